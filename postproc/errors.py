@@ -1,0 +1,43 @@
+"""Typed exceptions raised by the library.
+
+Only the CLI maps them to exit codes (see ``postproc.cli``): every subclass of
+``InputError`` is bad input (exit 2); ``JobError`` is a job that ran and found a
+problem the user must act on (exit 1).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+
+class PostprocError(Exception):
+    """Base class of every error postproc raises on purpose."""
+
+
+class InputError(PostprocError):
+    """Bad input or usage: the message names the file and where in it."""
+
+
+class JobError(PostprocError):
+    """The job ran and found a problem the user must act on."""
+
+
+class RobotFileError(InputError):
+    """A robot data file is missing, malformed or inconsistent."""
+
+    def __init__(self, path: str | Path, key: str, message: str):
+        self.path = str(path)
+        self.key = key
+        super().__init__(f"{self.path}: key '{key}': {message}")
+
+
+class UnknownRobotError(InputError):
+    """A robot name that is neither a bundled robot nor an existing file."""
+
+
+class KinematicsError(InputError):
+    """A kinematics call was given arrays of the wrong shape or a robot it cannot serve."""
+
+
+class FeatureUnavailableError(InputError):
+    """A command is registered in the scripted interface but not built yet."""
