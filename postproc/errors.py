@@ -41,3 +41,26 @@ class KinematicsError(InputError):
 
 class FeatureUnavailableError(InputError):
     """A command is registered in the scripted interface but not built yet."""
+
+
+class MeasurementError(InputError):
+    """A measurement file is malformed: names the file, the CSV line and the column."""
+
+    def __init__(self, path: str | Path, line: int | None, column: str | None, message: str):
+        self.path = str(path)
+        self.line = line
+        self.column = column
+        where = self.path
+        if line is not None:
+            where += f", line {line}"
+        if column is not None:
+            where += f", column '{column}'"
+        super().__init__(f"{where}: {message}")
+
+
+class ModelFileError(InputError):
+    """A model JSON file is missing, malformed or does not fit the data it is used with."""
+
+
+class IdentificationError(JobError):
+    """A fit ran but could not produce a usable model (too few poses, no convergence)."""

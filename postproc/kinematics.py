@@ -76,10 +76,11 @@ def _dh_thetas(robot: RobotModel, q_deg: np.ndarray) -> np.ndarray:
     return np.deg2rad(q_deg * robot.joint_sign + robot.theta0_deg).T.copy()
 
 
-def _chain(robot: RobotModel, theta: np.ndarray, keep_frames: bool):
+def _chain(theta: np.ndarray, d, a, alpha, keep_frames: bool):
     """Propagate the DH chain over a chunk.
 
-    Returns the flange rotation columns (3 arrays (3, C)) and position (3, C); with
+    theta (6, C) radians; d, a (mm) and alpha (radians) are (6,) constants or (6, C) per
+    pose. Returns the flange rotation columns (3 arrays (3, C)) and position (3, C); with
     keep_frames also the list of (columns, origin) of frames 0..6.
     """
     c = theta.shape[1]
@@ -89,51 +90,73 @@ def _chain(robot: RobotModel, theta: np.ndarray, keep_frames: bool):
     col0[0] = col1[1] = col2[2] = 1.0
     pos = np.zeros((3, c))
     frames = [((col0, col1, col2), pos)] if keep_frames else None
-    alpha = np.deg2rad(robot.alpha_deg)
     for i in range(6):
         ct, st = np.cos(theta[i]), np.sin(theta[i])
-        ca, sa = math.cos(alpha[i]), math.sin(alpha[i])
+        ca, sa = np.cos(alpha[i]), np.sin(alpha[i])
         # T_i = T_{i-1} Rz(theta) Tz(d) Tx(a) Rx(alpha), column by column.
         new0 = col0 * ct + col1 * st
         rot1 = col1 * ct - col0 * st
         new1 = rot1 * ca + col2 * sa
         new2 = col2 * ca - rot1 * sa
-        pos = pos + robot.d_mm[i] * col2 + robot.a_mm[i] * new0
+        pos = pos + d[i] * col2 + a[i] * new0
         col0, col1, col2 = new0, new1, new2
         if keep_frames:
             frames.append(((col0, col1, col2), pos))
     return (col0, col1, col2), pos, frames
 
 
-def fk(robot: RobotModel, q_deg, tool=None) -> np.ndarray:
-    """Flange (or TCP, with ``tool``) poses base_T_flange (N, 4, 4), mm, for joints q (N, 6) in degrees."""
-    q = _as_joints(q_deg)
-    n = q.shape[0]
+def _dh_columns(values, n: int, name: str) -> np.ndarray:
+    """A DH column as (6,) constants or (6, N) per pose, from (6,) or (N, 6) input."""
+    arr = np.asarray(values, dtype=float)
+    if arr.shape == (6,):
+        return arr
+    if arr.shape == (n, 6):
+        return arr.T
+    raise KinematicsError(f"DH '{name}' must have shape (6,) or (N, 6) with N = {n}, got {arr.shape}")
+
+
+def _slice(col: np.ndarray, s: int, e: int) -> np.ndarray:
+    return col if col.ndim == 1 else col[:, s:e]
+
+
+def forward_dh(theta_deg, d_mm, a_mm, alpha_deg, tool=None) -> np.ndarray:
+    """Poses (N, 4, 4) of a standard-DH chain whose parameters may vary per pose.
+
+    theta_deg (N, 6) are the DH angles (joint value times sign plus offset, plus any
+    error); d, a, alpha are (6,) or (N, 6). Used where the geometry differs from the
+    robot file's: identified errors, thermal growth.
+    """
+    theta = np.deg2rad(_as_joints(theta_deg)).T.copy()
+    n = theta.shape[1]
+    d = _dh_columns(d_mm, n, "d")
+    a = _dh_columns(a_mm, n, "a")
+    alpha = np.deg2rad(_dh_columns(alpha_deg, n, "alpha"))
     out = np.zeros((n, 4, 4))
     out[:, 3, 3] = 1.0
 
     def work(s, e):
-        cols, pos, _ = _chain(robot, _dh_thetas(robot, q[s:e]), keep_frames=False)
+        cols, pos, _ = _chain(theta[:, s:e], _slice(d, s, e), _slice(a, s, e), _slice(alpha, s, e), keep_frames=False)
         for j in range(3):
             out[s:e, :3, j] = cols[j].T
         out[s:e, :3, 3] = pos.T
 
     _run_chunked(n, work)
     tool_t = _tool_transform(tool)
-    if tool_t is not None:
-        out = out @ tool_t
-    return out
+    return out if tool_t is None else out @ tool_t
 
 
-def joint_frames(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
-    """All DH frames 0..6: rotations (N, 7, 3, 3) and origins (N, 7, 3), mm. Frame 0 is the base."""
-    q = _as_joints(q_deg)
-    n = q.shape[0]
+def frames_dh(theta_deg, d_mm, a_mm, alpha_deg) -> tuple[np.ndarray, np.ndarray]:
+    """All frames 0..6 of a per-pose DH chain: rotations (N, 7, 3, 3), origins (N, 7, 3)."""
+    theta = np.deg2rad(_as_joints(theta_deg)).T.copy()
+    n = theta.shape[1]
+    d = _dh_columns(d_mm, n, "d")
+    a = _dh_columns(a_mm, n, "a")
+    alpha = np.deg2rad(_dh_columns(alpha_deg, n, "alpha"))
     rots = np.zeros((n, 7, 3, 3))
     origins = np.zeros((n, 7, 3))
 
     def work(s, e):
-        _, _, frames = _chain(robot, _dh_thetas(robot, q[s:e]), keep_frames=True)
+        _, _, frames = _chain(theta[:, s:e], _slice(d, s, e), _slice(a, s, e), _slice(alpha, s, e), keep_frames=True)
         for k, (cols, pos) in enumerate(frames):
             for j in range(3):
                 rots[s:e, k, :, j] = cols[j].T
@@ -141,6 +164,21 @@ def joint_frames(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
 
     _run_chunked(n, work)
     return rots, origins
+
+
+def dh_angles(robot: RobotModel, q_deg) -> np.ndarray:
+    """DH angles theta (N, 6) in degrees of controller joint values."""
+    return _as_joints(q_deg) * robot.joint_sign + robot.theta0_deg
+
+
+def fk(robot: RobotModel, q_deg, tool=None) -> np.ndarray:
+    """Flange (or TCP, with ``tool``) poses base_T_flange (N, 4, 4), mm, for joints q (N, 6) in degrees."""
+    return forward_dh(dh_angles(robot, q_deg), robot.d_mm, robot.a_mm, robot.alpha_deg, tool=tool)
+
+
+def joint_frames(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
+    """All DH frames 0..6: rotations (N, 7, 3, 3) and origins (N, 7, 3), mm. Frame 0 is the base."""
+    return frames_dh(dh_angles(robot, q_deg), robot.d_mm, robot.a_mm, robot.alpha_deg)
 
 
 def jacobian(robot: RobotModel, q_deg, tool=None) -> np.ndarray:
@@ -153,9 +191,10 @@ def jacobian(robot: RobotModel, q_deg, tool=None) -> np.ndarray:
     n = q.shape[0]
     out = np.zeros((n, 6, 6))
     tool_t = _tool_transform(tool)
+    alpha = np.deg2rad(robot.alpha_deg)
 
     def work(s, e):
-        _, pos, frames = _chain(robot, _dh_thetas(robot, q[s:e]), keep_frames=True)
+        _, pos, frames = _chain(_dh_thetas(robot, q[s:e]), robot.d_mm, robot.a_mm, alpha, keep_frames=True)
         end = pos
         if tool_t is not None:
             cols = frames[-1][0]

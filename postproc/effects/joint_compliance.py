@@ -1,0 +1,57 @@
+"""Joint deflection under gravity (and payload): delta q_i = c_i tau_g,i(q) (seed 001 eq. 4-8).
+
+The compliances c_i = 1 / k_i (rad/(N*m)) are identified, starting from the robot file's
+stiffness. They are shared with ``external_load``: one joint has one stiffness.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..kinematics import gravity_torque
+from .base import Context, Effect, EffectSpecError, Param
+
+
+def compliance_params(robot) -> list[Param]:
+    return [
+        Param(f"compliance.c{i + 1}", "rad/(N*m)", 1.0 / k, 1.0 / k, initial=1.0 / k)
+        for i, k in enumerate(robot.stiffness_nm_per_rad)
+    ]
+
+
+class JointCompliance(Effect):
+    name = "joint_compliance"
+    kind = "joint"
+
+    def __init__(self, payload_kg: float = 0.0, payload_com_mm=(0.0, 0.0, 0.0)):
+        self.payload_kg = float(payload_kg)
+        self.payload_com_mm = tuple(float(v) for v in payload_com_mm)
+
+    def options(self) -> dict:
+        if not self.payload_kg:
+            return {}
+        return {"payload": self.payload_kg, "payload_com": list(self.payload_com_mm)}
+
+    @classmethod
+    def from_options(cls, opts: dict[str, str]) -> "JointCompliance":
+        unknown = set(opts) - {"payload", "payload_com"}
+        if unknown:
+            raise EffectSpecError(f"joint_compliance: unknown option(s) {', '.join(sorted(unknown))} (known: payload, payload_com)")
+        try:
+            mass = float(opts.get("payload", 0.0))
+            com = [float(v) for v in opts.get("payload_com", "0,0,0").split(",")]
+        except ValueError:
+            raise EffectSpecError("joint_compliance: payload is a mass in kg and payload_com three numbers in mm") from None
+        if len(com) != 3 or mass < 0:
+            raise EffectSpecError("joint_compliance: payload_com needs x,y,z in mm (flange frame) and payload >= 0 kg")
+        return cls(mass, com)
+
+    def params(self, robot) -> list[Param]:
+        return compliance_params(robot)
+
+    def joint_basis(self, ctx: Context, robot) -> np.ndarray:
+        tau = gravity_torque(robot, ctx.q_deg, self.payload_kg, self.payload_com_mm)
+        basis = np.zeros((len(tau), 6, 6))
+        idx = np.arange(6)
+        basis[:, idx, idx] = np.rad2deg(tau)
+        return basis

@@ -1,0 +1,329 @@
+"""Identification: nonlinear least squares over the union of effect parameters.
+
+1. Parameters the data cannot separate are found by a column-pivoted QR of the scaled
+   identification Jacobian, fixed at their initial value, and reported with the kept
+   parameters that absorb them.
+2. The rest are fitted by scipy's least squares with the analytic Jacobian, parameter
+   scaling, and an optional robust loss; outliers are flagged either way.
+3. Standard errors from the Jacobian at the solution; k-fold cross-validated RMS.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+from scipy.linalg import qr
+from scipy.optimize import least_squares
+
+from .effects import BaseFrame, EffectSum, JointHarmonics
+from .effects.base_frame import kabsch
+from .errormodel import ErrorModel, Prepared
+from .errors import IdentificationError
+from .measurements import MeasurementSet
+from .robots import RobotModel
+
+RANK_TOL = 1e-7
+OUTLIER_SIGMAS = 4.0  # per-pose 3-D residual beyond 4 robust sigmas (chi, 3 dof: p < 0.2 %)
+
+
+@dataclass(frozen=True)
+class Stats:
+    n: int
+    rms_mm: float
+    mean_mm: float
+    max_mm: float
+    rms_axis_mm: tuple[float, float, float]
+
+    @classmethod
+    def of(cls, residual: np.ndarray) -> "Stats":
+        norm = np.linalg.norm(residual, axis=1)
+        return cls(
+            n=len(norm),
+            rms_mm=float(np.sqrt(np.mean(norm**2))),
+            mean_mm=float(norm.mean()),
+            max_mm=float(norm.max()),
+            rms_axis_mm=tuple(float(v) for v in np.sqrt(np.mean(residual**2, axis=0))),
+        )
+
+    def as_dict(self) -> dict:
+        return {"n": self.n, "rms_mm": self.rms_mm, "mean_mm": self.mean_mm, "max_mm": self.max_mm, "rms_axis_mm": list(self.rms_axis_mm)}
+
+
+@dataclass(frozen=True)
+class FitResult:
+    model: ErrorModel
+    std: dict[str, float]
+    fixed: dict[str, str]  # parameter -> why it was not identified
+    outliers: tuple[str, ...]  # ids of flagged poses
+    before: Stats
+    after: Stats
+    cv_rms_mm: float | None
+    approach_inferred: bool
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def residuals(model: ErrorModel, meas: MeasurementSet, prep: Prepared | None = None) -> np.ndarray:
+    prep = model.prepare(meas) if prep is None else prep
+    return model.predict_prepared(prep) - meas.measured_mm
+
+
+def register_base(model: ErrorModel, meas: MeasurementSet, prep: Prepared) -> ErrorModel:
+    """Closed-form initial base frame (Kabsch) from the current model's positions to the measured ones."""
+    unregistered = replace(model, base_rotation=np.eye(3), base_translation=np.zeros(3))
+    values = unregistered.values.copy()
+    for ax in "xyz":
+        for kind in "tr":
+            values[model.index(f"base_frame.{kind}{ax}")] = 0.0
+    robot_frame = unregistered.predict_prepared(prep, values)
+    rot, trans = kabsch(robot_frame, meas.measured_mm)
+    return replace(unregistered, values=values, base_rotation=rot, base_translation=trans)
+
+
+def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) -> tuple[np.ndarray, dict[str, str]]:
+    """Which parameters the data can separate. Returns the new free mask and, for each
+    parameter fixed here, the reason (with the kept parameters that absorb it)."""
+    _, jac = model.evaluate(prep)
+    j = jac.reshape(-1, jac.shape[-1]) * np.array([p.scale for p in model.params])
+    cols = np.nonzero(free_mask)[0]
+    sub = j[:, cols]
+    norms = np.linalg.norm(sub, axis=0)
+    fixed: dict[str, str] = {}
+    nonzero = norms > 1e-12 * max(norms.max(), 1e-300)
+    for c in cols[~nonzero]:
+        fixed[model.params[c].name] = "no effect on these poses"
+    cols = cols[nonzero]
+    sub = sub[:, nonzero] / norms[nonzero]
+    # Keep frame parameters (base, tool) in preference to the DH errors they duplicate.
+    priority = np.array([2.0 if model.params[c].name.startswith(("base_frame.", "tool_offset.")) else 1.0 for c in cols])
+    _, r, piv = qr(sub * priority, mode="economic", pivoting=True)
+    diag = np.abs(np.diag(r))
+    rank = int(np.sum(diag > RANK_TOL * diag[0])) if len(diag) else 0
+    keep = cols[piv[:rank]]
+    drop = cols[piv[rank:]]
+    if len(drop):
+        kept = sub[:, piv[:rank]]
+        for k, c in zip(piv[rank:], drop):
+            coef, *_ = np.linalg.lstsq(kept, sub[:, k], rcond=None)
+            order = np.argsort(-np.abs(coef))
+            partners = [model.params[keep[i]].name for i in order[:3] if abs(coef[i]) > 0.05]
+            reason = "cannot be separated from " + (", ".join(partners) if partners else "the other parameters")
+            fixed[model.params[c].name] = reason + " (fixed; its effect is absorbed there)"
+    new_mask = np.zeros_like(free_mask)
+    new_mask[keep] = True
+    return new_mask, fixed
+
+
+def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None):
+    scales = np.array([p.scale for p in model.params])[free]
+    base = model.values.copy()
+
+    def unpack(x):
+        v = base.copy()
+        v[free] = x
+        return v
+
+    def fun(x):
+        return (model.predict_prepared(prep, unpack(x)) - measured).ravel()
+
+    def jac(x):
+        _, jj = model.evaluate(prep, unpack(x))
+        return jj.reshape(-1, jj.shape[-1])[:, free]
+
+    method = "lm" if loss == "linear" and free.sum() <= 3 * len(measured) else "trf"
+    res = least_squares(fun, base[free], jac=jac, x_scale=scales, method=method, loss=loss, f_scale=f_scale, max_nfev=max_nfev, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    return unpack(res.x), res
+
+
+def fit(
+    robot: RobotModel,
+    tool_mm,
+    effects: EffectSum,
+    meas: MeasurementSet,
+    *,
+    loss: str = "linear",
+    cv_folds: int = 5,
+    prior: ErrorModel | None = None,
+    seed: int = 0,
+    progress: Callable[[str], None] | None = None,
+) -> FitResult:
+    """Identify the parameters of ``effects`` from a measurement set.
+
+    ``prior``: a previously fitted model whose parameter values (and base registration)
+    start this fit, e.g. to extend a model by one effect.
+    """
+    say = progress or (lambda msg: None)
+    notes: list[str] = []
+    harmonics = effects.get("joint_harmonics")
+    if harmonics is not None and not harmonics.resolved:
+        say("choosing joint_harmonics terms")
+        without = EffectSum(tuple(e for e in effects if e.name != "joint_harmonics"))
+        chosen = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
+        effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
+        notes.append(f"joint_harmonics: data support {chosen.spec()}")
+    n_params = sum(len(e.params(robot)) for e in effects)
+    if len(meas) < 3:
+        raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
+
+    model = ErrorModel.create(robot, tool_mm, effects)
+    if prior is not None:
+        model = replace(model.with_values(prior.as_dict()), base_rotation=prior.base_rotation, base_translation=prior.base_translation)
+    prep = model.prepare(meas)
+    if prep.approach_inferred:
+        notes.append("backlash: approach directions inferred from the row order (no s1..s6 columns)")
+    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=effects.get("base_frame") is not None), meas))
+    if effects.get("base_frame") is not None and prior is None:
+        model = register_base(model, meas, prep)
+
+    say("identifiability")
+    free, fixed = identifiability(model, prep, np.ones(len(model.params), dtype=bool))
+    if 3 * len(meas) <= free.sum():
+        raise IdentificationError(f"{meas.source}: {len(meas)} poses give {3 * len(meas)} equations for {int(free.sum())} identifiable parameters; measure more poses")
+
+    say("fitting")
+    f_scale = 0.05
+    values, res = _solve(model, prep, meas.measured_mm, free, loss, f_scale)
+    if not res.success:
+        raise IdentificationError(f"{meas.source}: the fit did not converge ({res.message})")
+    model = model.with_vector(values)
+    if effects.get("base_frame") is not None:
+        # Re-centre the registration on the fitted rotation so the small-angle Jacobian is exact.
+        model = _recentre_base(model)
+
+    resid = residuals(model, meas, prep)
+    m = resid.size
+    dof = max(m - int(free.sum()), 1)
+    _, jj = model.evaluate(prep)
+    jf = jj.reshape(-1, jj.shape[-1])[:, free]
+    s2 = float(np.sum(resid**2)) / dof
+    try:
+        cov = s2 * np.linalg.inv(jf.T @ jf)
+        std_free = np.sqrt(np.clip(np.diag(cov), 0, None))
+    except np.linalg.LinAlgError:
+        std_free = np.full(int(free.sum()), np.nan)
+    std = {p.name: 0.0 for p in model.params}
+    for k, i in enumerate(np.nonzero(free)[0]):
+        std[model.params[i].name] = float(std_free[k])
+
+    sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)))
+    norms = np.linalg.norm(resid, axis=1)
+    outliers = tuple(meas.ids[i] for i in np.nonzero(norms > OUTLIER_SIGMAS * max(sigma, 1e-9))[0])
+
+    cv = None
+    if cv_folds and cv_folds >= 2 and len(meas) >= 2 * cv_folds:
+        cv = cross_validate(model, meas, free, cv_folds, loss, f_scale, seed, say)
+
+    return FitResult(
+        model=model,
+        std=std,
+        fixed=fixed,
+        outliers=outliers,
+        before=before,
+        after=Stats.of(resid),
+        cv_rms_mm=cv,
+        approach_inferred=prep.approach_inferred,
+        notes=tuple(notes),
+    )
+
+
+def nominal_model(robot: RobotModel, tool_mm, meas: MeasurementSet, registered: bool) -> ErrorModel:
+    """What the controller assumes; with ``registered``, rigidly moved onto the data (Kabsch),
+    which is the fair 'before' for data measured in another frame (a tracker's)."""
+    if not registered:
+        return ErrorModel.create(robot, tool_mm, EffectSum())
+    reg = ErrorModel.create(robot, tool_mm, EffectSum((BaseFrame(),)))
+    return register_base(reg, meas, reg.prepare(meas))
+
+
+def _recentre_base(model: ErrorModel) -> ErrorModel:
+    from .effects.base_frame import rotvec_to_matrix
+
+    r = np.array([model.value(f"base_frame.r{ax}") for ax in "xyz"])
+    t = np.array([model.value(f"base_frame.t{ax}") for ax in "xyz"])
+    values = model.values.copy()
+    for ax in "xyz":
+        values[model.index(f"base_frame.r{ax}")] = 0.0
+        values[model.index(f"base_frame.t{ax}")] = 0.0
+    return replace(model, values=values, base_rotation=rotvec_to_matrix(r) @ model.base_rotation, base_translation=model.base_translation + t)
+
+
+def cross_validate(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str, f_scale: float, seed: int, say=lambda m: None) -> float:
+    """k-fold cross-validated RMS (mm): refit the free parameters without each fold, predict it."""
+    order = np.random.default_rng(seed).permutation(len(meas))
+    errors = []
+    for k in range(folds):
+        say(f"cross-validation fold {k + 1}/{folds}")
+        test = np.zeros(len(meas), dtype=bool)
+        test[order[k::folds]] = True
+        train_set, test_set = meas.subset(~test), meas.subset(test)
+        prep_train = model.prepare(train_set)
+        values, _ = _solve(model, prep_train, train_set.measured_mm, free, loss, f_scale, max_nfev=200)
+        fold_model = model.with_vector(values)
+        errors.append(fold_model.predict(test_set) - test_set.measured_mm)
+    allerr = np.concatenate(errors)
+    return float(np.sqrt(np.mean(np.sum(allerr**2, axis=1))))
+
+
+def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 8) -> JointHarmonics:
+    """Greedy forward selection of (joint, order) terms by cross-validated RMS.
+
+    Each step fits the model without harmonics plus the chosen terms, linearises around
+    it, and adds the candidate whose two columns most reduce the k-fold error of the
+    linearised residual; it stops when the best candidate gains less than 5 %.
+    """
+    candidates = [(j, k) for j in range(1, 7) for k in (1, 2, 3, 4)]
+    chosen: list[tuple[int, int]] = []
+    folds = 5
+    order = np.random.default_rng(seed).permutation(len(meas))
+    fold_of = np.empty(len(meas), dtype=int)
+    fold_of[order] = np.arange(len(meas)) % folds
+    q = np.deg2rad(meas.q_deg)
+    while len(chosen) < max_terms:
+        effects = others + JointHarmonics(tuple(chosen)) if chosen else others
+        result = fit(robot, tool_mm, effects, meas, cv_folds=0, prior=prior, seed=seed)
+        prep = result.model.prepare(meas)
+        pos, jac = result.model.evaluate(prep)
+        resid = (meas.measured_mm - pos).reshape(-1)
+        free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params])
+        base_cols = jac.reshape(-1, jac.shape[-1])[:, free]
+        # d p / d q_j in the measurement frame, per degree.
+        jq = kin_joint_columns(result.model, prep)
+        baseline = _cv_linear(base_cols, resid, fold_of, folds)
+        best, best_err = None, baseline
+        for term in candidates:
+            if term in chosen:
+                continue
+            j, k = term
+            cols = np.stack([jq[:, :, j - 1] * np.sin(k * q[:, j - 1])[:, None], jq[:, :, j - 1] * np.cos(k * q[:, j - 1])[:, None]], axis=-1).reshape(-1, 2)
+            err = _cv_linear(np.hstack([base_cols, cols]), resid, fold_of, folds)
+            if err < best_err:
+                best, best_err = term, err
+        if best is None or best_err > 0.95 * baseline:
+            break
+        chosen.append(best)
+    return JointHarmonics(tuple(chosen))
+
+
+def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
+    """d(measured position)/d(q_j) per degree, (N, 3, 6), by central differences of the model."""
+    out = np.zeros((len(prep.ctx.q_deg), 3, 6))
+    h = 1e-4
+    for j in range(6):
+        dq = np.zeros(6)
+        dq[j] = h
+        up = replace(prep, ctx=replace(prep.ctx, q_deg=prep.ctx.q_deg + dq))
+        down = replace(prep, ctx=replace(prep.ctx, q_deg=prep.ctx.q_deg - dq))
+        out[:, :, j] = (model.predict_prepared(up) - model.predict_prepared(down)) / (2 * h)
+    return out
+
+
+def _cv_linear(cols: np.ndarray, target: np.ndarray, fold_of: np.ndarray, folds: int) -> float:
+    """k-fold RMS of a linear least-squares fit of target on cols, folds by pose (3 rows each)."""
+    row_fold = np.repeat(fold_of, 3)
+    sq = 0.0
+    for k in range(folds):
+        test = row_fold == k
+        coef, *_ = np.linalg.lstsq(cols[~test], target[~test], rcond=None)
+        sq += float(np.sum((target[test] - cols[test] @ coef) ** 2))
+    return float(np.sqrt(sq / (len(target) / 3)))
