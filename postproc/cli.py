@@ -32,8 +32,9 @@ app = typer.Typer(
     add_completion=False,
     pretty_exceptions_enable=False,
 )
-out = Console()
-err = Console(stderr=True)
+# Messages carry user text (effect specs use [brackets]): never interpret it as markup.
+out = Console(markup=False, highlight=False, soft_wrap=True)
+err = Console(stderr=True, markup=False, highlight=False, soft_wrap=True)
 
 
 def _exit_code(exc: PostprocError) -> int:
@@ -50,7 +51,7 @@ def handles_errors(func):
         try:
             return func(*args, **kwargs)
         except PostprocError as exc:
-            err.print(f"[bold red]error:[/] {exc}", highlight=False, markup=True, soft_wrap=True)
+            err.print(f"error: {exc}", style="bold red")
             raise typer.Exit(_exit_code(exc)) from None
 
     return wrapper
@@ -167,26 +168,113 @@ def _not_built(command: str, issue: str):
     raise FeatureUnavailableError(f"'postproc {command}' is not built in this version yet ({issue})")
 
 
+def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
+    """One screen: error before/after per axis, cross-validation, outliers, what was not identified."""
+    table = Table(title=f"fit: {robot_name}, effects {effects_spec}", show_edge=False)
+    for col in ("", "RMS", "mean", "max", "RMS x", "RMS y", "RMS z"):
+        table.add_column(col, justify="right")
+    for label, st in (("nominal (mm)", result.before), ("fitted (mm)", result.after)):
+        table.add_row(label, *(f"{v:.4f}" for v in (st.rms_mm, st.mean_mm, st.max_mm, *st.rms_axis_mm)))
+    out.print(table)
+    if result.cv_rms_mm is not None:
+        out.print(f"cross-validated RMS: {result.cv_rms_mm:.4f} mm")
+    for note in result.notes:
+        out.print(f"note: {note}", highlight=False)
+    if result.outliers:
+        shown = ", ".join(result.outliers[:20]) + (" ..." if len(result.outliers) > 20 else "")
+        out.print(f"outliers flagged ({len(result.outliers)}): ids {shown}", highlight=False)
+    if result.fixed:
+        out.print(f"not identified from these data ({len(result.fixed)} parameters, fixed):")
+        for name, why in result.fixed.items():
+            out.print(f"  {name}: {why}", highlight=False)
+
+
+def _load_measurements(path: Path):
+    from .measurements import read_measurements
+
+    return read_measurements(path)
+
+
 @app.command("fit")
 @handles_errors
 def fit_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV (spec/measurements.md)."),
-    robot: str = typer.Option(..., "--robot"),
-    tool: str = typer.Option(..., "--tool", help="X,Y,Z of the measured point in the flange frame, mm."),
-    effects: str = typer.Option(..., "--effects", help="Comma-separated effect names, or 'none'."),
-    output: Path = typer.Option(..., "-o", "--output"),
-    predictor: Optional[str] = typer.Option(None, "--predictor"),
-    source: Optional[Path] = typer.Option(None, "--source"),
+    robot: Optional[str] = typer.Option(None, "--robot", help="Robot name or file (not needed with --from)."),
+    tool: Optional[str] = typer.Option(None, "--tool", help="X,Y,Z of the measured point in the flange frame, mm."),
+    effects: str = typer.Option(..., "--effects", help="Comma-separated effect names, 'none', or '+name,...' to extend --from."),
+    output: Path = typer.Option(..., "-o", "--output", help="Model JSON to write."),
+    predictor: Optional[str] = typer.Option(None, "--predictor", help="Data-driven predictor on the residual."),
+    source: Optional[Path] = typer.Option(None, "--source", help="Source-domain measurements for tr-gpr."),
+    prior: Optional[Path] = typer.Option(None, "--from", help="Extend this model: start from its values and effects."),
+    loss: str = typer.Option("linear", "--loss", help="linear, soft_l1, huber or cauchy (robust to outliers)."),
+    cv: int = typer.Option(5, "--cv", help="Folds of cross-validation (0 to skip)."),
+    seed: int = typer.Option(0, "--seed"),
 ):
     """Identify an error model from measurements and write MODEL.json."""
-    _not_built("fit", "issue 4")
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .effects import parse_effects
+    from .identify import fit as run_fit
+    from .model_io import load_model, save_model
+
+    if predictor is not None:
+        raise FeatureUnavailableError(f"--predictor {predictor}: data-driven predictors are not built in this version yet (issue 7)")
+    if loss not in ("linear", "soft_l1", "huber", "cauchy"):
+        raise InputError(f"--loss: '{loss}' is not one of linear, soft_l1, huber, cauchy")
+    base_model = None
+    if prior is not None:
+        base_model, _ = load_model(prior)
+    if effects.startswith("+"):
+        if base_model is None:
+            raise InputError("--effects '+...' extends a model: give it with --from MODEL.json")
+        chosen = base_model.effects + parse_effects(effects[1:])
+    else:
+        chosen = parse_effects(effects)
+    if base_model is not None:
+        robot_model = base_model.robot if robot is None else load_robot(robot)
+        if robot_model.name != base_model.robot.name:
+            raise InputError(f"--robot {robot_model.name} does not match the model's robot {base_model.robot.name}")
+        tool_mm = base_model.tool_mm if tool is None else _floats(tool, 3, "--tool")
+    else:
+        if robot is None or tool is None:
+            raise InputError("fit needs --robot and --tool (or --from MODEL.json)")
+        robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
+    data = _load_measurements(meas)
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+        task = bar.add_task("fitting", total=None)
+        result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=lambda msg: bar.update(task, description=msg))
+    save_model(output, result.model, result, measurements=str(meas))
+    _fit_summary(result, robot_model.name, result.model.effects.spec())
+    out.print(f"model written to {output}", highlight=False)
 
 
 @app.command("evaluate")
 @handles_errors
-def evaluate_cmd(model: Path = typer.Argument(...), meas: Path = typer.Argument(...), json_out: bool = typer.Option(False, "--json")):
+def evaluate_cmd(
+    model: Path = typer.Argument(..., help="Model JSON from 'postproc fit'."),
+    meas: Path = typer.Argument(..., help="Measurement CSV."),
+    json_out: bool = typer.Option(False, "--json", help="Print {n, rms_mm, mean_mm, max_mm}."),
+    reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
+):
     """Position error of a model on a measurement set."""
-    _not_built("evaluate", "issue 4")
+    from .identify import Stats, residuals
+    from .model_io import load_model
+
+    error_model, _ = load_model(model)
+    data = _load_measurements(meas)
+    if reregister:
+        from .identify import refit_base
+
+        error_model = refit_base(error_model, data)
+    stats = Stats.of(residuals(error_model, data))
+    if json_out:
+        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}))
+        return
+    out.print(
+        f"{stats.n} poses: RMS {stats.rms_mm:.4f} mm, mean {stats.mean_mm:.4f} mm, max {stats.max_mm:.4f} mm "
+        f"(RMS x/y/z {stats.rms_axis_mm[0]:.4f}/{stats.rms_axis_mm[1]:.4f}/{stats.rms_axis_mm[2]:.4f})",
+        highlight=False,
+    )
 
 
 @app.command("diagnose")
@@ -210,9 +298,42 @@ def ladder_cmd(meas: Path = typer.Argument(...), robot: str = typer.Option(..., 
 
 @app.command("simulate")
 @handles_errors
-def simulate_cmd(robot: str = typer.Option(..., "--robot"), output: Path = typer.Option(..., "-o", "--output")):
+def simulate_cmd(
+    robot: str = typer.Option(..., "--robot", help="Robot name or file."),
+    output: Path = typer.Option(..., "-o", "--output", help="Measurement CSV to write."),
+    tool: str = typer.Option("0,0,200", "--tool", help="X,Y,Z of the measured point in the flange frame, mm."),
+    effects: str = typer.Option("geometric,base_frame,tool_offset,joint_compliance", "--effects", help="Effects of the true robot."),
+    n: int = typer.Option(250, "--n", help="Number of poses."),
+    seed: int = typer.Option(0, "--seed"),
+    noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (tracker + repeatability)."),
+    magnitude: float = typer.Option(2.0, "--magnitude", help="Error magnitudes in units of seed 001 Table 3."),
+    workspace: str = typer.Option("cylinder", "--workspace", help="cylinder (seed 001), box, or joints."),
+    truth_out: Optional[Path] = typer.Option(None, "--truth", help="Also write the true robot as a model JSON."),
+):
     """Generate a measurement set from a simulated robot with chosen error effects."""
-    _not_built("simulate", "issue 4")
+    from .effects import parse_effects
+    from .errormodel import require_resolved
+    from .measurements import write_measurements
+    from .model_io import save_model
+    from .sim import Box, Cylinder, JointBox, random_truth, sample_poses, simulate
+
+    regions = {"cylinder": Cylinder(), "box": Box(), "joints": JointBox()}
+    if workspace not in regions:
+        raise InputError(f"--workspace: '{workspace}' is not one of {', '.join(regions)}")
+    if n < 1:
+        raise InputError("--n must be at least 1")
+    chosen = parse_effects(effects)
+    require_resolved(chosen)
+    robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
+    rng = np.random.default_rng(seed)
+    truth = random_truth(robot_model, tool_mm, chosen, rng, magnitude=magnitude)
+    q = sample_poses(robot_model, tool_mm, n, regions[workspace], rng)
+    data = simulate(truth, q, rng, noise_mm=noise)
+    write_measurements(output, data)
+    if truth_out is not None:
+        save_model(truth_out, truth)
+    err_mm = np.linalg.norm(data.measured_mm - data.nominal_mm, axis=1)
+    out.print(f"{n} poses written to {output}; nominal error RMS {np.sqrt(np.mean(err_mm**2)):.3f} mm, max {err_mm.max():.3f} mm", highlight=False)
 
 
 @app.command("compensate")

@@ -207,6 +207,14 @@ class ErrorModel:
 
     # ---------------------------------------------------------------- summaries
 
+    def base_transform(self) -> tuple[np.ndarray, np.ndarray]:
+        """Total robot-base -> measurement-frame transform (R, t): registration and base_frame parameters."""
+        if self.effects.get("base_frame") is None:
+            return self.base_rotation, self.base_translation
+        r = np.array([self.value(f"base_frame.r{ax}") for ax in "xyz"])
+        t = np.array([self.value(f"base_frame.t{ax}") for ax in "xyz"])
+        return rotvec_to_matrix(r) @ self.base_rotation, self.base_translation + t
+
     def nominal(self) -> "ErrorModel":
         """The same robot and tool with no effects (what the controller assumes)."""
         return ErrorModel.create(self.robot, self.tool_mm, EffectSum())

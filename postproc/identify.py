@@ -81,12 +81,34 @@ def register_base(model: ErrorModel, meas: MeasurementSet, prep: Prepared) -> Er
     return replace(unregistered, values=values, base_rotation=rot, base_translation=trans)
 
 
+_GEOMETRIC_ORDER = {"dtheta": 0, "dalpha": 1, "da": 2, "dd": 3}
+
+
+def _priority(name: str) -> tuple:
+    """Order in which parameters are kept when the data cannot separate them: frames first
+    (they absorb the DH errors they duplicate), then joint-space effects, then DH errors
+    by joint offset, twist, length a, offset d."""
+    if name.startswith(("base_frame.", "tool_offset.")):
+        return (0, name)
+    if name.startswith("geometric."):
+        kind = name[len("geometric.") : -1]
+        return (2, _GEOMETRIC_ORDER[kind], int(name[-1]))
+    return (1, name)
+
+
 def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) -> tuple[np.ndarray, dict[str, str]]:
     """Which parameters the data can separate. Returns the new free mask and, for each
-    parameter fixed here, the reason (with the kept parameters that absorb it)."""
+    parameter fixed here, the reason (with the kept parameters that absorb it).
+
+    Columns of the scaled identification Jacobian are normalised and taken in a fixed
+    priority order; a parameter is kept when its column adds a direction the earlier
+    ones do not span (|R_kk| of an unpivoted QR above RANK_TOL). The choice is
+    deterministic: it never flips between fits of similar data.
+    """
     _, jac = model.evaluate(prep)
     j = jac.reshape(-1, jac.shape[-1]) * np.array([p.scale for p in model.params])
     cols = np.nonzero(free_mask)[0]
+    cols = np.array(sorted(cols, key=lambda c: _priority(model.params[c].name)), dtype=int)
     sub = j[:, cols]
     norms = np.linalg.norm(sub, axis=0)
     fixed: dict[str, str] = {}
@@ -95,21 +117,18 @@ def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) ->
         fixed[model.params[c].name] = "no effect on these poses"
     cols = cols[nonzero]
     sub = sub[:, nonzero] / norms[nonzero]
-    # Keep frame parameters (base, tool) in preference to the DH errors they duplicate.
-    priority = np.array([2.0 if model.params[c].name.startswith(("base_frame.", "tool_offset.")) else 1.0 for c in cols])
-    _, r, piv = qr(sub * priority, mode="economic", pivoting=True)
-    diag = np.abs(np.diag(r))
-    rank = int(np.sum(diag > RANK_TOL * diag[0])) if len(diag) else 0
-    keep = cols[piv[:rank]]
-    drop = cols[piv[rank:]]
-    if len(drop):
-        kept = sub[:, piv[:rank]]
-        for k, c in zip(piv[rank:], drop):
-            coef, *_ = np.linalg.lstsq(kept, sub[:, k], rcond=None)
-            order = np.argsort(-np.abs(coef))
-            partners = [model.params[keep[i]].name for i in order[:3] if abs(coef[i]) > 0.05]
-            reason = "cannot be separated from " + (", ".join(partners) if partners else "the other parameters")
-            fixed[model.params[c].name] = reason + " (fixed; its effect is absorbed there)"
+    _, r = qr(sub, mode="economic")
+    # With fewer equations than parameters the trailing columns have no diagonal entry.
+    keep_local = np.zeros(sub.shape[1], dtype=bool)
+    keep_local[: min(sub.shape)] = np.abs(np.diag(r)) > RANK_TOL
+    keep = cols[keep_local]
+    kept = sub[:, keep_local]
+    for k in np.nonzero(~keep_local)[0]:
+        coef, *_ = np.linalg.lstsq(kept, sub[:, k], rcond=None)
+        order = np.argsort(-np.abs(coef))
+        partners = [model.params[keep[i]].name for i in order[:3] if abs(coef[i]) > 0.05]
+        reason = "cannot be separated from " + (", ".join(partners) if partners else "the other parameters")
+        fixed[model.params[cols[k]].name] = reason + " (fixed; its effect is absorbed there)"
     new_mask = np.zeros_like(free_mask)
     new_mask[keep] = True
     return new_mask, fixed
@@ -162,11 +181,12 @@ def fit(
         chosen = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
         effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
         notes.append(f"joint_harmonics: data support {chosen.spec()}")
-    n_params = sum(len(e.params(robot)) for e in effects)
     if len(meas) < 3:
         raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
 
     model = ErrorModel.create(robot, tool_mm, effects)
+    if 3 * len(meas) < len(model.params):
+        raise IdentificationError(f"{meas.source}: {len(meas)} poses give {3 * len(meas)} equations for {len(model.params)} parameters; measure more poses")
     if prior is not None:
         model = replace(model.with_values(prior.as_dict()), base_rotation=prior.base_rotation, base_translation=prior.base_translation)
     prep = model.prepare(meas)
@@ -225,6 +245,19 @@ def fit(
         approach_inferred=prep.approach_inferred,
         notes=tuple(notes),
     )
+
+
+def refit_base(model: ErrorModel, meas: MeasurementSet) -> ErrorModel:
+    """Re-register the measurement frame on another set (a tracker moved between series),
+    keeping every other parameter: Kabsch, then a least-squares refinement of the 6 DOF."""
+    framed = model if model.effects.get("base_frame") is not None else ErrorModel.create(
+        model.robot, model.tool_mm, model.effects + BaseFrame(), model.as_dict()
+    )
+    prep = framed.prepare(meas)
+    framed = register_base(framed, meas, prep)
+    free = np.array([p.name.startswith("base_frame.") for p in framed.params])
+    values, _ = _solve(framed, prep, meas.measured_mm, free, "linear", 0.05)
+    return _recentre_base(framed.with_vector(values))
 
 
 def nominal_model(robot: RobotModel, tool_mm, meas: MeasurementSet, registered: bool) -> ErrorModel:

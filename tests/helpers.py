@@ -1,0 +1,51 @@
+"""Shared builders for tests that simulate robots."""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+import postproc
+from postproc.effects import parse_effects
+from postproc.identify import fit
+from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+
+TOOL = np.array([0.0, 0.0, 200.0])
+FRAME = "geometric,base_frame,tool_offset"
+
+
+def identifiable_truth(robot, effects_spec: str, seed: int, n: int = 300, noise: float = 0.02):
+    """A random true robot whose unidentifiable parameters sit at their initial values,
+    so its parameters can be compared one by one with a fit; and its measurements."""
+    effects = parse_effects(effects_spec)
+    rng = np.random.default_rng(seed)
+    truth = random_truth(robot, TOOL, effects, rng)
+    q = sample_poses(robot, TOOL, n, Cylinder(), rng)
+    probe = fit(robot, TOOL, effects, simulate(truth, q, rng, noise_mm=noise), cv_folds=0)
+    initial = {p.name: p.initial for p in truth.params}
+    truth = truth.with_values({name: initial[name] for name in probe.fixed})
+    return truth, q, rng
+
+
+def z_scores(result, truth) -> dict[str, float]:
+    """(fitted - true) / standard error for every identified parameter; base frame compared as a whole transform."""
+    z = {}
+    for p in result.model.params:
+        if p.name in result.fixed or p.name.startswith("base_frame."):
+            continue
+        z[p.name] = (result.model.value(p.name) - truth.value(p.name)) / result.std[p.name]
+    if result.model.effects.get("base_frame") is not None:
+        r_fit, t_fit = result.model.base_transform()
+        r_true, t_true = truth.base_transform()
+        dr = np.rad2deg(Rotation.from_matrix(r_fit @ r_true.T).as_rotvec())
+        dt = t_fit - t_true
+        for k, ax in enumerate("xyz"):
+            for kind, delta in (("t", dt[k]), ("r", dr[k])):
+                name = f"base_frame.{kind}{ax}"
+                if name not in result.fixed:
+                    z[name] = delta / result.std[name]
+    return z
+
+
+def kr160():
+    return postproc.load_robot("kr160_r1570")

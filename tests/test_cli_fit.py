@@ -1,0 +1,86 @@
+"""simulate -> fit -> evaluate through the command line, with the spec's JSON and exit codes."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from typer.testing import CliRunner
+
+from postproc.cli import app
+from postproc.model_io import load_model
+
+runner = CliRunner()
+
+
+@pytest.fixture(scope="module")
+def sim(tmp_path_factory):
+    d = tmp_path_factory.mktemp("sim")
+    args = ["simulate", "--robot", "kr160_r1570", "--tool", "0,0,200", "--n", "260", "--seed", "4", "--workspace", "joints",
+            "--effects", "geometric,base_frame,tool_offset,joint_compliance,joint_harmonics[joints=3;orders=2]",
+            "-o", str(d / "sim.csv"), "--truth", str(d / "truth.json")]
+    result = runner.invoke(app, args)
+    assert result.exit_code == 0, result.output
+    return d
+
+
+def test_fit_then_extend_then_evaluate(sim):
+    base = ["fit", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "-o", str(sim / "m1.json"),
+            "--effects", "geometric,base_frame,tool_offset,joint_compliance"]
+    first = runner.invoke(app, base)
+    assert first.exit_code == 0, first.output
+    assert "nominal (mm)" in first.stdout and "not identified" in first.stdout
+    second = runner.invoke(app, ["fit", str(sim / "sim.csv"), "--from", str(sim / "m1.json"), "--effects", "+joint_harmonics", "-o", str(sim / "m2.json")])
+    assert second.exit_code == 0, second.output
+    assert "joint_harmonics[joints=3;orders=2]" in second.stdout
+    model, doc = load_model(sim / "m2.json")
+    assert doc["fit"]["cv_rms_mm"] > 0 and "geometric.dtheta1" in doc["parameters"]
+    assert doc["parameters"]["geometric.dtheta1"]["identified"] is False
+    ev1 = json.loads(runner.invoke(app, ["evaluate", str(sim / "m1.json"), str(sim / "sim.csv"), "--json"]).stdout)
+    ev2 = json.loads(runner.invoke(app, ["evaluate", str(sim / "m2.json"), str(sim / "sim.csv"), "--json"]).stdout)
+    truth = json.loads(runner.invoke(app, ["evaluate", str(sim / "truth.json"), str(sim / "sim.csv"), "--json"]).stdout)
+    assert set(ev2) == {"n", "rms_mm", "mean_mm", "max_mm"} and ev2["n"] == 260
+    assert ev2["rms_mm"] < 0.5 * ev1["rms_mm"]  # adding the missing effect makes the error fall
+    assert ev2["rms_mm"] < 1.05 * truth["rms_mm"]
+
+
+def test_bad_inputs_exit_2_and_write_nothing(sim, tmp_path):
+    out = tmp_path / "m.json"
+    cases = [
+        (["--effects", "geometric,heat"], "unknown effect 'heat'"),
+        (["--effects", "geometric,external_load"], "fx, fy, fz"),
+        (["--effects", "+backlash"], "--from"),
+        (["--effects", "geometric", "--predictor", "gpr"], "not built"),
+        (["--effects", "geometric", "--loss", "l3"], "--loss"),
+    ]
+    for extra, message in cases:
+        args = ["fit", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "-o", str(out)] + extra
+        result = runner.invoke(app, args)
+        assert result.exit_code == 2, (extra, result.output)
+        assert message in result.stderr, (extra, result.stderr)
+        assert not out.exists()
+    broken = tmp_path / "broken.csv"
+    broken.write_text((sim / "sim.csv").read_text().replace("\n3,", "\n3,x", 1))
+    result = runner.invoke(app, ["fit", str(broken), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "geometric", "-o", str(out)])
+    assert result.exit_code == 2 and "line 4, column 'q1'" in result.stderr
+    assert not out.exists()
+
+
+def test_evaluate_rejects_broken_model_files(sim, tmp_path):
+    doc = json.loads((sim / "m1.json").read_text()) if (sim / "m1.json").exists() else None
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    result = runner.invoke(app, ["evaluate", str(bad), str(sim / "sim.csv")])
+    assert result.exit_code == 2 and "line 1, column 2" in result.stderr
+    truth = json.loads((sim / "truth.json").read_text())
+    del truth["parameters"]["geometric.dd2"]
+    bad.write_text(json.dumps(truth))
+    result = runner.invoke(app, ["evaluate", str(bad), str(sim / "sim.csv")])
+    assert result.exit_code == 2 and "parameters.geometric.dd2" in result.stderr
+    assert doc is None or doc["format"] == "postproc-model"
+
+
+def test_simulate_rejects_unknown_workspace(tmp_path):
+    result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--workspace", "sphere", "-o", str(tmp_path / "x.csv")])
+    assert result.exit_code == 2 and "--workspace" in result.stderr
+    assert not (tmp_path / "x.csv").exists()

@@ -1,0 +1,134 @@
+"""Effect specs, each effect's physics, and the analytic identification Jacobian."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import postproc
+from postproc.effects import CATALOG, EffectSpecError, Geometric, JointHarmonics, parse_effects
+from postproc.effects.backlash import approach_from_order
+from postproc.errormodel import ErrorModel
+from postproc.errors import MeasurementError
+from postproc.measurements import MeasurementSet
+
+ALL = "geometric,base_frame,tool_offset,joint_compliance,external_load,joint_harmonics[joints=2,3;orders=1,3],backlash,thermal"
+
+
+def test_catalog_names_are_the_spec_names():
+    assert set(CATALOG) == {"geometric", "base_frame", "tool_offset", "joint_compliance", "external_load", "joint_harmonics", "backlash", "thermal"}
+
+
+def test_parse_effects_with_options_and_round_trip():
+    effects = parse_effects("geometric, joint_harmonics[joints=2,3;orders=3,4], backlash[joints=1,2,3], thermal[reference=21.5]")
+    assert effects.names() == ["geometric", "joint_harmonics", "backlash", "thermal"]
+    assert effects.get("joint_harmonics").terms == ((2, 3), (2, 4), (3, 3), (3, 4))
+    assert effects.get("backlash").joints == (1, 2, 3)
+    assert effects.get("thermal").reference_c == 21.5
+    assert parse_effects(effects.spec()).spec() == effects.spec()
+    assert parse_effects("none").names() == []
+    assert (Geometric() + JointHarmonics.grid([2], [3])).spec() == "geometric,joint_harmonics[joints=2;orders=3]"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("geometric,heat", "unknown effect 'heat'"),
+        ("geometric,geometric", "appears twice"),
+        ("joint_harmonics[joints=7]", "1..6"),
+        ("joint_harmonics[joints=2;order=3]", "unknown option"),
+        ("backlash[joints=1,2", "unbalanced"),
+        ("geometric[x=1]", "takes no options"),
+        ("thermal[reference=warm]", "temperature"),
+    ],
+)
+def test_bad_effect_specs(text, message):
+    with pytest.raises(EffectSpecError, match=message):
+        parse_effects(text)
+
+
+def _random_set(n=25, seed=0):
+    rng = np.random.default_rng(seed)
+    return MeasurementSet(
+        q_deg=rng.uniform(-60, 60, (n, 6)),
+        measured_mm=np.zeros((n, 3)),
+        ids=tuple(str(i) for i in range(n)),
+        force_n=rng.normal(0, 200, (n, 3)),
+        approach=rng.choice([-1.0, 1.0], (n, 6)),
+        temp_c=rng.uniform(18, 30, n),
+        time_s=np.arange(n) * 30.0,
+    )
+
+
+def test_analytic_jacobian_matches_finite_differences():
+    robot = postproc.load_robot("kr160_r1570")
+    model = ErrorModel.create(robot, [10.0, -5.0, 200.0], parse_effects(ALL))
+    rng = np.random.default_rng(1)
+    model = model.with_vector(model.values + np.array([p.typical for p in model.params]) * rng.standard_normal(len(model.params)))
+    # Exact small-angle base-frame derivative holds at r = 0; keep the rotation in the registration.
+    model = model.with_values({f"base_frame.r{ax}": 0.0 for ax in "xyz"})
+    prep = model.prepare(_random_set())
+    _, jac = model.evaluate(prep)
+    for k, p in enumerate(model.params):
+        h = p.scale * 1e-3
+        up, down = model.values.copy(), model.values.copy()
+        up[k] += h
+        down[k] -= h
+        fd = (model.predict_prepared(prep, up) - model.predict_prepared(prep, down)) / (2 * h)
+        scale = max(np.abs(fd).max(), np.abs(jac[:, :, k]).max())
+        if scale < 1e-9:
+            continue  # e.g. joint 6 compliance with the tool on the joint-6 axis: no effect at all
+        assert np.abs(fd - jac[:, :, k]).max() < 1e-5 * scale, p.name
+
+
+def test_compliance_deflects_by_gravity_torque_over_stiffness():
+    robot = postproc.load_robot("kr160_r1570")
+    meas = _random_set()
+    model = ErrorModel.create(robot, [0, 0, 200], parse_effects("joint_compliance"))
+    prep = model.prepare(meas)
+    basis, idx = prep.bases[0]
+    dq = np.einsum("njp,p->nj", basis, model.values[idx])
+    expected = np.rad2deg(postproc.gravity_torque(robot, meas.q_deg) / robot.stiffness_nm_per_rad)
+    np.testing.assert_allclose(dq, expected, rtol=1e-12)
+
+
+def test_external_load_is_jacobian_transpose_force():
+    robot = postproc.load_robot("kr160_r1570")
+    meas = _random_set()
+    model = ErrorModel.create(robot, [0, 0, 200], parse_effects("external_load"))
+    prep = model.prepare(meas)
+    jac = postproc.jacobian(robot, meas.q_deg, tool=[0, 0, 200])
+    expected = np.einsum("nij,ni->nj", jac[:, :3], meas.force_n) / 1000.0
+    np.testing.assert_allclose(prep.ctx.force_torque, expected, rtol=1e-12)
+    # One shared set of compliances with joint_compliance.
+    both = ErrorModel.create(robot, [0, 0, 200], parse_effects("joint_compliance,external_load"))
+    assert [p.name for p in both.params] == [f"compliance.c{i}" for i in range(1, 7)]
+
+
+def test_thermal_growth_scales_link_lengths():
+    robot = postproc.load_robot("kr160_r1570")
+    meas = _random_set()
+    model = ErrorModel.create(robot, [0, 0, 0], parse_effects("thermal"), {"thermal.alpha": 1e-4})
+    pos = model.predict(meas)
+    grow = 1 + 1e-4 * (meas.temp_c - 20.0)
+    expected = np.stack([postproc.kinematics.forward_dh(postproc.kinematics.dh_angles(robot, meas.q_deg[i : i + 1]), robot.d_mm * g, robot.a_mm * g, robot.alpha_deg)[0, :3, 3] for i, g in enumerate(grow)])
+    np.testing.assert_allclose(pos, expected, atol=1e-9)
+
+
+def test_backlash_direction_from_row_order():
+    q = np.array([[0.0, 0], [1.0, 0], [1.0, -1], [0.5, -1], [0.5, -0.5]])
+    q6 = np.hstack([q, np.zeros((5, 4))])
+    s = approach_from_order(q6)
+    assert s[:, 0].tolist() == [1, 1, 1, -1, -1]
+    assert s[:, 1].tolist() == [1, 1, -1, -1, 1]
+
+
+def test_missing_column_for_an_effect_is_named():
+    robot = postproc.load_robot("kr160_r1570")
+    meas = _random_set()
+    no_force = MeasurementSet(q_deg=meas.q_deg, measured_mm=meas.measured_mm, ids=meas.ids, source="dev.csv")
+    model = ErrorModel.create(robot, [0, 0, 200], parse_effects("external_load"))
+    with pytest.raises(MeasurementError, match="external_load.*fx, fy, fz"):
+        model.prepare(no_force)
+    with pytest.raises(MeasurementError, match="thermal.*temp"):
+        ErrorModel.create(robot, [0, 0, 200], parse_effects("thermal")).prepare(no_force)
