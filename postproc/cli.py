@@ -296,6 +296,23 @@ def ladder_cmd(meas: Path = typer.Argument(...), robot: str = typer.Option(..., 
     _not_built("ladder", "issue 5")
 
 
+@app.command("import-ur10")
+@handles_errors
+def import_ur10_cmd(
+    series: Path = typer.Argument(..., help="A series folder of the IPA UR10 data set (e.g. data/ur10_ipa/Series_A)."),
+    output: Path = typer.Option(..., "-o", "--output", help="Measurement CSV to write (shared schema)."),
+):
+    """Convert IPA UR10 laser-tracker data (';', decimal comma, radians) to the shared CSV schema."""
+    from .formats.ur10_ipa import read_series
+    from .measurements import write_measurements
+
+    data, tool_mm = read_series(series)
+    write_measurements(output, data)
+    tool_text = ",".join(f"{v:.4f}" for v in np.where(np.abs(tool_mm) < 5e-5, 0.0, tool_mm))
+    out.print(f"{len(data)} poses written to {output} (positions in the tracker frame: fit a base_frame)")
+    out.print(f"measured point (T-Mac probe) in the flange frame: --tool {tool_text}")
+
+
 @app.command("simulate")
 @handles_errors
 def simulate_cmd(
@@ -308,6 +325,7 @@ def simulate_cmd(
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (tracker + repeatability)."),
     magnitude: float = typer.Option(2.0, "--magnitude", help="Error magnitudes in units of seed 001 Table 3."),
     workspace: str = typer.Option("cylinder", "--workspace", help="cylinder (seed 001), box, or joints."),
+    region: Optional[str] = typer.Option(None, "--region", help="Workspace extents, e.g. 'theta1=-40:40;radius=700:1150;z=300:800;tilt=30' (cylinder), 'x=..;y=..;z=..' (box), 'q2=-30:20' (joints)."),
     truth_out: Optional[Path] = typer.Option(None, "--truth", help="Also write the true robot as a model JSON."),
 ):
     """Generate a measurement set from a simulated robot with chosen error effects."""
@@ -315,11 +333,9 @@ def simulate_cmd(
     from .errormodel import require_resolved
     from .measurements import write_measurements
     from .model_io import save_model
-    from .sim import Box, Cylinder, JointBox, random_truth, sample_poses, simulate
+    from .sim import parse_region, random_truth, sample_poses, simulate
 
-    regions = {"cylinder": Cylinder(), "box": Box(), "joints": JointBox()}
-    if workspace not in regions:
-        raise InputError(f"--workspace: '{workspace}' is not one of {', '.join(regions)}")
+    space = parse_region(workspace, region)
     if n < 1:
         raise InputError("--n must be at least 1")
     chosen = parse_effects(effects)
@@ -327,7 +343,7 @@ def simulate_cmd(
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
     rng = np.random.default_rng(seed)
     truth = random_truth(robot_model, tool_mm, chosen, rng, magnitude=magnitude)
-    q = sample_poses(robot_model, tool_mm, n, regions[workspace], rng)
+    q = sample_poses(robot_model, tool_mm, n, space, rng)
     data = simulate(truth, q, rng, noise_mm=noise)
     write_measurements(output, data)
     if truth_out is not None:

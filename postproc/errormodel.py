@@ -113,7 +113,7 @@ class ErrorModel:
         bases = []
         for effect in self.effects:
             if effect.kind == "joint":
-                idx = np.array([self.index(p.name) for p in effect.params(self.robot)])
+                idx = np.array([self.index(p.name) for p in effect.params(self.robot)], dtype=int)
                 bases.append((effect.joint_basis(ctx, self.robot), idx))
         thermal = self.effects.get("thermal")
         delta_t = None if thermal is None else np.asarray(temp_c, dtype=float) - thermal.reference_c

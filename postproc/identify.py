@@ -150,8 +150,12 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
         _, jj = model.evaluate(prep, unpack(x))
         return jj.reshape(-1, jj.shape[-1])[:, free]
 
-    method = "lm" if loss == "linear" and free.sum() <= 3 * len(measured) else "trf"
-    res = least_squares(fun, base[free], jac=jac, x_scale=scales, method=method, loss=loss, f_scale=f_scale, max_nfev=max_nfev, xtol=1e-12, ftol=1e-12, gtol=1e-12)
+    lower = np.array([p.lower for p in model.params])[free]
+    upper = np.array([p.upper for p in model.params])[free]
+    bounded = np.isfinite(lower).any() or np.isfinite(upper).any()
+    x0 = np.clip(base[free], lower, upper)
+    method = "lm" if loss == "linear" and not bounded else "trf"
+    res = least_squares(fun, x0, jac=jac, x_scale=scales, method=method, loss=loss, f_scale=f_scale, bounds=(lower, upper) if bounded else (-np.inf, np.inf), max_nfev=max_nfev, xtol=1e-12, ftol=1e-12, gtol=1e-12)
     return unpack(res.x), res
 
 
@@ -179,8 +183,12 @@ def fit(
         say("choosing joint_harmonics terms")
         without = EffectSum(tuple(e for e in effects if e.name != "joint_harmonics"))
         chosen = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
-        effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
-        notes.append(f"joint_harmonics: data support {chosen.spec()}")
+        if chosen.terms:
+            effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
+            notes.append(f"joint_harmonics: data support {chosen.spec()}")
+        else:
+            effects = without
+            notes.append("joint_harmonics: the data support no harmonic term; the effect is left out")
     if len(meas) < 3:
         raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
 

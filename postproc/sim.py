@@ -71,6 +71,9 @@ def random_truth(robot: RobotModel, tool_mm, effects: EffectSum, rng: np.random.
             values[i] = p.typical * (1.0 + 0.2 * rng.standard_normal())
         else:
             values[i] = p.initial + magnitude * p.typical * rng.standard_normal()
+        if p.lower == 0.0 and values[i] < 0:  # a play or a compliance is never negative
+            values[i] = -values[i]
+        values[i] = np.clip(values[i], p.lower, p.upper)
     return model.with_vector(values)
 
 
@@ -176,3 +179,50 @@ def simulate(
 def tracker_frame(model: ErrorModel, rotvec_deg, translation_mm) -> ErrorModel:
     """The same truth seen from a tracker placed elsewhere: measurements in the tracker's frame."""
     return replace(model, base_rotation=rotvec_to_matrix(rotvec_deg) @ model.base_rotation, base_translation=np.asarray(translation_mm, dtype=float) + model.base_translation)
+
+
+_REGION_KEYS = {
+    "cylinder": {"theta1": "theta1_deg", "radius": "radius_mm", "z": "z_mm", "tilt": "tilt_deg", "spin": "spin_deg"},
+    "box": {"x": "x_mm", "y": "y_mm", "z": "z_mm", "tilt": "tilt_deg", "spin": "spin_deg"},
+}
+
+
+def parse_region(kind: str, text: str | None):
+    """A workspace from its command-line description.
+
+    cylinder: 'theta1=-40:40;radius=700:1150;z=300:800;tilt=30;spin=-180:180' (deg, mm)
+    box:      'x=800:1200;y=-400:400;z=300:800;tilt=30'
+    joints:   'q1=-40:40;q2=-30:20' (unnamed joints keep the robot's limits)
+    """
+    defaults = {"cylinder": Cylinder(), "box": Box(), "joints": JointBox()}
+    if kind not in defaults:
+        raise InputError(f"--workspace: '{kind}' is not one of {', '.join(defaults)}")
+    if not text:
+        return defaults[kind]
+    fields: dict[str, object] = {}
+    joint_ranges: dict[int, tuple[float, float]] = {}
+    for item in text.split(";"):
+        if not item.strip():
+            continue
+        key, eq, value = item.partition("=")
+        key = key.strip()
+        try:
+            parts = tuple(float(v) for v in value.split(":"))
+        except ValueError:
+            raise InputError(f"--region: '{item}' must be key=low:high or key=value with numbers") from None
+        if not eq or len(parts) not in (1, 2) or (len(parts) == 2 and parts[0] >= parts[1]):
+            raise InputError(f"--region: '{item}' must be key=low:high (low < high) or key=value")
+        if kind == "joints":
+            if key not in {f"q{i}" for i in range(1, 7)} or len(parts) != 2:
+                raise InputError(f"--region: joint ranges are q1..q6=low:high, got '{item}'")
+            joint_ranges[int(key[1])] = parts
+            continue
+        name = _REGION_KEYS[kind].get(key)
+        if name is None:
+            raise InputError(f"--region: unknown key '{key}' for a {kind} (known: {', '.join(_REGION_KEYS[kind])})")
+        if (name == "tilt_deg") != (len(parts) == 1):
+            raise InputError(f"--region: '{key}' takes {'one value' if name == 'tilt_deg' else 'a range low:high'}")
+        fields[name] = parts[0] if name == "tilt_deg" else parts
+    if kind == "joints":
+        return JointBox(tuple(joint_ranges.get(j, (-170.0, 170.0)) for j in range(1, 7)))
+    return replace(defaults[kind], **fields)

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 
+import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -84,3 +85,24 @@ def test_simulate_rejects_unknown_workspace(tmp_path):
     result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--workspace", "sphere", "-o", str(tmp_path / "x.csv")])
     assert result.exit_code == 2 and "--workspace" in result.stderr
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_simulate_workspace_regions(tmp_path):
+    from postproc.measurements import read_measurements
+
+    out = tmp_path / "cyl.csv"
+    result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--n", "60", "--region", "theta1=-10:10;radius=900:1000;z=400:500;tilt=5", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    meas = read_measurements(out)
+    r = np.hypot(meas.nominal_mm[:, 0], meas.nominal_mm[:, 1])
+    theta = np.degrees(np.arctan2(meas.nominal_mm[:, 1], meas.nominal_mm[:, 0]))
+    assert (r >= 900 - 1e-3).all() and (r <= 1000 + 1e-3).all()
+    assert (np.abs(theta) <= 10 + 1e-6).all()
+    assert ((meas.nominal_mm[:, 2] >= 400 - 1e-3) & (meas.nominal_mm[:, 2] <= 500 + 1e-3)).all()
+    out = tmp_path / "joints.csv"
+    result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--n", "40", "--workspace", "joints", "--region", "q1=-5:5;q2=-10:0", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    q = read_measurements(out).q_deg
+    assert (np.abs(q[:, 0]) <= 5).all() and (q[:, 1] <= 0).all() and (q[:, 1] >= -10).all()
+    result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--region", "radius=1000:900", "-o", str(tmp_path / "x.csv")])
+    assert result.exit_code == 2 and "low < high" in result.stderr

@@ -29,7 +29,8 @@ class Backlash(Effect):
         return {} if self.joints == (1, 2, 3, 4, 5, 6) else {"joints": list(self.joints)}
 
     def params(self, robot) -> list[Param]:
-        return [Param(f"backlash.h{j}", "deg", 0.01, 0.01) for j in self.joints]
+        # Half the lash is a play, never negative; a degree of play is no gear any more.
+        return [Param(f"backlash.h{j}", "deg", 0.01, 0.01, lower=0.0, upper=1.0) for j in self.joints]
 
     def joint_basis(self, ctx: Context, robot) -> np.ndarray:
         basis = np.zeros((ctx.q_deg.shape[0], 6, len(self.joints)))

@@ -33,6 +33,8 @@ class Param:
     scale: float
     typical: float
     initial: float = 0.0
+    lower: float = -np.inf
+    upper: float = np.inf
 
 
 @dataclass(frozen=True)

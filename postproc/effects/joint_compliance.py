@@ -14,7 +14,8 @@ from .base import Context, Effect, EffectSpecError, Param
 
 def compliance_params(robot) -> list[Param]:
     return [
-        Param(f"compliance.c{i + 1}", "rad/(N*m)", 1.0 / k, 1.0 / k, initial=1.0 / k)
+        # A joint cannot be more than 20 times softer than its data sheet, nor negative.
+        Param(f"compliance.c{i + 1}", "rad/(N*m)", 1.0 / k, 1.0 / k, initial=1.0 / k, lower=0.0, upper=20.0 / k)
         for i, k in enumerate(robot.stiffness_nm_per_rad)
     ]
 

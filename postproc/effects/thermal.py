@@ -28,4 +28,5 @@ class Thermal(Effect):
 
     def params(self, robot) -> list[Param]:
         # Steel grows about 1.2e-5 per K; a cast-aluminium arm about twice that.
-        return [Param("thermal.alpha", "1/K", 1e-5, 1.2e-5)]
+        # Bounds: no structural material grows by more than 1e-4 per K.
+        return [Param("thermal.alpha", "1/K", 1e-5, 1.2e-5, lower=-1e-4, upper=1e-4)]

@@ -1,0 +1,1 @@
+"""Readers for measurement data in formats other than the shared schema."""
