@@ -280,20 +280,111 @@ def evaluate_cmd(
 @app.command("diagnose")
 @handles_errors
 def diagnose_cmd(
-    model: Path = typer.Argument(...),
-    meas: Path = typer.Argument(...),
-    json_out: bool = typer.Option(False, "--json"),
-    report: Optional[Path] = typer.Option(None, "--report"),
+    model: Path = typer.Argument(..., help="Model JSON from 'postproc fit'."),
+    meas: Path = typer.Argument(..., help="Measurement CSV."),
+    json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write an HTML report with figures."),
+    noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (sets the noise floor)."),
+    folds: int = typer.Option(5, "--folds", help="Cross-validation folds."),
+    seed: int = typer.Option(0, "--seed"),
 ):
     """Where the model fails and which effect is missing."""
-    _not_built("diagnose", "issue 5")
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .diagnose import diagnose
+    from .measurements import write_text_atomic
+    from .model_io import load_model
+
+    if folds < 2:
+        raise InputError("--folds must be at least 2")
+    error_model, _ = load_model(model)
+    data = _load_measurements(meas)
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
+        task = bar.add_task("diagnosing", total=None)
+        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg))
+    if report is not None:
+        from .report.html import diagnosis_report
+
+        write_text_atomic(report, diagnosis_report(error_model, data, result, title=f"Diagnosis of {model.name} on {meas.name}"))
+    if json_out:
+        print(json.dumps(result.as_json()))
+        return
+    st = result.stats
+    out.print(f"model {error_model.effects.spec()} on {st.n} poses: RMS {st.rms_mm:.4f} mm, mean {st.mean_mm:.4f}, max {st.max_mm:.4f} "
+              f"(x/y/z {st.rms_axis_mm[0]:.4f}/{st.rms_axis_mm[1]:.4f}/{st.rms_axis_mm[2]:.4f}); cross-validated {result.cv_rms_mm:.4f} mm; noise floor {result.noise_floor_mm:.4f} mm")
+    structured = [b for b in result.breakdowns if b.significant]
+    if structured:
+        table = Table(title="Where it fails (significant after Holm correction)", show_edge=False)
+        for col in ("variable", "share of variance", "p"):
+            table.add_column(col, justify="left" if col == "variable" else "right")
+        for b in structured:
+            table.add_row(b.label, f"{100 * b.eta2:.1f}%", f"{b.p_adjusted:.1e}")
+        out.print(table)
+    if result.candidates:
+        table = Table(title="What is missing (held-out, whole model refitted)", show_edge=False)
+        for col in ("candidate", "explained", "CV RMS if added (mm)", "p (Holm)", "significant"):
+            table.add_column(col, justify="left" if col == "candidate" else "right")
+        for c in result.candidates:
+            table.add_row(c.effect, f"{100 * c.explained:.1f}%", f"{c.rms_if_added_mm:.4f}", f"{c.p_adjusted:.1e}", "yes" if c.significant else "no")
+        out.print(table)
+    for finding in result.findings:
+        out.print(f"- {finding}")
+    if report is not None:
+        out.print(f"report written to {report}")
 
 
 @app.command("ladder")
 @handles_errors
-def ladder_cmd(meas: Path = typer.Argument(...), robot: str = typer.Option(..., "--robot"), tool: str = typer.Option(..., "--tool")):
-    """Fit a sequence of models, each adding the next effect, and report validation RMS per step."""
-    _not_built("ladder", "issue 5")
+def ladder_cmd(
+    meas: Path = typer.Argument(..., help="Measurement CSV."),
+    robot: str = typer.Option(..., "--robot"),
+    tool: str = typer.Option(..., "--tool", help="X,Y,Z of the measured point in the flange frame, mm."),
+    effects: Optional[str] = typer.Option(None, "--effects", help="Effects to add in this order; default: diagnose chooses each next one."),
+    validation: Optional[Path] = typer.Option(None, "--val", help="A validation set to report as well."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write an HTML page with the ladder chart."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Write the ladder chart as PNG."),
+    noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
+    json_out: bool = typer.Option(False, "--json"),
+    seed: int = typer.Option(0, "--seed"),
+):
+    """Fit a sequence of models, each adding the next effect, and report the error per step."""
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .diagnose import ladder
+    from .effects import _split_top_level, parse_effects
+
+    robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
+    data = _load_measurements(meas)
+    val = _load_measurements(validation) if validation is not None else None
+    steps = None
+    if effects is not None:
+        steps = _split_top_level(effects)
+        parse_effects(effects)  # validate names and options before any work
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
+        task = bar.add_task("ladder", total=None)
+        rows = ladder(robot_model, tool_mm, data, steps, seed=seed, noise_mm=noise, validation=val, progress=lambda msg: bar.update(task, description=msg))
+    floor = noise * np.sqrt(3.0)
+    if plot is not None:
+        from .report.figures import ladder_chart
+
+        fig = ladder_chart(rows, floor)
+        tmp = plot.with_name(f".{plot.name}.tmp.png")
+        fig.savefig(tmp, dpi=110)
+        tmp.replace(plot)
+    if report is not None:
+        from .measurements import write_text_atomic
+        from .report.html import ladder_report
+
+        write_text_atomic(report, ladder_report(rows, floor, f"Ladder on {meas.name}"))
+    if json_out:
+        print(json.dumps({"noise_floor_mm": floor, "steps": rows}))
+        return
+    table = Table(title=f"ladder: {robot_model.name} on {meas.name} (noise floor {floor:.4f} mm)", show_edge=False)
+    for col in ("step", "added", "train RMS", "CV RMS") + (("validation RMS",) if val is not None else ()):
+        table.add_column(col, justify="left" if col == "added" else "right")
+    for r in rows:
+        table.add_row(str(r["step"]), r["added"], f"{r['train_rms_mm']:.4f}", f"{r['cv_rms_mm']:.4f}", *((f"{r['val_rms_mm']:.4f}",) if val is not None else ()))
+    out.print(table)
 
 
 @app.command("import-ur10")

@@ -291,19 +291,35 @@ def _recentre_base(model: ErrorModel) -> ErrorModel:
 
 def cross_validate(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str, f_scale: float, seed: int, say=lambda m: None) -> float:
     """k-fold cross-validated RMS (mm): refit the free parameters without each fold, predict it."""
-    order = np.random.default_rng(seed).permutation(len(meas))
-    errors = []
+    errors = cross_validation_errors(model, meas, free, folds, loss, f_scale, seed, say)
+    return float(np.sqrt(np.mean(np.sum(errors**2, axis=1))))
+
+
+def fold_assignment(n: int, folds: int, seed: int) -> np.ndarray:
+    """Fold number of each pose: a seeded permutation dealt round-robin, so every fold spans the set."""
+    order = np.random.default_rng(seed).permutation(n)
+    fold_of = np.empty(n, dtype=int)
+    fold_of[order] = np.arange(n) % folds
+    return fold_of
+
+
+def cross_validation_errors(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str = "linear", f_scale: float = 0.05, seed: int = 0, say=lambda m: None) -> np.ndarray:
+    """Held-out errors (N, 3), in the set's row order: each fold predicted by a refit without it."""
+    fold_of = fold_assignment(len(meas), folds, seed)
+    errors = np.zeros((len(meas), 3))
     for k in range(folds):
         say(f"cross-validation fold {k + 1}/{folds}")
-        test = np.zeros(len(meas), dtype=bool)
-        test[order[k::folds]] = True
+        test = fold_of == k
         train_set, test_set = meas.subset(~test), meas.subset(test)
         prep_train = model.prepare(train_set)
         values, _ = _solve(model, prep_train, train_set.measured_mm, free, loss, f_scale, max_nfev=200)
-        fold_model = model.with_vector(values)
-        errors.append(fold_model.predict(test_set) - test_set.measured_mm)
-    allerr = np.concatenate(errors)
-    return float(np.sqrt(np.mean(np.sum(allerr**2, axis=1))))
+        errors[test] = model.with_vector(values).predict(test_set) - test_set.measured_mm
+    return errors
+
+
+def free_mask(result: "FitResult") -> np.ndarray:
+    """Which parameters of a fit's model were identified."""
+    return np.array([p.name not in result.fixed for p in result.model.params])
 
 
 def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 8) -> JointHarmonics:
@@ -316,9 +332,7 @@ def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, pr
     candidates = [(j, k) for j in range(1, 7) for k in (1, 2, 3, 4)]
     chosen: list[tuple[int, int]] = []
     folds = 5
-    order = np.random.default_rng(seed).permutation(len(meas))
-    fold_of = np.empty(len(meas), dtype=int)
-    fold_of[order] = np.arange(len(meas)) % folds
+    fold_of = fold_assignment(len(meas), folds, seed)
     q = np.deg2rad(meas.q_deg)
     while len(chosen) < max_terms:
         effects = others + JointHarmonics(tuple(chosen)) if chosen else others

@@ -1,0 +1,364 @@
+"""Where a model fails and which physical effect is missing.
+
+1. Compare: residual statistics overall, per axis, and broken down by workspace region
+   (theta1 sector, radius, height), each joint's angle, load, temperature, time and
+   approach direction.
+2. Where it fails: for every variable, a one-way analysis of variance of the residual
+   across bins of that variable; p-values Holm-corrected over all variables, so noise is
+   not reported as structure.
+3. What is missing: each catalog effect not in the model whose columns the data have is
+   added and the *whole* model refitted; k-fold held-out errors (the same folds for all)
+   give the fraction of residual variance it explains and the RMS with it added. A paired
+   one-sided test on the per-pose held-out squared errors, Holm-corrected over the
+   candidates, says whether the gain is beyond noise.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as sps
+
+from . import kinematics as kin
+from .effects import CATALOG, EffectSum, parse_effects
+from .errormodel import ErrorModel
+from .identify import Stats, cross_validation_errors, fit, free_mask, residuals
+from .measurements import MeasurementSet
+
+ALPHA = 0.05
+MIN_EXPLAINED = 0.02  # a candidate must remove at least 2 % of the held-out residual variance
+BINS = 5
+
+_CANDIDATE_NEEDS = {"external_load": "force", "thermal": "temp"}
+
+
+@dataclass(frozen=True)
+class Breakdown:
+    """Residual against one variable: bins, their mean residual (mm, per axis) and the test."""
+
+    variable: str
+    label: str
+    unit: str
+    edges: tuple[float, ...]
+    centres: tuple[float, ...]
+    counts: tuple[int, ...]
+    mean_mm: tuple[tuple[float, float, float], ...]
+    rms_mm: tuple[float, ...]
+    eta2: float  # share of residual variance explained by the bin means
+    p_value: float
+    p_adjusted: float = 1.0
+
+    @property
+    def significant(self) -> bool:
+        return self.p_adjusted < ALPHA
+
+
+@dataclass(frozen=True)
+class Candidate:
+    effect: str  # spec, with the options the fit chose
+    explained: float
+    rms_if_added_mm: float
+    p_value: float
+    p_adjusted: float
+    significant: bool
+    message: str
+
+
+@dataclass(frozen=True)
+class Diagnosis:
+    stats: Stats
+    cv_rms_mm: float
+    noise_floor_mm: float
+    breakdowns: tuple[Breakdown, ...]
+    candidates: tuple[Candidate, ...]
+    findings: tuple[str, ...]
+    residual_mm: np.ndarray = field(repr=False)
+    variables: dict = field(repr=False, default_factory=dict)
+
+    def as_json(self) -> dict:
+        return {
+            "rms_mm": self.stats.rms_mm,
+            "mean_mm": self.stats.mean_mm,
+            "max_mm": self.stats.max_mm,
+            "rms_axis_mm": list(self.stats.rms_axis_mm),
+            "n": self.stats.n,
+            "cv_rms_mm": self.cv_rms_mm,
+            "noise_floor_mm": self.noise_floor_mm,
+            "candidates": [
+                {
+                    "effect": c.effect,
+                    "explained": c.explained,
+                    "rms_if_added_mm": c.rms_if_added_mm,
+                    "p_value": c.p_adjusted,
+                    "significant": c.significant,
+                    "message": c.message,
+                }
+                for c in self.candidates
+            ],
+            "structure": [
+                {"variable": b.variable, "eta2": b.eta2, "p_value": b.p_adjusted, "significant": b.significant}
+                for b in self.breakdowns
+            ],
+            "findings": list(self.findings),
+        }
+
+
+def holm(p_values: list[float]) -> list[float]:
+    """Holm-Bonferroni adjusted p-values (family-wise error control), in the input order."""
+    p = np.asarray(p_values, dtype=float)
+    m = len(p)
+    order = np.argsort(p)
+    adjusted = np.empty(m)
+    running = 0.0
+    for rank, idx in enumerate(order):
+        running = max(running, min(1.0, (m - rank) * p[idx]))
+        adjusted[idx] = running
+    return adjusted.tolist()
+
+
+def explanatory_variables(model: ErrorModel, meas: MeasurementSet) -> dict[str, tuple[str, str, np.ndarray, bool]]:
+    """name -> (label, unit, values (N,), categorical) for every variable the data allow."""
+    nominal = kin.fk(model.robot, meas.q_deg, tool=model.tool_mm)[:, :3, 3]
+    out: dict[str, tuple[str, str, np.ndarray, bool]] = {
+        "theta1_sector": ("theta1 sector (base rotation)", "deg", np.degrees(np.arctan2(nominal[:, 1], nominal[:, 0])), False),
+        "radius": ("radius from axis 1", "mm", np.hypot(nominal[:, 0], nominal[:, 1]), False),
+        "height": ("height", "mm", nominal[:, 2], False),
+    }
+    for j in range(6):
+        out[f"q{j + 1}"] = (f"joint {j + 1} angle", "deg", meas.q_deg[:, j], False)
+    if meas.force_n is not None:
+        out["load"] = ("load |F|", "N", np.linalg.norm(meas.force_n, axis=1), False)
+    if meas.temp_c is not None:
+        out["temperature"] = ("temperature", "degC", meas.temp_c, False)
+    if meas.time_s is not None:
+        out["time"] = ("time", "s", meas.time_s, False)
+    if meas.approach is not None:
+        for j in range(6):
+            out[f"s{j + 1}"] = (f"approach direction of joint {j + 1}", "", meas.approach[:, j], True)
+    return out
+
+
+def _breakdown(name: str, label: str, unit: str, values: np.ndarray, categorical: bool, resid: np.ndarray) -> Breakdown | None:
+    if categorical:
+        levels = np.unique(values)
+        groups = [values == v for v in levels]
+        edges = tuple(float(v) for v in levels)
+        centres = edges
+    else:
+        if np.ptp(values) <= 1e-9 * max(1.0, np.abs(values).max()):
+            return None  # the variable does not vary: nothing to learn from it
+        edges_arr = np.unique(np.quantile(values, np.linspace(0, 1, BINS + 1)))
+        if len(edges_arr) < 3:
+            return None
+        idx = np.clip(np.searchsorted(edges_arr, values, side="right") - 1, 0, len(edges_arr) - 2)
+        groups = [idx == b for b in range(len(edges_arr) - 1)]
+        edges = tuple(float(v) for v in edges_arr)
+        centres = tuple(float(values[g].mean()) if g.any() else float("nan") for g in groups)
+    groups = [g for g in groups if g.sum() >= 2]
+    if len(groups) < 2:
+        return None
+    p_axes = []
+    between = total = 0.0
+    for axis in range(3):
+        samples = [resid[g, axis] for g in groups]
+        p_axes.append(float(sps.f_oneway(*samples).pvalue) if np.var(resid[:, axis]) > 0 else 1.0)
+        grand = resid[:, axis].mean()
+        between += sum(len(s) * (s.mean() - grand) ** 2 for s in samples)
+        total += float(np.sum((resid[:, axis] - grand) ** 2))
+    p = min(1.0, 3 * np.nanmin(p_axes))  # Bonferroni over the three axes
+    return Breakdown(
+        variable=name,
+        label=label,
+        unit=unit,
+        edges=edges,
+        centres=centres,
+        counts=tuple(int(g.sum()) for g in groups),
+        mean_mm=tuple(tuple(float(v) for v in resid[g].mean(axis=0)) for g in groups),
+        rms_mm=tuple(float(np.sqrt(np.mean(np.sum(resid[g] ** 2, axis=1)))) for g in groups),
+        eta2=float(between / total) if total > 0 else 0.0,
+        p_value=p,
+    )
+
+
+def candidate_effects(model: ErrorModel, meas: MeasurementSet) -> list[str]:
+    """Catalog effects not in the model that the data's columns allow."""
+    present = set(model.effects.names())
+    out = []
+    for name in CATALOG:
+        if name in present:
+            continue
+        group = _CANDIDATE_NEEDS.get(name)
+        if group is not None and not meas.has(group):
+            continue
+        out.append(name)
+    return out
+
+
+_MESSAGES = {
+    "geometric": "residuals follow the arm's geometry (link lengths, offsets and twists)",
+    "base_frame": "residuals follow a rigid shift and tilt of the whole workspace",
+    "tool_offset": "residuals follow the tool orientation (the measured point is not where the tool says)",
+    "joint_compliance": "residuals follow the gravity torque on the joints",
+    "external_load": "residuals grow with the load at the TCP",
+    "backlash": "residuals change with the direction each joint approached from",
+    "thermal": "residuals drift with temperature",
+}
+
+
+def _message(spec: str, explained: float) -> str:
+    effects = parse_effects(spec)
+    effect = effects.effects[0]
+    if effect.name == "joint_harmonics" and effect.terms:
+        joints = sorted({j for j, _ in effect.terms})
+        parts = []
+        for j in joints:
+            orders = sorted(k for jj, k in effect.terms if jj == j)
+            parts.append(f"joint {j}" + (f" (order {', '.join(map(str, orders))})" if orders != [1] else ""))
+        what = "residuals follow sin/cos of " + " and ".join(parts)
+    else:
+        what = _MESSAGES.get(effect.name, f"{effect.name} accounts for part of the residual")
+    return f"{what}; {spec} explains {100 * explained:.0f}% of them"
+
+
+def diagnose(
+    model: ErrorModel,
+    meas: MeasurementSet,
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    noise_mm: float = 0.02,
+    candidates: list[str] | None = None,
+    progress=lambda msg: None,
+) -> Diagnosis:
+    """Compare the model with measurements, find structure, rank the missing effects."""
+    resid = residuals(model, meas)  # predicted - measured
+    miss = -resid  # measured - predicted: what the model misses
+    variables = explanatory_variables(model, meas)
+    breakdowns = [b for name, (label, unit, values, cat) in variables.items() if (b := _breakdown(name, label, unit, values, cat, miss)) is not None]
+    adjusted = holm([b.p_value for b in breakdowns]) if breakdowns else []
+    breakdowns = [Breakdown(**{**b.__dict__, "p_adjusted": p}) for b, p in zip(breakdowns, adjusted)]
+    breakdowns.sort(key=lambda b: (not b.significant, -b.eta2))
+
+    progress("refitting the model with cross-validation")
+    base_fit = fit(model.robot, model.tool_mm, model.effects, meas, cv_folds=0, prior=model, seed=seed)
+    base_err = cross_validation_errors(base_fit.model, meas, free_mask(base_fit), folds, seed=seed)
+    base_sq = np.sum(base_err**2, axis=1)
+    base_mse = float(base_sq.mean())
+
+    names = candidate_effects(model, meas) if candidates is None else candidates
+    raw = []
+    for name in names:
+        progress(f"trying {name}")
+        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base_fit.model, seed=seed)
+        added = [e for e in result.model.effects if e.name not in set(model.effects.names())]
+        if not added:  # e.g. joint_harmonics when the data support no term
+            raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0))
+            continue
+        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
+        sq = np.sum(err**2, axis=1)
+        mse = float(sq.mean())
+        gain = base_sq - sq
+        p = float(sps.ttest_1samp(gain, 0.0, alternative="greater").pvalue) if np.std(gain) > 0 else 1.0
+        raw.append((added[0].spec(), 1.0 - mse / base_mse, float(np.sqrt(mse)), p))
+    adjusted = holm([r[3] for r in raw]) if raw else []
+    ranked = []
+    for (spec, explained, rms, p), p_adj in zip(raw, adjusted):
+        significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
+        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained))))
+    ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
+
+    floor = float(noise_mm * np.sqrt(3.0))
+    cv_rms = float(np.sqrt(base_mse))
+    findings = _findings(breakdowns, ranked, cv_rms, floor)
+    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+
+
+def _findings(breakdowns, ranked, cv_rms, floor) -> list[str]:
+    out = []
+    structured = [b for b in breakdowns if b.significant]
+    for b in structured[:4]:
+        axis = int(np.argmax(np.abs(np.array(b.mean_mm)).max(axis=0)))
+        spread = np.ptp(np.array(b.mean_mm)[:, axis])
+        out.append(f"residual {'xyz'[axis]} varies with {b.label} (bin means span {spread:.3f} mm, {100 * b.eta2:.0f}% of residual variance, p = {b.p_adjusted:.1e})")
+    significant = [c for c in ranked if c.significant]
+    if significant:
+        best = significant[0]
+        out.append(best.message[0].upper() + best.message[1:] + f": add it (cross-validated RMS {cv_rms:.4f} -> {best.rms_if_added_mm:.4f} mm).")
+    else:
+        out.append(
+            f"No candidate explains the residual beyond noise. Cross-validated RMS {cv_rms:.4f} mm against a noise floor of "
+            f"{floor:.4f} mm ({cv_rms / floor:.2f} x)" + ("." if cv_rms < 1.25 * floor else ": what is left is not in the catalog (try a data-driven predictor).")
+        )
+    if not structured:
+        out.append("No variable shows structure in the residual beyond chance.")
+    return out
+
+
+def ladder(
+    robot,
+    tool_mm,
+    meas: MeasurementSet,
+    steps: list[str] | None = None,
+    *,
+    folds: int = 5,
+    seed: int = 0,
+    noise_mm: float = 0.02,
+    validation: MeasurementSet | None = None,
+    max_steps: int = 8,
+    progress=lambda msg: None,
+) -> list[dict]:
+    """Fit a sequence of models, each adding the next effect; report the error per step.
+
+    ``steps``: the effects in order; None lets diagnose choose the next one each time,
+    starting from the nominal robot (with a base frame if the data are far from it), and
+    stops when no candidate is significant.
+    """
+    rows = []
+    current = EffectSum()
+    model = ErrorModel.create(robot, tool_mm, current)
+
+    def record(label: str, model: ErrorModel, cv_rms: float):
+        row = {"step": len(rows), "added": label, "effects": model.effects.spec(), "cv_rms_mm": cv_rms, "train_rms_mm": Stats.of(residuals(model, meas)).rms_mm}
+        if validation is not None:
+            row["val_rms_mm"] = Stats.of(residuals(model, validation)).rms_mm
+        rows.append(row)
+
+    nominal_err = residuals(model, meas)
+    record("nominal", model, float(np.sqrt(np.mean(np.sum(nominal_err**2, axis=1)))))
+    planned = list(steps) if steps is not None else None
+    while len(rows) <= max_steps:
+        if planned is not None:
+            if not planned:
+                break
+            nxt = planned.pop(0)
+        else:
+            progress(f"step {len(rows)}: diagnosing")
+            diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress) if len(current) else None
+            if diag is None:
+                nxt = _first_step(robot, tool_mm, meas, folds, seed)
+            else:
+                best = [c for c in diag.candidates if c.significant]
+                if not best:
+                    break
+                nxt = best[0].effect
+        progress(f"step {len(rows)}: adding {nxt}")
+        current = current + parse_effects(nxt)
+        result = fit(robot, tool_mm, current, meas, cv_folds=0, prior=model if len(model.params) else None, seed=seed)
+        current = result.model.effects
+        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
+        model = result.model
+        record(nxt if "[" in nxt or nxt != "joint_harmonics" else current.get("joint_harmonics").spec(), model, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))))
+    return rows
+
+
+def _first_step(robot, tool_mm, meas, folds, seed) -> str:
+    """From the nominal robot, the single effect with the lowest cross-validated error."""
+    best, best_rms = None, np.inf
+    for name in ("base_frame", "geometric", "tool_offset"):
+        result = fit(robot, tool_mm, parse_effects(name), meas, cv_folds=0, seed=seed)
+        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
+        rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
+        if rms < best_rms:
+            best, best_rms = name, rms
+    return best

@@ -1,0 +1,91 @@
+"""A self-contained HTML report: figures embedded as PNG, tables, findings in plain words."""
+
+from __future__ import annotations
+
+import base64
+import html
+import io
+
+import matplotlib.pyplot as plt
+import numpy as np
+
+from .. import kinematics as kin
+from . import figures
+
+
+def _png(fig) -> str:
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    return base64.b64encode(buf.getvalue()).decode()
+
+
+def _img(fig, alt: str) -> str:
+    return f'<figure><img alt="{html.escape(alt)}" src="data:image/png;base64,{_png(fig)}"/><figcaption>{html.escape(alt)}</figcaption></figure>'
+
+
+CSS = """
+body { font-family: system-ui, sans-serif; max-width: 1200px; margin: 2em auto; color: #222; }
+h1 { font-size: 1.6em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #ddd; }
+table { border-collapse: collapse; margin: 0.8em 0; } td, th { border: 1px solid #ccc; padding: 4px 10px; text-align: right; }
+th { background: #f3f3f3; } td.l, th.l { text-align: left; }
+tr.sig td { background: #eaf7ea; } .finding { background: #fff8e1; padding: 0.6em 1em; border-left: 4px solid #f0b400; margin: 0.4em 0; }
+figure { margin: 1em 0; } img { max-width: 100%; } figcaption { color: #555; font-size: 0.9em; }
+"""
+
+
+def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None = None) -> str:
+    """The report of ``postproc diagnose --report``."""
+    nominal = kin.fk(model.robot, meas.q_deg, tool=model.tool_mm)[:, :3, 3]
+    # Errors relative to the nominal robot, all in the measurement frame.
+    rot, trans = model.base_transform()
+    nominal_meas = nominal @ rot.T + trans
+    measured_err = meas.measured_mm - nominal_meas
+    predicted = meas.measured_mm - diagnosis.residual_mm
+    model_err = predicted - nominal_meas
+    st = diagnosis.stats
+    parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title or 'postproc diagnosis')}</title><style>{CSS}</style></head><body>"]
+    parts.append(f"<h1>{html.escape(title or 'Diagnosis')}</h1>")
+    parts.append(f"<p>Robot <b>{html.escape(model.robot.name)}</b>, tool {model.tool_mm.tolist()} mm, model effects <code>{html.escape(model.effects.spec())}</code>; {st.n} poses from <code>{html.escape(meas.source)}</code>.</p>")
+    parts.append("<h2>What to do</h2>")
+    parts.extend(f"<div class='finding'>{html.escape(f)}</div>" for f in diagnosis.findings)
+    parts.append("<h2>Compare</h2><table><tr><th class='l'></th><th>RMS (mm)</th><th>mean (mm)</th><th>max (mm)</th><th>RMS x</th><th>RMS y</th><th>RMS z</th></tr>")
+    parts.append(f"<tr><td class='l'>model on this set</td><td>{st.rms_mm:.4f}</td><td>{st.mean_mm:.4f}</td><td>{st.max_mm:.4f}</td>" + "".join(f"<td>{v:.4f}</td>" for v in st.rms_axis_mm) + "</tr>")
+    parts.append(f"<tr><td class='l'>cross-validated (model refitted)</td><td>{diagnosis.cv_rms_mm:.4f}</td><td colspan='5' class='l'>noise floor {diagnosis.noise_floor_mm:.4f} mm ({diagnosis.cv_rms_mm / diagnosis.noise_floor_mm:.2f} x)</td></tr></table>")
+    parts.append(_img(figures.histograms(np.linalg.norm(measured_err, axis=1), np.linalg.norm(diagnosis.residual_mm, axis=1)), "3-D position error of the nominal robot and of the model on this set."))
+    parts.append(_img(figures.error_vectors(nominal, measured_err, model_err, diagnosis.residual_mm), "Error vectors at each measured pose: what was measured (grey), what the model predicts (blue), what is left (red)."))
+    parts.append("<h2>Where it fails</h2><table><tr><th class='l'>variable</th><th>share of residual variance</th><th>p (Holm)</th><th>largest bin mean (mm)</th><th class='l'>verdict</th></tr>")
+    for b in diagnosis.breakdowns:
+        biggest = float(np.abs(np.array(b.mean_mm)).max())
+        verdict = "structure" if b.significant else "noise"
+        parts.append(f"<tr class='{'sig' if b.significant else ''}'><td class='l'>{html.escape(b.label)}</td><td>{100 * b.eta2:.1f}%</td><td>{b.p_adjusted:.1e}</td><td>{biggest:.4f}</td><td class='l'>{verdict}</td></tr>")
+    parts.append("</table>")
+    parts.append(_img(figures.residual_vs_variables(diagnosis.breakdowns, diagnosis.variables, diagnosis.residual_mm), "Residual against each variable; lines are binned means, red titles are significant after Holm correction."))
+    parts.append("<h2>What is missing</h2>")
+    if diagnosis.candidates:
+        parts.append("<table><tr><th class='l'>candidate effect</th><th>explained (held out)</th><th>CV RMS if added (mm)</th><th>p (Holm)</th><th class='l'>in plain words</th></tr>")
+        for c in diagnosis.candidates:
+            parts.append(f"<tr class='{'sig' if c.significant else ''}'><td class='l'><code>{html.escape(c.effect)}</code></td><td>{100 * c.explained:.1f}%</td><td>{c.rms_if_added_mm:.4f}</td><td>{c.p_adjusted:.1e}</td><td class='l'>{html.escape(c.message)}</td></tr>")
+        parts.append("</table>")
+        parts.append(_img(figures.candidates_chart(list(diagnosis.candidates), diagnosis.cv_rms_mm, diagnosis.noise_floor_mm), "Cross-validated RMS with each candidate added."))
+    else:
+        parts.append("<p>Every catalog effect the data's columns allow is already in the model.</p>")
+    if ladder_rows:
+        parts.append("<h2>Ladder</h2>" + ladder_table(ladder_rows))
+        parts.append(_img(figures.ladder_chart(ladder_rows, diagnosis.noise_floor_mm), "Error per step: each step adds one effect."))
+    parts.append("</body></html>")
+    return "\n".join(parts)
+
+
+def ladder_table(rows) -> str:
+    has_val = "val_rms_mm" in rows[0]
+    out = ["<table><tr><th>step</th><th class='l'>added</th><th>train RMS (mm)</th><th>CV RMS (mm)</th>" + ("<th>validation RMS (mm)</th>" if has_val else "") + "</tr>"]
+    for r in rows:
+        out.append(f"<tr><td>{r['step']}</td><td class='l'><code>{html.escape(r['added'])}</code></td><td>{r['train_rms_mm']:.4f}</td><td>{r['cv_rms_mm']:.4f}</td>" + (f"<td>{r['val_rms_mm']:.4f}</td>" if has_val else "") + "</tr>")
+    out.append("</table>")
+    return "".join(out)
+
+
+def ladder_report(rows, floor_mm: float, title: str) -> str:
+    body = ladder_table(rows) + _img(figures.ladder_chart(rows, floor_mm), "Error per step: each step adds one effect.")
+    return f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title><style>{CSS}</style></head><body><h1>{html.escape(title)}</h1>{body}</body></html>"
