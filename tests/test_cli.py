@@ -26,7 +26,7 @@ def test_console_script_is_installed():
     assert proc.returncode == 0 and "postproc" in proc.stdout
 
 
-@pytest.mark.parametrize("command", ["fit", "evaluate", "diagnose", "compensate", "inspect", "roundtrip", "simulate", "ladder"])
+@pytest.mark.parametrize("command", ["fit", "evaluate", "diagnose", "compensate", "inspect", "roundtrip", "simulate", "ladder", "import-ur10"])
 def test_scripted_interface_commands_are_registered(command):
     result = runner.invoke(app, [command, "--help"])
     assert result.exit_code == 0, result.output
@@ -84,6 +84,6 @@ def test_bad_robot_file_exits_2_naming_file_and_key(tmp_path):
 
 
 def test_commands_not_built_yet_exit_2_and_say_so(tmp_path):
-    result = runner.invoke(app, ["diagnose", str(tmp_path / "m.json"), str(tmp_path / "x.csv")])
+    result = runner.invoke(app, ["inspect", str(tmp_path / "p.mod")])
     assert result.exit_code == 2
     assert "not built" in result.stderr

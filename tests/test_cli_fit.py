@@ -106,3 +106,34 @@ def test_simulate_workspace_regions(tmp_path):
     assert (np.abs(q[:, 0]) <= 5).all() and (q[:, 1] <= 0).all() and (q[:, 1] >= -10).all()
     result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--region", "radius=1000:900", "-o", str(tmp_path / "x.csv")])
     assert result.exit_code == 2 and "low < high" in result.stderr
+
+
+def test_diagnose_json_and_report(sim, tmp_path):
+    model = sim / "m1.json"
+    if not model.exists():
+        runner.invoke(app, ["fit", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "-o", str(model),
+                            "--effects", "geometric,base_frame,tool_offset,joint_compliance"])
+    report = tmp_path / "report.html"
+    result = runner.invoke(app, ["diagnose", str(model), str(sim / "sim.csv"), "--json", "--report", str(report)])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(result.stdout)
+    assert isinstance(doc["rms_mm"], float)
+    first = doc["candidates"][0]
+    assert set(first) >= {"effect", "explained", "rms_if_added_mm"}
+    assert first["effect"].startswith("joint_harmonics") and first["explained"] > 0.5
+    assert [c["explained"] for c in doc["candidates"]] == sorted((c["explained"] for c in doc["candidates"]), reverse=True)
+    page = report.read_text()
+    assert page.count("data:image/png;base64,") == 4 and "What is missing" in page
+
+
+def test_ladder_cli_plot_and_json(sim, tmp_path):
+    plot = tmp_path / "ladder.png"
+    result = runner.invoke(app, ["ladder", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200",
+                                 "--effects", "geometric,base_frame,joint_harmonics[joints=3;orders=2]", "--plot", str(plot), "--json"])
+    assert result.exit_code == 0, result.output
+    steps = json.loads(result.stdout)["steps"]
+    assert [s["added"] for s in steps] == ["nominal", "geometric", "base_frame", "joint_harmonics[joints=3;orders=2]"]
+    assert steps[-1]["cv_rms_mm"] < steps[1]["cv_rms_mm"]
+    assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    bad = runner.invoke(app, ["ladder", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "geometric,magic"])
+    assert bad.exit_code == 2 and "unknown effect 'magic'" in bad.stderr
