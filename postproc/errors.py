@@ -64,3 +64,21 @@ class ModelFileError(InputError):
 
 class IdentificationError(JobError):
     """A fit ran but could not produce a usable model (too few poses, no convergence)."""
+
+
+class ParseError(InputError):
+    """A program that cannot be parsed: file, line, column and the offending line with a caret."""
+
+    def __init__(self, path: str, line: int, column: int, message: str, excerpt: str = ""):
+        self.path = path
+        self.line = line
+        self.column = column
+        self.excerpt = excerpt
+        text = f"{path}:{line}:{column}: {message}"
+        if excerpt:
+            text += f"\n    {excerpt}\n    {' ' * max(column - 1, 0)}^"
+        super().__init__(text)
+
+
+class EmitError(InputError):
+    """A modified toolpath cannot be written back into its source text."""

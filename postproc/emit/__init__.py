@@ -1,0 +1,1 @@
+"""Writing programs: splice changed numbers into the original text, or write a new program."""

@@ -1,0 +1,148 @@
+"""The toolpath IR: a frozen struct of arrays over the motion targets of a program.
+
+The program text is kept (``SourceDoc``, decoded as Latin-1 so that every byte survives
+and character offsets are byte offsets); every number the IR took from the text has its
+span, so writing back splices new numbers into the original text and nothing else.
+
+Per target (N rows, program order):
+- ``kind``: Kind code; ``line``: 1-based line of its motion statement; ``file``: which source
+- ``position`` (N, 3) mm and ``orientation`` (N, 4) quaternion w, x, y, z of the target in
+  its own frame (work object / base / work offset), NaN where the dialect gives none
+- ``joints`` (N, 6) degrees for joint targets, ``ext`` (N, 6) external axes
+- ``conf`` (N, 4): ABB cf1, cf4, cf6, cfx or KUKA Status, Turn (NaN when absent)
+- ``speed``, ``zone`` (N,): as written (mm/s, mm/min feed, mm), NaN when unknown
+- ``tool`` / ``frame`` (N,): indices into ``tools`` (flange_T_tcp) and ``frames``
+  (base_T_frame), with their names; ``resolved`` (N,) False where a frame or tool could not
+  be evaluated from the program (then the identity was used and the target is flagged)
+- ``spans`` (N, FIELDS, 3): (source index, start, end) of each field's number, -1 if none
+- ``scale`` (N, FIELDS): IR value = text value x scale (inches, unit changes), and
+  ``relative`` (N,) True where the numbers are increments from the previous target (G91)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from enum import IntEnum
+
+import numpy as np
+
+from .frames import make_transform, quat_wxyz_to_matrix
+
+
+class Kind(IntEnum):
+    JOINT = 0  # PTP / MoveJ to a Cartesian target
+    LINEAR = 1  # LIN / MoveL / G1
+    CIRC_VIA = 2  # the auxiliary point of CIRC / MoveC
+    CIRC_END = 3
+    ABSJ = 4  # a target given in joint values (MoveAbsJ, PTP with E6AXIS)
+    RAPID = 5  # G0
+    ARC_CW = 6  # G2
+    ARC_CCW = 7  # G3
+
+
+FIELDS = ("x", "y", "z", "o1", "o2", "o3", "o4", "j1", "j2", "j3", "j4", "j5", "j6", "e1", "e2", "e3", "e4", "e5", "e6")
+F_POS = slice(0, 3)
+F_ORI = slice(3, 7)
+F_JOINT = slice(7, 13)
+F_EXT = slice(13, 19)
+NF = len(FIELDS)
+
+
+@dataclass(frozen=True)
+class SourceDoc:
+    path: str
+    text: str  # decoded as Latin-1: one character per byte
+    role: str = "program"  # "program", "src", "dat"
+
+    @classmethod
+    def read(cls, path, role: str = "program") -> "SourceDoc":
+        with open(path, "rb") as fh:
+            return cls(str(path), fh.read().decode("latin-1"), role)
+
+    def encode(self) -> bytes:
+        return self.text.encode("latin-1")
+
+
+@dataclass(frozen=True)
+class Toolpath:
+    dialect: str
+    sources: tuple[SourceDoc, ...]
+    kind: np.ndarray
+    line: np.ndarray
+    file: np.ndarray
+    position: np.ndarray
+    orientation: np.ndarray
+    orientation_kind: str  # "quat" (RAPID), "abc" (KRL, degrees in o1..o3), "axis" (G-code tool axis i, j, k) or "none"
+    joints: np.ndarray
+    ext: np.ndarray
+    conf: np.ndarray
+    speed: np.ndarray
+    zone: np.ndarray
+    tool: np.ndarray
+    frame: np.ndarray
+    tools: np.ndarray  # (T, 4, 4) flange_T_tcp
+    tool_names: tuple[str, ...]
+    frames: np.ndarray  # (F, 4, 4) base_T_frame
+    frame_names: tuple[str, ...]
+    resolved: np.ndarray
+    target_name: tuple[str, ...]  # declaration name of the target ('' for inline literals)
+    spans: np.ndarray
+    scale: np.ndarray
+    relative: np.ndarray
+    values: np.ndarray = field(repr=False)  # (N, FIELDS) the numbers as the IR reads them (NaN where absent)
+    offset: np.ndarray = field(repr=False, default=None)  # (N, FIELDS): IR value = text value x scale + offset (RAPID Offs)
+    offset_span: np.ndarray = field(repr=False, default=None)  # (N, FIELDS, 3): the number the offset was read from, -1 if none
+    insert_at: np.ndarray = field(repr=False, default=None)  # (N, 2) (source, offset) where a missing field may be written, -1 if nowhere
+    notes: tuple[str, ...] = ()
+
+    def __len__(self) -> int:
+        return self.kind.shape[0]
+
+    # ------------------------------------------------------------ frames
+
+    def target_poses(self) -> np.ndarray:
+        """(N, 4, 4) target poses in their own frame (identity rotation where none is given)."""
+        rot = np.repeat(np.eye(3)[None], len(self), axis=0)
+        has = ~np.isnan(self.orientation).any(axis=1)
+        if has.any():
+            rot[has] = quat_wxyz_to_matrix(self.orientation[has])
+        return make_transform(rot, self.position)
+
+    def base_poses(self) -> np.ndarray:
+        """(N, 4, 4) TCP poses in the robot base / machine frame: base_T_frame . frame_T_target."""
+        return self.frames[self.frame] @ self.target_poses()
+
+    def flange_poses(self) -> np.ndarray:
+        """(N, 4, 4) flange poses in the robot base frame: base_T_tcp . inv(flange_T_tcp)."""
+        return self.base_poses() @ np.linalg.inv(self.tools[self.tool])
+
+    def base_positions(self) -> np.ndarray:
+        return self.base_poses()[:, :3, 3]
+
+    # ---------------------------------------------------------- editing
+
+    def with_positions(self, position: np.ndarray) -> "Toolpath":
+        """A copy with new target positions (N, 3), mm, in each target's own frame."""
+        position = np.asarray(position, dtype=float)
+        values = self.values.copy()
+        values[:, F_POS] = np.where(np.isnan(self.values[:, F_POS]), np.nan, position)
+        return replace(self, position=position, values=values)
+
+    def with_orientations(self, orientation: np.ndarray) -> "Toolpath":
+        """A copy with new target orientations (N, 4) quaternion w, x, y, z (emitted in the dialect's notation)."""
+        from .frames import matrix_to_abc
+
+        orientation = np.asarray(orientation, dtype=float)
+        values = self.values.copy()
+        if self.orientation_kind == "quat":
+            values[:, F_ORI] = np.where(np.isnan(self.values[:, F_ORI]), np.nan, orientation)
+        elif self.orientation_kind == "abc":
+            abc = matrix_to_abc(quat_wxyz_to_matrix(orientation))
+            values[:, 3:6] = np.where(np.isnan(self.values[:, 3:6]), np.nan, abc)
+        return replace(self, orientation=orientation, values=values)
+
+    def with_joints(self, joints: np.ndarray) -> "Toolpath":
+        joints = np.asarray(joints, dtype=float)
+        values = self.values.copy()
+        values[:, F_JOINT] = np.where(np.isnan(self.values[:, F_JOINT]), np.nan, joints)
+        return replace(self, joints=joints, values=values)

@@ -1,0 +1,16 @@
+"""Loading the lark grammars shipped in grammars/ (package postproc.grammar_files)."""
+
+from __future__ import annotations
+
+import functools
+from importlib import resources
+
+from lark import Lark
+
+
+@functools.lru_cache(maxsize=None)
+def grammar(name: str) -> Lark:
+    """LALR parser with a contextual lexer and positions, built once per process."""
+    path = resources.files("postproc.grammar_files") / f"{name}.lark"
+    with resources.as_file(path) as real:
+        return Lark.open(str(real), parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False)

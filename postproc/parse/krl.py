@@ -1,0 +1,518 @@
+"""KUKA KRL: a .src program with its .dat (and, when present, $config.dat) -> Toolpath.
+
+Lines whose shape is plain bulk data — a move with an inline aggregate
+(``LIN {X 1,Y 2,...} C_DIS``), a move to a named point (``PTP XP1``), a point declaration
+(``DECL E6POS XP1={...}``) or an array element (``path[12]={...}``) — are recognised by
+compiled regular expressions over the whole text and their numbers are read by the
+vectorised scanner. Every other line is parsed by the lark grammar ``krl.lark``; the
+block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from lark import Token, Tree
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
+
+from ..frames import abc_to_matrix, make_transform
+from ..ir import NF, Kind, SourceDoc, Toolpath
+from .common import Builder, LineIndex, Numbers, _ranges, scan_numbers
+from .grammar import grammar
+
+NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
+AGG = rf"\{{[ \t]*{FLD}(?:[ \t]*,[ \t]*{FLD})*[ \t]*\}}"
+TAIL = r"[ \t]*(?:;[^\n]*)?\r?$"
+APPROX = r"(?:[ \t]+(?P<ap>C_DIS|C_PTP|C_VEL|C_ORI|C_SPL))?"
+NAME = r"[A-Za-z_$][\w$]*"
+FLAGS = re.IGNORECASE | re.MULTILINE
+RE_MOVE_INLINE = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)[ \t]*(?P<agg>{AGG}){APPROX}{TAIL}", FLAGS)
+RE_MOVE_NAME = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)[ \t]+(?P<name>{NAME}(?:\[[ \t]*\d+[ \t]*\])?){APPROX}{TAIL}", FLAGS)
+RE_DECL = re.compile(rf"^[ \t]*(?:DECL[ \t]+)?(?:GLOBAL[ \t]+)?(?P<type>E6POS|POS|FRAME|E6AXIS|AXIS)[ \t]+(?P<name>{NAME})[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
+RE_ELEM = re.compile(rf"^[ \t]*(?P<name>{NAME}\[[ \t]*\d+[ \t]*\])[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
+
+# Aggregate field names -> IR field (0-18) or conf column (100 + k).
+_FIELD_CODES = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "C": 5, "S": 100, "T": 101}
+_FIELD_CODES.update({f"A{i}": 6 + i for i in range(1, 7)})
+_FIELD_CODES.update({f"E{i}": 12 + i for i in range(1, 7)})
+_LOOKUP = np.full(65536, -1, dtype=np.int16)
+for _name, _code in _FIELD_CODES.items():
+    key = ord(_name[0]) if len(_name) == 1 else ord(_name[0]) * 256 + ord(_name[1])
+    _LOOKUP[key] = _code
+    lower = _name.lower()
+    key = ord(lower[0]) if len(lower) == 1 else ord(lower[0]) * 256 + ord(lower[1])
+    _LOOKUP[key] = _code
+
+_MOVE_KIND = {"PTP": Kind.JOINT, "SPTP": Kind.JOINT, "LIN": Kind.LINEAR, "SLIN": Kind.LINEAR, "SPL": Kind.LINEAR}
+_BLOCK_OPEN = {"def": "END", "deffct": "ENDFCT", "defdat": "ENDDAT", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "loop_open": "ENDLOOP", "repeat_open": "UNTIL", "switch_open": "ENDSWITCH", "spline_open": "ENDSPLINE"}
+_BLOCK_CLOSE = {"endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endloop": "ENDLOOP", "until": "UNTIL", "endswitch": "ENDSWITCH", "endspline": "ENDSPLINE"}
+
+
+@dataclass
+class Symbols:
+    """Named points and frames: name (upper case) -> values (NF), spans (NF, 3), conf, insert point."""
+
+    index: dict[str, int] = field(default_factory=dict)
+    values: list[np.ndarray] = field(default_factory=list)
+    spans: list[np.ndarray] = field(default_factory=list)
+    conf: list[np.ndarray] = field(default_factory=list)
+    insert: list[np.ndarray] = field(default_factory=list)
+
+    def add_many(self, names, values, spans, conf, insert):
+        base = len(self.values)
+        for i, name in enumerate(names):
+            self.index[name.upper().replace(" ", "").replace("\t", "")] = base + i
+        self.values.extend(values)
+        self.spans.extend(spans)
+        self.conf.extend(conf)
+        self.insert.extend(insert)
+
+    def get(self, name: str):
+        i = self.index.get(name.upper().replace(" ", "").replace("\t", ""))
+        if i is None:
+            return None
+        return self.values[i], self.spans[i], self.conf[i], self.insert[i]
+
+
+def _field_codes(raw: np.ndarray, prev_nonspace: np.ndarray, starts: np.ndarray) -> np.ndarray:
+    """IR field code of each number from the one- or two-character name before it."""
+    p = prev_nonspace[np.maximum(starts - 1, 0)]
+    c1 = raw[p].astype(np.int64)
+    c0 = np.where(p >= 1, raw[np.maximum(p - 1, 0)], 32).astype(np.int64)
+    cm = np.where(p >= 2, raw[np.maximum(p - 2, 0)], 32).astype(np.int64)
+    alnum = lambda c: ((c | 32) >= 97) & ((c | 32) <= 122) | ((c >= 48) & (c <= 57))  # noqa: E731
+    single = alnum(c1) & ~alnum(c0)
+    double = ((c1 >= 48) & (c1 <= 57)) & alnum(c0) & ~alnum(cm)
+    key = np.where(single, c1, np.where(double, c0 * 256 + c1, 0))
+    return np.where(single | double, _LOOKUP[key], -1)
+
+
+class _Doc:
+    """One source file: its text, lines, numbers and field codes, computed once."""
+
+    def __init__(self, doc: SourceDoc, index: int):
+        self.doc = doc
+        self.index = index
+        self.text = doc.text
+        self.lines = LineIndex(doc.text)
+        self.numbers: Numbers = scan_numbers(doc.text)
+        raw = np.frombuffer(doc.text.encode("latin-1"), dtype=np.uint8)
+        nonspace = (raw != 32) & (raw != 9)
+        self.prev_nonspace = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0)) if len(raw) else np.zeros(0, dtype=np.int64)
+        self.codes = _field_codes(raw, self.prev_nonspace, self.numbers.start) if len(raw) else np.zeros(0, dtype=np.int16)
+
+    def aggregates(self, agg_start: np.ndarray, agg_end: np.ndarray):
+        """Values (M, NF), spans (M, NF, 3), conf (M, 4), insert (M, 2) of M aggregates, vectorised."""
+        m = len(agg_start)
+        values = np.full((m, NF), np.nan)
+        spans = np.full((m, NF, 3), -1, dtype=np.int64)
+        conf = np.full((m, 4), np.nan)
+        insert = np.stack([np.full(m, self.index), agg_end - 1], axis=1).astype(np.int64)
+        nums = self.numbers
+        lo = np.searchsorted(nums.start, agg_start)
+        hi = np.searchsorted(nums.start, agg_end)
+        counts = hi - lo
+        rows = np.repeat(np.arange(m), counts)
+        idx = _ranges(lo, hi)
+        code = self.codes[idx]
+        f = code < 100
+        f &= code >= 0
+        values[rows[f], code[f]] = nums.value[idx[f]]
+        spans[rows[f], code[f], 0] = self.index
+        spans[rows[f], code[f], 1] = nums.start[idx[f]]
+        spans[rows[f], code[f], 2] = nums.end[idx[f]]
+        c = code >= 100
+        conf[rows[c], code[c] - 100] = nums.value[idx[c]]
+        return values, spans, conf, insert
+
+
+def _frame_of(values: np.ndarray) -> np.ndarray:
+    """FRAME / POS aggregate values -> 4x4 (missing components are 0)."""
+    v = np.nan_to_num(values[:6])
+    return make_transform(abc_to_matrix(v[3:6][None])[0], v[:3])
+
+
+def _bulk(regex, text):
+    return list(regex.finditer(text))
+
+
+class KrlParser:
+    def __init__(self, src: SourceDoc, dat: SourceDoc | None = None, config: SourceDoc | None = None):
+        docs = [d for d in (src, dat, config) if d is not None]
+        self.docs = [_Doc(d, i) for i, d in enumerate(docs)]
+        self.builder = Builder("krl", "abc", docs)
+        self.symbols = Symbols()
+        self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value)
+        self.slow_targets: list[tuple] = []
+        self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
+
+    # ---------------------------------------------------------------- data
+    def _declarations(self, d: _Doc) -> set[int]:
+        """Bulk point declarations and array elements of one file; returns their line starts."""
+        done = set()
+        for regex in (RE_DECL, RE_ELEM):
+            matches = _bulk(regex, d.text)
+            if not matches:
+                continue
+            starts = np.array([m.start("agg") for m in matches])
+            ends = np.array([m.end("agg") for m in matches])
+            values, spans, conf, insert = d.aggregates(starts, ends)
+            self.symbols.add_many([m.group("name") for m in matches], list(values), list(spans), list(conf), list(insert))
+            done.update(m.start() for m in matches)
+        return done
+
+    # ----------------------------------------------------------- statements
+    def parse(self) -> Toolpath:
+        src = self.docs[0]
+        data_lines = {}
+        for d in self.docs[1:]:
+            data_lines[d.index] = self._declarations(d)
+        src_decl = self._declarations(src)
+        for d in self.docs[1:]:
+            self._slow_lines(d, skip=data_lines[d.index], is_program=False)
+        inline = _bulk(RE_MOVE_INLINE, src.text)
+        named = _bulk(RE_MOVE_NAME, src.text)
+        skip = src_decl | {m.start() for m in inline} | {m.start() for m in named}
+        self._slow_lines(src, skip=skip, is_program=True)
+        self._bulk_moves(src, inline, named)
+        return self._finish()
+
+    def _slow_lines(self, d: _Doc, skip: set[int], is_program: bool) -> None:
+        g = grammar("krl")
+        stack: list[tuple[str, int]] = []
+        text = d.text
+        starts = d.lines.starts
+        for ln, start in enumerate(starts.tolist()):
+            if start in skip:
+                continue
+            end = text.find("\n", start)
+            end = len(text) if end < 0 else end
+            raw_line = text[start:end]
+            code, comment = _split_comment(raw_line)
+            if comment is not None:
+                folded = comment.lstrip(";").lstrip().upper()
+                if folded.startswith("FOLD"):
+                    stack.append(("ENDFOLD", start))
+                elif folded.startswith("ENDFOLD"):
+                    self._close(d, stack, "ENDFOLD", start + raw_line.find(";"))
+            if not code.strip():
+                continue
+            try:
+                tree = g.parse(code)
+            except UnexpectedInput as exc:
+                col = getattr(exc, "column", 1) or 1
+                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
+                raise d.lines.error(d.doc.path, start + col - 1, f"{what}: cannot parse this KRL statement") from None
+            except LarkError as exc:
+                raise d.lines.error(d.doc.path, start, f"cannot parse this KRL statement ({exc})") from None
+            if not tree.children:
+                continue
+            self._statement(d, tree.children[0], start, stack, is_program)
+        if stack:
+            want, where = stack[-1]
+            raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
+
+    def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
+        if not stack or stack[-1][0] != keyword:
+            expected = stack[-1][0] if stack else "nothing"
+            raise d.lines.error(d.doc.path, offset, f"{keyword} without its opening block (expected {expected})")
+        stack.pop()
+
+    def _statement(self, d: _Doc, node, start: int, stack, is_program: bool) -> None:
+        kind = node.data if isinstance(node, Tree) else None
+        if kind == "header":
+            kw = node.children[0]
+            word = str(kw).split()[-1].upper()
+            if word in ("DEF", "DEFFCT", "DEFDAT"):
+                stack.append(({"DEF": "END", "DEFFCT": "ENDFCT", "DEFDAT": "ENDDAT"}[word], start))
+            else:
+                self._close(d, stack, word, start + kw.column - 1)
+            return
+        if kind in _BLOCK_OPEN:
+            stack.append((_BLOCK_OPEN[kind], start))
+            return
+        if kind in ("else_", "case", "default"):
+            if not stack or stack[-1][0] not in ("ENDIF", "ENDSWITCH"):
+                raise d.lines.error(d.doc.path, start, f"{kind.rstrip('_').upper()} outside IF/SWITCH")
+            return
+        if kind in _BLOCK_CLOSE:
+            self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
+            return
+        if kind == "decl":
+            self._decl(d, node)
+            return
+        if kind == "assignment":
+            self._assignment(d, node, start)
+            return
+        if kind == "motion" and is_program:
+            self._motion(d, node, start)
+            return
+        if kind == "motion":
+            raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    # ------------------------------------------------------------ semantics
+    def _decl(self, d: _Doc, node: Tree) -> None:
+        for decl in node.children:
+            if isinstance(decl, Tree) and decl.data == "declarator" and len(decl.children) >= 2:
+                value = decl.children[-1]
+                if isinstance(value, Tree) and value.data == "aggregate":
+                    v, sp, c, ins = self._agg(d, value)
+                    self.symbols.add_many([str(decl.children[0])], [v], [sp], [c], [ins])
+
+    def _agg(self, d: _Doc, node: Tree):
+        s, e = node.meta.start_pos, node.meta.end_pos
+        v, sp, c, ins = d.aggregates(np.array([self._line_start + s]), np.array([self._line_start + e]))
+        return v[0], sp[0], c[0], ins[0]
+
+    def _eval_frame(self, d: _Doc, node) -> tuple[np.ndarray, bool, str]:
+        """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
+        if isinstance(node, Tree) and node.data == "geo":
+            total, ok, names = np.eye(4), True, []
+            for part in node.children:
+                t, r, n = self._eval_frame(d, part)
+                total, ok = total @ t, ok and r
+                names.append(n)
+            return total, ok, ":".join(names)
+        if isinstance(node, Tree) and node.data == "aggregate":
+            v, _, _, _ = self._agg(d, node)
+            return _frame_of(v), True, self._text(d, node)
+        name = self._text(d, node)
+        found = self.symbols.get(name)
+        if found is None:
+            return np.eye(4), False, name
+        return _frame_of(found[0]), True, name
+
+    def _text(self, d: _Doc, node) -> str:
+        s, e = _node_span(node)
+        return d.text[self._line_start + s : self._line_start + e].strip()
+
+    def _assignment(self, d: _Doc, node: Tree, start: int) -> None:
+        lhs = self._text(d, node.children[0]).upper().replace(" ", "")
+        rhs = node.children[1]
+        if isinstance(rhs, Tree) and rhs.data == "aggregate":
+            v, sp, c, ins = self._agg(d, rhs)
+            self.symbols.add_many([lhs], [v], [sp], [c], [ins])
+        if d.index != 0:
+            return
+        if lhs in ("$BASE", "$TOOL"):
+            transform, ok, name = self._eval_frame(d, rhs)
+            self.events.append((start, lhs, (name, transform, ok)))
+        elif lhs == "$VEL.CP":
+            self.events.append((start, "vel", _number(rhs)))
+        elif lhs == "$APO.CDIS":
+            self.events.append((start, "apo", _number(rhs)))
+
+    def _motion(self, d: _Doc, node: Tree, start: int) -> None:
+        move = str(node.children[0]).upper()
+        targets = [c for c in node.children if isinstance(c, Tree) and c.data == "target"]
+        approx = any(isinstance(c, Tree) and c.data == "approx" for c in node.children)
+        relative = move.endswith("_REL")
+        base_move = move.replace("_REL", "")
+        if base_move in ("CIRC", "SCIRC"):
+            kinds = [Kind.CIRC_VIA, Kind.CIRC_END]
+        else:
+            kinds = [_MOVE_KIND[base_move]]
+        if len(targets) != len(kinds):
+            raise d.lines.error(d.doc.path, start, f"{move} takes {len(kinds)} target(s), got {len(targets)}")
+        for k, tnode in zip(kinds, targets):
+            expr = tnode.children[0]
+            if isinstance(expr, Tree) and expr.data == "aggregate":
+                v, sp, c, ins = self._agg(d, expr)
+                name = ""
+            else:
+                name = self._text(d, expr)
+                found = self.symbols.get(name)
+                if found is None:
+                    v, sp, c, ins = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.array([-1, -1])
+                    self.builder.notes.append(f"{d.doc.path}:{d.lines.line(start)}: point {name} is not declared in the given files")
+                else:
+                    v, sp, c, ins = found
+            self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
+
+    _line_start = 0
+
+    def _bulk_moves(self, src: _Doc, inline, named) -> None:
+        if inline:
+            starts = np.array([m.start("agg") for m in inline])
+            ends = np.array([m.end("agg") for m in inline])
+            values, spans, conf, insert = src.aggregates(starts, ends)
+            kinds = np.array([_MOVE_KIND[m.group("mv").upper()] for m in inline])
+            approx = np.array([m.group("ap") is not None for m in inline])
+            self._collect(np.array([m.start() for m in inline]), kinds, values, spans, conf, insert, [""] * len(inline), approx)
+        if named:
+            names = [m.group("name") for m in named]
+            rows = [self.symbols.index.get(n.upper().replace(" ", "").replace("\t", "")) for n in names]
+            missing = [n for n, r in zip(names, rows) if r is None]
+            for n in sorted(set(missing)):
+                self.builder.notes.append(f"point {n} is not declared in the given files")
+            nan_v, nan_s = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64)
+            values = np.array([self.symbols.values[r] if r is not None else nan_v for r in rows])
+            spans = np.array([self.symbols.spans[r] if r is not None else nan_s for r in rows])
+            conf = np.array([self.symbols.conf[r] if r is not None else np.full(4, np.nan) for r in rows])
+            insert = np.array([self.symbols.insert[r] if r is not None else np.array([-1, -1]) for r in rows])
+            kinds = np.array([_MOVE_KIND[m.group("mv").upper()] for m in named])
+            approx = np.array([m.group("ap") is not None for m in named])
+            self._collect(np.array([m.start() for m in named]), kinds, values, spans, conf, insert, names, approx)
+
+    def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None):
+        self.builder.add_block(
+            offsets,
+            kind=kinds,
+            values=values,
+            spans=spans,
+            conf=conf,
+            insert_at=insert,
+            name=np.array(names, dtype=object),
+            relative=np.zeros(len(offsets), bool) if relative is None else relative,
+            line=self.docs[0].lines.line(offsets),
+        )
+        self._approx_blocks.append((offsets, approx))
+
+    def _finish(self) -> Toolpath:
+        from dataclasses import replace
+
+        from ..frames import matrix_to_quat_wxyz
+
+        if self.slow_targets:
+            rows = self.slow_targets
+            self._collect(
+                np.array([r[0] for r in rows]),
+                np.array([r[1] for r in rows]),
+                np.array([r[2] for r in rows]),
+                np.array([r[3] for r in rows]),
+                np.array([r[4] for r in rows]),
+                np.array([r[5] for r in rows]),
+                [r[6] for r in rows],
+                np.array([r[7] for r in rows]),
+                np.array([r[8] for r in rows]),
+            )
+        offsets = np.concatenate([b[0] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, np.int64)
+        approx = np.concatenate([b[1] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, bool)
+        perm = np.argsort(offsets, kind="stable")  # the builder orders targets the same way
+        offsets, approx = offsets[perm], approx[perm]
+        n = len(offsets)
+        # Program state at each target: the last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it.
+        frame = np.zeros(n, np.int32)
+        tool = np.zeros(n, np.int32)
+        speed = np.full(n, np.nan)
+        cdis = np.zeros(n)
+        resolved = np.ones(n, bool)
+        events = sorted(self.events, key=lambda e: e[0])
+        for key in ("$BASE", "$TOOL", "vel", "apo"):
+            ev = [(o, v) for o, k, v in events if k == key]
+            if not ev:
+                continue
+            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
+            has = at >= 0
+            if key in ("$BASE", "$TOOL"):
+                register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
+                ids = np.array([register(name, transform) for _, (name, transform, _) in ev])
+                oks = np.array([ok for _, (_, _, ok) in ev])
+                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
+                resolved &= ~has | oks[np.maximum(at, 0)]
+            else:
+                vals = np.array([v for _, v in ev], dtype=float)
+                if key == "vel":
+                    speed[has] = vals[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
+                else:
+                    cdis[has] = vals[at[has]]
+        tp = self.builder.build()
+        values = tp.values
+        # A partial aggregate ({X 10}) keeps the other components of the previous Cartesian target.
+        cart = ~np.isnan(values[:, :3]).all(axis=1)
+        pose = values[:, :6].copy()
+        for col in range(6):
+            column = np.where(cart, pose[:, col], np.nan)
+            last = np.where(~np.isnan(column), np.arange(n), -1)
+            np.maximum.accumulate(last, out=last)
+            pose[:, col] = np.where(cart & (last >= 0), column[np.maximum(last, 0)], np.nan)
+        if tp.relative.any():
+            # LIN_REL / PTP_REL: components are increments from the previous target.
+            for i in np.nonzero(tp.relative)[0]:
+                prev = pose[i - 1] if i > 0 else np.zeros(6)
+                pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
+        # The IR holds absolute values; the emitter turns them back into increments.
+        values = values.copy()
+        values[tp.relative, :6] = np.where(np.isnan(values[tp.relative, :6]), np.nan, pose[tp.relative])
+        orientation = np.full((n, 4), np.nan)
+        ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
+        if ok.any():
+            orientation[ok] = matrix_to_quat_wxyz(abc_to_matrix(pose[ok, 3:6]))
+        declared = ~np.isnan(values).all(axis=1)
+        joint_only = ~np.isnan(values[:, 7:13]).any(axis=1) & np.isnan(values[:, :3]).all(axis=1)
+        return replace(
+            tp,
+            values=values,
+            kind=np.where(joint_only, np.int8(Kind.ABSJ), tp.kind).astype(np.int8),
+            position=pose[:, :3],
+            orientation=orientation,
+            frame=frame,
+            tool=tool,
+            speed=speed,
+            zone=np.where(approx, cdis, 0.0),
+            resolved=resolved & declared,
+        )
+
+
+def _split_comment(line: str) -> tuple[str, str | None]:
+    """Code and comment (from the first ';' outside a string)."""
+    if ";" not in line:
+        return line.rstrip("\r"), None
+    in_string = False
+    for i, ch in enumerate(line):
+        if ch == '"':
+            in_string = not in_string
+        elif ch == ";" and not in_string:
+            return line[:i], line[i:].rstrip("\r")
+    return line.rstrip("\r"), None
+
+
+def _node_span(node) -> tuple[int, int]:
+    if isinstance(node, Token):
+        return node.start_pos, node.end_pos
+    return node.meta.start_pos, node.meta.end_pos
+
+
+def _first_column(node) -> int:
+    if isinstance(node, Token):
+        return node.column
+    return node.meta.column if not node.meta.empty else 1
+
+
+def _number(node) -> float:
+    if isinstance(node, Tree) and node.data == "number":
+        return float(node.children[0])
+    if isinstance(node, Tree) and node.data == "neg":
+        return -_number(node.children[0])
+    return float("nan")
+
+
+def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | None = None, config: str | Path | None = None) -> Toolpath:
+    """Parse a KRL .src; its .dat (same name) and a $config.dat in the same folder are read when present."""
+    path = Path(path)
+    src = SourceDoc(str(path), text.decode("latin-1"), "src") if text is not None else SourceDoc.read(path, "src")
+    dat_doc = None
+    dat_path = Path(dat) if dat is not None else path.with_suffix(".dat")
+    if text is None or dat is not None:
+        if dat_path.is_file() and dat_path != path:
+            dat_doc = SourceDoc.read(dat_path, "dat")
+    config_path = Path(config) if config is not None else path.parent / "$config.dat"
+    config_doc = SourceDoc.read(config_path, "config") if config_path.is_file() else None
+    parser = KrlParser(src, dat_doc, config_doc)
+    _install_line_start_hook(parser)
+    return parser.parse()
+
+
+def _install_line_start_hook(parser: KrlParser) -> None:
+    """Statements are parsed line by line: positions inside a tree are relative to the line."""
+    original = parser._statement
+
+    def statement(d, node, start, stack, is_program):
+        parser._line_start = start
+        return original(d, node, start, stack, is_program)
+
+    parser._statement = statement

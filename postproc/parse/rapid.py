@@ -1,0 +1,394 @@
+"""ABB RAPID modules -> Toolpath.
+
+Comments (``!`` to the end of the line) are blanked with spaces first, so every offset
+stays the file's. Bulk lines — MoveL/MoveJ with a literal robtarget or a named target on
+one line, and one-line robtarget declarations — are recognised by compiled regular
+expressions and read by the vectorised number scanner. Every other statement (they end
+with ';' or are block lines, and may span lines) is parsed by ``rapid.lark``; the block
+structure is checked with a stack.
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from lark import Token, Tree
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
+
+from ..frames import make_transform, quat_wxyz_to_matrix
+from ..ir import NF, Kind, SourceDoc, Toolpath
+from .common import Builder, LineIndex, scan_numbers
+from .grammar import grammar
+
+NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
+W = r"[ \t]*"
+
+
+def _vec(n: int) -> str:
+    return r"\[" + W + (W + "," + W).join([NUM] * n) + W + r"\]"
+
+
+RT = r"\[" + W + _vec(3) + W + "," + W + _vec(4) + W + "," + W + _vec(4) + W + "," + W + _vec(6) + W + r"\]"
+NAME = r"[A-Za-z][A-Za-z0-9_]*"
+TAIL = W + r";" + W + r"\r?$"
+ARGS = rf"{W},{W}(?P<speed>{NAME}){W},{W}(?P<zone>{NAME}){W},{W}(?P<tool>{NAME})(?:{W}\\WObj{W}:={W}(?P<wobj>{NAME}))?"
+FLAGS = re.IGNORECASE | re.MULTILINE
+RE_MOVE_LIT = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<lit>{RT}){ARGS}{TAIL}", FLAGS)
+RE_MOVE_NAME = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<name>{NAME}(?:\{{{W}\d+{W}\}})?){ARGS}{TAIL}", FLAGS)
+RE_DECL = re.compile(rf"^{W}(?:LOCAL[ \t]+)?(?:TASK[ \t]+)?(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(?P<name>{NAME}){W}:={W}(?P<lit>{RT}){TAIL}", FLAGS)
+RE_COMMENT = re.compile(r'("[^"\n]*")|(![^\n]*)')
+
+# Where the 17 numbers of a robtarget go: x y z, q1..q4, cf1 cf4 cf6 cfx, e1..e6.
+_RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
+_JT_FIELDS = np.array([7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18])
+_MOVE_KIND = {"MOVEL": Kind.LINEAR, "MOVEJ": Kind.JOINT, "MOVELDO": Kind.LINEAR, "MOVEJDO": Kind.JOINT, "MOVELSYNC": Kind.LINEAR, "MOVEJSYNC": Kind.JOINT,
+              "MOVELGO": Kind.LINEAR, "MOVEJGO": Kind.JOINT, "MOVELAO": Kind.LINEAR, "MOVEJAO": Kind.JOINT, "SEARCHL": Kind.LINEAR}
+_CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC"}
+_OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open": "ENDRECORD", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "test_open": "ENDTEST"}
+_CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
+_BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
+_LABEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*\s*:\s*$")
+
+
+def blank_comments(text: str) -> str:
+    """The text with every comment replaced by spaces (strings kept), same length."""
+    if "!" not in text:
+        return text
+    return RE_COMMENT.sub(lambda m: m.group(0) if m.group(1) else " " * len(m.group(0)), text)
+
+
+def _speed(name: str) -> float:
+    m = re.fullmatch(r"v(\d+(?:\.\d+)?)", name.strip(), re.IGNORECASE)
+    return float(m.group(1)) if m else np.nan
+
+
+def _zone(name: str) -> float:
+    name = name.strip().lower()
+    if name == "fine":
+        return 0.0
+    m = re.fullmatch(r"z(\d+(?:\.\d+)?)", name)
+    return float(m.group(1)) if m else np.nan
+
+
+def _pose(numbers7: np.ndarray) -> np.ndarray:
+    return make_transform(quat_wxyz_to_matrix(numbers7[3:7][None])[0], numbers7[:3])
+
+
+class RapidParser:
+    def __init__(self, doc: SourceDoc):
+        self.doc = doc
+        self.code = blank_comments(doc.text)
+        self.lines = LineIndex(doc.text)
+        self.numbers = scan_numbers(self.code)
+        self.builder = Builder("rapid", "quat", [doc])
+        self.points: dict[str, tuple] = {}  # name -> (values, spans, conf)
+        self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
+        self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
+        self.rows: list[dict] = []
+
+    # ------------------------------------------------------------- numbers
+    def _literal(self, start: int, end: int, fields: np.ndarray):
+        """values (NF,), spans (NF, 3), conf (4,) of a literal whose numbers fill ``fields`` in order."""
+        sl = self.numbers.between(start, end)
+        vals = self.numbers.value[sl]
+        values = np.full(NF, np.nan)
+        spans = np.full((NF, 3), -1, dtype=np.int64)
+        conf = np.full(4, np.nan)
+        if len(vals) != len(fields):
+            return None
+        for k, f in enumerate(fields):
+            if f >= 0:
+                values[f] = vals[k]
+                spans[f] = (0, self.numbers.start[sl][k], self.numbers.end[sl][k])
+            else:
+                conf[-f - 1] = vals[k]
+        values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])  # 9E9: no axis
+        spans[13:19][np.isnan(values[13:19])] = -1
+        return values, spans, conf
+
+    def _bulk_literals(self, matches, group: str):
+        """Vectorised read of many one-line robtarget literals: values (M, NF), spans, conf."""
+        m = len(matches)
+        starts = np.array([x.start(group) for x in matches])
+        lo = np.searchsorted(self.numbers.start, starts)
+        idx = lo[:, None] + np.arange(17)[None, :]
+        vals = self.numbers.value[idx]
+        values = np.full((m, NF), np.nan)
+        spans = np.full((m, NF, 3), -1, dtype=np.int64)
+        fields = _RT_FIELDS >= 0
+        values[:, _RT_FIELDS[fields]] = vals[:, fields]
+        spans[:, _RT_FIELDS[fields], 0] = 0
+        spans[:, _RT_FIELDS[fields], 1] = self.numbers.start[idx][:, fields]
+        spans[:, _RT_FIELDS[fields], 2] = self.numbers.end[idx][:, fields]
+        conf = vals[:, 7:11]
+        ext = values[:, 13:19]
+        none = np.abs(ext) >= 8.9e9
+        values[:, 13:19] = np.where(none, np.nan, ext)
+        spans[:, 13:19][none] = -1
+        return values, spans, conf
+
+    # --------------------------------------------------------------- parse
+    def parse(self) -> Toolpath:
+        decls = list(RE_DECL.finditer(self.code))
+        lits = list(RE_MOVE_LIT.finditer(self.code))
+        named = list(RE_MOVE_NAME.finditer(self.code))
+        if decls:
+            values, spans, conf = self._bulk_literals(decls, "lit")
+            for i, m in enumerate(decls):
+                self.points[m.group("name").upper()] = (values[i], spans[i], conf[i])
+        skip = {m.start() for m in decls} | {m.start() for m in lits} | {m.start() for m in named}
+        self._slow(skip)
+        if lits:
+            values, spans, conf = self._bulk_literals(lits, "lit")
+            self._bulk_rows(lits, values, spans, conf, [""] * len(lits))
+        if named:
+            names = [m.group("name").replace(" ", "").replace("\t", "") for m in named]
+            nan_v, nan_s, nan_c = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan)
+            found = [self.points.get(n.upper()) for n in names]
+            for n, f in zip(names, found):
+                if f is None:
+                    self.builder.notes.append(f"target {n} is not declared as a literal robtarget in this module")
+            values = np.array([f[0] if f else nan_v for f in found])
+            spans = np.array([f[1] if f else nan_s for f in found])
+            conf = np.array([f[2] if f else nan_c for f in found])
+            self._bulk_rows(named, values, spans, conf, names)
+        return self._finish()
+
+    def _bulk_rows(self, matches, values, spans, conf, names):
+        offsets = np.array([m.start() for m in matches])
+        tools = [m.group("tool") for m in matches]
+        wobjs = [m.group("wobj") or "wobj0" for m in matches]
+        tool_idx, tool_ok = self._frames_for(tools, self.tools, self.builder.tool_index)
+        wobj_idx, wobj_ok = self._frames_for(wobjs, self.wobjs, self.builder.frame_index)
+        self.builder.add_block(
+            offsets,
+            kind=np.array([_MOVE_KIND[m.group("mv").upper()] for m in matches], dtype=np.int8),
+            line=self.lines.line(offsets),
+            values=values,
+            spans=spans,
+            conf=conf,
+            speed=np.array([_speed(m.group("speed")) for m in matches]),
+            zone=np.array([_zone(m.group("zone")) for m in matches]),
+            tool=tool_idx,
+            frame=wobj_idx,
+            resolved=tool_ok & wobj_ok & ~np.isnan(values[:, :3]).any(axis=1),
+            name=np.array(names, dtype=object),
+        )
+
+    def _frames_for(self, names, table, register):
+        cache: dict[str, tuple[int, bool]] = {}
+        idx = np.zeros(len(names), np.int32)
+        ok = np.ones(len(names), bool)
+        for i, name in enumerate(names):
+            key = name.upper()
+            if key not in cache:
+                transform = table.get(key)
+                cache[key] = (register(name, transform), transform is not None)
+            idx[i], ok[i] = cache[key]
+        return idx, ok
+
+    # ----------------------------------------------------------- slow path
+    def _statements(self, skip: set[int]):
+        """(start offset, end offset) of each statement outside the bulk lines."""
+        code = self.code
+        pending = None
+        for start in self.lines.starts.tolist():
+            if start in skip:
+                if pending is not None:
+                    raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
+                continue
+            end = code.find("\n", start)
+            end = len(code) if end < 0 else end
+            line = code[start:end]
+            stripped = line.strip()
+            if not stripped or stripped.startswith("%%%"):
+                continue
+            first = pending if pending is not None else start + (len(line) - len(line.lstrip()))
+            if stripped.endswith(";") or (pending is None and (_BLOCK_WORDS.match(line) or _LABEL.match(line))):
+                yield first, end
+                pending = None
+            elif pending is None:
+                pending = first
+        if pending is not None:
+            raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
+
+    def _slow(self, skip: set[int]) -> None:
+        g = grammar("rapid")
+        stack: list[tuple[str, int]] = []
+        for start, end in self._statements(skip):
+            text = self.code[start:end]
+            try:
+                tree = g.parse(text)
+            except UnexpectedInput as exc:
+                pos = start + (getattr(exc, "pos_in_stream", None) or 0)
+                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
+                raise self.lines.error(self.doc.path, pos, f"{what}: cannot parse this RAPID statement") from None
+            except LarkError as exc:
+                raise self.lines.error(self.doc.path, start, f"cannot parse this RAPID statement ({exc})") from None
+            if tree.children:
+                self._statement(tree.children[0], start, stack)
+        if stack:
+            want, where = stack[-1]
+            raise self.lines.error(self.doc.path, where, f"block opened here is never closed (missing {want if want != 'ENDROUTINE' else 'ENDPROC'})")
+
+    def _statement(self, node, start: int, stack) -> None:
+        kind = node.data if isinstance(node, Tree) else None
+        if kind in _OPEN:
+            stack.append((_OPEN[kind], start))
+        elif kind in _CLOSE:
+            if not stack or stack[-1][0] != _CLOSE[kind]:
+                expected = stack[-1][0] if stack else "nothing open"
+                raise self.lines.error(self.doc.path, start, f"{self.code[start:start + 12].split()[0]} does not close the open block (expected {expected})")
+            stack.pop()
+        elif kind in ("elseif", "else_") and (not stack or stack[-1][0] != "ENDIF"):
+            raise self.lines.error(self.doc.path, start, "ELSE outside IF")
+        elif kind in ("case", "default") and (not stack or stack[-1][0] != "ENDTEST"):
+            raise self.lines.error(self.doc.path, start, "CASE outside TEST")
+        elif kind == "decl":
+            self._decl(node, start)
+        elif kind == "move":
+            if not any(s[0] == "ENDROUTINE" for s in stack):
+                raise self.lines.error(self.doc.path, start, "motion instruction outside a routine")
+            self._move(node, start)
+
+    def _span(self, node, start: int) -> tuple[int, int]:
+        if isinstance(node, Token):
+            return start + node.start_pos, start + node.end_pos
+        return start + node.meta.start_pos, start + node.meta.end_pos
+
+    def _decl(self, node: Tree, start: int) -> None:
+        tokens = [c for c in node.children if isinstance(c, Token)]
+        names = [t for t in tokens if t.type == "NAME"]
+        if len(names) < 2:
+            return
+        dtype, name = str(names[0]).lower(), str(names[1])
+        init = node.children[-1]
+        if not isinstance(init, Tree) or init.data != "aggregate":
+            return
+        s, e = self._span(init, start)
+        has_dims = any(isinstance(c, Tree) and c.data == "dims" for c in node.children)
+        if dtype == "robtarget":
+            if has_dims:
+                for k, elem in enumerate(c for c in init.children if isinstance(c, Tree)):
+                    es, ee = self._span(elem, start)
+                    lit = self._literal(es, ee, _RT_FIELDS)
+                    if lit is not None:
+                        self.points[f"{name.upper()}{{{k + 1}}}"] = lit
+            else:
+                lit = self._literal(s, e, _RT_FIELDS)
+                if lit is None:
+                    raise self.lines.error(self.doc.path, s, f"robtarget {name} needs 17 numbers")
+                self.points[name.upper()] = lit
+        elif dtype == "jointtarget":
+            lit = self._literal(s, e, _JT_FIELDS)
+            if lit is None:
+                raise self.lines.error(self.doc.path, s, f"jointtarget {name} needs 12 numbers")
+            values, spans, conf = lit
+            values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])
+            self.points[name.upper()] = (values, spans, conf)
+        elif dtype in ("tooldata", "wobjdata"):
+            text = self.code[s:e].upper()
+            holds = text.lstrip("[ \t").startswith("TRUE")
+            sl = self.numbers.between(s, e)
+            nums = self.numbers.value[sl]
+            if dtype == "tooldata":
+                self.tools[name.upper()] = None if holds or len(nums) < 7 else _pose(nums[:7])
+            else:
+                fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
+                self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
+
+    def _target(self, node, start: int):
+        """values, spans, conf, offset, name of a target expression; None values where unknown."""
+        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF))
+        if isinstance(node, Tree) and node.data == "aggregate":
+            s, e = self._span(node, start)
+            lit = self._literal(s, e, _RT_FIELDS)
+            if lit is None:
+                raise self.lines.error(self.doc.path, s, "a robtarget literal needs 17 numbers")
+            return (*lit, np.zeros(NF)), ""
+        s, e = self._span(node, start)
+        text = re.sub(r"\s+", "", self.doc.text[s:e])
+        if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "OFFS":
+            args = node.children[1].children if len(node.children) > 1 else []
+            base_expr = args[0].children[0] if args else None
+            (values, spans, conf, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
+            values, spans = values.copy(), spans.copy()
+            offset = np.zeros(NF)
+            offset_span = np.full((NF, 3), -1, dtype=np.int64)
+            for k in range(3):
+                arg = args[k + 1].children[0] if len(args) > k + 1 else None
+                if isinstance(arg, Tree) and arg.data in ("number", "neg") and not np.isnan(values[k]):
+                    a_s, a_e = self._span(arg, start)
+                    sl = self.numbers.between(a_s, a_e)
+                    delta = float(self.numbers.value[sl][0])
+                    offset[k] = values[k]
+                    offset_span[k] = spans[k]
+                    spans[k] = (0, self.numbers.start[sl][0], self.numbers.end[sl][0])
+                    values[k] = values[k] + delta
+                else:
+                    values[k] = np.nan  # an offset the parser cannot evaluate
+                    spans[k] = -1
+            self._offset_span = offset_span
+            return (values, spans, conf, offset), text
+        if isinstance(node, Tree) and node.data == "lvalue":
+            found = self.points.get(text.upper())
+            if found is not None:
+                return (*found, np.zeros(NF)), text
+        self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
+        return empty, text
+
+    def _move(self, node: Tree, start: int) -> None:
+        mv = str(node.children[0]).upper()
+        args = node.children[1].children
+        positional = [a for a in args if a.children and isinstance(a.children[0], Tree) and a.children[0].data != "optarg" or (a.children and isinstance(a.children[0], Token))]
+        options = {}
+        for a in args:
+            for o in a.children:
+                if isinstance(o, Tree) and o.data == "optarg":
+                    key = str(o.children[0]).upper()
+                    options[key] = o.children[1] if len(o.children) > 1 else None
+        n_targets = 2 if mv in _CIRC else 1
+        if len(positional) < n_targets + 3:
+            raise self.lines.error(self.doc.path, start, f"{mv} needs target(s), speed, zone and tool")
+        kinds = [Kind.CIRC_VIA, Kind.CIRC_END] if mv in _CIRC else [Kind.ABSJ if mv in ("MOVEABSJ", "MOVEEXTJ") else _MOVE_KIND.get(mv, Kind.LINEAR)]
+        speed_node, zone_node, tool_node = positional[n_targets : n_targets + 3]
+        speed = _speed(self._text(speed_node, start))
+        if "V" in options and options["V"] is not None:
+            speed = _num(options["V"])
+        zone = _zone(self._text(zone_node, start))
+        if "Z" in options and options["Z"] is not None:
+            zone = _num(options["Z"])
+        tool = self._text(tool_node.children[0], start)
+        wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
+        tool_idx, tool_ok = self._frames_for([tool], self.tools, self.builder.tool_index)
+        wobj_idx, wobj_ok = self._frames_for([wobj], self.wobjs, self.builder.frame_index)
+        for k, tnode in zip(kinds, positional[:n_targets]):
+            self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
+            (values, spans, conf, offset), name = self._target(tnode.children[0], start)
+            usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
+            self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
+                                  tool=tool_idx[0], frame=wobj_idx[0], resolved=bool(tool_ok[0] and wobj_ok[0] and usable), offset_span=self._offset_span))
+
+    def _text(self, node, start: int) -> str:
+        s, e = self._span(node, start)
+        return self.doc.text[s:e].strip()
+
+    def _finish(self) -> Toolpath:
+        if self.rows:
+            cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
+            order = cols.pop("order")
+            self.builder.add_block(order, line=self.lines.line(order), **cols)
+        return self.builder.build()
+
+
+def _num(node) -> float:
+    if isinstance(node, Tree) and node.data == "number":
+        return float(node.children[0])
+    if isinstance(node, Tree) and node.data == "neg":
+        return -_num(node.children[0])
+    return float("nan")
+
+
+def parse_rapid(path: str, data: bytes) -> Toolpath:
+    return RapidParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()
