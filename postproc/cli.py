@@ -455,18 +455,92 @@ def compensate_cmd(
     _not_built("compensate", "issue 6")
 
 
+_KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
+
+
 @app.command("inspect")
 @handles_errors
-def inspect_cmd(program: Path = typer.Argument(...), json_out: bool = typer.Option(False, "--json"), dialect: Optional[str] = typer.Option(None, "--dialect")):
+def inspect_cmd(
+    program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, KRL .src with its .dat, G-code)."),
+    json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+):
     """Motion targets of a program, resolved to the base frame."""
-    _not_built("inspect", "issue 3")
+    from .frames import matrix_to_quat_wxyz
+    from .programs import parse_program
+
+    tp = parse_program(program, dialect)
+    poses = tp.base_poses()
+    has_ori = ~np.isnan(tp.orientation).any(axis=1)
+    quats = np.full((len(tp), 4), np.nan)
+    if has_ori.any():
+        quats[has_ori] = matrix_to_quat_wxyz(poses[has_ori, :3, :3])
+
+    def num(v):
+        return None if v is None or not np.isfinite(v) else round(float(v), 6)
+
+    moves = []
+    for i in range(len(tp)):
+        entry = {
+            "line": int(tp.line[i]),
+            "kind": _KIND_NAMES[int(tp.kind[i])],
+            "xyz": [num(v) for v in poses[i, :3, 3]],
+            "file": tp.sources[int(tp.file[i])].path,
+            "target": tp.target_name[i] or None,
+            "frame": tp.frame_names[int(tp.frame[i])],
+            "tool": tp.tool_names[int(tp.tool[i])],
+            "resolved": bool(tp.resolved[i]),
+        }
+        if has_ori[i]:
+            entry["quaternion"] = [num(v) for v in quats[i]]
+        if not np.isnan(tp.joints[i]).all():
+            entry["joints"] = [num(v) for v in tp.joints[i]]
+        if not np.isnan(tp.ext[i]).all():
+            entry["ext"] = [num(v) for v in tp.ext[i]]
+        if not np.isnan(tp.conf[i]).all():
+            entry["conf"] = [num(v) for v in tp.conf[i]]
+        entry["speed"] = num(tp.speed[i])
+        entry["zone"] = num(tp.zone[i])
+        moves.append(entry)
+    if json_out:
+        print(json.dumps({"dialect": tp.dialect, "moves": moves, "notes": list(tp.notes)}))
+        return
+    table = Table(title=f"{program} ({tp.dialect}, {len(tp)} targets)", show_edge=False)
+    for col in ("line", "kind", "x", "y", "z", "target", "frame", "tool", "ok"):
+        table.add_column(col, justify="right" if col in ("line", "x", "y", "z") else "left")
+    for m in moves[:200]:
+        table.add_row(str(m["line"]), m["kind"], *(f"{v:.3f}" if v is not None else "-" for v in m["xyz"]), m["target"] or "", m["frame"], m["tool"], "yes" if m["resolved"] else "NO")
+    out.print(table)
+    if len(moves) > 200:
+        out.print(f"... {len(moves) - 200} more (use --json)")
+    for note in tp.notes:
+        out.print(f"note: {note}")
 
 
 @app.command("roundtrip")
-@handles_errors
-def roundtrip_cmd(programs: list[Path] = typer.Argument(...), dialect: Optional[str] = typer.Option(None, "--dialect")):
+def roundtrip_cmd(
+    programs: list[Path] = typer.Argument(..., help="Program files."),
+    dialect: Optional[str] = typer.Option(None, "--dialect"),
+):
     """Parse and re-emit programs unchanged; exit 0 only if every output is byte-identical."""
-    _not_built("roundtrip", "issue 3")
+    from .programs import emit_texts, parse_program
+
+    status = 0
+    for program in programs:
+        try:
+            tp = parse_program(program, dialect)
+            texts = emit_texts(tp, tp)
+        except PostprocError as exc:
+            err.print(f"error: {exc}", style="bold red")
+            out.print(f"ERROR      {program}")
+            status = max(status, _exit_code(exc) if isinstance(exc, JobError) else 2)
+            continue
+        same = all(t.encode("latin-1") == doc.encode() and doc.encode() == Path(doc.path).read_bytes() for t, doc in zip(texts, tp.sources))
+        files = ", ".join(Path(d.path).name for d in tp.sources)
+        out.print(f"{'IDENTICAL' if same else 'DIFFERS'}  {program} ({tp.dialect}, {len(tp)} targets; {files})")
+        if not same:
+            status = max(status, 1)
+    raise typer.Exit(status)
 
 
 def main() -> None:

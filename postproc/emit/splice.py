@@ -69,25 +69,22 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
     new = _text_values(modified, original)
     old = _text_values(original, original)
     spans = original.spans
-    derived = original.offset_span is not None and (original.offset_span[:, :, 1] >= 0).any()
-    if derived:
-        # An offset (RAPID Offs) is relative to its base point: if that point moves too, the
-        # offset is taken from its new value, so the derived target lands where asked.
-        base_new = {}
-        plain = (original.offset_span[:, :, 1] < 0)
-        for r, f in zip(*np.nonzero((spans[:, :, 1] >= 0) & plain)):
-            base_new[tuple(spans[r, f])] = modified.values[r, f]
-        for r, f in zip(*np.nonzero(original.offset_span[:, :, 1] >= 0)):
-            key = tuple(original.offset_span[r, f])
-            if key in base_new and not np.isnan(modified.values[r, f]):
-                new[r, f] = (modified.values[r, f] - base_new[key]) / modified.scale[r, f]
-    changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old)
+    derived = np.zeros(spans.shape[:2], dtype=bool)
+    if original.offset_span is not None:
+        derived = original.offset_span[:, :, 1] >= 0
+    changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~original.relative[:, None] & ~derived
     edits: dict[tuple[int, int], tuple[int, str, int, int]] = {}  # (file, start) -> (end, text, row, field)
-    rows, fields = np.nonzero(changed)
-    for r, f in zip(rows.tolist(), fields.tolist()):
+
+    def tol(r, f):
+        return float(TOLERANCE[f] / max(abs(original.scale[r, f]), 1e-12))
+
+    written = np.array(modified.position, dtype=float)  # positions as the new text will give them
+
+    def put(r, f, value):
         file, start, end = (int(v) for v in spans[r, f])
-        src = original.sources[file].text
-        text = format_like(src[start:end], float(new[r, f]), float(TOLERANCE[f] / max(abs(original.scale[r, f]), 1e-12)))
+        text = format_like(original.sources[file].text[start:end], float(value), tol(r, f))
+        if f < 3 and not original.relative[r]:
+            written[r, f] = float(text) * original.scale[r, f] + (original.offset[r, f] if original.offset is not None else 0.0)
         key = (file, start)
         if key in edits and edits[key][1] != text:
             other = edits[key][2]
@@ -96,27 +93,65 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
                 f"{original.line[other]} and {original.line[r]} with different new values ({edits[key][1]} and {text})"
             )
         edits[key] = (end, text, r, f)
-    # Components the text leaves out but whose value changed (partial aggregates, modal axes).
+        return float(text)
+
+    rows, fields = np.nonzero(changed)
+    for r, f in zip(rows.tolist(), fields.tolist()):
+        put(r, f, new[r, f])
+    # Offsets (RAPID Offs) against the value their base point is written with.
+    for r, f in zip(*np.nonzero(derived & (spans[:, :, 1] >= 0))):
+        key = (int(original.offset_span[r, f, 0]), int(original.offset_span[r, f, 1]))
+        base = float(edits[key][1]) if key in edits else original.offset[r, f]
+        target = modified.values[r, f]
+        if not np.isnan(target) and target != original.values[r, f] or key in edits:
+            put(r, f, (target - base) / original.scale[r, f])
+    # A number written as an expression (G-code X[#1*2]) is there but cannot be rewritten.
+    fixed = ~np.isnan(original.values[:, F_POS]) & (spans[:, F_POS, 1] < 0)
     moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True)
-    missing = moved & (spans[:, F_POS, 1] < 0)
-    if missing.any():
-        if insert_field is None or original.insert_at is None:
-            r = int(np.nonzero(missing.any(axis=1))[0][0])
-            raise EmitError(f"line {original.line[r]}: target has no {FIELDS[int(np.nonzero(missing[r])[0][0])]} in the text to change")
-        inserts: dict[tuple[int, int], list[str]] = {}
-        for r, f in zip(*np.nonzero(missing)):
-            file, offset = (int(v) for v in original.insert_at[r])
-            if offset < 0:
-                raise EmitError(f"line {original.line[r]}: target has no {FIELDS[f]} in the text and none can be added")
-            value = modified.position[r, f] / original.scale[r, f]
-            piece = insert_field(file, FIELDS[f], format_like("0.000", float(value), float(TOLERANCE[f])))
-            if piece is None:
-                raise EmitError(f"line {original.line[r]}: cannot add {FIELDS[f]} to this target")
-            inserts.setdefault((file, offset), [])
-            if piece not in inserts[(file, offset)]:
-                inserts[(file, offset)].append(piece)
-        for (file, offset), pieces in inserts.items():
-            edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
+    if (fixed & moved).any():
+        r, f = (int(v[0]) for v in np.nonzero(fixed & moved))
+        raise EmitError(f"{original.sources[int(original.file[r])].path}, line {original.line[r]}: {FIELDS[f]} is not a plain number in the text and cannot be changed")
+    # Components the text leaves out (partial aggregates, modal axes) inherit the previous
+    # target's value: write one only where the new value differs from what it inherits.
+    inherited = np.vstack([np.full((1, 3), np.nan), modified.position[:-1]])
+    differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
+    # (An unmoved target still needs one when the target it inherits from moved.)
+    missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (spans[:, F_POS, 1] < 0)
+    if missing.any() and (insert_field is None or original.insert_at is None):
+        r = int(np.nonzero(missing.any(axis=1))[0][0])
+        raise EmitError(f"line {original.line[r]}: target has no {FIELDS[int(np.nonzero(missing[r])[0][0])]} in the text to change")
+    # One pass in program order over incremental targets and targets that need a word added:
+    # each increment is taken from where the previous target is written (rounding included),
+    # so rounding never accumulates along a run of incremental moves.
+    inserts: dict[tuple[int, int], list[str]] = {}
+    for r in np.nonzero(original.relative | missing.any(axis=1))[0].tolist():
+        prev_written = np.nan_to_num(written[r - 1]) if r > 0 else np.zeros(3)
+        prev_original = np.nan_to_num(original.position[r - 1]) if r > 0 else np.zeros(3)
+        for f in range(3):
+            if original.relative[r] and spans[r, f, 1] >= 0 and not np.isnan(modified.values[r, f]):
+                inc = (modified.values[r, f] - prev_written[f]) / original.scale[r, f]
+                old_inc = (original.values[r, f] - prev_original[f]) / original.scale[r, f]
+                if inc != old_inc:
+                    inc = put(r, f, inc)
+                written[r, f] = prev_written[f] + inc * original.scale[r, f]
+            elif missing[r, f]:
+                file, offset = (int(v) for v in original.insert_at[r])
+                if offset < 0:
+                    raise EmitError(f"line {original.line[r]}: target has no {FIELDS[f]} in the text and none can be added")
+                value = modified.position[r, f] - (prev_written[f] if original.relative[r] else 0.0)
+                text = format_like("0.000", float(value / original.scale[r, f]), tol(r, f))
+                piece = insert_field(file, FIELDS[f], text)
+                if piece is None:
+                    raise EmitError(f"line {original.line[r]}: cannot add {FIELDS[f]} to this target")
+                written[r, f] = (prev_written[f] if original.relative[r] else 0.0) + float(text) * original.scale[r, f]
+                pieces = inserts.setdefault((file, offset), [])
+                if piece not in pieces:
+                    pieces.append(piece)
+            elif original.relative[r] and np.isnan(original.values[r, f]):
+                written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
+    for (file, offset), pieces in inserts.items():
+        edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
+    _check_shared(original, modified, edits)
     texts = [doc.text for doc in original.sources]
     by_file: dict[int, list] = {}
     for (file, start), (end, text, _, _) in edits.items():
@@ -132,3 +167,30 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
         out.append(src[pos:])
         texts[file] = "".join(out)
     return texts
+
+
+def _check_shared(original: Toolpath, modified: Toolpath, edits: dict) -> None:
+    """A number used by several targets (a named point) may only change if all of them agree."""
+    sp = original.spans.reshape(-1, 3)
+    have = sp[:, 1] >= 0
+    keys = sp[have, 0] * (1 << 40) + sp[have, 1]
+    uniq, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
+    shared = counts[inverse] > 1
+    if not shared.any():
+        return
+    flat = np.nonzero(have)[0][shared]
+    rows, fields = flat // original.spans.shape[1], flat % original.spans.shape[1]
+    by_key: dict[tuple[int, int], list[tuple[int, int]]] = {}
+    for r, f in zip(rows.tolist(), fields.tolist()):
+        by_key.setdefault((int(original.spans[r, f, 0]), int(original.spans[r, f, 1])), []).append((r, f))
+    for key, users in by_key.items():
+        if key not in edits:
+            continue
+        values = {float(modified.values[r, f]) for r, f in users}
+        if len(values) > 1:
+            lines = sorted({int(original.line[r]) for r, _ in users})
+            name = original.target_name[users[0][0]] or "?"
+            raise EmitError(
+                f"{original.sources[key[0]].path}: point '{name}' is used by lines {', '.join(map(str, lines))}, "
+                "which ask for different new values; give each use its own point"
+            )

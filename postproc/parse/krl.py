@@ -217,10 +217,15 @@ class KrlParser:
             raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
 
     def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
-        if not stack or stack[-1][0] != keyword:
-            expected = stack[-1][0] if stack else "nothing"
-            raise d.lines.error(d.doc.path, offset, f"{keyword} without its opening block (expected {expected})")
-        stack.pop()
+        if stack and stack[-1][0] == keyword:
+            stack.pop()
+            return
+        if any(want == keyword for want, _ in stack):
+            # It closes an outer block: the inner one was never closed.
+            want, where = stack[-1]
+            raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want} before line {d.lines.line(offset)})")
+        expected = stack[-1][0] if stack else "nothing open"
+        raise d.lines.error(d.doc.path, offset, f"{keyword} without its opening block (expected {expected})")
 
     def _statement(self, d: _Doc, node, start: int, stack, is_program: bool) -> None:
         kind = node.data if isinstance(node, Tree) else None

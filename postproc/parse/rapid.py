@@ -193,7 +193,13 @@ class RapidParser:
         """(start offset, end offset) of each statement outside the bulk lines."""
         code = self.code
         pending = None
+        header = False  # the %%% ... %%% block of old .prg files
         for start in self.lines.starts.tolist():
+            if code.startswith("%%%", start):
+                header = not header
+                continue
+            if header:
+                continue
             if start in skip:
                 if pending is not None:
                     raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
@@ -237,6 +243,9 @@ class RapidParser:
         if kind in _OPEN:
             stack.append((_OPEN[kind], start))
         elif kind in _CLOSE:
+            if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
+                want, where = stack[-1]
+                raise self.lines.error(self.doc.path, where, f"block opened here is never closed (missing {want if want != 'ENDROUTINE' else 'ENDPROC'} before line {self.lines.line(start)})")
             if not stack or stack[-1][0] != _CLOSE[kind]:
                 expected = stack[-1][0] if stack else "nothing open"
                 raise self.lines.error(self.doc.path, start, f"{self.code[start:start + 12].split()[0]} does not close the open block (expected {expected})")
@@ -331,12 +340,39 @@ class RapidParser:
                     spans[k] = -1
             self._offset_span = offset_span
             return (values, spans, conf, offset), text
+        if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
+            return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
             found = self.points.get(text.upper())
             if found is not None:
                 return (*found, np.zeros(NF)), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
         return empty, text
+
+    def _reltool(self, node: Tree, start: int, empty):
+        """RelTool(p, dx, dy, dz [\Rx] [\Ry] [\Rz]): offset and turn in the tool frame of p.
+
+        The result is reported but not editable (its numbers mix through p's rotation)."""
+        from ..frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
+
+        args = node.children[1].children if len(node.children) > 1 else []
+        if len(args) < 4:
+            return empty
+        (values, _, conf, _), _ = self._target(args[0].children[0], start)
+        deltas = [_num(a.children[0]) for a in args[1:4]]
+        turns = {"RX": 0.0, "RY": 0.0, "RZ": 0.0}
+        for a in args:
+            for o in a.children:
+                if isinstance(o, Tree) and o.data == "optarg" and len(o.children) > 1:
+                    turns[str(o.children[0]).upper()] = _num(o.children[1])
+        if np.isnan(values[:7]).any() or np.isnan(deltas).any() or np.isnan(list(turns.values())).any():
+            return empty
+        rot = quat_wxyz_to_matrix(values[3:7][None])[0]
+        out = np.full(NF, np.nan)
+        out[:3] = values[:3] + rot @ np.array(deltas)
+        turned = rot @ rot_x(np.radians(turns["RX"])) @ rot_y(np.radians(turns["RY"])) @ rot_z(np.radians(turns["RZ"]))
+        out[3:7] = matrix_to_quat_wxyz(turned[None])[0]
+        return out, np.full((NF, 3), -1, dtype=np.int64), conf, np.zeros(NF)
 
     def _move(self, node: Tree, start: int) -> None:
         mv = str(node.children[0]).upper()

@@ -1,0 +1,399 @@
+"""G-code (ISO / Fanuc / LinuxCNC; Siemens TRAORI) -> Toolpath.
+
+Every line is one block. Plain motion blocks (``N.. G0-3 X.. Y.. Z.. A.. F..`` with an
+optional comment) are recognised by one regular expression over the whole text and read
+by the vectorised scanner; all other blocks are parsed by ``gcode.lark``, with #
+parameters evaluated in program order (a value that cannot be evaluated is flagged, never
+guessed). Modal state — motion mode, units, absolute/incremental, work offset, tool
+length, canned cycles — is then resolved over the whole block table at once: forward
+fills and cumulative sums, no per-target Python loop.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+
+import numpy as np
+from lark import Token, Tree
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
+
+from ..frames import make_transform
+from ..ir import NF, Kind, SourceDoc, Toolpath
+from .common import Builder, LineIndex, scan_numbers
+from .grammar import grammar
+
+AXES = "XYZABCIJKRF"
+_AX = {c: i for i, c in enumerate(AXES)}
+NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
+RE_BULK = re.compile(
+    rf"^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg]0?(?P<mode>[0-3])(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}[ \t]*)+(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
+    re.MULTILINE,
+)
+_LETTER_CODE = np.full(256, -1, dtype=np.int16)
+for _c, _i in _AX.items():
+    _LETTER_CODE[ord(_c)] = _i
+    _LETTER_CODE[ord(_c.lower())] = _i
+_MOTION_KIND = {0: Kind.RAPID, 1: Kind.LINEAR, 2: Kind.ARC_CW, 3: Kind.ARC_CCW}
+_NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
+_WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
+
+
+class _Unknown(Exception):
+    """A parameter or expression whose value the program text does not determine."""
+
+
+class GcodeParser:
+    def __init__(self, doc: SourceDoc):
+        self.doc = doc
+        self.text = doc.text
+        self.lines = LineIndex(doc.text)
+        self.builder = Builder("gcode", "none", [doc])
+        self.params: dict = {}
+        self.notes: list[str] = []
+
+    def parse(self) -> Toolpath:
+        text = self.text
+        bulk = list(RE_BULK.finditer(text))
+        bulk_starts = np.array([m.start() for m in bulk], dtype=np.int64)
+        # ---- bulk blocks, vectorised
+        nb = len(bulk)
+        rows: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53")}
+        if nb:
+            code_end = np.array([m.end() - len(m.group(0)) + len(_code_part(m.group(0))) for m in bulk])
+            numbers = scan_numbers(text, letter_prefix=True)
+            raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+            nonspace = (raw != 32) & (raw != 9)
+            prev_ns = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0))
+            lo = np.searchsorted(numbers.start, bulk_starts)
+            hi = np.searchsorted(numbers.start, code_end)
+            counts = hi - lo
+            from .common import _ranges
+
+            idx = _ranges(lo, hi)
+            row = np.repeat(np.arange(nb), counts)
+            starts = numbers.start[idx]
+            letter = raw[prev_ns[np.maximum(starts - 1, 0)]]
+            code = _LETTER_CODE[letter]
+            values = np.full((nb, len(AXES)), np.nan)
+            spans = np.full((nb, len(AXES), 2), -1, dtype=np.int64)
+            keep = code >= 0
+            values[row[keep], code[keep]] = numbers.value[idx[keep]]
+            spans[row[keep], code[keep], 0] = starts[keep]
+            spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
+            motion = np.array([float(m.group("mode")) if m.group("g") else np.nan for m in bulk])
+            nan = np.full(nb, np.nan)
+            block = dict(offset=bulk_starts, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
+                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool))
+        else:
+            block = None
+        # ---- slow blocks, in order (parameters are evaluated in program order)
+        slow = self._slow(set(bulk_starts.tolist()))
+        tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
+        if not tables:
+            return self.builder.build()
+        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0]}
+        order = np.argsort(table["offset"], kind="stable")
+        table = {k: v[order] for k, v in table.items()}
+        return self._resolve(table)
+
+    # ------------------------------------------------------------- slow path
+    def _slow(self, skip: set[int]) -> dict:
+        g = grammar("gcode")
+        out: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53")}
+        stack: list[tuple[str, int]] = []
+        text = self.text
+        for start in self.lines.starts.tolist():
+            if start in skip:
+                continue
+            end = text.find("\n", start)
+            end = len(text) if end < 0 else end
+            line = text[start:end].rstrip("\r")
+            stripped = line.strip()
+            if not stripped or stripped == "%":
+                continue
+            try:
+                tree = g.parse(line)
+            except UnexpectedInput as exc:
+                col = getattr(exc, "column", 1) or 1
+                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
+                raise self.lines.error(self.doc.path, start + col - 1, f"{what}: cannot parse this G-code block") from None
+            except LarkError as exc:
+                raise self.lines.error(self.doc.path, start, f"cannot parse this G-code block ({exc})") from None
+            self._block(tree, start, out, stack)
+        if stack:
+            want, where = stack[-1]
+            raise self.lines.error(self.doc.path, where, f"O-word block opened here is never closed (missing {want})")
+        n = len(out["offset"])
+        return {
+            "offset": np.array(out["offset"], dtype=np.int64),
+            "values": np.array(out["values"]).reshape(n, len(AXES)),
+            "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo")},
+            "nonmotion": np.array(out["nonmotion"], dtype=bool),
+            "ok": np.array(out["ok"], dtype=bool),
+            "g53": np.array(out["g53"], dtype=bool),
+        }
+
+    def _eval(self, node) -> float:
+        if isinstance(node, Token):
+            if node.type == "GNUMBER":
+                return float(node)
+            raise _Unknown(str(node))
+        kind = node.data
+        if kind == "number":
+            return float(node.children[0])
+        if kind == "neg":
+            return -self._eval(node.children[-1])
+        if kind == "param":
+            key = self._param_key(node)
+            if key not in self.params:
+                raise _Unknown(f"#{key}")
+            return self.params[key]
+        if kind == "func":
+            name, arg = str(node.children[0]).upper(), self._eval(node.children[1])
+            fns = {"SIN": lambda v: math.sin(math.radians(v)), "COS": lambda v: math.cos(math.radians(v)), "TAN": lambda v: math.tan(math.radians(v)),
+                   "ASIN": lambda v: math.degrees(math.asin(v)), "ACOS": lambda v: math.degrees(math.acos(v)), "ABS": abs, "SQRT": math.sqrt,
+                   "EXP": math.exp, "LN": math.log, "ROUND": lambda v: float(round(v)), "FIX": lambda v: float(math.floor(v)), "FUP": lambda v: float(math.ceil(v))}
+            return fns[name](arg)
+        if kind == "atan2":
+            return math.degrees(math.atan2(self._eval(node.children[1]), self._eval(node.children[2])))
+        if kind in ("sum_expr", "prod_expr", "or_expr", "and_expr", "cmp_expr", "pow_expr"):
+            ch = node.children
+            acc = self._eval(ch[0])
+            for op, rhs in zip(ch[1::2], ch[2::2]):
+                b = self._eval(rhs)
+                o = str(op).upper()
+                acc = {"+": acc + b, "-": acc - b, "*": acc * b, "/": acc / b if b else math.inf, "MOD": math.fmod(acc, b) if b else math.nan,
+                       "EQ": float(acc == b), "NE": float(acc != b), "GT": float(acc > b), "GE": float(acc >= b), "LT": float(acc < b), "LE": float(acc <= b),
+                       "AND": float(bool(acc) and bool(b)), "OR": float(bool(acc) or bool(b)), "XOR": float(bool(acc) != bool(b))}[o]
+            if kind == "pow_expr" and len(ch) == 2:
+                acc = self._eval(ch[0]) ** self._eval(ch[1])
+            return acc
+        if len(node.children) == 1:
+            return self._eval(node.children[0])
+        raise _Unknown(kind)
+
+    def _param_key(self, node: Tree):
+        ref = node.children[0]
+        if isinstance(ref, Token) and ref.type == "GNUMBER":
+            return int(float(ref))
+        if isinstance(ref, Token):
+            return str(ref).lower()
+        return int(self._eval(ref))
+
+    def _block(self, tree: Tree, start: int, out, stack) -> None:
+        values = np.full(len(AXES), np.nan)
+        spans = np.full((len(AXES), 2), -1, dtype=np.int64)
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo")}
+        nonmotion = g53 = False
+        ok = True
+        gcodes: list[float] = []
+        for item in tree.children:
+            if not isinstance(item, Tree):
+                continue
+            if item.data == "assign":
+                try:
+                    self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
+                except (_Unknown, ValueError, ZeroDivisionError) as exc:
+                    self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
+                    self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
+                continue
+            if item.data == "oword":
+                if len(item.children) < 2:
+                    continue  # a program number (Fanuc O1000)
+                kw = str(item.children[1]).lower()
+                label = re.sub(r"\s+", "", str(item.children[0]).lower())
+                opens = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
+                if kw in opens:
+                    stack.append((f"{label} {opens[kw]}", start))
+                elif kw in ("endsub", "endif", "endwhile", "endrepeat") or (kw == "while" and stack and stack[-1][0] == f"{label} while"):
+                    if not stack or stack[-1][0] != f"{label} {kw}":
+                        raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
+                    stack.pop()
+                continue
+            if item.data == "keyword":
+                self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
+                continue
+            if item.data != "word":
+                continue
+            letter = str(item.children[0]).upper()
+            vnode = item.children[1]
+            try:
+                value = self._eval(vnode)
+            except (_Unknown, ValueError, ZeroDivisionError) as exc:
+                value = np.nan
+                ok = False
+                self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
+            if letter == "G":
+                gcodes.append(round(value, 1))
+            elif letter in _AX:
+                values[_AX[letter]] = value
+                if isinstance(vnode, Tree) and vnode.data in ("number", "neg") and _plain_number(vnode):
+                    tok_start, tok_end = _token_span(vnode)
+                    spans[_AX[letter]] = (start + tok_start, start + tok_end)
+        for gc in gcodes:
+            if gc in (0.0, 1.0, 2.0, 3.0):
+                state["motion"] = gc
+            elif gc == 80.0:
+                state["canned"] = 0.0
+            elif 73.0 <= gc <= 89.0:
+                state["canned"] = gc
+            elif gc in (20.0, 21.0):
+                state["units"] = gc
+            elif gc in (90.0, 91.0):
+                state["dist"] = gc
+            elif gc in (17.0, 18.0, 19.0):
+                state["plane"] = gc
+            elif gc in _WCS:
+                state["wcs"] = float(_WCS[gc])
+            elif gc in (43.0, 43.1, 43.4, 43.5, 49.0):
+                state["tlo"] = gc
+            elif gc == 53.0:
+                g53 = True
+            elif gc in _NONMOTION:
+                nonmotion = True
+                if gc == 10.0:
+                    self._g10(values, start)
+        out["offset"].append(start)
+        out["values"].append(values)
+        out["spans"].append(spans)
+        for k, v in state.items():
+            out[k].append(v)
+        out["nonmotion"].append(nonmotion)
+        out["ok"].append(ok)
+        out["g53"].append(g53)
+
+    def _g10(self, values, start) -> None:
+        """G10 L2/L20 Pn X Y Z: a work offset set in the program (recorded as an event)."""
+        self.g10 = getattr(self, "g10", [])
+        line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
+        p = re.search(r"[Pp][ \t]*(\d+)", line)
+        lcode = re.search(r"[Ll][ \t]*(\d+)", line)
+        if p and lcode and lcode.group(1) in ("2", "20"):
+            self.g10.append((start, int(p.group(1)), np.nan_to_num(values[:3])))
+
+    # -------------------------------------------------------------- modal state
+    def _resolve(self, t: dict) -> Toolpath:
+        n = len(t["offset"])
+
+        def ffill(col, default):
+            has = ~np.isnan(col)
+            idx = np.where(has, np.arange(n), -1)
+            np.maximum.accumulate(idx, out=idx)
+            return np.where(idx >= 0, col[np.maximum(idx, 0)], default)
+
+        motion = ffill(t["motion"], np.nan)
+        units = ffill(t["units"], 21.0)
+        dist = ffill(t["dist"], 90.0)
+        canned = ffill(t["canned"], 0.0)
+        wcs = ffill(t["wcs"], 1.0).astype(int)
+        values = t["values"]
+        linear_scale = np.where(units == 20.0, 25.4, 1.0)
+        has_axis = ~np.isnan(values[:, :6]).all(axis=1)
+        moves = has_axis & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
+        # Absolute positions: an absolute word resets the axis, an incremental one adds.
+        absolute = np.full((n, 6), np.nan)
+        for k in range(6):
+            v = values[:, k] * (linear_scale if k < 3 else 1.0)
+            has = ~np.isnan(v) & (moves | t["g53"])
+            rel = has & (dist == 91.0)
+            reset = has & (dist != 91.0)
+            inc = np.where(rel, v, 0.0)
+            cum = np.cumsum(inc)
+            base = np.where(reset, v - cum, np.nan)
+            known = np.where(reset, np.arange(n), -1)
+            np.maximum.accumulate(known, out=known)
+            base_ff = np.where(known >= 0, base[np.maximum(known, 0)], np.nan)
+            absolute[:, k] = base_ff + cum
+        rows = np.nonzero(moves)[0]
+        m = len(rows)
+        ir_values = np.full((m, NF), np.nan)
+        ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
+        scale = np.ones((m, NF))
+        field_of = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
+        for k, f in field_of.items():
+            ir_values[:, f] = np.where(~np.isnan(values[rows, k]), absolute[rows, k], np.nan)
+            sp = t["spans"][rows, k]
+            have = sp[:, 0] >= 0
+            ir_spans[have, f, 0] = 0
+            ir_spans[have, f, 1:] = sp[have]
+            if k < 3:
+                scale[:, f] = linear_scale[rows]
+        # Work offsets set by G10 in the program; others are unknown (zero, flagged).
+        frames_known = {}
+        g10 = sorted(getattr(self, "g10", []))
+        frame_idx = np.zeros(m, np.int32)
+        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
+        for w in np.unique(wcs[rows]):
+            sel = wcs[rows] == w
+            events = [(o, off) for o, p, off in g10 if p == w]
+            name = f"G{[54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3][w - 1]:g}"
+            if not events:
+                frame_idx[sel] = self.builder.frame_index(name, np.eye(4))
+                frames_known[name] = False
+                continue
+            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
+            ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
+            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, np.eye(4)))
+        g53 = t["g53"][rows]
+        if g53.any():
+            frame_idx[g53] = self.builder.frame_index("machine", np.eye(4))
+        unknown = [name for name, known in frames_known.items() if not known]
+        if unknown:
+            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        self.builder.notes.extend(self.notes)
+        motion_rows = motion[rows].astype(int)
+        offsets = t["offset"][rows]
+        # Insert missing axis words at the end of the block's code (before any comment).
+        ends = np.array([start + len(_code_part(self.text[start : (self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text))])) for start in offsets.tolist()], dtype=np.int64)
+        self.builder.add_block(
+            offsets,
+            kind=np.array([_MOTION_KIND[c] for c in motion_rows], dtype=np.int8),
+            line=self.lines.line(offsets),
+            values=ir_values,
+            spans=ir_spans,
+            scale=scale,
+            relative=(dist[rows] == 91.0),
+            frame=frame_idx,
+            resolved=resolved,
+            speed=ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
+            insert_at=np.stack([np.zeros(m, np.int64), ends], axis=1),
+        )
+        tp = self.builder.build()
+        # Modal axes: a block without X keeps the previous X (already in ``absolute``).
+        from dataclasses import replace
+
+        position = absolute[rows, :3]
+        ext = np.full((m, 6), np.nan)
+        ext[:, :3] = absolute[rows, 3:6]
+        return replace(tp, position=position, ext=ext)
+
+
+def _code_part(line: str) -> str:
+    """A block without its trailing comment and whitespace."""
+    cut = len(line)
+    for ch in "(;":
+        i = line.find(ch)
+        if i >= 0:
+            cut = min(cut, i)
+    return line[:cut].rstrip(" \t\r")
+
+
+def _plain_number(node) -> bool:
+    if isinstance(node, Tree) and node.data == "neg":
+        return _plain_number(node.children[-1])
+    return isinstance(node, Tree) and node.data == "number"
+
+
+def _token_span(node) -> tuple[int, int]:
+    """Span of a literal word value, sign included."""
+    if node.data == "neg":
+        inner_start, inner_end = _token_span(node.children[-1])
+        return node.meta.start_pos, inner_end
+    tok = node.children[0]
+    return tok.start_pos, tok.end_pos
+
+
+def parse_gcode(path: str, data: bytes) -> Toolpath:
+    return GcodeParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()

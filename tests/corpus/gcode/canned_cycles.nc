@@ -1,0 +1,11 @@
+(drilling with canned cycles kept opaque)
+G21 G90 G17
+G0 X10 Y10 Z5
+G81 R2 Z-10 F100
+X20
+X30
+G80
+G0 Z50
+G83 X40 Y10 R2 Z-20 Q3 F80
+G80
+M30

@@ -1,0 +1,9 @@
+(inch units)
+G20 G90 G17
+G0 X0 Y0 Z0.5
+G1 Z-0.05 F10
+G1 X1.0 Y0.25
+G1 X2.5 Y0.25
+G21
+G0 Z25
+M30

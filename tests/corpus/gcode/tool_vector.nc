@@ -1,0 +1,7 @@
+(5-axis with tool axis vectors, Fanuc G43.5)
+G21 G90
+G43.5 H2
+G1 X10 Y0 Z20 I0 J0 K1 F400
+G1 X20 Y0 Z20 I0.1736 J0 K0.9848
+G49
+M30
