@@ -49,7 +49,7 @@ def parse_program(path: str | Path, dialect: str | None = None, data: bytes | No
     if dialect == "krl":
         from .parse.krl import parse_krl
 
-        return parse_krl(path, data if str(path) == "-" else None) if str(path) == "-" else parse_krl(path)
+        return parse_krl(path, data)
     if dialect == "rapid":
         from .parse.rapid import parse_rapid
 

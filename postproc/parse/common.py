@@ -78,8 +78,20 @@ def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
     buf = np.full(n, ord(" "), dtype=np.uint8)
     idx = _ranges(starts, ends)
     buf[idx] = raw[idx]
-    values = np.array(buf.tobytes().split(), dtype=float) if len(starts) else np.zeros(0)
+    tokens = buf.tobytes().split()
+    try:
+        values = np.array(tokens, dtype=float) if len(starts) else np.zeros(0)
+    except ValueError:
+        # A malformed run such as '1e5e3' or '.e1' is no number: NaN (the grammar rejects it).
+        values = np.array([_to_float(t) for t in tokens], dtype=float)
     return Numbers(starts.astype(np.int64), ends.astype(np.int64), values)
+
+
+def _to_float(token: bytes) -> float:
+    try:
+        return float(token)
+    except ValueError:
+        return float("nan")
 
 
 def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

@@ -51,6 +51,7 @@ class GcodeParser:
         self.builder = Builder("gcode", "none", [doc])
         self.params: dict = {}
         self.notes: list[str] = []
+        self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -145,6 +146,8 @@ class GcodeParser:
             return float(node.children[0])
         if kind == "neg":
             return -self._eval(node.children[-1])
+        if kind == "pos":
+            return self._eval(node.children[-1])
         if kind == "param":
             key = self._param_key(node)
             if key not in self.params:
@@ -229,7 +232,7 @@ class GcodeParser:
                 gcodes.append(round(value, 1))
             elif letter in _AX:
                 values[_AX[letter]] = value
-                if isinstance(vnode, Tree) and vnode.data in ("number", "neg") and _plain_number(vnode):
+                if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
                     tok_start, tok_end = _token_span(vnode)
                     spans[_AX[letter]] = (start + tok_start, start + tok_end)
         for gc in gcodes:
@@ -266,7 +269,6 @@ class GcodeParser:
 
     def _g10(self, values, start) -> None:
         """G10 L2/L20 Pn X Y Z: a work offset set in the program (recorded as an event)."""
-        self.g10 = getattr(self, "g10", [])
         line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         lcode = re.search(r"[Ll][ \t]*(\d+)", line)
@@ -322,7 +324,7 @@ class GcodeParser:
                 scale[:, f] = linear_scale[rows]
         # Work offsets set by G10 in the program; others are unknown (zero, flagged).
         frames_known = {}
-        g10 = sorted(getattr(self, "g10", []))
+        g10 = sorted(self.g10, key=lambda event: event[0])
         frame_idx = np.zeros(m, np.int32)
         resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
         for w in np.unique(wcs[rows]):
@@ -381,14 +383,14 @@ def _code_part(line: str) -> str:
 
 
 def _plain_number(node) -> bool:
-    if isinstance(node, Tree) and node.data == "neg":
+    if isinstance(node, Tree) and node.data in ("neg", "pos"):
         return _plain_number(node.children[-1])
     return isinstance(node, Tree) and node.data == "number"
 
 
 def _token_span(node) -> tuple[int, int]:
     """Span of a literal word value, sign included."""
-    if node.data == "neg":
+    if node.data in ("neg", "pos"):
         inner_start, inner_end = _token_span(node.children[-1])
         return node.meta.start_pos, inner_end
     tok = node.children[0]

@@ -502,11 +502,10 @@ def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | Non
     src = SourceDoc(str(path), text.decode("latin-1"), "src") if text is not None else SourceDoc.read(path, "src")
     dat_doc = None
     dat_path = Path(dat) if dat is not None else path.with_suffix(".dat")
-    if text is None or dat is not None:
-        if dat_path.is_file() and dat_path != path:
-            dat_doc = SourceDoc.read(dat_path, "dat")
+    if str(path) != "-" and dat_path.is_file() and dat_path != path:
+        dat_doc = SourceDoc.read(dat_path, "dat")
     config_path = Path(config) if config is not None else path.parent / "$config.dat"
-    config_doc = SourceDoc.read(config_path, "config") if config_path.is_file() else None
+    config_doc = SourceDoc.read(config_path, "config") if str(path) != "-" and config_path.is_file() else None
     parser = KrlParser(src, dat_doc, config_doc)
     _install_line_start_hook(parser)
     return parser.parse()

@@ -327,9 +327,10 @@ class RapidParser:
             offset_span = np.full((NF, 3), -1, dtype=np.int64)
             for k in range(3):
                 arg = args[k + 1].children[0] if len(args) > k + 1 else None
-                if isinstance(arg, Tree) and arg.data in ("number", "neg") and not np.isnan(values[k]):
-                    a_s, a_e = self._span(arg, start)
-                    sl = self.numbers.between(a_s, a_e)
+                a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
+                sl = self.numbers.between(a_s, a_e)
+                literal = isinstance(arg, Tree) and arg.data in ("number", "neg") and sl.stop - sl.start == 1
+                if literal and not np.isnan(values[k]) and not np.isnan(self.numbers.value[sl][0]):
                     delta = float(self.numbers.value[sl][0])
                     offset[k] = values[k]
                     offset_span[k] = spans[k]
@@ -350,7 +351,7 @@ class RapidParser:
         return empty, text
 
     def _reltool(self, node: Tree, start: int, empty):
-        """RelTool(p, dx, dy, dz [\Rx] [\Ry] [\Rz]): offset and turn in the tool frame of p.
+        """RelTool(p, dx, dy, dz [Rx] [Ry] [Rz]): offset and turn in the tool frame of p.
 
         The result is reported but not editable (its numbers mix through p's rotation)."""
         from ..frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
