@@ -517,6 +517,28 @@ def inspect_cmd(
         out.print(f"note: {note}")
 
 
+@app.command("convert")
+@handles_errors
+def convert_cmd(
+    program: Path = typer.Argument(..., help="Program in any supported dialect."),
+    to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program."),
+    output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
+):
+    """Write a new robot program with every target of another program."""
+    from .emit.writer import write_program
+    from .measurements import write_text_atomic
+    from .programs import parse_program
+
+    tp = parse_program(program, dialect)
+    texts = write_program(tp, to, output.stem)
+    outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]
+    encoded = [t.encode("latin-1") for t in texts]
+    for data, path in zip(encoded, outputs):
+        write_text_atomic(path, data.decode("latin-1"), encoding="latin-1")
+    out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
+
+
 @app.command("roundtrip")
 def roundtrip_cmd(
     programs: list[Path] = typer.Argument(..., help="Program files."),

@@ -112,3 +112,18 @@ def invert_transform(t: np.ndarray) -> np.ndarray:
 def wrap_deg(angle: np.ndarray) -> np.ndarray:
     """Wrap angles to [-180, 180)."""
     return (np.asarray(angle) + 180.0) % 360.0 - 180.0
+
+
+def axis_to_quat_wxyz(axis: np.ndarray) -> np.ndarray:
+    """Tool axis vectors (N, 3) -> orientations (N, 4) whose z axis is the tool axis.
+
+    The rotation about the axis is not given by a vector: x is taken as the base x axis
+    projected onto the plane normal to the tool axis (base y where x is parallel to it).
+    """
+    z = np.asarray(axis, dtype=float)
+    z = z / np.linalg.norm(z, axis=-1, keepdims=True)
+    ref = np.where(np.abs(z[..., :1]) > 0.9, np.array([0.0, 1.0, 0.0]), np.array([1.0, 0.0, 0.0]))
+    x = ref - np.sum(ref * z, axis=-1, keepdims=True) * z
+    x /= np.linalg.norm(x, axis=-1, keepdims=True)
+    y = np.cross(z, x)
+    return matrix_to_quat_wxyz(np.stack([x, y, z], axis=-1))

@@ -136,6 +136,9 @@ class Toolpath:
         values = self.values.copy()
         if self.orientation_kind == "quat":
             values[:, F_ORI] = np.where(np.isnan(self.values[:, F_ORI]), np.nan, orientation)
+        elif self.orientation_kind == "axis":
+            axis = quat_wxyz_to_matrix(orientation)[:, :, 2]
+            values[:, 3:6] = np.where(np.isnan(self.values[:, 3:6]), np.nan, axis)
         elif self.orientation_kind == "abc":
             abc = matrix_to_abc(quat_wxyz_to_matrix(orientation))
             values[:, 3:6] = np.where(np.isnan(self.values[:, 3:6]), np.nan, abc)

@@ -43,23 +43,27 @@ def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
         empty = np.zeros(0, dtype=np.int64)
         return Numbers(empty, empty, np.zeros(0))
     digit = _DIGIT[raw]
-    dot = raw == ord(".")
-    body = digit | dot
-    # Exponents: e/E followed by digits (optionally signed) right after a body run.
-    e_mark = ((raw == ord("e")) | (raw == ord("E")))
-    prev_body = np.concatenate([[False], body[:-1]])
-    nxt = np.concatenate([raw[1:], [0]])
-    nxt2 = np.concatenate([raw[2:], [0, 0]])
-    exp_start = e_mark & prev_body & (_DIGIT[nxt] | (((nxt == ord("+")) | (nxt == ord("-"))) & _DIGIT[nxt2]))
-    exp_sign = np.concatenate([[False], exp_start[:-1]]) & ((raw == ord("+")) | (raw == ord("-")))
-    numchar = body | exp_start | exp_sign
-    # Exponent digits continue the run naturally (they are digits).
-    start_mask = numchar & ~np.concatenate([[False], numchar[:-1]])
-    end_mask = numchar & ~np.concatenate([numchar[1:], [False]])
+    numchar = digit | (raw == ord("."))
+    # Exponents (1e5, 9E-3) are rare: look only at the e/E that follow a digit or dot.
+    cand = np.nonzero(((raw == ord("e")) | (raw == ord("E")))[1:-1] & numchar[:-2])[0] + 1
+    if len(cand):
+        nxt = raw[cand + 1]
+        nxt2 = raw[np.minimum(cand + 2, n - 1)]
+        signed = ((nxt == ord("+")) | (nxt == ord("-"))) & _DIGIT[nxt2] & (cand + 2 < n)
+        ok = _DIGIT[nxt] | signed
+        numchar[cand[ok]] = True
+        numchar[cand[ok & signed] + 1] = True
+    start_mask = numchar.copy()
+    start_mask[1:] &= ~numchar[:-1]
+    end_mask = numchar.copy()
+    end_mask[:-1] &= ~numchar[1:]
     starts = np.nonzero(start_mask)[0]
     ends = np.nonzero(end_mask)[0] + 1
-    # A run must contain a digit and may not be a lone dot or glued to a name.
-    has_digit = np.add.reduceat(digit.astype(np.int32), starts) > 0 if len(starts) else np.zeros(0, bool)
+    del start_mask, end_mask
+    # A run must contain a digit and may not be glued to a name.
+    digits_before = np.concatenate([[0], np.cumsum(digit, dtype=np.int32)])
+    has_digit = digits_before[ends] > digits_before[starts]
+    del digits_before, digit
     before = np.where(starts > 0, raw[np.maximum(starts - 1, 0)], 32)
     glued = _WORD[before] & (starts > 0)
     if letter_prefix:
@@ -73,18 +77,30 @@ def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
     binary = _WORD[before_sign] & ~(letter_prefix & (((before_sign | 32) >= ord("a")) & ((before_sign | 32) <= ord("z"))))
     binary |= before_sign == ord(")")
     binary &= sign_pos > 0
-    signed = has_sign & ~binary
-    starts = np.where(signed, starts - 1, starts)
-    buf = np.full(n, ord(" "), dtype=np.uint8)
-    idx = _ranges(starts, ends)
-    buf[idx] = raw[idx]
-    tokens = buf.tobytes().split()
-    try:
-        values = np.array(tokens, dtype=float) if len(starts) else np.zeros(0)
-    except ValueError:
-        # A malformed run such as '1e5e3' or '.e1' is no number: NaN (the grammar rejects it).
-        values = np.array([_to_float(t) for t in tokens], dtype=float)
+    starts = np.where(has_sign & ~binary, starts - 1, starts)
+    # Blank everything but the numbers and let NumPy's C parser read them in one call.
+    # Runs are maximal, so no run starts where another ends: plain assignment is exact.
+    edge = np.zeros(n + 1, dtype=np.int8)
+    edge[starts] = 1
+    edge[ends] = -1
+    inside = np.cumsum(edge[:-1], dtype=np.int8).view(bool)
+    buf = np.where(inside, raw, np.uint8(32))
+    values = _read_floats(buf.tobytes(), len(starts))
     return Numbers(starts.astype(np.int64), ends.astype(np.int64), values)
+
+
+def _read_floats(buf: bytes, count: int) -> np.ndarray:
+    """Space-separated numbers -> array; a malformed run ('1e5e3', '.e1') becomes NaN."""
+    if count == 0:
+        return np.zeros(0)
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", DeprecationWarning)
+        values = np.fromstring(buf, dtype=float, sep=" ")
+    if len(values) == count:
+        return values
+    return np.array([_to_float(t) for t in buf.split()], dtype=float)
 
 
 def _to_float(token: bytes) -> float:
@@ -186,24 +202,20 @@ class Builder:
         }
         shapes = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
         total = sum(len(b["order"]) for b in self.blocks)
+        order = np.concatenate([b["order"] for b in self.blocks]) if self.blocks else np.zeros(0, np.int64)
+        # Program order is statement order; most programs arrive sorted and need no copy.
+        perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in defaults.items():
-            cols[key] = np.full((total,) + shapes.get(key, ()), fill, dtype=dtype)
-        order = np.zeros(total, dtype=np.int64)
-        file_key = np.zeros(total, dtype=np.int64)
-        pos = 0
-        for b in self.blocks:
-            n = len(b["order"])
-            order[pos : pos + n] = b["order"]
-            for key, arr in b.items():
-                if key == "order":
-                    continue
-                cols[key][pos : pos + n] = arr
-            file_key[pos : pos + n] = cols["file"][pos : pos + n]
-            pos += n
-        # Program order: the main program's statements by offset (targets of the main file).
-        perm = np.lexsort((order, np.zeros(total)))
-        cols = {k: v[perm] for k, v in cols.items()}
+            shape = shapes.get(key, ())
+            parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
+            if not parts:
+                col = np.full((0,) + shape, fill, dtype=dtype)
+            elif len(parts) == 1:
+                col = parts[0]
+            else:
+                col = np.concatenate(parts)
+            cols[key] = col if perm is None else col[perm]
         values = cols["values"]
         from ..frames import abc_to_matrix, matrix_to_quat_wxyz
 

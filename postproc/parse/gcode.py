@@ -27,7 +27,7 @@ AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
-    rf"^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg]0?(?P<mode>[0-3])(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}[ \t]*)+(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
+    rf"^(?P<code>[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg]0?(?P<mode>[0-3])(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}(?:[ \t]+(?=[XYZABCIJKRFxyzabcijkrf]))?)+)[ \t]*(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
     re.MULTILINE,
 )
 _LETTER_CODE = np.full(256, -1, dtype=np.int16)
@@ -52,6 +52,7 @@ class GcodeParser:
         self.params: dict = {}
         self.notes: list[str] = []
         self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
+        self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -59,9 +60,9 @@ class GcodeParser:
         bulk_starts = np.array([m.start() for m in bulk], dtype=np.int64)
         # ---- bulk blocks, vectorised
         nb = len(bulk)
-        rows: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53")}
+        rows: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         if nb:
-            code_end = np.array([m.end() - len(m.group(0)) + len(_code_part(m.group(0))) for m in bulk])
+            code_end = np.array([m.end("code") for m in bulk], dtype=np.int64)
             numbers = scan_numbers(text, letter_prefix=True)
             raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
             nonspace = (raw != 32) & (raw != 9)
@@ -82,10 +83,10 @@ class GcodeParser:
             values[row[keep], code[keep]] = numbers.value[idx[keep]]
             spans[row[keep], code[keep], 0] = starts[keep]
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
-            motion = np.array([float(m.group("mode")) if m.group("g") else np.nan for m in bulk])
+            motion = np.array([float(mode) if mode else np.nan for mode in (m.group("mode") for m in bulk)])
             nan = np.full(nb, np.nan)
-            block = dict(offset=bulk_starts, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
-                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool))
+            block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
+                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan)
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
@@ -101,7 +102,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: set[int]) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts.tolist():
@@ -122,15 +123,17 @@ class GcodeParser:
             except LarkError as exc:
                 raise self.lines.error(self.doc.path, start, f"cannot parse this G-code block ({exc})") from None
             self._block(tree, start, out, stack)
+            out["code_end"].append(start + len(_code_part(line)))
         if stack:
             want, where = stack[-1]
             raise self.lines.error(self.doc.path, where, f"O-word block opened here is never closed (missing {want})")
         n = len(out["offset"])
         return {
             "offset": np.array(out["offset"], dtype=np.int64),
+            "code_end": np.array(out["code_end"], dtype=np.int64),
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo")},
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -188,7 +191,7 @@ class GcodeParser:
     def _block(self, tree: Tree, start: int, out, stack) -> None:
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo")}
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
         nonmotion = g53 = False
         ok = True
         gcodes: list[float] = []
@@ -230,6 +233,8 @@ class GcodeParser:
                 self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
             if letter == "G":
                 gcodes.append(round(value, 1))
+            elif letter == "H":
+                state["h"] = value
             elif letter in _AX:
                 values[_AX[letter]] = value
                 if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
@@ -254,6 +259,14 @@ class GcodeParser:
                 state["tlo"] = gc
             elif gc == 53.0:
                 g53 = True
+            elif gc == 68.2:
+                nonmotion = True
+                self._tilt(values, start)
+            elif gc == 69.0:
+                self.tilts.append((start, None))
+            elif gc in (68.0, 68.3, 68.4):
+                self.notes.append(f"line {self.lines.line(start)}: G{gc:g} coordinate rotation is not evaluated; later targets are flagged")
+                self.tilts.append((start, "unknown"))
             elif gc in _NONMOTION:
                 nonmotion = True
                 if gc == 10.0:
@@ -266,6 +279,20 @@ class GcodeParser:
         out["nonmotion"].append(nonmotion)
         out["ok"].append(ok)
         out["g53"].append(g53)
+
+    def _tilt(self, values, start) -> None:
+        """G68.2 X Y Z I J K (P0: Euler ZXZ): a tilted working plane until G69."""
+        from ..frames import rot_x, rot_z
+
+        line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
+        p = re.search(r"[Pp][ \t]*(\d+)", line)
+        if p and p.group(1) != "0":
+            self.notes.append(f"line {self.lines.line(start)}: G68.2 P{p.group(1)} is not evaluated (only P0, Euler ZXZ); later targets are flagged")
+            self.tilts.append((start, "unknown"))
+            return
+        v = np.nan_to_num(values)
+        rot = rot_z(np.radians(v[_AX["I"]])) @ rot_x(np.radians(v[_AX["J"]])) @ rot_z(np.radians(v[_AX["K"]]))
+        self.tilts.append((start, make_transform(rot, v[:3])))
 
     def _g10(self, values, start) -> None:
         """G10 L2/L20 Pn X Y Z: a work offset set in the program (recorded as an event)."""
@@ -338,6 +365,21 @@ class GcodeParser:
             at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
             ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
             frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, np.eye(4)))
+        if self.tilts:
+            offs = np.array([o for o, _ in self.tilts])
+            at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
+            for k in np.unique(at[at >= 0]):
+                tilt = self.tilts[k][1]
+                sel = at == k
+                if tilt is None:
+                    continue
+                if isinstance(tilt, str):
+                    resolved[sel] = False
+                    continue
+                for f in np.unique(frame_idx[sel]):
+                    both = sel & (frame_idx == f)
+                    name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
+                    frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt)
         g53 = t["g53"][rows]
         if g53.any():
             frame_idx[g53] = self.builder.frame_index("machine", np.eye(4))
@@ -345,10 +387,31 @@ class GcodeParser:
         if unknown:
             self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
         self.builder.notes.extend(self.notes)
+        # Tool length offsets: the tool number of G43 (its length is in the machine's tool table).
+        tlo = ffill(t["tlo"], 49.0)
+        hnum = ffill(t["h"], np.nan)
+        tool_idx = np.zeros(m, np.int32)
+        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
+        for h in np.unique(hnum[rows][active]):
+            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
+        if active.any():
+            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
+        # G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre.
+        axis_rows = (tlo[rows] == 43.5) & ~np.isnan(values[rows][:, [_AX["I"], _AX["J"], _AX["K"]]]).any(axis=1)
+        for f_ir, letter in ((3, "I"), (4, "J"), (5, "K")):
+            k = _AX[letter]
+            ir_values[axis_rows, f_ir] = values[rows][axis_rows, k]
+            sp = t["spans"][rows][axis_rows, k]
+            have = sp[:, 0] >= 0
+            idx = np.nonzero(axis_rows)[0][have]
+            ir_spans[idx, f_ir, 0] = 0
+            ir_spans[idx, f_ir, 1:] = sp[have]
+        if axis_rows.any():
+            self.builder.orientation_kind = "axis"
         motion_rows = motion[rows].astype(int)
         offsets = t["offset"][rows]
         # Insert missing axis words at the end of the block's code (before any comment).
-        ends = np.array([start + len(_code_part(self.text[start : (self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text))])) for start in offsets.tolist()], dtype=np.int64)
+        ends = t["code_end"][rows]
         self.builder.add_block(
             offsets,
             kind=np.array([_MOTION_KIND[c] for c in motion_rows], dtype=np.int8),
@@ -358,6 +421,7 @@ class GcodeParser:
             scale=scale,
             relative=(dist[rows] == 91.0),
             frame=frame_idx,
+            tool=tool_idx,
             resolved=resolved,
             speed=ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
             insert_at=np.stack([np.zeros(m, np.int64), ends], axis=1),
@@ -369,7 +433,12 @@ class GcodeParser:
         position = absolute[rows, :3]
         ext = np.full((m, 6), np.nan)
         ext[:, :3] = absolute[rows, 3:6]
-        return replace(tp, position=position, ext=ext)
+        orientation = np.full((m, 4), np.nan)
+        if axis_rows.any():
+            from ..frames import axis_to_quat_wxyz
+
+            orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
+        return replace(tp, position=position, ext=ext, orientation=orientation)
 
 
 def _code_part(line: str) -> str:

@@ -13,4 +13,5 @@ def grammar(name: str) -> Lark:
     """LALR parser with a contextual lexer and positions, built once per process."""
     path = resources.files("postproc.grammar_files") / f"{name}.lark"
     with resources.as_file(path) as real:
-        return Lark.open(str(real), parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False)
+        # cache=True keeps the LALR tables in the temp folder, keyed by the grammar's hash.
+        return Lark.open(str(real), parser="lalr", lexer="contextual", propagate_positions=True, maybe_placeholders=False, cache=True)

@@ -30,10 +30,13 @@ TAIL = r"[ \t]*(?:;[^\n]*)?\r?$"
 APPROX = r"(?:[ \t]+(?P<ap>C_DIS|C_PTP|C_VEL|C_ORI|C_SPL))?"
 NAME = r"[A-Za-z_$][\w$]*"
 FLAGS = re.IGNORECASE | re.MULTILINE
-RE_MOVE_INLINE = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)[ \t]*(?P<agg>{AGG}){APPROX}{TAIL}", FLAGS)
-RE_MOVE_NAME = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)[ \t]+(?P<name>{NAME}(?:\[[ \t]*\d+[ \t]*\])?){APPROX}{TAIL}", FLAGS)
+# One pass finds both bulk move shapes: an inline aggregate or a named point.
+RE_MOVE = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)(?:[ \t]*(?P<agg>{AGG})|[ \t]+(?P<name>{NAME}(?:\[[ \t]*\d+[ \t]*\])?)){APPROX}{TAIL}", FLAGS)
 RE_DECL = re.compile(rf"^[ \t]*(?:DECL[ \t]+)?(?:GLOBAL[ \t]+)?(?P<type>E6POS|POS|FRAME|E6AXIS|AXIS)[ \t]+(?P<name>{NAME})[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
 RE_ELEM = re.compile(rf"^[ \t]*(?P<name>{NAME}\[[ \t]*\d+[ \t]*\])[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
+
+# Cheap probes: a file without any of these words has no declarations to look for.
+DECL_WORDS = ("DECL", "E6POS", "E6AXIS", "FRAME", "AXIS", "POS")
 
 # Aggregate field names -> IR field (0-18) or conf column (100 + k).
 _FIELD_CODES = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "C": 5, "S": 100, "T": 101}
@@ -154,7 +157,12 @@ class KrlParser:
     def _declarations(self, d: _Doc) -> set[int]:
         """Bulk point declarations and array elements of one file; returns their line starts."""
         done = set()
-        for regex in (RE_DECL, RE_ELEM):
+        upper = d.text.upper()
+        probes = {RE_DECL: any(word in upper for word in DECL_WORDS), RE_ELEM: "]=" in upper.replace(" ", "").replace("\t", "")}
+        del upper
+        for regex, present in probes.items():
+            if not present:
+                continue  # a program without declarations skips the full pass
             matches = _bulk(regex, d.text)
             if not matches:
                 continue
@@ -174,9 +182,10 @@ class KrlParser:
         src_decl = self._declarations(src)
         for d in self.docs[1:]:
             self._slow_lines(d, skip=data_lines[d.index], is_program=False)
-        inline = _bulk(RE_MOVE_INLINE, src.text)
-        named = _bulk(RE_MOVE_NAME, src.text)
-        skip = src_decl | {m.start() for m in inline} | {m.start() for m in named}
+        moves = _bulk(RE_MOVE, src.text)
+        inline = [m for m in moves if m.group("agg") is not None]
+        named = [m for m in moves if m.group("agg") is None]
+        skip = src_decl | {m.start() for m in moves}
         self._slow_lines(src, skip=skip, is_program=True)
         self._bulk_moves(src, inline, named)
         return self._finish()
@@ -271,6 +280,9 @@ class KrlParser:
     def _agg(self, d: _Doc, node: Tree):
         s, e = node.meta.start_pos, node.meta.end_pos
         v, sp, c, ins = d.aggregates(np.array([self._line_start + s]), np.array([self._line_start + e]))
+        # Status and Turn may be written as bits ('B010') or hex ('H22').
+        for key, base, digits in re.findall(r"\b([ST])[ \t]+'([BbHh])([0-9A-Fa-f]+)'", d.text[self._line_start + s : self._line_start + e]):
+            c[0][0 if key.upper() == "S" else 1] = int(digits, 2 if base.upper() == "B" else 16)
         return v[0], sp[0], c[0], ins[0]
 
     def _eval_frame(self, d: _Doc, node) -> tuple[np.ndarray, bool, str]:

@@ -10,6 +10,7 @@ structure is checked with a stack.
 
 from __future__ import annotations
 
+import functools
 import re
 
 import numpy as np
@@ -58,11 +59,13 @@ def blank_comments(text: str) -> str:
     return RE_COMMENT.sub(lambda m: m.group(0) if m.group(1) else " " * len(m.group(0)), text)
 
 
+@functools.lru_cache(maxsize=4096)
 def _speed(name: str) -> float:
     m = re.fullmatch(r"v(\d+(?:\.\d+)?)", name.strip(), re.IGNORECASE)
     return float(m.group(1)) if m else np.nan
 
 
+@functools.lru_cache(maxsize=4096)
 def _zone(name: str) -> float:
     name = name.strip().lower()
     if name == "fine":
@@ -157,19 +160,19 @@ class RapidParser:
 
     def _bulk_rows(self, matches, values, spans, conf, names):
         offsets = np.array([m.start() for m in matches])
-        tools = [m.group("tool") for m in matches]
-        wobjs = [m.group("wobj") or "wobj0" for m in matches]
+        mv, speed, zone, tools, wobjs = zip(*(m.group("mv", "speed", "zone", "tool", "wobj") for m in matches))
+        wobjs = [w or "wobj0" for w in wobjs]
         tool_idx, tool_ok = self._frames_for(tools, self.tools, self.builder.tool_index)
         wobj_idx, wobj_ok = self._frames_for(wobjs, self.wobjs, self.builder.frame_index)
         self.builder.add_block(
             offsets,
-            kind=np.array([_MOVE_KIND[m.group("mv").upper()] for m in matches], dtype=np.int8),
+            kind=np.array([_MOVE_KIND[k.upper()] for k in mv], dtype=np.int8),
             line=self.lines.line(offsets),
             values=values,
             spans=spans,
             conf=conf,
-            speed=np.array([_speed(m.group("speed")) for m in matches]),
-            zone=np.array([_zone(m.group("zone")) for m in matches]),
+            speed=np.array([_speed(v) for v in speed]),
+            zone=np.array([_zone(z) for z in zone]),
             tool=tool_idx,
             frame=wobj_idx,
             resolved=tool_ok & wobj_ok & ~np.isnan(values[:, :3]).any(axis=1),
@@ -307,14 +310,14 @@ class RapidParser:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
 
-    def _target(self, node, start: int):
+    def _target(self, node, start: int, joint: bool = False):
         """values, spans, conf, offset, name of a target expression; None values where unknown."""
         empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF))
         if isinstance(node, Tree) and node.data == "aggregate":
             s, e = self._span(node, start)
-            lit = self._literal(s, e, _RT_FIELDS)
+            lit = self._literal(s, e, _JT_FIELDS if joint else _RT_FIELDS)
             if lit is None:
-                raise self.lines.error(self.doc.path, s, "a robtarget literal needs 17 numbers")
+                raise self.lines.error(self.doc.path, s, f"a {'jointtarget' if joint else 'robtarget'} literal needs {12 if joint else 17} numbers")
             return (*lit, np.zeros(NF)), ""
         s, e = self._span(node, start)
         text = re.sub(r"\s+", "", self.doc.text[s:e])
@@ -402,7 +405,7 @@ class RapidParser:
         wobj_idx, wobj_ok = self._frames_for([wobj], self.wobjs, self.builder.frame_index)
         for k, tnode in zip(kinds, positional[:n_targets]):
             self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
-            (values, spans, conf, offset), name = self._target(tnode.children[0], start)
+            (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
                                   tool=tool_idx[0], frame=wobj_idx[0], resolved=bool(tool_ok[0] and wobj_ok[0] and usable), offset_span=self._offset_span))

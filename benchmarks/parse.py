@@ -1,0 +1,97 @@
+"""Parse throughput (lines/s) per dialect on 10^6-line programs (target: >= 10^5 lines/s).
+
+Run: .venv/bin/python benchmarks/parse.py [--lines 1000000]
+Writes one program per dialect to a temporary folder (moves with literal targets, the bulk
+of real CAM output; a KRL .src whose points live in its .dat), then times parse and the
+unchanged emit (round trip), and reports the peak memory of each run in a fresh process.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+
+def make_programs(folder: Path, n: int) -> dict[str, Path]:
+    out = {}
+    rapid = folder / "big.mod"
+    with open(rapid, "w", encoding="latin-1") as fh:
+        fh.write("MODULE Big\n  PROC main()\n")
+        for i in range(n - 5):
+            fh.write(f"    MoveL [[{800 + (i % 400) * 0.5:.3f},{-200 + (i // 400) % 400:.3f},{300 + (i % 7) * 0.125:.3f}],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tool0;\n")
+        fh.write("  ENDPROC\nENDMODULE\n")
+    out["rapid"] = rapid
+    krl = folder / "big_inline.src"
+    with open(krl, "w", encoding="latin-1") as fh:
+        fh.write("DEF big_inline( )\n$APO.CDIS = 0.5\n")
+        for i in range(n - 3):
+            fh.write(f"LIN {{X {800 + (i % 400) * 0.5:.3f}, Y {-200 + (i // 400) % 400:.3f}, Z {300 + (i % 7) * 0.125:.3f}, A 0, B 180, C 0}} C_DIS\n")
+        fh.write("END\n")
+    out["krl"] = krl
+    src, dat = folder / "big_dat.src", folder / "big_dat.dat"
+    half = n // 2
+    with open(src, "w", encoding="latin-1") as fs, open(dat, "w", encoding="latin-1") as fd:
+        fs.write("DEF big_dat( )\n")
+        fd.write("DEFDAT big_dat\n")
+        for i in range(half - 2):
+            fs.write(f"LIN XP{i} C_DIS\n")
+            fd.write(f"DECL E6POS XP{i}={{X {800 + (i % 400) * 0.5:.3f},Y {-200 + (i // 400) % 400:.3f},Z {300 + (i % 7) * 0.125:.3f},A 0.0,B 180.0,C 0.0,S 2,T 10}}\n")
+        fs.write("END\n")
+        fd.write("ENDDAT\n")
+    out["krl (.src + .dat)"] = src
+    gcode = folder / "big.ngc"
+    with open(gcode, "w", encoding="latin-1") as fh:
+        fh.write("G21 G90 G17\nG0 X0 Y0 Z5\nF1500\n")
+        for i in range(n - 4):
+            fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
+        fh.write("M2\n")
+    out["gcode"] = gcode
+    return out
+
+
+def measure(path: str) -> None:
+    """Child process: parse and round-trip one program, print JSON."""
+    from postproc.programs import emit_texts, parse_program
+
+    lines = sum(Path(d).read_bytes().count(b"\n") for d in [path] + ([str(Path(path).with_suffix(".dat"))] if Path(path).with_suffix(".dat").exists() else []))
+    t0 = time.perf_counter()
+    tp = parse_program(path)
+    t_parse = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    texts = emit_texts(tp, tp)
+    t_emit = time.perf_counter() - t0
+    assert all(t.encode("latin-1") == d.encode() for t, d in zip(texts, tp.sources))
+    peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    print(json.dumps({"lines": lines, "targets": len(tp), "parse_s": t_parse, "emit_s": t_emit, "peak_mb": peak_mb}))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lines", type=int, default=1_000_000)
+    parser.add_argument("--measure", help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.measure:
+        measure(args.measure)
+        return
+    with tempfile.TemporaryDirectory() as tmp:
+        programs = make_programs(Path(tmp), args.lines)
+        print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'round trip s':>14}{'peak MB':>9}   target >= 1e5 lines/s")
+        for name, path in programs.items():
+            proc = subprocess.run([sys.executable, __file__, "--measure", str(path)], capture_output=True, text=True, env=os.environ)
+            if proc.returncode:
+                print(f"{name:<20} failed: {proc.stderr[-500:]}")
+                continue
+            r = json.loads(proc.stdout)
+            rate = r["lines"] / r["parse_s"]
+            print(f"{name:<20}{r['lines']:>10,}{r['targets']:>10,}{r['parse_s']:>9.2f}{rate:>12,.0f}{r['emit_s']:>14.2f}{r['peak_mb']:>9.0f}   {'met' if rate >= 1e5 else 'MISSED'}")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,65 @@
+"""New RAPID / KRL programs from another program's Toolpath (the event-protocol writer)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from postproc.cli import app
+from postproc.emit.writer import RapidWriter, write_program
+from postproc.errors import EmitError
+from postproc.programs import parse_program
+
+CORPUS = Path(__file__).parent / "corpus"
+runner = CliRunner()
+SOURCES = ["krl/circ_arcs.src", "krl/inline_milling.src", "rapid/milling_wobj.mod", "rapid/circles.mod", "rapid/absj_home.mod", "gcode/arcs_ijk.ngc", "gcode/work_offsets.ngc"]
+
+
+@pytest.mark.parametrize("source", SOURCES)
+@pytest.mark.parametrize("dialect", ["rapid", "krl"])
+def test_written_program_reaches_the_same_targets(source, dialect, tmp_path):
+    tp = parse_program(CORPUS / source)
+    texts = write_program(tp, dialect, "conv")
+    suffixes = [".mod"] if dialect == "rapid" else [".src", ".dat"]
+    for text, suffix in zip(texts, suffixes):
+        (tmp_path / f"conv{suffix}").write_bytes(text.encode("latin-1"))
+    back = parse_program(tmp_path / f"conv{suffixes[0]}")
+    assert len(back) == len(tp)
+    cart = ~np.isnan(tp.position).any(axis=1)
+    np.testing.assert_allclose(back.base_positions()[cart], tp.base_positions()[cart], atol=1e-3)
+    with_ori = cart & ~np.isnan(tp.orientation).any(axis=1)
+    np.testing.assert_allclose(back.base_poses()[with_ori, :3, :3], tp.base_poses()[with_ori, :3, :3], atol=1e-6)
+    joints = ~np.isnan(tp.joints).any(axis=1)
+    np.testing.assert_allclose(back.joints[joints], tp.joints[joints], atol=1e-6)
+    assert (back.kind[cart] == tp.kind[cart]).all() or tp.dialect == "gcode"
+
+
+def test_event_protocol_directly():
+    w = RapidWriter("demo")
+    w.start("main")
+    w.tool("spindle", np.array([[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 200.0], [0, 0, 0, 1]]))
+    w.speed(50.0)
+    w.zone(0.5)
+    pose = np.eye(4)
+    pose[:3, 3] = [800, 0, 400]
+    w.move_linear(pose)
+    w.raw("done")
+    text = w.end()[0]
+    assert "MoveL [[800,0,400],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v1000\\V:=50, z10\\Z:=0.5, spindle;" in text
+    assert "PERS tooldata spindle := [TRUE,[[0,0,200]" in text and "! done" in text
+
+
+def test_unknown_positions_are_refused_and_cli_writes_nothing(tmp_path):
+    with pytest.raises(EmitError, match="unknown"):
+        write_program(parse_program(CORPUS / "krl" / "big_dat_array.src"), "rapid")  # LIN PATH[I]: I is a loop variable
+    tp = parse_program(CORPUS / "gcode" / "face_mill.nc")  # Z is unknown before the first Z word
+    with pytest.raises(EmitError, match="unknown"):
+        write_program(tp, "rapid")
+    out = tmp_path / "x.mod"
+    result = runner.invoke(app, ["convert", str(CORPUS / "gcode" / "face_mill.nc"), "--to", "rapid", "-o", str(out)])
+    assert result.exit_code == 2 and not out.exists()
+    result = runner.invoke(app, ["convert", str(CORPUS / "gcode" / "arcs_ijk.ngc"), "--to", "krl", "-o", str(tmp_path / "a.src")])
+    assert result.exit_code == 0 and (tmp_path / "a.dat").exists()
