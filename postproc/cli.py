@@ -164,10 +164,6 @@ def ik_cmd(
 # Registered now so that the interface is complete; each is built by its own issue.
 
 
-def _not_built(command: str, issue: str):
-    raise FeatureUnavailableError(f"'postproc {command}' is not built in this version yet ({issue})")
-
-
 def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
     """One screen: error before/after per axis, cross-validation, outliers, what was not identified."""
     table = Table(title=f"fit: {robot_name}, effects {effects_spec}", show_edge=False)
@@ -443,16 +439,96 @@ def simulate_cmd(
     out.print(f"{n} poses written to {output}; nominal error RMS {np.sqrt(np.mean(err_mm**2)):.3f} mm, max {err_mm.max():.3f} mm", highlight=False)
 
 
+def _named_frames(items: list[str] | None, option: str) -> dict:
+    """'NAME=X,Y,Z[,A,B,C]' options -> {name: 4x4}."""
+    out = {}
+    for item in items or []:
+        name, eq, values = item.partition("=")
+        if not eq or not name.strip():
+            raise InputError(f"{option}: expected NAME=X,Y,Z[,A,B,C], got '{item}'")
+        parts = [p for p in values.split(",") if p.strip()]
+        nums = _floats(values, len(parts) if len(parts) in (3, 6) else 6, option)
+        abc = nums[3:6] if len(nums) == 6 else np.zeros(3)
+        out[name.strip()] = make_transform(abc_to_matrix(abc[None])[0], nums[:3])
+    return out
+
+
 @app.command("compensate")
 @handles_errors
 def compensate_cmd(
-    program: str = typer.Argument(..., help="Program file, or - for standard input."),
-    model: Path = typer.Option(..., "--model"),
-    output: Path = typer.Option(..., "-o", "--output"),
-    dialect: Optional[str] = typer.Option(None, "--dialect"),
+    program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
+    model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
+    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
+    max_iter: int = typer.Option(25, "--max-iter"),
+    scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
+    temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (models with a thermal effect)."),
+    force: Optional[str] = typer.Option(None, "--force", help="Process force fx,fy,fz in N, base frame (models with external_load)."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
+    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
+    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model."""
-    _not_built("compensate", "issue 6")
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .compensate import CompensationError, compensate
+    from .measurements import write_text_atomic
+    from .model_io import load_model
+    from .programs import emit_texts, parse_program
+
+    if tol <= 0 or max_iter < 1:
+        raise InputError("--tol must be > 0 and --max-iter >= 1")
+    error_model, _ = load_model(model)
+    if program == "-":
+        if dialect is None:
+            raise InputError("reading a program from standard input needs --dialect")
+        data = sys.stdin.buffer.read()
+        tp = parse_program("-" if dialect != "krl" else "-", dialect, data)
+    else:
+        tp = parse_program(Path(program), dialect)
+    to_stdout = output == "-"
+    log = err if to_stdout else out
+    forces = None if force is None else _floats(force, 3, "--force")
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+        task = bar.add_task("compensating", total=None)
+        new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
+                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"), progress=lambda m: bar.update(task, description=m))
+    summary = rep.summary()
+    if report is not None:
+        doc = {"summary": summary, "points": [
+            {"line": int(rep.line[i]), "compensated": bool(rep.compensated[i]), "iterations": int(rep.iterations[i]),
+             "before_mm": None if np.isnan(rep.before_mm[i]) else float(rep.before_mm[i]), "after_mm": None if np.isnan(rep.after_mm[i]) else float(rep.after_mm[i]),
+             "correction_mm": None if np.isnan(rep.correction_mm[i]) else float(rep.correction_mm[i]), "converged": bool(rep.converged[i]),
+             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i])}
+            for i in range(len(rep.line))]}
+        write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
+    failures = rep.failures()
+    if failures:
+        for line, reason in failures[:50]:
+            err.print(f"line {line}: {reason}")
+        if len(failures) > 50:
+            err.print(f"... and {len(failures) - 50} more")
+        raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
+    texts = emit_texts(tp, new)
+    if to_stdout:
+        sys.stdout.buffer.write(texts[0].encode("latin-1"))
+        sys.stdout.buffer.flush()
+    else:
+        outputs = [Path(output)] + [Path(output).with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
+        encoded = [t.encode("latin-1") for t in texts[: len(outputs)]]
+        for data, path in zip(encoded, outputs):
+            write_text_atomic(path, data.decode("latin-1"), encoding="latin-1")
+    b, a = summary["predicted_before"], summary["predicted_after"]
+    if b["rms_mm"] is not None:
+        log.print(
+            f"{summary['compensated']} of {summary['targets']} targets compensated ({scheme}); predicted error RMS {b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, "
+            f"max {b['max_mm']:.4f} -> {a['max_mm']:.4f} mm; iterations median {summary['iterations_median']:.0f}, max {summary['iterations_max']}"
+        )
+    else:
+        log.print("no Cartesian target to compensate (joint targets are kept as written)")
+    for note in new.notes:
+        log.print(f"note: {note}")
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
@@ -479,6 +555,7 @@ def inspect_cmd(
     def num(v):
         return None if v is None or not np.isfinite(v) else round(float(v), 6)
 
+    placed = tp.placed()
     moves = []
     for i in range(len(tp)):
         entry = {
@@ -489,7 +566,7 @@ def inspect_cmd(
             "target": tp.target_name[i] or None,
             "frame": tp.frame_names[int(tp.frame[i])],
             "tool": tp.tool_names[int(tp.tool[i])],
-            "resolved": bool(tp.resolved[i]),
+            "resolved": bool(placed[i]),
         }
         if has_ori[i]:
             entry["quaternion"] = [num(v) for v in quats[i]]

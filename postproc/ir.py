@@ -93,12 +93,46 @@ class Toolpath:
     offset: np.ndarray = field(repr=False, default=None)  # (N, FIELDS): IR value = text value x scale + offset (RAPID Offs)
     offset_span: np.ndarray = field(repr=False, default=None)  # (N, FIELDS, 3): the number the offset was read from, -1 if none
     insert_at: np.ndarray = field(repr=False, default=None)  # (N, 2) (source, offset) where a missing field may be written, -1 if nowhere
+    frame_known: np.ndarray = field(repr=False, default=None)  # (F,) False where the program does not define the frame
+    tool_known: np.ndarray = field(repr=False, default=None)  # (T,) False where the program does not define the tool
     notes: tuple[str, ...] = ()
 
     def __len__(self) -> int:
         return self.kind.shape[0]
 
     # ------------------------------------------------------------ frames
+
+    def placed(self) -> np.ndarray:
+        """(N,) True where the target's point, frame and tool are all known from the program."""
+        ok = self.resolved.copy()
+        if self.frame_known is not None:
+            ok &= self.frame_known[self.frame]
+        if self.tool_known is not None:
+            ok &= self.tool_known[self.tool]
+        return ok
+
+    def with_frames(self, frames: dict | None = None, tools: dict | None = None) -> "Toolpath":
+        """A copy where frames and tools the program leaves undefined are given by name
+        (base_T_frame, flange_T_tcp as 4x4); an unknown name is an error naming the known ones."""
+        from .errors import InputError
+
+        new_frames, new_tools = self.frames.copy(), self.tools.copy()
+        frame_known = np.ones(len(self.frames), bool) if self.frame_known is None else self.frame_known.copy()
+        tool_known = np.ones(len(self.tools), bool) if self.tool_known is None else self.tool_known.copy()
+        for table, names, known, given, what in ((new_frames, self.frame_names, frame_known, frames or {}, "frame"), (new_tools, self.tool_names, tool_known, tools or {}, "tool")):
+            for name, transform in given.items():
+                exact = [i for i, n in enumerate(names) if n == name]
+                # A frame composed on an undefined one (G54+G68.2@line4) is placed with it.
+                composed = [i for i, n in enumerate(names) if n.startswith(name + "+") and not known[i]]
+                if not exact and not composed:
+                    raise InputError(f"the program has no {what} named '{name}' (it has: {', '.join(names)})")
+                for i in exact:
+                    table[i] = transform
+                    known[i] = True
+                for i in composed:
+                    table[i] = transform @ table[i]  # the unknown base stood in as identity
+                    known[i] = True
+        return replace(self, frames=new_frames, tools=new_tools, frame_known=frame_known, tool_known=tool_known)
 
     def target_poses(self) -> np.ndarray:
         """(N, 4, 4) target poses in their own frame (identity rotation where none is given)."""

@@ -360,15 +360,45 @@ def within_limits(robot: RobotModel, q_deg, tol_deg: float = 1e-9) -> np.ndarray
 
 
 def _shift_turns_towards(robot: RobotModel, q: np.ndarray, ref: np.ndarray) -> np.ndarray:
-    """Add whole turns to each joint of q to come nearest to ref while staying inside the joint range."""
+    """Add whole turns to each joint of q to come nearest to ref while staying inside the joint range.
+
+    Only joints whose range spans more than a turn can take another value: the others are
+    returned as they are (IK gives [-180, 180], their only representation in range)."""
+    wide = (robot.upper_deg - robot.lower_deg) > 360.0 - 1e-9
+    if not wide.any():
+        return q.copy()
+    shifted = q.copy()
+    shifted[..., wide] = _shift_wide(robot, q[..., wide], np.broadcast_to(ref, q.shape)[..., wide], wide)
+    return shifted
+
+
+def _shift_wide(robot: RobotModel, q: np.ndarray, ref: np.ndarray, wide: np.ndarray) -> np.ndarray:
+    lower, upper = robot.lower_deg[wide], robot.upper_deg[wide]
     shifted = ref + (q - ref + 180.0) % 360.0 - 180.0
     # If the nearest equivalent is outside the limits, try one turn either way.
     for delta in (360.0, -360.0):
         alt = shifted + delta
-        bad = (shifted < robot.lower_deg) | (shifted > robot.upper_deg)
-        good_alt = (alt >= robot.lower_deg) & (alt <= robot.upper_deg)
+        bad = (shifted < lower) | (shifted > upper)
+        good_alt = (alt >= lower) & (alt <= upper)
         shifted = np.where(bad & good_alt, alt, shifted)
     return shifted
+
+
+def select_branch(robot: RobotModel, solutions, branch, q_ref) -> tuple[np.ndarray, np.ndarray]:
+    """The solution on a given branch per pose (turns unwrapped towards q_ref); where that
+    branch is unreachable or outside the limits, the nearest valid one (then the branch differs)."""
+    sols = np.asarray(solutions, dtype=float)
+    n = sols.shape[0]
+    branch = np.asarray(branch)
+    q = sols[np.arange(n), np.maximum(branch, 0)]
+    q = _shift_turns_towards(robot, q, np.asarray(q_ref, dtype=float))
+    ok = (branch >= 0) & within_limits(robot, q)
+    out_branch = np.where(ok, branch, -1)
+    if not ok.all():
+        bad = np.nonzero(~ok)[0]
+        q_alt, b_alt = select_nearest(robot, sols[bad], np.asarray(q_ref, dtype=float)[bad] if np.ndim(q_ref) == 2 else q_ref)
+        q[bad], out_branch[bad] = q_alt, b_alt
+    return q, out_branch
 
 
 def select_nearest(robot: RobotModel, solutions, q_ref) -> tuple[np.ndarray, np.ndarray]:

@@ -81,9 +81,3 @@ def test_bad_robot_file_exits_2_naming_file_and_key(tmp_path):
     result = runner.invoke(app, ["fk", str(bad), "--q", "0,0,0,0,0,0"])
     assert result.exit_code == 2
     assert "broken.toml" in result.stderr and "'description'" in result.stderr
-
-
-def test_commands_not_built_yet_exit_2_and_say_so(tmp_path):
-    result = runner.invoke(app, ["compensate", str(tmp_path / "p.mod"), "--model", str(tmp_path / "m.json"), "-o", str(tmp_path / "out.mod")])
-    assert result.exit_code == 2
-    assert "not built" in result.stderr

@@ -119,8 +119,8 @@ def test_krl_undeclared_point_is_flagged_not_guessed():
     tp = parse_program(CORPUS / "krl" / "ptp_lin_basic.src")
     assert tp.target_name[0] == "XHOME" and tp.kind[0] == 4  # E6AXIS from the .dat: a joint target
     np.testing.assert_allclose(tp.joints[0], [0, -90, 90, 0, 0, 0])
-    assert tp.frame_names[tp.frame[1]] == "BASE_DATA[1]" and not tp.resolved[1]  # BASE_DATA is in $config.dat
-    assert any("BASE_DATA[1]" in n or "XHOME" in n for n in tp.notes) or not tp.resolved.all()
+    assert tp.frame_names[tp.frame[1]] == "BASE_DATA[1]" and tp.resolved[1] and not tp.placed()[1]  # BASE_DATA is in $config.dat
+    assert not tp.placed()[1:4].any()  # every Cartesian target sits in that undefined base
 
 
 def test_shared_point_with_conflicting_edits_is_refused():

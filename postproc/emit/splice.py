@@ -45,6 +45,51 @@ def format_like(old: str, value: float, tol: float) -> str:
     return text
 
 
+def format_many(original: Toolpath, rows, fields, values: np.ndarray, tol: np.ndarray) -> list[str]:
+    """format_like for many numbers at once: decimals chosen vectorised, strings grouped by decimals."""
+    spans = original.spans[rows, fields]
+    sources = [doc.text for doc in original.sources]
+    olds = [sources[fi][a:b] for fi, a, b in zip(spans[:, 0].tolist(), spans[:, 1].tolist(), spans[:, 2].tolist())]
+    has_dot = np.array(["." in t and "e" not in t.lower() for t in olds], dtype=bool)
+    old_dec = np.array([len(t) - t.find(".") - 1 if d else 0 for t, d in zip(olds, has_dot)], dtype=int)
+    decimals = np.full(len(values), MAX_DECIMALS)
+    undecided = np.ones(len(values), dtype=bool)
+    for d in range(0, MAX_DECIMALS + 1):
+        ok = undecided & (d >= old_dec) & (np.abs(np.round(values, d) - values) <= tol)
+        decimals[ok] = d
+        undecided &= ~ok
+    out: list[str] = [""] * len(values)
+    for d in np.unique(decimals):
+        idx = np.nonzero(decimals == d)[0]
+        spec = f".{int(d)}f"
+        for i, v in zip(idx.tolist(), values[idx].tolist()):
+            out[i] = format(v, spec)
+    # Styles are rare: patch them one by one (sign, trailing dot, missing leading zero, -0).
+    for i, old in enumerate(olds):
+        text = out[i]
+        if text.startswith("-") and float(text) == 0.0:
+            text = text[1:]
+        if old[:1] == "+" or has_dot[i] and decimals[i] == 0 or old.lstrip("+-")[:1] == ".":
+            text = format_like(old, values[i], float(tol[i]))
+        out[i] = text
+    return out
+
+
+def _refuse_conflicts(original: Toolpath, files, starts, texts, rows, fields) -> None:
+    """Two targets sharing one number (a named point) may not ask for different new text."""
+    keys = files * (1 << 40) + starts
+    order = np.argsort(keys, kind="stable")
+    dup = np.nonzero(keys[order][1:] == keys[order][:-1])[0]
+    for k in dup:
+        a, b = order[k], order[k + 1]
+        if texts[a] != texts[b]:
+            name = original.target_name[rows[a]] or "?"
+            raise EmitError(
+                f"{original.sources[int(files[a])].path}: {FIELDS[fields[a]]} of point '{name}' is used by lines "
+                f"{original.line[rows[a]]} and {original.line[rows[b]]} with different new values ({texts[a]} and {texts[b]})"
+            )
+
+
 def _text_values(modified: Toolpath, original: Toolpath) -> np.ndarray:
     """New numbers as the text writes them: undo the scale, and make G91-style increments."""
     values = modified.values.copy()
@@ -96,8 +141,19 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
         return float(text)
 
     rows, fields = np.nonzero(changed)
-    for r, f in zip(rows.tolist(), fields.tolist()):
-        put(r, f, new[r, f])
+    if len(rows):
+        texts_new = format_many(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
+        file_ids, starts, ends = (spans[rows, fields, k] for k in range(3))
+        _refuse_conflicts(original, file_ids, starts, texts_new, rows, fields)
+        for key_file, key_start, key_end, text, r, f in zip(file_ids.tolist(), starts.tolist(), ends.tolist(), texts_new, rows.tolist(), fields.tolist()):
+            edits[(key_file, key_start)] = (key_end, text, r, f)
+        pos = fields < 3
+        if pos.any():
+            vals = np.array([texts_new[i] for i in np.nonzero(pos)[0]], dtype=float)
+            r, f = rows[pos], fields[pos]
+            off = original.offset[r, f] if original.offset is not None else 0.0
+            keep = ~original.relative[r]
+            written[r[keep], f[keep]] = (vals * original.scale[r, f] + off)[keep]
     # Offsets (RAPID Offs) against the value their base point is written with.
     for r, f in zip(*np.nonzero(derived & (spans[:, :, 1] >= 0))):
         key = (int(original.offset_span[r, f, 0]), int(original.offset_span[r, f, 1]))

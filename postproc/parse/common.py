@@ -119,6 +119,25 @@ def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     return np.arange(lengths.sum()) + offsets
 
 
+def parse_statement(parser, text: str, lines: "LineIndex", path: str, start: int, what: str):
+    """Parse one statement with a lark parser; any failure is a ParseError at its file position.
+
+    ``start`` is the statement's offset in the file, so lark's position inside the
+    statement becomes the file's line and column."""
+    from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
+
+    try:
+        return parser.parse(text)
+    except UnexpectedInput as exc:
+        pos = getattr(exc, "pos_in_stream", None)
+        if pos is None:
+            pos = (getattr(exc, "column", 1) or 1) - 1
+        kind = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
+        raise lines.error(path, start + pos, f"{kind}: cannot parse this {what}") from None
+    except LarkError as exc:
+        raise lines.error(path, start, f"cannot parse this {what} ({exc})") from None
+
+
 class LineIndex:
     """Offsets <-> 1-based line and column numbers."""
 
@@ -151,27 +170,29 @@ class Builder:
     frames: list[np.ndarray] = field(default_factory=lambda: [np.eye(4)])
     blocks: list[dict] = field(default_factory=list)
     notes: list[str] = field(default_factory=list)
+    tool_known: list[bool] = field(default_factory=lambda: [True])
+    frame_known: list[bool] = field(default_factory=lambda: [True])
 
-    def tool_index(self, name: str, transform: np.ndarray | None) -> int:
-        key = name
-        if key in self.tool_names:
-            i = self.tool_names.index(key)
+    @staticmethod
+    def _register(names, values, known, name, transform, is_known):
+        """Index of a named frame/tool; a None transform is unknown (identity stands in, flagged)."""
+        is_known = transform is not None if is_known is None else is_known
+        if name in names:
+            i = names.index(name)
             if transform is not None:
-                self.tools[i] = transform
+                values[i] = transform
+                known[i] = is_known
             return i
-        self.tool_names.append(key)
-        self.tools.append(np.eye(4) if transform is None else transform)
-        return len(self.tool_names) - 1
+        names.append(name)
+        values.append(np.eye(4) if transform is None else transform)
+        known.append(is_known)
+        return len(names) - 1
 
-    def frame_index(self, name: str, transform: np.ndarray | None) -> int:
-        if name in self.frame_names:
-            i = self.frame_names.index(name)
-            if transform is not None:
-                self.frames[i] = transform
-            return i
-        self.frame_names.append(name)
-        self.frames.append(np.eye(4) if transform is None else transform)
-        return len(self.frame_names) - 1
+    def tool_index(self, name: str, transform: np.ndarray | None, known: bool | None = None) -> int:
+        return self._register(self.tool_names, self.tools, self.tool_known, name, transform, known)
+
+    def frame_index(self, name: str, transform: np.ndarray | None, known: bool | None = None) -> int:
+        return self._register(self.frame_names, self.frames, self.frame_known, name, transform, known)
 
     def add_block(self, order: np.ndarray, **arrays) -> None:
         """Targets whose program order is given by ``order`` (their statement offsets)."""
@@ -258,6 +279,8 @@ class Builder:
             relative=cols["relative"],
             values=values,
             insert_at=cols["insert_at"],
+            frame_known=np.array(self.frame_known, dtype=bool),
+            tool_known=np.array(self.tool_known, dtype=bool),
             offset=cols["offset"],
             offset_span=cols["offset_span"],
             notes=tuple(self.notes),

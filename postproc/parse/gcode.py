@@ -16,11 +16,10 @@ import re
 
 import numpy as np
 from lark import Token, Tree
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
 from ..frames import make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, scan_numbers
+from .common import Builder, LineIndex, parse_statement, scan_numbers
 from .grammar import grammar
 
 AXES = "XYZABCIJKRF"
@@ -114,14 +113,7 @@ class GcodeParser:
             stripped = line.strip()
             if not stripped or stripped == "%":
                 continue
-            try:
-                tree = g.parse(line)
-            except UnexpectedInput as exc:
-                col = getattr(exc, "column", 1) or 1
-                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
-                raise self.lines.error(self.doc.path, start + col - 1, f"{what}: cannot parse this G-code block") from None
-            except LarkError as exc:
-                raise self.lines.error(self.doc.path, start, f"cannot parse this G-code block ({exc})") from None
+            tree = parse_statement(g, line, self.lines, self.doc.path, start, "G-code block")
             self._block(tree, start, out, stack)
             out["code_end"].append(start + len(_code_part(line)))
         if stack:
@@ -359,12 +351,12 @@ class GcodeParser:
             events = [(o, off) for o, p, off in g10 if p == w]
             name = f"G{[54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3][w - 1]:g}"
             if not events:
-                frame_idx[sel] = self.builder.frame_index(name, np.eye(4))
+                frame_idx[sel] = self.builder.frame_index(name, None)
                 frames_known[name] = False
                 continue
             at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
             ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
-            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, np.eye(4)))
+            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
         if self.tilts:
             offs = np.array([o for o, _ in self.tilts])
             at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
@@ -379,10 +371,10 @@ class GcodeParser:
                 for f in np.unique(frame_idx[sel]):
                     both = sel & (frame_idx == f)
                     name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
-                    frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt)
+                    frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
         g53 = t["g53"][rows]
         if g53.any():
-            frame_idx[g53] = self.builder.frame_index("machine", np.eye(4))
+            frame_idx[g53] = self.builder.frame_index("machine", np.eye(4), True)
         unknown = [name for name, known in frames_known.items() if not known]
         if unknown:
             self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")

@@ -16,11 +16,10 @@ from pathlib import Path
 
 import numpy as np
 from lark import Token, Tree
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
 from ..frames import abc_to_matrix, make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, Numbers, _ranges, scan_numbers
+from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
 from .grammar import grammar
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -210,14 +209,7 @@ class KrlParser:
                     self._close(d, stack, "ENDFOLD", start + raw_line.find(";"))
             if not code.strip():
                 continue
-            try:
-                tree = g.parse(code)
-            except UnexpectedInput as exc:
-                col = getattr(exc, "column", 1) or 1
-                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
-                raise d.lines.error(d.doc.path, start + col - 1, f"{what}: cannot parse this KRL statement") from None
-            except LarkError as exc:
-                raise d.lines.error(d.doc.path, start, f"cannot parse this KRL statement ({exc})") from None
+            tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
             if not tree.children:
                 continue
             self._statement(d, tree.children[0], start, stack, is_program)
@@ -427,10 +419,8 @@ class KrlParser:
             has = at >= 0
             if key in ("$BASE", "$TOOL"):
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
-                ids = np.array([register(name, transform) for _, (name, transform, _) in ev])
-                oks = np.array([ok for _, (_, _, ok) in ev])
+                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
                 (frame if key == "$BASE" else tool)[has] = ids[at[has]]
-                resolved &= ~has | oks[np.maximum(at, 0)]
             else:
                 vals = np.array([v for _, v in ev], dtype=float)
                 if key == "vel":

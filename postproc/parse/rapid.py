@@ -15,11 +15,10 @@ import re
 
 import numpy as np
 from lark import Token, Tree
-from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
 from ..frames import make_transform, quat_wxyz_to_matrix
 from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, scan_numbers
+from .common import Builder, LineIndex, parse_statement, scan_numbers
 from .grammar import grammar
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -175,7 +174,7 @@ class RapidParser:
             zone=np.array([_zone(z) for z in zone]),
             tool=tool_idx,
             frame=wobj_idx,
-            resolved=tool_ok & wobj_ok & ~np.isnan(values[:, :3]).any(axis=1),
+            resolved=~np.isnan(values[:, :3]).any(axis=1),
             name=np.array(names, dtype=object),
         )
 
@@ -227,14 +226,7 @@ class RapidParser:
         stack: list[tuple[str, int]] = []
         for start, end in self._statements(skip):
             text = self.code[start:end]
-            try:
-                tree = g.parse(text)
-            except UnexpectedInput as exc:
-                pos = start + (getattr(exc, "pos_in_stream", None) or 0)
-                what = "unexpected character" if isinstance(exc, UnexpectedCharacters) else "unexpected token"
-                raise self.lines.error(self.doc.path, pos, f"{what}: cannot parse this RAPID statement") from None
-            except LarkError as exc:
-                raise self.lines.error(self.doc.path, start, f"cannot parse this RAPID statement ({exc})") from None
+            tree = parse_statement(g, text, self.lines, self.doc.path, start, "RAPID statement")
             if tree.children:
                 self._statement(tree.children[0], start, stack)
         if stack:
@@ -305,9 +297,11 @@ class RapidParser:
             sl = self.numbers.between(s, e)
             nums = self.numbers.value[sl]
             if dtype == "tooldata":
-                self.tools[name.upper()] = None if holds or len(nums) < 7 else _pose(nums[:7])
+                # robhold TRUE: the robot holds the tool (the usual case); FALSE: a stationary tool.
+                self.tools[name.upper()] = None if not holds or len(nums) < 7 else _pose(nums[:7])
             else:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
+                # robhold TRUE here: the robot holds the work object (a stationary tool set-up).
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
 
     def _target(self, node, start: int, joint: bool = False):
@@ -408,7 +402,7 @@ class RapidParser:
             (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx[0], frame=wobj_idx[0], resolved=bool(tool_ok[0] and wobj_ok[0] and usable), offset_span=self._offset_span))
+                                  tool=tool_idx[0], frame=wobj_idx[0], resolved=bool(usable), offset_span=self._offset_span))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)

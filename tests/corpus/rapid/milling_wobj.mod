@@ -1,7 +1,7 @@
 MODULE Milling
   ! Fräsbahn über Werkstück - Kommentar mit Umlauten
-  PERS tooldata tSpindle := [TRUE,[[0,0,215.5],[1,0,0,0]],[12.5,[0,0,90],[1,0,0,0],0,0,0]];
-  PERS tooldata tMill := [FALSE,[[0.25,-0.1,215.5],[1,0,0,0]],[12.5,[0,0,90],[1,0,0,0],0,0,0]];
+  PERS tooldata tSpindle := [FALSE,[[0,0,215.5],[1,0,0,0]],[12.5,[0,0,90],[1,0,0,0],0,0,0]];
+  PERS tooldata tMill := [TRUE,[[0.25,-0.1,215.5],[1,0,0,0]],[12.5,[0,0,90],[1,0,0,0],0,0,0]];
   TASK PERS wobjdata wTable := [FALSE,TRUE,"",[[1200,-300,400],[0.7071068,0,0,0.7071068]],[[10,20,0],[1,0,0,0]]];
   CONST robtarget p10 := [[0,0,50],[0,0.7071068,0.7071068,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
   CONST robtarget p20 := [[100,0,-2],[0,0.7071068,0.7071068,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
