@@ -484,7 +484,7 @@ def compensate_cmd(
         if dialect is None:
             raise InputError("reading a program from standard input needs --dialect")
         data = sys.stdin.buffer.read()
-        tp = parse_program("-" if dialect != "krl" else "-", dialect, data)
+        tp = parse_program("-", dialect, data)
     else:
         tp = parse_program(Path(program), dialect)
     to_stdout = output == "-"

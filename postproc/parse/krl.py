@@ -138,10 +138,6 @@ def _frame_of(values: np.ndarray) -> np.ndarray:
     return make_transform(abc_to_matrix(v[3:6][None])[0], v[:3])
 
 
-def _bulk(regex, text):
-    return list(regex.finditer(text))
-
-
 class KrlParser:
     def __init__(self, src: SourceDoc, dat: SourceDoc | None = None, config: SourceDoc | None = None):
         docs = [d for d in (src, dat, config) if d is not None]
@@ -162,7 +158,7 @@ class KrlParser:
         for regex, present in probes.items():
             if not present:
                 continue  # a program without declarations skips the full pass
-            matches = _bulk(regex, d.text)
+            matches = list(regex.finditer(d.text))
             if not matches:
                 continue
             starts = np.array([m.start("agg") for m in matches])
@@ -181,7 +177,7 @@ class KrlParser:
         src_decl = self._declarations(src)
         for d in self.docs[1:]:
             self._slow_lines(d, skip=data_lines[d.index], is_program=False)
-        moves = _bulk(RE_MOVE, src.text)
+        moves = list(RE_MOVE.finditer(src.text))
         inline = [m for m in moves if m.group("agg") is not None]
         named = [m for m in moves if m.group("agg") is None]
         skip = src_decl | {m.start() for m in moves}
@@ -212,6 +208,7 @@ class KrlParser:
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
             if not tree.children:
                 continue
+            self._line_start = start  # positions inside the tree are relative to the line
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
@@ -508,17 +505,4 @@ def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | Non
         dat_doc = SourceDoc.read(dat_path, "dat")
     config_path = Path(config) if config is not None else path.parent / "$config.dat"
     config_doc = SourceDoc.read(config_path, "config") if str(path) != "-" and config_path.is_file() else None
-    parser = KrlParser(src, dat_doc, config_doc)
-    _install_line_start_hook(parser)
-    return parser.parse()
-
-
-def _install_line_start_hook(parser: KrlParser) -> None:
-    """Statements are parsed line by line: positions inside a tree are relative to the line."""
-    original = parser._statement
-
-    def statement(d, node, start, stack, is_program):
-        parser._line_start = start
-        return original(d, node, start, stack, is_program)
-
-    parser._statement = statement
+    return KrlParser(src, dat_doc, config_doc).parse()

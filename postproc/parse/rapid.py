@@ -375,7 +375,8 @@ class RapidParser:
     def _move(self, node: Tree, start: int) -> None:
         mv = str(node.children[0]).upper()
         args = node.children[1].children
-        positional = [a for a in args if a.children and isinstance(a.children[0], Tree) and a.children[0].data != "optarg" or (a.children and isinstance(a.children[0], Token))]
+        # Positional arguments: those that do not start with an optional \Name argument.
+        positional = [a for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
         options = {}
         for a in args:
             for o in a.children:
