@@ -95,9 +95,12 @@ def _read_floats(buf: bytes, count: int) -> np.ndarray:
         return np.zeros(0)
     import warnings
 
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore", DeprecationWarning)
-        values = np.fromstring(buf, dtype=float, sep=" ")
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            values = np.fromstring(buf, dtype=float, sep=" ")
+    except ValueError:  # NumPy 2.4 raises where older versions warned and stopped
+        values = np.zeros(0)
     if len(values) == count:
         return values
     return np.array([_to_float(t) for t in buf.split()], dtype=float)
