@@ -106,7 +106,7 @@ def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) ->
     deterministic: it never flips between fits of similar data.
     """
     _, jac = model.evaluate(prep)
-    j = jac.reshape(-1, jac.shape[-1]) * np.array([p.scale for p in model.params])
+    j = jac.reshape(jac.shape[0] * 3, jac.shape[-1]) * np.array([p.scale for p in model.params])
     cols = np.nonzero(free_mask)[0]
     cols = np.array(sorted(cols, key=lambda c: _priority(model.params[c].name)), dtype=int)
     sub = j[:, cols]
@@ -135,6 +135,11 @@ def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) ->
 
 
 def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None):
+    free = np.asarray(free, dtype=bool)
+    if not free.any():
+        from types import SimpleNamespace
+
+        return model.values.copy(), SimpleNamespace(success=True, message="nothing to fit")
     scales = np.array([p.scale for p in model.params])[free]
     base = model.values.copy()
 
@@ -148,7 +153,7 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
 
     def jac(x):
         _, jj = model.evaluate(prep, unpack(x))
-        return jj.reshape(-1, jj.shape[-1])[:, free]
+        return jj.reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
 
     lower = np.array([p.lower for p in model.params])[free]
     upper = np.array([p.upper for p in model.params])[free]
@@ -201,6 +206,10 @@ def fit(
     if prep.approach_inferred:
         notes.append("backlash: approach directions inferred from the row order (no s1..s6 columns)")
     before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=effects.get("base_frame") is not None), meas))
+    if not model.params:
+        # --effects none: the nominal model, nothing to identify (a predictor may sit on top).
+        return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=before,
+                         cv_rms_mm=before.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
     if effects.get("base_frame") is not None and prior is None:
         model = register_base(model, meas, prep)
 
@@ -223,7 +232,7 @@ def fit(
     m = resid.size
     dof = max(m - int(free.sum()), 1)
     _, jj = model.evaluate(prep)
-    jf = jj.reshape(-1, jj.shape[-1])[:, free]
+    jf = jj.reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
     s2 = float(np.sum(resid**2)) / dof
     try:
         cov = s2 * np.linalg.inv(jf.T @ jf)
@@ -340,8 +349,8 @@ def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, pr
         prep = result.model.prepare(meas)
         pos, jac = result.model.evaluate(prep)
         resid = (meas.measured_mm - pos).reshape(-1)
-        free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params])
-        base_cols = jac.reshape(-1, jac.shape[-1])[:, free]
+        free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
+        base_cols = jac.reshape(jac.shape[0] * 3, jac.shape[-1])[:, free]
         # d p / d q_j in the measurement frame, per degree.
         jq = kin_joint_columns(result.model, prep)
         baseline = _cv_linear(base_cols, resid, fold_of, folds)

@@ -137,3 +137,21 @@ def test_ladder_cli_plot_and_json(sim, tmp_path):
     assert plot.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     bad = runner.invoke(app, ["ladder", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "geometric,magic"])
     assert bad.exit_code == 2 and "unknown effect 'magic'" in bad.stderr
+
+
+def test_effects_none_is_the_nominal_model(sim, tmp_path):
+    out = tmp_path / "none.json"
+    result = runner.invoke(app, ["fit", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    doc = json.loads(out.read_text())
+    assert doc["effects"] == "none" and doc["parameters"] == {}
+    ev = json.loads(runner.invoke(app, ["evaluate", str(out), str(sim / "sim.csv"), "--json"]).stdout)
+    assert ev["rms_mm"] == pytest.approx(doc["fit"]["before"]["rms_mm"]) and ev["rms_mm"] > 1.0
+
+
+def test_diagnose_from_the_nominal_model_names_the_geometry(sim, tmp_path):
+    out = tmp_path / "none.json"
+    runner.invoke(app, ["fit", str(sim / "sim.csv"), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "-o", str(out)])
+    result = runner.invoke(app, ["diagnose", str(out), str(sim / "sim.csv"), "--json"])
+    assert result.exit_code == 0, result.output
+    assert json.loads(result.stdout)["candidates"][0]["effect"] == "geometric"
