@@ -208,6 +208,12 @@ def compensate(
         if effect.name == "external_load" and force_n is None:
             raise InputError("the model has an external_load effect: give the process force (--force fx,fy,fz)")
 
+    arcs = np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW))
+    if arcs.any():
+        # Moving an arc's end points without its centre would change its radius (LinuxCNC,
+        # for one, rejects such an arc): refuse rather than write a program that may not run.
+        lines = ", ".join(str(v) for v in tp.line[arcs][:10])
+        raise InputError(f"G2/G3 arcs on lines {lines}: arc centres are not compensated yet; linearise the arcs (or use R-format moves) first")
     written = tp
     if frames or tools:
         tp = tp.with_frames(frames, tools)

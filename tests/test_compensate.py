@@ -234,3 +234,10 @@ def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
     thermal = fit(model.robot, TOOL, parse_effects("geometric,thermal"), simulate(random_truth(model.robot, TOOL, parse_effects("geometric,thermal"), np.random.default_rng(2)), sample_poses(model.robot, TOOL, 120, Cylinder(), np.random.default_rng(2)), np.random.default_rng(2)), cv_folds=0).model
     with pytest.raises(InputError, match="--temp"):
         compensate(parse_program(rapid_program(tmp_path)), thermal)
+
+
+def test_gcode_arcs_are_refused_not_silently_broken(truth_and_model):
+    _, model = truth_and_model
+    tp = parse_program(Path(__file__).parent / "corpus" / "gcode" / "arcs_ijk.ngc")
+    with pytest.raises(InputError, match="arc centres are not compensated"):
+        compensate(tp, model)
