@@ -213,8 +213,10 @@ def fit_cmd(
     from .identify import fit as run_fit
     from .model_io import load_model, save_model
 
-    if predictor is not None:
-        raise FeatureUnavailableError(f"--predictor {predictor}: data-driven predictors are not built in this version yet (issue 7)")
+    if predictor is not None and predictor not in ("gpr", "tr-gpr", "pso-bp", "grid"):
+        raise InputError(f"--predictor: '{predictor}' is not one of gpr, tr-gpr, pso-bp, grid")
+    if predictor == "tr-gpr" and source is None:
+        raise InputError("--predictor tr-gpr needs --source SRC.csv (measurements from another workspace region)")
     if loss not in ("linear", "soft_l1", "huber", "cauchy"):
         raise InputError(f"--loss: '{loss}' is not one of linear, soft_l1, huber, cauchy")
     base_model = None
@@ -239,8 +241,18 @@ def fit_cmd(
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("fitting", total=None)
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=lambda msg: bar.update(task, description=msg))
-    save_model(output, result.model, result, measurements=str(meas))
+    final = result.model
+    if predictor is not None:
+        from .identify import Stats, fit_predictor, residuals
+
+        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+            bar.add_task(f"fitting the {predictor} predictor", total=None)
+            final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed)
+    save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
+    if predictor is not None:
+        hybrid = Stats.of(residuals(final, data))
+        out.print(f"with the {predictor} predictor on the residual: training RMS {hybrid.rms_mm:.4f} mm (validate with 'postproc evaluate')")
     out.print(f"model written to {output}", highlight=False)
 
 

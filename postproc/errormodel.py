@@ -43,6 +43,7 @@ class ErrorModel:
     params: tuple[Param, ...]
     base_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))  # R0 of the base-frame registration
     base_translation: np.ndarray = field(default_factory=lambda: np.zeros(3))  # t0
+    residual: object | None = None  # a data-driven predictor of what the effects leave (postproc.learn.Residual)
 
     # ------------------------------------------------------------------ building
 
@@ -148,11 +149,14 @@ class ErrorModel:
         return theta, d, a, alpha, tool, rot, trans
 
     def predict_prepared(self, prep: Prepared, values: np.ndarray | None = None) -> np.ndarray:
-        """Predicted measured positions (N, 3) in the measurement frame."""
+        """Predicted measured positions (N, 3) in the measurement frame: the effects, plus the
+        data-driven residual predictor when the model has one (a hybrid model)."""
         values = self.values if values is None else values
         theta, d, a, alpha, tool, rot, trans = self._geometry(prep, values)
-        pos = kin.forward_dh(theta, d, a, alpha, tool=tool)[:, :3, 3]
-        return pos @ rot.T + trans
+        pos = kin.forward_dh(theta, d, a, alpha, tool=tool)[:, :3, 3] @ rot.T + trans
+        if self.residual is not None:
+            pos = pos + self.residual.predict(self.robot, self.tool_mm, prep.ctx.q_deg)
+        return pos
 
     def predict(self, meas: MeasurementSet) -> np.ndarray:
         return self.predict_prepared(self.prepare(meas))

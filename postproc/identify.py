@@ -391,3 +391,33 @@ def _cv_linear(cols: np.ndarray, target: np.ndarray, fold_of: np.ndarray, folds:
         coef, *_ = np.linalg.lstsq(cols[~test], target[~test], rcond=None)
         sq += float(np.sum((target[test] - cols[test] @ coef) ** 2))
     return float(np.sqrt(sq / (len(target) / 3)))
+
+
+def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0) -> ErrorModel:
+    """Attach a data-driven predictor of the model's residual (a hybrid model; with no
+    effects, a purely data-driven one). tr-gpr takes a source-region set as well."""
+    from dataclasses import replace as _replace
+
+    from .learn import FEATURES, GPRPredictor, GridPredictor, PSOBPPredictor, Residual, TrGPRPredictor
+    from .learn.features import features
+
+    if kind not in FEATURES:
+        raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join(FEATURES)})")
+    physics = _replace(model, residual=None)
+    target = meas.measured_mm - physics.predict(meas)
+    feature_kind = FEATURES[kind]
+    reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
+    X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
+    if kind == "gpr":
+        est = GPRPredictor(anisotropic=True, random_state=seed).fit(X, target)
+    elif kind == "pso-bp":
+        est = PSOBPPredictor(random_state=seed).fit(X, target)
+    elif kind == "grid":
+        est = GridPredictor().fit(X, target)
+    else:
+        if source is None:
+            raise IdentificationError("tr-gpr needs a source-region measurement set (--source)")
+        Xs = features(model.robot, model.tool_mm, source.q_deg, feature_kind)
+        ys = source.measured_mm - physics.predict(source)
+        est = TrGPRPredictor(random_state=seed).fit(X, target, Xs, ys)
+    return _replace(model, residual=Residual(kind, feature_kind, est, reference))

@@ -44,7 +44,7 @@ def model_document(model: ErrorModel, result: FitResult | None = None, measureme
         "effects": model.effects.spec(),
         "parameters": params,
         "base_registration": {"rotation": model.base_rotation.tolist(), "translation_mm": model.base_translation.tolist()},
-        "predictor": None,
+        "predictor": None if model.residual is None else model.residual.to_state(),
     }
     if result is not None:
         doc["fit"] = {
@@ -126,7 +126,12 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         raise fail("base_registration", "rotation must be a 3x3 rotation matrix and translation_mm three numbers")
     from dataclasses import replace
 
-    return replace(model.with_values(values), base_rotation=rot, base_translation=trans)
+    residual = None
+    if doc.get("predictor") is not None:
+        from .learn import Residual
+
+        residual = Residual.from_state(doc["predictor"], source)
+    return replace(model.with_values(values), base_rotation=rot, base_translation=trans, residual=residual)
 
 
 def _finite(v) -> bool:

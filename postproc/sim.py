@@ -138,6 +138,7 @@ def simulate(
     force_max_n: float = 500.0,
     with_force: bool | None = None,
     seconds_per_pose: tuple[float, float] = (20.0, 40.0),
+    distortion_mm: float = 0.0,
 ) -> MeasurementSet:
     """Measure the true robot at q: all columns of the schema, noise ~ N(0, noise_mm) per axis.
 
@@ -161,6 +162,8 @@ def simulate(
         temp = 21.0 + rng.uniform(-0.5, 0.5, n)
     prep = truth.prepare(q_deg=q, force_n=force, approach=approach, temp_c=temp, time_s=time_s)
     actual = truth.predict_prepared(prep)
+    if distortion_mm:
+        actual = actual + smooth_distortion(actual, distortion_mm)
     measured = actual + rng.normal(0.0, noise_mm, size=actual.shape)
     nominal = kin.fk(truth.robot, q, tool=truth.tool_mm)[:, :3, 3]
     return MeasurementSet(
@@ -226,3 +229,14 @@ def parse_region(kind: str, text: str | None):
     if kind == "joints":
         return JointBox(tuple(joint_ranges.get(j, (-170.0, 170.0)) for j in range(1, 7)))
     return replace(defaults[kind], **fields)
+
+
+def smooth_distortion(position_mm: np.ndarray, amplitude_mm: float) -> np.ndarray:
+    """An error no catalog effect describes: a smooth field over the workspace (wavelengths
+    of 0.4-0.7 m), e.g. a structure's deflection or a tracker's scale error. For tests of
+    the data-driven predictors."""
+    p = np.asarray(position_mm, dtype=float) / 1000.0
+    return amplitude_mm * np.stack(
+        [np.sin(2 * np.pi * p[:, 1] / 0.7) * np.cos(2 * np.pi * p[:, 2] / 0.6),
+         np.sin(2 * np.pi * p[:, 0] / 0.5) * np.sin(2 * np.pi * p[:, 2] / 0.7),
+         np.cos(2 * np.pi * p[:, 0] / 0.6) * np.cos(2 * np.pi * p[:, 1] / 0.4)], axis=1)

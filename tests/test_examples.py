@@ -16,6 +16,8 @@ def test_example_runs(script, tmp_path, shared):
     args = [sys.executable, str(script)]
     if script.name == "explain_loop.py":
         args.append(str(tmp_path))
+    if script.name == "seed_experiments.py":
+        args.append("--quick")
     if script.name == "ur10_real_data.py":
         args.append(str(shared / "data" / "ur10_ipa"))
     proc = subprocess.run(args, capture_output=True, text=True, timeout=600, cwd=tmp_path)

@@ -8,5 +8,7 @@ compared. Inputs and outputs are arrays: X (N, features), y (N, 3) position erro
 from .gp import GPRPredictor
 from .grid import GridPredictor, OutsideGridError
 from .nn import PSOBPPredictor, hidden_size_table
+from .residual import FEATURES, Residual
+from .transfer import TrGPRPredictor, region_similarity
 
-__all__ = ["GPRPredictor", "GridPredictor", "OutsideGridError", "PSOBPPredictor", "hidden_size_table"]
+__all__ = ["FEATURES", "GPRPredictor", "GridPredictor", "OutsideGridError", "PSOBPPredictor", "Residual", "TrGPRPredictor", "hidden_size_table", "region_similarity"]

@@ -1,0 +1,95 @@
+"""A predictor attached to an error model: what to feed it, how to save and restore it.
+
+``Residual`` wraps a fitted estimator with its feature kind, so that ``ErrorModel``
+adds ``residual.predict(robot, tool, q)`` to the physics. ``to_state`` / ``from_state``
+make it JSON: the GPR is stored as its training data and optimised kernel (restored
+exactly by refitting with the kernel fixed), the network as its weights, the grid as its
+nodes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError, ModelFileError
+from .features import features
+from .gp import GPRPredictor
+from .grid import GridPredictor
+from .nn import PSOBPPredictor
+
+FEATURES = {"gpr": "pose", "tr-gpr": "pose", "pso-bp": "joints+disp", "grid": "position"}
+
+
+@dataclass(frozen=True)
+class Residual:
+    kind: str
+    feature_kind: str
+    estimator: object
+    reference: np.ndarray | None = None  # pso-bp: the displacement reference point
+
+    def inputs(self, robot, tool_mm, q_deg):
+        return features(robot, tool_mm, q_deg, self.feature_kind, self.reference)
+
+    def predict(self, robot, tool_mm, q_deg) -> np.ndarray:
+        return np.asarray(self.estimator.predict(self.inputs(robot, tool_mm, q_deg)), dtype=float).reshape(-1, 3)
+
+    # ------------------------------------------------------------- state
+    def to_state(self) -> dict:
+        est = self.estimator
+        state = {"kind": self.kind, "features": self.feature_kind, "reference": None if self.reference is None else self.reference.tolist()}
+        state["estimator"] = estimator_state(est)
+        return state
+
+    @classmethod
+    def from_state(cls, state: dict, source: str) -> "Residual":
+        try:
+            est = estimator_from_state(state["estimator"])
+            ref = state.get("reference")
+            return cls(state["kind"], state["features"], est, None if ref is None else np.asarray(ref, dtype=float))
+        except (KeyError, TypeError, ValueError) as exc:
+            raise ModelFileError(f"{source}: key 'predictor': not a readable predictor ({exc})") from None
+
+
+def estimator_state(est) -> dict:
+    if isinstance(est, GPRPredictor):
+        return {"type": "gpr", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
+                "theta": est.gpr_.kernel_.theta.tolist(), "weights": None if est.weights_ is None else est.weights_.tolist()}
+    if isinstance(est, PSOBPPredictor):
+        return {"type": "pso-bp", "params": est.get_params(), "weights": est.weights_.tolist(), "shapes": [list(s) for s in est.shapes_],
+                "x_mean": est.x_mean_.tolist(), "x_std": est.x_std_.tolist(), "y_mean": est.y_mean_.tolist(), "y_std": est.y_std_.tolist()}
+    if isinstance(est, GridPredictor):
+        return {"type": "grid", "params": est.get_params(), "axes": [a.tolist() for a in est.axes_], "values": est.interp_.values.tolist()}
+    if hasattr(est, "to_state"):
+        return est.to_state()
+    raise InputError(f"cannot save a predictor of type {type(est).__name__}")
+
+
+def estimator_from_state(state: dict):
+    kind = state["type"]
+    if kind == "gpr":
+        est = GPRPredictor(**state["params"])
+        w = state.get("weights")
+        return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w))
+    if kind == "pso-bp":
+        est = PSOBPPredictor(**state["params"])
+        est.weights_ = np.asarray(state["weights"], dtype=float)
+        est.shapes_ = [tuple(s) for s in state["shapes"]]
+        for key in ("x_mean", "x_std", "y_mean", "y_std"):
+            setattr(est, f"{key}_", np.asarray(state[key], dtype=float))
+        est.n_features_in_ = len(est.x_mean_)
+        return est
+    if kind == "grid":
+        from scipy.interpolate import RegularGridInterpolator
+
+        est = GridPredictor(**state["params"])
+        est.axes_ = [np.asarray(a) for a in state["axes"]]
+        est.interp_ = RegularGridInterpolator(est.axes_, np.asarray(state["values"]), method="linear", bounds_error=False, fill_value=np.nan)
+        est.n_features_in_ = 3
+        return est
+    if kind == "tr-gpr":
+        from .transfer import TrGPRPredictor
+
+        return TrGPRPredictor.from_state(state)
+    raise ValueError(f"unknown predictor type '{kind}'")

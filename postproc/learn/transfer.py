@@ -1,0 +1,153 @@
+"""Transfer-learned GPR (seed 001 §2) and the region-similarity measure (eq. 9-10).
+
+A source region measured densely and a target region measured sparsely. The target is
+split into k sub-spaces by base angle theta1. For each sub-space j:
+- feature alignment (eq. 11-12): the source poses rotated about the base z axis by the
+  sub-space's angle and shifted by the mean offset, T_j;
+- label alignment (eq. 13-14): a 3x3 map H_j (ridge regression towards the identity,
+  weighted by the measurement precision) from the source model's errors at the aligned
+  target poses to the measured target errors;
+- the source set transferred as (T_j x, H_j y) and merged with the target data (eq. 15-17).
+TrAdaBoost.R2 (eq. 19-24) then reweights: target samples by the weighted fitting error
+relative to the largest target error, source samples that fit badly lose weight; the
+GPR base learners are combined by their weighted median (eq. 25). The kernel is fitted
+once and then kept, so every boosting round is one factorisation.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+
+from .gp import GPRPredictor
+
+
+def region_similarity(errors_a: np.ndarray, errors_b: np.ndarray) -> float:
+    """Mean cosine similarity of min-max normalised error vectors of two regions (eq. 9-10).
+
+    The two sets hold the same number of samples taken in corresponding order; 1 means the
+    error patterns are alike (seed 001 Table 4: >= 0.94 for transferable regions)."""
+    a = np.asarray(errors_a, dtype=float)
+    b = np.asarray(errors_b, dtype=float)
+    n = min(len(a), len(b))
+    a, b = a[:n], b[:n]
+
+    def norm(e):
+        lo, hi = e.min(axis=0), e.max(axis=0)
+        return (e - lo) / np.where(hi > lo, hi - lo, 1.0)
+
+    na, nb = norm(a), norm(b)
+    dots = np.sum(na * nb, axis=1)
+    lengths = np.linalg.norm(na, axis=1) * np.linalg.norm(nb, axis=1)
+    return float(np.mean(np.where(lengths > 0, dots / np.where(lengths > 0, lengths, 1.0), 1.0)))
+
+
+def _theta1(X):
+    return np.degrees(np.arctan2(X[:, 1], X[:, 0]))
+
+
+def _rotate(X, theta_deg, offset):
+    """Pose features (x, y, z, A, B, C) turned about base z by theta and shifted."""
+    t = np.radians(theta_deg)
+    c, s = np.cos(t), np.sin(t)
+    out = np.array(X, dtype=float, copy=True)
+    out[:, 0] = c * X[:, 0] - s * X[:, 1] + offset[0]
+    out[:, 1] = s * X[:, 0] + c * X[:, 1] + offset[1]
+    out[:, 2] = X[:, 2] + offset[2]
+    if X.shape[1] >= 4:
+        out[:, 3] = (X[:, 3] + theta_deg + 180.0) % 360.0 - 180.0  # A: the turn about z
+    return out
+
+
+def _weighted_median(preds: np.ndarray, weights: np.ndarray) -> np.ndarray:
+    """Per sample and output, the weighted median over learners: preds (L, N, 3)."""
+    order = np.argsort(preds, axis=0)
+    sorted_preds = np.take_along_axis(preds, order, axis=0)
+    w = weights[order]
+    cum = np.cumsum(w, axis=0)
+    idx = np.argmax(cum >= 0.5 * cum[-1], axis=0)
+    return np.take_along_axis(sorted_preds, idx[None], axis=0)[0]
+
+
+class TrGPRPredictor(RegressorMixin, BaseEstimator):
+    def __init__(self, n_subspaces: int = 5, n_iter: int = 10, ridge: float = 1.0, noise_mm: float = 0.02, random_state: int = 0):
+        self.n_subspaces = n_subspaces
+        self.n_iter = n_iter
+        self.ridge = ridge
+        self.noise_mm = noise_mm
+        self.random_state = random_state
+
+    def fit(self, X, y, X_source=None, y_source=None):
+        """X, y: target poses and errors (few); X_source, y_source: the source region's (many)."""
+        X = np.asarray(X, dtype=float)
+        y = np.asarray(y, dtype=float)
+        if X_source is None or y_source is None:
+            raise ValueError("tr-gpr needs source-domain data (X_source, y_source)")
+        Xs = np.asarray(X_source, dtype=float)
+        ys = np.asarray(y_source, dtype=float)
+        source_model = GPRPredictor(random_state=self.random_state).fit(Xs, ys)
+        order = np.argsort(_theta1(X))
+        groups = np.array_split(order, self.n_subspaces)
+        parts_X, parts_y = [], []
+        self.alignments_ = []
+        precision = 1.0 / self.noise_mm**2  # the tracker's precision weights the label fit
+        for g in groups:
+            theta = float(np.mean(_theta1(X[g])) - np.mean(_theta1(Xs)))
+            rotated = _rotate(Xs, theta, np.zeros(3))
+            offset = X[g, :3].mean(axis=0) - rotated[:, :3].mean(axis=0)
+            # Label alignment: target errors against the source model at the poses they map from.
+            back = _rotate(_rotate(X[g], 0.0, -offset), -theta, np.zeros(3))
+            f_src = source_model.predict(back)
+            a = precision * f_src.T @ f_src + self.ridge * np.eye(3)
+            b = precision * f_src.T @ y[g] + self.ridge * np.eye(3)
+            h = np.linalg.solve(a, b)  # y ~ f_src @ h, pulled towards the identity
+            parts_X.append(_rotate(Xs, theta, offset))
+            parts_y.append(ys @ h)
+            self.alignments_.append((theta, offset.tolist(), h.tolist()))
+        n_src = sum(len(p) for p in parts_X)
+        X_all = np.vstack(parts_X + [X])
+        y_all = np.vstack(parts_y + [y])
+        is_target = np.r_[np.zeros(n_src, bool), np.ones(len(X), bool)]
+        weights = np.full(len(X_all), 1.0 / len(X_all))  # eq. 19 with no overlapping sub-spaces
+        beta_src = 1.0 / (1.0 + np.sqrt(2.0 * np.log(max(n_src, 2)) / max(self.n_iter, 1)))
+        first = GPRPredictor(random_state=self.random_state).fit(X_all, y_all, sample_weight=weights * len(X_all))
+        theta_kernel = first.gpr_.kernel_.theta
+        learners, betas = [], []
+        for _ in range(self.n_iter):
+            learner = GPRPredictor(random_state=self.random_state).fit_fixed(X_all, y_all, theta_kernel, sample_weight=weights * len(X_all))
+            err = np.linalg.norm(learner.predict(X_all) - y_all, axis=1)
+            e = err / max(err[is_target].max(), 1e-12)  # eq. 20-21
+            eps = float(np.sum(e[is_target] * weights[is_target]) / np.sum(weights[is_target]))  # eq. 22
+            if eps >= 0.5:
+                break
+            beta_t = max(eps, 1e-6) / (1.0 - eps)
+            learners.append(learner)
+            betas.append(beta_t)
+            # eq. 23: target samples that fit badly gain weight; bad source samples lose it.
+            weights = np.where(is_target, weights * beta_t ** (-(e)), weights * beta_src**e)
+            weights /= weights.sum()
+        if not learners:
+            learners, betas = [first], [0.5]
+        self.learners_ = learners
+        self.learner_weights_ = np.log(1.0 / np.asarray(betas))  # eq. 24-25
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def predict(self, X):
+        preds = np.stack([m.predict(np.asarray(X, dtype=float)) for m in self.learners_])
+        return _weighted_median(preds, self.learner_weights_)
+
+    def to_state(self) -> dict:
+        from .residual import estimator_state
+
+        return {"type": "tr-gpr", "params": self.get_params(), "learners": [estimator_state(m) for m in self.learners_], "learner_weights": self.learner_weights_.tolist()}
+
+    @classmethod
+    def from_state(cls, state: dict) -> "TrGPRPredictor":
+        from .residual import estimator_from_state
+
+        est = cls(**state["params"])
+        est.learners_ = [estimator_from_state(s) for s in state["learners"]]
+        est.learner_weights_ = np.asarray(state["learner_weights"], dtype=float)
+        est.n_features_in_ = est.learners_[0].n_features_in_
+        return est
