@@ -395,6 +395,40 @@ def ladder_cmd(
     out.print(table)
 
 
+@app.command("similarity")
+@handles_errors
+def similarity_cmd(
+    region_a: Path = typer.Argument(..., help="Measurements of one workspace region (e.g. the source)."),
+    region_b: Path = typer.Argument(..., help="Measurements of another region (e.g. a target sub-space)."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="Robot (errors against its nominal model); not needed with --model."),
+    tool: Optional[str] = typer.Option(None, "--tool", help="X,Y,Z of the measured point in the flange frame, mm."),
+    model: Optional[Path] = typer.Option(None, "--model", help="Compare what this model leaves instead of the nominal errors."),
+    json_out: bool = typer.Option(False, "--json"),
+):
+    """How alike two regions' error patterns are (seed 001 eq. 9-10), and whether transfer learning is advisable."""
+    from .errormodel import ErrorModel
+    from .effects import EffectSum
+    from .learn import region_similarity
+    from .model_io import load_model
+
+    if model is not None:
+        error_model, _ = load_model(model)
+    elif robot is not None and tool is not None:
+        error_model = ErrorModel.create(load_robot(robot), _floats(tool, 3, "--tool"), EffectSum())
+    else:
+        raise InputError("similarity needs --model MODEL.json, or --robot and --tool")
+    a, b = _load_measurements(region_a), _load_measurements(region_b)
+    ea = a.measured_mm - error_model.predict(a)
+    eb = b.measured_mm - error_model.predict(b)
+    sim = region_similarity(ea, eb)
+    advisable = sim >= 0.94  # seed 001 Table 4: transferable cylinder regions scored 0.94 and above
+    if json_out:
+        print(json.dumps({"similarity": sim, "pairs": int(min(len(a), len(b))), "transfer_advisable": bool(advisable)}))
+        return
+    out.print(f"cosine similarity of the normalised errors over {min(len(a), len(b))} pose pairs: {sim:.4f}")
+    out.print("transfer learning is advisable (>= 0.94, seed 001 Table 4)" if advisable else "the regions' errors differ: measure the target region rather than transfer (< 0.94, seed 001 Table 4)")
+
+
 @app.command("import-ur10")
 @handles_errors
 def import_ur10_cmd(

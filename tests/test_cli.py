@@ -26,7 +26,7 @@ def test_console_script_is_installed():
     assert proc.returncode == 0 and "postproc" in proc.stdout
 
 
-@pytest.mark.parametrize("command", ["fit", "evaluate", "diagnose", "compensate", "inspect", "roundtrip", "simulate", "ladder", "import-ur10"])
+@pytest.mark.parametrize("command", ["fit", "evaluate", "diagnose", "compensate", "inspect", "roundtrip", "simulate", "ladder", "import-ur10", "similarity", "convert"])
 def test_scripted_interface_commands_are_registered(command):
     result = runner.invoke(app, [command, "--help"])
     assert result.exit_code == 0, result.output

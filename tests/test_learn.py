@@ -93,3 +93,12 @@ def test_one_torch_and_it_is_the_pinned_one():
     assert importlib.metadata.version("torch").startswith("2.13.0")
     names = [d.metadata["Name"].lower() for d in importlib.metadata.distributions()]
     assert names.count("torch") == 1 and not any(n.startswith("nvidia-") for n in names)
+
+
+def test_region_similarity():
+    from postproc.learn import region_similarity
+
+    rng = np.random.default_rng(0)
+    base = rng.normal(0, 1, (50, 3))
+    assert region_similarity(base, 2.0 * base + 0.5) == pytest.approx(1.0)  # the same pattern, scaled and shifted
+    assert region_similarity(base, rng.normal(0, 1, (50, 3))) < 0.9  # unrelated patterns
