@@ -18,7 +18,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import __version__
-from .errors import FeatureUnavailableError, InputError, JobError, PostprocError
+from .errors import InputError, JobError, PostprocError
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik

@@ -271,6 +271,11 @@ def diagnose(
     floor = float(noise_mm * np.sqrt(3.0))
     cv_rms = float(np.sqrt(base_mse))
     findings = _findings(breakdowns, ranked, cv_rms, floor)
+    if model.residual is not None:
+        findings.append(
+            f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
+            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
+        )
     return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
 
 

@@ -51,7 +51,7 @@ def test_bad_inputs_exit_2_and_write_nothing(sim, tmp_path):
         (["--effects", "geometric,heat"], "unknown effect 'heat'"),
         (["--effects", "geometric,external_load"], "fx, fy, fz"),
         (["--effects", "+backlash"], "--from"),
-        (["--effects", "geometric", "--predictor", "gpr"], "not built"),
+        (["--effects", "geometric", "--predictor", "svm"], "--predictor"),
         (["--effects", "geometric", "--loss", "l3"], "--loss"),
     ]
     for extra, message in cases:
