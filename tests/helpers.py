@@ -12,6 +12,7 @@ from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 TOOL = np.array([0.0, 0.0, 200.0])
 FRAME = "geometric,base_frame,tool_offset"
+FRAME_AND_COMPLIANCE = FRAME + ",joint_compliance"
 
 
 def identifiable_truth(robot, effects_spec: str, seed: int, n: int = 300, noise: float = 0.02):

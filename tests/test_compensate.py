@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
 import postproc
@@ -25,13 +26,20 @@ from postproc.programs import emit_texts, parse_program
 from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 runner = CliRunner()
-TOOL = np.array([0.0, 0.0, 200.0])
-EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
+EFFECTS = FRAME_AND_COMPLIANCE
+
+
+def _fitted_on_simulated(robot, effects_spec: str, n: int, region, seed: int):
+    """A model of `effects_spec` fitted to n simulated poses of a random true robot with those effects."""
+    effects = parse_effects(effects_spec)
+    truth = random_truth(robot, TOOL, effects, np.random.default_rng(seed))
+    data = simulate(truth, sample_poses(robot, TOOL, n, region, np.random.default_rng(seed)), np.random.default_rng(seed))
+    return fit(robot, TOOL, effects, data, cv_folds=0).model
 
 
 @pytest.fixture(scope="module")
 def robot():
-    return postproc.load_robot("kr160_r1570")
+    return kr160()
 
 
 @pytest.fixture(scope="module")
@@ -228,10 +236,10 @@ def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
     bad_model.write_text(json.dumps(doc))
     result = runner.invoke(app, ["compensate", str(ngc), "--model", str(bad_model), "-o", str(tmp_path / "o3.ngc")])
     assert result.exit_code == 2 and "kr999" in result.stderr
-    ur10 = fit(postproc.load_robot("ur10"), TOOL, parse_effects("geometric"), simulate(random_truth(postproc.load_robot("ur10"), TOOL, parse_effects("geometric"), np.random.default_rng(1)), sample_poses(postproc.load_robot("ur10"), TOOL, 60, postproc.sim.JointBox(), np.random.default_rng(1)), np.random.default_rng(1)), cv_folds=0).model
+    ur10 = _fitted_on_simulated(postproc.load_robot("ur10"), "geometric", 60, postproc.sim.JointBox(), seed=1)
     with pytest.raises(InputError, match="analytic IK"):
         compensate(parse_program(rapid_program(tmp_path)), ur10)
-    thermal = fit(model.robot, TOOL, parse_effects("geometric,thermal"), simulate(random_truth(model.robot, TOOL, parse_effects("geometric,thermal"), np.random.default_rng(2)), sample_poses(model.robot, TOOL, 120, Cylinder(), np.random.default_rng(2)), np.random.default_rng(2)), cv_folds=0).model
+    thermal = _fitted_on_simulated(model.robot, "geometric,thermal", 120, Cylinder(), seed=2)
     with pytest.raises(InputError, match="--temp"):
         compensate(parse_program(rapid_program(tmp_path)), thermal)
 

@@ -6,9 +6,9 @@ import json
 
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-import postproc
 from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.effects import parse_effects
@@ -19,13 +19,12 @@ from postproc.model_io import load_model, save_model
 from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 runner = CliRunner()
-TOOL = np.array([0.0, 0.0, 200.0])
-EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
+EFFECTS = FRAME_AND_COMPLIANCE
 
 
 @pytest.fixture(scope="module")
 def robot():
-    return postproc.load_robot("kr160_r1570")
+    return kr160()
 
 
 @pytest.fixture(scope="module")
