@@ -37,6 +37,7 @@ class RapidWriter:
         self.body: list[str] = []
         self.tool_name, self.wobj_name = "tool0", "wobj0"
         self.v, self.z = 100.0, 0.0
+        self.proc = "main"
 
     def start(self, name: str) -> None:
         self.proc = _name(name, "main")
@@ -89,7 +90,7 @@ class RapidWriter:
         self.body.append(f"    ! {line}")
 
     def end(self) -> list[str]:
-        lines = [f"MODULE {self.module}", *dict.fromkeys(self.decl), f"  PROC {getattr(self, 'proc', 'main')}()", *self.body, "  ENDPROC", "ENDMODULE", ""]
+        lines = [f"MODULE {self.module}", *dict.fromkeys(self.decl), f"  PROC {self.proc}()", *self.body, "  ENDPROC", "ENDMODULE", ""]
         return ["\n".join(lines)]
 
 
@@ -97,7 +98,6 @@ class KrlWriter:
     def __init__(self, name: str = "converted"):
         self.name = _name(name, "prog").lower()
         self.body: list[str] = []
-        self.dat: list[str] = []
         self.approx = False
 
     def start(self, name: str) -> None:
@@ -143,7 +143,7 @@ class KrlWriter:
 
     def end(self) -> list[str]:
         src = [f"DEF {self.name}( )", *self.body, "END", ""]
-        dat = [f"DEFDAT {self.name}", *self.dat, "ENDDAT", ""]
+        dat = [f"DEFDAT {self.name}", "ENDDAT", ""]  # every target is written inline
         return ["\r\n".join(src), "\r\n".join(dat)]
 
 
