@@ -20,7 +20,7 @@ from lark import Token, Tree
 from ..frames import abc_to_matrix, make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
 from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
-from .grammar import grammar
+from .grammar import grammar, literal_number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -308,9 +308,9 @@ class KrlParser:
             transform, ok, name = self._eval_frame(d, rhs)
             self.events.append((start, lhs, (name, transform, ok)))
         elif lhs == "$VEL.CP":
-            self.events.append((start, "vel", _number(rhs)))
+            self.events.append((start, "vel", literal_number(rhs)))
         elif lhs == "$APO.CDIS":
-            self.events.append((start, "apo", _number(rhs)))
+            self.events.append((start, "apo", literal_number(rhs)))
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
         move = str(node.children[0]).upper()
@@ -485,14 +485,6 @@ def _first_column(node) -> int:
     if isinstance(node, Token):
         return node.column
     return node.meta.column if not node.meta.empty else 1
-
-
-def _number(node) -> float:
-    if isinstance(node, Tree) and node.data == "number":
-        return float(node.children[0])
-    if isinstance(node, Tree) and node.data == "neg":
-        return -_number(node.children[0])
-    return float("nan")
 
 
 def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | None = None, config: str | Path | None = None) -> Toolpath:

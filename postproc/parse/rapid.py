@@ -19,7 +19,7 @@ from lark import Token, Tree
 from ..frames import make_transform, quat_wxyz_to_matrix
 from ..ir import NF, Kind, SourceDoc, Toolpath
 from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar
+from .grammar import grammar, literal_number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -357,12 +357,12 @@ class RapidParser:
         if len(args) < 4:
             return empty
         (values, _, conf, _), _ = self._target(args[0].children[0], start)
-        deltas = [_num(a.children[0]) for a in args[1:4]]
+        deltas = [literal_number(a.children[0]) for a in args[1:4]]
         turns = {"RX": 0.0, "RY": 0.0, "RZ": 0.0}
         for a in args:
             for o in a.children:
                 if isinstance(o, Tree) and o.data == "optarg" and len(o.children) > 1:
-                    turns[str(o.children[0]).upper()] = _num(o.children[1])
+                    turns[str(o.children[0]).upper()] = literal_number(o.children[1])
         if np.isnan(values[:7]).any() or np.isnan(deltas).any() or np.isnan(list(turns.values())).any():
             return empty
         rot = quat_wxyz_to_matrix(values[3:7][None])[0]
@@ -390,10 +390,10 @@ class RapidParser:
         speed_node, zone_node, tool_node = positional[n_targets : n_targets + 3]
         speed = _speed(self._text(speed_node, start))
         if "V" in options and options["V"] is not None:
-            speed = _num(options["V"])
+            speed = literal_number(options["V"])
         zone = _zone(self._text(zone_node, start))
         if "Z" in options and options["Z"] is not None:
-            zone = _num(options["Z"])
+            zone = literal_number(options["Z"])
         tool = self._text(tool_node.children[0], start)
         wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
         tool_idx, tool_ok = self._frames_for([tool], self.tools, self.builder.tool_index)
@@ -415,14 +415,6 @@ class RapidParser:
             order = cols.pop("order")
             self.builder.add_block(order, line=self.lines.line(order), **cols)
         return self.builder.build()
-
-
-def _num(node) -> float:
-    if isinstance(node, Tree) and node.data == "number":
-        return float(node.children[0])
-    if isinstance(node, Tree) and node.data == "neg":
-        return -_num(node.children[0])
-    return float("nan")
 
 
 def parse_rapid(path: str, data: bytes) -> Toolpath:
