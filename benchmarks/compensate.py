@@ -20,7 +20,7 @@ import postproc
 from postproc.compensate import compensate
 from postproc.effects import parse_effects
 from postproc.identify import fit
-from postproc.programs import emit_texts, parse_program, write_program
+from postproc.programs import emit_texts, parse_program, write_texts
 from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 
@@ -59,7 +59,7 @@ def main():
         texts = emit_texts(tp, new)
         times["emit"] = time.perf_counter() - t0
         t0 = time.perf_counter()
-        write_program(tp, texts, [Path(tmp) / "out.src"])
+        write_texts(texts, [Path(tmp) / "out.src"])
         times["write"] = time.perf_counter() - t0
         total = sum(times.values())
         peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0

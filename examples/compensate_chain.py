@@ -22,7 +22,7 @@ from postproc.effects import parse_effects
 from postproc.identify import fit
 from postproc.measurements import write_measurements
 from postproc.model_io import save_model
-from postproc.programs import emit_texts, parse_program, write_program
+from postproc.programs import emit_texts, parse_program
 from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out")

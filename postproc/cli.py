@@ -521,7 +521,7 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .programs import emit_texts, parse_program
+    from .programs import emit_texts, parse_program, write_texts
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
@@ -562,9 +562,7 @@ def compensate_cmd(
         sys.stdout.buffer.flush()
     else:
         outputs = [Path(output)] + [Path(output).with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
-        encoded = [t.encode("latin-1") for t in texts[: len(outputs)]]
-        for data, path in zip(encoded, outputs):
-            write_text_atomic(path, data.decode("latin-1"), encoding="latin-1")
+        write_texts(texts[: len(outputs)], outputs)
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -650,15 +648,12 @@ def convert_cmd(
 ):
     """Write a new robot program with every target of another program."""
     from .emit.writer import write_program
-    from .measurements import write_text_atomic
-    from .programs import parse_program
+    from .programs import parse_program, write_texts
 
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
     outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]
-    encoded = [t.encode("latin-1") for t in texts]
-    for data, path in zip(encoded, outputs):
-        write_text_atomic(path, data.decode("latin-1"), encoding="latin-1")
+    write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 
 

@@ -71,8 +71,8 @@ def emit_texts(original: Toolpath, modified: Toolpath) -> list[str]:
     return splice(original, modified, inserter)
 
 
-def write_program(original: Toolpath, texts: list[str], outputs: list[str | Path]) -> None:
-    """Write each source's new text to its output path, each atomically, all only if all succeed to encode."""
+def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
+    """Write each program text to its output path, each atomically, all only if all succeed to encode."""
     encoded = [t.encode("latin-1") for t in texts]  # fails before anything is written
     for data, out in zip(encoded, outputs):
         write_text_atomic(out, data.decode("latin-1"), encoding="latin-1")
