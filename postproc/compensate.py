@@ -98,10 +98,8 @@ def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
     p = robot.opw
     phi = np.deg2rad(p.signs * q - p.offsets_deg)
     wrist = np.abs(np.sin(phi[:, 4])) < np.sin(np.deg2rad(SINGULAR_DEG))
-    psi3 = np.arctan2(p.a2, p.c3)
-    elbow = np.abs(np.sin(phi[:, 2] + psi3)) < np.sin(np.deg2rad(SINGULAR_DEG))
-    k = np.hypot(p.a2, p.c3)
-    radial = p.c2 * np.sin(phi[:, 1]) + k * np.sin(phi[:, 1] + phi[:, 2] + psi3) + p.a1
+    elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < np.sin(np.deg2rad(SINGULAR_DEG))
+    radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
     shoulder = np.abs(radial) < SHOULDER_MM
     return wrist | elbow | shoulder
 

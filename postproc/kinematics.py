@@ -230,10 +230,7 @@ def opw_forward(robot: RobotModel, q_deg) -> np.ndarray:
     q = _as_joints(q_deg)
     phi = np.deg2rad(p.signs * q - p.offsets_deg)
     q1, q2, q3, q4, q5, q6 = phi.T
-    psi3 = math.atan2(p.a2, p.c3)
-    k = math.hypot(p.a2, p.c3)
-    cx1 = p.c2 * np.sin(q2) + k * np.sin(q2 + q3 + psi3) + p.a1
-    cz1 = p.c2 * np.cos(q2) + k * np.cos(q2 + q3 + psi3)
+    cx1, cz1 = wrist_centre_in_arm_plane(robot, phi)
     centre = np.stack([cx1 * np.cos(q1) - p.b * np.sin(q1), cx1 * np.sin(q1) + p.b * np.cos(q1), cz1 + p.c1], -1)
     from .frames import make_transform, rot_y, rot_z
 
@@ -459,17 +456,16 @@ def _opw_angles(robot: RobotModel, q: np.ndarray) -> np.ndarray:
     return np.deg2rad(p.signs * q - p.offsets_deg)
 
 
-def _wrist_centre_in_arm_plane(robot: RobotModel, phi: np.ndarray):
-    """Wrist centre in the plane of the arm: (forward of axis 1, forward of the lower arm)."""
+def wrist_centre_in_arm_plane(robot: RobotModel, phi: np.ndarray):
+    """Wrist centre in the plane of the arm, from OPW angles phi (radians): (forward of
+    axis 1, height above joint 2), mm."""
     p = robot.opw
     psi3 = math.atan2(p.a2, p.c3)
     k = math.hypot(p.a2, p.c3)
     t2, t3 = phi[..., 1], phi[..., 2]
     forward = p.c2 * np.sin(t2) + k * np.sin(t2 + t3 + psi3) + p.a1
-    # Component of (wrist centre - joint 2) normal to the lower arm, pointing forward.
     up = p.c2 * np.cos(t2) + k * np.cos(t2 + t3 + psi3)
-    normal = (forward - p.a1) * np.cos(t2) - up * np.sin(t2)
-    return forward, normal
+    return forward, up
 
 
 def abb_confdata(robot: RobotModel, q_deg) -> np.ndarray:
@@ -479,7 +475,10 @@ def abb_confdata(robot: RobotModel, q_deg) -> np.ndarray:
     behind axis 1) + 2 x (wrist centre behind the lower arm) + (axis 5 negative).
     """
     q = _as_joints(q_deg)
-    forward, normal = _wrist_centre_in_arm_plane(robot, _opw_angles(robot, q))
+    phi = _opw_angles(robot, q)
+    forward, up = wrist_centre_in_arm_plane(robot, phi)
+    # Component of (wrist centre - joint 2) normal to the lower arm, pointing forward.
+    normal = (forward - robot.opw.a1) * np.cos(phi[:, 1]) - up * np.sin(phi[:, 1])
     cfx = 4 * (forward < 0) + 2 * (normal < 0) + (q[:, 4] < 0)
     quadrants = np.floor(q[:, [0, 3, 5]] / 90.0)
     return np.column_stack([quadrants, cfx]).astype(int)
@@ -495,7 +494,7 @@ def kuka_status_turn(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
     q = _as_joints(q_deg)
     p = _require_opw(robot)
     phi = _opw_angles(robot, q)
-    forward, _ = _wrist_centre_in_arm_plane(robot, phi)
+    forward, _ = wrist_centre_in_arm_plane(robot, phi)
     stretched = p.signs[2] * (np.rad2deg(-math.atan2(p.a2, p.c3)) + p.offsets_deg[2])
     a5 = q[:, 4]
     bit2 = ~(((a5 >= 0) & (a5 < 180)) | ((a5 >= -360) & (a5 < -180)))
