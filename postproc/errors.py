@@ -82,3 +82,7 @@ class ParseError(InputError):
 
 class EmitError(InputError):
     """A modified toolpath cannot be written back into its source text."""
+
+
+class OutputError(InputError):
+    """An output file cannot be written where the user asked (missing folder, no permission)."""

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+
 import numpy as np
 import pytest
 
@@ -104,3 +106,25 @@ def test_write_read_round_trip(tmp_path):
     np.testing.assert_array_equal(back.approach, meas.approach)
     np.testing.assert_allclose(back.force_n, meas.force_n, atol=1e-4)
     assert not list(tmp_path.glob(".out.csv.*"))  # no temp file left behind
+
+
+def test_atomic_write_errors_are_typed_and_modes_are_ordinary(tmp_path):
+    from postproc.errors import OutputError
+    from postproc.measurements import write_text_atomic
+
+    with pytest.raises(OutputError, match=r"missing/x\.txt: cannot write"):
+        write_text_atomic(tmp_path / "missing" / "x.txt", "a")
+    with pytest.raises(OutputError, match="cannot write"):
+        write_text_atomic(tmp_path, "a")  # a folder, not a file
+    assert [p.name for p in tmp_path.iterdir()] == []  # no temp file left behind
+
+    new = tmp_path / "new.txt"
+    write_text_atomic(new, "a")
+    mask = os.umask(0o022)
+    os.umask(mask)
+    assert new.stat().st_mode & 0o777 == 0o666 & ~mask  # as open() would create it, not mkstemp's 0600
+    kept = tmp_path / "kept.txt"
+    kept.write_text("old")
+    kept.chmod(0o640)
+    write_text_atomic(kept, "new")
+    assert kept.read_text() == "new" and kept.stat().st_mode & 0o777 == 0o640

@@ -63,3 +63,10 @@ def test_unknown_positions_are_refused_and_cli_writes_nothing(tmp_path):
     assert result.exit_code == 2 and not out.exists()
     result = runner.invoke(app, ["convert", str(CORPUS / "gcode" / "arcs_ijk.ngc"), "--to", "krl", "-o", str(tmp_path / "a.src")])
     assert result.exit_code == 0 and (tmp_path / "a.dat").exists()
+
+
+def test_output_folder_that_does_not_exist_is_bad_usage(tmp_path):
+    out = tmp_path / "no_such_folder" / "a.src"
+    result = runner.invoke(app, ["convert", str(CORPUS / "gcode" / "arcs_ijk.ngc"), "--to", "krl", "-o", str(out)])
+    assert result.exit_code == 2 and "no_such_folder" in result.stderr and "cannot write" in result.stderr
+    assert not out.parent.exists()
