@@ -82,6 +82,7 @@ def main():
         return
     with tempfile.TemporaryDirectory() as tmp:
         programs = make_programs(Path(tmp), args.lines)
+        os.sync()  # the programs' write-back would otherwise compete with the first measurement
         print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'round trip s':>14}{'peak MB':>9}   target >= 1e5 lines/s")
         for name, path in programs.items():
             proc = subprocess.run([sys.executable, __file__, "--measure", str(path)], capture_output=True, text=True, env=os.environ)

@@ -76,6 +76,17 @@ def abc_to_matrix(abc_deg: np.ndarray) -> np.ndarray:
     return rot_z(abc[..., 0]) @ rot_y(abc[..., 1]) @ rot_x(abc[..., 2])
 
 
+def abc_to_quat_wxyz(abc_deg: np.ndarray) -> np.ndarray:
+    """KUKA A, B, C in degrees -> unit quaternions [w, x, y, z] (w >= 0) of Rz(A) Ry(B) Rx(C),
+    from the half angles directly (no matrices: programs have a million of them)."""
+    half = np.deg2rad(np.asarray(abc_deg, dtype=float)) / 2
+    ca, cb, cc = np.cos(half[..., 0]), np.cos(half[..., 1]), np.cos(half[..., 2])
+    sa, sb, sc = np.sin(half[..., 0]), np.sin(half[..., 1]), np.sin(half[..., 2])
+    q = np.stack([ca * cb * cc + sa * sb * sc, ca * cb * sc - sa * sb * cc, ca * sb * cc + sa * cb * sc, sa * cb * cc - ca * sb * sc], -1)
+    q /= np.linalg.norm(q, axis=-1, keepdims=True)
+    return np.where(q[..., :1] < 0, -q, q)
+
+
 def matrix_to_abc(rot: np.ndarray) -> np.ndarray:
     """(N, 3, 3) -> KUKA A, B, C in degrees, B in [-90, 90]; at B = ±90 C is set to 0."""
     r = np.asarray(rot, dtype=float)

@@ -9,14 +9,7 @@ import numpy as np
 
 from ..errors import ParseError
 from ..ir import FIELDS, NF, Kind, SourceDoc, Toolpath
-
-_DIGIT = np.zeros(256, dtype=bool)
-_DIGIT[ord("0") : ord("9") + 1] = True
-_WORD = np.zeros(256, dtype=bool)  # characters that make a number part of an identifier
-for _c in range(256):
-    ch = chr(_c)
-    if ch.isalnum() or ch in "_$.":
-        _WORD[_c] = True
+from . import scan_kernel
 
 
 @dataclass(frozen=True)
@@ -35,82 +28,14 @@ def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
     """Every decimal number in ``text`` that is not part of an identifier, with its sign.
 
     ``letter_prefix``: a number right after a letter counts (G-code words like X-10.5);
-    otherwise digits glued to a letter belong to a name (p10, tool0, E1).
+    otherwise digits glued to a letter belong to a name (p10, tool0, E1). A run that is
+    not a valid number ('1e5e3', '1.2.3') has the value NaN.
     """
     raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
-    n = len(raw)
-    if n == 0:
-        empty = np.zeros(0, dtype=np.int64)
-        return Numbers(empty, empty, np.zeros(0))
-    digit = _DIGIT[raw]
-    numchar = digit | (raw == ord("."))
-    # Exponents (1e5, 9E-3) are rare: look only at the e/E that follow a digit or dot.
-    cand = np.nonzero(((raw == ord("e")) | (raw == ord("E")))[1:-1] & numchar[:-2])[0] + 1
-    if len(cand):
-        nxt = raw[cand + 1]
-        nxt2 = raw[np.minimum(cand + 2, n - 1)]
-        signed = ((nxt == ord("+")) | (nxt == ord("-"))) & _DIGIT[nxt2] & (cand + 2 < n)
-        ok = _DIGIT[nxt] | signed
-        numchar[cand[ok]] = True
-        numchar[cand[ok & signed] + 1] = True
-    start_mask = numchar.copy()
-    start_mask[1:] &= ~numchar[:-1]
-    end_mask = numchar.copy()
-    end_mask[:-1] &= ~numchar[1:]
-    starts = np.nonzero(start_mask)[0]
-    ends = np.nonzero(end_mask)[0] + 1
-    del start_mask, end_mask
-    # A run must contain a digit and may not be glued to a name.
-    digits_before = np.concatenate([[0], np.cumsum(digit, dtype=np.int32)])
-    has_digit = digits_before[ends] > digits_before[starts]
-    del digits_before, digit
-    before = np.where(starts > 0, raw[np.maximum(starts - 1, 0)], 32)
-    glued = _WORD[before] & (starts > 0)
-    if letter_prefix:
-        glued = glued & ~(((before | 32) >= ord("a")) & ((before | 32) <= ord("z")))
-    keep = has_digit & ~glued
-    starts, ends = starts[keep], ends[keep]
-    # A sign right before the number belongs to it when it is not a binary operator.
-    sign_pos = starts - 1
-    has_sign = (sign_pos >= 0) & np.isin(raw[np.maximum(sign_pos, 0)], (ord("-"), ord("+")))
-    before_sign = np.where(sign_pos > 0, raw[np.maximum(sign_pos - 1, 0)], 32)
-    binary = _WORD[before_sign] & ~(letter_prefix & (((before_sign | 32) >= ord("a")) & ((before_sign | 32) <= ord("z"))))
-    binary |= before_sign == ord(")")
-    binary &= sign_pos > 0
-    starts = np.where(has_sign & ~binary, starts - 1, starts)
-    # Blank everything but the numbers and let NumPy's C parser read them in one call.
-    # Runs are maximal, so no run starts where another ends: plain assignment is exact.
-    edge = np.zeros(n + 1, dtype=np.int8)
-    edge[starts] = 1
-    edge[ends] = -1
-    inside = np.cumsum(edge[:-1], dtype=np.int8).view(bool)
-    buf = np.where(inside, raw, np.uint8(32))
-    values = _read_floats(buf.tobytes(), len(starts))
-    return Numbers(starts.astype(np.int64), ends.astype(np.int64), values)
-
-
-def _read_floats(buf: bytes, count: int) -> np.ndarray:
-    """Space-separated numbers -> array; a malformed run ('1e5e3', '.e1') becomes NaN."""
-    if count == 0:
-        return np.zeros(0)
-    import warnings
-
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            values = np.fromstring(buf, dtype=float, sep=" ")
-    except ValueError:  # NumPy 2.4 raises where older versions warned and stopped
-        values = np.zeros(0)
-    if len(values) == count:
-        return values
-    return np.array([_to_float(t) for t in buf.split()], dtype=float)
-
-
-def _to_float(token: bytes) -> float:
-    try:
-        return float(token)
-    except ValueError:
-        return float("nan")
+    starts, ends, values, status = scan_kernel.scan(raw, letter_prefix)
+    for i in np.nonzero(status == scan_kernel.SLOW)[0].tolist():
+        values[i] = float(text[starts[i] : ends[i]])  # beyond the exact fast path: Python rounds
+    return Numbers(starts, ends, values)
 
 
 def _ranges(starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
@@ -204,7 +129,9 @@ class Builder:
     def add(self, order: int, **values) -> None:
         self.add_block(np.array([order]), **{k: np.asarray(v)[None] for k, v in values.items()})
 
-    def build(self) -> Toolpath:
+    def build(self, orientation: bool = True) -> Toolpath:
+        """The Toolpath; ``orientation=False`` leaves orientations NaN for a caller that
+        computes them itself (KRL fills partial aggregates first)."""
         defaults = {
             "file": (np.int16, 0),
             "kind": (np.int8, 0),
@@ -241,10 +168,12 @@ class Builder:
                 col = np.concatenate(parts)
             cols[key] = col if perm is None else col[perm]
         values = cols["values"]
-        from ..frames import abc_to_matrix, matrix_to_quat_wxyz
+        from ..frames import abc_to_quat_wxyz
 
         position = values[:, 0:3].copy()
-        if self.orientation_kind == "quat":
+        if not orientation:
+            orientation = np.full((total, 4), np.nan)
+        elif self.orientation_kind == "quat":
             orientation = values[:, 3:7].copy()
             norm = np.linalg.norm(orientation, axis=1, keepdims=True)
             orientation = np.where(norm > 0, orientation / np.where(norm > 0, norm, 1), np.nan)
@@ -252,7 +181,7 @@ class Builder:
             orientation = np.full((total, 4), np.nan)
             ok = ~np.isnan(values[:, 3:6]).any(axis=1)
             if ok.any():
-                orientation[ok] = matrix_to_quat_wxyz(abc_to_matrix(values[ok, 3:6]))
+                orientation[ok] = abc_to_quat_wxyz(values[ok, 3:6])
         else:
             orientation = np.full((total, 4), np.nan)
         return Toolpath(

@@ -21,18 +21,20 @@ from ..frames import make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
 from .common import Builder, LineIndex, parse_statement, scan_numbers
 from .grammar import grammar
+from .line_shapes import LineShapes
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
-    rf"^(?P<code>[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg]0?(?P<mode>[0-3])(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}(?:[ \t]+(?=[XYZABCIJKRFxyzabcijkrf]))?)+)[ \t]*(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
+    rf"^(?P<code>[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg](?P<mode>\d+)(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}(?:[ \t]+(?=[XYZABCIJKRFxyzabcijkrf]))?)+)[ \t]*(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
     re.MULTILINE,
 )
 _LETTER_CODE = np.full(256, -1, dtype=np.int16)
 for _c, _i in _AX.items():
     _LETTER_CODE[ord(_c)] = _i
     _LETTER_CODE[ord(_c.lower())] = _i
+_BULK_MODES = {"0": 0.0, "1": 1.0, "2": 2.0, "3": 3.0, "00": 0.0, "01": 1.0, "02": 2.0, "03": 3.0}
 _MOTION_KIND = {0: Kind.RAPID, 1: Kind.LINEAR, 2: Kind.ARC_CW, 3: Kind.ARC_CCW}
 _NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
 _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
@@ -55,15 +57,21 @@ class GcodeParser:
 
     def parse(self) -> Toolpath:
         text = self.text
-        bulk = list(RE_BULK.finditer(text))
-        bulk_starts = np.array([m.start() for m in bulk], dtype=np.int64)
+        raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+        # RE_BULK accepts any G number (so that line shapes decide a match); only G0-G3
+        # (G00-G03) blocks are bulk motion, the others go to the grammar.
+        bulk = LineShapes(text, raw, self.lines.starts).match(RE_BULK)
+        codes, modes = bulk.factorize("mode")
+        plain = np.array([m is None or m in _BULK_MODES for m in modes], dtype=bool)
+        bulk = bulk.subset(plain[codes])
+        motion = np.array([_BULK_MODES.get(m, np.nan) if m is not None else np.nan for m in modes])[codes[plain[codes]]]
+        bulk_starts = bulk.start
         # ---- bulk blocks, vectorised
         nb = len(bulk)
         rows: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         if nb:
-            code_end = np.array([m.end("code") for m in bulk], dtype=np.int64)
+            code_end = bulk.span("code")[1]
             numbers = scan_numbers(text, letter_prefix=True)
-            raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
             nonspace = (raw != 32) & (raw != 9)
             prev_ns = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0))
             lo = np.searchsorted(numbers.start, bulk_starts)
@@ -82,14 +90,15 @@ class GcodeParser:
             values[row[keep], code[keep]] = numbers.value[idx[keep]]
             spans[row[keep], code[keep], 0] = starts[keep]
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
-            motion = np.array([float(mode) if mode else np.nan for mode in (m.group("mode") for m in bulk)])
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
                          nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan)
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
-        slow = self._slow(set(bulk_starts.tolist()))
+        skip = np.zeros(len(self.lines.starts), bool)
+        skip[bulk.line] = True
+        slow = self._slow(skip)
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:
             return self.builder.build()
@@ -99,14 +108,12 @@ class GcodeParser:
         return self._resolve(table)
 
     # ------------------------------------------------------------- slow path
-    def _slow(self, skip: set[int]) -> dict:
+    def _slow(self, skip: np.ndarray) -> dict:
         g = grammar("gcode")
         out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         stack: list[tuple[str, int]] = []
         text = self.text
-        for start in self.lines.starts.tolist():
-            if start in skip:
-                continue
+        for start in self.lines.starts[~skip].tolist():
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             line = text[start:end].rstrip("\r")

@@ -21,6 +21,8 @@ from ..frames import abc_to_matrix, make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
 from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
 from .grammar import grammar, literal_number
+from .line_shapes import LineShapes
+from .name_table import NameTable
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -34,8 +36,6 @@ RE_MOVE = re.compile(rf"^[ \t]*(?P<mv>SPTP|SLIN|PTP|LIN)(?:[ \t]*(?P<agg>{AGG})|
 RE_DECL = re.compile(rf"^[ \t]*(?:DECL[ \t]+)?(?:GLOBAL[ \t]+)?(?P<type>E6POS|POS|FRAME|E6AXIS|AXIS)[ \t]+(?P<name>{NAME})[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
 RE_ELEM = re.compile(rf"^[ \t]*(?P<name>{NAME}\[[ \t]*\d+[ \t]*\])[ \t]*=[ \t]*(?P<agg>{AGG}){TAIL}", FLAGS)
 
-# Cheap probes: a file without any of these words has no declarations to look for.
-DECL_WORDS = ("DECL", "E6POS", "E6AXIS", "FRAME", "AXIS", "POS")
 
 # Aggregate field names -> IR field (0-18) or conf column (100 + k).
 _FIELD_CODES = {"X": 0, "Y": 1, "Z": 2, "A": 3, "B": 4, "C": 5, "S": 100, "T": 101}
@@ -54,30 +54,76 @@ _BLOCK_OPEN = {"def": "END", "deffct": "ENDFCT", "defdat": "ENDDAT", "if_open": 
 _BLOCK_CLOSE = {"endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endloop": "ENDLOOP", "until": "UNTIL", "endswitch": "ENDSWITCH", "endspline": "ENDSPLINE"}
 
 
-@dataclass
+def _key(name: str) -> str:
+    """KRL names are case-insensitive and may have blanks inside brackets (XP[ 1 ])."""
+    return name.upper().replace(" ", "").replace("\t", "")
+
+
 class Symbols:
-    """Named points and frames: name (upper case) -> values (NF), spans (NF, 3), conf, insert point."""
+    """Named points and frames: name -> row of values (NF), spans (NF, 3), conf (4), insert (2).
 
-    index: dict[str, int] = field(default_factory=dict)
-    values: list[np.ndarray] = field(default_factory=list)
-    spans: list[np.ndarray] = field(default_factory=list)
-    conf: list[np.ndarray] = field(default_factory=list)
-    insert: list[np.ndarray] = field(default_factory=list)
+    Rows are kept in blocks as they arrive (a .dat may declare a million points), joined
+    once when first read. Bulk declarations are looked up by ``NameTable`` (vectorised);
+    the few the grammar reads go to a dict that takes precedence, since they are read
+    after every bulk line. A later declaration of a name wins, as in the controller."""
 
-    def add_many(self, names, values, spans, conf, insert):
-        base = len(self.values)
-        for i, name in enumerate(names):
-            self.index[name.upper().replace(" ", "").replace("\t", "")] = base + i
-        self.values.extend(values)
-        self.spans.extend(spans)
-        self.conf.extend(conf)
-        self.insert.extend(insert)
+    def __init__(self):
+        self.bulk = NameTable()
+        self._bulk_rows: list[np.ndarray] = []  # global row of each bulk name
+        self.overlay: dict[str, int] = {}
+        self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        self.count = 0
+        self._joined: tuple | None = None
+
+    def _add_rows(self, values, spans, conf, insert) -> np.ndarray:
+        block = (np.asarray(values).reshape(-1, NF), np.asarray(spans).reshape(-1, NF, 3), np.asarray(conf).reshape(-1, 4), np.asarray(insert).reshape(-1, 2))
+        self.blocks.append(block)
+        self._joined = None
+        rows = np.arange(self.count, self.count + len(block[0]))
+        self.count += len(rows)
+        return rows
+
+    def add_many(self, names: list[str], values, spans, conf, insert):
+        rows = self._add_rows(values, spans, conf, insert)
+        self.overlay.update(zip(map(_key, names), rows.tolist()))
+
+    def add_spans(self, raw: np.ndarray, name_spans: np.ndarray, values, spans, conf, insert):
+        """Rows whose names are spans of a text's bytes (bulk declarations)."""
+        self.bulk.add_spans(raw, name_spans)
+        self._bulk_rows.append(self._add_rows(values, spans, conf, insert))
+
+    def table(self):
+        """values (M, NF), spans (M, NF, 3), conf (M, 4), insert (M, 2) of every row, plus a last row for 'not declared'."""
+        if self._joined is None:
+            missing = (np.full((1, NF), np.nan), np.full((1, NF, 3), -1, np.int64), np.full((1, 4), np.nan), np.full((1, 2), -1, np.int64))
+            parts = self.blocks + [missing]
+            self._joined = tuple(np.concatenate([p[k] for p in parts]) for k in range(4))
+        return self._joined
+
+    def _global(self, local: np.ndarray) -> np.ndarray:
+        bulk_rows = np.concatenate(self._bulk_rows + [np.array([self.count])])
+        return bulk_rows[np.minimum(local, len(bulk_rows) - 1)]
+
+    def rows_of_spans(self, raw: np.ndarray, spans: np.ndarray) -> np.ndarray:
+        """Row of each named span; ``count`` where the name is not declared."""
+        rows = self._global(self.bulk.rows_of_spans(raw, spans))
+        if self.overlay:
+            table = NameTable()
+            keys = list(self.overlay)
+            table.add(keys)
+            local = table.rows_of_spans(raw, spans)
+            found = local < len(keys)
+            rows[found] = np.array([self.overlay[k] for k in keys])[local[found]]
+        return rows
 
     def get(self, name: str):
-        i = self.index.get(name.upper().replace(" ", "").replace("\t", ""))
+        i = self.overlay.get(_key(name))
         if i is None:
+            i = int(self._global(self.bulk.rows([name]))[0])
+        if i == self.count:
             return None
-        return self.values[i], self.spans[i], self.conf[i], self.insert[i]
+        values, spans, conf, insert = self.table()
+        return values[i], spans[i], conf[i], insert[i]
 
 
 def _field_codes(raw: np.ndarray, prev_nonspace: np.ndarray, starts: np.ndarray) -> np.ndarray:
@@ -102,10 +148,16 @@ class _Doc:
         self.text = doc.text
         self.lines = LineIndex(doc.text)
         self.numbers: Numbers = scan_numbers(doc.text)
-        raw = np.frombuffer(doc.text.encode("latin-1"), dtype=np.uint8)
+        self.raw = raw = np.frombuffer(doc.text.encode("latin-1"), dtype=np.uint8)
+        self._shapes: LineShapes | None = None
         nonspace = (raw != 32) & (raw != 9)
         self.prev_nonspace = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0)) if len(raw) else np.zeros(0, dtype=np.int64)
         self.codes = _field_codes(raw, self.prev_nonspace, self.numbers.start) if len(raw) else np.zeros(0, dtype=np.int16)
+
+    def shapes(self) -> LineShapes:
+        if self._shapes is None:
+            self._shapes = LineShapes(self.text, self.raw, self.lines.starts)
+        return self._shapes
 
     def aggregates(self, agg_start: np.ndarray, agg_end: np.ndarray):
         """Values (M, NF), spans (M, NF, 3), conf (M, 4), insert (M, 2) of M aggregates, vectorised."""
@@ -149,23 +201,16 @@ class KrlParser:
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
 
     # ---------------------------------------------------------------- data
-    def _declarations(self, d: _Doc) -> set[int]:
-        """Bulk point declarations and array elements of one file; returns their line starts."""
-        done = set()
-        upper = d.text.upper()
-        probes = {RE_DECL: any(word in upper for word in DECL_WORDS), RE_ELEM: "]=" in upper.replace(" ", "").replace("\t", "")}
-        del upper
-        for regex, present in probes.items():
-            if not present:
-                continue  # a program without declarations skips the full pass
-            matches = list(regex.finditer(d.text))
-            if not matches:
+    def _declarations(self, d: _Doc) -> np.ndarray:
+        """Bulk point declarations and array elements of one file; returns the lines they fill."""
+        done = np.zeros(len(d.lines.starts), bool)
+        for regex in (RE_DECL, RE_ELEM):
+            matches = d.shapes().match(regex)
+            if not len(matches):
                 continue
-            starts = np.array([m.start("agg") for m in matches])
-            ends = np.array([m.end("agg") for m in matches])
-            values, spans, conf, insert = d.aggregates(starts, ends)
-            self.symbols.add_many([m.group("name") for m in matches], list(values), list(spans), list(conf), list(insert))
-            done.update(m.start() for m in matches)
+            values, spans, conf, insert = d.aggregates(*matches.span("agg"))
+            self.symbols.add_spans(d.raw, matches.spans["name"], values, spans, conf, insert)
+            done[matches.line] = True
         return done
 
     # ----------------------------------------------------------- statements
@@ -177,22 +222,21 @@ class KrlParser:
         src_decl = self._declarations(src)
         for d in self.docs[1:]:
             self._slow_lines(d, skip=data_lines[d.index], is_program=False)
-        moves = list(RE_MOVE.finditer(src.text))
-        inline = [m for m in moves if m.group("agg") is not None]
-        named = [m for m in moves if m.group("agg") is None]
-        skip = src_decl | {m.start() for m in moves}
+        moves = src.shapes().match(RE_MOVE)
+        inline = moves.subset(moves.present("agg"))
+        named = moves.subset(~moves.present("agg"))
+        skip = src_decl.copy()
+        skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
         self._bulk_moves(src, inline, named)
         return self._finish()
 
-    def _slow_lines(self, d: _Doc, skip: set[int], is_program: bool) -> None:
+    def _slow_lines(self, d: _Doc, skip: np.ndarray, is_program: bool) -> None:
         g = grammar("krl")
         stack: list[tuple[str, int]] = []
         text = d.text
         starts = d.lines.starts
-        for ln, start in enumerate(starts.tolist()):
-            if start in skip:
-                continue
+        for start in starts[~skip].tolist():
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             raw_line = text[start:end]
@@ -342,29 +386,25 @@ class KrlParser:
     _line_start = 0
 
     def _bulk_moves(self, src: _Doc, inline, named) -> None:
-        if inline:
-            starts = np.array([m.start("agg") for m in inline])
-            ends = np.array([m.end("agg") for m in inline])
-            values, spans, conf, insert = src.aggregates(starts, ends)
-            kinds = np.array([_MOVE_KIND[m.group("mv").upper()] for m in inline])
-            approx = np.array([m.group("ap") is not None for m in inline])
-            self._collect(np.array([m.start() for m in inline]), kinds, values, spans, conf, insert, [""] * len(inline), approx)
-        if named:
-            names = [m.group("name") for m in named]
-            rows = [self.symbols.index.get(n.upper().replace(" ", "").replace("\t", "")) for n in names]
-            missing = [n for n, r in zip(names, rows) if r is None]
-            for n in sorted(set(missing)):
-                self.builder.notes.append(f"point {n} is not declared in the given files")
-            nan_v, nan_s = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64)
-            values = np.array([self.symbols.values[r] if r is not None else nan_v for r in rows])
-            spans = np.array([self.symbols.spans[r] if r is not None else nan_s for r in rows])
-            conf = np.array([self.symbols.conf[r] if r is not None else np.full(4, np.nan) for r in rows])
-            insert = np.array([self.symbols.insert[r] if r is not None else np.array([-1, -1]) for r in rows])
-            kinds = np.array([_MOVE_KIND[m.group("mv").upper()] for m in named])
-            approx = np.array([m.group("ap") is not None for m in named])
-            self._collect(np.array([m.start() for m in named]), kinds, values, spans, conf, insert, names, approx)
+        for moves in (inline, named):
+            if not len(moves):
+                continue
+            codes, words = moves.factorize("mv")
+            kinds = np.array([_MOVE_KIND[w.upper()] for w in words])[codes]
+            approx = moves.present("ap")
+            if moves is inline:
+                values, spans, conf, insert = src.aggregates(*moves.span("agg"))
+                names = np.full(len(moves), "", dtype=object)
+            else:
+                rows = self.symbols.rows_of_spans(src.raw, moves.spans["name"])
+                missing = rows == self.symbols.count
+                for text in sorted(set(moves.subset(missing).group("name"))):
+                    self.builder.notes.append(f"point {text} is not declared in the given files")
+                values, spans, conf, insert = (column[rows] for column in self.symbols.table())
+                names = np.array(moves.group("name"), dtype=object)
+            self._collect(moves.start, kinds, values, spans, conf, insert, names, approx, line=moves.line + 1)
 
-    def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None):
+    def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None, line=None):
         self.builder.add_block(
             offsets,
             kind=kinds,
@@ -374,14 +414,14 @@ class KrlParser:
             insert_at=insert,
             name=np.array(names, dtype=object),
             relative=np.zeros(len(offsets), bool) if relative is None else relative,
-            line=self.docs[0].lines.line(offsets),
+            line=self.docs[0].lines.line(offsets) if line is None else line,
         )
         self._approx_blocks.append((offsets, approx))
 
     def _finish(self) -> Toolpath:
         from dataclasses import replace
 
-        from ..frames import matrix_to_quat_wxyz
+        from ..frames import abc_to_quat_wxyz
 
         if self.slow_targets:
             rows = self.slow_targets
@@ -424,7 +464,7 @@ class KrlParser:
                     speed[has] = vals[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
                 else:
                     cdis[has] = vals[at[has]]
-        tp = self.builder.build()
+        tp = self.builder.build(orientation=False)
         values = tp.values
         # A partial aggregate ({X 10}) keeps the other components of the previous Cartesian target.
         cart = ~np.isnan(values[:, :3]).all(axis=1)
@@ -445,7 +485,7 @@ class KrlParser:
         orientation = np.full((n, 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
-            orientation[ok] = matrix_to_quat_wxyz(abc_to_matrix(pose[ok, 3:6]))
+            orientation[ok] = abc_to_quat_wxyz(pose[ok, 3:6])
         declared = ~np.isnan(values).all(axis=1)
         joint_only = ~np.isnan(values[:, 7:13]).any(axis=1) & np.isnan(values[:, :3]).all(axis=1)
         return replace(

@@ -15,11 +15,13 @@ import re
 
 import numpy as np
 from lark import Token, Tree
+from numba import njit
 
 from ..frames import make_transform, quat_wxyz_to_matrix
 from ..ir import NF, Kind, SourceDoc, Toolpath
 from .common import Builder, LineIndex, parse_statement, scan_numbers
 from .grammar import grammar, literal_number
+from .line_shapes import LineShapes
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -73,6 +75,29 @@ def _zone(name: str) -> float:
     return float(m.group(1)) if m else np.nan
 
 
+@njit(cache=True)
+def _gather_robtargets(first, num_start, num_end, num_value, fields):
+    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals whose 17
+    numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
+    m = len(first)
+    values = np.full((m, NF), np.nan)
+    spans = np.full((m, NF, 3), -1, np.int64)
+    conf = np.empty((m, 4))
+    for r in range(m):
+        for k in range(len(fields)):
+            i = first[r] + k
+            f = fields[k]
+            v = num_value[i]
+            if f < 0:
+                conf[r, -f - 1] = v
+            elif not (f >= 13 and abs(v) >= 8.9e9):
+                values[r, f] = v
+                spans[r, f, 0] = 0
+                spans[r, f, 1] = num_start[i]
+                spans[r, f, 2] = num_end[i]
+    return values, spans, conf
+
+
 def _pose(numbers7: np.ndarray) -> np.ndarray:
     return make_transform(quat_wxyz_to_matrix(numbers7[3:7][None])[0], numbers7[:3])
 
@@ -109,73 +134,63 @@ class RapidParser:
         spans[13:19][np.isnan(values[13:19])] = -1
         return values, spans, conf
 
-    def _bulk_literals(self, matches, group: str):
+    def _bulk_literals(self, starts: np.ndarray):
         """Vectorised read of many one-line robtarget literals: values (M, NF), spans, conf."""
-        m = len(matches)
-        starts = np.array([x.start(group) for x in matches])
         lo = np.searchsorted(self.numbers.start, starts)
-        idx = lo[:, None] + np.arange(17)[None, :]
-        vals = self.numbers.value[idx]
-        values = np.full((m, NF), np.nan)
-        spans = np.full((m, NF, 3), -1, dtype=np.int64)
-        fields = _RT_FIELDS >= 0
-        values[:, _RT_FIELDS[fields]] = vals[:, fields]
-        spans[:, _RT_FIELDS[fields], 0] = 0
-        spans[:, _RT_FIELDS[fields], 1] = self.numbers.start[idx][:, fields]
-        spans[:, _RT_FIELDS[fields], 2] = self.numbers.end[idx][:, fields]
-        conf = vals[:, 7:11]
-        ext = values[:, 13:19]
-        none = np.abs(ext) >= 8.9e9
-        values[:, 13:19] = np.where(none, np.nan, ext)
-        spans[:, 13:19][none] = -1
-        return values, spans, conf
+        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS)
 
     # --------------------------------------------------------------- parse
     def parse(self) -> Toolpath:
-        decls = list(RE_DECL.finditer(self.code))
-        lits = list(RE_MOVE_LIT.finditer(self.code))
-        named = list(RE_MOVE_NAME.finditer(self.code))
-        if decls:
-            values, spans, conf = self._bulk_literals(decls, "lit")
-            for i, m in enumerate(decls):
-                self.points[m.group("name").upper()] = (values[i], spans[i], conf[i])
-        skip = {m.start() for m in decls} | {m.start() for m in lits} | {m.start() for m in named}
+        raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
+        shapes = LineShapes(self.code, raw, self.lines.starts)
+        decls = shapes.match(RE_DECL)
+        lits = shapes.match(RE_MOVE_LIT)
+        named = shapes.match(RE_MOVE_NAME)
+        if len(decls):
+            values, spans, conf = self._bulk_literals(decls.span("lit")[0])
+            for i, name in enumerate(decls.group("name")):
+                self.points[name.upper()] = (values[i], spans[i], conf[i])
+        skip = np.zeros(len(self.lines.starts), bool)
+        for matches in (decls, lits, named):
+            skip[matches.line] = True
         self._slow(skip)
-        if lits:
-            values, spans, conf = self._bulk_literals(lits, "lit")
-            self._bulk_rows(lits, values, spans, conf, [""] * len(lits))
-        if named:
-            names = [m.group("name").replace(" ", "").replace("\t", "") for m in named]
+        if len(lits):
+            values, spans, conf = self._bulk_literals(lits.span("lit")[0])
+            self._bulk_rows(lits, values, spans, conf, np.full(len(lits), "", dtype=object))
+        if len(named):
+            codes, texts = named.factorize("name")
+            names = [t.replace(" ", "").replace("\t", "") for t in texts]
             nan_v, nan_s, nan_c = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan)
             found = [self.points.get(n.upper()) for n in names]
             for n, f in zip(names, found):
                 if f is None:
                     self.builder.notes.append(f"target {n} is not declared as a literal robtarget in this module")
-            values = np.array([f[0] if f else nan_v for f in found])
-            spans = np.array([f[1] if f else nan_s for f in found])
-            conf = np.array([f[2] if f else nan_c for f in found])
-            self._bulk_rows(named, values, spans, conf, names)
+            values = np.array([f[0] if f else nan_v for f in found])[codes]
+            spans = np.array([f[1] if f else nan_s for f in found])[codes]
+            conf = np.array([f[2] if f else nan_c for f in found])[codes]
+            self._bulk_rows(named, values, spans, conf, np.array(names, dtype=object)[codes])
         return self._finish()
 
     def _bulk_rows(self, matches, values, spans, conf, names):
-        offsets = np.array([m.start() for m in matches])
-        mv, speed, zone, tools, wobjs = zip(*(m.group("mv", "speed", "zone", "tool", "wobj") for m in matches))
-        wobjs = [w or "wobj0" for w in wobjs]
-        tool_idx, tool_ok = self._frames_for(tools, self.tools, self.builder.tool_index)
-        wobj_idx, wobj_ok = self._frames_for(wobjs, self.wobjs, self.builder.frame_index)
+        def per_row(group, convert, dtype=None):
+            codes, texts = matches.factorize(group)
+            return np.array([convert(t) for t in texts], dtype=dtype)[codes]
+
+        tool_idx = per_row("tool", lambda t: self._frames_for([t], self.tools, self.builder.tool_index)[0][0], np.int32)
+        wobj_idx = per_row("wobj", lambda t: self._frames_for([t or "wobj0"], self.wobjs, self.builder.frame_index)[0][0], np.int32)
         self.builder.add_block(
-            offsets,
-            kind=np.array([_MOVE_KIND[k.upper()] for k in mv], dtype=np.int8),
-            line=self.lines.line(offsets),
+            matches.start,
+            kind=per_row("mv", lambda t: _MOVE_KIND[t.upper()], np.int8),
+            line=matches.line + 1,
             values=values,
             spans=spans,
             conf=conf,
-            speed=np.array([_speed(v) for v in speed]),
-            zone=np.array([_zone(z) for z in zone]),
+            speed=per_row("speed", _speed, float),
+            zone=per_row("zone", _zone, float),
             tool=tool_idx,
             frame=wobj_idx,
             resolved=~np.isnan(values[:, :3]).any(axis=1),
-            name=np.array(names, dtype=object),
+            name=names,
         )
 
     def _frames_for(self, names, table, register):
@@ -191,20 +206,22 @@ class RapidParser:
         return idx, ok
 
     # ----------------------------------------------------------- slow path
-    def _statements(self, skip: set[int]):
-        """(start offset, end offset) of each statement outside the bulk lines."""
+    def _statements(self, skip: np.ndarray):
+        """(start offset, end offset) of each statement outside the bulk lines (``skip``, by line)."""
         code = self.code
         pending = None
         header = False  # the %%% ... %%% block of old .prg files
-        for start in self.lines.starts.tolist():
+        starts = self.lines.starts
+        previous = -1
+        for li in np.nonzero(~skip)[0].tolist():
+            start = int(starts[li])
+            if pending is not None and not header and li > previous + 1:
+                raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")  # a bulk line came first
+            previous = li
             if code.startswith("%%%", start):
                 header = not header
                 continue
             if header:
-                continue
-            if start in skip:
-                if pending is not None:
-                    raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
                 continue
             end = code.find("\n", start)
             end = len(code) if end < 0 else end
@@ -221,7 +238,7 @@ class RapidParser:
         if pending is not None:
             raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
 
-    def _slow(self, skip: set[int]) -> None:
+    def _slow(self, skip: np.ndarray) -> None:
         g = grammar("rapid")
         stack: list[tuple[str, int]] = []
         for start, end in self._statements(skip):
