@@ -12,7 +12,9 @@ target p we look for the command c with model(IK(c)) = p:
   from a0 = ap, a1 = ap + e(a0).
 
 Both stop a point when its correction changes by less than the tolerance (0.01 mm by
-default). Orientation is kept as programmed (the model predicts position). Points that
+default); ``broyden`` also stops a point as soon as its predicted residual is below the
+tolerance (including a target already within it as written: 0 iterations), which saves
+the evaluation that would only confirm a sub-tolerance step. Orientation is kept as programmed (the model predicts position). Points that
 do not converge, leave the joint limits, come near a singularity or would change IK
 branch are reported with their program lines; the caller must not write such a program.
 """
@@ -166,7 +168,7 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray)
         # Without configuration data the controller keeps its branch along the path: the
         # branch of the first target nearest the middle of the joint ranges.
         start = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
-        path_q, path_branch, _ = kin.select_path(robot, sols[missing], start)
+        path_q, path_branch, _ = kin.select_path(robot, sols if missing.all() else sols[missing], start)  # (no copy of all 8 solutions)
         # Big steps between targets are the program's business; reachability is ours.
         usable = kin.within_limits(robot, path_q)
         q[missing] = np.where(usable[:, None], path_q, np.nan)
@@ -260,6 +262,9 @@ def compensate(
     if scheme == "broyden":
         jac = np.repeat(np.eye(3)[None], len(rows), axis=0)
         active = within & ~np.isnan(err).any(axis=1)
+        already = active & (np.linalg.norm(np.nan_to_num(err), axis=1) < tol_mm)
+        converged[already] = True
+        active &= ~already
         for it in range(max_iter):
             if not active.any():
                 break
@@ -282,7 +287,7 @@ def compensate(
             q_now[idx[keep]] = q[keep]
             branch_now[idx[keep]] = b[keep]
             within[idx[lost]] = False
-            done = keep & (np.sqrt(ss) < tol_mm)
+            done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
             converged[idx[done]] = True
             active[idx[done | lost]] = False
     else:

@@ -14,6 +14,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
+from numba import njit
 
 from .errors import KinematicsError
 from .robots import RobotModel
@@ -105,18 +106,81 @@ def _chain(theta: np.ndarray, d, a, alpha, keep_frames: bool):
     return (col0, col1, col2), pos, frames
 
 
-def _dh_columns(values, n: int, name: str) -> np.ndarray:
-    """A DH column as (6,) constants or (6, N) per pose, from (6,) or (N, 6) input."""
+@njit(cache=True, nogil=True)
+def _dh_kernel(theta, d, a, alpha, rots, origins, flange):
+    """The DH chain of _chain, compiled: per pose, frames 0..6 into rots (N, 7, 3, 3) and
+    origins (N, 7, 3) when those have N rows, and the flange pose into flange (N, 4, 4)
+    when it has. theta (N, 6) radians; d, a, alpha (M, 6) with M = 1 (constants) or N."""
+    n = theta.shape[0]
+    keep = rots.shape[0] == n
+    want_flange = flange.shape[0] == n
+    for p in range(n):
+        gd = p if d.shape[0] > 1 else 0
+        ga = p if a.shape[0] > 1 else 0
+        gl = p if alpha.shape[0] > 1 else 0
+        c00, c01, c02 = 1.0, 0.0, 0.0  # columns of the rotation: c0 = (c00, c01, c02), ...
+        c10, c11, c12 = 0.0, 1.0, 0.0
+        c20, c21, c22 = 0.0, 0.0, 1.0
+        px, py, pz = 0.0, 0.0, 0.0
+        if keep:
+            for i in range(3):
+                for j in range(3):
+                    rots[p, 0, i, j] = 1.0 if i == j else 0.0
+                origins[p, 0, i] = 0.0
+        for i in range(6):
+            ct, st = math.cos(theta[p, i]), math.sin(theta[p, i])
+            ca, sa = math.cos(alpha[gl, i]), math.sin(alpha[gl, i])
+            n0x, n0y, n0z = c00 * ct + c10 * st, c01 * ct + c11 * st, c02 * ct + c12 * st
+            r1x, r1y, r1z = c10 * ct - c00 * st, c11 * ct - c01 * st, c12 * ct - c02 * st
+            n1x, n1y, n1z = r1x * ca + c20 * sa, r1y * ca + c21 * sa, r1z * ca + c22 * sa
+            n2x, n2y, n2z = c20 * ca - r1x * sa, c21 * ca - r1y * sa, c22 * ca - r1z * sa
+            px += d[gd, i] * c20 + a[ga, i] * n0x
+            py += d[gd, i] * c21 + a[ga, i] * n0y
+            pz += d[gd, i] * c22 + a[ga, i] * n0z
+            c00, c01, c02 = n0x, n0y, n0z
+            c10, c11, c12 = n1x, n1y, n1z
+            c20, c21, c22 = n2x, n2y, n2z
+            if keep:
+                f = i + 1
+                rots[p, f, 0, 0], rots[p, f, 1, 0], rots[p, f, 2, 0] = c00, c01, c02
+                rots[p, f, 0, 1], rots[p, f, 1, 1], rots[p, f, 2, 1] = c10, c11, c12
+                rots[p, f, 0, 2], rots[p, f, 1, 2], rots[p, f, 2, 2] = c20, c21, c22
+                origins[p, f, 0], origins[p, f, 1], origins[p, f, 2] = px, py, pz
+        if want_flange:
+            flange[p, 0, 0], flange[p, 1, 0], flange[p, 2, 0] = c00, c01, c02
+            flange[p, 0, 1], flange[p, 1, 1], flange[p, 2, 1] = c10, c11, c12
+            flange[p, 0, 2], flange[p, 1, 2], flange[p, 2, 2] = c20, c21, c22
+            flange[p, 0, 3], flange[p, 1, 3], flange[p, 2, 3] = px, py, pz
+            flange[p, 3, 0], flange[p, 3, 1], flange[p, 3, 2], flange[p, 3, 3] = 0.0, 0.0, 0.0, 1.0
+
+
+def _dh_rows(values, n: int, name: str) -> np.ndarray:
+    """A DH column set as (1, 6) constants or (N, 6) per pose, C-contiguous, for _dh_kernel."""
     arr = np.asarray(values, dtype=float)
     if arr.shape == (6,):
-        return arr
+        return arr.reshape(1, 6)
     if arr.shape == (n, 6):
-        return arr.T
+        return np.ascontiguousarray(arr)
     raise KinematicsError(f"DH '{name}' must have shape (6,) or (N, 6) with N = {n}, got {arr.shape}")
 
 
-def _slice(col: np.ndarray, s: int, e: int) -> np.ndarray:
-    return col if col.ndim == 1 else col[:, s:e]
+def _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames: bool):
+    theta = np.ascontiguousarray(np.deg2rad(_as_joints(theta_deg)))
+    n = theta.shape[0]
+    d, a = _dh_rows(d_mm, n, "d"), _dh_rows(a_mm, n, "a")
+    alpha = np.deg2rad(_dh_rows(alpha_deg, n, "alpha"))
+    rots = np.empty((n if frames else 0, 7, 3, 3))
+    origins = np.empty((n if frames else 0, 7, 3))
+    flange = np.empty((0 if frames else n, 4, 4))
+
+    def rows(col, s, e):
+        return col[s:e] if len(col) > 1 else col
+
+    def work(s, e):
+        _dh_kernel(theta[s:e], rows(d, s, e), rows(a, s, e), rows(alpha, s, e), rots[s:e] if frames else rots, origins[s:e] if frames else origins, flange if frames else flange[s:e])
+
+    _run_chunked(n, work)
+    return (rots, origins) if frames else flange
 
 
 def forward_dh(theta_deg, d_mm, a_mm, alpha_deg, tool=None) -> np.ndarray:
@@ -126,44 +190,14 @@ def forward_dh(theta_deg, d_mm, a_mm, alpha_deg, tool=None) -> np.ndarray:
     error); d, a, alpha are (6,) or (N, 6). Used where the geometry differs from the
     robot file's: identified errors, thermal growth.
     """
-    theta = np.deg2rad(_as_joints(theta_deg)).T.copy()
-    n = theta.shape[1]
-    d = _dh_columns(d_mm, n, "d")
-    a = _dh_columns(a_mm, n, "a")
-    alpha = np.deg2rad(_dh_columns(alpha_deg, n, "alpha"))
-    out = np.zeros((n, 4, 4))
-    out[:, 3, 3] = 1.0
-
-    def work(s, e):
-        cols, pos, _ = _chain(theta[:, s:e], _slice(d, s, e), _slice(a, s, e), _slice(alpha, s, e), keep_frames=False)
-        for j in range(3):
-            out[s:e, :3, j] = cols[j].T
-        out[s:e, :3, 3] = pos.T
-
-    _run_chunked(n, work)
+    out = _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames=False)
     tool_t = _tool_transform(tool)
     return out if tool_t is None else out @ tool_t
 
 
 def frames_dh(theta_deg, d_mm, a_mm, alpha_deg) -> tuple[np.ndarray, np.ndarray]:
     """All frames 0..6 of a per-pose DH chain: rotations (N, 7, 3, 3), origins (N, 7, 3)."""
-    theta = np.deg2rad(_as_joints(theta_deg)).T.copy()
-    n = theta.shape[1]
-    d = _dh_columns(d_mm, n, "d")
-    a = _dh_columns(a_mm, n, "a")
-    alpha = np.deg2rad(_dh_columns(alpha_deg, n, "alpha"))
-    rots = np.zeros((n, 7, 3, 3))
-    origins = np.zeros((n, 7, 3))
-
-    def work(s, e):
-        _, _, frames = _chain(theta[:, s:e], _slice(d, s, e), _slice(a, s, e), _slice(alpha, s, e), keep_frames=True)
-        for k, (cols, pos) in enumerate(frames):
-            for j in range(3):
-                rots[s:e, k, :, j] = cols[j].T
-            origins[s:e, k] = pos.T
-
-    _run_chunked(n, work)
-    return rots, origins
+    return _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames=True)
 
 
 def dh_angles(robot: RobotModel, q_deg) -> np.ndarray:
@@ -238,84 +272,105 @@ def opw_forward(robot: RobotModel, q_deg) -> np.ndarray:
     return make_transform(rot, centre + p.c4 * rot[:, :, 2])
 
 
-def _triangle_angle(opposite: np.ndarray, side_b, side_c) -> np.ndarray:
-    """Angle (radians) opposite one side of a triangle, from its three side lengths.
+@njit(cache=True, inline="always")
+def _triangle_angle(a, b, c, slack_factor):
+    """Angle (radians) opposite side ``a`` of a triangle, from its three side lengths.
 
     Kahan's formula ("Miscalculating area and angles of a needle-like triangle"): accurate
     to a few ulps even for nearly degenerate triangles, where the law of cosines with acos
-    loses half the digits (an arm near full stretch). NaN where no triangle exists.
+    loses half the digits (an arm near full stretch). NaN where no triangle exists; a
+    rounding-sized negative (within slack_factor of the perimeter) counts as zero.
     """
-    a, b, c = np.broadcast_arrays(*(np.asarray(x, dtype=float) for x in (opposite, side_b, side_c)))
-    big, small = np.maximum(b, c), np.minimum(b, c)
-    # mu = a - (big - small) or small - (big - a), whichever Kahan's ordering asks for.
-    mu = np.where(small >= a, a - (big - small), small - (big - a))
+    big, small = max(b, c), min(b, c)
+    mu = a - (big - small) if small >= a else small - (big - a)
     scale = big + small + a
-    slack = _ACOS_SLACK * scale
-    mu = np.where((mu < 0) & (mu > -slack), 0.0, mu)
+    slack = slack_factor * scale
+    if mu < 0 and mu > -slack:
+        mu = 0.0
     num = ((big - small) + a) * mu
     den = (big + (small + a)) * ((big - a) + small)
-    den = np.where((den < 0) & (den > -slack * scale), 0.0, den)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        angle = 2.0 * np.arctan(np.sqrt(num / den))
-    # den == 0 with num > 0: the angle is pi (a equals the sum of the other sides).
-    angle = np.where((den == 0) & (num >= 0), np.pi, angle)
-    return np.where((mu < 0) | (den < 0) | (num < 0), np.nan, angle)
+    if den < 0 and den > -slack * scale:
+        den = 0.0
+    if mu < 0 or den < 0 or num < 0:
+        return np.nan
+    if den == 0 and num >= 0:
+        return np.pi
+    return 2.0 * math.atan(np.sqrt(num / den))
 
 
-def _ik_chunk(p, rot: np.ndarray, pos: np.ndarray) -> np.ndarray:
-    """OPW inverse kinematics over a chunk: rot (C, 3, 3), pos (C, 3) -> OPW angles (C, 8, 6) radians."""
-    c = pos - p.c4 * rot[:, :, 2]
-    cx, cy, cz = c[:, 0], c[:, 1], c[:, 2]
-    with np.errstate(invalid="ignore"):
-        nx1 = np.sqrt(cx * cx + cy * cy - p.b * p.b) - p.a1
-    dz = cz - p.c1
-    # Distances from joint 2 to the wrist centre, arm in front (s1) or reaching over the back (s2).
-    s1 = np.hypot(nx1, dz)
-    s2 = np.hypot(nx1 + 2 * p.a1, dz)
-    k = math.hypot(p.a2, p.c3)
-    base_angle = np.arctan2(cy, cx)
-    shoulder = np.arctan2(p.b, nx1 + p.a1)
-    t1_front = base_angle - shoulder
-    t1_back = base_angle + shoulder - np.pi
-    # Shoulder angle between lower arm and the line to the wrist centre; elbow angle.
-    shoulder_a = _triangle_angle(k, s1, p.c2)
-    shoulder_b = _triangle_angle(k, s2, p.c2)
-    elbow_a = np.pi - _triangle_angle(s1, p.c2, k)
-    elbow_b = np.pi - _triangle_angle(s2, p.c2, k)
-    lean_a = np.arctan2(nx1, dz)
-    lean_b = np.arctan2(nx1 + 2 * p.a1, dz)
-    psi3 = math.atan2(p.a2, p.c3)
-    arm = [
-        (t1_front, -shoulder_a + lean_a, elbow_a - psi3),
-        (t1_front, shoulder_a + lean_a, -elbow_a - psi3),
-        (t1_back, -shoulder_b - lean_b, elbow_b - psi3),
-        (t1_back, shoulder_b - lean_b, -elbow_b - psi3),
-    ]
-    n = pos.shape[0]
-    out = np.empty((n, 8, 6))
-    for j, (t1, t2, t3) in enumerate(arm):
-        s1_, c1_ = np.sin(t1)[:, None], np.cos(t1)[:, None]
-        s23, c23 = np.sin(t2 + t3)[:, None], np.cos(t2 + t3)[:, None]
-        # Wrist rotation R_ce = (Rz(t1) Ry(t2 + t3))^T R, decomposed as Rz(t4) Ry(t5) Rz(t6).
-        rx0 = c1_ * rot[:, 0, :] + s1_ * rot[:, 1, :]  # row 0 of Rz(t1)^T R
-        ry = -s1_ * rot[:, 0, :] + c1_ * rot[:, 1, :]  # row 1
-        rz = rot[:, 2, :]
-        w0 = c23 * rx0 - s23 * rz  # rows of R_ce
-        w1 = ry
-        w2 = s23 * rx0 + c23 * rz
-        sin5 = np.hypot(w0[:, 2], w1[:, 2])
-        t5 = np.arctan2(sin5, w2[:, 2])
-        # At the wrist singularity only t4 + t6 (or t6 - t4) is defined: t4 = 0 there.
-        t4 = np.where(sin5 < WRIST_SINGULAR_EPS, 0.0, np.arctan2(w1[:, 2], w0[:, 2]))
-        # t6 from the rotation left after t4 and t5, so that it absorbs any error of t4
-        # (large near the singularity) and the composed rotation stays exact.
-        c4, s4, c5, s5 = np.cos(t4), np.sin(t4), np.cos(t5), np.sin(t5)
-        m00 = c5 * (c4 * w0[:, 0] + s4 * w1[:, 0]) - s5 * w2[:, 0]
-        m10 = -s4 * w0[:, 0] + c4 * w1[:, 0]
-        t6 = np.arctan2(m10, m00)
-        out[:, j] = np.stack([t1, t2, t3, t4, t5, t6], -1)
-        out[:, j + 4] = np.stack([t1, t2, t3, t4 + np.pi, -t5, t6 - np.pi], -1)
-    return out
+@njit(cache=True, nogil=True)
+def _ik_kernel(t, a1, a2, b, c1, c2, c3, c4, signs, offsets_deg, slack_factor, wrist_eps, out):
+    """OPW inverse kinematics, compiled: flange poses t (N, 4, 4) -> out (N, 8, 6) controller degrees.
+
+    Per pose: the wrist centre, the four arm configurations (shoulder front/back x elbow)
+    from the triangle of joint 2, joint 3 and the wrist centre, then the wrist rotation
+    R_ce = (Rz(t1) Ry(t2 + t3))^T R decomposed as Rz(t4) Ry(t5) Rz(t6), and its flip.
+    At the wrist singularity only t4 + t6 is defined: t4 = 0 there, and t6 is taken from
+    the rotation left after t4 and t5 so that the composed rotation stays exact."""
+    k = math.hypot(a2, c3)
+    psi3 = math.atan2(a2, c3)
+    phi = np.empty(6)
+    for p in range(t.shape[0]):
+        cx = t[p, 0, 3] - c4 * t[p, 0, 2]
+        cy = t[p, 1, 3] - c4 * t[p, 1, 2]
+        cz = t[p, 2, 3] - c4 * t[p, 2, 2]
+        nx1 = np.sqrt(cx * cx + cy * cy - b * b) - a1
+        dz = cz - c1
+        s1 = math.hypot(nx1, dz)
+        s2 = math.hypot(nx1 + 2 * a1, dz)
+        base_angle = math.atan2(cy, cx)
+        shoulder = math.atan2(b, nx1 + a1)
+        t1_front = base_angle - shoulder
+        t1_back = base_angle + shoulder - np.pi
+        shoulder_a = _triangle_angle(k, s1, c2, slack_factor)
+        shoulder_b = _triangle_angle(k, s2, c2, slack_factor)
+        elbow_a = np.pi - _triangle_angle(s1, c2, k, slack_factor)
+        elbow_b = np.pi - _triangle_angle(s2, c2, k, slack_factor)
+        lean_a = math.atan2(nx1, dz)
+        lean_b = math.atan2(nx1 + 2 * a1, dz)
+        for j in range(4):
+            if j == 0:
+                t1, t2, t3 = t1_front, -shoulder_a + lean_a, elbow_a - psi3
+            elif j == 1:
+                t1, t2, t3 = t1_front, shoulder_a + lean_a, -elbow_a - psi3
+            elif j == 2:
+                t1, t2, t3 = t1_back, -shoulder_b - lean_b, elbow_b - psi3
+            else:
+                t1, t2, t3 = t1_back, shoulder_b - lean_b, -elbow_b - psi3
+            s1_, c1_ = math.sin(t1), math.cos(t1)
+            s23, c23 = math.sin(t2 + t3), math.cos(t2 + t3)
+            # Rows of R_ce (the components the decomposition needs).
+            rx00 = c1_ * t[p, 0, 0] + s1_ * t[p, 1, 0]
+            rx02 = c1_ * t[p, 0, 2] + s1_ * t[p, 1, 2]
+            w10 = -s1_ * t[p, 0, 0] + c1_ * t[p, 1, 0]
+            w12 = -s1_ * t[p, 0, 2] + c1_ * t[p, 1, 2]
+            w00 = c23 * rx00 - s23 * t[p, 2, 0]
+            w02 = c23 * rx02 - s23 * t[p, 2, 2]
+            w20 = s23 * rx00 + c23 * t[p, 2, 0]
+            w22 = s23 * rx02 + c23 * t[p, 2, 2]
+            sin5 = math.hypot(w02, w12)
+            t5 = math.atan2(sin5, w22)
+            t4 = 0.0 if sin5 < wrist_eps else math.atan2(w12, w02)
+            c4_, s4_, c5, s5 = math.cos(t4), math.sin(t4), math.cos(t5), math.sin(t5)
+            m00 = c5 * (c4_ * w00 + s4_ * w10) - s5 * w20
+            m10 = -s4_ * w00 + c4_ * w10
+            t6 = math.atan2(m10, m00)
+            for flip in range(2):
+                if flip == 0:
+                    phi[0], phi[1], phi[2], phi[3], phi[4], phi[5] = t1, t2, t3, t4, t5, t6
+                else:
+                    phi[0], phi[1], phi[2], phi[3], phi[4], phi[5] = t1, t2, t3, t4 + np.pi, -t5, t6 - np.pi
+                row = j + 4 * flip
+                bad = False
+                for i in range(6):
+                    q = signs[i] * (phi[i] * (180.0 / np.pi) + offsets_deg[i])
+                    q = (q + 180.0) % 360.0 - 180.0
+                    if np.isnan(q):
+                        bad = True
+                    out[p, row, i] = q
+                if bad:
+                    for i in range(6):
+                        out[p, row, i] = np.nan
 
 
 def ik(robot: RobotModel, poses) -> np.ndarray:
@@ -327,17 +382,14 @@ def ik(robot: RobotModel, poses) -> np.ndarray:
     wrist flipped.
     """
     p = _require_opw(robot)
-    t = _as_poses(poses)
+    t = np.ascontiguousarray(_as_poses(poses), dtype=float)
     n = t.shape[0]
     out = np.empty((n, 8, 6))
+    signs = np.asarray(p.signs, dtype=float) * np.ones(6)
+    offsets = np.asarray(p.offsets_deg, dtype=float) * np.ones(6)
 
     def work(s, e):
-        phi = _ik_chunk(p, t[s:e, :3, :3], t[s:e, :3, 3])
-        q = p.signs * (np.rad2deg(phi) + p.offsets_deg)
-        q = (q + 180.0) % 360.0 - 180.0
-        # A branch is unreachable as a whole: never return half a solution.
-        q[np.isnan(q).any(axis=-1)] = np.nan
-        out[s:e] = q
+        _ik_kernel(t[s:e], p.a1, p.a2, p.b, p.c1, p.c2, p.c3, p.c4, signs, offsets, _ACOS_SLACK, WRIST_SINGULAR_EPS, out[s:e])
 
     _run_chunked(n, work)
     return out
@@ -561,6 +613,29 @@ def select_by_kuka_status(robot: RobotModel, solutions, status, turn) -> tuple[n
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, base frame (conventions.md)
 
 
+@njit(cache=True)
+def _gravity_kernel(rots, origins, masses, com_local, frame_of, owner, g):
+    """tau_i = z_i . sum_{l loads i} (c_l - o_i) x m_l g per pose, positions in metres."""
+    n = rots.shape[0]
+    out = np.zeros((n, 6))
+    c = np.empty(3)
+    for p in range(n):
+        for l in range(len(masses)):
+            f = frame_of[l]
+            for k in range(3):
+                c[k] = (origins[p, f, k] + rots[p, f, k, 0] * com_local[l, 0] + rots[p, f, k, 1] * com_local[l, 1] + rots[p, f, k, 2] * com_local[l, 2]) / 1000.0
+            fx, fy, fz = masses[l] * g[0], masses[l] * g[1], masses[l] * g[2]
+            for i in range(owner[l] + 1):
+                rx = c[0] - origins[p, i, 0] / 1000.0
+                ry = c[1] - origins[p, i, 1] / 1000.0
+                rz = c[2] - origins[p, i, 2] / 1000.0
+                mx = ry * fz - rz * fy
+                my = rz * fx - rx * fz
+                mz = rx * fy - ry * fx
+                out[p, i] += rots[p, i, 0, 2] * mx + rots[p, i, 1, 2] * my + rots[p, i, 2, 2] * mz
+    return out
+
+
 def gravity_torque(robot: RobotModel, q_deg, payload_kg: float = 0.0, payload_com_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
     """Torque gravity exerts on each joint (N, 6), N*m, in the sense of the controller's q_i.
 
@@ -570,26 +645,13 @@ def gravity_torque(robot: RobotModel, q_deg, payload_kg: float = 0.0, payload_co
     """
     rots, origins = joint_frames(robot, q_deg)
     masses = np.asarray(robot.mass_kg, dtype=float)
-    com_local = np.asarray(robot.com_mm, dtype=float)
-    # Centres of mass in the base frame, metres: c_l = o_l + R_l com_l.
-    com = (origins[:, 1:] + np.einsum("nlij,lj->nli", rots[:, 1:], com_local)) / 1000.0
+    com_local = np.asarray(robot.com_mm, dtype=float).reshape(6, 3)
+    frame_of = np.arange(1, 7)  # link l's centre of mass is fixed in DH frame l + 1
+    owner = np.arange(6)  # ... and it loads joints 0..l
     if payload_kg:
-        pay = (origins[:, 6] + rots[:, 6] @ np.asarray(payload_com_mm, dtype=float)) / 1000.0
-        com = np.concatenate([com, pay[:, None]], axis=1)
         masses = np.append(masses, payload_kg)
-        owner = np.array([0, 1, 2, 3, 4, 5, 5])
-    else:
-        owner = np.arange(6)
-    forces = masses[:, None] * GRAVITY  # (L, 3)
-    moments = np.cross(com, forces)  # (N, L, 3) about the base origin
-    # Suffix sums over the links beyond joint i: sum_l (c_l x F_l) and sum_l F_l.
-    torque = np.zeros((com.shape[0], 6))
-    for i in range(6):
-        beyond = owner >= i
-        moment_sum = moments[:, beyond].sum(axis=1)
-        force_sum = forces[beyond].sum(axis=0)
-        origin = origins[:, i] / 1000.0
-        axis = rots[:, i, :, 2]
-        about_joint = moment_sum - np.cross(origin, force_sum)
-        torque[:, i] = np.einsum("nj,nj->n", axis, about_joint)
+        com_local = np.vstack([com_local, np.asarray(payload_com_mm, dtype=float)])
+        frame_of = np.append(frame_of, 6)
+        owner = np.append(owner, 5)
+    torque = _gravity_kernel(np.ascontiguousarray(rots), np.ascontiguousarray(origins), masses, com_local, frame_of, owner, GRAVITY)
     return torque * robot.joint_sign

@@ -14,6 +14,7 @@ import numpy as np
 
 from ..errors import EmitError
 from ..ir import F_POS, FIELDS, NF, Toolpath
+from . import number_kernel
 
 # Largest rounding error accepted when writing a field (mm for positions, degrees for
 # angles, unit quaternion components).
@@ -45,49 +46,88 @@ def format_like(old: str, value: float, tol: float) -> str:
     return text
 
 
-def format_many(original: Toolpath, rows, fields, values: np.ndarray, tol: np.ndarray) -> list[str]:
-    """format_like for many numbers at once: decimals chosen vectorised, strings grouped by decimals."""
-    spans = original.spans[rows, fields]
-    sources = [doc.text for doc in original.sources]
-    olds = [sources[fi][a:b] for fi, a, b in zip(spans[:, 0].tolist(), spans[:, 1].tolist(), spans[:, 2].tolist())]
-    has_dot = np.array(["." in t and "e" not in t.lower() for t in olds], dtype=bool)
-    old_dec = np.array([len(t) - t.find(".") - 1 if d else 0 for t, d in zip(olds, has_dot)], dtype=int)
+def choose_decimals(values: np.ndarray, tol: np.ndarray, old_decimals: np.ndarray) -> np.ndarray:
+    """Fewest decimals, at least the old number's, that write each value within its tolerance."""
     decimals = np.full(len(values), MAX_DECIMALS)
     undecided = np.ones(len(values), dtype=bool)
     for d in range(0, MAX_DECIMALS + 1):
-        ok = undecided & (d >= old_dec) & (np.abs(np.round(values, d) - values) <= tol)
+        ok = undecided & (d >= old_decimals) & (np.abs(np.round(values, d) - values) <= tol)
         decimals[ok] = d
         undecided &= ~ok
-    out: list[str] = [""] * len(values)
-    for d in np.unique(decimals):
-        idx = np.nonzero(decimals == d)[0]
-        spec = f".{int(d)}f"
-        for i, v in zip(idx.tolist(), values[idx].tolist()):
-            out[i] = format(v, spec)
-    # Styles are rare: patch them one by one (sign, trailing dot, missing leading zero, -0).
-    for i, old in enumerate(olds):
-        text = out[i]
-        if text.startswith("-") and float(text) == 0.0:
-            text = text[1:]
-        if old[:1] == "+" or has_dot[i] and decimals[i] == 0 or old.lstrip("+-")[:1] == ".":
-            text = format_like(old, values[i], float(tol[i]))
-        out[i] = text
-    return out
+        if not undecided.any():
+            break
+    return decimals
 
 
-def _refuse_conflicts(original: Toolpath, files, starts, texts, rows, fields) -> None:
-    """Two targets sharing one number (a named point) may not ask for different new text."""
-    keys = files * (1 << 40) + starts
-    order = np.argsort(keys, kind="stable")
-    dup = np.nonzero(keys[order][1:] == keys[order][:-1])[0]
-    for k in dup:
-        a, b = order[k], order[k + 1]
-        if texts[a] != texts[b]:
-            name = original.target_name[rows[a]] or "?"
-            raise EmitError(
-                f"{original.sources[int(files[a])].path}: {FIELDS[fields[a]]} of point '{name}' is used by lines "
-                f"{original.line[rows[a]]} and {original.line[rows[b]]} with different new values ({texts[a]} and {texts[b]})"
-            )
+class _BulkEdits:
+    """The changed numbers of targets, as arrays: where they are, and how to write them."""
+
+    COLUMNS = ("digits", "decimals", "negative", "plus", "dot_style", "no_lead_zero")
+
+    def __init__(self, original: Toolpath, rows, fields, values, tol):
+        spans = original.spans[rows, fields]
+        self.file, self.start, self.end = spans[:, 0], spans[:, 1], spans[:, 2]
+        self.rows, self.fields = rows, fields
+        style = {k: np.zeros(len(rows), bool) for k in ("plus", "no_lead_zero", "dot_style")}
+        old_decimals = np.zeros(len(rows), np.int64)
+        for f in np.unique(self.file).tolist():
+            sel = self.file == f
+            raw = np.frombuffer(original.sources[f].text.encode("latin-1"), dtype=np.uint8)
+            got = number_kernel.old_styles(raw, self.start[sel], self.end[sel])
+            for k in style:
+                style[k][sel] = got[k]
+            old_decimals[sel] = got["old_decimals"]
+        self.decimals = choose_decimals(values, tol, old_decimals)
+        self.digits, self.negative, too_big = number_kernel.round_digits(values, self.decimals)
+        self.plus, self.no_lead_zero, self.dot_style = style["plus"], style["no_lead_zero"], style["dot_style"]
+        # Numbers with more than 18 digits are written by Python (as literal edits).
+        self.literal = {i: format_like(original.sources[int(self.file[i])].text[self.start[i] : self.end[i]], float(values[i]), float(tol[i])) for i in np.nonzero(too_big)[0].tolist()}
+        self.key = self.file * (1 << 40) + self.start
+        self._sorted = None
+
+    def written(self) -> np.ndarray:
+        """The value each new text reads back as (float of the written digits, exactly)."""
+        out = np.where(self.negative, -1.0, 1.0) * self.digits / (10.0**self.decimals)
+        for i, text in self.literal.items():
+            out[i] = float(text)
+        return out
+
+    def text(self, i: int) -> str:
+        if i in self.literal:
+            return self.literal[i]
+        return number_kernel.number_text(int(self.digits[i]), int(self.decimals[i]), bool(self.negative[i]), bool(self.plus[i]), bool(self.dot_style[i]), bool(self.no_lead_zero[i]))
+
+    def refuse_conflicts(self, original: Toolpath) -> None:
+        """Two targets sharing one number (a named point) may not ask for different new text."""
+        order = np.argsort(self.key, kind="stable")
+        k = self.key[order]
+        dup = np.nonzero(k[1:] == k[:-1])[0]
+        for j in dup.tolist():
+            a, b = order[j], order[j + 1]
+            if self.text(a) != self.text(b) if a in self.literal or b in self.literal else (self.digits[a], self.decimals[a], self.negative[a]) != (self.digits[b], self.decimals[b], self.negative[b]):
+                name = original.target_name[self.rows[a]] or "?"
+                raise EmitError(
+                    f"{original.sources[int(self.file[a])].path}: {FIELDS[self.fields[a]]} of point '{name}' is used by lines "
+                    f"{original.line[self.rows[a]]} and {original.line[self.rows[b]]} with different new values ({self.text(a)} and {self.text(b)})"
+                )
+        # One edit per number from here on.
+        first = np.ones(len(k), bool)
+        first[1:] = k[1:] != k[:-1]
+        self._sorted = order[first]
+
+    def lookup(self, file: int, start: int) -> int | None:
+        """Index of the edit at a number's position, if any."""
+        order = self._sorted
+        keys = self.key[order]
+        i = int(np.searchsorted(keys, file * (1 << 40) + start))
+        return int(order[i]) if i < len(keys) and keys[i] == file * (1 << 40) + start else None
+
+    def keys(self) -> np.ndarray:
+        return self.key[self._sorted]
+
+    def for_file(self, file: int) -> np.ndarray:
+        """Edit indices of one file, in text order."""
+        return self._sorted[self.file[self._sorted] == file]
 
 
 def _text_values(modified: Toolpath, original: Toolpath) -> np.ndarray:
@@ -131,25 +171,26 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
         if f < 3 and not original.relative[r]:
             written[r, f] = float(text) * original.scale[r, f] + (original.offset[r, f] if original.offset is not None else 0.0)
         key = (file, start)
-        if key in edits and edits[key][1] != text:
-            other = edits[key][2]
+        other = edits[key][1] if key in edits else None
+        if other is None and bulk is not None and (i := bulk.lookup(file, start)) is not None:
+            other = bulk.text(i)
+        if other is not None and other != text:
+            other_row = edits[key][2] if key in edits else int(bulk.rows[bulk.lookup(file, start)])
             raise EmitError(
                 f"{original.sources[file].path}: {FIELDS[f]} of point '{original.target_name[r] or '?'}' is used by lines "
-                f"{original.line[other]} and {original.line[r]} with different new values ({edits[key][1]} and {text})"
+                f"{original.line[other_row]} and {original.line[r]} with different new values ({other} and {text})"
             )
         edits[key] = (end, text, r, f)
         return float(text)
 
     rows, fields = np.nonzero(changed)
+    bulk = None
     if len(rows):
-        texts_new = format_many(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
-        file_ids, starts, ends = (spans[rows, fields, k] for k in range(3))
-        _refuse_conflicts(original, file_ids, starts, texts_new, rows, fields)
-        for key_file, key_start, key_end, text, r, f in zip(file_ids.tolist(), starts.tolist(), ends.tolist(), texts_new, rows.tolist(), fields.tolist()):
-            edits[(key_file, key_start)] = (key_end, text, r, f)
+        bulk = _BulkEdits(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
+        bulk.refuse_conflicts(original)
         pos = fields < 3
         if pos.any():
-            vals = np.array([texts_new[i] for i in np.nonzero(pos)[0]], dtype=float)
+            vals = bulk.written()[pos]
             r, f = rows[pos], fields[pos]
             off = original.offset[r, f] if original.offset is not None else 0.0
             keep = ~original.relative[r]
@@ -157,9 +198,11 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
     # Offsets (RAPID Offs) against the value their base point is written with.
     for r, f in zip(*np.nonzero(derived & (spans[:, :, 1] >= 0))):
         key = (int(original.offset_span[r, f, 0]), int(original.offset_span[r, f, 1]))
-        base = float(edits[key][1]) if key in edits else original.offset[r, f]
+        base_edit = bulk.lookup(*key) if bulk is not None else None
+        base_text = edits[key][1] if key in edits else (bulk.text(base_edit) if base_edit is not None else None)
+        base = float(base_text) if base_text is not None else original.offset[r, f]
         target = modified.values[r, f]
-        if not np.isnan(target) and target != original.values[r, f] or key in edits:
+        if not np.isnan(target) and target != original.values[r, f] or base_text is not None:
             put(r, f, (target - base) / original.scale[r, f])
     # A number written as an expression (G-code X[#1*2]) is there but cannot be rewritten.
     fixed = ~np.isnan(original.values[:, F_POS]) & (spans[:, F_POS, 1] < 0)
@@ -207,25 +250,39 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
                 written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
     for (file, offset), pieces in inserts.items():
         edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
-    _check_shared(original, modified, edits)
+    edited = np.array([f * (1 << 40) + st for f, st in edits], dtype=np.int64)
+    if bulk is not None:
+        edited = np.concatenate([edited, bulk.keys()])
+    _check_shared(original, modified, edited)
     texts = [doc.text for doc in original.sources]
-    by_file: dict[int, list] = {}
-    for (file, start), (end, text, _, _) in edits.items():
-        by_file.setdefault(file, []).append((start, end, text))
-    for file, items in by_file.items():
-        items.sort()
-        src = texts[file]
-        out, pos = [], 0
-        for start, end, text in items:
-            out.append(src[pos:start])
-            out.append(text)
-            pos = end
-        out.append(src[pos:])
-        texts[file] = "".join(out)
+    for file in range(len(texts)):
+        literal = sorted((start, end, text) for (f, start), (end, text, _, _) in edits.items() if f == file)
+        numbers = bulk.for_file(file) if bulk is not None else np.zeros(0, np.int64)
+        if not literal and not len(numbers):
+            continue
+        if literal and len(numbers):
+            # A number both changed as a target's and written by a special case: it must agree.
+            lit_starts = np.array([st for st, _, _ in literal])
+            clash = np.isin(bulk.start[numbers], lit_starts)
+            for i in numbers[clash].tolist():
+                text = next(t for st, _, t in literal if st == bulk.start[i])
+                if text != bulk.text(i):
+                    raise EmitError(f"{original.sources[file].path}, line {original.line[bulk.rows[i]]}: one number asked to be written as both {bulk.text(i)} and {text}")
+            numbers = numbers[~clash]
+        starts = np.concatenate([bulk.start[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([st for st, _, _ in literal], dtype=np.int64)])
+        ends = np.concatenate([bulk.end[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([e for _, e, _ in literal], dtype=np.int64)])
+        cols = {k: np.concatenate([getattr(bulk, k)[numbers] if bulk is not None else np.zeros(0), np.zeros(len(literal))]) for k in _BulkEdits.COLUMNS}
+        order = np.argsort(starts, kind="stable")
+        position = np.empty(len(order), np.int64)
+        position[order] = np.arange(len(order))
+        literals = {int(position[len(numbers) + j]): text for j, (_, _, text) in enumerate(literal)}
+        literals.update({int(position[k]): bulk.literal[i] for k, i in enumerate(numbers.tolist()) if i in bulk.literal} if bulk is not None and bulk.literal else {})
+        new_bytes = number_kernel.splice_bytes(texts[file].encode("latin-1"), starts[order], ends[order], {k: v[order] for k, v in cols.items()}, literals)
+        texts[file] = new_bytes.decode("latin-1")
     return texts
 
 
-def _check_shared(original: Toolpath, modified: Toolpath, edits: dict) -> None:
+def _check_shared(original: Toolpath, modified: Toolpath, edited: np.ndarray) -> None:
     """A number used by several targets (a named point) may only change if all of them agree."""
     sp = original.spans.reshape(-1, 3)
     have = sp[:, 1] >= 0
@@ -239,8 +296,9 @@ def _check_shared(original: Toolpath, modified: Toolpath, edits: dict) -> None:
     by_key: dict[tuple[int, int], list[tuple[int, int]]] = {}
     for r, f in zip(rows.tolist(), fields.tolist()):
         by_key.setdefault((int(original.spans[r, f, 0]), int(original.spans[r, f, 1])), []).append((r, f))
+    edited = set(edited[np.isin(edited, uniq)].tolist())
     for key, users in by_key.items():
-        if key not in edits:
+        if key[0] * (1 << 40) + key[1] not in edited:
             continue
         values = {float(modified.values[r, f]) for r, f in users}
         if len(values) > 1:

@@ -19,6 +19,7 @@ from lark import Token, Tree
 
 from ..frames import make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
+from . import scan_kernel
 from .common import Builder, LineIndex, parse_statement, scan_numbers
 from .grammar import grammar
 from .line_shapes import LineShapes
@@ -72,8 +73,6 @@ class GcodeParser:
         if nb:
             code_end = bulk.span("code")[1]
             numbers = scan_numbers(text, letter_prefix=True)
-            nonspace = (raw != 32) & (raw != 9)
-            prev_ns = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0))
             lo = np.searchsorted(numbers.start, bulk_starts)
             hi = np.searchsorted(numbers.start, code_end)
             counts = hi - lo
@@ -82,7 +81,7 @@ class GcodeParser:
             idx = _ranges(lo, hi)
             row = np.repeat(np.arange(nb), counts)
             starts = numbers.start[idx]
-            letter = raw[prev_ns[np.maximum(starts - 1, 0)]]
+            letter = raw[scan_kernel.prev_nonblank(raw, starts - 1)]
             code = _LETTER_CODE[letter]
             values = np.full((nb, len(AXES)), np.nan)
             spans = np.full((nb, len(AXES), 2), -1, dtype=np.int64)

@@ -19,6 +19,7 @@ from lark import Token, Tree
 
 from ..frames import abc_to_matrix, make_transform
 from ..ir import NF, Kind, SourceDoc, Toolpath
+from . import scan_kernel
 from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
 from .grammar import grammar, literal_number
 from .line_shapes import LineShapes
@@ -126,9 +127,9 @@ class Symbols:
         return values[i], spans[i], conf[i], insert[i]
 
 
-def _field_codes(raw: np.ndarray, prev_nonspace: np.ndarray, starts: np.ndarray) -> np.ndarray:
+def _field_codes(raw: np.ndarray, starts: np.ndarray) -> np.ndarray:
     """IR field code of each number from the one- or two-character name before it."""
-    p = prev_nonspace[np.maximum(starts - 1, 0)]
+    p = scan_kernel.prev_nonblank(raw, starts - 1)
     c1 = raw[p].astype(np.int64)
     c0 = np.where(p >= 1, raw[np.maximum(p - 1, 0)], 32).astype(np.int64)
     cm = np.where(p >= 2, raw[np.maximum(p - 2, 0)], 32).astype(np.int64)
@@ -150,9 +151,7 @@ class _Doc:
         self.numbers: Numbers = scan_numbers(doc.text)
         self.raw = raw = np.frombuffer(doc.text.encode("latin-1"), dtype=np.uint8)
         self._shapes: LineShapes | None = None
-        nonspace = (raw != 32) & (raw != 9)
-        self.prev_nonspace = np.maximum.accumulate(np.where(nonspace, np.arange(len(raw)), 0)) if len(raw) else np.zeros(0, dtype=np.int64)
-        self.codes = _field_codes(raw, self.prev_nonspace, self.numbers.start) if len(raw) else np.zeros(0, dtype=np.int16)
+        self.codes = _field_codes(raw, self.numbers.start) if len(raw) else np.zeros(0, dtype=np.int16)
 
     def shapes(self) -> LineShapes:
         if self._shapes is None:

@@ -176,5 +176,21 @@ def scan(raw: np.ndarray, letter_prefix: bool):
     return starts[:count], ends[:count], values[:count], status[:count]
 
 
+@njit(cache=True)
+def _prev_nonblank(raw, positions):
+    out = np.empty(len(positions), np.int64)
+    for k in range(len(positions)):
+        j = positions[k]
+        while j > 0 and (raw[j] == 32 or raw[j] == 9):
+            j -= 1
+        out[k] = j
+    return out
+
+
+def prev_nonblank(raw: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """For each position, the nearest index at or before it that is not a blank (0 if none)."""
+    return _prev_nonblank(raw, np.maximum(np.asarray(positions, dtype=np.int64), 0))
+
+
 SLOW = _SLOW
 INVALID = _INVALID
