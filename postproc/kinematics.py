@@ -613,27 +613,31 @@ def select_by_kuka_status(robot: RobotModel, solutions, status, turn) -> tuple[n
 GRAVITY = np.array([0.0, 0.0, -9.81])  # m/s^2, base frame (conventions.md)
 
 
-@njit(cache=True)
-def _gravity_kernel(rots, origins, masses, com_local, frame_of, owner, g):
-    """tau_i = z_i . sum_{l loads i} (c_l - o_i) x m_l g per pose, positions in metres."""
-    n = rots.shape[0]
-    out = np.zeros((n, 6))
+@njit(cache=True, nogil=True)
+def _gravity_kernel(theta, d, a, alpha, masses, com_local, frame_of, owner, g, out):
+    """tau_i = z_i . sum_{l loads i} (c_l - o_i) x m_l g per pose (positions in metres),
+    with the DH frames of each pose computed on the spot (no (N, 7, 3, 3) arrays)."""
+    rots = np.zeros((1, 7, 3, 3))
+    origins = np.zeros((1, 7, 3))
+    flange = np.zeros((0, 4, 4))
     c = np.empty(3)
-    for p in range(n):
+    for p in range(theta.shape[0]):
+        _dh_kernel(theta[p : p + 1], d, a, alpha, rots, origins, flange)
+        for i in range(6):
+            out[p, i] = 0.0
         for l in range(len(masses)):
             f = frame_of[l]
             for k in range(3):
-                c[k] = (origins[p, f, k] + rots[p, f, k, 0] * com_local[l, 0] + rots[p, f, k, 1] * com_local[l, 1] + rots[p, f, k, 2] * com_local[l, 2]) / 1000.0
+                c[k] = (origins[0, f, k] + rots[0, f, k, 0] * com_local[l, 0] + rots[0, f, k, 1] * com_local[l, 1] + rots[0, f, k, 2] * com_local[l, 2]) / 1000.0
             fx, fy, fz = masses[l] * g[0], masses[l] * g[1], masses[l] * g[2]
             for i in range(owner[l] + 1):
-                rx = c[0] - origins[p, i, 0] / 1000.0
-                ry = c[1] - origins[p, i, 1] / 1000.0
-                rz = c[2] - origins[p, i, 2] / 1000.0
+                rx = c[0] - origins[0, i, 0] / 1000.0
+                ry = c[1] - origins[0, i, 1] / 1000.0
+                rz = c[2] - origins[0, i, 2] / 1000.0
                 mx = ry * fz - rz * fy
                 my = rz * fx - rx * fz
                 mz = rx * fy - ry * fx
-                out[p, i] += rots[p, i, 0, 2] * mx + rots[p, i, 1, 2] * my + rots[p, i, 2, 2] * mz
-    return out
+                out[p, i] += rots[0, i, 0, 2] * mx + rots[0, i, 1, 2] * my + rots[0, i, 2, 2] * mz
 
 
 def gravity_torque(robot: RobotModel, q_deg, payload_kg: float = 0.0, payload_com_mm=(0.0, 0.0, 0.0)) -> np.ndarray:
@@ -643,7 +647,7 @@ def gravity_torque(robot: RobotModel, q_deg, payload_kg: float = 0.0, payload_co
     optional payload: a point mass at ``payload_com_mm`` in the flange frame. A joint of
     stiffness k_i deflects by tau_i / k_i in the direction gravity pushes it.
     """
-    rots, origins = joint_frames(robot, q_deg)
+    theta = np.ascontiguousarray(np.deg2rad(dh_angles(robot, q_deg)))
     masses = np.asarray(robot.mass_kg, dtype=float)
     com_local = np.asarray(robot.com_mm, dtype=float).reshape(6, 3)
     frame_of = np.arange(1, 7)  # link l's centre of mass is fixed in DH frame l + 1
@@ -653,5 +657,8 @@ def gravity_torque(robot: RobotModel, q_deg, payload_kg: float = 0.0, payload_co
         com_local = np.vstack([com_local, np.asarray(payload_com_mm, dtype=float)])
         frame_of = np.append(frame_of, 6)
         owner = np.append(owner, 5)
-    torque = _gravity_kernel(np.ascontiguousarray(rots), np.ascontiguousarray(origins), masses, com_local, frame_of, owner, GRAVITY)
+    d, a = _dh_rows(robot.d_mm, 1, "d"), _dh_rows(robot.a_mm, 1, "a")
+    alpha = np.deg2rad(_dh_rows(robot.alpha_deg, 1, "alpha"))
+    torque = np.empty((theta.shape[0], 6))
+    _run_chunked(theta.shape[0], lambda s, e: _gravity_kernel(theta[s:e], d, a, alpha, masses, com_local, frame_of, owner, GRAVITY, torque[s:e]))
     return torque * robot.joint_sign
