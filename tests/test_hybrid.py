@@ -103,9 +103,30 @@ def test_cli_predictors_and_transfer(robot, distorted, tmp_path):
 
 
 @pytest.mark.slow
-def test_seed001_design_transfer_beats_target_only_gpr():
+def test_seed001_design_transfer_beats_target_only_gpr_and_nears_dense_gpr():
+    """Seed 001 Table 8 design: Tr-GPR (126 source + 80 target poses) beats GPR on the
+    target poses and comes within 25 % of GPR on 378 poses of the validation region."""
     from postproc.learn.experiments import seed001_transfer
 
     rows = {r["model"].split(" (")[0]: r["mean_mm"] for r in seed001_transfer(1)}
     assert rows["Tr-GPR"] < rows["GPR-80"] and rows["Tr-GPR"] < rows["GPR-50"]
-    assert rows["Tr-GPR"] < 0.15 * rows["uncompensated"]
+    assert rows["Tr-GPR"] <= 1.25 * rows["GPR-378"]
+    assert rows["Tr-GPR"] < 0.05 * rows["uncompensated"]
+
+
+def test_turn_physics_carries_a_base_tilt_between_sectors():
+    """Errors that turn with joint 1 plus a base tilt and shift: the fitted turn term
+    recovers the tilt's and shift's horizontal components."""
+    from postproc.learn.transfer import _rotate, _rz, _turn_design
+
+    rng = np.random.default_rng(0)
+    omega, shift = np.array([4e-4, -2e-4, 0.0]), np.array([0.3, -0.5, 0.2])
+    p_src = np.column_stack([rng.uniform(800, 1300, 40), rng.uniform(-600, -400, 40), rng.uniform(400, 900, 40)])
+    arm = rng.normal(0, 0.3, (40, 3))
+    theta = 50.0
+    p_tgt = _rotate(np.hstack([p_src, np.zeros((40, 3))]), theta, np.zeros(3))[:, :3]
+    e_src = arm + np.cross(omega, p_src) + shift
+    e_tgt = arm @ _rz(theta).T + np.cross(omega, p_tgt) + shift
+    design = _turn_design(_rz(theta), p_tgt)
+    frame = np.linalg.lstsq(design, (e_tgt - e_src @ _rz(theta).T).reshape(-1), rcond=None)[0]
+    np.testing.assert_allclose(frame, [omega[0], omega[1], shift[0], shift[1]], rtol=1e-6, atol=1e-9)

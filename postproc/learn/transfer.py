@@ -2,11 +2,16 @@
 
 A source region measured densely and a target region measured sparsely. The target is
 split into k sub-spaces by base angle theta1. For each sub-space j:
-- feature alignment (eq. 11-12): the source poses rotated about the base z axis by the
-  sub-space's angle and shifted by the mean offset, T_j;
+- feature alignment (eq. 11-12): the source poses turned about the base z axis by the
+  sub-space's angle (shifted by the mean offset only with ``shift=True``: a shift moves
+  the arm, the turn is the arm's one symmetry), T_j;
+- the physics of that turn: errors of the arm (joints 2-6, compliance, reducers) turn
+  with joint 1, while a base-frame tilt omega and shift t add ((I - Rz) omega) x p +
+  (I - Rz) t; their four horizontal components are fitted once over all sub-spaces, and
+  source errors are carried over as Rz y + that term;
 - label alignment (eq. 13-14): a 3x3 map H_j (ridge regression towards the identity,
-  weighted by the measurement precision) from the source model's errors at the aligned
-  target poses to the measured target errors;
+  weighted by the measurement precision, the ridge chosen by leave-one-out error) from
+  the source model's carried-over errors at the target poses to the measured ones;
 - the source set transferred as (T_j x, H_j y) and merged with the target data (eq. 15-17).
 TrAdaBoost.R2 (eq. 19-24) then reweights: target samples by the weighted fitting error
 relative to the largest target error, source samples that fit badly lose weight; the
@@ -59,6 +64,48 @@ def _rotate(X, theta_deg, offset):
     return out
 
 
+RIDGE_GRID = 10.0 ** np.arange(0, 13)
+
+
+def _label_map(f_src: np.ndarray, y: np.ndarray, precision: float, ridge: float | None) -> tuple[np.ndarray, float]:
+    """H minimising precision * |y - f_src H|^2 + ridge * |H - I|^2 (eq. 13-14), and the ridge.
+
+    ``ridge=None`` picks it from RIDGE_GRID by leave-one-out error over the sub-space's
+    target points (closed form): 16 points and a source model that is itself uncertain
+    rarely support a map far from the identity."""
+    resid = y - f_src  # what H - I has to explain
+    gram = precision * f_src.T @ f_src
+    best = None
+    for lam in RIDGE_GRID if ridge is None else [ridge]:
+        inv = np.linalg.inv(gram + lam * np.eye(3))
+        d = inv @ (precision * f_src.T @ resid)
+        lever = precision * np.einsum("ij,jk,ik->i", f_src, inv, f_src)
+        loo = (resid - f_src @ d) / np.maximum(1.0 - lever, 1e-9)[:, None]
+        score = float(np.sum(loo**2))
+        if best is None or score <= best[0]:  # ties go to the stronger prior
+            best = (score, lam, d)
+    return np.eye(3) + best[2], float(best[1])
+
+
+def _rz(theta_deg: float) -> np.ndarray:
+    t = np.radians(theta_deg)
+    return np.array([[np.cos(t), -np.sin(t), 0.0], [np.sin(t), np.cos(t), 0.0], [0.0, 0.0, 1.0]])
+
+
+def _turn_design(rz: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """(3N, 4): d/d(omega_x, omega_y, t_x, t_y) of ((I - Rz) omega) x p + (I - Rz) t, omega in rad, p in mm."""
+    m = (np.eye(3) - rz)[:, :2]  # (3, 2)
+    p = positions
+    # (m w) x p = -[p]x (m w)
+    skew = np.zeros((len(p), 3, 3))
+    skew[:, 0, 1], skew[:, 0, 2] = -p[:, 2], p[:, 1]
+    skew[:, 1, 0], skew[:, 1, 2] = p[:, 2], -p[:, 0]
+    skew[:, 2, 0], skew[:, 2, 1] = -p[:, 1], p[:, 0]
+    tilt = -skew @ m  # (N, 3, 2)
+    shift = np.broadcast_to(m, (len(p), 3, 2))
+    return np.concatenate([tilt, shift], axis=2).reshape(-1, 4)
+
+
 def _weighted_median(preds: np.ndarray, weights: np.ndarray) -> np.ndarray:
     """Per sample and output, the weighted median over learners: preds (L, N, 3)."""
     order = np.argsort(preds, axis=0)
@@ -70,8 +117,9 @@ def _weighted_median(preds: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
 
 class TrGPRPredictor(RegressorMixin, BaseEstimator):
-    def __init__(self, n_subspaces: int = 5, n_iter: int = 10, ridge: float = 1.0, noise_mm: float = 0.02, random_state: int = 0):
+    def __init__(self, n_subspaces: int = 5, n_iter: int = 10, ridge: float | None = None, noise_mm: float = 0.02, shift: bool = False, random_state: int = 0):
         self.n_subspaces = n_subspaces
+        self.shift = shift
         self.n_iter = n_iter
         self.ridge = ridge
         self.noise_mm = noise_mm
@@ -88,22 +136,41 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         source_model = GPRPredictor(random_state=self.random_state).fit(Xs, ys)
         order = np.argsort(_theta1(X))
         groups = np.array_split(order, self.n_subspaces)
-        parts_X, parts_y = [], []
-        self.alignments_ = []
         precision = 1.0 / self.noise_mm**2  # the tracker's precision weights the label fit
+        # Feature alignment (eq. 11-12): each sub-space's turn about base z and offset.
+        turns, offsets, backs = [], [], []
         for g in groups:
             theta = float(np.mean(_theta1(X[g])) - np.mean(_theta1(Xs)))
-            rotated = _rotate(Xs, theta, np.zeros(3))
-            offset = X[g, :3].mean(axis=0) - rotated[:, :3].mean(axis=0)
-            # Label alignment: target errors against the source model at the poses they map from.
-            back = _rotate(_rotate(X[g], 0.0, -offset), -theta, np.zeros(3))
-            f_src = source_model.predict(back)
-            a = precision * f_src.T @ f_src + self.ridge * np.eye(3)
-            b = precision * f_src.T @ y[g] + self.ridge * np.eye(3)
-            h = np.linalg.solve(a, b)  # y ~ f_src @ h, pulled towards the identity
-            parts_X.append(_rotate(Xs, theta, offset))
-            parts_y.append(ys @ h)
-            self.alignments_.append((theta, offset.tolist(), h.tolist()))
+            # The offset of eq. 11-12 is the difference of the regions' mean positions. Only
+            # the turn about base z is a symmetry of the arm: shifting a pose moves the arm
+            # and its error does not follow, and with regions sampled alike the offset of 16
+            # poses is mostly sampling noise (tens of mm). So it is applied only on request.
+            offset = X[g, :3].mean(axis=0) - _rotate(Xs, theta, np.zeros(3))[:, :3].mean(axis=0) if self.shift else np.zeros(3)
+            turns.append(theta)
+            offsets.append(offset)
+            backs.append(source_model.predict(_rotate(_rotate(X[g], 0.0, -offset), -theta, np.zeros(3))))
+        # Physics of the turn: errors of the arm turn with joint 1; a base-frame tilt omega
+        # and shift t do not, and add ((I - Rz) omega) x p + (I - Rz) t. Their four
+        # horizontal components are fitted once over every sub-space.
+        rows_a, rows_b = [], []
+        for g, theta, f_src in zip(groups, turns, backs):
+            rz = _rz(theta)
+            rows_a.append(_turn_design(rz, X[g, :3]))
+            rows_b.append((y[g] - f_src @ rz.T).reshape(-1))
+        design, rhs = np.vstack(rows_a), np.concatenate(rows_b)
+        frame = np.linalg.lstsq(design, rhs, rcond=None)[0]  # 240 equations for 4 unknowns: no prior needed
+        parts_X, parts_y = [], []
+        self.alignments_ = []
+        for g, theta, offset, f_src in zip(groups, turns, offsets, backs):
+            rz = _rz(theta)
+            moved = _rotate(Xs, theta, offset)
+            turned_src = f_src @ rz.T + (_turn_design(rz, X[g, :3]) @ frame).reshape(-1, 3)
+            # Label alignment (eq. 13-14): what the turn leaves, a 3x3 map pulled towards the identity.
+            h, ridge = _label_map(turned_src, y[g], precision, self.ridge)
+            labels = ys @ rz.T + (_turn_design(rz, moved[:, :3]) @ frame).reshape(-1, 3)
+            parts_X.append(moved)
+            parts_y.append(labels @ h)
+            self.alignments_.append({"theta_deg": theta, "offset_mm": offset.tolist(), "H": h.tolist(), "ridge": ridge})
         n_src = sum(len(p) for p in parts_X)
         X_all = np.vstack(parts_X + [X])
         y_all = np.vstack(parts_y + [y])
