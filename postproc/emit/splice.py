@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import EmitError
-from ..ir import F_POS, FIELDS, NF, Toolpath
+from ..ir import F_POS, FIELDS, Toolpath
 from . import number_kernel
 
 # Largest rounding error accepted when writing a field (mm for positions, degrees for

@@ -69,7 +69,6 @@ class GcodeParser:
         bulk_starts = bulk.start
         # ---- bulk blocks, vectorised
         nb = len(bulk)
-        rows: dict[str, list] = {k: [] for k in ("offset", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         if nb:
             code_end = bulk.span("code")[1]
             numbers = scan_numbers(text, letter_prefix=True)

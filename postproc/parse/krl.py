@@ -11,7 +11,6 @@ block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np

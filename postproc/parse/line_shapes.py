@@ -251,24 +251,21 @@ def _span_hashes(raw, spans, prime, offset):
 
 
 @njit(cache=True)
-def _same_folded(raw, spans, rep_of_row):
-    ok = np.empty(len(spans), np.bool_)
-    for i in range(len(spans)):
-        r = rep_of_row[i]
-        if r == i:
-            ok[i] = True
-            continue
-        a, ae, b, be = spans[r, 0], spans[r, 1], spans[i, 0], spans[i, 1]
+def same_folded_pairs(raw_a, spans_a, raw_b, spans_b):
+    """Whether span i of raw_a equals span i of raw_b up to case and blanks, for every i."""
+    ok = np.empty(len(spans_a), np.bool_)
+    for i in range(len(spans_a)):
+        a, ae, b, be = spans_a[i, 0], spans_a[i, 1], spans_b[i, 0], spans_b[i, 1]
         same = True
         while True:
-            while a < ae and _fold(raw[a]) == 0:
+            while a < ae and _fold(raw_a[a]) == 0:
                 a += 1
-            while b < be and _fold(raw[b]) == 0:
+            while b < be and _fold(raw_b[b]) == 0:
                 b += 1
             if a == ae or b == be:
                 same = a == ae and b == be
                 break
-            if _fold(raw[a]) != _fold(raw[b]):
+            if _fold(raw_a[a]) != _fold(raw_b[b]):
                 same = False
                 break
             a += 1
@@ -291,7 +288,8 @@ def factorize_spans(text: str, raw: np.ndarray, spans: np.ndarray) -> tuple[np.n
     _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
     inverse = inverse.reshape(-1)
     rep = first[inverse]
-    ok = absent | _same_folded(raw, np.where(absent[:, None], 0, spans), rep)
+    present_spans = np.where(absent[:, None], 0, spans)
+    ok = absent | same_folded_pairs(raw, present_spans[rep], raw, present_spans)
     texts = [None if absent[r] else text[spans[r, 0] : spans[r, 1]] for r in first.tolist()]
     codes = inverse.astype(np.int64)
     # A hash collision (never seen, but possible): those rows get classes of their own.

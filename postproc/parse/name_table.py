@@ -10,34 +10,9 @@ an earlier one, as in the controller.
 from __future__ import annotations
 
 import numpy as np
-from numba import njit
 
 from .common import _ranges
-from .line_shapes import _FNV_OFFSET, _FNV_PRIME, _fold, _span_hashes
-
-
-@njit(cache=True)
-def _same_pairs(raw_a, spans_a, raw_b, spans_b):
-    """Whether span i of raw_a equals span i of raw_b up to case and blanks."""
-    ok = np.empty(len(spans_a), np.bool_)
-    for i in range(len(spans_a)):
-        a, ae, b, be = spans_a[i, 0], spans_a[i, 1], spans_b[i, 0], spans_b[i, 1]
-        same = True
-        while True:
-            while a < ae and _fold(raw_a[a]) == 0:
-                a += 1
-            while b < be and _fold(raw_b[b]) == 0:
-                b += 1
-            if a == ae or b == be:
-                same = a == ae and b == be
-                break
-            if _fold(raw_a[a]) != _fold(raw_b[b]):
-                same = False
-                break
-            a += 1
-            b += 1
-        ok[i] = same
-    return ok
+from .line_shapes import _FNV_OFFSET, _FNV_PRIME, _span_hashes, same_folded_pairs
 
 
 def _encode(names: list[str]) -> tuple[np.ndarray, np.ndarray]:
@@ -100,12 +75,12 @@ class NameTable:
         cand = key_rows[pos]
         same = np.zeros(len(spans), bool)
         rows = np.nonzero(hit)[0]
-        same[rows] = _same_pairs(raw, spans[rows], heap, heap_spans[cand[rows]])
+        same[rows] = same_folded_pairs(raw, spans[rows], heap, heap_spans[cand[rows]])
         out[same] = cand[same]
         # Same hash, different name (a collision): look through that hash's rows, last first.
         for i in np.nonzero(hit & ~same)[0].tolist():
             for r in np.nonzero(hashes == h[i])[0][::-1].tolist():
-                if _same_pairs(raw, spans[i : i + 1], heap, heap_spans[r : r + 1])[0]:
+                if same_folded_pairs(raw, spans[i : i + 1], heap, heap_spans[r : r + 1])[0]:
                     out[i] = r
                     break
         return out
