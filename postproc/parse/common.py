@@ -158,6 +158,9 @@ class Builder:
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in defaults.items():
+            if key in ("offset", "offset_span") and not any(key in b for b in self.blocks):
+                cols[key] = None  # no Offs in this program: 600 bytes a target saved
+                continue
             shape = shapes.get(key, ())
             parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
             if not parts:
