@@ -70,8 +70,7 @@ def main():
         tps = parse_program(small)
         t0 = time.perf_counter()
         for i in range(sub):
-            one = tps.__class__(**{**tps.__dict__, **{k: getattr(tps, k)[i : i + 1] for k in ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame", "resolved", "spans", "scale", "relative", "values", "insert_at", "offset", "offset_span")}, "target_name": tps.target_name[i : i + 1]})
-            compensate(one, model)
+            compensate(tps.take([i]), model)
         loop_rate = sub / (time.perf_counter() - t0)
     s = report.summary()
     rate = args.points / total

@@ -97,6 +97,17 @@ class Toolpath:
     tool_known: np.ndarray = field(repr=False, default=None)  # (T,) False where the program does not define the tool
     notes: tuple[str, ...] = ()
 
+    PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at")
+
+    def take(self, rows) -> "Toolpath":
+        """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""
+        rows = np.asarray(rows)
+        if rows.dtype == bool:
+            rows = np.nonzero(rows)[0]
+        picked = {k: getattr(self, k)[rows] for k in self.PER_TARGET if getattr(self, k) is not None}
+        return replace(self, **picked, target_name=tuple(self.target_name[i] for i in rows.tolist()))
+
     def __len__(self) -> int:
         return self.kind.shape[0]
 

@@ -192,3 +192,14 @@ def test_dialect_sniffing_and_override(tmp_path):
     rapid = tmp_path / "program.txt"
     rapid.write_bytes((CORPUS / "rapid" / "circles.mod").read_bytes())
     assert parse_program(rapid).dialect == "rapid"
+
+
+def test_take_keeps_the_chosen_targets_only(tmp_path):
+    path = tmp_path / "p.src"
+    path.write_text("DEF p( )\nLIN {X 1, Y 2, Z 3, A 0, B 90, C 0}\nLIN {X 4, Y 5, Z 6, A 0, B 90, C 0}\nPTP XP1\nEND\n")
+    tp = parse_program(path)
+    one = tp.take([1])
+    assert len(one) == 1 and one.position.tolist() == [[4.0, 5.0, 6.0]] and one.line.tolist() == [3]
+    assert one.offset is None and one.sources == tp.sources
+    masked = tp.take(np.array([True, False, True]))
+    assert masked.target_name == (tp.target_name[0], tp.target_name[2]) and masked.line.tolist() == [2, 4]
