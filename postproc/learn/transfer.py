@@ -161,10 +161,10 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         frame = np.linalg.lstsq(design, rhs, rcond=None)[0]  # 240 equations for 4 unknowns: no prior needed
         parts_X, parts_y = [], []
         self.alignments_ = []
-        for g, theta, offset, f_src in zip(groups, turns, offsets, backs):
+        for g, theta, offset, f_src, design_g in zip(groups, turns, offsets, backs, rows_a):
             rz = _rz(theta)
             moved = _rotate(Xs, theta, offset)
-            turned_src = f_src @ rz.T + (_turn_design(rz, X[g, :3]) @ frame).reshape(-1, 3)
+            turned_src = f_src @ rz.T + (design_g @ frame).reshape(-1, 3)
             # Label alignment (eq. 13-14): what the turn leaves, a 3x3 map pulled towards the identity.
             h, ridge = _label_map(turned_src, y[g], precision, self.ridge)
             labels = ys @ rz.T + (_turn_design(rz, moved[:, :3]) @ frame).reshape(-1, 3)

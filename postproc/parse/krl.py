@@ -74,6 +74,7 @@ class Symbols:
         self.blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
         self.count = 0
         self._joined: tuple | None = None
+        self._bulk_global: np.ndarray | None = None
 
     def _add_rows(self, values, spans, conf, insert) -> np.ndarray:
         block = (np.asarray(values).reshape(-1, NF), np.asarray(spans).reshape(-1, NF, 3), np.asarray(conf).reshape(-1, 4), np.asarray(insert).reshape(-1, 2))
@@ -91,6 +92,7 @@ class Symbols:
         """Rows whose names are spans of a text's bytes (bulk declarations)."""
         self.bulk.add_spans(raw, name_spans)
         self._bulk_rows.append(self._add_rows(values, spans, conf, insert))
+        self._bulk_global = None
 
     def table(self):
         """values (M, NF), spans (M, NF, 3), conf (M, 4), insert (M, 2) of every row, plus a last row for 'not declared'."""
@@ -101,8 +103,11 @@ class Symbols:
         return self._joined
 
     def _global(self, local: np.ndarray) -> np.ndarray:
-        bulk_rows = np.concatenate(self._bulk_rows + [np.array([self.count])])
-        return bulk_rows[np.minimum(local, len(bulk_rows) - 1)]
+        """Rows of the bulk name table -> rows of the joined table (not declared -> count)."""
+        if self._bulk_global is None:  # joined once: the grammar's lines look names up one by one
+            self._bulk_global = np.concatenate(self._bulk_rows + [np.zeros(1, np.int64)])
+        out = self._bulk_global[np.minimum(local, len(self._bulk_global) - 1)]
+        return np.where(local >= self.bulk.count, self.count, out)
 
     def rows_of_spans(self, raw: np.ndarray, spans: np.ndarray) -> np.ndarray:
         """Row of each named span; ``count`` where the name is not declared."""

@@ -176,8 +176,8 @@ class RapidParser:
             codes, texts = matches.factorize(group)
             return np.array([convert(t) for t in texts], dtype=dtype)[codes]
 
-        tool_idx = per_row("tool", lambda t: self._frames_for([t], self.tools, self.builder.tool_index)[0][0], np.int32)
-        wobj_idx = per_row("wobj", lambda t: self._frames_for([t or "wobj0"], self.wobjs, self.builder.frame_index)[0][0], np.int32)
+        tool_idx = per_row("tool", lambda t: self._frame_index(t, self.tools, self.builder.tool_index), np.int32)
+        wobj_idx = per_row("wobj", lambda t: self._frame_index(t or "wobj0", self.wobjs, self.builder.frame_index), np.int32)
         self.builder.add_block(
             matches.start,
             kind=per_row("mv", lambda t: _MOVE_KIND[t.upper()], np.int8),
@@ -193,17 +193,10 @@ class RapidParser:
             name=names,
         )
 
-    def _frames_for(self, names, table, register):
-        cache: dict[str, tuple[int, bool]] = {}
-        idx = np.zeros(len(names), np.int32)
-        ok = np.ones(len(names), bool)
-        for i, name in enumerate(names):
-            key = name.upper()
-            if key not in cache:
-                transform = table.get(key)
-                cache[key] = (register(name, transform), transform is not None)
-            idx[i], ok[i] = cache[key]
-        return idx, ok
+    @staticmethod
+    def _frame_index(name: str, table: dict, register) -> int:
+        """The builder's index of a tool or work object (its transform, or unknown, from the module's declarations)."""
+        return register(name, table.get(name.upper()))
 
     # ----------------------------------------------------------- slow path
     def _statements(self, skip: np.ndarray):
@@ -413,14 +406,14 @@ class RapidParser:
             zone = literal_number(options["Z"])
         tool = self._text(tool_node.children[0], start)
         wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
-        tool_idx, tool_ok = self._frames_for([tool], self.tools, self.builder.tool_index)
-        wobj_idx, wobj_ok = self._frames_for([wobj], self.wobjs, self.builder.frame_index)
+        tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
+        wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
         for k, tnode in zip(kinds, positional[:n_targets]):
             self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
             (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx[0], frame=wobj_idx[0], resolved=bool(usable), offset_span=self._offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=self._offset_span))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)

@@ -17,8 +17,8 @@ from numba import njit
 WORD = np.array([chr(c).isalnum() or chr(c) in "_$." for c in range(256)], dtype=np.bool_)
 _POW10 = np.array([10.0**k for k in range(23)])  # all exact in binary64
 
-_INVALID = 2  # status: not a number Python's float accepts -> NaN
-_SLOW = 1  # status: valid but outside the fast path -> Python float()
+INVALID = 2  # status: not a number Python's float accepts -> NaN
+SLOW = 1  # status: valid but outside the fast path -> Python float()
 
 
 @njit(cache=True, inline="always")
@@ -84,13 +84,13 @@ def _value(raw, s, e, pow10):
                     scale += 1
         elif c == 46:
             if seen_point:
-                return np.nan, _INVALID
+                return np.nan, INVALID
             seen_point = True
         else:
-            return np.nan, _INVALID
+            return np.nan, INVALID
         pos += 1
     if not any_digit:
-        return np.nan, _INVALID
+        return np.nan, INVALID
     exponent = 0
     if pos < e:  # an exponent
         pos += 1
@@ -99,11 +99,11 @@ def _value(raw, s, e, pow10):
             exp_neg = raw[pos] == 45
             pos += 1
         if pos >= e:
-            return np.nan, _INVALID
+            return np.nan, INVALID
         while pos < e:
             c = raw[pos]
             if not _is_digit(c):
-                return np.nan, _INVALID
+                return np.nan, INVALID
             if exponent < 100000:
                 exponent = exponent * 10 + (c - 48)
             pos += 1
@@ -113,7 +113,7 @@ def _value(raw, s, e, pow10):
         return (-0.0 if neg else 0.0), 0
     power = exponent + scale
     if digits > 15 or power > 22 or power < -22:
-        return np.nan, _SLOW
+        return np.nan, SLOW
     value = float(mant)
     value = value * pow10[power] if power >= 0 else value / pow10[-power]
     return (-value if neg else value), 0
@@ -191,6 +191,3 @@ def prev_nonblank(raw: np.ndarray, positions: np.ndarray) -> np.ndarray:
     """For each position, the nearest index at or before it that is not a blank (0 if none)."""
     return _prev_nonblank(raw, np.maximum(np.asarray(positions, dtype=np.int64), 0))
 
-
-SLOW = _SLOW
-INVALID = _INVALID
