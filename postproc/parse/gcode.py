@@ -37,6 +37,7 @@ for _c, _i in _AX.items():
     _LETTER_CODE[ord(_c.lower())] = _i
 _BULK_MODES = {"0": 0.0, "1": 1.0, "2": 2.0, "3": 3.0, "00": 0.0, "01": 1.0, "02": 2.0, "03": 3.0}
 _MOTION_KIND = {0: Kind.RAPID, 1: Kind.LINEAR, 2: Kind.ARC_CW, 3: Kind.ARC_CCW}
+_MOTION_KIND_CODES = np.array([_MOTION_KIND[c] for c in range(4)], dtype=np.int8)
 _NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
 _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
 
@@ -394,11 +395,12 @@ class GcodeParser:
         if active.any():
             self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
         # G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre.
-        axis_rows = (tlo[rows] == 43.5) & ~np.isnan(values[rows][:, [_AX["I"], _AX["J"], _AX["K"]]]).any(axis=1)
-        for f_ir, letter in ((3, "I"), (4, "J"), (5, "K")):
-            k = _AX[letter]
-            ir_values[axis_rows, f_ir] = values[rows][axis_rows, k]
-            sp = t["spans"][rows][axis_rows, k]
+        ijk = [_AX["I"], _AX["J"], _AX["K"]]
+        axis_rows = (tlo[rows] == 43.5) & ~np.isnan(values[rows[:, None], ijk]).any(axis=1)
+        axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
+        for f_ir, k in zip((3, 4, 5), ijk):
+            ir_values[axis_rows, f_ir] = values[axis_at, k]
+            sp = t["spans"][axis_at, k]
             have = sp[:, 0] >= 0
             idx = np.nonzero(axis_rows)[0][have]
             ir_spans[idx, f_ir, 0] = 0
@@ -411,7 +413,7 @@ class GcodeParser:
         ends = t["code_end"][rows]
         self.builder.add_block(
             offsets,
-            kind=np.array([_MOTION_KIND[c] for c in motion_rows], dtype=np.int8),
+            kind=_MOTION_KIND_CODES[motion_rows],
             line=self.lines.line(offsets),
             values=ir_values,
             spans=ir_spans,
