@@ -18,7 +18,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import __version__
-from .errors import InputError, JobError, PostprocError
+from .errors import InputError, JobError, OutputError, PostprocError
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik
@@ -185,10 +185,40 @@ def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
             out.print(f"  {name}: {why}", highlight=False)
 
 
-def _load_measurements(path: Path):
-    from .measurements import read_measurements
+def _load_measurements(path: Path, robot=None, drop_invalid: bool = False):
+    """Read a measurement set; with a robot, rows beyond its joint limits are an error
+    (or, with --drop-invalid, dropped and listed on stderr)."""
+    from .measurements import check_joint_limits, read_measurements
 
-    return read_measurements(path)
+    data = read_measurements(path)
+    if robot is None:
+        return data
+    # Limits a robot file marks as estimates are not grounds to refuse measured data:
+    # rows beyond them are listed as warnings and kept.
+    enforce = not robot.estimates.get("limits", False)
+    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid, enforce=enforce)
+    if dropped and not enforce:
+        err.print(f"warning: {path}: {len(dropped)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; kept (first: {dropped[0]})")
+        dropped = []
+    for message in dropped:
+        err.print(f"dropped: {path}, {message}")
+    if dropped and len(data) == 0:
+        raise InputError(f"{path}: every row is outside the robot's joint limits; nothing left to use")
+    return data
+
+
+_DROP_INVALID_HELP = "Drop (and list) rows whose joints are outside the robot's limits instead of stopping."
+
+
+def _check_output_folder(path: Optional[Path], option: str) -> None:
+    """Fail before any computation when an output cannot be written where asked."""
+    if path is None or str(path) == "-":
+        return
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputError(f"{option} {path}: folder {folder} does not exist")
+    if path.is_dir():
+        raise OutputError(f"{option} {path}: is a folder, expected a file name")
 
 
 @app.command("fit")
@@ -205,6 +235,7 @@ def fit_cmd(
     loss: str = typer.Option("linear", "--loss", help="linear, soft_l1, huber or cauchy (robust to outliers)."),
     cv: int = typer.Option(5, "--cv", help="Folds of cross-validation (0 to skip)."),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Identify an error model from measurements and write MODEL.json."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -237,7 +268,8 @@ def fit_cmd(
         if robot is None or tool is None:
             raise InputError("fit needs --robot and --tool (or --from MODEL.json)")
         robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
-    data = _load_measurements(meas)
+    _check_output_folder(output, "-o")
+    data = _load_measurements(meas, robot_model, drop_invalid)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("fitting", total=None)
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=lambda msg: bar.update(task, description=msg))
@@ -256,6 +288,21 @@ def fit_cmd(
     out.print(f"model written to {output}", highlight=False)
 
 
+# A rigid 6-DOF registration needs three points that span a plane; a handful more makes
+# it an estimate rather than an interpolation of noise.
+_MIN_REGISTRATION_ROWS = 6
+
+
+def _check_registrable(path: Path, data) -> None:
+    """--reregister fits 6 degrees of freedom: refuse sets that cannot determine them."""
+    if len(data) < _MIN_REGISTRATION_ROWS:
+        raise InputError(f"{path}: --reregister fits the 6-DOF tracker frame and needs at least {_MIN_REGISTRATION_ROWS} rows, the set has {len(data)}")
+    centred = data.measured_mm - data.measured_mm.mean(axis=0)
+    spread = np.linalg.svd(centred, compute_uv=False)
+    if spread[1] < 1.0:
+        raise InputError(f"{path}: --reregister needs measured points that span a plane; these lie on a line (second singular value {spread[1]:.3g} mm)")
+
+
 @app.command("evaluate")
 @handles_errors
 def evaluate_cmd(
@@ -263,14 +310,16 @@ def evaluate_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV."),
     json_out: bool = typer.Option(False, "--json", help="Print {n, rms_mm, mean_mm, max_mm}."),
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Position error of a model on a measurement set."""
     from .identify import Stats, residuals
     from .model_io import load_model
 
     error_model, _ = load_model(model)
-    data = _load_measurements(meas)
+    data = _load_measurements(meas, error_model.robot, drop_invalid)
     if reregister:
+        _check_registrable(meas, data)
         from .identify import refit_base
 
         error_model = refit_base(error_model, data)
@@ -295,6 +344,7 @@ def diagnose_cmd(
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (sets the noise floor)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds."),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Where the model fails and which effect is missing."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -305,8 +355,9 @@ def diagnose_cmd(
 
     if folds < 2:
         raise InputError("--folds must be at least 2")
+    _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
-    data = _load_measurements(meas)
+    data = _load_measurements(meas, error_model.robot, drop_invalid)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
         task = bar.add_task("diagnosing", total=None)
         result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg))
@@ -354,6 +405,7 @@ def ladder_cmd(
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
     json_out: bool = typer.Option(False, "--json"),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -362,8 +414,10 @@ def ladder_cmd(
     from .effects import _split_top_level, parse_effects
 
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
-    data = _load_measurements(meas)
-    val = _load_measurements(validation) if validation is not None else None
+    _check_output_folder(plot, "--plot")
+    _check_output_folder(report, "--report")
+    data = _load_measurements(meas, robot_model, drop_invalid)
+    val = _load_measurements(validation, robot_model, drop_invalid) if validation is not None else None
     steps = None
     if effects is not None:
         steps = _split_top_level(effects)
@@ -377,8 +431,13 @@ def ladder_cmd(
 
         fig = ladder_chart(rows, floor)
         tmp = plot.with_name(f".{plot.name}.tmp.png")
-        fig.savefig(tmp, dpi=110)
-        tmp.replace(plot)
+        try:
+            fig.savefig(tmp, dpi=110)
+            tmp.replace(plot)
+        except OSError as exc:
+            raise OutputError(f"--plot {plot}: cannot write ({exc.strerror})") from None
+        finally:
+            tmp.unlink(missing_ok=True)
     if report is not None:
         from .measurements import write_text_atomic
         from .report.html import ladder_report

@@ -69,6 +69,8 @@ def load_model(path: str | Path) -> tuple[ErrorModel, dict[str, Any]]:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise ModelFileError(f"{path}: cannot read model file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelFileError(f"{path}: not a model file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
     except json.JSONDecodeError as exc:
         raise ModelFileError(f"{path}, line {exc.lineno}, column {exc.colno}: not valid JSON ({exc.msg})") from None
     return model_from_document(doc, str(path)), doc

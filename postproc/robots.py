@@ -93,7 +93,12 @@ def load_robot(name_or_path: str | Path) -> RobotModel:
     if candidate.suffix == ".toml" or candidate.exists():
         if not candidate.is_file():
             raise UnknownRobotError(f"{candidate}: robot file not found")
-        text = candidate.read_text(encoding="utf-8")
+        try:
+            text = candidate.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise RobotFileError(candidate, "-", f"not a robot file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
+        except OSError as exc:
+            raise UnknownRobotError(f"{candidate}: cannot read robot file ({exc.strerror})") from None
         return parse_robot_toml(text, str(candidate))
     name = str(name_or_path)
     resource = resources.files("postproc.robot_files") / f"{name}.toml"
