@@ -121,3 +121,60 @@ def _unwrap_from_anchors(raw, anchors, last):
     jump[1:] = np.abs(steps[1:]).max(axis=1) > MAX_STEP_DEG
     jump &= ~anchors
     return q, jump
+
+
+SINGULAR_DEG = 2.0  # within this many degrees of a wrist or elbow singularity
+SHOULDER_MM = 20.0  # wrist centre closer than this to axis 1
+
+
+def near_singular(robot, q_deg: np.ndarray) -> np.ndarray:
+    """True where joints q (N, 6) are within SINGULAR_DEG of the wrist or elbow singularity,
+    or the wrist centre within SHOULDER_MM of axis 1 (the shoulder singularity)."""
+    p = robot.opw
+    phi = np.deg2rad(p.signs * q_deg - p.offsets_deg)
+    limit = np.sin(np.deg2rad(SINGULAR_DEG))
+    wrist = np.abs(np.sin(phi[:, 4])) < limit
+    elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < limit
+    radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
+    return wrist | elbow | (np.abs(radial) < SHOULDER_MM)
+
+
+def interpolate_poses(start: np.ndarray, end: np.ndarray, fractions: np.ndarray) -> np.ndarray:
+    """Poses along straight segments (M, 4, 4) -> (M, K, 4, 4): position linear, orientation
+    by the shortest rotation (slerp), as controllers interpolate LIN / MoveL."""
+    from scipy.spatial.transform import Rotation
+
+    m, k = len(start), len(fractions)
+    rel = Rotation.from_matrix(np.einsum("nji,njk->nik", start[:, :3, :3], end[:, :3, :3])).as_rotvec()
+    turn = Rotation.from_rotvec((rel[:, None, :] * fractions[None, :, None]).reshape(-1, 3)).as_matrix().reshape(m, k, 3, 3)
+    out = np.zeros((m, k, 4, 4))
+    out[..., :3, :3] = np.einsum("nij,nkjl->nkil", start[:, :3, :3], turn)
+    out[..., :3, 3] = start[:, None, :3, 3] + fractions[None, :, None] * (end[:, None, :3, 3] - start[:, None, :3, 3])
+    out[..., 3, 3] = 1.0
+    return out
+
+
+def check_linear_segments(robot, start_flange, end_flange, branch, q_start, samples: int = 16) -> np.ndarray:
+    """Why each straight segment (flange poses start -> end, M of them) cannot be driven on
+    its branch by the nominal controller: 0 fine, 1 leaves reach or the limits, 2 passes
+    near a singularity, 3 flips (a joint jumps > MAX_STEP_DEG between samples).
+
+    q_start (M, 6): the joints at each segment's start; branch (M,): the branch carried."""
+    fractions = np.linspace(0.0, 1.0, samples + 2)[1:]
+    poses = interpolate_poses(np.asarray(start_flange), np.asarray(end_flange), fractions)
+    m = len(poses)
+    sols = kin.ik(robot, poses.reshape(-1, 4, 4)).reshape(m, len(fractions), 8, 6)
+    q = sols[np.arange(m)[:, None], np.arange(len(fractions))[None, :], np.maximum(branch, 0)[:, None]]
+    path = np.concatenate([np.asarray(q_start, dtype=float)[:, None, :], q], axis=1)
+    steps = (np.diff(path, axis=1) + 180.0) % 360.0 - 180.0
+    unwrapped = path[:, :1] + np.concatenate([np.zeros((m, 1, 6)), np.cumsum(steps, axis=1)], axis=1)
+    missing = np.isnan(q).any(axis=(1, 2)) | (branch < 0)
+    flat = np.nan_to_num(unwrapped[:, 1:].reshape(-1, 6))
+    outside = ~kin.within_limits(robot, flat).reshape(m, -1).all(axis=1)
+    singular = near_singular(robot, flat).reshape(m, -1).any(axis=1)
+    flip = np.nan_to_num(np.abs(steps)).max(axis=(1, 2)) > MAX_STEP_DEG
+    reason = np.zeros(m, dtype=int)
+    reason[flip] = 3
+    reason[singular] = 2
+    reason[missing | outside] = 1
+    return reason

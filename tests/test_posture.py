@@ -85,3 +85,38 @@ def test_a_flip_between_targets_is_not_ok(robot):
     anchor[0] = True
     got = carry(robot, _sols(robot, q), anchor, np.where(anchor[:, None], q, np.nan))
     assert not got.ok.all()
+
+
+def _flanges(robot, q):
+    return kin.fk(robot, q)
+
+
+def test_straight_segments_between_good_targets_pass(robot):
+    from postproc.posture import check_linear_segments
+
+    q = _path([0.0, -60.0, 40.0, 20.0, 40.0, 10.0], [1.0, 0.5, -0.5, 0.5, 0.5, 1.0], 6)
+    f = _flanges(robot, q)
+    reason = check_linear_segments(robot, f[:-1], f[1:], branch_of(robot, q[1:]), q[:-1])
+    assert (reason == 0).all()
+
+
+def test_a_segment_through_the_wrist_singularity_is_flagged(robot):
+    """A5 = +5 then -5: both end points are reachable, the straight line between them passes
+    A5 = 0 (on the carried branch the wrist flips there)."""
+    from postproc.posture import check_linear_segments
+
+    a = np.array([[0.0, -60.0, 40.0, 30.0, 5.0, 0.0]])
+    b = np.array([[0.0, -60.0, 40.0, 30.0, -5.0, 0.0]])
+    reason = check_linear_segments(robot, _flanges(robot, a), _flanges(robot, b), branch_of(robot, a), a)
+    assert reason[0] in (2, 3)
+
+
+def test_interpolation_hits_both_ends(robot):
+    from postproc.posture import interpolate_poses
+
+    q = _path([0.0, -60.0, 40.0, 20.0, 40.0, 10.0], [10.0, 5.0, -5.0, 30.0, 20.0, 40.0], 2)
+    f = _flanges(robot, q)
+    poses = interpolate_poses(f[:1], f[1:], np.array([0.0, 0.5, 1.0]))
+    np.testing.assert_allclose(poses[0, 0], f[0], atol=1e-9)
+    np.testing.assert_allclose(poses[0, 2], f[1], atol=1e-9)
+    np.testing.assert_allclose(poses[0, 1, :3, 3], (f[0, :3, 3] + f[1, :3, 3]) / 2, atol=1e-9)
