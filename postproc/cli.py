@@ -504,8 +504,9 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 def compensate_cmd(
     program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
-    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output (refused when targets live in another file). KRL: its .dat (and a changed $config.dat) is written beside it."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    in_place: bool = typer.Option(False, "--in-place", help="Allow OUT to be the program's own file(s); each replaced file is kept as NAME.bak."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
     max_iter: int = typer.Option(25, "--max-iter"),
     scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
@@ -521,7 +522,7 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .programs import emit_texts, parse_program, write_texts
+    from .programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, refuse_stdout, write_set
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
@@ -534,6 +535,10 @@ def compensate_cmd(
     else:
         tp = parse_program(Path(program), dialect)
     to_stdout = output == "-"
+    if to_stdout:
+        refuse_stdout(tp)
+    else:  # the program's own files, before the work (a changed $config.dat is checked again below)
+        refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
     log = err if to_stdout else out
     forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
@@ -557,12 +562,14 @@ def compensate_cmd(
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
     texts = emit_texts(tp, new)
+    check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])  # the new text reads back as the compensated targets
     if to_stdout:
         sys.stdout.buffer.write(texts[0].encode("latin-1"))
         sys.stdout.buffer.flush()
     else:
-        outputs = [Path(output)] + [Path(output).with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
-        write_texts(texts[: len(outputs)], outputs)
+        files = files_for(tp, texts, output)
+        refuse_overwrite(tp, files, in_place)
+        write_set(files, backup=in_place)
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -647,12 +654,12 @@ def convert_cmd(
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
 ):
     """Write a new robot program with every target of another program."""
-    from .emit.writer import write_program
-    from .programs import parse_program, write_texts
+    from .dialects import get
+    from .programs import parse_program, write_program, write_texts
 
+    outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
-    outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

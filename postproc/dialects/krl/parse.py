@@ -11,18 +11,17 @@ block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 import numpy as np
 from lark import Token, Tree
 
-from ..frames import abc_to_matrix, make_transform
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from . import scan_kernel
-from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
-from .grammar import grammar, literal_number
-from .line_shapes import LineShapes
-from .name_table import NameTable
+from ...frames import abc_to_matrix, make_transform
+from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...parse import scan_kernel
+from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
+from ...parse.grammar import grammar, literal_number
+from ...parse.line_shapes import LineShapes
+from ...parse.name_table import NameTable
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -194,8 +193,9 @@ def _frame_of(values: np.ndarray) -> np.ndarray:
 
 
 class KrlParser:
-    def __init__(self, src: SourceDoc, dat: SourceDoc | None = None, config: SourceDoc | None = None):
-        docs = [d for d in (src, dat, config) if d is not None]
+    """Parses a program's files: the program first, then its data lists (.dat, $config.dat)."""
+
+    def __init__(self, docs: list[SourceDoc]):
         self.docs = [_Doc(d, i) for i, d in enumerate(docs)]
         self.builder = Builder("krl", "abc", docs)
         self.symbols = Symbols()
@@ -424,7 +424,7 @@ class KrlParser:
     def _finish(self) -> Toolpath:
         from dataclasses import replace
 
-        from ..frames import abc_to_quat_wxyz
+        from ...frames import abc_to_quat_wxyz
 
         if self.slow_targets:
             rows = self.slow_targets
@@ -528,16 +528,3 @@ def _first_column(node) -> int:
     if isinstance(node, Token):
         return node.column
     return node.meta.column if not node.meta.empty else 1
-
-
-def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | None = None, config: str | Path | None = None) -> Toolpath:
-    """Parse a KRL .src; its .dat (same name) and a $config.dat in the same folder are read when present."""
-    path = Path(path)
-    src = SourceDoc(str(path), text.decode("latin-1"), "src") if text is not None else SourceDoc.read(path, "src")
-    dat_doc = None
-    dat_path = Path(dat) if dat is not None else path.with_suffix(".dat")
-    if str(path) != "-" and dat_path.is_file() and dat_path != path:
-        dat_doc = SourceDoc.read(dat_path, "dat")
-    config_path = Path(config) if config is not None else path.parent / "$config.dat"
-    config_doc = SourceDoc.read(config_path, "config") if str(path) != "-" and config_path.is_file() else None
-    return KrlParser(src, dat_doc, config_doc).parse()

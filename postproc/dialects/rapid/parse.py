@@ -17,11 +17,11 @@ import numpy as np
 from lark import Token, Tree
 from numba import njit
 
-from ..frames import make_transform, quat_wxyz_to_matrix
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar, literal_number
-from .line_shapes import LineShapes
+from ...frames import make_transform, quat_wxyz_to_matrix
+from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.grammar import grammar, literal_number
+from ...parse.line_shapes import LineShapes
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -40,6 +40,10 @@ RE_MOVE_LIT = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<lit>{RT}){ARGS}{TAI
 RE_MOVE_NAME = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<name>{NAME}(?:\{{{W}\d+{W}\}})?){ARGS}{TAIL}", FLAGS)
 RE_DECL = re.compile(rf"^{W}(?:LOCAL[ \t]+)?(?:TASK[ \t]+)?(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(?P<name>{NAME}){W}:={W}(?P<lit>{RT}){TAIL}", FLAGS)
 RE_COMMENT = re.compile(r'("[^"\n]*")|(![^\n]*)')
+
+# An external axis the robot does not have is written 9E9; anything this large is 'none'.
+NO_AXIS_TEXT = "9E9"
+NO_AXIS_ABOVE = 8.9e9
 
 # Where the 17 numbers of a robtarget go: x y z, q1..q4, cf1 cf4 cf6 cfx, e1..e6.
 _RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
@@ -90,12 +94,21 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields):
             v = num_value[i]
             if f < 0:
                 conf[r, -f - 1] = v
-            elif not (f >= 13 and abs(v) >= 8.9e9):
+            elif not (f >= 13 and abs(v) >= NO_AXIS_ABOVE):
                 values[r, f] = v
                 spans[r, f, 0] = 0
                 spans[r, f, 1] = num_start[i]
                 spans[r, f, 2] = num_end[i]
     return values, spans, conf
+
+
+def _drop_absent_axes(values: np.ndarray, spans: np.ndarray) -> None:
+    """External axes written 9E9 (none) become NaN without a span (in place); the same
+    rule as the bulk kernel's."""
+    ext = values[F_EXT]
+    absent = ~(np.abs(ext) < NO_AXIS_ABOVE)  # (a number the scanner could not read too)
+    ext[absent] = np.nan
+    spans[F_EXT][absent] = -1
 
 
 def _pose(numbers7: np.ndarray) -> np.ndarray:
@@ -130,8 +143,7 @@ class RapidParser:
                 spans[f] = (0, self.numbers.start[sl][k], self.numbers.end[sl][k])
             else:
                 conf[-f - 1] = vals[k]
-        values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])  # 9E9: no axis
-        spans[13:19][np.isnan(values[13:19])] = -1
+        _drop_absent_axes(values, spans)
         return values, spans, conf
 
     def _bulk_literals(self, starts: np.ndarray):
@@ -298,9 +310,7 @@ class RapidParser:
             lit = self._literal(s, e, _JT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"jointtarget {name} needs 12 numbers")
-            values, spans, conf = lit
-            values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])
-            self.points[name.upper()] = (values, spans, conf)
+            self.points[name.upper()] = lit
         elif dtype in ("tooldata", "wobjdata"):
             text = self.code[s:e].upper()
             holds = text.lstrip("[ \t").startswith("TRUE")
@@ -361,7 +371,7 @@ class RapidParser:
         """RelTool(p, dx, dy, dz [Rx] [Ry] [Rz]): offset and turn in the tool frame of p.
 
         The result is reported but not editable (its numbers mix through p's rotation)."""
-        from ..frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
+        from ...frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
 
         args = node.children[1].children if len(node.children) > 1 else []
         if len(args) < 4:
@@ -425,7 +435,3 @@ class RapidParser:
             order = cols.pop("order")
             self.builder.add_block(order, line=self.lines.line(order), **cols)
         return self.builder.build()
-
-
-def parse_rapid(path: str, data: bytes) -> Toolpath:
-    return RapidParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()

@@ -17,12 +17,12 @@ import re
 import numpy as np
 from lark import Token, Tree
 
-from ..frames import make_transform
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from . import scan_kernel
-from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar
-from .line_shapes import LineShapes
+from ...frames import make_transform
+from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...parse import scan_kernel
+from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.grammar import grammar
+from ...parse.line_shapes import LineShapes
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -76,7 +76,7 @@ class GcodeParser:
             lo = np.searchsorted(numbers.start, bulk_starts)
             hi = np.searchsorted(numbers.start, code_end)
             counts = hi - lo
-            from .common import _ranges
+            from ...parse.common import _ranges
 
             idx = _ranges(lo, hi)
             row = np.repeat(np.arange(nb), counts)
@@ -280,7 +280,7 @@ class GcodeParser:
 
     def _tilt(self, values, start) -> None:
         """G68.2 X Y Z I J K (P0: Euler ZXZ): a tilted working plane until G69."""
-        from ..frames import rot_x, rot_z
+        from ...frames import rot_x, rot_z
 
         line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
         p = re.search(r"[Pp][ \t]*(\d+)", line)
@@ -434,7 +434,7 @@ class GcodeParser:
         ext[:, :3] = absolute[rows, 3:6]
         orientation = np.full((m, 4), np.nan)
         if axis_rows.any():
-            from ..frames import axis_to_quat_wxyz
+            from ...frames import axis_to_quat_wxyz
 
             orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
         return replace(tp, position=position, ext=ext, orientation=orientation)
@@ -463,7 +463,3 @@ def _token_span(node) -> tuple[int, int]:
         return node.meta.start_pos, inner_end
     tok = node.children[0]
     return tok.start_pos, tok.end_pos
-
-
-def parse_gcode(path: str, data: bytes) -> Toolpath:
-    return GcodeParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()
