@@ -255,7 +255,6 @@ class KrlParser:
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
             if not tree.children:
                 continue
-            self._line_start = start  # positions inside the tree are relative to the line
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
@@ -293,7 +292,7 @@ class KrlParser:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
             return
         if kind == "decl":
-            self._decl(d, node)
+            self._decl(d, node, start)
             return
         if kind == "assignment":
             self._assignment(d, node, start)
@@ -305,54 +304,55 @@ class KrlParser:
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
 
     # ------------------------------------------------------------ semantics
-    def _decl(self, d: _Doc, node: Tree) -> None:
+    def _decl(self, d: _Doc, node: Tree, start: int) -> None:
         for decl in node.children:
             if isinstance(decl, Tree) and decl.data == "declarator" and len(decl.children) >= 2:
                 value = decl.children[-1]
                 if isinstance(value, Tree) and value.data == "aggregate":
-                    v, sp, c, ins = self._agg(d, value)
+                    v, sp, c, ins = self._agg(d, value, start)
                     self.symbols.add_many([str(decl.children[0])], [v], [sp], [c], [ins])
 
-    def _agg(self, d: _Doc, node: Tree):
-        s, e = node.meta.start_pos, node.meta.end_pos
-        v, sp, c, ins = d.aggregates(np.array([self._line_start + s]), np.array([self._line_start + e]))
+    def _agg(self, d: _Doc, node: Tree, start: int):
+        """An aggregate of the statement at ``start`` (tree positions are relative to it)."""
+        s, e = start + node.meta.start_pos, start + node.meta.end_pos
+        v, sp, c, ins = d.aggregates(np.array([s]), np.array([e]))
         # Status and Turn may be written as bits ('B010') or hex ('H22').
-        for key, base, digits in re.findall(r"\b([ST])[ \t]+'([BbHh])([0-9A-Fa-f]+)'", d.text[self._line_start + s : self._line_start + e]):
+        for key, base, digits in re.findall(r"\b([ST])[ \t]+'([BbHh])([0-9A-Fa-f]+)'", d.text[s:e]):
             c[0][0 if key.upper() == "S" else 1] = int(digits, 2 if base.upper() == "B" else 16)
         return v[0], sp[0], c[0], ins[0]
 
-    def _eval_frame(self, d: _Doc, node) -> tuple[np.ndarray, bool, str]:
+    def _eval_frame(self, d: _Doc, node, start: int) -> tuple[np.ndarray, bool, str]:
         """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
         if isinstance(node, Tree) and node.data == "geo":
             total, ok, names = np.eye(4), True, []
             for part in node.children:
-                t, r, n = self._eval_frame(d, part)
+                t, r, n = self._eval_frame(d, part, start)
                 total, ok = total @ t, ok and r
                 names.append(n)
             return total, ok, ":".join(names)
         if isinstance(node, Tree) and node.data == "aggregate":
-            v, _, _, _ = self._agg(d, node)
-            return _frame_of(v), True, self._text(d, node)
-        name = self._text(d, node)
+            v, _, _, _ = self._agg(d, node, start)
+            return _frame_of(v), True, self._text(d, node, start)
+        name = self._text(d, node, start)
         found = self.symbols.get(name)
         if found is None:
             return np.eye(4), False, name
         return _frame_of(found[0]), True, name
 
-    def _text(self, d: _Doc, node) -> str:
+    def _text(self, d: _Doc, node, start: int) -> str:
         s, e = _node_span(node)
-        return d.text[self._line_start + s : self._line_start + e].strip()
+        return d.text[start + s : start + e].strip()
 
     def _assignment(self, d: _Doc, node: Tree, start: int) -> None:
-        lhs = self._text(d, node.children[0]).upper().replace(" ", "")
+        lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
         if isinstance(rhs, Tree) and rhs.data == "aggregate":
-            v, sp, c, ins = self._agg(d, rhs)
+            v, sp, c, ins = self._agg(d, rhs, start)
             self.symbols.add_many([lhs], [v], [sp], [c], [ins])
         if d.index != 0:
             return
         if lhs in ("$BASE", "$TOOL"):
-            transform, ok, name = self._eval_frame(d, rhs)
+            transform, ok, name = self._eval_frame(d, rhs, start)
             self.events.append((start, lhs, (name, transform, ok)))
         elif lhs == "$VEL.CP":
             self.events.append((start, "vel", literal_number(rhs)))
@@ -374,10 +374,10 @@ class KrlParser:
         for k, tnode in zip(kinds, targets):
             expr = tnode.children[0]
             if isinstance(expr, Tree) and expr.data == "aggregate":
-                v, sp, c, ins = self._agg(d, expr)
+                v, sp, c, ins = self._agg(d, expr, start)
                 name = ""
             else:
-                name = self._text(d, expr)
+                name = self._text(d, expr, start)
                 found = self.symbols.get(name)
                 if found is None:
                     v, sp, c, ins = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.array([-1, -1])
@@ -385,8 +385,6 @@ class KrlParser:
                 else:
                     v, sp, c, ins = found
             self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
-
-    _line_start = 0
 
     def _bulk_moves(self, src: _Doc, inline, named) -> None:
         for moves in (inline, named):

@@ -111,6 +111,10 @@ def _drop_absent_axes(values: np.ndarray, spans: np.ndarray) -> None:
     spans[F_EXT][absent] = -1
 
 
+def _no_spans() -> np.ndarray:
+    return np.full((NF, 3), -1, dtype=np.int64)
+
+
 def _pose(numbers7: np.ndarray) -> np.ndarray:
     return make_transform(quat_wxyz_to_matrix(numbers7[3:7][None])[0], numbers7[:3])
 
@@ -325,23 +329,26 @@ class RapidParser:
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
 
     def _target(self, node, start: int, joint: bool = False):
-        """values, spans, conf, offset, name of a target expression; None values where unknown."""
-        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF))
+        """(values, spans, conf, offset, offset_span), name of a target expression; NaN values where unknown.
+
+        ``offset`` and ``offset_span``: for Offs(p, dx, dy, dz) the value of p's numbers and
+        where they are written (the IR value is p + the offset written in the Offs call)."""
+        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF), _no_spans())
         if isinstance(node, Tree) and node.data == "aggregate":
             s, e = self._span(node, start)
             lit = self._literal(s, e, _JT_FIELDS if joint else _RT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"a {'jointtarget' if joint else 'robtarget'} literal needs {12 if joint else 17} numbers")
-            return (*lit, np.zeros(NF)), ""
+            return (*lit, np.zeros(NF), _no_spans()), ""
         s, e = self._span(node, start)
         text = re.sub(r"\s+", "", self.doc.text[s:e])
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "OFFS":
             args = node.children[1].children if len(node.children) > 1 else []
             base_expr = args[0].children[0] if args else None
-            (values, spans, conf, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
+            (values, spans, conf, _, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
             values, spans = values.copy(), spans.copy()
             offset = np.zeros(NF)
-            offset_span = np.full((NF, 3), -1, dtype=np.int64)
+            offset_span = _no_spans()
             for k in range(3):
                 arg = args[k + 1].children[0] if len(args) > k + 1 else None
                 a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
@@ -356,14 +363,13 @@ class RapidParser:
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
                     spans[k] = -1
-            self._offset_span = offset_span
-            return (values, spans, conf, offset), text
+            return (values, spans, conf, offset, offset_span), text
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
             return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
             found = self.points.get(text.upper())
             if found is not None:
-                return (*found, np.zeros(NF)), text
+                return (*found, np.zeros(NF), _no_spans()), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
         return empty, text
 
@@ -376,7 +382,7 @@ class RapidParser:
         args = node.children[1].children if len(node.children) > 1 else []
         if len(args) < 4:
             return empty
-        (values, _, conf, _), _ = self._target(args[0].children[0], start)
+        (values, _, conf, _, _), _ = self._target(args[0].children[0], start)
         deltas = [literal_number(a.children[0]) for a in args[1:4]]
         turns = {"RX": 0.0, "RY": 0.0, "RZ": 0.0}
         for a in args:
@@ -390,7 +396,7 @@ class RapidParser:
         out[:3] = values[:3] + rot @ np.array(deltas)
         turned = rot @ rot_x(np.radians(turns["RX"])) @ rot_y(np.radians(turns["RY"])) @ rot_z(np.radians(turns["RZ"]))
         out[3:7] = matrix_to_quat_wxyz(turned[None])[0]
-        return out, np.full((NF, 3), -1, dtype=np.int64), conf, np.zeros(NF)
+        return out, _no_spans(), conf, np.zeros(NF), _no_spans()
 
     def _move(self, node: Tree, start: int) -> None:
         mv = str(node.children[0]).upper()
@@ -419,11 +425,10 @@ class RapidParser:
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
         for k, tnode in zip(kinds, positional[:n_targets]):
-            self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
-            (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
+            (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=self._offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)
