@@ -302,118 +302,36 @@ class GcodeParser:
 
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
+        """The targets of the block table ``t`` (program order) with every modal state applied."""
         n = len(t["offset"])
-
-        def ffill(col, default):
-            has = ~np.isnan(col)
-            idx = np.where(has, np.arange(n), -1)
-            np.maximum.accumulate(idx, out=idx)
-            return np.where(idx >= 0, col[np.maximum(idx, 0)], default)
-
-        motion = ffill(t["motion"], np.nan)
-        units = ffill(t["units"], 21.0)
-        dist = ffill(t["dist"], 90.0)
-        canned = ffill(t["canned"], 0.0)
-        wcs = ffill(t["wcs"], 1.0).astype(int)
-        values = t["values"]
+        motion = _ffill(t["motion"], np.nan)
+        units = _ffill(t["units"], 21.0)
+        dist = _ffill(t["dist"], 90.0)
+        canned = _ffill(t["canned"], 0.0)
         linear_scale = np.where(units == 20.0, 25.4, 1.0)
+        values = t["values"]
         has_axis = ~np.isnan(values[:, :6]).all(axis=1)
         moves = has_axis & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
-        # Absolute positions: an absolute word resets the axis, an incremental one adds.
-        absolute = np.full((n, 6), np.nan)
-        for k in range(6):
-            v = values[:, k] * (linear_scale if k < 3 else 1.0)
-            has = ~np.isnan(v) & (moves | t["g53"])
-            rel = has & (dist == 91.0)
-            reset = has & (dist != 91.0)
-            inc = np.where(rel, v, 0.0)
-            cum = np.cumsum(inc)
-            base = np.where(reset, v - cum, np.nan)
-            known = np.where(reset, np.arange(n), -1)
-            np.maximum.accumulate(known, out=known)
-            base_ff = np.where(known >= 0, base[np.maximum(known, 0)], np.nan)
-            absolute[:, k] = base_ff + cum
+        absolute = _absolute_positions(values, moves | t["g53"], dist, linear_scale)
         rows = np.nonzero(moves)[0]
-        m = len(rows)
-        ir_values = np.full((m, NF), np.nan)
-        ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
-        scale = np.ones((m, NF))
-        field_of = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
-        for k, f in field_of.items():
-            ir_values[:, f] = np.where(~np.isnan(values[rows, k]), absolute[rows, k], np.nan)
-            sp = t["spans"][rows, k]
-            have = sp[:, 0] >= 0
-            ir_spans[have, f, 0] = 0
-            ir_spans[have, f, 1:] = sp[have]
-            if k < 3:
-                scale[:, f] = linear_scale[rows]
-        # Work offsets set by G10 in the program; others are unknown (zero, flagged).
-        frames_known = {}
-        g10 = sorted(self.g10, key=lambda event: event[0])
-        frame_idx = np.zeros(m, np.int32)
+        ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
-        for w in np.unique(wcs[rows]):
-            sel = wcs[rows] == w
-            events = [(o, off) for o, p, off in g10 if p == w]
-            name = f"G{[54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3][w - 1]:g}"
-            if not events:
-                frame_idx[sel] = self.builder.frame_index(name, None)
-                frames_known[name] = False
-                continue
-            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
-            ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
-            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
-        if self.tilts:
-            offs = np.array([o for o, _ in self.tilts])
-            at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
-            for k in np.unique(at[at >= 0]):
-                tilt = self.tilts[k][1]
-                sel = at == k
-                if tilt is None:
-                    continue
-                if isinstance(tilt, str):
-                    resolved[sel] = False
-                    continue
-                for f in np.unique(frame_idx[sel]):
-                    both = sel & (frame_idx == f)
-                    name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
-                    frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
+        frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
+        self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
         if g53.any():
             frame_idx[g53] = self.builder.frame_index("machine", np.eye(4), True)
-        unknown = [name for name, known in frames_known.items() if not known]
-        if unknown:
-            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
-        self.builder.notes.extend(self.notes)
-        # Tool length offsets: the tool number of G43 (its length is in the machine's tool table).
-        tlo = ffill(t["tlo"], 49.0)
-        hnum = ffill(t["h"], np.nan)
-        tool_idx = np.zeros(m, np.int32)
-        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
-        for h in np.unique(hnum[rows][active]):
-            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
-        if active.any():
-            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
-        # G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre.
-        ijk = [_AX["I"], _AX["J"], _AX["K"]]
-        axis_rows = (tlo[rows] == 43.5) & ~np.isnan(values[rows[:, None], ijk]).any(axis=1)
-        axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
-        for f_ir, k in zip((3, 4, 5), ijk):
-            ir_values[axis_rows, f_ir] = values[axis_at, k]
-            sp = t["spans"][axis_at, k]
-            have = sp[:, 0] >= 0
-            idx = np.nonzero(axis_rows)[0][have]
-            ir_spans[idx, f_ir, 0] = 0
-            ir_spans[idx, f_ir, 1:] = sp[have]
+        tlo = _ffill(t["tlo"], 49.0)
+        tool_idx = self._tool_lengths(t, rows, tlo)
+        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans)
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
-        motion_rows = motion[rows].astype(int)
+        self.builder.notes.extend(self.notes)
         offsets = t["offset"][rows]
-        # Insert missing axis words at the end of the block's code (before any comment).
-        ends = t["code_end"][rows]
+        m = len(rows)
         self.builder.add_block(
             offsets,
-            kind=_MOTION_KIND_CODES[motion_rows],
+            kind=_MOTION_KIND_CODES[motion[rows].astype(int)],
             line=self.lines.line(offsets),
             values=ir_values,
             spans=ir_spans,
@@ -422,22 +340,145 @@ class GcodeParser:
             frame=frame_idx,
             tool=tool_idx,
             resolved=resolved,
-            speed=ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
-            insert_at=np.stack([np.zeros(m, np.int64), ends], axis=1),
+            speed=_ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
+            # Missing axis words are inserted at the end of the block's code (before any comment).
+            insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
         )
-        tp = self.builder.build()
-        # Modal axes: a block without X keeps the previous X (already in ``absolute``).
-        from dataclasses import replace
+        return _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
 
-        position = absolute[rows, :3]
-        ext = np.full((m, 6), np.nan)
-        ext[:, :3] = absolute[rows, 3:6]
-        orientation = np.full((m, 4), np.nan)
-        if axis_rows.any():
-            from ...frames import axis_to_quat_wxyz
+    def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
+        """Frame index of each target: its work offset as set by G10 in the program before it;
+        one the program never sets is unknown (identity stands in, flagged)."""
+        unknown = []
+        g10 = sorted(self.g10, key=lambda event: event[0])
+        frame_idx = np.zeros(len(rows), np.int32)
+        for w in np.unique(wcs[rows]):
+            sel = wcs[rows] == w
+            events = [(o, off) for o, p, off in g10 if p == w]
+            name = f"G{_WCS_NAMES[w - 1]:g}"
+            if not events:
+                frame_idx[sel] = self.builder.frame_index(name, None)
+                unknown.append(name)
+                continue
+            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
+            ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
+            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
+        if unknown:
+            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        return frame_idx
 
-            orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
-        return replace(tp, position=position, ext=ext, orientation=orientation)
+    def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
+        """G68.2 tilts each later target's frame (in place) until G69; a tilt that is not
+        evaluated unresolves the targets under it."""
+        if not self.tilts:
+            return
+        offs = np.array([o for o, _ in self.tilts])
+        at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
+        for k in np.unique(at[at >= 0]):
+            tilt = self.tilts[k][1]
+            sel = at == k
+            if tilt is None:
+                continue
+            if isinstance(tilt, str):
+                resolved[sel] = False
+                continue
+            for f in np.unique(frame_idx[sel]):
+                both = sel & (frame_idx == f)
+                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
+                frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
+
+    def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
+        """Tool index of each target: the H number of the active G43 (its length is in the
+        machine's tool table, not the program: an unknown tool)."""
+        hnum = _ffill(t["h"], np.nan)
+        tool_idx = np.zeros(len(rows), np.int32)
+        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
+        for h in np.unique(hnum[rows][active]):
+            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
+        if active.any():
+            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
+        return tool_idx
+
+
+_WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _ffill(col: np.ndarray, default: float) -> np.ndarray:
+    """Modal value of each block: the last one set at or before it, else ``default``."""
+    has = ~np.isnan(col)
+    idx = np.where(has, np.arange(len(col)), -1)
+    np.maximum.accumulate(idx, out=idx)
+    return np.where(idx >= 0, col[np.maximum(idx, 0)], default)
+
+
+def _absolute_positions(values: np.ndarray, counted: np.ndarray, dist: np.ndarray, linear_scale: np.ndarray) -> np.ndarray:
+    """(n, 6) absolute X Y Z A B C of every block (mm, degrees): an absolute word resets
+    the axis, an incremental one (G91) adds to it; only ``counted`` blocks move it."""
+    n = len(values)
+    absolute = np.full((n, 6), np.nan)
+    for k in range(6):
+        v = values[:, k] * (linear_scale if k < 3 else 1.0)
+        has = ~np.isnan(v) & counted
+        rel = has & (dist == 91.0)
+        reset = has & (dist != 91.0)
+        cum = np.cumsum(np.where(rel, v, 0.0))
+        base = np.where(reset, v - cum, np.nan)
+        known = np.where(reset, np.arange(n), -1)
+        np.maximum.accumulate(known, out=known)
+        absolute[:, k] = np.where(known >= 0, base[np.maximum(known, 0)], np.nan) + cum
+    return absolute
+
+
+_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
+
+
+def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: np.ndarray):
+    """IR values (m, NF), spans (m, NF, 3) and scale (m, NF) of the axis words of the blocks ``rows``."""
+    m = len(rows)
+    ir_values = np.full((m, NF), np.nan)
+    ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
+    scale = np.ones((m, NF))
+    for k, f in _IR_FIELD_OF_AXIS.items():
+        ir_values[:, f] = np.where(~np.isnan(t["values"][rows, k]), absolute[rows, k], np.nan)
+        _put_spans(ir_spans, np.arange(m), f, t["spans"][rows, k])
+        if k < 3:
+            scale[:, f] = linear_scale[rows]
+    return ir_values, ir_spans, scale
+
+
+def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarray) -> None:
+    """Spans (start, end) of the one source, -1 where none, into IR field ``field`` of rows ``at``."""
+    have = spans[:, 0] >= 0
+    ir_spans[at[have], field, 0] = 0
+    ir_spans[at[have], field, 1:] = spans[have]
+
+
+def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray:
+    """G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre. Puts
+    them in IR fields o1..o3 (in place); returns the targets that have one."""
+    ijk = [_AX["I"], _AX["J"], _AX["K"]]
+    axis_rows = (tlo[rows] == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
+    axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
+    for f_ir, k in zip((3, 4, 5), ijk):
+        ir_values[axis_rows, f_ir] = t["values"][axis_at, k]
+        _put_spans(ir_spans, np.nonzero(axis_rows)[0], f_ir, t["spans"][axis_at, k])
+    return axis_rows
+
+
+def _with_modal_positions(tp: Toolpath, absolute: np.ndarray, ir_values: np.ndarray, axis_rows: np.ndarray) -> Toolpath:
+    """Positions with modal axes (a block without X keeps the previous X), rotary axes as
+    external axes, and tool-axis orientations."""
+    from dataclasses import replace
+
+    from ...frames import axis_to_quat_wxyz
+
+    m = len(absolute)
+    ext = np.full((m, 6), np.nan)
+    ext[:, :3] = absolute[:, 3:6]
+    orientation = np.full((m, 4), np.nan)
+    if axis_rows.any():
+        orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
+    return replace(tp, position=absolute[:, :3], ext=ext, orientation=orientation)
 
 
 def _code_part(line: str) -> str:
