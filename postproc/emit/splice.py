@@ -23,27 +23,19 @@ MAX_DECIMALS = 9
 
 
 def format_like(old: str, value: float, tol: float) -> str:
-    """Write value in the style of ``old`` with as many decimals as the tolerance needs."""
-    body = old.lstrip("+-")
-    decimals = len(body.split(".", 1)[1]) if "." in body and "e" not in body.lower() else 0
-    for d in range(decimals, MAX_DECIMALS + 1):
-        if abs(round(value, d) - value) <= tol:
-            decimals = d
-            break
-    else:
-        decimals = MAX_DECIMALS
-    text = f"{value:.{decimals}f}"
-    if text.startswith("-") and float(text) == 0.0:
-        text = text[1:]  # no "-0.000"
-    had_dot_style = "." in body
-    if decimals == 0 and had_dot_style:
-        text += "."
-    if old.startswith("+") and not text.startswith("-"):
-        text = "+" + text
-    if body.startswith(".") and text.lstrip("+-").startswith("0."):
-        sign = text[0] if text[0] in "+-" else ""
-        text = sign + text.lstrip("+-")[1:]
-    return text
+    """Write value in the style of ``old`` with as many decimals as the tolerance needs.
+
+    The same rules as the bulk path (``choose_decimals`` and the number kernel), for one
+    number; numbers of more than 18 digits are written by Python's format."""
+    raw = np.frombuffer(old.encode("latin-1"), dtype=np.uint8)
+    style = number_kernel.old_styles(raw, np.array([0]), np.array([len(old)]))
+    decimals = choose_decimals(np.array([value], dtype=float), np.array([tol]), style["old_decimals"])
+    digits, negative, too_big = number_kernel.round_digits(np.array([value], dtype=float), decimals)
+    d, plus, dot_style = int(decimals[0]), bool(style["plus"][0]), bool(style["dot_style"][0])
+    if too_big[0]:  # |value| >= 1e18 / 10^d: no leading-zero or negative-zero case here
+        text = f"{abs(value):.{d}f}" + ("." if d == 0 and dot_style else "")
+        return ("-" if value < 0 else "+" if plus else "") + text
+    return number_kernel.number_text(int(digits[0]), d, bool(negative[0]), plus, dot_style, bool(style["no_lead_zero"][0]))
 
 
 def choose_decimals(values: np.ndarray, tol: np.ndarray, old_decimals: np.ndarray) -> np.ndarray:
