@@ -95,3 +95,44 @@ def test_every_dialect_is_a_registered_object():
     for name, lang in dialects.REGISTRY.items():
         assert lang.name == name and isinstance(lang, dialects.Dialect)
         assert lang.extensions and all(e.startswith(".") and e == e.lower() for e in lang.extensions)
+
+
+class ToyDialect(dialects.Dialect):
+    """A language of 'MOVE x y z' lines: all it takes to add one is this class."""
+
+    name, extensions = "toy", (".toy",)
+
+    def parse_sources(self, sources):
+        import numpy as np
+
+        from postproc.ir import NF, Kind
+        from postproc.parse.common import Builder, LineIndex, scan_numbers
+
+        doc = sources[0]
+        builder, numbers, lines = Builder(self.name, "none", [doc]), scan_numbers(doc.text), LineIndex(doc.text)
+        for start in (s for s in lines.starts.tolist() if doc.text.startswith("MOVE", s)):
+            sl = numbers.between(start, doc.text.find("\n", start) % (len(doc.text) + 1))
+            values, spans = np.full(NF, np.nan), np.full((NF, 3), -1)
+            values[:3], spans[:3, 0], spans[:3, 1], spans[:3, 2] = numbers.value[sl], 0, numbers.start[sl], numbers.end[sl]
+            builder.add(start, kind=Kind.LINEAR, line=lines.line(start), values=values, spans=spans)
+        return builder.build()
+
+
+def test_a_new_dialect_is_one_class_and_one_registry_entry(tmp_path, monkeypatch):
+    import json
+
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    monkeypatch.setitem(dialects.REGISTRY, "toy", ToyDialect())
+    program = tmp_path / "p.toy"
+    program.write_bytes(b"START\nMOVE 1 2 3\nMOVE 4.5 -6 7 ; done\n")
+    result = CliRunner().invoke(app, ["inspect", str(program), "--json"])
+    assert result.exit_code == 0, result.output
+    assert [m["xyz"] for m in json.loads(result.stdout)["moves"]] == [[1, 2, 3], [4.5, -6, 7]]
+    assert CliRunner().invoke(app, ["roundtrip", str(program)]).exit_code == 0
+    out = tmp_path / "moved.toy"
+    tp = dialects.get("toy").parse(program)
+    files = dialects.of(tp).emit(tp, tp.with_positions(tp.position + 0.25), out)
+    assert files == {out: "START\nMOVE 1.25 2.25 3.25\nMOVE 4.75 -5.75 7.25 ; done\n"}

@@ -2,7 +2,7 @@
 
 ``REGISTRY`` maps a dialect's name (the ``--dialect`` / ``--to`` option value and
 ``Toolpath.dialect``) to its ``Dialect`` object. Adding a language is one new package
-here with a ``Dialect`` subclass, plus one line in ``_DIALECTS`` below.
+here with a ``Dialect`` subclass, plus its entry in ``REGISTRY`` below.
 """
 
 from __future__ import annotations
@@ -16,8 +16,7 @@ from .gcode import GCODE
 from .krl import KRL
 from .rapid import RAPID
 
-_DIALECTS: tuple[Dialect, ...] = (RAPID, KRL, GCODE)  # sniffing tries them in this order
-REGISTRY: dict[str, Dialect] = {d.name: d for d in _DIALECTS}
+REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, KRL, GCODE)}  # sniffing tries them in this order
 
 
 def names() -> tuple[str, ...]:
@@ -40,13 +39,13 @@ def of(tp: Toolpath) -> Dialect:
 def sniff(path: str | Path, data: bytes | None = None) -> Dialect:
     """The dialect of a program from its extension, or from its content when that is unknown."""
     suffix = Path(str(path)).suffix.lower()
-    by_extension = [d for d in _DIALECTS if suffix in d.extensions]
+    by_extension = [d for d in REGISTRY.values() if suffix in d.extensions]
     if by_extension and suffix != ".txt":  # .txt is anything: look inside
         return by_extension[0]
     if data is None:
         data = read_head(path)
     head = data[:4096].decode("latin-1").upper()
-    for dialect in _DIALECTS:
+    for dialect in REGISTRY.values():
         if dialect.sniff(head):
             return dialect
     raise InputError(f"{path}: cannot tell the dialect (give --dialect {', '.join(REGISTRY)})")
