@@ -40,6 +40,16 @@ _MOTION_KIND = {0: Kind.RAPID, 1: Kind.LINEAR, 2: Kind.ARC_CW, 3: Kind.ARC_CCW}
 _MOTION_KIND_CODES = np.array([_MOTION_KIND[c] for c in range(4)], dtype=np.int8)
 _NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
 _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
+# Modal G codes that set one state column: G code -> (column, value).
+_STATE_OF_G = {
+    **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
+    80.0: ("canned", 0.0),
+    **{g: ("units", g) for g in (20.0, 21.0)},
+    **{g: ("dist", g) for g in (90.0, 91.0)},
+    **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
+    **{g: ("wcs", float(w)) for g, w in _WCS.items()},
+    **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
+}
 
 
 class _Unknown(Exception):
@@ -187,74 +197,85 @@ class GcodeParser:
         return int(self._eval(ref))
 
     def _block(self, tree: Tree, start: int, out, stack) -> None:
+        """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
         state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
-        nonmotion = g53 = False
         ok = True
         gcodes: list[float] = []
         for item in tree.children:
             if not isinstance(item, Tree):
                 continue
             if item.data == "assign":
-                try:
-                    self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
-                except (_Unknown, ValueError, ZeroDivisionError) as exc:
-                    self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
-                    self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
-                continue
-            if item.data == "oword":
-                if len(item.children) < 2:
-                    continue  # a program number (Fanuc O1000)
-                kw = str(item.children[1]).lower()
-                label = re.sub(r"\s+", "", str(item.children[0]).lower())
-                opens = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
-                if kw in opens:
-                    stack.append((f"{label} {opens[kw]}", start))
-                elif kw in ("endsub", "endif", "endwhile", "endrepeat") or (kw == "while" and stack and stack[-1][0] == f"{label} while"):
-                    if not stack or stack[-1][0] != f"{label} {kw}":
-                        raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
-                    stack.pop()
-                continue
-            if item.data == "keyword":
+                self._assign(item, start)
+            elif item.data == "oword":
+                self._oword(item, start, stack)
+            elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
-                continue
-            if item.data != "word":
-                continue
-            letter = str(item.children[0]).upper()
-            vnode = item.children[1]
-            try:
-                value = self._eval(vnode)
-            except (_Unknown, ValueError, ZeroDivisionError) as exc:
-                value = np.nan
-                ok = False
-                self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
-            if letter == "G":
-                gcodes.append(round(value, 1))
-            elif letter == "H":
-                state["h"] = value
-            elif letter in _AX:
-                values[_AX[letter]] = value
-                if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
-                    tok_start, tok_end = _token_span(vnode)
-                    spans[_AX[letter]] = (start + tok_start, start + tok_end)
+            elif item.data == "word":
+                ok &= self._word(item, start, values, spans, state, gcodes)
+        nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
+        out["offset"].append(start)
+        out["values"].append(values)
+        out["spans"].append(spans)
+        for k, v in state.items():
+            out[k].append(v)
+        out["nonmotion"].append(nonmotion)
+        out["ok"].append(ok)
+        out["g53"].append(g53)
+
+    def _assign(self, item: Tree, start: int) -> None:
+        """#n = expression: evaluated now (program order); a value that cannot be is forgotten."""
+        try:
+            self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
+            self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
+            self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
+
+    def _oword(self, item: Tree, start: int, stack) -> None:
+        """O-word blocks (sub, if, while, do, repeat) must close in order."""
+        if len(item.children) < 2:
+            return  # a program number (Fanuc O1000)
+        kw = str(item.children[1]).lower()
+        label = re.sub(r"\s+", "", str(item.children[0]).lower())
+        opens = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
+        if kw in opens:
+            stack.append((f"{label} {opens[kw]}", start))
+        elif kw in ("endsub", "endif", "endwhile", "endrepeat") or (kw == "while" and stack and stack[-1][0] == f"{label} while"):
+            if not stack or stack[-1][0] != f"{label} {kw}":
+                raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
+            stack.pop()
+
+    def _word(self, item: Tree, start: int, values, spans, state, gcodes) -> bool:
+        """One letter word into the block's values / state; False where its value is unknown."""
+        letter = str(item.children[0]).upper()
+        vnode = item.children[1]
+        known = True
+        try:
+            value = self._eval(vnode)
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
+            value, known = np.nan, False
+            self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
+        if letter == "G":
+            gcodes.append(round(value, 1))
+        elif letter == "H":
+            state["h"] = value
+        elif letter in _AX:
+            values[_AX[letter]] = value
+            if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
+                tok_start, tok_end = _token_span(vnode)
+                spans[_AX[letter]] = (start + tok_start, start + tok_end)
+        return known
+
+    def _apply_gcodes(self, gcodes: list[float], state: dict, values, start: int) -> tuple[bool, bool]:
+        """The block's G codes into its modal state; returns (no motion in this block, G53)."""
+        nonmotion = g53 = False
         for gc in gcodes:
-            if gc in (0.0, 1.0, 2.0, 3.0):
-                state["motion"] = gc
-            elif gc == 80.0:
-                state["canned"] = 0.0
+            if gc in _STATE_OF_G:
+                key, value = _STATE_OF_G[gc]
+                state[key] = value
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
-            elif gc in (20.0, 21.0):
-                state["units"] = gc
-            elif gc in (90.0, 91.0):
-                state["dist"] = gc
-            elif gc in (17.0, 18.0, 19.0):
-                state["plane"] = gc
-            elif gc in _WCS:
-                state["wcs"] = float(_WCS[gc])
-            elif gc in (43.0, 43.1, 43.4, 43.5, 49.0):
-                state["tlo"] = gc
             elif gc == 53.0:
                 g53 = True
             elif gc == 68.2:
@@ -269,14 +290,7 @@ class GcodeParser:
                 nonmotion = True
                 if gc == 10.0:
                     self._g10(values, start)
-        out["offset"].append(start)
-        out["values"].append(values)
-        out["spans"].append(spans)
-        for k, v in state.items():
-            out[k].append(v)
-        out["nonmotion"].append(nonmotion)
-        out["ok"].append(ok)
-        out["g53"].append(g53)
+        return nonmotion, g53
 
     def _tilt(self, values, start) -> None:
         """G68.2 X Y Z I J K (P0: Euler ZXZ): a tilted working plane until G69."""

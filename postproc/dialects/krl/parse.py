@@ -11,11 +11,12 @@ block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 from lark import Token, Tree
 
-from ...frames import abc_to_matrix, make_transform
+from ...frames import abc_to_matrix, abc_to_quat_wxyz, make_transform
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
@@ -420,70 +421,15 @@ class KrlParser:
         self._approx_blocks.append((offsets, approx))
 
     def _finish(self) -> Toolpath:
-        from dataclasses import replace
-
-        from ...frames import abc_to_quat_wxyz
-
-        if self.slow_targets:
-            rows = self.slow_targets
-            self._collect(
-                np.array([r[0] for r in rows]),
-                np.array([r[1] for r in rows]),
-                np.array([r[2] for r in rows]),
-                np.array([r[3] for r in rows]),
-                np.array([r[4] for r in rows]),
-                np.array([r[5] for r in rows]),
-                [r[6] for r in rows],
-                np.array([r[7] for r in rows]),
-                np.array([r[8] for r in rows]),
-            )
+        self._collect_slow_targets()
         offsets = np.concatenate([b[0] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, np.int64)
         approx = np.concatenate([b[1] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, bool)
         perm = np.argsort(offsets, kind="stable")  # the builder orders targets the same way
         offsets, approx = offsets[perm], approx[perm]
-        n = len(offsets)
-        # Program state at each target: the last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it.
-        frame = np.zeros(n, np.int32)
-        tool = np.zeros(n, np.int32)
-        speed = np.full(n, np.nan)
-        cdis = np.zeros(n)
-        resolved = np.ones(n, bool)
-        events = sorted(self.events, key=lambda e: e[0])
-        for key in ("$BASE", "$TOOL", "vel", "apo"):
-            ev = [(o, v) for o, k, v in events if k == key]
-            if not ev:
-                continue
-            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
-            has = at >= 0
-            if key in ("$BASE", "$TOOL"):
-                register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
-                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
-                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
-            else:
-                vals = np.array([v for _, v in ev], dtype=float)
-                if key == "vel":
-                    speed[has] = vals[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
-                else:
-                    cdis[has] = vals[at[has]]
+        frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
-        values = tp.values
-        # A partial aggregate ({X 10}) keeps the other components of the previous Cartesian target.
-        cart = ~np.isnan(values[:, :3]).all(axis=1)
-        pose = values[:, :6].copy()
-        for col in range(6):
-            column = np.where(cart, pose[:, col], np.nan)
-            last = np.where(~np.isnan(column), np.arange(n), -1)
-            np.maximum.accumulate(last, out=last)
-            pose[:, col] = np.where(cart & (last >= 0), column[np.maximum(last, 0)], np.nan)
-        if tp.relative.any():
-            # LIN_REL / PTP_REL: components are increments from the previous target.
-            for i in np.nonzero(tp.relative)[0]:
-                prev = pose[i - 1] if i > 0 else np.zeros(6)
-                pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
-        # The IR holds absolute values; the emitter turns them back into increments.
-        values = values.copy()
-        values[tp.relative, :6] = np.where(np.isnan(values[tp.relative, :6]), np.nan, pose[tp.relative])
-        orientation = np.full((n, 4), np.nan)
+        pose, values = _absolute_poses(tp.values, tp.relative)
+        orientation = np.full((len(offsets), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
             orientation[ok] = abc_to_quat_wxyz(pose[ok, 3:6])
@@ -499,8 +445,61 @@ class KrlParser:
             tool=tool,
             speed=speed,
             zone=np.where(approx, cdis, 0.0),
-            resolved=resolved & declared,
+            resolved=declared,
         )
+
+    def _collect_slow_targets(self) -> None:
+        """The targets the grammar read, as one block."""
+        if not self.slow_targets:
+            return
+        columns = list(zip(*self.slow_targets))  # offset, kind, values, spans, conf, insert, name, approx, relative
+        self._collect(*(np.array(c) for c in columns[:6]), list(columns[6]), np.array(columns[7]), np.array(columns[8]))
+
+    def _program_state(self, offsets: np.ndarray):
+        """Frame and tool index, speed (mm/s) and approximation distance at each target: the
+        last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it."""
+        n = len(offsets)
+        frame, tool = np.zeros(n, np.int32), np.zeros(n, np.int32)
+        speed, cdis = np.full(n, np.nan), np.zeros(n)
+        events = sorted(self.events, key=lambda e: e[0])
+        for key in ("$BASE", "$TOOL", "vel", "apo"):
+            ev = [(o, v) for o, k, v in events if k == key]
+            if not ev:
+                continue
+            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
+            has = at >= 0
+            if key in ("$BASE", "$TOOL"):
+                register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
+                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
+                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
+            elif key == "vel":
+                speed[has] = np.array([v for _, v in ev], dtype=float)[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
+            else:
+                cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
+        return frame, tool, speed, cdis
+
+
+def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 6) X Y Z A B C of every target, and the IR values with absolute components.
+
+    A partial aggregate ({X 10}) keeps the other components of the previous Cartesian
+    target; LIN_REL / PTP_REL components are increments from the previous target (the IR
+    holds absolute values; the emitter turns them back into increments)."""
+    n = len(values)
+    cart = ~np.isnan(values[:, :3]).all(axis=1)
+    pose = values[:, :6].copy()
+    for col in range(6):
+        column = np.where(cart, pose[:, col], np.nan)
+        last = np.where(~np.isnan(column), np.arange(n), -1)
+        np.maximum.accumulate(last, out=last)
+        pose[:, col] = np.where(cart & (last >= 0), column[np.maximum(last, 0)], np.nan)
+    if relative.any():
+        for i in np.nonzero(relative)[0]:
+            prev = pose[i - 1] if i > 0 else np.zeros(6)
+            pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
+    values = values.copy()
+    values[relative, :6] = np.where(np.isnan(values[relative, :6]), np.nan, pose[relative])
+    return pose, values
 
 
 def _split_comment(line: str) -> tuple[str, str | None]:
