@@ -522,23 +522,13 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, refuse_stdout, write_set
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
     error_model, _ = load_model(model)
-    if program == "-":
-        if dialect is None:
-            raise InputError("reading a program from standard input needs --dialect")
-        data = sys.stdin.buffer.read()
-        tp = parse_program("-", dialect, data)
-    else:
-        tp = parse_program(Path(program), dialect)
+    tp = _read_program(program, dialect)
     to_stdout = output == "-"
-    if to_stdout:
-        refuse_stdout(tp)
-    else:  # the program's own files, before the work (a changed $config.dat is checked again below)
-        refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
+    _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
     forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
@@ -561,15 +551,7 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    texts = emit_texts(tp, new)
-    check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])  # the new text reads back as the compensated targets
-    if to_stdout:
-        sys.stdout.buffer.write(texts[0].encode("latin-1"))
-        sys.stdout.buffer.flush()
-    else:
-        files = files_for(tp, texts, output)
-        refuse_overwrite(tp, files, in_place)
-        write_set(files, backup=in_place)
+    _write_compensated(tp, new, np.nonzero(rep.compensated)[0], output, in_place)
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -580,6 +562,44 @@ def compensate_cmd(
         log.print("no Cartesian target to compensate (joint targets are kept as written)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _read_program(program: str, dialect: str | None):
+    """The program at ``program``, or - for standard input (then ``dialect`` is needed)."""
+    from .programs import parse_program
+
+    if program != "-":
+        return parse_program(Path(program), dialect)
+    if dialect is None:
+        raise InputError("reading a program from standard input needs --dialect")
+    return parse_program("-", dialect, sys.stdin.buffer.read())
+
+
+def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
+    """Before the work: standard output only for one-file programs; no input overwritten
+    without --in-place (a changed $config.dat is checked again when the texts are known)."""
+    from .programs import files_for, refuse_overwrite, refuse_stdout
+
+    if output == "-":
+        refuse_stdout(tp)
+    else:
+        refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
+
+
+def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
+    """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
+    whole set of changed files at once, or the program to standard output."""
+    from .programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
+
+    texts = emit_texts(tp, new)
+    check_texts(tp, new, texts, rows)
+    if output == "-":
+        sys.stdout.buffer.write(texts[0].encode("latin-1"))
+        sys.stdout.buffer.flush()
+        return
+    files = files_for(tp, texts, output)
+    refuse_overwrite(tp, files, in_place)
+    write_set(files, backup=in_place)
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
