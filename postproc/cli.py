@@ -563,8 +563,9 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 def compensate_cmd(
     program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
-    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output (refused when targets live in another file). KRL: its .dat (and a changed $config.dat) is written beside it."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    in_place: bool = typer.Option(False, "--in-place", help="Allow OUT to be the program's own file(s); each replaced file is kept as NAME.bak."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
     max_iter: int = typer.Option(25, "--max-iter"),
     scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
@@ -580,19 +581,13 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .programs import emit_texts, parse_program, write_texts
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
     error_model, _ = load_model(model)
-    if program == "-":
-        if dialect is None:
-            raise InputError("reading a program from standard input needs --dialect")
-        data = sys.stdin.buffer.read()
-        tp = parse_program("-", dialect, data)
-    else:
-        tp = parse_program(Path(program), dialect)
+    tp = _read_program(program, dialect)
     to_stdout = output == "-"
+    _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
     forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
@@ -615,13 +610,7 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    texts = emit_texts(tp, new)
-    if to_stdout:
-        sys.stdout.buffer.write(texts[0].encode("latin-1"))
-        sys.stdout.buffer.flush()
-    else:
-        outputs = [Path(output)] + [Path(output).with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
-        write_texts(texts[: len(outputs)], outputs)
+    _write_compensated(tp, new, np.nonzero(rep.compensated)[0], output, in_place)
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -632,6 +621,44 @@ def compensate_cmd(
         log.print("no Cartesian target to compensate (joint targets are kept as written)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _read_program(program: str, dialect: str | None):
+    """The program at ``program``, or - for standard input (then ``dialect`` is needed)."""
+    from .programs import parse_program
+
+    if program != "-":
+        return parse_program(Path(program), dialect)
+    if dialect is None:
+        raise InputError("reading a program from standard input needs --dialect")
+    return parse_program("-", dialect, sys.stdin.buffer.read())
+
+
+def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
+    """Before the work: standard output only for one-file programs; no input overwritten
+    without --in-place (a changed $config.dat is checked again when the texts are known)."""
+    from .programs import files_for, refuse_overwrite, refuse_stdout
+
+    if output == "-":
+        refuse_stdout(tp)
+    else:
+        refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
+
+
+def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
+    """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
+    whole set of changed files at once, or the program to standard output."""
+    from .programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
+
+    texts = emit_texts(tp, new)
+    check_texts(tp, new, texts, rows)
+    if output == "-":
+        sys.stdout.buffer.write(texts[0].encode("latin-1"))
+        sys.stdout.buffer.flush()
+        return
+    files = files_for(tp, texts, output)
+    refuse_overwrite(tp, files, in_place)
+    write_set(files, backup=in_place)
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
@@ -706,12 +733,12 @@ def convert_cmd(
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
 ):
     """Write a new robot program with every target of another program."""
-    from .emit.writer import write_program
-    from .programs import parse_program, write_texts
+    from .dialects import get
+    from .programs import parse_program, write_program, write_texts
 
+    outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
-    outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import dialects
 from . import kinematics as kin
 from .errormodel import ErrorModel
 from .errors import InputError, JobError
@@ -151,16 +152,7 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray)
     notes: list[str] = []
     sols = kin.ik(robot, flange)
     conf = tp.conf[rows]
-    q = np.full((len(rows), 6), np.nan)
-    branch = np.full(len(rows), -1)
-    if tp.dialect == "rapid":
-        has = ~np.isnan(conf).any(axis=1)
-        if has.any():
-            q[has], branch[has] = kin.select_by_abb_conf(robot, sols[has], conf[has].astype(int))
-    elif tp.dialect == "krl":
-        has = ~np.isnan(conf[:, :2]).any(axis=1)
-        if has.any():
-            q[has], branch[has] = kin.select_by_kuka_status(robot, sols[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
+    q, branch = dialects.of(tp).branch_from_conf(robot, sols, conf)
     missing = np.isnan(q).any(axis=1)
     if missing.any():
         if (~missing & ~np.isnan(conf).all(axis=1)).sum() < (~np.isnan(conf).all(axis=1)).sum():
@@ -190,8 +182,28 @@ def compensate(
     progress=lambda msg: None,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring)."""
-    if scheme not in ("broyden", "seed000"):
+    if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
+    _require_usable_model(model)
+    _require_process_inputs(model, temp_c, force_n)
+    _refuse_arcs(tp)
+    written = tp
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    _refuse_unplaced(tp)
+    problem = _Problem.of(tp, model, temp_c, force_n)
+    progress("predicting the program as written")
+    before = problem.predicted_error_as_written()
+    solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
+    report = _report(problem, before, solution)
+    out = written.with_positions(problem.positions_for(solution.cmd))
+    if problem.notes:
+        out = replace(out, notes=out.notes + tuple(problem.notes))
+    return out, report
+
+
+def _require_usable_model(model: ErrorModel) -> None:
+    """Compensation solves the nominal IK and needs the model in the robot's base frame."""
     robot = model.robot
     if not robot.has_analytic_ik:
         raise InputError(f"robot '{robot.name}' has no analytic IK: compensation needs an ortho-parallel arm")
@@ -202,22 +214,28 @@ def compensate(
             f"the model's measurement frame is {np.linalg.norm(trans):.0f} mm and {angle:.1f} deg away from the robot base "
             "(a tracker frame?): compensation needs a model whose measurements are in the robot's base frame"
         )
+
+
+def _require_process_inputs(model: ErrorModel, temp_c, force_n) -> None:
+    """An effect that needs a process input (temperature, force) may not run without it."""
     for effect in model.effects:
         if effect.name == "thermal" and temp_c is None:
             raise InputError("the model has a thermal effect: give the cell temperature (--temp)")
         if effect.name == "external_load" and force_n is None:
             raise InputError("the model has an external_load effect: give the process force (--force fx,fy,fz)")
 
+
+def _refuse_arcs(tp: Toolpath) -> None:
     arcs = np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW))
     if arcs.any():
         # Moving an arc's end points without its centre would change its radius (LinuxCNC,
         # for one, rejects such an arc): refuse rather than write a program that may not run.
         lines = ", ".join(str(v) for v in tp.line[arcs][:10])
         raise InputError(f"G2/G3 arcs on lines {lines}: arc centres are not compensated yet; linearise the arcs (or use R-format moves) first")
-    written = tp
-    if frames or tools:
-        tp = tp.with_frames(frames, tools)
-    n = len(tp)
+
+
+def _refuse_unplaced(tp: Toolpath) -> None:
+    """Every Cartesian target must be placed in the base frame (point, frame and tool known)."""
     cart = tp.kind != Kind.ABSJ
     unplaced = cart & ~(tp.placed() & ~np.isnan(tp.position).any(axis=1))
     if unplaced.any():
@@ -229,129 +247,171 @@ def compensate(
             hint = " Define " + ", ".join([f"frame {m} (--frame {m}=X,Y,Z,A,B,C)" for m in missing] + [f"tool {m} (--tool {m}=X,Y,Z,A,B,C)" for m in missing_tools]) + "."
         lines = ", ".join(str(v) for v in tp.line[i][:10])
         raise InputError(f"targets on lines {lines} cannot be placed in the robot base frame (undefined point, frame or tool).{hint}")
-    rows = np.nonzero(cart)[0]
-    base = tp.base_poses()
-    if np.isnan(tp.orientation[rows]).any():
+    if np.isnan(tp.orientation[np.nonzero(cart)[0]]).any():
         raise InputError("targets without an orientation (3-axis G-code) need one: convert the program for a robot first")
-    target = base[rows]
-    plant = _Plant(model, tp.tools, tp.tool, temp_c, None if force_n is None else np.asarray(force_n, dtype=float))
-    flange0 = target @ plant.inv_tools[tp.tool[rows]]
-    q_ref, branch_ref, notes = _reference_joints(tp, robot, flange0, rows)
-    order_q = np.zeros((n, 6))
-    order_q[rows] = np.nan_to_num(q_ref)
 
-    goal = target[:, :3, 3]
-    progress("predicting the program as written")
-    before = plant.actual(q_ref, rows, order_q) - goal
-    within = ~np.isnan(q_ref).any(axis=1)
 
-    cmd = goal.copy()
-    err = before.copy()
-    iterations = np.zeros(len(rows), dtype=int)
-    converged = np.zeros(len(rows), dtype=bool)
-    q_now = q_ref.copy()
-    branch_now = branch_ref.copy()
+class _Problem:
+    """The Cartesian targets of one program and the robot that must reach them."""
 
-    def evaluate(c, active):
-        poses = target[active].copy()
-        poses[:, :3, 3] = c
-        q, b = plant.joints(poses, rows[active], q_ref[active], branch_ref[active])
-        order_q[rows[active]] = np.where(np.isnan(q), order_q[rows[active]], q)
-        return plant.actual(q, rows[active], order_q) - goal[active], q, b
+    def __init__(self, tp: Toolpath, plant: _Plant, rows: np.ndarray, target: np.ndarray, q_ref, branch_ref, notes):
+        self.tp, self.plant, self.rows, self.target = tp, plant, rows, target
+        self.goal = target[:, :3, 3]
+        self.q_ref, self.branch_ref, self.notes = q_ref, branch_ref, notes
+        # Joints of every target in program order (backlash depends on the approach direction).
+        self.order_q = np.zeros((len(tp), 6))
+        self.order_q[rows] = np.nan_to_num(q_ref)
 
-    if scheme == "broyden":
-        jac = np.repeat(np.eye(3)[None], len(rows), axis=0)
-        active = within & ~np.isnan(err).any(axis=1)
-        already = active & (np.linalg.norm(np.nan_to_num(err), axis=1) < tol_mm)
-        converged[already] = True
-        active &= ~already
-        for it in range(max_iter):
-            if not active.any():
-                break
-            progress(f"iteration {it + 1}: {int(active.sum())} points")
-            idx = np.nonzero(active)[0]
-            step = -np.linalg.solve(jac[idx], err[idx][..., None])[..., 0]
-            new_cmd = cmd[idx] + step
-            new_err, q, b = evaluate(new_cmd, active)
-            iterations[idx] += 1
-            lost = np.isnan(new_err).any(axis=1)
-            y = new_err - err[idx]
-            ss = np.einsum("ij,ij->i", step, step)
-            upd = ~lost & (ss > 0)
-            # Broyden: B += ((y - B s) s^T) / (s^T s)
-            bs = np.einsum("nij,nj->ni", jac[idx], step)
-            jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
-            keep = ~lost
-            cmd[idx[keep]] = new_cmd[keep]
-            err[idx[keep]] = new_err[keep]
-            q_now[idx[keep]] = q[keep]
-            branch_now[idx[keep]] = b[keep]
-            within[idx[lost]] = False
-            done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
-            converged[idx[done]] = True
-            active[idx[done | lost]] = False
-    else:
-        axis = target[:, :3, 2]  # the tool axis of each target
-        axial = np.einsum("ij,ij->i", err, axis)
-        # Across the tool axis: the first prediction's error is subtracted once (seed 000 step 2).
-        cmd = goal - (err - axial[:, None] * axis)
-        a_prev = np.zeros(len(rows))  # a0 = ap: no axial correction
-        f_prev = axial
-        a_now = -axial  # a1 = ap + e(a0), with e as (target - actual) along the axis
-        active = within & ~np.isnan(err).any(axis=1)
-        for it in range(max_iter):
-            if not active.any():
-                break
-            idx = np.nonzero(active)[0]
-            c = cmd[idx] + a_now[idx, None] * axis[idx]
-            e, q, b = evaluate(c, active)
-            iterations[idx] += 1
-            lost = np.isnan(e).any(axis=1)
-            f_now = np.einsum("ij,ij->i", e, axis[idx])
-            denom = f_now - f_prev[idx]
-            safe = np.abs(denom) > 1e-12
-            a_next = np.where(safe, a_now[idx] - f_now * (a_now[idx] - a_prev[idx]) / np.where(safe, denom, 1.0), a_now[idx])
-            keep = ~lost
-            err[idx[keep]] = e[keep]
-            q_now[idx[keep]] = q[keep]
-            branch_now[idx[keep]] = b[keep]
-            within[idx[lost]] = False
-            done = keep & (np.abs(a_next - a_now[idx]) < tol_mm)
-            converged[idx[done]] = True
-            a_prev[idx], f_prev[idx] = a_now[idx], f_now
-            a_now[idx] = np.where(done, a_now[idx], a_next)
-            active[idx[done | lost]] = False
-        cmd = cmd + a_now[:, None] * axis
+    @classmethod
+    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n) -> "_Problem":
+        rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
+        target = tp.base_poses()[rows]
+        plant = _Plant(model, tp.tools, tp.tool, temp_c, None if force_n is None else np.asarray(force_n, dtype=float))
+        flange = target @ plant.inv_tools[tp.tool[rows]]
+        q_ref, branch_ref, notes = _reference_joints(tp, model.robot, flange, rows)
+        return cls(tp, plant, rows, target, q_ref, branch_ref, notes)
 
+    def predicted_error_as_written(self) -> np.ndarray:
+        return self.plant.actual(self.q_ref, self.rows, self.order_q) - self.goal
+
+    def evaluate(self, commands: np.ndarray, active: np.ndarray):
+        """Predicted error, joints and branch of the targets ``active`` commanded at ``commands``."""
+        rows = self.rows[active]
+        poses = self.target[active].copy()
+        poses[:, :3, 3] = commands
+        q, b = self.plant.joints(poses, rows, self.q_ref[active], self.branch_ref[active])
+        self.order_q[rows] = np.where(np.isnan(q), self.order_q[rows], q)
+        return self.plant.actual(q, rows, self.order_q) - self.goal[active], q, b
+
+    def positions_for(self, cmd: np.ndarray) -> np.ndarray:
+        """Target positions (all rows, each in its own frame) for base-frame commands ``cmd``."""
+        new_base = self.target.copy()
+        new_base[:, :3, 3] = cmd
+        local = invert_transform(self.tp.frames[self.tp.frame[self.rows]]) @ new_base
+        position = self.tp.position.copy()
+        position[self.rows] = local[:, :3, 3]
+        return position
+
+
+@dataclass
+class _Solution:
+    """Iteration state per Cartesian target."""
+
+    cmd: np.ndarray
+    err: np.ndarray
+    q: np.ndarray
+    branch: np.ndarray
+    within: np.ndarray
+    iterations: np.ndarray
+    converged: np.ndarray
+
+    @classmethod
+    def start(cls, problem: _Problem, before: np.ndarray) -> "_Solution":
+        n = len(problem.rows)
+        return cls(problem.goal.copy(), before.copy(), problem.q_ref.copy(), problem.branch_ref.copy(),
+                   ~np.isnan(problem.q_ref).any(axis=1), np.zeros(n, dtype=int), np.zeros(n, dtype=bool))
+
+    def accept(self, idx: np.ndarray, keep: np.ndarray, err: np.ndarray, q: np.ndarray, branch: np.ndarray) -> None:
+        """Take the new error and joints of the points ``idx[keep]``; the others left the workspace."""
+        self.err[idx[keep]] = err[keep]
+        self.q[idx[keep]] = q[keep]
+        self.branch[idx[keep]] = branch[keep]
+        self.within[idx[~keep]] = False
+
+
+def _solve_broyden(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
+    """Full 3-D position: secant / Broyden iteration per point, vectorised over points."""
+    sol = _Solution.start(problem, before)
+    jac = np.repeat(np.eye(3)[None], len(problem.rows), axis=0)
+    active = sol.within & ~np.isnan(sol.err).any(axis=1)
+    already = active & (np.linalg.norm(np.nan_to_num(sol.err), axis=1) < tol_mm)
+    sol.converged[already] = True
+    active &= ~already
+    for it in range(max_iter):
+        if not active.any():
+            break
+        progress(f"iteration {it + 1}: {int(active.sum())} points")
+        idx = np.nonzero(active)[0]
+        step = -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
+        new_cmd = sol.cmd[idx] + step
+        new_err, q, b = problem.evaluate(new_cmd, active)
+        sol.iterations[idx] += 1
+        keep = ~np.isnan(new_err).any(axis=1)
+        ss = np.einsum("ij,ij->i", step, step)
+        _broyden_update(jac, idx, step, new_err - sol.err[idx], ss, keep & (ss > 0))
+        sol.cmd[idx[keep]] = new_cmd[keep]
+        sol.accept(idx, keep, new_err, q, b)
+        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
+        sol.converged[idx[done]] = True
+        active[idx[done | ~keep]] = False
+    return sol
+
+
+def _broyden_update(jac, idx, step, y, ss, upd) -> None:
+    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx[upd]``."""
+    bs = np.einsum("nij,nj->ni", jac[idx], step)
+    jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
+
+
+def _solve_seed000(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
+    """Seed 000 (eq. 10-15): across the tool axis the first error is subtracted once; along
+    it, a secant iteration on the depth from a0 = ap, a1 = ap + e(a0)."""
+    sol = _Solution.start(problem, before)
+    axis = problem.target[:, :3, 2]  # the tool axis of each target
+    axial = np.einsum("ij,ij->i", sol.err, axis)
+    across = problem.goal - (sol.err - axial[:, None] * axis)
+    a_prev = np.zeros(len(problem.rows))  # a0 = ap: no axial correction
+    f_prev = axial
+    a_now = -axial  # a1 = ap + e(a0), with e as (target - actual) along the axis
+    active = sol.within & ~np.isnan(sol.err).any(axis=1)
+    for _ in range(max_iter):
+        if not active.any():
+            break
+        idx = np.nonzero(active)[0]
+        e, q, b = problem.evaluate(across[idx] + a_now[idx, None] * axis[idx], active)
+        sol.iterations[idx] += 1
+        keep = ~np.isnan(e).any(axis=1)
+        f_now = np.einsum("ij,ij->i", e, axis[idx])
+        a_next = _secant_step(a_prev[idx], a_now[idx], f_prev[idx], f_now)
+        sol.accept(idx, keep, e, q, b)
+        done = keep & (np.abs(a_next - a_now[idx]) < tol_mm)
+        sol.converged[idx[done]] = True
+        a_prev[idx], f_prev[idx] = a_now[idx], f_now
+        a_now[idx] = np.where(done, a_now[idx], a_next)
+        active[idx[done | ~keep]] = False
+    sol.cmd = across + a_now[:, None] * axis
+    return sol
+
+
+def _secant_step(a_prev, a_now, f_prev, f_now):
+    """Next depth of the secant iteration (kept where the two errors are equal)."""
+    denom = f_now - f_prev
+    safe = np.abs(denom) > 1e-12
+    return np.where(safe, a_now - f_now * (a_now - a_prev) / np.where(safe, denom, 1.0), a_now)
+
+
+_SCHEMES = {"broyden": _solve_broyden, "seed000": _solve_seed000}
+
+
+def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
+    robot, rows, n = problem.plant.robot, problem.rows, len(problem.tp)
     singular = np.zeros(len(rows), dtype=bool)
-    ok_q = ~np.isnan(q_now).any(axis=1)
-    singular[ok_q] = _wrist_elbow_shoulder(robot, q_now[ok_q])
-    changed = within & (branch_now != branch_ref)
-
-    # Commands back into each target's own frame.
-    new_base = target.copy()
-    new_base[:, :3, 3] = cmd
-    local = invert_transform(tp.frames[tp.frame[rows]]) @ new_base
-    position = tp.position.copy()
-    position[rows] = local[:, :3, 3]
-
+    ok_q = ~np.isnan(sol.q).any(axis=1)
+    singular[ok_q] = _wrist_elbow_shoulder(robot, sol.q[ok_q])
+    changed = sol.within & (sol.branch != problem.branch_ref)
     full = lambda fill, values, dtype=float: _scatter(n, rows, fill, values, dtype)  # noqa: E731
-    report = Report(
-        line=tp.line,
+    return Report(
+        line=problem.tp.line,
         compensated=full(False, np.ones(len(rows), bool), bool),
-        iterations=full(0, iterations, int),
+        iterations=full(0, sol.iterations, int),
         before_mm=full(np.nan, np.linalg.norm(before, axis=1)),
-        after_mm=full(np.nan, np.linalg.norm(err, axis=1)),
-        correction_mm=full(np.nan, np.linalg.norm(cmd - goal, axis=1)),
-        converged=full(True, converged, bool),
-        within_limits=full(True, within, bool),
+        after_mm=full(np.nan, np.linalg.norm(sol.err, axis=1)),
+        correction_mm=full(np.nan, np.linalg.norm(sol.cmd - problem.goal, axis=1)),
+        converged=full(True, sol.converged, bool),
+        within_limits=full(True, sol.within, bool),
         singular=full(False, singular, bool),
         branch_changed=full(False, changed, bool),
     )
-    out = written.with_positions(position)
-    if notes:
-        out = replace(out, notes=out.notes + tuple(notes))
-    return out, report
 
 
 def _scatter(n, rows, fill, values, dtype):

@@ -86,3 +86,7 @@ class EmitError(InputError):
 
 class OutputError(InputError):
     """An output file cannot be written where the user asked (missing folder, no permission)."""
+
+
+class OutputCheckError(JobError):
+    """The text about to be written does not read back as the values it was meant to hold."""

@@ -17,11 +17,11 @@ import numpy as np
 from lark import Token, Tree
 from numba import njit
 
-from ..frames import make_transform, quat_wxyz_to_matrix
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar, literal_number
-from .line_shapes import LineShapes
+from ...frames import make_transform, quat_wxyz_to_matrix
+from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.grammar import grammar, literal_number
+from ...parse.line_shapes import LineShapes
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -40,6 +40,10 @@ RE_MOVE_LIT = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<lit>{RT}){ARGS}{TAI
 RE_MOVE_NAME = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<name>{NAME}(?:\{{{W}\d+{W}\}})?){ARGS}{TAIL}", FLAGS)
 RE_DECL = re.compile(rf"^{W}(?:LOCAL[ \t]+)?(?:TASK[ \t]+)?(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(?P<name>{NAME}){W}:={W}(?P<lit>{RT}){TAIL}", FLAGS)
 RE_COMMENT = re.compile(r'("[^"\n]*")|(![^\n]*)')
+
+# An external axis the robot does not have is written 9E9; anything this large is 'none'.
+NO_AXIS_TEXT = "9E9"
+NO_AXIS_ABOVE = 8.9e9
 
 # Where the 17 numbers of a robtarget go: x y z, q1..q4, cf1 cf4 cf6 cfx, e1..e6.
 _RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
@@ -90,12 +94,25 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields):
             v = num_value[i]
             if f < 0:
                 conf[r, -f - 1] = v
-            elif not (f >= 13 and abs(v) >= 8.9e9):
+            elif not (f >= 13 and abs(v) >= NO_AXIS_ABOVE):
                 values[r, f] = v
                 spans[r, f, 0] = 0
                 spans[r, f, 1] = num_start[i]
                 spans[r, f, 2] = num_end[i]
     return values, spans, conf
+
+
+def _drop_absent_axes(values: np.ndarray, spans: np.ndarray) -> None:
+    """External axes written 9E9 (none) become NaN without a span (in place); the same
+    rule as the bulk kernel's."""
+    ext = values[F_EXT]
+    absent = ~(np.abs(ext) < NO_AXIS_ABOVE)  # (a number the scanner could not read too)
+    ext[absent] = np.nan
+    spans[F_EXT][absent] = -1
+
+
+def _no_spans() -> np.ndarray:
+    return np.full((NF, 3), -1, dtype=np.int64)
 
 
 def _pose(numbers7: np.ndarray) -> np.ndarray:
@@ -130,8 +147,7 @@ class RapidParser:
                 spans[f] = (0, self.numbers.start[sl][k], self.numbers.end[sl][k])
             else:
                 conf[-f - 1] = vals[k]
-        values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])  # 9E9: no axis
-        spans[13:19][np.isnan(values[13:19])] = -1
+        _drop_absent_axes(values, spans)
         return values, spans, conf
 
     def _bulk_literals(self, starts: np.ndarray):
@@ -298,9 +314,7 @@ class RapidParser:
             lit = self._literal(s, e, _JT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"jointtarget {name} needs 12 numbers")
-            values, spans, conf = lit
-            values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])
-            self.points[name.upper()] = (values, spans, conf)
+            self.points[name.upper()] = lit
         elif dtype in ("tooldata", "wobjdata"):
             text = self.code[s:e].upper()
             holds = text.lstrip("[ \t").startswith("TRUE")
@@ -315,23 +329,26 @@ class RapidParser:
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
 
     def _target(self, node, start: int, joint: bool = False):
-        """values, spans, conf, offset, name of a target expression; None values where unknown."""
-        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF))
+        """(values, spans, conf, offset, offset_span), name of a target expression; NaN values where unknown.
+
+        ``offset`` and ``offset_span``: for Offs(p, dx, dy, dz) the value of p's numbers and
+        where they are written (the IR value is p + the offset written in the Offs call)."""
+        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF), _no_spans())
         if isinstance(node, Tree) and node.data == "aggregate":
             s, e = self._span(node, start)
             lit = self._literal(s, e, _JT_FIELDS if joint else _RT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"a {'jointtarget' if joint else 'robtarget'} literal needs {12 if joint else 17} numbers")
-            return (*lit, np.zeros(NF)), ""
+            return (*lit, np.zeros(NF), _no_spans()), ""
         s, e = self._span(node, start)
         text = re.sub(r"\s+", "", self.doc.text[s:e])
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "OFFS":
             args = node.children[1].children if len(node.children) > 1 else []
             base_expr = args[0].children[0] if args else None
-            (values, spans, conf, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
+            (values, spans, conf, _, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
             values, spans = values.copy(), spans.copy()
             offset = np.zeros(NF)
-            offset_span = np.full((NF, 3), -1, dtype=np.int64)
+            offset_span = _no_spans()
             for k in range(3):
                 arg = args[k + 1].children[0] if len(args) > k + 1 else None
                 a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
@@ -346,14 +363,13 @@ class RapidParser:
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
                     spans[k] = -1
-            self._offset_span = offset_span
-            return (values, spans, conf, offset), text
+            return (values, spans, conf, offset, offset_span), text
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
             return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
             found = self.points.get(text.upper())
             if found is not None:
-                return (*found, np.zeros(NF)), text
+                return (*found, np.zeros(NF), _no_spans()), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
         return empty, text
 
@@ -361,12 +377,12 @@ class RapidParser:
         """RelTool(p, dx, dy, dz [Rx] [Ry] [Rz]): offset and turn in the tool frame of p.
 
         The result is reported but not editable (its numbers mix through p's rotation)."""
-        from ..frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
+        from ...frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
 
         args = node.children[1].children if len(node.children) > 1 else []
         if len(args) < 4:
             return empty
-        (values, _, conf, _), _ = self._target(args[0].children[0], start)
+        (values, _, conf, _, _), _ = self._target(args[0].children[0], start)
         deltas = [literal_number(a.children[0]) for a in args[1:4]]
         turns = {"RX": 0.0, "RY": 0.0, "RZ": 0.0}
         for a in args:
@@ -380,7 +396,7 @@ class RapidParser:
         out[:3] = values[:3] + rot @ np.array(deltas)
         turned = rot @ rot_x(np.radians(turns["RX"])) @ rot_y(np.radians(turns["RY"])) @ rot_z(np.radians(turns["RZ"]))
         out[3:7] = matrix_to_quat_wxyz(turned[None])[0]
-        return out, np.full((NF, 3), -1, dtype=np.int64), conf, np.zeros(NF)
+        return out, _no_spans(), conf, np.zeros(NF), _no_spans()
 
     def _move(self, node: Tree, start: int) -> None:
         mv = str(node.children[0]).upper()
@@ -409,11 +425,10 @@ class RapidParser:
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
         for k, tnode in zip(kinds, positional[:n_targets]):
-            self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
-            (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
+            (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=self._offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)
@@ -425,7 +440,3 @@ class RapidParser:
             order = cols.pop("order")
             self.builder.add_block(order, line=self.lines.line(order), **cols)
         return self.builder.build()
-
-
-def parse_rapid(path: str, data: bytes) -> Toolpath:
-    return RapidParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()
