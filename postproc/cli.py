@@ -574,6 +574,7 @@ def compensate_cmd(
     report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
+    start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -593,7 +594,9 @@ def compensate_cmd(
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
-                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"), progress=lambda m: bar.update(task, description=m))
+                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
+                              start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                              progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
     if report is not None:
         doc = {"summary": summary, "points": [

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import dialects
+from . import dialects, posture
 from . import kinematics as kin
 from .errormodel import ErrorModel
 from .errors import InputError, JobError
@@ -56,16 +56,22 @@ class Report:
     within_limits: np.ndarray
     singular: np.ndarray
     branch_changed: np.ndarray
+    posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
 
     @property
     def failed(self) -> np.ndarray:
-        return self.compensated & ~(self.converged & self.within_limits & ~self.singular & ~self.branch_changed)
+        fine = self.converged & self.within_limits & ~self.singular & ~self.branch_changed
+        if self.posture is not None:
+            fine &= self.posture == 0
+        return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
         out = []
         for i in np.nonzero(self.failed)[0]:
             reasons = []
-            if not self.within_limits[i]:
+            if self.posture is not None and self.posture[i]:
+                reasons.append(_POSTURE_TEXT[int(self.posture[i])])
+            if not self.within_limits[i] and (self.posture is None or self.posture[i] != POSTURE_CONF):
                 reasons.append("out of reach or outside the joint limits")
             if self.singular[i]:
                 reasons.append("near a singularity")
@@ -146,26 +152,41 @@ class _Plant:
         return out
 
 
-def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The joints the controller would use for each target as written: from the program's
-    configuration data where it has some, else by continuity along the path."""
-    notes: list[str] = []
-    sols = kin.ik(robot, flange)
-    conf = tp.conf[rows]
-    q, branch = dialects.of(tp).branch_from_conf(robot, sols, conf)
-    missing = np.isnan(q).any(axis=1)
-    if missing.any():
-        if (~missing & ~np.isnan(conf).all(axis=1)).sum() < (~np.isnan(conf).all(axis=1)).sum():
-            notes.append("some configuration data match no IK solution of the nominal model; those targets follow the path instead")
-        # Without configuration data the controller keeps its branch along the path: the
-        # branch of the first target nearest the middle of the joint ranges.
-        start = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
-        path_q, path_branch, _ = kin.select_path(robot, sols if missing.all() else sols[missing], start)  # (no copy of all 8 solutions)
-        # Big steps between targets are the program's business; reachability is ours.
-        usable = kin.within_limits(robot, path_q)
-        q[missing] = np.where(usable[:, None], path_q, np.nan)
-        branch[missing] = np.where(usable, path_branch, -1)
-    return q, branch, notes
+def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray, start_q=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """The joints and branch the controller takes for each Cartesian target as written, by
+    the dialect's rules (postproc.posture): joint targets and configuration data that apply
+    set the posture, every other target carries it. Also returns, per Cartesian target, why
+    the controller could not take that posture (POSTURE_* codes, 0 where it can)."""
+    n = len(tp)
+    sols = np.full((n, 8, 6), np.nan)
+    sols[rows] = kin.ik(robot, flange)
+    dialect = dialects.of(tp)
+    cartesian = np.zeros(n, dtype=bool)
+    cartesian[rows] = True
+    by_conf = dialect.conf_applies(tp) & cartesian
+    anchor_q = np.full((n, 6), np.nan)
+    if by_conf.any():
+        anchor_q[by_conf] = dialect.branch_from_conf(robot, sols[by_conf], tp.conf[by_conf])[0]
+    joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
+    anchor_q[joint_targets] = tp.joints[joint_targets]
+    carried = posture.carry(robot, sols, by_conf | joint_targets, anchor_q, start_q, lines=tp.line)
+    problem = np.zeros(n, dtype=int)
+    problem[by_conf & np.isnan(anchor_q).any(axis=1)] = POSTURE_CONF
+    q = np.where(problem[:, None] == POSTURE_CONF, np.nan, carried.q)
+    usable = ~np.isnan(q).any(axis=1) & kin.within_limits(robot, np.nan_to_num(q))
+    branch = np.where(usable, carried.branch, -1)
+    q[~usable] = np.nan
+    return q[rows], branch[rows], problem[rows], list(carried.notes)
+
+
+# What may keep the controller from the posture its rules give (Report.posture):
+POSTURE_CONF = 1  # the configuration data match no IK solution of the nominal robot
+POSTURE_PATH = 3  # the straight line to the compensated target passes a singularity or leaves reach
+_POSTURE_TEXT = {
+    POSTURE_CONF: "its configuration data match no IK solution of the nominal robot: the controller would stop there "
+                  "(write the configuration the robot takes, or let it choose: KRL LIN, RAPID ConfL\\Off / ConfJ\\Off)",
+    POSTURE_PATH: "the controller's straight line to the compensated target passes near a singularity or leaves reach on its posture",
+}
 
 
 def compensate(
@@ -179,6 +200,7 @@ def compensate(
     force_n=None,
     frames: dict | None = None,
     tools: dict | None = None,
+    start_joints=None,
     progress=lambda msg: None,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring)."""
@@ -191,7 +213,7 @@ def compensate(
     if frames or tools:
         tp = tp.with_frames(frames, tools)
     _refuse_unplaced(tp)
-    problem = _Problem.of(tp, model, temp_c, force_n)
+    problem = _Problem.of(tp, model, temp_c, force_n, start_joints)
     progress("predicting the program as written")
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
@@ -254,22 +276,41 @@ def _refuse_unplaced(tp: Toolpath) -> None:
 class _Problem:
     """The Cartesian targets of one program and the robot that must reach them."""
 
-    def __init__(self, tp: Toolpath, plant: _Plant, rows: np.ndarray, target: np.ndarray, q_ref, branch_ref, notes):
+    def __init__(self, tp: Toolpath, plant: _Plant, rows: np.ndarray, target: np.ndarray, q_ref, branch_ref, posture_problem, notes):
         self.tp, self.plant, self.rows, self.target = tp, plant, rows, target
         self.goal = target[:, :3, 3]
         self.q_ref, self.branch_ref, self.notes = q_ref, branch_ref, notes
+        self.posture_problem = posture_problem
         # Joints of every target in program order (backlash depends on the approach direction).
         self.order_q = np.zeros((len(tp), 6))
         self.order_q[rows] = np.nan_to_num(q_ref)
 
     @classmethod
-    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n) -> "_Problem":
+    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None) -> "_Problem":
         rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
         target = tp.base_poses()[rows]
         plant = _Plant(model, tp.tools, tp.tool, temp_c, None if force_n is None else np.asarray(force_n, dtype=float))
         flange = target @ plant.inv_tools[tp.tool[rows]]
-        q_ref, branch_ref, notes = _reference_joints(tp, model.robot, flange, rows)
-        return cls(tp, plant, rows, target, q_ref, branch_ref, notes)
+        q_ref, branch_ref, posture_problem, notes = _reference_joints(tp, model.robot, flange, rows, start_joints)
+        return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
+
+    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
+        """(Cartesian targets,) True where the nominal controller's straight line from the
+        previous target to this compensated one cannot be driven on the carried posture."""
+        tp, rows = self.tp, self.rows
+        straight = np.isin(tp.kind[rows], (Kind.LINEAR,))
+        has_prev = np.zeros(len(rows), dtype=bool)
+        has_prev[1:] = rows[1:] == rows[:-1] + 1  # the previous motion is a Cartesian target too
+        check = straight & has_prev & ~np.isnan(q).any(axis=1) & np.roll(~np.isnan(q).any(axis=1), 1)
+        blocked = np.zeros(len(rows), dtype=bool)
+        idx = np.nonzero(check)[0]
+        if idx.size:
+            poses = self.target.copy()
+            poses[:, :3, 3] = cmd
+            flange = poses @ self.plant.inv_tools[tp.tool[rows]]
+            reason = posture.check_linear_segments(self.plant.robot, flange[idx - 1], flange[idx], branch[idx], q[idx - 1])
+            blocked[idx] = reason != 0
+        return blocked
 
     def predicted_error_as_written(self) -> np.ndarray:
         return self.plant.actual(self.q_ref, self.rows, self.order_q) - self.goal
@@ -399,6 +440,9 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
     ok_q = ~np.isnan(sol.q).any(axis=1)
     singular[ok_q] = _wrist_elbow_shoulder(robot, sol.q[ok_q])
     changed = sol.within & (sol.branch != problem.branch_ref)
+    posture_problem = problem.posture_problem.copy()
+    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch)
+    posture_problem[(posture_problem == 0) & blocked] = POSTURE_PATH
     full = lambda fill, values, dtype=float: _scatter(n, rows, fill, values, dtype)  # noqa: E731
     return Report(
         line=problem.tp.line,
@@ -411,6 +455,7 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
         within_limits=full(True, sol.within, bool),
         singular=full(False, singular, bool),
         branch_changed=full(False, changed, bool),
+        posture=full(0, posture_problem, int),
     )
 
 

@@ -132,7 +132,7 @@ def test_rapid_to_standard_output_still_works(model_path, tmp_path):
     """One-file programs keep the filter mode (program on stdout, summary on stderr)."""
     program = tmp_path / "p.mod"
     program.write_text(
-        "MODULE P\n  PERS tooldata t1 := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];\n  PROC main()\n"
+        "MODULE P\n  PERS tooldata t1 := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];\n  PROC main()\n    ConfL\\Off;\n"
         "    MoveL [[950,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, t1;\n  ENDPROC\nENDMODULE\n"
     )
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-"])

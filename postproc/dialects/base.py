@@ -52,6 +52,12 @@ class Dialect:
         where the program gives none (the caller then follows the path)."""
         return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
 
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        """(N,) True where the controller takes the target's configuration data as written
+        (it then selects the branch); elsewhere the robot keeps the posture it is in
+        (see postproc.posture). Default: wherever the program gives configuration data."""
+        return ~np.isnan(tp.conf).all(axis=1)
+
     # ---------------------------------------------------------------- writing
     def insert_field(self, source: int, field: str, text: str) -> str | None:
         """Text that adds a component a target leaves out (``LIN {X 1}`` without Y), or None

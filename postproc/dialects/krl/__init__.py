@@ -53,6 +53,14 @@ class KrlDialect(Dialect):
             q[has], branch[has] = select_by_kuka_status(robot, solutions[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
         return q, branch
 
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        """S and T count for PTP motions only; LIN, CIRC (and KSS 8 SLIN/SCIRC) ignore them
+        and keep the current posture (KUKA System Software 8.x operating and programming
+        manual, 'Status and Turn')."""
+        from ...ir import Kind
+
+        return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f", {field.upper()} {text}"  # one more component of the aggregate
 
