@@ -189,11 +189,15 @@ def recording(name: str) -> Path:
 
 
 def run_rs274(path: Path) -> tuple[bool, str, str]:
-    """(accepted, canonical stdout, stderr) of LinuxCNC's interpreter on a program."""
+    """(accepted, canonical calls, stderr) of LinuxCNC's interpreter on a program. The calls are
+    rs274's stdout without its running count and without COMMENT/MESSAGE calls (they echo the
+    program's comments, which stay in the third-party file)."""
     proc = subprocess.run(["rs274", "-g", "-t", str(TOOL_TABLE), path.name], cwd=path.parent, stdin=subprocess.DEVNULL,
                           capture_output=True, timeout=60)
     out, err = proc.stdout.decode("latin-1"), proc.stderr.decode("latin-1")
-    return proc.returncode == 0 or BENIGN_END in err, out, err
+    calls = [re.sub(r"^\s*\d+ ", "", line) for line in out.splitlines()]
+    calls = [c for c in calls if not re.match(r"N\S*\s+(COMMENT|MESSAGE)\(", c)]
+    return proc.returncode == 0 or BENIGN_END in err, "".join(c + "\n" for c in calls), err
 
 
 def canonical_endpoints(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
