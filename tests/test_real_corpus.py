@@ -111,7 +111,7 @@ RS274_XFAIL = {
     "gcode/LinuxCNC_linuxcnc__interp_g10-l2-while-active.ngc": "refused by the parser: `g1 y sqrt[2]` (g10-l2-while-active.ngc:12)",
     "gcode/LinuxCNC_linuxcnc__ccomp_mill-g90g91g92.ngc": "G92 Z.5 is not applied: IR Z 0 mm where rs274 has 12.7 mm, target marked resolved (mill-g90g91g92.ngc:17 -> :20)",
     "gcode/LinuxCNC_linuxcnc__interp_g10-l20-while-active.ngc": "G10 L20 (offset from the current position) with a G10 L2 R45 rotation: IR (-1, 0, 0) mm where rs274 has (17.96, 17.96, 0), marked resolved (g10-l20-while-active.ngc:6 -> :8)",
-    "gcode/LinuxCNC_linuxcnc__interp_rotation-g53.ngc": "G10 L2 R45 work-offset rotation, G53 and G92 together: IR (1, 1, ?) where rs274 has (0, 1.414, 0) in (rotation-g53.ngc:2 -> :6); flagged unresolved",
+    "gcode/LinuxCNC_linuxcnc__interp_rotation-g53.ngc": "G10 L2 R45 work-offset rotation, G53 and G92 together: IR (1, 1, ?) mm where rs274 has (0, 1.414, 0) mm (rotation-g53.ngc:2 -> :6); flagged unresolved",
     "gcode/LinuxCNC_linuxcnc__interp_g17-g98-g81.ngc": "G81 with G98 (and R above/below the old Z) not expanded: 1 IR target, 38 rs274 moves (g17-g98-g81.ngc:18-)",
     "gcode/LinuxCNC_linuxcnc__interp_g18-g99-g81.ngc": "G81 in G18 with G99 not expanded: 1 IR target, 37 rs274 moves (g18-g99-g81.ngc)",
     "gcode/LinuxCNC_linuxcnc__interp_inverse-time-with-comp.ngc": "`o100 call` (3 calls, #100 changed between them) not unrolled: IR 10 targets, rs274 40 moves (inverse-time-with-comp.ngc:18-22)",
