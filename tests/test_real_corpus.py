@@ -114,8 +114,8 @@ RS274_XFAIL = {
     "gcode/LinuxCNC_linuxcnc__interp_rotation-g53.ngc": "G10 L2 R45 work-offset rotation, G53 and G92 together: IR (1, 1, ?) mm where rs274 has (0, 1.414, 0) mm (rotation-g53.ngc:2 -> :6); flagged unresolved",
     "gcode/LinuxCNC_linuxcnc__interp_g17-g98-g81.ngc": "G81 with G98 (and R above/below the old Z) not expanded: 1 IR target, 38 rs274 moves (g17-g98-g81.ngc:18-)",
     "gcode/LinuxCNC_linuxcnc__interp_g18-g99-g81.ngc": "G81 in G18 with G99 not expanded: 1 IR target, 37 rs274 moves (g18-g99-g81.ngc)",
-    "gcode/LinuxCNC_linuxcnc__interp_inverse-time-with-comp.ngc": "`o100 call` (3 calls, #100 changed between them) not unrolled: IR 10 targets, rs274 40 moves (inverse-time-with-comp.ngc:18-22)",
-    "gcode/LinuxCNC_linuxcnc__interp_m98-loops.ngc": "Fanuc `M98 P1 L10` subprogram calls with repeat counts not unrolled: IR 1, rs274 40 (m98-loops.ngc:8, :13, :18)",
+    "gcode/LinuxCNC_linuxcnc__interp_inverse-time-with-comp.ngc": "`o100 call` (3 calls, the G42.1 diameter #100 changed between them) not unrolled, body marked resolved: IR 11 targets, rs274 40 moves (inverse-time-with-comp.ngc:18-22)",
+    "gcode/LinuxCNC_linuxcnc__interp_m98-loops.ngc": "Fanuc `M98 P1 L10` calls of `O1 ... M99` not unrolled and the sub's `G91 G99 G81` (line 23) missing, not flagged: IR 3 targets, rs274 40 moves (m98-loops.ngc:8, :13, :18)",
 }
 
 
