@@ -1,0 +1,61 @@
+"""Library entry points of the five-axis CLI commands (cli.py only maps errors and prints)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .calibrate import Calibration, calibrate_machine
+from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
+from .files import write_all
+from .machine import load_machine, machine_toml
+from .probes import read_probes
+
+
+def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, axis: str | None = None, method: str = "seed003",
+                   seed: int = 0, sphere_radius: float | None = None, tip_radius: float = 0.0, min_outlier_mm: float = 0.01) -> tuple[dict, Calibration]:
+    """Calibrate the rotary axes from a probing CSV; with ``output``, write the calibrated
+    machine file and the controller data beside it (all files or none). Returns the JSON
+    document (spec/cli.md) and the calibration."""
+    machine = load_machine(machine_name)
+    centres = read_probes(probes, axis=axis, sphere_radius=sphere_radius, tip_radius=tip_radius)
+    cal = calibrate_machine(machine, centres, method=method, seed=seed, min_outlier_mm=min_outlier_mm)
+    doc = cal.as_json()
+    doc["probes"] = str(probes)
+    controllers = {}
+    lcnc = linuxcnc_trt(cal.machine, machine)
+    sie = siemens_tc_carr(cal.machine)
+    if lcnc:
+        controllers["linuxcnc"] = {k: v for k, v in lcnc.items() if k != "text"}
+    if sie:
+        controllers["siemens"] = {k: v for k, v in sie.items() if k != "text"}
+    doc["controller_data"] = controllers
+    if output is not None:
+        output = Path(output)
+        header = (f"Calibrated by postproc rtcp-calibrate from {probes} ({method}); nominal machine {machine.source_path}.\n"
+                  "Rotary axes: fitted direction and a point on the axis (the fitted circle centre).")
+        files = {output: machine_toml(cal.machine, header), output.with_suffix(".heidenhain.csv"): heidenhain_csv(cal.machine)}
+        if lcnc:
+            files[output.with_suffix(".linuxcnc.hal")] = lcnc["text"]
+        if sie:
+            files[output.with_suffix(".siemens.spf")] = sie["text"]
+        write_all(files)
+        doc["files"] = {str(p): label for p, label in zip(files, ["calibrated machine (postproc TOML)", "Heidenhain-style kinematics table (CSV)",
+                                                                   *(["LinuxCNC trt kinematics HAL pins"] if lcnc else []),
+                                                                   *(["Siemens 840D $TC_CARR (type P)"] if sie else [])])}
+    return doc, cal
+
+
+def calibration_summary(doc: dict) -> list[str]:
+    lines = []
+    for name, ax in doc["axes"].items():
+        d, p, v = ax["direction"], ax["point"], ax["vs_nominal"]
+        lines.append(f"axis {name}: direction [{d[0]:.6f}, {d[1]:.6f}, {d[2]:.6f}] (+-{ax['direction_sigma_rad']:.1e} rad), "
+                     f"point [{p[0]:.4f}, {p[1]:.4f}, {p[2]:.4f}] mm (+-{ax['point_sigma_mm']:.4f}), circle RMS {ax['rms_mm']:.4f} mm, "
+                     f"{ax['kept']} of {ax['positions']} positions kept")
+        lines.append(f"  vs nominal: line distance {v['line_distance_mm']:.4f} mm, angle {v['angle_rad']:.2e} rad, "
+                     f"offset at the circle centre {v['offset_at_centre_mm']:.4f} mm")
+        for o in ax["removed"]:
+            lines.append(f"  removed id {o['id']} (row {o['row']}): {o['why']}")
+    for path, label in doc.get("files", {}).items():
+        lines.append(f"wrote {path} ({label})")
+    return lines
