@@ -645,11 +645,22 @@ def convert_cmd(
     to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
+    machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
+    rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
 ):
-    """Write a new robot program with every target of another program."""
+    """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .emit.writer import write_program
     from .programs import parse_program, write_texts
 
+    if to == "gcode" or machine is not None:
+        from .fivex.commands import convert_five
+
+        if machine is None:
+            raise InputError("--to gcode needs --machine (a name from machines/ or a machine file)")
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes):
+            out.print(line)
+        return
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
     outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]

@@ -59,3 +59,38 @@ def calibration_summary(doc: dict) -> list[str]:
     for path, label in doc.get("files", {}).items():
         lines.append(f"wrote {path} ({label})")
     return lines
+
+
+def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: str | None, dialect: str | None = None,
+                 input_axes: str | None = None, tool: int = 1) -> list[str]:
+    """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
+    robot program from a five-axis G-code one. Returns the summary lines."""
+    from ..emit.writer import write_program
+    from ..errors import InputError
+    from ..programs import parse_program
+    from .emit import MODES, emit
+    from .program import from_toolpath, to_robot_toolpath
+
+    machine = load_machine(machine_name)
+    if input_axes not in (None, "tip", "machine"):
+        raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
+    tp = parse_program(program, dialect)
+    path = from_toolpath(tp, machine, input_axes)
+    if to == "gcode":
+        if rtcp not in MODES:
+            raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
+        result = emit(machine, path, rtcp, tool=tool)
+        write_all({Path(output): result.text}, encoding="latin-1")
+        lines = [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"]
+        if rtcp == "none":
+            lines.append(f"largest tip deviation at the middle of a move (axes interpolated linearly): {result.chord_error_mm:.4f} mm")
+        return lines + [f"note: {n}" for n in result.notes]
+    if to not in ("rapid", "krl"):
+        raise InputError(f"--to: '{to}' is not rapid, krl or gcode")
+    if tp.dialect != "gcode":
+        raise InputError("--machine with --to rapid/krl converts a five-axis G-code program; this one is a robot program")
+    robot = to_robot_toolpath(tp, path)
+    texts = write_program(robot, to, Path(output).stem)
+    outputs = [Path(output)] if to == "rapid" else [Path(output), Path(output).with_suffix(".dat")]
+    write_all(dict(zip(outputs, texts)), encoding="latin-1")
+    return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]

@@ -115,6 +115,12 @@ def ik(machine: Machine, tip: np.ndarray, tool_axis: np.ndarray, start_deg=(0.0,
     periodic = np.array([ax.periodic for ax in machine.rotary])
     lin_ok = np.stack([_linear_ok(machine, tip, np.nan_to_num(cand[:, b]), tool_length) for b in range(2)], axis=1)
     chosen, branch = _choose_kernel(cand, free, lin_ok, lo, hi, periodic, np.asarray(start_deg, dtype=float))
+    # A program that starts at the pole takes the free axis where it will be needed first
+    # (CAM posts' look-ahead), instead of turning it at speed on the first tilted move.
+    settled = np.nonzero(~free.any(axis=1) & (branch >= 0))[0]
+    if len(settled) and settled[0] > 0:
+        lead = slice(0, settled[0])
+        chosen[lead] = np.where(free[lead], chosen[settled[0]], chosen[lead])
     axes = np.full((len(tip), 5), np.nan)
     axes[:, 3:5] = chosen
     ok = branch >= 0
