@@ -74,11 +74,11 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     machine = load_machine(machine_name)
     if input_axes not in (None, "tip", "machine"):
         raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
+    if to == "gcode" and rtcp not in MODES:
+        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
     tp = parse_program(program, dialect)
     path = from_toolpath(tp, machine, input_axes)
     if to == "gcode":
-        if rtcp not in MODES:
-            raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
         result = emit(machine, path, rtcp, tool=tool)
         write_all({Path(output): result.text}, encoding="latin-1")
         lines = [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"]
