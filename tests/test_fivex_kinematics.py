@@ -146,3 +146,35 @@ def test_calibrated_file_round_trips():
     for a, b in zip(m.rotary, back.rotary):
         np.testing.assert_allclose(a.direction, b.direction, atol=1e-9)
         np.testing.assert_allclose(a.point, b.point, atol=1e-9)
+
+
+HEAD_MACHINES = {
+    "head-table": ('name = "B"\ncarrier = "head"\ndirection = [0.0, 1.0, 0.0]\npoint = [0.0, 0.0, 150.0]\nlimits = [-110.0, 110.0]',
+                   'name = "C"\ncarrier = "table"\ndirection = [0.0, 0.0, 1.0]\npoint = [5.0, -3.0, 0.0]\nlimits = [-36000.0, 36000.0]'),
+    "head-head": ('name = "C"\ncarrier = "head"\ndirection = [0.0, 0.0, 1.0]\npoint = [0.0, 0.0, 0.0]\nlimits = [-36000.0, 36000.0]',
+                  'name = "A"\ncarrier = "head"\ndirection = [1.0, 0.0, 0.0]\npoint = [0.0, 0.0, 180.0]\nlimits = [-100.0, 100.0]'),
+}
+
+
+def synthetic_machine(kind: str):
+    first, second = HEAD_MACHINES[kind]
+    names = [first.split('"')[1], second.split('"')[1]]
+    text = (f'[machine]\nname = "{kind}-test"\ndescription = "synthetic {kind} machine for tests"\nkind = "{kind}"\n'
+            f'axes = ["X", "Y", "Z", "{names[0]}", "{names[1]}"]\ntool_axis = [0.0, 0.0, 1.0]\n[units]\nlength = "mm"\nangle = "deg"\n'
+            '[sources]\ngeometry = "synthetic (tests)"\n[linear]\nX = [-1000.0, 1000.0]\nY = [-1000.0, 1000.0]\nZ = [-1000.0, 1000.0]\n'
+            f"[[rotary]]\n{first}\n[[rotary]]\n{second}\n")
+    return parse_machine_toml(text, f"{kind}-test.toml")
+
+
+@pytest.mark.parametrize("kind", sorted(HEAD_MACHINES))
+@pytest.mark.parametrize("tool_length", [0.0, 120.0])
+def test_head_machines_round_trip(kind, tool_length):
+    rng = np.random.default_rng(7)
+    m = perturbed(synthetic_machine(kind), rng, tilt_rad=(1e-3, 2e-3), offset_mm=(0.2, 0.5))
+    lim = np.array([ax.limits for ax in m.rotary])
+    joints = np.c_[rng.uniform(-200, 200, (200, 3)), rng.uniform(np.maximum(lim[:, 0], -100), np.minimum(lim[:, 1], 100), (200, 2))]
+    tip, axis = fk(m, joints, tool_length)
+    result = ik(m, tip, axis, start_deg=joints[0, 3:5], tool_length=tool_length)
+    tip2, axis2 = fk(m, result.axes, tool_length)
+    np.testing.assert_allclose(tip2, tip, atol=1e-8)
+    np.testing.assert_allclose(axis2, axis, atol=1e-10)

@@ -52,6 +52,7 @@ class AxisFit:
     plane_xy: np.ndarray = field(repr=False)  # (N, 2) in-plane coordinates of all centres
     basis: np.ndarray = field(repr=False)  # (2, 3) in-plane directions
     centroid: np.ndarray = field(repr=False)
+    plane_offset: np.ndarray = field(repr=False, default=None)  # (N,) signed distance of every centre to the fitted plane, mm
 
 
 def consensus_plane_outliers(points: np.ndarray, seed: int = 0, min_outlier_mm: float = 0.01, max_batches: int = 64) -> tuple[np.ndarray, np.ndarray, int]:
@@ -126,7 +127,7 @@ def fit_axis(axis: str, xyz: np.ndarray, ids, angle=None, method: str = "seed003
     off = (xyz[kept] - plane.centroid) @ plane.normal
     rms3d = float(np.sqrt(np.mean(circle.residuals**2 + off**2)))
     return AxisFit(axis, direction, point, circle.radius, rms3d, plane.rms, plane.normal_sigma_rad, circle.centre_sigma, kept, outliers, sense,
-                   draws, method, xy, basis, plane.centroid)
+                   draws, method, xy, basis, plane.centroid, (xyz - plane.centroid) @ direction)
 
 
 def _plane_and_circle(xyz: np.ndarray, kept: np.ndarray, method: str):

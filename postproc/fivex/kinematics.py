@@ -27,6 +27,12 @@ from .machine import Machine
 # Per kind, for rotary axis i: which known vector its subproblem-1 pairs with x
 # ("t0": the tool axis at zero in the machine frame, "u": the wanted tool axis in the
 # workpiece frame) and whether x is the vector turned ("from") or the target ("to").
+# Within this angle of the pole a rotary angle is held (as CAM posts do): with calibrated,
+# slightly tilted axes a nominally vertical tool is a few 1e-4 rad off the pole, where the
+# exact solution would swing the table through tens of degrees for nothing. The tool axis
+# error this allows (at most about twice the tolerance) is reported per target.
+POLE_TOL_DEG = 0.05
+
 _PAIRS = {
     "table-table": (("t0", True), ("u", False)),  # R1 R2 u = t0: x = R2 u = R1^T t0
     "head-table": (("t0", False), ("u", False)),  # R_h t0 = R_t u = x
@@ -71,7 +77,7 @@ def fk(machine: Machine, axes: np.ndarray, tool_length: float = 0.0) -> tuple[np
     return tip_m, axis_m
 
 
-def rotary_solutions(machine: Machine, tool_axis: np.ndarray, singular_tol_deg: float = 1e-4):
+def rotary_solutions(machine: Machine, tool_axis: np.ndarray, singular_tol_deg: float = POLE_TOL_DEG):
     """Both rotary solutions (N, 2 branches, 2 axes) deg of the tool axis (N, 3), NaN where
     the axis cannot be reached, and (N, 2) flags of a free (singular) axis, whose angle is
     then arbitrary (the value given is that of the other branch's computation)."""
@@ -106,7 +112,7 @@ class IKResult:
 
 
 def ik(machine: Machine, tip: np.ndarray, tool_axis: np.ndarray, start_deg=(0.0, 0.0), tool_length: float = 0.0,
-       singular_tol_deg: float = 1e-4) -> IKResult:
+       singular_tol_deg: float = POLE_TOL_DEG) -> IKResult:
     """Machine axes reaching tool tips (N, 3) with tool axes (N, 3), workpiece frame."""
     tip = np.atleast_2d(np.asarray(tip, dtype=float))
     cand, free = rotary_solutions(machine, np.atleast_2d(tool_axis), singular_tol_deg)
@@ -121,6 +127,7 @@ def ik(machine: Machine, tip: np.ndarray, tool_axis: np.ndarray, start_deg=(0.0,
     if len(settled) and settled[0] > 0:
         lead = slice(0, settled[0])
         chosen[lead] = np.where(free[lead], chosen[settled[0]], chosen[lead])
+    chosen = _resolve_held(machine, np.atleast_2d(tool_axis), chosen, free & (branch >= 0)[:, None], periodic)
     axes = np.full((len(tip), 5), np.nan)
     axes[:, 3:5] = chosen
     ok = branch >= 0
@@ -133,6 +140,30 @@ def ik(machine: Machine, tip: np.ndarray, tool_axis: np.ndarray, start_deg=(0.0,
     u = np.atleast_2d(tool_axis) / np.linalg.norm(np.atleast_2d(tool_axis), axis=1, keepdims=True)
     err = np.where(ok, np.arccos(np.clip(np.einsum("ni,ni->n", reached, u), -1.0, 1.0)), np.nan)
     return IKResult(axes, branch, free.any(axis=1) & ok, inside, err)
+
+
+def _resolve_held(machine: Machine, tool_axis: np.ndarray, chosen: np.ndarray, held: np.ndarray, periodic: np.ndarray) -> np.ndarray:
+    """With one axis held, the other's angle that brings the tool axis nearest the wanted one
+    (subproblem 1 with the held rotation applied), at the turn nearest the kernel's choice."""
+    out = chosen.copy()
+    u = tool_axis / np.linalg.norm(tool_axis, axis=1, keepdims=True)
+    known = {"t0": np.broadcast_to(machine.tool_axis, u.shape), "u": u}
+    for i in (0, 1):
+        rows = held[:, i] & ~held[:, 1 - i]
+        if not rows.any():
+            continue
+        j = 1 - i
+        (vi, from_i), (vj, from_j) = _PAIRS[machine.kind][i], _PAIRS[machine.kind][j]
+        ki, kj = machine.rotary[i].direction, machine.rotary[j].direction
+        theta = np.radians(chosen[rows, i])
+        rot = rotation(ki, -theta if from_i else theta)
+        x = np.einsum("nij,nj->ni", rot, known[vi][rows])  # R(ki, th) x = v  or  R(ki, th) v = x
+        frm, to = (x, known[vj][rows]) if from_j else (known[vj][rows], x)
+        angle = np.degrees(subproblem1(kj, frm, to)[0])
+        if periodic[j]:
+            angle = angle + 360.0 * np.round((chosen[rows, j] - angle) / 360.0)
+        out[rows, j] = angle
+    return out
 
 
 def _linear_ok(machine: Machine, tip: np.ndarray, angles_deg: np.ndarray, tool_length: float) -> np.ndarray:
