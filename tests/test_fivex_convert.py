@@ -59,7 +59,13 @@ def test_every_mode_reads_back_to_the_intended_tips(tmp_path, mode):
         assert d.max() < 1e-5
     else:
         np.testing.assert_allclose(back.tip, path.tip, atol=1e-6)
-        np.testing.assert_allclose(back.axis, path.axis, atol=1e-6)
+        # tool axes exact, but within the pole tolerance of C, where C is held (the calibrated
+        # C is tilted a few 1e-4 rad, so the vertical tool is near, not at, the pole)
+        from postproc.fivex.kinematics import POLE_TOL_DEG
+
+        err = np.arccos(np.clip(np.einsum("ni,ni->n", back.axis, path.axis), -1, 1))
+        near_pole = np.arccos(np.abs(path.axis @ machine.rotary[1].direction)) < np.radians(POLE_TOL_DEG)
+        assert near_pole.sum() == 2 and err[~near_pole].max() < 1e-6 and err[near_pole].max() < 2 * np.radians(POLE_TOL_DEG)
 
 
 def test_machine_axes_keep_the_inputs_inverse_time():

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .errors import UnreachableError
-from .kinematics import fk, ik
+from .kinematics import POLE_TOL_DEG, fk, ik
 from .machine import Machine
 from .program import FivePath
 
@@ -55,7 +55,10 @@ def _header(mode: str, machine: Machine, path: FivePath) -> list[str]:
             "fanuc": "Fanuc tool centre point control G43.4 (tool tip + rotary angles)",
             "siemens": "Siemens TRAORI (tool tip + rotary angles)",
             "none": "machine axes (no RTCP), from the machine file's kinematics"}[mode]
-    texts = [f"postproc: {what}", f"machine {machine.name} ({machine.source_path}); from {path.source}"]
+    from pathlib import Path
+
+    # file names only: the program must not depend on where it was made
+    texts = [f"postproc: {what}", f"machine {machine.name} ({Path(machine.source_path).name}); from {Path(path.source).name}"]
     if machine.calibration:
         texts.append("machine axes calibrated: " + ", ".join(f"{k} {v}" for k, v in machine.calibration.items()))
     return [f"; {t}" if c else f"({t.replace('(', '[').replace(')', ']')})" for t in texts]
@@ -127,7 +130,9 @@ def emit(machine: Machine, path: FivePath, mode: str, tool: int = 1, tool_length
     lines += {"linuxcnc": ["G94", "M2"], "fanuc": ["G94", "G49", "M30"], "siemens": ["G94", "TRAFOOF", "M30"], "none": ["G94", "M2"]}[mode]
     notes = list(path.notes)
     if result.held.any():
-        notes.append(f"{int(result.held.sum())} target(s) at the singular pole (tool axis along a rotary axis): that axis was held (at its previous angle; at the program start, at the angle the first tilted target needs)")
+        worst = float(np.degrees(np.nanmax(result.axis_error_rad[result.held])))
+        notes.append(f"{int(result.held.sum())} target(s) within {POLE_TOL_DEG} deg of the singular pole (tool axis along a rotary axis): that axis was held "
+                     f"(at its previous angle; at the program start, at the angle the first tilted target needs); tool axis off by at most {worst:.4f} deg there")
     chord = _chord_error(machine, path, axes) if mode == "none" else 0.0
     return Emitted("\n".join(lines) + "\n", axes, result.held, chord, tuple(notes), path)
 
