@@ -514,8 +514,17 @@ def compensate_cmd(
     report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
+    grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
-    """Rewrite a program so the robot reaches its targets under the fitted error model."""
+    """Rewrite a program so the robot reaches its targets under the fitted error model
+    (or a five-axis G-code program for a calibrated machine file given as --model)."""
+    if model.suffix == ".toml":
+        from .fivex.commands import compensate_five_program
+
+        for line in compensate_five_program(Path(program), model, Path(output), grid, input_axes, dialect=dialect):
+            out.print(line)
+        return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .compensate import CompensationError, compensate

@@ -94,3 +94,38 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     outputs = [Path(output)] if to == "rapid" else [Path(output), Path(output).with_suffix(".dat")]
     write_all(dict(zip(outputs, texts)), encoding="latin-1")
     return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]
+
+
+def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
+                            controller_name: str | None = None, dialect: str | None = None) -> list[str]:
+    """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
+    for the real machine; the written text is read back and checked before it is kept."""
+    import numpy as np
+
+    from ..errors import JobError
+    from ..programs import emit_texts, parse_program
+    from .compensate import actual_tip, compensate_five, controller_axes
+    from .errormap import load_grid
+    from .kinematics import fk
+    from .program import _ROTARY_FIELD
+
+    true = load_machine(machine_file)
+    controller = load_machine(controller_name or true.name)
+    grid = load_grid(grid_file) if grid_file is not None else None
+    tp = parse_program(program, dialect)
+    new, report = compensate_five(tp, true, controller, grid, input_axes)
+    text = emit_texts(tp, new)[0]
+    # What the written numbers (rounded as the text has them) make the real machine do:
+    again = parse_program(program, tp.dialect, data=text.encode("latin-1"))
+    cols = [_ROTARY_FIELD[n] for n in controller.rotary_names]
+    cmd = controller_axes(controller, again.position, again.ext[:, cols], input_axes)
+    intended, _ = fk(controller, controller_axes(controller, tp.position, tp.ext[:, cols], input_axes))
+    written = np.linalg.norm(actual_tip(true, grid, cmd) - intended, axis=1)
+    if not np.isfinite(written).all() or written.max() > 0.005:
+        i = int(np.nanargmax(np.where(np.isfinite(written), written, np.inf)))
+        raise JobError(f"{program}:{int(tp.line[i])}: the compensated numbers, as written, leave {written[i]:.4f} mm; nothing was written")
+    write_all({Path(output): text}, encoding="latin-1")
+    lines = [f"{len(tp)} targets compensated for {machine_file}{' and grid ' + str(grid_file) if grid is not None else ''}: "
+             f"predicted tip error max {report.before_mm.max():.4f} -> {written.max():.4f} mm (RMS {np.sqrt(np.mean(report.before_mm**2)):.4f} -> "
+             f"{np.sqrt(np.mean(written**2)):.4f} mm, as written); largest linear-axis correction {report.correction_mm.max():.4f} mm"]
+    return lines + [f"note: {n}" for n in report.notes]
