@@ -11,7 +11,7 @@ from postproc.fivex.kinematics import fk, ik, rotary_solutions
 from postproc.fivex.machine import available_machines, load_machine, machine_toml, parse_machine_toml
 from postproc.fivex.simulate import perturbed
 
-MACHINES = ("xyzac-trt", "xyzbc-trt")
+MACHINES = ("xyzac-trt", "xyzbc-trt")  # table-table; the head-head xyzbc-5axiskins is tested below
 
 
 def linuxcnc_forward(name: str, joints: np.ndarray) -> np.ndarray:
@@ -178,3 +178,17 @@ def test_head_machines_round_trip(kind, tool_length):
     tip2, axis2 = fk(m, result.axes, tool_length)
     np.testing.assert_allclose(tip2, tip, atol=1e-8)
     np.testing.assert_allclose(axis2, axis, atol=1e-10)
+
+
+def test_head_head_machine_equals_linuxcnc_5axiskins():
+    """5axiskins.c: tip = joints + (0, 0, L) + L (sin b cos c, sin b sin c, -cos b), L = 250."""
+    m = load_machine("xyzbc-5axiskins")
+    rng = np.random.default_rng(8)
+    j = np.c_[rng.uniform(-300, 300, (300, 2)), rng.uniform(-300, 0, 300), rng.uniform(-180, 180, 300), rng.uniform(-110, 110, 300)]  # X Y Z C B
+    b, c = np.radians(j[:, 4]), np.radians(j[:, 3])
+    want = j[:, :3] + 250.0 * np.stack([np.sin(b) * np.cos(c), np.sin(b) * np.sin(c), 1.0 - np.cos(b)], axis=1)
+    tip, axis = fk(m, j)
+    np.testing.assert_allclose(tip, want, atol=1e-9)
+    np.testing.assert_allclose(axis, np.stack([-np.sin(b) * np.cos(c), -np.sin(b) * np.sin(c), np.cos(b)], axis=1), atol=1e-12)
+    result = ik(m, tip, axis, start_deg=j[0, 3:5])
+    np.testing.assert_allclose(fk(m, result.axes)[0], tip, atol=1e-8)

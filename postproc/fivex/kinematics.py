@@ -10,7 +10,8 @@ the previous angle and reported, then the linear axes from the tool tip.
 
 Chain (``machine.py``): table axes turn the workpiece about their lines, T = T1 o T2 (T1 on
 the bed carries T2); head axes turn the tool about lines through points given relative to
-the spindle gauge point, which sits ``tool_length`` above the tip along the tool axis.
+the spindle gauge point, which sits the machine's ``gauge_to_tip`` plus ``tool_length``
+above the tip along the tool axis.
 The controlled point (X, Y, Z) is the tool tip with both axes at zero (G43 compensation).
 """
 
@@ -49,6 +50,7 @@ def _head_tip(machine: Machine, theta: np.ndarray, tool_length: float) -> tuple[
     """Tool tip offset from the controlled point (N, 3) and the tool axis (N, 3) in the machine frame."""
     n = theta.shape[0]
     t0 = machine.tool_axis
+    tool_length = machine.gauge_to_tip + tool_length  # the machine's pivot distance + any extra tool
     tip = np.broadcast_to(-tool_length * t0, (n, 3)).copy()  # relative to the gauge point
     axis = np.broadcast_to(t0, (n, 3)).copy()
     for ax, rot in reversed(_chain(machine, theta, "head")):  # innermost first

@@ -6,7 +6,8 @@ outward (the first carries the second), head axes from the ram to the spindle. E
 axis has a unit direction and a point on it (mm, machine frame, all axes at zero); a
 positive angle turns its carrier (table or head) right-handed about the direction.
 The workpiece frame is the machine frame with every rotary axis at zero; the tool axis
-(tip -> spindle) at zero is ``tool_axis``.
+(tip -> spindle) at zero is ``tool_axis``. Head axes' points are given relative to a
+gauge point on the spindle (e.g. the pivot), ``gauge_to_tip`` mm above the tool tip.
 """
 
 from __future__ import annotations
@@ -53,6 +54,7 @@ class Machine:
     sources: dict[str, str] = field(default_factory=dict)
     linuxcnc: dict[str, str] = field(default_factory=dict)
     calibration: dict[str, Any] = field(default_factory=dict)
+    gauge_to_tip: float = 0.0  # head machines: from the point the head axes' points are given from to the tool tip, mm
 
     @property
     def rotary_names(self) -> tuple[str, str]:
@@ -159,6 +161,12 @@ def parse_machine_toml(text: str, path: str) -> Machine:
     name = r.string(head, "name", "machine.name")
     if path.startswith("machines/") and Path(path).stem != name:  # bundled files: name = file name
         raise r.fail("machine.name", f"'{name}' does not match the file name '{Path(path).stem}'")
+    gauge = head.get("gauge_to_tip", 0.0)
+    if isinstance(gauge, bool) or not isinstance(gauge, (int, float)) or not math.isfinite(gauge) or gauge < 0:
+        raise r.fail("machine.gauge_to_tip", f"must be a finite number >= 0 (mm), got {gauge!r}")
+    for key in head:
+        if key not in ("name", "description", "kind", "axes", "tool_axis", "gauge_to_tip"):
+            raise r.fail(f"machine.{key}", "unknown key (allowed: axes, description, gauge_to_tip, kind, name, tool_axis)")
     sources = r.table(data, "sources")
     if "geometry" not in sources:
         raise r.fail("sources.geometry", "missing: cite where the axis geometry comes from")
@@ -174,6 +182,7 @@ def parse_machine_toml(text: str, path: str) -> Machine:
         sources={k: str(v) for k, v in sources.items()},
         linuxcnc={k: str(v) for k, v in r.table(data, "linuxcnc", required=False).items()},
         calibration=dict(r.table(data, "calibration", required=False)),
+        gauge_to_tip=float(gauge),
     )
 
 
@@ -212,7 +221,8 @@ def machine_toml(machine: Machine, header: str = "") -> str:
 
     lines = [f"# {h}" for h in header.splitlines()] + [
         "[machine]", f"name = {s(machine.name)}", f"description = {s(machine.description)}", f"kind = {s(machine.kind)}",
-        "axes = [" + ", ".join(s(a) for a in machine.axes) + "]", f"tool_axis = {vec(machine.tool_axis)}", "",
+        "axes = [" + ", ".join(s(a) for a in machine.axes) + "]", f"tool_axis = {vec(machine.tool_axis)}",
+        *([f"gauge_to_tip = {machine.gauge_to_tip:.9f}"] if machine.gauge_to_tip else []), "",
         "[units]", 'length = "mm"', 'angle = "deg"', "", "[sources]"]
     lines += [f"{k} = {s(v)}" for k, v in machine.sources.items()]
     lines += ["", "[linear]"] + [f"{ax} = {vec(lim)}" for ax, lim in zip("XYZ", machine.linear_limits)]
