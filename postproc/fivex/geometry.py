@@ -9,14 +9,20 @@ import numpy as np
 
 
 def rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """(N, 3, 3) right-handed rotation by ``angle`` (N,) rad about unit ``axis`` (3,) or (N, 3)."""
+    """(N, 3, 3) right-handed rotation by ``angle`` (N,) rad about unit ``axis`` (3,) or (N, 3):
+    R = cos I + sin [k]x + (1 - cos) k k^T (Rodrigues, no batched matrix product)."""
     angle = np.asarray(angle, dtype=float)
+    s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
+    if np.ndim(axis) == 1:  # one axis for all: its matrices are constants
+        k = np.asarray(axis, dtype=float)
+        kx = np.array([[0.0, -k[2], k[1]], [k[2], 0.0, -k[0]], [-k[1], k[0], 0.0]])
+        kk = np.outer(k, k)
+        return kk + c * (np.eye(3) - kk) + s * kx
     k = np.broadcast_to(np.asarray(axis, dtype=float), angle.shape + (3,))
     kx = np.zeros(angle.shape + (3, 3))
     kx[..., 0, 1], kx[..., 0, 2], kx[..., 1, 2] = -k[..., 2], k[..., 1], -k[..., 0]
     kx[..., 1, 0], kx[..., 2, 0], kx[..., 2, 1] = k[..., 2], -k[..., 1], k[..., 0]
-    s, c = np.sin(angle)[..., None, None], np.cos(angle)[..., None, None]
-    return np.eye(3) + s * kx + (1.0 - c) * (kx @ kx)
+    return c * np.eye(3) + s * kx + (1.0 - c) * (k[..., :, None] * k[..., None, :])
 
 
 def rotate_about_line(points: np.ndarray, rot: np.ndarray, through: np.ndarray) -> np.ndarray:
