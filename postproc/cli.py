@@ -657,6 +657,7 @@ def convert_cmd(
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
+    max_deviation: float = typer.Option(0.01, "--max-deviation", help="--rtcp none: split moves until the tip stays this close (mm) to the straight path."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .emit.writer import write_program
@@ -667,7 +668,7 @@ def convert_cmd(
 
         if machine is None:
             raise InputError("--to gcode needs --machine (a name from machines/ or a machine file)")
-        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes):
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=max_deviation):
             out.print(line)
         return
     tp = parse_program(program, dialect)

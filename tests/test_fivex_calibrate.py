@@ -191,3 +191,11 @@ def test_a_large_outlier_does_not_hide_a_smaller_one(tmp_path):
     path.write_text(rows_csv(rows))
     fit = calibrate_machine(nominal, read_probes(path)).fits["C"]
     assert sorted(o["id"] for o in fit.outliers) == ["C3", "C8"]
+
+
+def test_coplanar_touches_are_refused(tmp_path):
+    path = tmp_path / "flat.csv"
+    path.write_text("id,axis,angle,touch,x,y,z\n" + "".join(f"s1,C,0,{k + 1},{x},{y},0\n" for k, (x, y) in enumerate([(1, 0), (0, 1), (-1, 0), (0, -1)])))
+    with pytest.raises(ProbeFileError) as exc:
+        read_probes(path, sphere_radius=1.0)
+    assert exc.value.row == 1 and "one plane" in str(exc.value)

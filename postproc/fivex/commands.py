@@ -62,7 +62,7 @@ def calibration_summary(doc: dict) -> list[str]:
 
 
 def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: str | None, dialect: str | None = None,
-                 input_axes: str | None = None, tool: int = 1) -> list[str]:
+                 input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
     from ..emit.writer import write_program
@@ -79,7 +79,9 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     tp = parse_program(program, dialect)
     path = from_toolpath(tp, machine, input_axes)
     if to == "gcode":
-        result = emit(machine, path, rtcp, tool=tool)
+        if not max_deviation_mm > 0:
+            raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation_mm}")
+        result = emit(machine, path, rtcp, tool=tool, max_deviation_mm=max_deviation_mm)
         write_all({Path(output): result.text}, encoding="latin-1")
         lines = [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"]
         if rtcp == "none":

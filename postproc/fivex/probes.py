@@ -104,6 +104,10 @@ def _touch_centres(path, ids, axes, angle, xyz, sphere_radius, tip_radius) -> Ce
         if len(named) != 1:
             raise ProbeFileError(path, int(np.nonzero(group == g)[0][0]) + 1, "id", f"touches of one sphere position carry different ids: {sorted(named)}")
     radius = None if sphere_radius is None else sphere_radius + tip_radius
+    spread = np.array([np.linalg.svd(xyz[group == g] - xyz[group == g].mean(axis=0), compute_uv=False)[-1] for g in range(len(order))])
+    if (spread < 1e-6).any():  # one small SVD per sphere: a few dozen spheres at most
+        bad = int(np.nonzero(spread < 1e-6)[0][0])
+        raise ProbeFileError(path, int(first[bad]) + 1, "touch", f"the touches of sphere '{ids[first[bad]]}' lie in one plane: they do not determine a sphere")
     centre, rad, rms = fit_spheres(xyz, group, len(order), radius)
     if not np.all(np.isfinite(centre)):
         bad = int(np.nonzero(~np.isfinite(centre).all(axis=1))[0][0])
