@@ -3,9 +3,9 @@
 Each case converts a program for a machine; rs274 reads the emitted program and its
 canonical motion (STRAIGHT_TRAVERSE / STRAIGHT_FEED end points, 4 decimals) is turned back
 into tool tips through the machine kinematics:
-- LinuxCNC TCP mode: the canonical X Y Z A C are the tip in the workpiece frame; LinuxCNC's
-  xyzac-trt inverse kinematics (trtfuncs.c, re-derived below) gives the joints, and the
-  machine model's forward kinematics the tip;
+- LinuxCNC TCP mode: the canonical X Y Z A C (B C) are the tip in the workpiece frame;
+  LinuxCNC's inverse kinematics (trtfuncs.c xyzac-trt, 5axiskins.c; re-derived below) give
+  the joints, and the machine model's forward kinematics the tip;
 - mode none: the canonical values are the machine axes; the (calibrated) machine's forward
   kinematics gives the tip.
 The tips must equal the intended ones within 1e-3 mm. rs274's outputs are kept in
@@ -40,6 +40,7 @@ CASES = {  # name: (program, machine, mode, input axes)
     "tilted_linuxcnc": ("corpus/fivex/tilted_pass.mod", "xyzac-trt", "linuxcnc", None),
     "tilted_none_calibrated": ("corpus/fivex/tilted_pass.mod", str(CALIBRATED), "none", None),
     "milling_wobj_linuxcnc": ("corpus/rapid/milling_wobj.mod", "xyzac-trt", "linuxcnc", None),
+    "tilted_5axiskins_linuxcnc": ("corpus/fivex/tilted_pass.mod", "xyzbc-5axiskins", "linuxcnc", None),
 }
 CANON = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED)\(([^)]*)\)")
 has_rs274 = shutil.which("rs274") is not None
@@ -61,11 +62,19 @@ def run_rs274(text: str, tmp: Path) -> str:
     return proc.stdout.decode("latin-1")
 
 
-def canonical_axes(canon: str) -> np.ndarray:
-    """(M, 5) X Y Z A C of every straight move (rs274 prints x, y, z, a, b, c)."""
+def canonical_axes(canon: str, letters=("A", "C")) -> np.ndarray:
+    """(M, 5) X Y Z and the machine's two rotary axes of every straight move (rs274 prints
+    x, y, z, a, b, c)."""
     rows = [[float(v) for v in args.split(",")] for _, args in CANON.findall(canon)]
     arr = np.array(rows)
-    return arr[:, [0, 1, 2, 3, 5]]
+    return arr[:, [0, 1, 2] + [3 + "ABC".index(k) for k in letters]]
+
+
+def linuxcnc_5axiskins_inverse(pos: np.ndarray, pivot: float = 250.0) -> np.ndarray:
+    """5axiskins.c kinematicsInverse (w = 0): joints = pos - L (sin b cos c, sin b sin c, -cos b) - (0, 0, L); pos columns X Y Z C B."""
+    c, b = np.radians(pos[:, 3]), np.radians(pos[:, 4])
+    r = pivot * np.stack([np.sin(b) * np.cos(c), np.sin(b) * np.sin(c), -np.cos(b)], axis=1)
+    return np.c_[pos[:, :3] - r - [0.0, 0.0, pivot], pos[:, 3:5]]
 
 
 def linuxcnc_xyzac_inverse(pos: np.ndarray, dy: float = 20.0, dz: float = 10.0) -> np.ndarray:
@@ -79,9 +88,9 @@ def linuxcnc_xyzac_inverse(pos: np.ndarray, dy: float = 20.0, dz: float = 10.0) 
 
 
 def tips_from_canon(name: str, machine, canon: str) -> np.ndarray:
-    axes = canonical_axes(canon)
+    axes = canonical_axes(canon, machine.rotary_names)
     if CASES[name][2] == "linuxcnc":
-        axes = linuxcnc_xyzac_inverse(axes)
+        axes = linuxcnc_5axiskins_inverse(axes) if machine.kind == "head-head" else linuxcnc_xyzac_inverse(axes)
     tip, _ = fk(machine, axes)
     return tip
 
@@ -129,7 +138,7 @@ def record() -> None:
         with tempfile.TemporaryDirectory() as tmp:
             canon = run_rs274(result.text, Path(tmp))
         (RECORDED / f"{name}.canon").write_text(canon, encoding="latin-1")
-        print(f"{name}: {len(result.path.tip)} targets, {len(canonical_axes(canon))} canonical moves")
+        print(f"{name}: {len(result.path.tip)} targets, {len(CANON.findall(canon))} canonical moves")
 
 
 if __name__ == "__main__":
