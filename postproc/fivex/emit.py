@@ -51,7 +51,9 @@ def solve(machine: Machine, path: FivePath, tool_length: float = 0.0):
 
 def _header(mode: str, machine: Machine, path: FivePath) -> list[str]:
     c = ";" if mode == "siemens" else None
-    what = {"linuxcnc": "LinuxCNC TCP kinematics (tool tip + rotary angles); switch the machine to its TCP kinematics first (M428 in LinuxCNC's trt sim configs)",
+    kins = machine.linuxcnc.get("kinematics", "its kinematics module")
+    switch = f"{kins}{' (M428 in the trt sim configs)' if kins.endswith('trt-kins') else ''}"
+    what = {"linuxcnc": f"LinuxCNC TCP kinematics (tool tip + rotary angles); run with {switch}",
             "fanuc": "Fanuc tool centre point control G43.4 (tool tip + rotary angles)",
             "siemens": "Siemens TRAORI (tool tip + rotary angles)",
             "none": "machine axes (no RTCP), from the machine file's kinematics"}[mode]
