@@ -125,6 +125,7 @@ def test_rs274_style_machine_axes_reach_the_tip_on_the_calibrated_machine():
     ("G21\nG0 X0 Y0 Z5 B10 C0\nG1 X1 F100\nM2\n", ["--input-axes", "tip"], 2, "rotary axis B"),
     ("G21\nG0 X0 Y0 Z5 A0 C0\nG1 X900 F100\nM2\n", ["--input-axes", "tip"], 1, "outside"),
     ("G21\nG0 X0 Y0 Z5 A0 C0\nG1 X1 F100\nM2\n", ["--rtcp", "heidenhain"], 2, "--rtcp"),
+    ("G21\nG0 X0 Y0 Z5 A0 C0\nG1 X1\nM2\n", ["--input-axes", "tip"], 2, ":3: feed move without"),
 ])
 def test_convert_errors_write_nothing(tmp_path, text, args, code, message):
     prog = tmp_path / "in.ngc"

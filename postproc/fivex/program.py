@@ -86,6 +86,7 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
         raise InputError(f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}: the target has no Cartesian position")
     rapid = tp.kind == Kind.JOINT
     feed = np.where(rapid, np.nan, tp.speed * 60.0)  # robot speeds are mm/s
+    _require_feed(tp, rapid, feed)
     return FivePath(poses[:, :3, 3], -poses[:, :3, 2], rapid, feed, np.full(len(tp), np.nan), tp.line.copy(), None, tp.sources[0].path,
                     ("robot joint moves (MoveJ / PTP) are written as rapid positioning moves (G0)",) if rapid.any() else ())
 
@@ -127,10 +128,15 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     time_min = np.where(g93 & ~rapid, 1.0 / tp.speed, np.nan)
     dist = np.linalg.norm(np.diff(tip, axis=0, prepend=tip[:1]), axis=1)
     feed = np.where(rapid, np.nan, np.where(g93, dist * tp.speed, tp.speed))
-    if np.isnan(feed[~rapid]).any():
-        i = int(np.nonzero(~rapid & np.isnan(feed))[0][0])
-        raise InputError(f"{path}:{int(tp.line[i])}: feed move without a feed rate (no F word before it)")
+    _require_feed(tp, rapid, feed)
     return FivePath(tip, axis, rapid, feed, time_min, tp.line.copy(), angles, path, tuple(notes))
+
+
+def _require_feed(tp: Toolpath, rapid: np.ndarray, feed: np.ndarray) -> None:
+    bad = ~rapid & ~(np.isfinite(feed) & (feed >= 0))
+    if bad.any():
+        i = int(np.nonzero(bad)[0][0])
+        raise InputError(f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}: feed move without a known feed rate (no F word / speed before it)")
 
 
 def _filled_axis(tp: Toolpath) -> np.ndarray:
