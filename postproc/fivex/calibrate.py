@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .errors import CalibrationError
-from .fitting import Plane, fit_circle, fit_circle_iterative, fit_plane, plane_basis, plane_distances
+from .fitting import fit_circle, fit_circle_iterative, fit_plane, plane_basis, plane_distances
 from .geometry import line_distance
 from .machine import Machine
 

@@ -98,7 +98,7 @@ def rotary_solutions(machine: Machine, tool_axis: np.ndarray, singular_tol_deg: 
         k, v = machine.rotary[i].direction, known[vname]
         for b in range(2):
             frm, to = (x[:, b], v) if x_from else (v, x[:, b])
-            angle, perp = subproblem1(k, frm, to)
+            angle, _ = subproblem1(k, frm, to)
             angles[:, b, i] = np.degrees(angle)
         free[:, i] = np.linalg.norm(np.cross(v, k), axis=1) < tol
     return angles, free
