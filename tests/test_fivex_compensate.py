@@ -12,8 +12,7 @@ from typer.testing import CliRunner
 from postproc.cli import app
 from postproc.fivex.compensate import actual_tip, controller_axes
 from postproc.fivex.emit import emit
-from postproc.fivex.errormap import load_grid
-from postproc.fivex.errors import ProbeFileError
+from postproc.fivex.errormap import GridFileError, load_grid
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
 from postproc.fivex.program import from_toolpath
@@ -72,7 +71,7 @@ def test_planar_and_linewise_grids(tmp_path):
 def test_bad_grids(tmp_path, text, row, column):
     path = tmp_path / "bad.csv"
     path.write_text(text)
-    with pytest.raises(ProbeFileError) as exc:  # GridFileError or a number error of the shared CSV reader
+    with pytest.raises(GridFileError) as exc:
         load_grid(path)
     assert exc.value.row == row and exc.value.column == column
 

@@ -72,7 +72,7 @@ def load_grid(path: str | Path) -> GridMap:
     for k, line, row in data:
         if len(row) != len(header):
             raise GridFileError(path, k, None, f"{len(row)} fields, the header has {len(header)} (file line {line})")
-        values[k - 1] = [_number(path, k, n, row[c]) for n, c in zip(need, col)]
+        values[k - 1] = [_number(path, k, n, row[c], GridFileError) for n, c in zip(need, col)]
     if not len(values):
         raise GridFileError(path, None, None, "no grid points")
     return _build(path, values)

@@ -80,13 +80,13 @@ def read_probes(path: str | Path, axis: str | None = None, sphere_radius: float 
     return _touch_centres(path, ids, axes, angle, xyz, sphere_radius, tip_radius)
 
 
-def _number(path: Path, row: int, column: str, text: str) -> float:
+def _number(path: Path, row: int, column: str, text: str, error=ProbeFileError) -> float:
     try:
         value = float(text.strip())
     except ValueError:
-        raise ProbeFileError(path, row, column, f"'{text.strip()}' is not a number ('.' is the decimal mark)") from None
+        raise error(path, row, column, f"'{text.strip()}' is not a number ('.' is the decimal mark)") from None
     if not math.isfinite(value):
-        raise ProbeFileError(path, row, column, f"'{text.strip()}' is not a finite number")
+        raise error(path, row, column, f"'{text.strip()}' is not a finite number")
     return value
 
 
