@@ -109,7 +109,7 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     from .compensate import actual_tip, compensate_five, controller_axes
     from .errormap import load_grid
     from .kinematics import fk
-    from .program import _ROTARY_FIELD
+    from .program import ROTARY_FIELD
 
     true = load_machine(machine_file)
     controller = load_machine(controller_name or true.name)
@@ -119,7 +119,7 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     text = emit_texts(tp, new)[0]
     # What the written numbers (rounded as the text has them) make the real machine do:
     again = parse_program(program, tp.dialect, data=text.encode("latin-1"))
-    cols = [_ROTARY_FIELD[n] for n in controller.rotary_names]
+    cols = [ROTARY_FIELD[n] for n in controller.rotary_names]
     cmd = controller_axes(controller, again.position, again.ext[:, cols], input_axes)
     intended, _ = fk(controller, controller_axes(controller, tp.position, tp.ext[:, cols], input_axes))
     written = np.linalg.norm(actual_tip(true, grid, cmd) - intended, axis=1)

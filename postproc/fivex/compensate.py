@@ -22,7 +22,7 @@ from ..ir import F_EXT, Toolpath
 from .errormap import GridMap
 from .kinematics import _head_tip, fk, ik, table_to_machine
 from .machine import Machine
-from .program import _ROTARY_FIELD
+from .program import ROTARY_FIELD
 
 
 @dataclass(frozen=True)
@@ -77,7 +77,7 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
     names = controller.rotary_names
-    cols = [_ROTARY_FIELD[n] for n in names]
+    cols = [ROTARY_FIELD[n] for n in names]
     angles = tp.ext[:, cols]
     known = ~np.isnan(angles).any(axis=1) & ~np.isnan(tp.position).any(axis=1)
     if not known.all():

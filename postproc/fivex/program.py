@@ -24,7 +24,7 @@ from ..ir import Kind, Toolpath
 from .kinematics import fk
 from .machine import Machine
 
-_ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # IR ext columns of the G-code rotary words
+ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # IR ext columns of the G-code rotary words
 _RTCP_ON = re.compile(r"G43\.4|G43\.5|TRAORI", re.IGNORECASE)
 
 
@@ -94,10 +94,10 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
 def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FivePath:
     path = tp.sources[0].path
     names = machine.rotary_names
-    used = [k for k in "ABC" if not np.isnan(tp.ext[:, _ROTARY_FIELD[k]]).all()]
+    used = [k for k in "ABC" if not np.isnan(tp.ext[:, ROTARY_FIELD[k]]).all()]
     foreign = [k for k in used if k not in names]
     if foreign:
-        i = int(np.nonzero(~np.isnan(tp.ext[:, _ROTARY_FIELD[foreign[0]]]))[0][0])
+        i = int(np.nonzero(~np.isnan(tp.ext[:, ROTARY_FIELD[foreign[0]]]))[0][0])
         raise InputError(f"{path}:{int(tp.line[i])}: the program moves rotary axis {foreign[0]}; machine {machine.name} has {', '.join(names)}")
     g93 = _feed_modes(tp)
     notes = list(tp.notes)
@@ -106,7 +106,7 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
         axis = _filled_axis(tp)
         tip = tp.position.copy()
     elif used:
-        angles = np.stack([tp.ext[:, _ROTARY_FIELD[k]] for k in names], axis=1)
+        angles = np.stack([tp.ext[:, ROTARY_FIELD[k]] for k in names], axis=1)
         unknown = np.isnan(angles).any(axis=1)
         if unknown.any():
             i = int(np.nonzero(unknown)[0][0])
