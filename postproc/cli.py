@@ -575,8 +575,17 @@ def compensate_cmd(
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
+    grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
-    """Rewrite a program so the robot reaches its targets under the fitted error model."""
+    """Rewrite a program so the robot reaches its targets under the fitted error model
+    (or a five-axis G-code program for a calibrated machine file given as --model)."""
+    if model.suffix == ".toml":
+        from .fivex.commands import compensate_five_program
+
+        for line in compensate_five_program(Path(program), model, Path(output), grid, input_axes, dialect=dialect):
+            out.print(line)
+        return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .compensate import CompensationError, compensate
@@ -734,11 +743,23 @@ def convert_cmd(
     to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
+    machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
+    rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
+    max_deviation: float = typer.Option(0.01, "--max-deviation", help="--rtcp none: split moves until the tip stays this close (mm) to the straight path."),
 ):
-    """Write a new robot program with every target of another program."""
+    """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
     from .programs import parse_program, write_program, write_texts
 
+    if machine is not None or rtcp is not None:
+        from .fivex.commands import convert_five
+
+        if machine is None:
+            raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=max_deviation):
+            out.print(line)
+        return
     outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
@@ -770,6 +791,31 @@ def roundtrip_cmd(
         if not same:
             status = max(status, 1)
     raise typer.Exit(status)
+
+
+@app.command("rtcp-calibrate")
+@handles_errors
+def rtcp_calibrate_cmd(
+    probes: Path = typer.Argument(..., help="Probing CSV (spec/probing.md): sphere centres or touches."),
+    machine: str = typer.Option(..., "--machine", help="Machine name from machines/ (e.g. xyzac-trt) or a machine file."),
+    json_out: bool = typer.Option(False, "--json", help="Print the calibration as JSON (spec/cli.md)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="Calibrated machine file; controller data are written beside it."),
+    axis: Optional[str] = typer.Option(None, "--axis", help="Rotary axis of every row when the file has no axis column."),
+    method: str = typer.Option("seed003", "--method", help="seed003 (Gauss-Newton circle) or seed004 (iterative re-centred circle)."),
+    sphere_radius: Optional[float] = typer.Option(None, "--sphere-radius", help="Calibration sphere radius, mm (touches; fitted when absent)."),
+    tip_radius: float = typer.Option(0.0, "--tip-radius", help="Probe tip radius, mm (touches)."),
+    min_outlier: float = typer.Option(0.01, "--min-outlier", help="A deviation below this (mm) is never an outlier (probing repeatability)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random 3-point planes."),
+):
+    """Calibrate the rotary axes of a five-axis machine from probed sphere centres (seed 003)."""
+    from .fivex.commands import calibration_summary, rtcp_calibrate
+
+    doc, _ = rtcp_calibrate(probes, machine, output, axis, method, seed, sphere_radius, tip_radius, min_outlier)
+    if json_out:
+        print(json.dumps(doc))
+        return
+    for line in calibration_summary(doc):
+        out.print(line)
 
 
 def main() -> None:
