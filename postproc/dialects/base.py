@@ -25,6 +25,9 @@ class Dialect:
     name: str = ""
     description: str = ""
     extensions: tuple[str, ...] = ()  # lower case, with the dot
+    #: programs of this language drive machine axes (a CNC: five-axis emitters and machine
+    #: kinematics apply), not a robot controller's Cartesian targets
+    machine_program: bool = False
 
     # ---------------------------------------------------------------- reading
     def sniff(self, head: str) -> bool:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .. import dialects
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
 from .files import write_all
@@ -74,11 +75,12 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     machine = load_machine(machine_name)
     if input_axes not in (None, "tip", "machine"):
         raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
-    if to == "gcode" and rtcp not in MODES:
+    target = dialects.get(to, "--to")
+    if target.machine_program and rtcp not in MODES:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
     tp = parse_program(program, dialect)
     path = from_toolpath(tp, machine, input_axes)
-    if to == "gcode":
+    if target.machine_program:
         if not max_deviation_mm > 0:
             raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation_mm}")
         result = emit(machine, path, rtcp, tool=tool, max_deviation_mm=max_deviation_mm)
@@ -87,13 +89,11 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
         if rtcp == "none":
             lines.append(f"largest tip deviation at the middle of a move (axes interpolated linearly): {result.chord_error_mm:.4f} mm")
         return lines + [f"note: {n}" for n in result.notes]
-    if to not in ("rapid", "krl"):
-        raise InputError(f"--to: '{to}' is not rapid, krl or gcode")
-    if tp.dialect != "gcode":
+    if not dialects.of(tp).machine_program:
         raise InputError("--machine with --to rapid/krl converts a five-axis G-code program; this one is a robot program")
     robot = to_robot_toolpath(tp, path)
     texts = write_program(robot, to, Path(output).stem)
-    outputs = [Path(output)] if to == "rapid" else [Path(output), Path(output).with_suffix(".dat")]
+    outputs = target.new_program_paths(Path(output))
     write_all(dict(zip(outputs, texts)), encoding="latin-1")
     return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]
 

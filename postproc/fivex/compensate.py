@@ -17,6 +17,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from .. import dialects
 from ..errors import EmitError, InputError, JobError
 from ..ir import F_EXT, Toolpath
 from .errormap import GridMap
@@ -69,7 +70,7 @@ def _grid_inverse(grid: GridMap, want: np.ndarray, lines: np.ndarray, iterations
 
 def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: GridMap | None, input_axes: str) -> tuple[Toolpath, FiveReport]:
     """The program's numbers changed so that the real machine reaches what the controller's model means."""
-    if tp.dialect != "gcode":
+    if not dialects.of(tp).machine_program:
         raise InputError(f"{tp.sources[0].path}: five-axis compensation works on G-code programs")
     if input_axes not in ("tip", "machine"):
         raise InputError("--input-axes: tip (tool tip + rotary angles, RTCP on) or machine (machine axes, RTCP off) is needed")

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .. import dialects
 from ..errors import InputError
 from ..ir import Kind, Toolpath
 from .kinematics import fk
@@ -71,9 +72,9 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
     if not tp.placed().all():
         i = int(np.nonzero(~tp.placed())[0][0])
         where = f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}"
-        if tp.dialect != "gcode":
+        if not dialects.of(tp).machine_program:
             raise InputError(f"{where}: the target's frame or tool is not defined in the program")
-    if tp.dialect == "gcode":
+    if dialects.of(tp).machine_program:
         return _from_gcode(tp, machine, input_axes)
     frames = np.unique(tp.frame)
     if len(frames) > 1:

@@ -10,6 +10,7 @@ class GcodeDialect(Dialect):
     name = "gcode"
     description = "G-code (ISO, Fanuc, LinuxCNC, Siemens)"
     extensions = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".mpf", ".spf", ".iso", ".txt")
+    machine_program = True
 
     def sniff(self, head: str) -> bool:
         return any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2"))
