@@ -163,6 +163,8 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[s
         poses[no_ori, :3, :3] = quat_wxyz_to_matrix(TOOL_DOWN[None])[0]
     frame = tool = -1
     speed = zone = None
+    # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
+    per_second = 1.0 / 60.0 if tp.dialect == "gcode" else 1.0
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:
@@ -173,7 +175,7 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[s
             w.tool(tp.tool_names[tool], tp.tools[tool])
         if speed is None or not np.array_equal(tp.speed[i], speed, equal_nan=True):
             speed = tp.speed[i]
-            w.speed(float(speed))
+            w.speed(float(speed) * per_second)
         if zone is None or not np.array_equal(tp.zone[i], zone, equal_nan=True):
             zone = tp.zone[i]
             w.zone(float(zone))
