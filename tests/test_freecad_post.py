@@ -26,11 +26,9 @@ from typer.testing import CliRunner
 import postproc
 from postproc import kinematics as kin
 from postproc.cam.arcs import linearise_arc
-from postproc.cam.freecad import annotate, commands_to_gcode, run
+from postproc.cam.freecad import annotate, commands_to_gcode, planned_targets, run
 from postproc.cli import app
-from postproc.emit.writer import TOOL_DOWN
 from postproc.errors import InputError, JobError
-from postproc.frames import abc_to_matrix, make_transform
 from postproc.model_io import load_model
 from postproc.programs import emit_texts, parse_program
 
@@ -38,7 +36,6 @@ runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "examples" / "freecad"
 RECORDED = json.loads((EXAMPLE / "part_commands.json").read_text())
-G54 = (900.0, -100.0, 350.0)
 ARGS = "--to krl --frame G54=900,-100,350 --tool 1=0,0,200 --initial-tool 1 --start 40,25,60"
 
 
@@ -47,10 +44,10 @@ def fitted(tmp_path_factory):
     """README step 1: a model of a simulated KR160 (and the true robot, to run programs on)."""
     d = tmp_path_factory.mktemp("model")
     sim, model, truth = d / "sim.csv", d / "model.json", d / "truth.json"
-    r = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "-o", str(sim), "--n", "200", "--truth", str(truth)])
+    r = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "-o", str(sim), "--truth", str(truth)])
     assert r.exit_code == 0, r.output
     r = runner.invoke(app, ["fit", str(sim), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "geometric,base_frame,tool_offset,joint_compliance",
-                            "--cv", "0", "-o", str(model)])
+                            "-o", str(model)])
     assert r.exit_code == 0, r.output
     return model, truth
 
@@ -70,11 +67,7 @@ def _tcp(model, tp):
 
 def _cam_targets(objects, args=ARGS):
     """The CAM commands as targets in the robot base frame (arcs as the post linearises them)."""
-    gcode = commands_to_gcode(objects, 0.01, "40,25,60", 1)
-    tp = parse_program("-", "gcode", gcode.text.encode())
-    frame = make_transform(abc_to_matrix(np.zeros((1, 3)))[0], np.array(G54))
-    tp = tp.with_orientations(np.tile(TOOL_DOWN, (len(tp), 1)))  # 3-axis: the tool straight down, as the writer gives it
-    return gcode, tp.with_frames({"G54": frame}, {"H1": make_transform(np.eye(3), np.array([0.0, 0.0, 200.0]))})
+    return planned_targets({"argstring": f"--model unused.json {args}", "objects": objects})
 
 
 def check_program(src: Path, objects, model_path, truth_path):
@@ -83,7 +76,7 @@ def check_program(src: Path, objects, model_path, truth_path):
     truth, _ = load_model(truth_path)
     back = parse_program(src)
     assert emit_texts(back, back)[0].encode("latin-1") == src.read_bytes()  # round trip: byte-identical
-    _, cam = _cam_targets(objects)
+    cam = _cam_targets(objects)
     assert len(back) == len(cam)
     goal = cam.base_positions()
     np.testing.assert_allclose(back.base_poses()[:, :3, :3], np.repeat(back.base_poses()[:1, :3, :3], len(back), 0), atol=1e-9)

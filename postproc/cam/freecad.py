@@ -211,10 +211,8 @@ def annotate(message: str, origin: list[str]) -> str:
     return re.sub(r"\blines? [\d, ]+", lambda m: re.sub(r"\d+", one, m.group(0)), message)
 
 
-def run(request: dict) -> dict:
-    """One post request (see the module docstring) -> its answer; raises PostprocError."""
-    from .post import post, write_programs
-
+def _prepare(request: dict):
+    """The post's options and the job as G-code, checked: (args, GcodeText, frames, tools)."""
     args = argument_parser().parse_args(shlex.split(request.get("argstring") or ""))
     if args.to == "gcode":
         raise InputError("--to gcode: five-axis machines need an RTCP emitter, which this version of postproc does not have; use --to krl or rapid")
@@ -225,12 +223,33 @@ def run(request: dict) -> dict:
     missing = sorted(t for t in gcode.tools if f"H{t}" not in tools)
     if missing:
         raise InputError(f"the job uses tool(s) {', '.join(map(str, missing))}: give each as the robot's TCP, --tool N=X,Y,Z[,A,B,C]")
+    return args, gcode, _transforms(args.frame, "--frame"), tools
+
+
+def planned_targets(request: dict):
+    """The job's targets as the post reads them, placed in the robot base frame, before compensation
+    (3-axis moves get the writer's tool-down orientation): what the compensated program must cut."""
+    from ..emit.writer import TOOL_DOWN
+    from ..programs import parse_program
+
+    _, gcode, frames, tools = _prepare(request)
+    tp = parse_program("-", "gcode", gcode.text.encode("latin-1"))
+    missing = np.isnan(tp.orientation).any(axis=1)
+    orientation = np.where(missing[:, None], TOOL_DOWN, tp.orientation)
+    return tp.with_orientations(orientation).with_frames(frames, tools)
+
+
+def run(request: dict) -> dict:
+    """One post request (see the module docstring) -> its answer; raises PostprocError."""
+    from .post import post, write_programs
+
+    args, gcode, frames, tools = _prepare(request)
     filename = request.get("filename") or "-"
     suffix = ".src" if args.to == "krl" else ".mod"
     output = (request.get("name") or "postproc") + suffix if filename == "-" else filename
     force = None if args.force is None else _numbers(args.force, (3,), "--force")
     try:
-        files = post(gcode.text, args.model, args.to, output=output, dialect="gcode", frames=_transforms(args.frame, "--frame"), tools=tools,
+        files = post(gcode.text, args.model, args.to, output=output, dialect="gcode", frames=frames, tools=tools,
                      robot=args.robot, tol_mm=args.tol, max_iter=args.max_iter, scheme=args.scheme, temp_c=args.temp, force_n=force)
     except PostprocError as exc:
         raise _annotated(exc, gcode.origin) from None
