@@ -55,7 +55,7 @@ def fitted(tmp_path_factory):
 def _tcp(model, tp):
     """Where a robot described by ``model`` puts the TCP for each target of tp (controller: nominal IK along the path)."""
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
-    q, _, ok = kin.select_path(model.robot, kin.ik(model.robot, flange), np.zeros(6))
+    q, _, ok = kin.select_path(model.robot, kin.ik(model.robot, flange), np.zeros(6), max_step_deg=180.0)  # moves between fixtures are long
     assert ok.all()
     out = np.zeros((len(tp), 3))
     for t in np.unique(tp.tool):
@@ -172,7 +172,7 @@ def test_freecad_commands_to_gcode():
             commands_to_gcode([{"label": "Drill", "commands": [bad]}], 0.01)
     with pytest.raises(InputError, match="give --start"):
         commands_to_gcode([{"label": "Op", "commands": [["G2", {"X": 1.0, "I": 0.5}]]}], 0.01)
-    assert annotate("targets on lines 2, 3 cannot", ["a", "b", "c"]) == "targets on lines 2 [b], 3 [c] cannot"
+    assert annotate("targets on lines 2, 3, 4 cannot", ["a", "b", "c", "c"]) == "targets at b; c cannot"
 
 
 # ------------------------------------------------------------------ the post's own half, on FreeCAD's recorded commands
@@ -189,6 +189,26 @@ def test_recorded_job_posts_and_lands_on_the_cam_path(fitted, tmp_path):
     # Every straight move FreeCAD wrote is a target (arcs add their segments in between).
     cam_points = [(c[1].get("X"), c[1].get("Y")) for o in objects for c in o["commands"] if c[0] in ("G1", "G0") and "X" in c[1]]
     assert len(back) > len(cam_points) + 40  # the Profile's 16 arcs became segments
+
+
+def test_two_work_offsets_and_rapid(fitted, tmp_path):
+    """A job ordered by fixture: the Profile in G54 and again in G55; every offset must be given."""
+    model, truth = fitted
+    g54, tc, profile = RECORDED["sections"][0]
+    g55 = {"label": "G55", "commands": [["G55", {}], ["G0", {"Z": 26.0}]]}
+    objects = [g54, tc, profile, g55, profile]
+    out = tmp_path / "part.mod"
+    with pytest.raises(InputError, match="G55=X,Y,Z"):
+        run({"argstring": f"--model {model} {ARGS} --to rapid", "filename": str(out), "objects": objects})
+    args = f"--model {model} {ARGS} --to rapid --frame G55=900,100,350,90,0,0"
+    answer = run({"argstring": args, "filename": str(out), "objects": objects})
+    assert answer["files"] == [str(out)] and "WObj:=G55;" in out.read_text()
+    back = parse_program(out)
+    cam = planned_targets({"argstring": args, "objects": objects})
+    assert len(back) == len(cam) and len(set(back.frame_names[f] for f in back.frame)) == 2
+    landed = _tcp(load_model(model)[0], back)
+    assert np.abs(landed - cam.base_positions()).max() < 0.012
+    assert run({"argstring": args, "filename": str(tmp_path / "part.ngc"), "objects": objects})["messages"][-1].endswith("ends in .mod")
 
 
 def test_post_errors_name_the_freecad_command_and_write_nothing(fitted, tmp_path):
@@ -262,7 +282,7 @@ def test_readme_steps_in_freecad(fitted, tmp_path):
     bad = tmp_path / "bad.src"
     log = _freecad(EXAMPLE / "post_job.py", tmp_path, POSTPROC_FCSTD=EXAMPLE / "part.FCStd", POSTPROC_OUTPUT=bad,
                    POSTPROC_ARGS=f"--model {model} {ARGS.replace('G54=900', 'G54=2500')}")
-    assert "POSTPROC-POST-RESULT: failed" in log and "postproc: " in log and "out of reach" in log and "[Profile, command" in log, log[-3000:]
+    assert "POSTPROC-POST-RESULT: failed" in log and "postproc: " in log and "out of reach" in log and "\n  Profile, command 7 (G2 arc, 5 segments): out of reach" in log, log[-3000:]
     assert not bad.exists() and not bad.with_suffix(".dat").exists()
 
 

@@ -202,13 +202,13 @@ def _arc(out: GcodeText, state: dict, code: str, params: dict, where: str, arc_t
 
 
 def annotate(message: str, origin: list[str]) -> str:
-    """'line 12' in a message about the generated G-code -> 'line 12 [Profile, command 5]'."""
+    """'lines 2, 3' of the generated G-code (which the user never sees) -> 'at G54, command 2; ...'."""
 
-    def one(match):
-        n = int(match.group(0))
-        return f"{n} [{origin[n - 1]}]" if 1 <= n <= len(origin) else match.group(0)
+    def where(match):
+        places = [origin[int(n) - 1] if 1 <= int(n) <= len(origin) else f"G-code line {n}" for n in re.findall(r"\d+", match.group(0))]
+        return "at " + "; ".join(dict.fromkeys(places)) + " "
 
-    return re.sub(r"\blines? [\d, ]+", lambda m: re.sub(r"\d+", one, m.group(0)), message)
+    return re.sub(r"\b(?:on )?lines? [\d, ]+", where, message)
 
 
 def _prepare(request: dict):
@@ -256,8 +256,10 @@ def run(request: dict) -> dict:
     if filename != "-":
         write_programs(files)
     main_text = next(iter(files.values()))
-    return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "gcode": gcode.text,
-            "messages": [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}"]}
+    messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}"]
+    if filename != "-" and not filename.lower().endswith(suffix):
+        messages.append(f"postproc: note: a {args.to.upper()} program's file name usually ends in {suffix}")
+    return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "gcode": gcode.text, "messages": messages}
 
 
 def _annotated(exc: PostprocError, origin: list[str]) -> PostprocError:
@@ -265,8 +267,9 @@ def _annotated(exc: PostprocError, origin: list[str]) -> PostprocError:
     text = annotate(str(exc), origin)
     report = getattr(exc, "report", None)
     if report is not None:
-        failures = report.failures()
-        text += "".join(f"\n  line {line} [{origin[line - 1] if 0 < line <= len(origin) else '?'}]: {why}" for line, why in failures[:20])
+        # One line per FreeCAD command and reason (an arc's segments share theirs).
+        failures = list(dict.fromkeys((origin[line - 1] if 0 < line <= len(origin) else f"G-code line {line}", why) for line, why in report.failures()))
+        text += "".join(f"\n  {place}: {why}" for place, why in failures[:20])
         if len(failures) > 20:
             text += f"\n  ... and {len(failures) - 20} more"
     return (JobError if isinstance(exc, JobError) else InputError)(text)
