@@ -56,11 +56,21 @@ def _objects(objectslist):
     return out
 
 
+def _environment():
+    """FreeCAD's environment without what points a Python at FreeCAD's own (bundled builds set
+    PYTHONHOME / PYTHONPATH, AppImages LD_LIBRARY_PATH): postproc's Python must find only its own."""
+    env = {k: v for k, v in os.environ.items() if k not in ("PYTHONHOME", "PYTHONPATH", "PYTHONSTARTUP", "PYTHONEXECUTABLE")}
+    if "APPIMAGE" in env or "APPDIR" in env:
+        env.pop("LD_LIBRARY_PATH", None)
+    return env
+
+
 def _run(objects, filename, argstring, name=None):
     """The answer of postproc's own Python to one post request (a dict; 'ok' False on any error)."""
     request = json.dumps({"argstring": argstring or "", "filename": filename, "name": name, "objects": objects})
     try:
-        done = subprocess.run([_python(), "-m", "postproc.cam.freecad"], input=request, capture_output=True, text=True, check=False)
+        done = subprocess.run([_python(), "-m", "postproc.cam.freecad"], input=request, capture_output=True, text=True,
+                              check=False, env=_environment())
     except OSError as exc:
         return {"ok": False, "error": "cannot run postproc's Python %s (%s); reinstall the post with `postproc freecad-install-post`" % (_python(), exc)}
     try:

@@ -18,6 +18,7 @@ doc = FreeCAD.openDocument(os.environ["POSTPROC_FCSTD"])
 job = [o for o in doc.Objects if o.Name.startswith("Job")][0]
 objects = PathPost.CommandPathPost().buildPostList(job)[0]
 args = os.environ["POSTPROC_ARGS"]
+os.environ["PYTHONHOME"] = "/nonexistent"  # as bundled FreeCAD builds set it: the post must not pass it on
 helped = postproc_post.export(objects, os.environ["POSTPROC_OUTPUT"] + ".help", "--help")
 text = postproc_post.export(objects, os.environ["POSTPROC_OUTPUT"], args)
 written = open(os.environ["POSTPROC_OUTPUT"], encoding="latin-1", newline="").read()
