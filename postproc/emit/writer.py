@@ -45,6 +45,8 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
         poses[no_ori, :3, :3] = quat_wxyz_to_matrix(TOOL_DOWN[None])[0]
     frame = tool = -1
     speed = zone = None
+    # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
+    per_second = 1.0 / 60.0 if tp.dialect == "gcode" else 1.0
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:
@@ -55,7 +57,7 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
             w.tool(tp.tool_names[tool], tp.tools[tool])
         if speed is None or not np.array_equal(tp.speed[i], speed, equal_nan=True):
             speed = tp.speed[i]
-            w.speed(float(speed))
+            w.speed(float(speed) * per_second)
         if zone is None or not np.array_equal(tp.zone[i], zone, equal_nan=True):
             zone = tp.zone[i]
             w.zone(float(zone))
