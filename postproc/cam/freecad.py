@@ -24,6 +24,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .. import dialects
 from ..errors import InputError, JobError, PostprocError
 from .arcs import linearise_arc
 
@@ -214,8 +215,9 @@ def annotate(message: str, origin: list[str]) -> str:
 def _prepare(request: dict):
     """The post's options and the job as G-code, checked: (args, GcodeText, frames, tools)."""
     args = argument_parser().parse_args(shlex.split(request.get("argstring") or ""))
-    if args.to == "gcode":
-        raise InputError("--to gcode: five-axis machines need an RTCP emitter, which this version of postproc does not have; use --to krl or rapid")
+    if dialects.get(args.to, "--to").machine_program:
+        raise InputError(f"--to {args.to}: the FreeCAD post writes robot programs (--to krl or rapid); "
+                         "for a five-axis machine post to G-code and run 'postproc convert --to gcode --machine M --rtcp MODE'")
     if args.model is None:
         raise InputError("post arguments: --model MODEL.json is required (a model from 'postproc fit')")
     gcode = commands_to_gcode(request.get("objects", []), args.arc_tol, args.start, args.initial_tool)
@@ -245,7 +247,7 @@ def run(request: dict) -> dict:
 
     args, gcode, frames, tools = _prepare(request)
     filename = request.get("filename") or "-"
-    suffix = ".src" if args.to == "krl" else ".mod"
+    suffix = dialects.get(args.to, "--to").extensions[0]
     output = (request.get("name") or "postproc") + suffix if filename == "-" else filename
     force = None if args.force is None else _numbers(args.force, (3,), "--force")
     try:
@@ -259,7 +261,7 @@ def run(request: dict) -> dict:
     messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}"]
     if filename != "-" and not filename.lower().endswith(suffix):
         messages.append(f"postproc: note: a {args.to.upper()} program's file name usually ends in {suffix}")
-    return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "gcode": gcode.text, "messages": messages}
+    return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "cam_gcode": gcode.text, "messages": messages}
 
 
 def _annotated(exc: PostprocError, origin: list[str]) -> PostprocError:

@@ -13,11 +13,15 @@ from pathlib import Path
 
 import numpy as np
 
+from .. import dialects
 from ..errors import InputError
 from ..ir import Kind, Toolpath
 
-ROBOT_LANGUAGES = ("krl", "rapid")
-_SUFFIX = {"krl": ".src", "rapid": ".mod"}
+
+
+def robot_languages() -> tuple[str, ...]:
+    """The dialects a robot program can be written in (those with a writer for new programs)."""
+    return tuple(name for name in dialects.names() if dialects.get(name).new_writer("p") is not None)
 
 
 def post(
@@ -52,13 +56,14 @@ def post(
     from ..emit.writer import write_program
     from ..programs import parse_program
 
-    if to not in ROBOT_LANGUAGES:
-        raise InputError(f"--to: '{to}' is not one of {', '.join(ROBOT_LANGUAGES)}"
-                         + (" (five-axis machines: postproc has no RTCP emitter yet)" if to == "gcode" else ""))
+    target = dialects.get(to, "--to")
+    if to not in robot_languages():
+        raise InputError(f"--to: '{to}' is not one of {', '.join(robot_languages())}"
+                         + (" (five-axis machines: use 'postproc convert --to gcode --machine M --rtcp MODE')" if target.machine_program else ""))
     error_model = _model(model)
     if robot is not None and robot != error_model.robot.name:
         raise InputError(f"--robot {robot} does not match the model's robot {error_model.robot.name}")
-    output = Path(output) if output is not None else Path("postproc" + _SUFFIX[to])
+    output = Path(output) if output is not None else Path("postproc" + target.extensions[0])
     tp = program if isinstance(program, Toolpath) else _parse(program, dialect)
     _refuse_what_a_robot_cannot_run(tp)
     tp = tp.with_frames(frames, tools)
@@ -77,8 +82,8 @@ def post(
     from ..programs import emit_texts
 
     out = {str(output): emit_texts(converted, new)[0]}
-    if to == "krl":
-        out[str(output.with_suffix(".dat"))] = texts[1]  # every target is inline: the .dat is unchanged
+    # Every target is inline: the program's other files (KRL's .dat) are as the writer made them.
+    out.update({str(path): text for path, text in zip(target.new_program_paths(output)[1:], texts[1:])})
     return out
 
 
@@ -120,7 +125,7 @@ def _refuse_what_a_robot_cannot_run(tp: Toolpath) -> None:
         raise InputError(f"G2/G3 arcs on lines {lines}: a robot program needs them as straight moves; linearise them first "
                          "(the FreeCAD post does, within --arc-tol)")
     rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1)
-    if tp.dialect == "gcode" and rotary.any():
+    if dialects.of(tp).machine_program and rotary.any():
         lines = ", ".join(str(v) for v in tp.line[rotary][:10])
         raise InputError(f"rotary axis words (A/B/C) on lines {lines}: they belong to a five-axis machine, "
                          "whose kinematics postproc cannot emit yet; give the tool axis as G43.5 I J K for a robot")

@@ -28,6 +28,8 @@ class Dialect:
     #: programs of this language drive machine axes (a CNC: five-axis emitters and machine
     #: kinematics apply), not a robot controller's Cartesian targets
     machine_program: bool = False
+    #: the program's speeds (as the IR keeps them) times this are mm/s (G-code feeds: mm/min)
+    speed_to_mm_per_s: float = 1.0
 
     # ---------------------------------------------------------------- reading
     def sniff(self, head: str) -> bool:

@@ -46,7 +46,9 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     frame = tool = -1
     speed = zone = None
     # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
-    per_second = 1.0 / 60.0 if tp.dialect == "gcode" else 1.0
+    from .. import dialects  # (not at the top: the dialects' writers import this module)
+
+    per_second = dialects.of(tp).speed_to_mm_per_s
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:

@@ -11,6 +11,7 @@ class GcodeDialect(Dialect):
     description = "G-code (ISO, Fanuc, LinuxCNC, Siemens)"
     extensions = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".mpf", ".spf", ".iso", ".txt")
     machine_program = True
+    speed_to_mm_per_s = 1.0 / 60.0  # F words are mm/min (G94)
 
     def sniff(self, head: str) -> bool:
         return any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2"))
