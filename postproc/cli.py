@@ -777,7 +777,8 @@ def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> list
     from .errors import OutputError
     from .report.placement_figures import error_maps, path_errors
 
-    dist = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1))])
+    steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))
+    dist = np.concatenate([[0.0], np.cumsum(steps)])  # length along the cut
     err_best, _, _ = pl.path_errors(problem, best_frame)
     err_cur = None
     if frame0 is not None and cur["mean_normal_error_mm"] is not None:

@@ -51,13 +51,23 @@ def normal_compliance(c_tt: np.ndarray, normal_base: np.ndarray) -> np.ndarray:
     return np.einsum("...i,...ij,...j->...", normal_base, c_tt, normal_base)
 
 
+def normal_error_and_compliance(jac_linear, compliance_rad_per_nm, force_base, normal_base):
+    """e_n = n^T C_tt F and n^T C_tt n without forming C_tt: with a_k = n . J_k and
+    b_k = F . J_k (J_k the k-th column of J_v), n^T J diag(c) J^T F = sum_k c_k a_k b_k."""
+    c = np.asarray(compliance_rad_per_nm, dtype=float) * 1e-3
+    a = np.einsum("ni,nik->nk", normal_base, jac_linear)
+    b = np.einsum("ni,nik->nk", force_base, jac_linear)
+    return (a * b) @ c, (a * a) @ c
+
+
 def step_weights(positions: np.ndarray, cutting: np.ndarray) -> np.ndarray:
     """Weights (N,) of eq. 2: each cutting step's length, split half to either end point.
 
-    A step counts when it ends on a cutting move (``cutting`` True); rapid and joint moves
-    contribute nothing. Where no step has length (a single point), cutting points weigh 1.
+    A step counts when both its ends are cutting-move targets (``cutting`` True): the
+    approach from a rapid or joint move and the points it starts from weigh nothing. Where
+    no step has length (a single point), cutting points weigh 1.
     """
-    steps = np.linalg.norm(np.diff(positions, axis=0), axis=1) * cutting[1:]
+    steps = np.linalg.norm(np.diff(positions, axis=0), axis=1) * (cutting[1:] & cutting[:-1])
     weights = np.zeros(len(positions))
     weights[1:] += steps / 2.0
     weights[:-1] += steps / 2.0

@@ -112,7 +112,10 @@ def _program_branch(problem: PlacementProblem, sols: np.ndarray) -> tuple[np.nda
 
 
 def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
-    """Per point normal errors (M, P), normal compliance (M, P) and feasibility (M,)."""
+    """Per point normal errors (M, P), normal compliance (M, P) and feasibility (M,).
+
+    Reach, limits and singularities are settled first; the Jacobians and compliances are
+    only computed for the candidates that passed (NaN elsewhere)."""
     m, p = len(frames), len(problem.local_tcp)
     tcp = frames[:, None] @ problem.local_tcp[None]  # (M, P, 4, 4)
     flange = tcp @ np.linalg.inv(problem.flange_T_tcp)[None]
@@ -121,17 +124,18 @@ def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
     q_flat = np.where(ok[..., None], q, 0.0).reshape(-1, 6)
     wrist, elbow, shoulder = singularity_margins(problem.robot, q_flat)
     clear = (wrist > problem.singular_deg) & (elbow > problem.singular_deg) & (shoulder > problem.shoulder_mm)
-    ok &= clear.reshape(m, p)
-    r = (tcp[..., :3, 3] - flange[..., :3, 3]).reshape(-1, 3)
-    jv = comp.tcp_linear_jacobian(problem.robot, q_flat, r)
-    c_tt = comp.translational_compliance(jv, problem.compliance).reshape(m, p, 3, 3)
-    rot = frames[:, None, :3, :3]
-    force = (rot @ problem.force_local[None, :, :, None])[..., 0]
-    normal = (rot @ problem.normal_local[None, :, :, None])[..., 0]
-    err = comp.normal_error(c_tt, force, normal)
-    cn = comp.normal_compliance(c_tt, normal)
-    feasible = ok.all(axis=1)
-    err[~feasible] = np.nan
+    feasible = (ok & clear.reshape(m, p)).all(axis=1)
+    err = np.full((m, p), np.nan)
+    cn = np.full((m, p), np.nan)
+    if feasible.any():
+        keep = np.nonzero(feasible)[0]
+        rot = frames[keep, None, :3, :3]
+        force = (rot @ problem.force_local[None, :, :, None])[..., 0].reshape(-1, 3)
+        normal = (rot @ problem.normal_local[None, :, :, None])[..., 0].reshape(-1, 3)
+        r = (tcp[keep, :, :3, 3] - flange[keep, :, :3, 3]).reshape(-1, 3)
+        jv = comp.tcp_linear_jacobian(problem.robot, q[keep].reshape(-1, 6), r)
+        e, c = comp.normal_error_and_compliance(jv, problem.compliance, force, normal)
+        err[keep], cn[keep] = e.reshape(-1, p), c.reshape(-1, p)
     return err, cn, feasible
 
 
