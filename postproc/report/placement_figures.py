@@ -19,39 +19,48 @@ def error_maps(result, current_xyt=None, max_panels: int = 12):
     pick = np.unique(np.linspace(0, len(thetas) - 1, min(len(thetas), max_panels)).round().astype(int))
     cols = min(4, len(pick))
     rows = int(np.ceil(len(pick) / cols))
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols + 1.2, 3.9 * rows + 0.8), squeeze=False)
+    xs, ys = result.xs, result.ys
+    span_x = max(float(np.ptp(xs)), 1.0)
+    span_y = max(float(np.ptp(ys)), 1.0)
+    panel_h = float(np.clip(3.6 * span_y / span_x, 1.6, 4.2)) + 0.9  # equal aspect plus labels
+    height = panel_h * rows + 1.3
+    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols + 1.2, height), squeeze=False)
     # fixed margins (constrained layout costs seconds per figure on a busy machine)
-    fig.subplots_adjust(left=0.07, right=0.86, top=1 - 0.6 / (3.9 * rows + 0.8), bottom=0.55 / (3.9 * rows + 0.8) + 0.02, wspace=0.45, hspace=0.45)
+    fig.subplots_adjust(left=0.07, right=0.86, top=1 - 0.55 / height, bottom=0.95 / height, wspace=0.45, hspace=0.9 / panel_h)
     grid_um = result.grid_mean_mm * 1000.0
     finite = grid_um[np.isfinite(grid_um)]
     vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     cmap = plt.get_cmap("viridis").with_extremes(bad="#d9d9d9")
-    xs, ys = result.xs, result.ys
     extent = _edges(xs), _edges(ys)
     image = None
+    gx, gy = np.meshgrid(xs, ys, indexing="ij")
     for ax, k in zip(axes.flat, pick):
         values = np.ma.masked_invalid(grid_um[:, :, k].T)
         image = ax.pcolormesh(extent[0], extent[1], values, cmap=cmap, vmin=vmin, vmax=vmax, shading="flat")
         bad = ~np.isfinite(grid_um[:, :, k])
-        gx, gy = np.meshgrid(xs, ys, indexing="ij")
         if bad.any():
-            ax.plot(gx[bad], gy[bad], "x", color="#7f7f7f", markersize=3, linestyle="none", label="infeasible")
+            ax.plot(gx[bad], gy[bad], "x", color="#7f7f7f", markersize=3, linestyle="none")
         if np.isclose(result.grid_best[2], thetas[k]):
-            ax.plot(result.grid_best[0], result.grid_best[1], "*", color="red", markersize=14, markeredgecolor="white", label="best")
+            ax.plot(result.grid_best[0], result.grid_best[1], "*", color="red", markersize=14, markeredgecolor="white")
         if current_xyt is not None and np.isclose(current_xyt[2], thetas[k]):
-            ax.plot(current_xyt[0], current_xyt[1], "o", color=CURRENT, markersize=9, markeredgecolor="black", label="current")
+            ax.plot(current_xyt[0], current_xyt[1], "o", color=CURRENT, markersize=9, markeredgecolor="black")
         ax.set_title(f"θ = {thetas[k]:g}°", fontsize=10)
         ax.set_xlabel("workpiece x (mm, base frame)")
         ax.set_ylabel("workpiece y (mm)")
         ax.set_aspect("equal")
-        handles, labels = ax.get_legend_handles_labels()
-        if handles:
-            ax.legend(fontsize=7, loc="lower right", framealpha=0.85)
     for ax in list(axes.flat)[len(pick):]:
         ax.set_visible(False)
     if image is not None:
         fig.colorbar(image, cax=fig.add_axes([0.89, 0.15, 0.015, 0.7]), label="mean normal error (µm)")
-    fig.suptitle("Force-induced mean normal error over workpiece placements (grey x: infeasible)", fontsize=12)
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], marker="x", color="#7f7f7f", linestyle="none", label="infeasible (reach, limits, singularity)"),
+               Line2D([], [], marker="*", color="red", markeredgecolor="white", markersize=14, linestyle="none", label="best grid candidate")]
+    if current_xyt is not None:
+        handles.append(Line2D([], [], marker="o", color=CURRENT, markeredgecolor="black", markersize=9, linestyle="none", label="current placement"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=9, frameon=False)
+    shown = "" if len(pick) == len(thetas) else f" ({len(pick)} of {len(thetas)} θ values shown)"
+    fig.suptitle(f"Force-induced mean normal error over workpiece placements{shown}", fontsize=12)
     return fig
 
 
