@@ -703,6 +703,7 @@ def place_cmd(
     z: float = typer.Option(..., "--z", help="Height of the workpiece frame in the base frame, mm."),
     force: Optional[str] = typer.Option(None, "--force", help="Constant cutting force fx,fy,fz on the tool, N, tool frame."),
     cut: Optional[Path] = typer.Option(None, "--cut", help="Cutting-parameter TOML (tool, material, cut) for the mechanistic force model, instead of --force."),
+    stock: Optional[Path] = typer.Option(None, "--stock", help="Stock mesh (STL, OBJ, ...) in the workpiece frame: engagement per target from stock minus swept tool (with --cut; 3-axis Z-map)."),
     model: Optional[Path] = typer.Option(None, "--model", help="Fitted model JSON: its identified joint compliance replaces the robot file's stiffness."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
     output: Optional[Path] = typer.Option(None, "-o", "--output", help="Write the program with the best workpiece frame here."),
@@ -730,7 +731,14 @@ def place_cmd(
         fitted, _ = load_model(model)
     params = None if cut is None else load_cut_params(cut)
     force_tool = None if force is None else _floats(force, 3, "--force")
-    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, model=fitted, singular_deg=singular_margin)
+    engagement = None
+    if stock is not None:
+        if params is None:
+            raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
+        from .engagement import load_stock, program_engagement
+
+        engagement = program_engagement(tp, params.diameter, load_stock(stock))
+    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
     result = pl.search(problem, *axes, z, refine=refine)
     frame0 = current_frame(tp)
     cur = None
@@ -741,7 +749,7 @@ def place_cmd(
         cur = {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
     doc = {"best": None, "evaluated": int(result.evaluated), "feasible": int(np.isfinite(result.grid_mean_mm).sum()),
            "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None,
-           "force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})",
+           "force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
            "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
     if not np.isfinite(result.best_mm):
         if json_out:

@@ -204,3 +204,23 @@ def test_cli_bad_input_and_no_feasible_placement(tmp_path):
     assert not out.exists()
     both = runner.invoke(app, ["place", str(BLOCK_PASS), "--robot", ROBOT, "--search", "0:0:0,0:0:0,0:0:0", "--z", "0"])
     assert both.exit_code == 2 and "--force" in both.stderr
+
+
+def test_cli_place_with_cut_model_and_stock(tmp_path):
+    from postproc.engagement import block_stock
+
+    stl = tmp_path / "block.stl"
+    block_stock().export(stl)
+    program = tmp_path / "pass97.src"
+    program.write_text(BLOCK_PASS.read_text().replace("Z 100,", "Z 97,"))
+    cut = REPO / "examples" / "cut_aluminium.toml"
+    base = ["place", str(program), "--robot", ROBOT, "--z", "1170", "--json", "--search", "1000:1400:200,0:400:200,0:90:45"]
+    with_stock = runner.invoke(app, base + ["--cut", str(cut), "--stock", str(stl)])
+    stated = runner.invoke(app, base + ["--cut", str(cut)])
+    assert with_stock.exit_code == 0 and stated.exit_code == 0, with_stock.stderr + stated.stderr
+    a, b = json.loads(with_stock.stdout), json.loads(stated.stdout)
+    assert "engagement from" in a["force"] and a["best"]["mean_normal_error_mm"] > 0
+    # the stock gives a 3 mm slot (full immersion), the file a 3 mm x 12 mm cut: different forces
+    assert a["best"]["mean_normal_error_mm"] != pytest.approx(b["best"]["mean_normal_error_mm"], rel=1e-3)
+    no_cut = runner.invoke(app, base + ["--force", "1,2,3", "--stock", str(stl)])
+    assert no_cut.exit_code == 2 and "--stock needs --cut" in no_cut.stderr
