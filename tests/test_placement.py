@@ -51,7 +51,7 @@ def test_compliance_is_the_small_force_deflection(robot):
 
 
 def test_weights_and_normal_error():
-    pos = np.array([[0, 0, 0], [0, 0, 0], [10, 0, 0], [30, 0, 0], [30, 0, 50]], dtype=float)
+    pos = np.array([[0, 0, 50], [0, 0, 0], [10, 0, 0], [30, 0, 0], [30, 0, 50]], dtype=float)  # approach, cut, retract
     cutting = np.array([False, True, True, True, False])
     w = comp.step_weights(pos, cutting)
     np.testing.assert_allclose(w, [0, 5, 15, 10, 0])
@@ -224,3 +224,21 @@ def test_cli_place_with_cut_model_and_stock(tmp_path):
     assert a["best"]["mean_normal_error_mm"] != pytest.approx(b["best"]["mean_normal_error_mm"], rel=1e-3)
     no_cut = runner.invoke(app, base + ["--force", "1,2,3", "--stock", str(stl)])
     assert no_cut.exit_code == 2 and "--stock needs --cut" in no_cut.stderr
+
+
+def test_path_errors_equal_a_hand_computation(block_pass, robot):
+    """One turned candidate, computed point by point with the robot's own Jacobian at the TCP."""
+    tp, problem = block_pass
+    frame = pl.placement_frames([[1000.0, 100.0, 30.0]], 1170.0)[0]
+    err, cn, ok = pl.path_errors(problem, frame)
+    assert ok
+    tool = tp.tools[tp.tool[1]]
+    for j in range(len(problem.local_tcp)):
+        tcp = frame @ problem.local_tcp[j]
+        q, _ = kin.select_nearest(robot, kin.ik(robot, (tcp @ np.linalg.inv(tool))[None]), np.zeros(6))
+        jv = kin.jacobian(robot, q, tool=tool[:3, 3])[0, :3]
+        c_tt = jv @ np.diag(1e-3 / robot.stiffness_nm_per_rad) @ jv.T
+        force = tcp[:3, :3] @ np.array(FORCE) * (j > 0)  # the PTP approach (row 0) does not cut
+        normal = -tcp[:3, 2]
+        assert err[j] == pytest.approx(normal @ c_tt @ force, rel=1e-9, abs=1e-15)
+        assert cn[j] == pytest.approx(normal @ c_tt @ normal, rel=1e-9)
