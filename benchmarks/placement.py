@@ -1,6 +1,6 @@
 """Placement search speed: >= 10,000 candidate workpiece frames x 100 cutter-contact points (target <= 10 s on 2 cores).
 
-Run: .venv/bin/python benchmarks/placement.py [--points 100] [--grid 22,23,20] [--repeat 3]
+Run: .venv/bin/python benchmarks/placement.py [--points 100] [--spacing 10] [--grid 22,23,20] [--box ...] [--repeat 3]
 The program is a straight face-milling pass of ``--points`` targets on seed 002's block
 (KRL, no Status/Turn: the branch follows the path), the robot the IRB6660-205/1.9, the
 force a constant tool-frame force. Timed: the vectorised grid evaluation (IK on the
@@ -27,10 +27,10 @@ from postproc.programs import parse_program
 from postproc.robots import load_robot
 
 
-def make_program(path: Path, points: int) -> None:
+def make_program(path: Path, points: int, spacing: float = 10.0) -> None:
     lines = ["DEF pass( )", "$TOOL = {X 0, Y 0, Z 250, A 0, B 0, C 0}", "$BASE = {X 1000, Y 0, Z 1170, A 0, B 0, C 0}",
              "PTP {X 0, Y 50, Z 150, A 0, B 180, C 0}"]
-    lines += [f"LIN {{X {10.0 * i:.1f}, Y 50, Z 100, A 0, B 180, C 0}}" for i in range(points - 1)]
+    lines += [f"LIN {{X {spacing * i:.1f}, Y 50, Z 100, A 0, B 180, C 0}}" for i in range(points - 1)]
     lines.append("END")
     path.write_text("\n".join(lines) + "\n")
 
@@ -38,19 +38,23 @@ def make_program(path: Path, points: int) -> None:
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=100)
+    parser.add_argument("--spacing", type=float, default=10.0, help="mm between targets (2: a 200 mm pass, most candidates feasible)")
     parser.add_argument("--grid", default="22,23,20", help="candidates along x, y, theta")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--box", default="0,1800,-1100,1100,0,180",
+                        help="x0,x1,y0,y1,t0,t1 of the grid (mm, deg); 700,1300,-300,300,0,90 is all feasible (the slow case)")
     args = parser.parse_args()
     nx, ny, nt = (int(v) for v in args.grid.split(","))
     with tempfile.TemporaryDirectory() as tmp:
         program = Path(tmp) / "pass.src"
-        make_program(program, args.points)
+        make_program(program, args.points, args.spacing)
         tp = parse_program(program)
     problem = problem_from_program(tp, load_robot("irb6660_205_190"), force_tool=(200.0, 100.0, 300.0))
-    xs, ys, ts = np.linspace(0, 1800, nx), np.linspace(-1100, 1100, ny), np.linspace(0, 180, nt)
+    x0, x1, y0, y1, t0, t1 = (float(v) for v in args.box.split(","))
+    xs, ys, ts = np.linspace(x0, x1, nx), np.linspace(y0, y1, ny), np.linspace(t0, t1, nt)
     pl.search(problem, xs[:2], ys[:2], ts[:2], 1170.0, refine=False)  # compile / warm up
     print(f"{nx * ny * nt} candidates x {len(problem.local_tcp)} points = {nx * ny * nt * len(problem.local_tcp):,} poses; "
-          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} before")
+          f"{os.cpu_count()} cores, load average {os.getloadavg()[0]:.1f} before; box {args.box}")
     for r in range(args.repeat):
         cpu0, t0 = time.process_time(), time.perf_counter()
         res = pl.search(problem, xs, ys, ts, 1170.0, refine=False)
