@@ -27,7 +27,7 @@ from __future__ import annotations
 
 import math
 import tomllib
-from dataclasses import dataclass, fields, replace
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -281,30 +281,24 @@ def to_frame(rot: np.ndarray, force_cutter: np.ndarray) -> np.ndarray:
     return np.einsum("pij,pj->pi", rot, force_cutter)
 
 
-def with_params(params: CutParams, **changes) -> CutParams:
-    """A copy of params with some values changed (names as in CutParams)."""
-    known = {f.name for f in fields(CutParams)}
-    unknown = set(changes) - known
-    if unknown:
-        raise InputError(f"unknown cut parameter(s): {', '.join(sorted(unknown))}")
-    return replace(params, **changes)
-
-
 # ------------------------------------------------------------------ forces of a program
 
 CUTTING_KINDS = (1, 2, 3, 6, 7)  # Kind.LINEAR, CIRC_VIA, CIRC_END, ARC_CW, ARC_CCW: moves that cut
 
 
 def forces_along(poses: np.ndarray, cutting: np.ndarray, *, params: CutParams | None = None, force_tool=None,
-                 engagement=None) -> tuple[np.ndarray, np.ndarray]:
+                 engagement=None, statistic: str = "mean") -> tuple[np.ndarray, np.ndarray]:
     """Cutting force (P, 3) N on the tool and surface normal (P, 3) at TCP poses (P, 4, 4),
     both in the frame the poses are given in; zero force where ``cutting`` is False.
 
     Either ``force_tool`` (3,) N, constant in the TCP frame (normal = -z_tcp), or the
-    mechanistic model ``params`` (mean force per tooth period; ``engagement`` (P, 4) per
-    point as in ``cutter_forces``, else params' stated cut), whose cutter frame takes the
-    feed from the move arriving at each point (the next one for the first).
+    mechanistic model ``params`` (``statistic`` "mean" over a tooth period or "peak", the
+    force at the largest resultant; ``engagement`` (P, 4) per point as in ``cutter_forces``,
+    else params' stated cut), whose cutter frame takes the feed from the move arriving at
+    each point (the next one for the first).
     """
+    if statistic not in ("mean", "peak"):
+        raise InputError(f"force statistic '{statistic}' is not mean or peak")
     rot = poses[:, :3, :3]
     if (params is None) == (force_tool is None):
         raise InputError("give either a constant tool-frame force or a cutting-parameter file, not both or neither")
@@ -317,7 +311,9 @@ def forces_along(poses: np.ndarray, cutting: np.ndarray, *, params: CutParams | 
         feed[1:] = np.diff(pos, axis=0)
         feed[0] = feed[1]
     frames = cutter_frames(rot, feed)
-    mean, _, _ = cutter_forces(params, engagement)
+    mean, peak, _ = cutter_forces(params, engagement)
+    if statistic == "peak":
+        mean = peak
     if mean.shape[0] == 1:
         mean = np.repeat(mean, len(poses), axis=0)
     force = to_frame(frames, mean) * cutting[:, None]
@@ -325,10 +321,11 @@ def forces_along(poses: np.ndarray, cutting: np.ndarray, *, params: CutParams | 
     return force, normal
 
 
-def program_forces(tp, *, params: CutParams | None = None, force_tool=None, engagement=None) -> np.ndarray:
+def program_forces(tp, *, params: CutParams | None = None, force_tool=None, engagement=None, statistic: str = "mean") -> np.ndarray:
     """The compensation hook: per-target cutting force (N, 3) in the robot base frame, N.
 
-    Cartesian cutting moves get the model's force (mean over a tooth period), every other
+    Cartesian cutting moves get the model's force (mean over a tooth period, or the peak
+    with ``statistic="peak"``), every other
     target (rapid, joint move, joint target) zero. ``engagement`` (N, 4) may give each
     target's (phi_start, phi_exit, z_low, z_high), e.g. from ``engagement.from_stock``.
     """
@@ -336,5 +333,5 @@ def program_forces(tp, *, params: CutParams | None = None, force_tool=None, enga
     poses = tp.base_poses()
     poses[np.isnan(poses)] = 0.0
     eng = None if engagement is None else np.asarray(engagement, dtype=float)
-    force, _ = forces_along(poses, cutting, params=params, force_tool=force_tool, engagement=eng)
+    force, _ = forces_along(poses, cutting, params=params, force_tool=force_tool, engagement=eng, statistic=statistic)
     return force

@@ -17,7 +17,7 @@ import numpy as np
 from . import compliance as comp
 from .errors import EmitError, InputError
 from .forces import CUTTING_KINDS, CutParams, forces_along
-from .frames import abc_to_matrix, matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
+from .frames import matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
 from .ir import Kind, Toolpath
 from .placement import PlacementProblem
 from .robots import RobotModel
@@ -177,9 +177,3 @@ def _check_multi(tp, texts, new_frame, rows, tol_mm):
     if not np.isfinite(worst) or worst > tol_mm:
         raise EmitError(f"{tp.sources[0].path}: the written frame does not reproduce the placement (off by {worst:.4g} mm); nothing written")
 
-
-def frame_from_abc(x, y, z, a, b, c) -> np.ndarray:
-    out = np.eye(4)
-    out[:3, :3] = abc_to_matrix(np.array([[a, b, c]]))[0]
-    out[:3, 3] = (x, y, z)
-    return out

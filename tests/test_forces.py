@@ -163,3 +163,16 @@ def test_cut_file_is_validated(tmp_path):
     minimal.write_text('[units]\nlength = "mm"\nangle = "deg"\nforce = "N"\n[tool]\ndiameter = 10\nteeth = 2\n[cut]\nfeed_per_tooth = 0.05\naxial_depth = 1\nradial_width = 5\n')
     m = load_cut_params(minimal)
     assert m.ktc == 631.0 and "doi:10.1186" in m.source
+
+
+def test_peak_force_hook():
+    from postproc.programs import parse_program
+
+    tp = parse_program(REPO / "examples" / "data" / "block_face.src")
+    params = load_cut_params(REPO / "examples" / "cut_aluminium.toml")
+    mean = program_forces(tp, params=params)
+    peak = program_forces(tp, params=params, statistic="peak")
+    assert np.all(np.linalg.norm(peak[2:-1], axis=1) > np.linalg.norm(mean[2:-1], axis=1))
+    np.testing.assert_allclose(np.linalg.norm(peak[3]), cutter_forces(params)[2][0], rtol=1e-9)
+    with pytest.raises(InputError):
+        program_forces(tp, params=params, statistic="median")

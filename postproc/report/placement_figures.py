@@ -11,7 +11,7 @@ import numpy as np  # noqa: E402
 BEST, CURRENT = "#1f77b4", "#ff7f0e"
 
 
-def error_maps(result, current_xyt=None, max_panels: int = 12):
+def error_maps(result, current_xyt=None, max_panels: int = 24):
     """Mean normal error over (x, y), one panel per theta (up to max_panels, evenly
     picked); infeasible cells grey with an x; the best candidate (star) and the current
     placement (circle) marked on their theta's panel."""
