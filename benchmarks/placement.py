@@ -35,19 +35,39 @@ def make_program(path: Path, points: int, spacing: float = 10.0) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
+def make_rapid_program(path: Path, points: int, spacing: float) -> None:
+    """The same pass in RAPID, every robtarget with the confdata of its joints at x 1000, y 0, theta 0."""
+    from postproc import kinematics as kin
+
+    robot = load_robot("irb6660_205_190")
+    local = np.array([[spacing * i, 50.0, 100.0] for i in range(points)])
+    tool, poses = np.eye(4), np.repeat(np.eye(4)[None], points, axis=0)
+    tool[2, 3] = 250.0
+    poses[:, :3, :3], poses[:, :3, 3] = np.diag([1.0, -1.0, -1.0]), local
+    frame = pl.placement_frames([[1000.0, 0.0, 0.0]], 1170.0)[0]
+    q, _ = kin.select_nearest(robot, kin.ik(robot, frame @ poses @ np.linalg.inv(tool)), np.zeros(6))
+    conf = kin.abb_confdata(robot, np.nan_to_num(q))
+    lines = ["MODULE Pass", "  PERS tooldata spindle := [TRUE,[[0,0,250],[1,0,0,0]],[20,[0,0,100],[1,0,0,0],0,0,0]];",
+             '  TASK PERS wobjdata block := [FALSE,TRUE,"",[[1000,0,1170],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];', "  PROC main()"]
+    lines += [f"    MoveL [[{p[0]:g},{p[1]:g},{p[2]:g}],[0,1,0,0],[{c[0]},{c[1]},{c[2]},{c[3]}],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, spindle\\WObj:=block;"
+              for p, c in zip(local, conf)]
+    path.write_text("\n".join(lines + ["  ENDPROC", "ENDMODULE", ""]))
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--points", type=int, default=100)
     parser.add_argument("--spacing", type=float, default=10.0, help="mm between targets (2: a 200 mm pass, most candidates feasible)")
     parser.add_argument("--grid", default="22,23,20", help="candidates along x, y, theta")
     parser.add_argument("--repeat", type=int, default=3)
+    parser.add_argument("--rapid", action="store_true", help="a RAPID program with confdata: the branch follows cf1, cf4, cf6, cfx")
     parser.add_argument("--box", default="0,1800,-1100,1100,0,180",
                         help="x0,x1,y0,y1,t0,t1 of the grid (mm, deg); 700,1300,-300,300,0,90 is all feasible (the slow case)")
     args = parser.parse_args()
     nx, ny, nt = (int(v) for v in args.grid.split(","))
     with tempfile.TemporaryDirectory() as tmp:
-        program = Path(tmp) / "pass.src"
-        make_program(program, args.points, args.spacing)
+        program = Path(tmp) / ("pass.mod" if args.rapid else "pass.src")
+        (make_rapid_program if args.rapid else make_program)(program, args.points, args.spacing)
         tp = parse_program(program)
     problem = problem_from_program(tp, load_robot("irb6660_205_190"), force_tool=(200.0, 100.0, 300.0))
     x0, x1, y0, y1, t0, t1 = (float(v) for v in args.box.split(","))
