@@ -122,7 +122,8 @@ def _krl_base(text: str, new_frame: np.ndarray, path: str) -> str:
         raise EmitError(f"{path}: the program sets $BASE {len(found)} times (need exactly one inline {{X .., C ..}} literal)")
     abc = matrix_to_abc(new_frame[None, :3, :3])[0]
     values = dict(zip("XYZABC", [*new_frame[:3, 3], *abc]))
-    literal = "{" + ", ".join(f"{k} {_fmt(v, 4)}" for k, v in values.items()) + "}"
+    # 6 decimals of a degree: 2e-5 mm at 1 m from the frame's origin
+    literal = "{" + ", ".join(f"{k} {_fmt(v, 4 if k in 'XYZ' else 6)}" for k, v in values.items()) + "}"
     m = found[0]
     return text[: m.start(1) - 1] + literal + text[m.end(1) + 1 :]
 

@@ -286,3 +286,20 @@ def test_fast_configuration_selection_equals_the_kinematics_one(robot_name):
         return (st == status[rows]) & (tu == turn[rows])
 
     _check_selection(robot, sols, q_ref, idx_ref, q_new, idx_new, kuka_ok, exact)
+
+
+def test_program_with_two_frames_or_a_dat_file(tmp_path):
+    two = tmp_path / "two.src"
+    text = BLOCK_PASS.read_text()
+    two.write_text(text.replace("LIN {X 30,", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}\r\nLIN {X 30,"))
+    proc = _cli(two, "--search", "1000:1100:100,0:0:0,0:0:0")
+    assert proc.returncode == 2 and "several frames" in proc.stderr and "line 12" in proc.stderr
+    src = tmp_path / "pass.src"
+    src.write_text(text.replace("DEF block_pass( )", "DEF pass( )"))
+    (tmp_path / "pass.dat").write_text("DEFDAT pass\r\nENDDAT\r\n")
+    out = tmp_path / "out.src"
+    proc = _cli(src, "--search", "600:1000:200,-400:0:200,0:90:45", "-o", out)
+    assert proc.returncode == 0, proc.stderr
+    assert (tmp_path / "out.dat").read_text() == (tmp_path / "pass.dat").read_text()
+    changed = [a for a, b in zip(out.read_text().splitlines(), src.read_text().splitlines()) if a != b]
+    assert len(changed) == 1 and changed[0].startswith("$BASE")
