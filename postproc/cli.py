@@ -714,43 +714,18 @@ def place_cmd(
 ):
     """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
     from . import placement as pl
-    from .compliance import weighted_mean
-    from .forces import load_cut_params
-    from .place_program import check_placed, current_frame, frame_xy_theta, placed_texts, problem_from_program
+    from .place_program import check_placed, placed_texts
     from .programs import parse_program, write_texts
 
     if (force is None) == (cut is None):
         raise InputError("give the cutting force as either --force FX,FY,FZ or --cut CUT.toml")
     axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
     tp = parse_program(program, dialect)
-    robot_model = load_robot(robot)
-    fitted = None
-    if model is not None:
-        from .model_io import load_model
-
-        fitted, _ = load_model(model)
-    params = None if cut is None else load_cut_params(cut)
-    force_tool = None if force is None else _floats(force, 3, "--force")
-    engagement = None
-    if stock is not None:
-        if params is None:
-            raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
-        from .engagement import load_stock, program_engagement
-
-        engagement = program_engagement(tp, params.diameter, load_stock(stock))
-    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
+    problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin)
     result = pl.search(problem, *axes, z, refine=refine)
-    frame0 = current_frame(tp)
-    cur = None
-    if frame0 is not None:
-        err0, _, ok0 = pl.path_errors(problem, frame0)
-        x0, y0, t0, z0 = frame_xy_theta(frame0)
-        mean0 = float(weighted_mean(err0, problem.weights)) if ok0 else None
-        cur = {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
+    frame0, cur = _current_placement(tp, problem)
     doc = {"best": None, "evaluated": int(result.evaluated), "feasible": int(np.isfinite(result.grid_mean_mm).sum()),
-           "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None,
-           "force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
-           "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
+           "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None, **sources}
     if not np.isfinite(result.best_mm):
         if json_out:
             print(json.dumps(doc))
@@ -771,7 +746,51 @@ def place_cmd(
     if json_out:
         print(json.dumps(doc))
         return
-    b = doc["best"]
+    _print_placement(doc, z)
+
+
+def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
+    """The placement problem of the place command's inputs, and where its force and compliance come from."""
+    from .forces import load_cut_params
+    from .place_program import problem_from_program
+
+    fitted = None
+    if model is not None:
+        from .model_io import load_model
+
+        fitted, _ = load_model(model)
+    params = None if cut is None else load_cut_params(cut)
+    force_tool = None if force is None else _floats(force, 3, "--force")
+    engagement = None
+    if stock is not None:
+        if params is None:
+            raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
+        from .engagement import load_stock, program_engagement
+
+        engagement = program_engagement(tp, params.diameter, load_stock(stock))
+    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
+    sources = {"force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
+               "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
+    return problem, sources
+
+
+def _current_placement(tp, problem):
+    """The program's own workpiece frame and its mean normal error (None where undefined or infeasible)."""
+    from . import placement as pl
+    from .compliance import weighted_mean
+    from .place_program import current_frame, frame_xy_theta
+
+    frame0 = current_frame(tp)
+    if frame0 is None:
+        return None, None
+    err0, _, ok0 = pl.path_errors(problem, frame0)
+    x0, y0, t0, z0 = frame_xy_theta(frame0)
+    mean0 = float(weighted_mean(err0, problem.weights)) if ok0 else None
+    return frame0, {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
+
+
+def _print_placement(doc: dict, z: float) -> None:
+    b, cur = doc["best"], doc["current"]
     out.print(f"{doc['evaluated']} placements evaluated ({doc['feasible']} of {doc['grid']} grid cells feasible)")
     out.print(f"best: x {b['x']:.1f} mm, y {b['y']:.1f} mm, theta {b['theta']:.2f} deg, z {z:g} mm: mean normal error {b['mean_normal_error_mm'] * 1000:.2f} um")
     if cur is not None:
