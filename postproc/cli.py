@@ -833,6 +833,147 @@ def freecad_install_post_cmd(
     target = install_post(directory, python)
     out.print(f"installed {target} ({how}); in FreeCAD choose the post processor 'postproc' and give its arguments (--help lists them)")
 
+def _search_spec(text: str) -> list[tuple[float, float, float]]:
+    """'X0:X1:DX,Y0:Y1:DY,T0:T1:DT' -> three (start, stop, step)."""
+    parts = text.split(",")
+    if len(parts) != 3 or any(len(p.split(":")) != 3 for p in parts):
+        raise InputError(f"--search: expected X0:X1:DX,Y0:Y1:DY,T0:T1:DT (mm, mm, deg), got '{text}'")
+    try:
+        return [tuple(float(v) for v in p.split(":")) for p in parts]
+    except ValueError:
+        raise InputError(f"--search: expected numbers in X0:X1:DX,Y0:Y1:DY,T0:T1:DT, got '{text}'") from None
+
+
+@app.command("place")
+@handles_errors
+def place_cmd(
+    program: Path = typer.Argument(..., help="Program whose Cartesian targets are in one workpiece frame (RAPID work object, KRL $BASE)."),
+    robot: str = typer.Option(..., "--robot", help="Robot name from robots/ or a robot file."),
+    search_spec: str = typer.Option(..., "--search", help="X0:X1:DX,Y0:Y1:DY,T0:T1:DT: the grid of workpiece frames (mm, mm, deg about base z)."),
+    z: float = typer.Option(..., "--z", help="Height of the workpiece frame in the base frame, mm."),
+    force: Optional[str] = typer.Option(None, "--force", help="Constant cutting force fx,fy,fz on the tool, N, tool frame."),
+    cut: Optional[Path] = typer.Option(None, "--cut", help="Cutting-parameter TOML (tool, material, cut) for the mechanistic force model, instead of --force."),
+    stock: Optional[Path] = typer.Option(None, "--stock", help="Stock mesh (STL, OBJ, ...) in the workpiece frame: engagement per target from stock minus swept tool (with --cut; 3-axis Z-map)."),
+    model: Optional[Path] = typer.Option(None, "--model", help="Fitted model JSON: its identified joint compliance replaces the robot file's stiffness."),
+    json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="Write the program with the best workpiece frame here."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Heat map PNG of the mean normal error per theta; the error along the path goes beside it (*_path.png)."),
+    refine: bool = typer.Option(True, "--refine/--no-refine", help="Bounded local refinement after the grid."),
+    singular_margin: float = typer.Option(5.0, "--singular-margin", help="Minimum distance from wrist and elbow singularities, deg."),
+    dialect: Optional[str] = typer.Option(None, "--dialect"),
+):
+    """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
+    from . import placement as pl
+    from .place_program import check_placed, placed_texts
+    from .programs import parse_program, write_texts
+
+    if (force is None) == (cut is None):
+        raise InputError("give the cutting force as either --force FX,FY,FZ or --cut CUT.toml")
+    axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
+    tp = parse_program(program, dialect)
+    problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin)
+    result = pl.search(problem, *axes, z, refine=refine)
+    frame0, cur = _current_placement(tp, problem)
+    doc = {"best": None, "evaluated": int(result.evaluated), "feasible": int(np.isfinite(result.grid_mean_mm).sum()),
+           "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None, **sources}
+    if not np.isfinite(result.best_mm):
+        if json_out:
+            print(json.dumps(doc))
+        raise JobError(f"no feasible placement in the search grid ({result.grid_mean_mm.size} candidates): every one leaves the reach, the joint limits or comes near a singularity")
+    doc["best"] = {"x": float(result.best[0]), "y": float(result.best[1]), "theta": float(result.best[2]), "z": z, "mean_normal_error_mm": result.best_mm}
+    doc["grid_best"] = {"x": float(result.grid_best[0]), "y": float(result.grid_best[1]), "theta": float(result.grid_best[2]), "mean_normal_error_mm": result.grid_best_mm}
+    if cur is not None and cur["mean_normal_error_mm"]:
+        doc["reduction_percent"] = 100.0 * (1.0 - result.best_mm / cur["mean_normal_error_mm"])
+    best_frame = pl.placement_frames(result.best, z)[0]
+    if output is not None:
+        texts = placed_texts(tp, best_frame)
+        check_placed(tp, texts, best_frame)
+        outputs = [output] + [output.with_suffix(".dat") for d in tp.sources[1:] if d.role == "dat"]
+        write_texts(texts[: len(outputs)], outputs)
+        doc["written"] = str(output)
+    if plot is not None:
+        doc["figures"] = _place_figures(plot, result, problem, best_frame, frame0, cur)
+    if json_out:
+        print(json.dumps(doc))
+        return
+    _print_placement(doc, z)
+
+
+def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
+    """The placement problem of the place command's inputs, and where its force and compliance come from."""
+    from .forces import load_cut_params
+    from .place_program import problem_from_program
+
+    fitted = None
+    if model is not None:
+        from .model_io import load_model
+
+        fitted, _ = load_model(model)
+    params = None if cut is None else load_cut_params(cut)
+    force_tool = None if force is None else _floats(force, 3, "--force")
+    engagement = None
+    if stock is not None:
+        if params is None:
+            raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
+        from .engagement import load_stock, program_engagement
+
+        engagement = program_engagement(tp, params.diameter, load_stock(stock))
+    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
+    sources = {"force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
+               "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
+    return problem, sources
+
+
+def _current_placement(tp, problem):
+    """The program's own workpiece frame and its mean normal error (None where undefined or infeasible)."""
+    from . import placement as pl
+    from .compliance import weighted_mean
+    from .place_program import current_frame, frame_xy_theta
+
+    frame0 = current_frame(tp)
+    if frame0 is None:
+        return None, None
+    err0, _, ok0 = pl.path_errors(problem, frame0)
+    x0, y0, t0, z0 = frame_xy_theta(frame0)
+    mean0 = float(weighted_mean(err0, problem.weights)) if ok0 else None
+    return frame0, {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
+
+
+def _print_placement(doc: dict, z: float) -> None:
+    b, cur = doc["best"], doc["current"]
+    out.print(f"{doc['evaluated']} placements evaluated ({doc['feasible']} of {doc['grid']} grid cells feasible)")
+    out.print(f"best: x {b['x']:.1f} mm, y {b['y']:.1f} mm, theta {b['theta']:.2f} deg, z {z:g} mm: mean normal error {b['mean_normal_error_mm'] * 1000:.2f} um")
+    if cur is not None:
+        now = "infeasible" if cur["mean_normal_error_mm"] is None else f"{cur['mean_normal_error_mm'] * 1000:.2f} um"
+        out.print(f"current: x {cur['x']:.1f}, y {cur['y']:.1f}, theta {cur['theta']:.2f}: {now}"
+                  + ("" if doc["reduction_percent"] is None else f"; reduction {doc['reduction_percent']:.1f} %"))
+
+
+def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> list[str]:
+    from . import placement as pl
+    from .errors import OutputError
+    from .report.placement_figures import error_maps, path_errors
+
+    steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))
+    dist = np.concatenate([[0.0], np.cumsum(steps)])  # length along the cut
+    err_best, _, _ = pl.path_errors(problem, best_frame)
+    err_cur = None
+    if frame0 is not None and cur["mean_normal_error_mm"] is not None:
+        err_cur, _, _ = pl.path_errors(problem, frame0)
+    current_xyt = None if cur is None else (cur["x"], cur["y"], cur["theta"])
+    paths = [plot, plot.with_name(plot.stem + "_path" + plot.suffix)]
+    cutting = problem.weights > 0
+    figs = [error_maps(result, current_xyt),
+            path_errors(dist[cutting], err_best[cutting], None if err_cur is None else err_cur[cutting])]
+    for fig, path in zip(figs, paths):
+        tmp = path.with_name("." + path.name + ".tmp.png")
+        try:
+            fig.savefig(tmp, dpi=110)
+            tmp.replace(path)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write the figure ({exc.strerror})") from None
+    return [str(p) for p in paths]
+
 
 def main() -> None:
     app()
