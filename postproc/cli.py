@@ -888,8 +888,10 @@ def place_cmd(
     if output is not None:
         texts = placed_texts(tp, best_frame)
         check_placed(tp, texts, best_frame)
-        outputs = [output] + [output.with_suffix(".dat") for d in tp.sources[1:] if d.role == "dat"]
-        write_texts(texts[: len(outputs)], outputs)
+        from .dialects import of as dialect_of
+
+        files = dialect_of(tp).files(tp, texts, output)
+        write_texts(list(files.values()), list(files.keys()))
         doc["written"] = str(output)
     if plot is not None:
         doc["figures"] = _place_figures(plot, result, problem, best_frame, frame0, cur)

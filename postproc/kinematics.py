@@ -557,55 +557,63 @@ def kuka_status_turn(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
     return status, turn
 
 
-def _select_matching(robot: RobotModel, solutions, matches) -> tuple[np.ndarray, np.ndarray]:
-    sols = np.asarray(solutions, dtype=float)
-    n = sols.shape[0]
-    best = np.full((n, 6), np.nan)
-    idx = np.full(n, -1)
-    for b in range(sols.shape[1]):
-        for cand in _turn_variants(robot, sols[:, b]):
-            usable = within_limits(robot, cand)  # False on unreachable (NaN) rows
-            ok = np.isnan(best[:, 0]) & usable & matches(np.where(usable[:, None], cand, 0.0))
-            best[ok] = cand[ok]
-            idx[ok] = b
-    return best, idx
-
-
-def _turn_variants(robot: RobotModel, q: np.ndarray):
-    """q and the equivalents one or two turns away on each joint whose range allows it."""
-    yield q
-    wide = np.nonzero(robot.upper_deg - robot.lower_deg > 360.0)[0]
-    for joint in wide:
-        for turns in (1, -1, 2, -2):
-            alt = q.copy()
-            alt[:, joint] += 360.0 * turns
-            yield alt
-    if len(wide) >= 2:
-        for t_a in (1, -1):
-            for t_b in (1, -1):
-                alt = q.copy()
-                alt[:, wide[0]] += 360.0 * t_a
-                alt[:, wide[1]] += 360.0 * t_b
-                yield alt
+def _wide_joints(robot: RobotModel) -> np.ndarray:
+    """Joints whose range spans more than a turn (the only ones whose turn the program picks)."""
+    return np.nonzero(robot.upper_deg - robot.lower_deg > 360.0)[0]
 
 
 def select_by_abb_conf(robot: RobotModel, solutions, confdata) -> tuple[np.ndarray, np.ndarray]:
-    """Pick the solution whose ABB confdata [cf1, cf4, cf6, cfx] equals the given (N, 4) or (4,)."""
+    """Pick, per pose, the first branch whose solution has the given ABB confdata [cf1, cf4,
+    cf6, cfx] ((N, 4) or (4,)). Each wide joint's turn (a range over a turn) is computed
+    from the quadrant asked for rather than searched: 8 passes of ``abb_confdata``."""
     want = np.broadcast_to(np.asarray(confdata, dtype=int), (np.asarray(solutions).shape[0], 4))
-    return _select_matching(robot, solutions, lambda q: np.all(abb_confdata(robot, q) == want, axis=1))
+    quadrant_col = {0: 0, 3: 1, 5: 2}
+    return _first_matching(robot, solutions, lambda q, rows: np.all(abb_confdata(robot, q) == want[rows], axis=1),
+                           lambda q, j, rows: _turn_to_quadrant(q, want[rows, quadrant_col[j]]) if j in quadrant_col else q)
 
 
 def select_by_kuka_status(robot: RobotModel, solutions, status, turn) -> tuple[np.ndarray, np.ndarray]:
-    """Pick the solution whose KUKA Status and Turn equal the given values ((N,) or scalars)."""
+    """Pick, per pose, the first branch whose solution has the given KUKA Status and Turn
+    ((N,) or scalars): each wide joint is turned to the sign its Turn bit asks for."""
     n = np.asarray(solutions).shape[0]
     want_s = np.broadcast_to(np.asarray(status, dtype=int), (n,))
     want_t = np.broadcast_to(np.asarray(turn, dtype=int), (n,))
 
-    def matches(q):
-        s, t = kuka_status_turn(robot, q)
-        return (s == want_s) & (t == want_t)
+    def matches(q, rows):
+        st, tu = kuka_status_turn(robot, q)
+        return (st == want_s[rows]) & (tu == want_t[rows])
 
-    return _select_matching(robot, solutions, matches)
+    def turned(q, j, rows):
+        negative = (want_t[rows] >> j) & 1 == 1
+        return np.where(negative & (q >= 0), q - 360.0, np.where(~negative & (q < 0), q + 360.0, q))
+
+    return _first_matching(robot, solutions, matches, turned)
+
+
+def _turn_to_quadrant(q: np.ndarray, quadrant: np.ndarray) -> np.ndarray:
+    """q plus the whole turns that put it in the wanted quadrant floor(q / 90), when some do."""
+    turns = (quadrant - np.floor(q / 90.0)) / 4.0
+    return np.where(turns == np.round(turns), q + 360.0 * turns, q)
+
+
+def _first_matching(robot: RobotModel, solutions: np.ndarray, matches, turned):
+    sols = np.asarray(solutions, dtype=float)
+    n = sols.shape[0]
+    best = np.full((n, 6), np.nan)
+    idx = np.full(n, -1)
+    wide = _wide_joints(robot)
+    for b in range(sols.shape[1]):
+        open_rows = np.nonzero(idx < 0)[0]
+        if not len(open_rows):
+            break
+        cand = sols[open_rows, b].copy()
+        for j in wide:
+            cand[:, j] = turned(cand[:, j], j, open_rows)
+        usable = within_limits(robot, cand)
+        ok = usable & matches(np.where(usable[:, None], cand, 0.0), open_rows)
+        best[open_rows[ok]] = cand[ok]
+        idx[open_rows[ok]] = b
+    return best, idx
 
 
 # ------------------------------------------------------------------------ gravity

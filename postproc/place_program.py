@@ -9,15 +9,14 @@ else nothing is written.
 
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
 
 from . import compliance as comp
+from . import dialects
 from .errors import EmitError, InputError
 from .forces import CUTTING_KINDS, CutParams, forces_along
-from .frames import matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
 from .ir import Kind, Toolpath
 from .placement import PlacementProblem
 from .robots import RobotModel
@@ -60,7 +59,8 @@ def problem_from_program(tp: Toolpath, robot: RobotModel, *, force_tool=None, pa
     weights = comp.step_weights(local[:, :3, 3], cutting)
     return PlacementProblem(
         robot=robot, local_tcp=local, flange_T_tcp=tp.tools[tp.tool[rows]], force_local=force, normal_local=normal,
-        weights=weights, conf=tp.conf[rows], dialect=tp.dialect, compliance=comp.joint_compliance(robot, model),
+        weights=weights, conf=tp.conf[rows], dialect=tp.dialect, conf_applies=dialects.of(tp).conf_applies(tp)[rows],
+        compliance=comp.joint_compliance(robot, model),
         line=tp.line[rows], singular_deg=singular_deg,
     )
 
@@ -81,67 +81,11 @@ def frame_xy_theta(frame: np.ndarray) -> tuple[float, float, float, float]:
 # ------------------------------------------------------------------ writing
 
 
-_NUM = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
-
-
-def _fmt(v: float, decimals: int) -> str:
-    text = f"{v:.{decimals}f}".rstrip("0").rstrip(".")
-    return "0" if text in ("-0", "") else text
-
-
-def _rapid_wobj(text: str, name: str, new_frame: np.ndarray, path: str) -> str:
-    decl = re.compile(rf"wobjdata\s+{re.escape(name)}\s*:=\s*\[", re.IGNORECASE)
-    found = list(decl.finditer(text))
-    if len(found) != 1:
-        raise EmitError(f"{path}: work object '{name}' is declared {len(found)} times; cannot place it")
-    start = found[0].end()
-    end = text.find(";", start)
-    body = text[start:end]
-    after_string = body.find('"', body.find('"') + 1) + 1  # past the ufmec string
-    nums = [m for m in re.finditer(_NUM, body[after_string:])]
-    if after_string <= 0 or len(nums) != 14:
-        raise EmitError(f"{path}: work object '{name}' is not a literal wobjdata (14 numbers); cannot place it")
-    values = np.array([float(m.group()) for m in nums])
-    oframe = np.eye(4)
-    oframe[:3, :3] = quat_wxyz_to_matrix(values[10:14][None])[0]
-    oframe[:3, 3] = values[7:10]
-    uframe = new_frame @ np.linalg.inv(oframe)
-    new = list(uframe[:3, 3]) + list(matrix_to_quat_wxyz(uframe[None, :3, :3])[0])
-    digits = [4, 4, 4, 8, 8, 8, 8]
-    out = text
-    for m, value, dec in sorted(zip(nums[:7], new, digits), key=lambda t: -t[0].start()):
-        s, e = start + after_string + m.start(), start + after_string + m.end()
-        out = out[:s] + _fmt(value, dec) + out[e:]
-    return out
-
-
-def _krl_base(text: str, new_frame: np.ndarray, path: str) -> str:
-    pattern = re.compile(r"\$BASE\s*=\s*\{([^}]*)\}", re.IGNORECASE)
-    found = list(pattern.finditer(text))
-    if len(found) != 1:
-        raise EmitError(f"{path}: the program sets $BASE {len(found)} times (need exactly one inline {{X .., C ..}} literal)")
-    abc = matrix_to_abc(new_frame[None, :3, :3])[0]
-    values = dict(zip("XYZABC", [*new_frame[:3, 3], *abc]))
-    # 6 decimals of a degree: 2e-5 mm at 1 m from the frame's origin
-    literal = "{" + ", ".join(f"{k} {_fmt(v, 4 if k in 'XYZ' else 6)}" for k, v in values.items()) + "}"
-    m = found[0]
-    return text[: m.start(1) - 1] + literal + text[m.end(1) + 1 :]
-
-
 def placed_texts(tp: Toolpath, new_frame: np.ndarray) -> list[str]:
     """Every source text of the program with its workpiece frame set to ``new_frame``."""
-    k, rows = workpiece_frame_index(tp)
-    path = tp.sources[0].path
+    k, _ = workpiece_frame_index(tp)
     texts = [doc.text for doc in tp.sources]
-    if tp.dialect == "rapid":
-        name = tp.frame_names[k]
-        if name.upper() == "WOBJ0":
-            raise EmitError(f"{path}: the targets are in wobj0 (the base frame); declare a work object to place the workpiece")
-        texts[0] = _rapid_wobj(texts[0], name, new_frame, path)
-    elif tp.dialect == "krl":
-        texts[0] = _krl_base(texts[0], new_frame, path)
-    else:
-        raise EmitError(f"{path}: writing a placed {tp.dialect} program is not supported (RAPID work objects and KRL $BASE are)")
+    texts[0] = dialects.of(tp).place_workpiece(texts[0], tp.frame_names[k], new_frame, tp.sources[0].path)
     return texts
 
 

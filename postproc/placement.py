@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import compliance as comp
+from . import dialects
 from . import kinematics as kin
 from .errors import InputError
 from .robots import RobotModel
@@ -39,6 +40,7 @@ class PlacementProblem:
     weights: np.ndarray  # (P,) eq. 2 step weights (0 off the cut)
     conf: np.ndarray  # (P, 4) the program's configuration data, NaN where none
     dialect: str
+    conf_applies: np.ndarray  # (P,) True where the controller takes the configuration data (the dialect's rule)
     compliance: np.ndarray  # (6,) joint compliance, rad/(N*m)
     line: np.ndarray  # (P,) program lines
     singular_deg: float = 5.0
@@ -74,85 +76,17 @@ def singularity_margins(robot: RobotModel, q_deg: np.ndarray) -> tuple[np.ndarra
     return wrist, elbow, np.abs(radial)
 
 
-def _wide_joints(robot: RobotModel) -> np.ndarray:
-    """Joints whose range spans more than a turn (the only ones whose turn the program picks)."""
-    return np.nonzero(robot.upper_deg - robot.lower_deg > 360.0)[0]
-
-
-def select_by_abb_conf(robot: RobotModel, solutions: np.ndarray, confdata: np.ndarray):
-    """``kinematics.select_by_abb_conf`` for many poses at once: the same result (first
-    branch whose solution, on the turn its quadrant asks for, has the given confdata),
-    but each wide joint's turn is computed from the wanted quadrant instead of trying every
-    turn: 8 passes of ``abb_confdata`` instead of 104 (tests/test_placement.py compares)."""
-    want = np.asarray(confdata, dtype=int)
-    quadrant_col = {0: 0, 3: 1, 5: 2}
-    return _first_matching(robot, solutions, lambda q, rows: np.all(kin.abb_confdata(robot, q) == want[rows], axis=1),
-                           lambda q, j, rows: _turn_to_quadrant(q, want[rows, quadrant_col[j]]) if j in quadrant_col else q)
-
-
-def select_by_kuka_status(robot: RobotModel, solutions: np.ndarray, status, turn):
-    """``kinematics.select_by_kuka_status`` for many poses at once (see select_by_abb_conf):
-    each wide joint is turned to the sign its Turn bit asks for."""
-    n = solutions.shape[0]
-    want_s = np.broadcast_to(np.asarray(status, dtype=int), (n,))
-    want_t = np.broadcast_to(np.asarray(turn, dtype=int), (n,))
-
-    def matches(q, rows):
-        st, tu = kin.kuka_status_turn(robot, q)
-        return (st == want_s[rows]) & (tu == want_t[rows])
-
-    def turned(q, j, rows):
-        negative = (want_t[rows] >> j) & 1 == 1
-        return np.where(negative & (q >= 0), q - 360.0, np.where(~negative & (q < 0), q + 360.0, q))
-
-    return _first_matching(robot, solutions, matches, turned)
-
-
-def _turn_to_quadrant(q: np.ndarray, quadrant: np.ndarray) -> np.ndarray:
-    """q plus the whole turns that put it in the wanted quadrant floor(q / 90), when some do."""
-    turns = (quadrant - np.floor(q / 90.0)) / 4.0
-    return np.where(turns == np.round(turns), q + 360.0 * turns, q)
-
-
-def _first_matching(robot: RobotModel, solutions: np.ndarray, matches, turned):
-    sols = np.asarray(solutions, dtype=float)
-    n = sols.shape[0]
-    best = np.full((n, 6), np.nan)
-    idx = np.full(n, -1)
-    wide = _wide_joints(robot)
-    for b in range(sols.shape[1]):
-        open_rows = np.nonzero(idx < 0)[0]
-        if not len(open_rows):
-            break
-        cand = sols[open_rows, b].copy()
-        for j in wide:
-            cand[:, j] = turned(cand[:, j], j, open_rows)
-        usable = kin.within_limits(robot, cand)
-        ok = usable & matches(np.where(usable[:, None], cand, 0.0), open_rows)
-        best[open_rows[ok]] = cand[ok]
-        idx[open_rows[ok]] = b
-    return best, idx
-
-
 def _program_branch(problem: PlacementProblem, sols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Joints (M, P, 6) on the program's configuration and whether each was found (M, P)."""
     m, p = sols.shape[:2]
     robot, conf = problem.robot, problem.conf
     q = np.full((m, p, 6), np.nan)
     ok = np.zeros((m, p), dtype=bool)
-    if problem.dialect == "rapid":
-        has = ~np.isnan(conf).any(axis=1)
-    elif problem.dialect == "krl":
-        has = ~np.isnan(conf[:, :2]).any(axis=1)
-    else:
-        has = np.zeros(p, dtype=bool)
+    has = problem.conf_applies
     if has.any():
         flat = sols[:, has].reshape(-1, 8, 6)
         want = np.tile(conf[has], (m, 1))
-        if problem.dialect == "rapid":
-            qs, idx = select_by_abb_conf(robot, flat, want[:, :4].astype(int))
-        else:
-            qs, idx = select_by_kuka_status(robot, flat, want[:, 0].astype(int), want[:, 1].astype(int))
+        qs, idx = dialects.get(problem.dialect).branch_from_conf(robot, flat, want)
         q[:, has] = qs.reshape(m, -1, 6)
         ok[:, has] = (idx >= 0).reshape(m, -1)
     free = ~has
@@ -162,7 +96,6 @@ def _program_branch(problem: PlacementProblem, sols: np.ndarray) -> tuple[np.nda
         rows = sols[:, free]
         start = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
         q0, b0 = kin.select_nearest(robot, rows[:, 0], start)
-        n_free = int(free.sum())
         # That branch's solution at every target; the IK's [-180, 180] values need no
         # unwrapping here: only the wide wrist joints (ranges over a turn) could take another.
         picked = np.take_along_axis(rows, np.maximum(b0, 0)[:, None, None, None], axis=2)[:, :, 0]

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import EmitError, InputError
 from ..ir import SourceDoc, Toolpath
 
 
@@ -93,6 +93,11 @@ class Dialect:
         """{path: text} of every file to write for ``modified`` at ``output`` (see ``files``)."""
         return self.files(original, self.emit_texts(original, modified), output)
 
+    def place_workpiece(self, text: str, frame_name: str, new_frame: np.ndarray, path: str) -> str:
+        """``text`` (the program's main file) with its workpiece frame ``frame_name`` set to
+        ``new_frame`` (base_T_workpiece), for ``postproc place -o``."""
+        raise EmitError(f"{path}: writing a placed {self.name} program is not supported")
+
     # ------------------------------------------------------------ new programs
     def new_writer(self, name: str):
         """An event writer (see postproc.emit.writer) for a new program, or None."""
@@ -101,6 +106,15 @@ class Dialect:
     def new_program_paths(self, output: Path) -> list[Path]:
         """Paths of the files a new program written to ``output`` consists of."""
         return [Path(output)]
+
+
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # a plain decimal number literal
+
+
+def short_number(value: float, decimals: int) -> str:
+    """``value`` with at most ``decimals`` decimals and no trailing zeros ('-0' is '0')."""
+    text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
 
 
 def read_bytes(path: str | Path) -> bytes:

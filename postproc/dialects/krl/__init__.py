@@ -61,6 +61,11 @@ class KrlDialect(Dialect):
 
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
 
+    def place_workpiece(self, text, frame_name, new_frame, path):
+        from .placing import set_base
+
+        return set_base(text, new_frame, path)
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f", {field.upper()} {text}"  # one more component of the aggregate
 

@@ -45,6 +45,11 @@ class RapidDialect(Dialect):
         joint = tp.kind == Kind.JOINT
         return has & np.where(joint, ~joint_off, ~lin_off)
 
+    def place_workpiece(self, text, frame_name, new_frame, path):
+        from .placing import set_work_object
+
+        return set_work_object(text, frame_name, new_frame, path)
+
     def new_writer(self, name: str):
         from .writer import RapidWriter
 
