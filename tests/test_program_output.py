@@ -138,3 +138,14 @@ def test_rapid_to_standard_output_still_works(model_path, tmp_path):
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-"])
     assert result.exit_code == 0, result.stderr
     assert result.stdout.startswith("MODULE P") and "[[950,0,400]" not in result.stdout
+
+
+def test_a_set_that_cannot_be_written_whole_is_not_written_at_all(tmp_path):
+    from postproc.errors import OutputError
+    from postproc.files import write_all
+
+    keep = tmp_path / "kept.src"
+    keep.write_bytes(b"old")
+    with pytest.raises(OutputError, match="no_such_folder"):
+        write_all({keep: b"new", tmp_path / "new.dat": b"data", tmp_path / "no_such_folder" / "x.dat": b"more"})
+    assert keep.read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["kept.src"]  # no temp file left
