@@ -80,3 +80,13 @@ def test_without_configuration_data_no_branch_is_chosen(kr160_solutions):
     for name in dialects.names():
         q, branch = dialects.get(name).branch_from_conf(robot, sols, np.full((2, 4), np.nan))
         assert np.isnan(q).all() and (branch == -1).all(), name
+
+
+def test_a_rapid_program_file_names_its_missing_or_malformed_parts(tmp_path):
+    pgf = tmp_path / "cell.pgf"
+    pgf.write_text("<Program>\n  <Module>Main.mod</Module>\n</Program>\n")
+    with pytest.raises(InputError, match=r"module Main.mod listed in the program file is not in"):
+        dialects.sniff(pgf).parse(pgf)
+    pgf.write_text("<Program>\n  <Module>Main.mod</Module>\n")
+    with pytest.raises(InputError, match=r"cell.pgf:3:1: not a RAPID program file"):
+        dialects.get("rapid").parse(pgf)
