@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import MeasurementError, OutputError
+from .errors import MeasurementError
 
 JOINTS = tuple(f"q{i}" for i in range(1, 7))
 MEASURED = ("mx", "my", "mz")
