@@ -19,13 +19,15 @@ from postproc import dialects
 PACKAGE = Path(dialects.__file__).parents[1]
 DIALECTS_DIR = Path(dialects.__file__).parent
 NAMES = set(dialects.names())
+# File names a language gives its files: deciding by them is the dialect's business too.
+EXTENSIONS = {e for d in dialects.REGISTRY.values() for e in d.extensions} | {".dat", "$config.dat"}
 NAMED_ATTRIBUTES = {"dialect", "role"}  # Toolpath.dialect, SourceDoc.role
 
 
 def _names_a_dialect(node: ast.AST) -> bool:
     """A string constant that is a dialect's name, or a tuple/list/set holding one."""
     if isinstance(node, ast.Constant) and isinstance(node.value, str):
-        return node.value.lower() in NAMES
+        return node.value.lower() in NAMES or node.value.lower() in EXTENSIONS
     if isinstance(node, (ast.Tuple, ast.List, ast.Set)):
         return any(_names_a_dialect(e) for e in node.elts)
     return False
@@ -51,6 +53,8 @@ def branching_by_name(source: str) -> list[tuple[int, str]]:
             found.append((node.lineno, "dict keyed by dialect name"))
         elif isinstance(node, ast.MatchValue) and _names_a_dialect(node.value):
             found.append((node.lineno, "match case on a dialect name"))
+        elif isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "with_suffix" and any(_names_a_dialect(a) for a in node.args):
+            found.append((node.lineno, "a language's file name chosen outside its dialect"))
     return found
 
 
@@ -72,6 +76,8 @@ def test_no_dialect_branching_outside_the_dialects_package():
         'outputs = [p for doc in docs if doc.role == "dat"]\n',
         'match name:\n    case "gcode":\n        pass\n',
         'if dialect != other:\n    pass\n',
+        'if path.suffix.lower() in (".mod", ".modx"):\n    pass\n',
+        'outputs = [output, output.with_suffix(".dat")]\n',
     ],
 )
 def test_the_checker_finds_each_kind_of_branching(snippet):

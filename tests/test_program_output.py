@@ -138,3 +138,51 @@ def test_rapid_to_standard_output_still_works(model_path, tmp_path):
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-"])
     assert result.exit_code == 0, result.stderr
     assert result.stdout.startswith("MODULE P") and "[[950,0,400]" not in result.stdout
+
+
+def test_a_set_that_cannot_be_written_whole_is_not_written_at_all(tmp_path):
+    from postproc.errors import OutputError
+    from postproc.files import write_all
+
+    keep = tmp_path / "kept.src"
+    keep.write_bytes(b"old")
+    with pytest.raises(OutputError, match="no_such_folder"):
+        write_all({keep: b"new", tmp_path / "new.dat": b"data", tmp_path / "no_such_folder" / "x.dat": b"more"})
+    assert keep.read_bytes() == b"old" and sorted(p.name for p in tmp_path.iterdir()) == ["kept.src"]  # no temp file left
+
+
+def rapid_program_file(folder: Path) -> Path:
+    """cell.pgf listing Main.mod (the moves) and Data.mod (tool and robtargets), as RobotWare keeps a task."""
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / "Main.mod").write_text(
+        "MODULE Main\n  PROC main()\n    MoveJ p10, v100, fine, tSpindle;\n    MoveL p20, v100, z1, tSpindle;\n"
+        "    MoveL [[1050,-40,430],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tSpindle;\n  ENDPROC\nENDMODULE\n"
+    )
+    (folder / "Data.mod").write_text(
+        "MODULE Data\n  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];\n"
+        "  CONST robtarget p10 := [[950,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n"
+        "  CONST robtarget p20 := [[1000,50,420],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\nENDMODULE\n"
+    )
+    (folder / "cell.pgf").write_text('<?xml version="1.0" encoding="ISO-8859-1" ?>\n<Program>\n  <Module>Main.mod</Module>\n  <Module>Data.mod</Module>\n</Program>\n')
+    return folder / "cell.pgf"
+
+
+def test_a_rapid_program_of_several_modules_is_compensated_and_written_whole(model_path, tmp_path):
+    from postproc.model_io import load_model
+
+    program = rapid_program_file(tmp_path / "in")
+    tp = parse_program(program)
+    assert [Path(d.path).name for d in tp.sources] == ["cell.pgf", "Main.mod", "Data.mod"]
+    assert tp.placed().all() and tp.tool_names[tp.tool[0]] == "tSpindle"  # tool and points from Data.mod
+    assert {int(f) for f in tp.spans[:2, 0, 0]} == {2} and int(tp.spans[2, 0, 0]) == 1
+    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-"])
+    assert result.exit_code == 2 and "standard output cannot carry" in result.stderr and result.stdout == ""
+    out = tmp_path / "out" / "cell.pgf"
+    out.parent.mkdir()
+    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.parent.iterdir()) == ["Data.mod", "Main.mod", "cell.pgf"]
+    assert (out.parent / "cell.pgf").read_bytes() == program.read_bytes()
+    want, _ = compensate(tp, load_model(model_path)[0])
+    np.testing.assert_allclose(parse_program(out).position, want.position, atol=WRITE_TOL_MM)
+    assert (np.linalg.norm(want.position - tp.position, axis=1) > 0.01).all()

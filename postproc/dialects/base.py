@@ -70,12 +70,14 @@ class Dialect:
         return None
 
     def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
-        """Where each source file of ``original`` goes when the program is written to ``output``."""
-        return [Path(output)]
+        """Where each source file of ``original`` goes when the program is written to
+        ``output``: the program there, any other file beside it under its own name."""
+        output = Path(output)
+        return [output] + [output.parent / Path(doc.path).name for doc in original.sources[1:]]
 
     def travels_with_program(self, doc: SourceDoc) -> bool:
         """True for a file written with the program even when unchanged (KRL's .dat)."""
-        return doc is not None and doc.role in ("program", "src")
+        return doc.role == "program"
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
         """New text of every source file, in ``original.sources`` order (unchanged ones as they were)."""
@@ -87,6 +89,8 @@ class Dialect:
         """{path: text} to write for the new ``texts`` of the program at ``output``: every
         file that changed and every file that travels with the program."""
         paths = self.output_paths(original, output)
+        if len(paths) != len(original.sources) or len(texts) != len(original.sources):
+            raise EmitError(f"{self.name}: {len(original.sources)} source files, {len(texts)} texts and {len(paths)} output paths: no file may be left out")
         return {path: text for path, text, doc in zip(paths, texts, original.sources) if text != doc.text or self.travels_with_program(doc)}
 
     def emit(self, original: Toolpath, modified: Toolpath, output: Path) -> dict[Path, str]:

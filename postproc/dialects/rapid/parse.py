@@ -80,9 +80,9 @@ def _zone(name: str) -> float:
 
 
 @njit(cache=True)
-def _gather_robtargets(first, num_start, num_end, num_value, fields):
-    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals whose 17
-    numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
+def _gather_robtargets(first, num_start, num_end, num_value, fields, source):
+    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals of module
+    ``source`` whose 17 numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
     m = len(first)
     values = np.full((m, NF), np.nan)
     spans = np.full((m, NF, 3), -1, np.int64)
@@ -96,7 +96,7 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields):
                 conf[r, -f - 1] = v
             elif not (f >= 13 and abs(v) >= NO_AXIS_ABOVE):
                 values[r, f] = v
-                spans[r, f, 0] = 0
+                spans[r, f, 0] = source
                 spans[r, f, 1] = num_start[i]
                 spans[r, f, 2] = num_end[i]
     return values, spans, conf
@@ -119,17 +119,57 @@ def _pose(numbers7: np.ndarray) -> np.ndarray:
     return make_transform(quat_wxyz_to_matrix(numbers7[3:7][None])[0], numbers7[:3])
 
 
-class RapidParser:
-    def __init__(self, doc: SourceDoc):
-        self.doc = doc
-        self.code = blank_comments(doc.text)
-        self.lines = LineIndex(doc.text)
-        self.numbers = scan_numbers(self.code)
-        self.builder = Builder("rapid", "quat", [doc])
+def parse_modules(sources: list[SourceDoc]) -> Toolpath:
+    """The IR of a RAPID program: its modules share one set of data (robtargets, tools,
+    work objects), as the task's modules do on the controller. A program file (.pgf, role
+    'pgf') among the sources holds no targets and is kept as it is."""
+    builder = Builder("rapid", "quat", list(sources))
+    data = _Data()
+    modules = [RapidParser(doc, builder, data, index) for index, doc in enumerate(sources) if doc.role != "pgf"]
+    for module in modules:  # one-line declarations first: a data module may come after its users
+        module.declarations()
+    for module in modules:
+        module.statements()
+    for module in modules:
+        module.bulk_moves()
+    _bind_late_declarations(builder, data)
+    return builder.build()
+
+
+def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
+    """Tools and work objects a move used before the module declaring them was read: RAPID
+    data are visible to the whole task, whatever the order of the declarations."""
+    for names, known, table, register in ((builder.tool_names, builder.tool_known, data.tools, builder.tool_index),
+                                          (builder.frame_names, builder.frame_known, data.wobjs, builder.frame_index)):
+        for i, name in enumerate(list(names)):
+            if not known[i] and table.get(name.upper()) is not None:
+                register(name, table[name.upper()])
+
+
+class _Data:
+    """The program's named data: robtargets, tools and work objects by upper-case name."""
+
+    def __init__(self):
         self.points: dict[str, tuple] = {}  # name -> (values, spans, conf)
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
+
+
+class RapidParser:
+    """One module; ``index`` is its place among the program's sources (the span source)."""
+
+    def __init__(self, doc: SourceDoc, builder: Builder | None = None, data: _Data | None = None, index: int = 0):
+        self.doc = doc
+        self.index = index
+        self.order_base = index << 40  # program order: module, then offset
+        self.code = blank_comments(doc.text)
+        self.lines = LineIndex(doc.text)
+        self.numbers = scan_numbers(self.code)
+        self.builder = Builder("rapid", "quat", [doc]) if builder is None else builder
+        data = _Data() if data is None else data
+        self.points, self.tools, self.wobjs = data.points, data.tools, data.wobjs
         self.rows: list[dict] = []
+        self._shapes = None
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
@@ -144,7 +184,7 @@ class RapidParser:
         for k, f in enumerate(fields):
             if f >= 0:
                 values[f] = vals[k]
-                spans[f] = (0, self.numbers.start[sl][k], self.numbers.end[sl][k])
+                spans[f] = (self.index, self.numbers.start[sl][k], self.numbers.end[sl][k])
             else:
                 conf[-f - 1] = vals[k]
         _drop_absent_axes(values, spans)
@@ -153,23 +193,38 @@ class RapidParser:
     def _bulk_literals(self, starts: np.ndarray):
         """Vectorised read of many one-line robtarget literals: values (M, NF), spans, conf."""
         lo = np.searchsorted(self.numbers.start, starts)
-        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS)
+        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS, self.index)
 
     # --------------------------------------------------------------- parse
     def parse(self) -> Toolpath:
+        """The IR of this module as a program on its own."""
+        self.declarations()
+        self.statements()
+        self.bulk_moves()
+        return self.builder.build()
+
+    def declarations(self) -> None:
+        """One-line robtarget declarations, read in bulk."""
         raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
         shapes = LineShapes(self.code, raw, self.lines.starts)
-        decls = shapes.match(RE_DECL)
-        lits = shapes.match(RE_MOVE_LIT)
-        named = shapes.match(RE_MOVE_NAME)
+        self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
+        decls = self._shapes["decls"]
         if len(decls):
             values, spans, conf = self._bulk_literals(decls.span("lit")[0])
             for i, name in enumerate(decls.group("name")):
                 self.points[name.upper()] = (values[i], spans[i], conf[i])
+
+    def statements(self) -> None:
+        """Every statement the bulk shapes leave, through the grammar, in module order."""
         skip = np.zeros(len(self.lines.starts), bool)
-        for matches in (decls, lits, named):
+        for matches in self._shapes.values():
             skip[matches.line] = True
         self._slow(skip)
+
+    def bulk_moves(self) -> None:
+        """One-line MoveL/MoveJ to a literal or a named target, read in bulk; then the
+        targets the grammar read."""
+        lits, named = self._shapes["lits"], self._shapes["named"]
         if len(lits):
             values, spans, conf = self._bulk_literals(lits.span("lit")[0])
             self._bulk_rows(lits, values, spans, conf, np.full(len(lits), "", dtype=object))
@@ -185,7 +240,10 @@ class RapidParser:
             spans = np.array([f[1] if f else nan_s for f in found])[codes]
             conf = np.array([f[2] if f else nan_c for f in found])[codes]
             self._bulk_rows(named, values, spans, conf, np.array(names, dtype=object)[codes])
-        return self._finish()
+        if self.rows:  # the grammar's targets, after the bulk ones (the builder sorts by order)
+            cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
+            order = cols.pop("order")
+            self.builder.add_block(order + self.order_base, line=self.lines.line(order), file=np.full(len(order), self.index), **cols)
 
     def _bulk_rows(self, matches, values, spans, conf, names):
         def per_row(group, convert, dtype=None):
@@ -195,7 +253,8 @@ class RapidParser:
         tool_idx = per_row("tool", lambda t: self._frame_index(t, self.tools, self.builder.tool_index), np.int32)
         wobj_idx = per_row("wobj", lambda t: self._frame_index(t or "wobj0", self.wobjs, self.builder.frame_index), np.int32)
         self.builder.add_block(
-            matches.start,
+            matches.start + self.order_base,
+            file=np.full(len(matches), self.index),
             kind=per_row("mv", lambda t: _MOVE_KIND[t.upper()], np.int8),
             line=matches.line + 1,
             values=values,
@@ -358,7 +417,7 @@ class RapidParser:
                     delta = float(self.numbers.value[sl][0])
                     offset[k] = values[k]
                     offset_span[k] = spans[k]
-                    spans[k] = (0, self.numbers.start[sl][0], self.numbers.end[sl][0])
+                    spans[k] = (self.index, self.numbers.start[sl][0], self.numbers.end[sl][0])
                     values[k] = values[k] + delta
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
@@ -433,10 +492,3 @@ class RapidParser:
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)
         return self.doc.text[s:e].strip()
-
-    def _finish(self) -> Toolpath:
-        if self.rows:
-            cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
-            order = cols.pop("order")
-            self.builder.add_block(order, line=self.lines.line(order), **cols)
-        return self.builder.build()

@@ -11,6 +11,12 @@ from .parse import NO_AXIS_TEXT
 NO_EXTERNAL_AXES = "[" + ",".join([NO_AXIS_TEXT] * 6) + "]"  # extax of a robot without external axes
 
 
+def _pose_literal(t: np.ndarray) -> str:
+    """A pose as RAPID writes one: [[x,y,z],[q1,q2,q3,q4]] (mm, unit quaternion)."""
+    q = matrix_to_quat_wxyz(t[None, :3, :3])[0]
+    return f"[[{','.join(short_number(v) for v in t[:3, 3])}],[{','.join(short_number(v, 7) for v in q)}]]"
+
+
 class RapidWriter:
     def __init__(self, module: str = "Converted"):
         self.module = legal_name(module, "Module")
@@ -25,17 +31,13 @@ class RapidWriter:
 
     def frame(self, name: str, base_T_frame: np.ndarray) -> None:
         self.wobj_name = legal_name(name, "wobj")
-        if self.wobj_name != "wobj0":
-            q = matrix_to_quat_wxyz(base_T_frame[None, :3, :3])[0]
-            t = base_T_frame[:3, 3]
-            self.decl.append(f"  TASK PERS wobjdata {self.wobj_name} := [FALSE,TRUE,\"\",[[{','.join(short_number(v) for v in t)}],[{','.join(short_number(v, 7) for v in q)}]],[[0,0,0],[1,0,0,0]]];")
+        if self.wobj_name != "wobj0":  # user frame = the frame, object frame = identity
+            self.decl.append(f"  TASK PERS wobjdata {self.wobj_name} := [FALSE,TRUE,\"\",{_pose_literal(base_T_frame)},[[0,0,0],[1,0,0,0]]];")
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
         self.tool_name = legal_name(name, "tool")
         if self.tool_name != "tool0":
-            q = matrix_to_quat_wxyz(flange_T_tcp[None, :3, :3])[0]
-            t = flange_T_tcp[:3, 3]
-            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,[[{','.join(short_number(v) for v in t)}],[{','.join(short_number(v, 7) for v in q)}]],[1,[0,0,1],[1,0,0,0],0,0,0]];")
+            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},[1,[0,0,1],[1,0,0,0],0,0,0]];")
 
     def speed(self, mm_s: float) -> None:
         self.v = mm_s
@@ -51,9 +53,8 @@ class RapidWriter:
 
     @staticmethod
     def _target(pose: np.ndarray, conf=None) -> str:
-        q = matrix_to_quat_wxyz(pose[None, :3, :3])[0]
         c = [0, 0, 0, 0] if conf is None or np.isnan(conf).any() else [int(v) for v in conf]
-        return f"[[{','.join(short_number(v) for v in pose[:3, 3])}],[{','.join(short_number(v, 7) for v in q)}],[{','.join(map(str, c))}],{NO_EXTERNAL_AXES}]"
+        return f"[{_pose_literal(pose)[1:-1]},[{','.join(map(str, c))}],{NO_EXTERNAL_AXES}]"
 
     def move_joint(self, pose, conf=None) -> None:
         self.body.append(f"    MoveJ {self._target(pose, conf)}, {self._args()};")
