@@ -155,7 +155,7 @@ def rapid_program_file(folder: Path) -> Path:
     """cell.pgf listing Main.mod (the moves) and Data.mod (tool and robtargets), as RobotWare keeps a task."""
     folder.mkdir(parents=True, exist_ok=True)
     (folder / "Main.mod").write_text(
-        "MODULE Main\n  PROC main()\n    MoveJ p10, v100, fine, tSpindle;\n    MoveL p20, v100, z1, tSpindle;\n"
+        "MODULE Main\n  PROC main()\n    ConfJ\\Off;\n    ConfL\\Off;\n    MoveJ p10, v100, fine, tSpindle;\n    MoveL p20, v100, z1, tSpindle;\n"
         "    MoveL [[1050,-40,430],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tSpindle;\n  ENDPROC\nENDMODULE\n"
     )
     (folder / "Data.mod").write_text(
