@@ -575,6 +575,7 @@ def compensate_cmd(
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
+    max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
@@ -594,6 +595,9 @@ def compensate_cmd(
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
+    if max_deviation is not None and not max_deviation > 0:
+        raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation}")
+    _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
     tp = _read_program(program, dialect)
     to_stdout = output == "-"
@@ -605,14 +609,15 @@ def compensate_cmd(
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
                               frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
                               start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                              progress=lambda m: bar.update(task, description=m))
+                              max_deviation_mm=max_deviation, progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
     if report is not None:
         doc = {"summary": summary, "points": [
             {"line": int(rep.line[i]), "compensated": bool(rep.compensated[i]), "iterations": int(rep.iterations[i]),
              "before_mm": None if np.isnan(rep.before_mm[i]) else float(rep.before_mm[i]), "after_mm": None if np.isnan(rep.after_mm[i]) else float(rep.after_mm[i]),
              "correction_mm": None if np.isnan(rep.correction_mm[i]) else float(rep.correction_mm[i]), "converged": bool(rep.converged[i]),
-             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i])}
+             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i]),
+             "path_mm": None if rep.path_mm is None or np.isnan(rep.path_mm[i]) else float(rep.path_mm[i])}
             for i in range(len(rep.line))]}
         write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
     failures = rep.failures()
@@ -631,6 +636,11 @@ def compensate_cmd(
         )
     else:
         log.print("no Cartesian target to compensate (joint targets are kept as written)")
+    if summary["path"] is not None:
+        pth = summary["path"]
+        log.print(f"between targets ({pth['segments']} straight or circular segments, controller interpolation, model prediction): "
+                  f"largest distance from the intended path {pth['max_mm']:.4f} mm, on the segment into line {pth['line']}; "
+                  f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
     for note in new.notes:
         log.print(f"note: {note}")
 

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import dialects, posture
+from . import dialects, posture, segments
 from . import kinematics as kin
 from .errormodel import ErrorModel
 from .errors import InputError, JobError
@@ -57,12 +57,16 @@ class Report:
     singular: np.ndarray
     branch_changed: np.ndarray
     posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
+    path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
+    path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
 
     @property
     def failed(self) -> np.ndarray:
         fine = self.converged & self.within_limits & ~self.singular & ~self.branch_changed
         if self.posture is not None:
             fine &= self.posture == 0
+        if self.path_limit_mm is not None and self.path_mm is not None:
+            fine &= ~(self.path_mm > self.path_limit_mm)
         return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
@@ -77,6 +81,9 @@ class Report:
                 reasons.append("near a singularity")
             if self.branch_changed[i]:
                 reasons.append("would change IK branch")
+            if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
+                reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
+                               f"(over --max-deviation {self.path_limit_mm:g} mm; subdividing it is not implemented yet)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
@@ -99,7 +106,16 @@ class Report:
             "iterations_max": int(it.max()) if len(it) else None,
             "max_correction_mm": float(np.nanmax(self.correction_mm[c])) if c.any() else None,
             "failed": int(self.failed.sum()),
+            "path": self._path_summary(),
         }
+
+    def _path_summary(self) -> dict | None:
+        """Largest predicted distance from the intended path between targets, and where."""
+        if self.path_mm is None or not np.isfinite(self.path_mm).any():
+            return None
+        i = int(np.nanargmax(self.path_mm))
+        return {"max_mm": float(self.path_mm[i]), "line": int(self.line[i]), "segments": int(np.isfinite(self.path_mm).sum()),
+                "over_tolerance": int((self.path_mm > PATH_TOLERANCE_MM).sum()), "tolerance_mm": PATH_TOLERANCE_MM}
 
 
 def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
@@ -179,6 +195,8 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray,
     return q[rows], branch[rows], problem[rows], list(carried.notes)
 
 
+PATH_TOLERANCE_MM = 0.02  # segments straying further between targets are counted in the summary
+
 # What may keep the controller from the posture its rules give (Report.posture):
 POSTURE_CONF = 1  # the configuration data match no IK solution of the nominal robot
 POSTURE_PATH = 3  # the straight line to the compensated target passes a singularity or leaves reach
@@ -201,6 +219,7 @@ def compensate(
     frames: dict | None = None,
     tools: dict | None = None,
     start_joints=None,
+    max_deviation_mm: float | None = None,
     progress=lambda msg: None,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring)."""
@@ -218,6 +237,9 @@ def compensate(
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
     report = _report(problem, before, solution)
+    progress("predicting the path between targets")
+    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, _path_deviation(problem, solution), float),
+                     path_limit_mm=max_deviation_mm)
     out = written.with_positions(problem.positions_for(solution.cmd))
     if problem.notes:
         out = replace(out, notes=out.notes + tuple(problem.notes))
@@ -457,6 +479,41 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
         branch_changed=full(False, changed, bool),
         posture=full(0, posture_problem, int),
     )
+
+
+def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:
+    """Per Cartesian target: the largest predicted distance of the robot from the intended
+    path on the segment into it (straight for LIN, the arc for a CIRC end point), with the
+    controller interpolating the compensated commands; NaN where there is no such segment."""
+    tp, rows = problem.tp, problem.rows
+    kind = tp.kind[rows]
+    follows = np.zeros(len(rows), dtype=bool)
+    follows[1:] = rows[1:] == rows[:-1] + 1  # the previous motion is a Cartesian target too
+    commands = problem.target.copy()
+    commands[:, :3, 3] = sol.cmd
+    goal = problem.goal
+    deviation = np.full(len(rows), np.nan)
+    lin = np.nonzero((kind == Kind.LINEAR) & follows)[0]
+    if lin.size:
+        actual = _predicted_samples(problem, sol, segments.linear_samples(commands[lin - 1], commands[lin]), lin)
+        deviation[lin] = segments.distance_to_segments(actual, goal[lin - 1], goal[lin]).max(axis=1)
+    arc = np.nonzero((kind == Kind.CIRC_END) & follows & np.roll(follows, 1) & (np.roll(kind, 1) == Kind.CIRC_VIA))[0]
+    arc = arc[arc >= 2]
+    if arc.size:
+        actual = _predicted_samples(problem, sol, segments.arc_samples(commands[arc - 2], commands[arc - 1], commands[arc]), arc)
+        deviation[arc] = segments.distance_to_circles(actual, goal[arc - 2], goal[arc - 1], goal[arc]).max(axis=1)
+    return deviation
+
+
+def _predicted_samples(problem: _Problem, sol: _Solution, commanded: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Predicted TCP (M, K, 3) where the controller's interpolated commands (M, K, 4, 4) on
+    the segments into targets ``idx`` put the robot (their end target's posture and tool)."""
+    m, k = commanded.shape[:2]
+    rows = np.repeat(problem.rows[idx], k)
+    flange = commanded.reshape(-1, 4, 4) @ problem.plant.inv_tools[problem.tp.tool[rows]]
+    sols = kin.ik(problem.plant.robot, flange)
+    q, _ = kin.select_branch(problem.plant.robot, sols, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
+    return problem.plant.actual(q, rows, problem.order_q).reshape(m, k, 3)
 
 
 def _scatter(n, rows, fill, values, dtype):
