@@ -498,7 +498,7 @@ def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:
         actual = _predicted_samples(problem, sol, segments.linear_samples(commands[lin - 1], commands[lin]), lin)
         deviation[lin] = segments.distance_to_segments(actual, goal[lin - 1], goal[lin]).max(axis=1)
     arc = np.nonzero((kind == Kind.CIRC_END) & follows & np.roll(follows, 1) & (np.roll(kind, 1) == Kind.CIRC_VIA))[0]
-    arc = arc[arc >= 2]
+    arc = arc[(arc >= 2) & dialects.of(tp).arc_ends_at_target(tp)[rows[arc]]]
     if arc.size:
         actual = _predicted_samples(problem, sol, segments.arc_samples(commands[arc - 2], commands[arc - 1], commands[arc]), arc)
         deviation[arc] = segments.distance_to_circles(actual, goal[arc - 2], goal[arc - 1], goal[arc]).max(axis=1)

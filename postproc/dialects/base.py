@@ -63,6 +63,10 @@ class Dialect:
         (see postproc.posture). Default: wherever the program gives configuration data."""
         return ~np.isnan(tp.conf).all(axis=1)
 
+    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
+        """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
+        return np.ones(len(tp.kind), dtype=bool)
+
     # ---------------------------------------------------------------- writing
     def insert_field(self, source: int, field: str, text: str) -> str | None:
         """Text that adds a component a target leaves out (``LIN {X 1}`` without Y), or None

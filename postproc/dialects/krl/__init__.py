@@ -66,6 +66,15 @@ class KrlDialect(Dialect):
 
         return set_base(text, new_frame, path)
 
+    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
+        """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
+        import re
+
+        ca = re.compile(r"\bCA\b", re.IGNORECASE)
+        lines = [doc.text.split("\n") for doc in tp.sources]
+        return np.array([not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
+                         for f, n in zip(tp.file.tolist(), tp.line.tolist())], dtype=bool)
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f", {field.upper()} {text}"  # one more component of the aggregate
 
