@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import InputError, JobError
+from ..errors import InputError, JobError, located
 
 
 class MachineFileError(InputError):
@@ -24,12 +24,7 @@ class ProbeFileError(InputError):
 
     def __init__(self, path: str | Path, row: int | None, column: str | None, message: str):
         self.path, self.row, self.column = str(path), row, column
-        where = self.path
-        if row is not None:
-            where += f", row {row}"
-        if column is not None:
-            where += f", column '{column}'"
-        super().__init__(f"{where}: {message}")
+        super().__init__(f"{located(path, 'row', row, column)}: {message}")
 
 
 class CalibrationError(InputError):
