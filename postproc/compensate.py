@@ -99,7 +99,7 @@ class Report:
 def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
     """True where q is within SINGULAR_DEG of a wrist or elbow singularity or the shoulder one."""
     p = robot.opw
-    phi = np.deg2rad(p.signs * q - p.offsets_deg)
+    phi = kin.opw_angles(robot, q)
     wrist = np.abs(np.sin(phi[:, 4])) < np.sin(np.deg2rad(SINGULAR_DEG))
     elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < np.sin(np.deg2rad(SINGULAR_DEG))
     radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)

@@ -216,10 +216,27 @@ def diagnose(
     base_mse = float(base_sq.mean())
 
     names = candidate_effects(model, meas) if candidates is None else candidates
+    ranked = _rank_candidates(model, meas, names, base_fit.model, base_sq, folds, seed, progress)
+
+    floor = float(noise_mm * np.sqrt(3.0))
+    cv_rms = float(np.sqrt(base_mse))
+    findings = _findings(breakdowns, ranked, cv_rms, floor)
+    if model.residual is not None:
+        findings.append(
+            f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
+            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
+        )
+    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+
+
+def _rank_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], base: ErrorModel, base_sq: np.ndarray, folds: int, seed: int, progress) -> list[Candidate]:
+    """Add each candidate to the whole model, refit, and compare held-out errors pose by pose
+    with the model as it is (paired one-sided test, Holm-corrected over the candidates)."""
+    base_mse = float(base_sq.mean())
     raw = []
     for name in names:
         progress(f"trying {name}")
-        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base_fit.model, seed=seed)
+        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base, seed=seed)
         added = [e for e in result.model.effects if e.name not in set(model.effects.names())]
         if not added:  # e.g. a term family when the data support no term
             raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0))
@@ -236,16 +253,7 @@ def diagnose(
         significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
         ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained))))
     ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
-
-    floor = float(noise_mm * np.sqrt(3.0))
-    cv_rms = float(np.sqrt(base_mse))
-    findings = _findings(breakdowns, ranked, cv_rms, floor)
-    if model.residual is not None:
-        findings.append(
-            f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
-            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
-        )
-    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+    return ranked
 
 
 def _findings(breakdowns, ranked, cv_rms, floor) -> list[str]:
