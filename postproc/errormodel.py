@@ -158,9 +158,9 @@ class ErrorModel:
         return DH((q + dq) * robot.joint_sign + robot.theta0_deg, np.broadcast_to(robot.d_mm, shape),
                   np.broadcast_to(robot.a_mm, shape), np.broadcast_to(robot.alpha_deg, shape))
 
-    def _geometry(self, prep: Prepared, values: np.ndarray):
+    def _geometry(self, prep: Prepared, values: np.ndarray, dh: DH | None = None):
         """The perturbed DH table, tool (3,) and base transform (R, t)."""
-        dh = self._dh(prep, values)
+        dh = self._dh(prep, values) if dh is None else dh
         for effect, data, idx in self._parts(prep, "geometry"):
             dh = effect.apply_dh(dh, values[idx], data)
         tool = self.tool_mm.copy()
@@ -193,39 +193,48 @@ class ErrorModel:
     def predict(self, meas: MeasurementSet) -> np.ndarray:
         return self.predict_prepared(self.prepare(meas))
 
-    def _dh_jacobian(self, prep: Prepared, values: np.ndarray) -> tuple[DH, dict[str, np.ndarray]]:
-        """The final DH table and d(channel)/d(parameters) (N, 6, P) per DH channel, by the chain rule."""
-        dh = self._dh(prep, values)
-        n, p = dh.theta.shape[0], len(self.params)
-        jac = {ch: np.zeros((n, 6, p)) for ch in DH_CHANNELS}
+    def _dh_jacobian(self, prep: Prepared, values: np.ndarray, dh: DH) -> dict[str, list]:
+        """d(DH channel)/d(parameters) by the chain rule, as blocks per channel: (parameter
+        indices, (N, 6, Pe) or constant (6, Pe)) — only the columns an effect touches."""
+        blocks: dict[str, list] = {ch: [] for ch in DH_CHANNELS}
         for _, basis, idx in self._parts(prep, "joint"):
-            jac["theta"][:, :, idx] += self.robot.joint_sign[None, :, None] * basis
+            blocks["theta"].append((idx, self.robot.joint_sign[None, :, None] * basis))
         for effect, data, idx in self._parts(prep, "geometry"):
             scale, own = effect.dh_derivatives(dh, values[idx], data)
             for ch, factor in scale.items():
-                jac[ch] *= np.asarray(factor)[..., None]
+                blocks[ch] = [(i, np.asarray(factor)[..., None] * block) for i, block in blocks[ch]]
             for ch, derivative in own.items():
-                jac[ch][:, :, idx] += derivative
+                blocks[ch].append((idx, derivative))
             dh = effect.apply_dh(dh, values[idx], data)
-        return dh, jac
+        return blocks
 
     def evaluate(self, prep: Prepared, values: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Predicted positions (N, 3) and their Jacobian (N, 3, P) with respect to every parameter."""
         values = self.values if values is None else values
-        dh, dh_jac = self._dh_jacobian(prep, values)
-        _, tool, rot, trans = self._geometry(prep, values)
+        dh0 = self._dh(prep, values)
+        blocks = self._dh_jacobian(prep, values, dh0)
+        dh, tool, rot, trans = self._geometry(prep, values, dh0)
         rots, origins = kin.frames_dh(dh.theta, dh.d, dh.a, dh.alpha)
         p = origins[:, 6] + rots[:, 6] @ tool  # measured point in the robot base frame
         z_prev, o_prev = rots[:, :6, :, 2], origins[:, :6]  # z_{i-1}, o_{i-1}
         x_i, o_i = rots[:, 1:, :, 0], origins[:, 1:]
         d_point = {"theta": np.cross(z_prev, p[:, None] - o_prev), "d": z_prev, "a": x_i, "alpha": np.cross(x_i, p[:, None] - o_i)}
-        jac = sum(np.einsum("nic,nip->ncp", d_point[ch] * _ANGLES[ch], dh_jac[ch]) for ch in DH_CHANNELS)
+        n = len(p)
+        jac = np.zeros((n, 3, len(self.params)))
+        for ch in DH_CHANNELS:
+            per_unit = np.ascontiguousarray((d_point[ch] * _ANGLES[ch]).transpose(0, 2, 1))  # (N, 3, 6)
+            for idx, block in blocks[ch]:
+                # d p / d params = d p / d channel_i . d channel_i / d params (a GEMM for constant blocks).
+                if block.ndim == 2:
+                    jac[:, :, _columns(idx)] += (per_unit.reshape(-1, 6) @ block).reshape(n, 3, -1)
+                else:
+                    jac[:, :, _columns(idx)] += np.matmul(per_unit, block)
         for effect, _, idx in self._parts(prep, "tool"):
-            jac[:, :, idx] += np.einsum("nij,jp->nip", rots[:, 6], effect.tool_basis())
+            jac[:, :, _columns(idx)] += np.einsum("nij,jp->nip", rots[:, 6], effect.tool_basis())
         for _, basis, idx in self._parts(prep, "cartesian"):
-            jac[:, :, idx] += basis
+            jac[:, :, _columns(idx)] += basis
         p = p + self._displacement(prep, values)
-        jac = np.einsum("ij,njp->nip", rot, jac)  # into the measurement frame
+        jac = np.matmul(rot, jac)  # into the measurement frame
         measured = p @ rot.T + trans
         for effect, _, idx in self._parts(prep, "base"):
             jac[:, :, idx] = effect.base_jacobian(measured - trans, values[idx])
@@ -244,6 +253,13 @@ class ErrorModel:
     def nominal(self) -> "ErrorModel":
         """The same robot and tool with no effects (what the controller assumes)."""
         return ErrorModel.create(self.robot, self.tool_mm, EffectSum())
+
+
+def _columns(idx: np.ndarray):
+    """A run of consecutive parameter indices as a slice (an in-place view), else the indices."""
+    if len(idx) and np.all(np.diff(idx) == 1):
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return idx
 
 
 def require_resolved(effects: EffectSum) -> None:

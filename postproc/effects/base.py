@@ -168,7 +168,8 @@ class Effect:
 
     def dh_derivatives(self, dh_in: DH, values: np.ndarray, data) -> tuple[dict, dict]:
         """(scale, own): out_c = scale_c * in_c + f(params) per channel c; ``scale`` maps a
-        channel to (N, 6) (absent: 1), ``own`` a channel to d out_c / d params (N, 6, P)."""
+        channel to (N, 6) (absent: 1), ``own`` a channel to d out_c / d params, (N, 6, P) or,
+        when it does not vary over the poses, (6, P)."""
         raise NotImplementedError
 
     def tool_basis(self) -> np.ndarray:

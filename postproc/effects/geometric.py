@@ -57,5 +57,4 @@ class Geometric(Effect):
         return DH(dh.theta + geo[:, 0], dh.d + geo[:, 1], dh.a + geo[:, 2], dh.alpha + geo[:, 3])
 
     def dh_derivatives(self, dh_in: DH, values: np.ndarray, data) -> tuple[dict, dict]:
-        n = dh_in.theta.shape[0]
-        return {}, {ch: np.broadcast_to(sel, (n, 6, 24)) for ch, sel in _SELECTORS.items()}
+        return {}, dict(_SELECTORS)  # constant (6, 24): the model broadcasts them over the poses
