@@ -311,19 +311,12 @@ def ladder(
     planned = list(steps) if steps is not None else None
     while len(rows) <= max_steps:
         if planned is not None:
-            if not planned:
-                break
-            nxt = planned.pop(0)
+            nxt = planned.pop(0) if planned else None
         else:
             progress(f"step {len(rows)}: diagnosing")
-            diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress) if len(current) else None
-            if diag is None:
-                nxt = _first_step(robot, tool_mm, meas, folds, seed)
-            else:
-                best = [c for c in diag.candidates if c.significant]
-                if not best:
-                    break
-                nxt = best[0].effect
+            nxt = _diagnosed_step(model, meas, folds, seed, noise_mm, progress)
+        if nxt is None:
+            break
         progress(f"step {len(rows)}: adding {nxt}")
         current = current + parse_effects(nxt)
         result = fit(robot, tool_mm, current, meas, cv_folds=0, prior=model if len(model.params) else None, seed=seed)
@@ -332,6 +325,16 @@ def ladder(
         model = result.model
         record(_step_label(nxt, current), model, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))))
     return rows
+
+
+def _diagnosed_step(model: ErrorModel, meas: MeasurementSet, folds: int, seed: int, noise_mm: float, progress) -> str | None:
+    """The next effect for the ladder: the best first step from the nominal robot, else the
+    most significant candidate diagnose finds (None when none is significant)."""
+    if not len(model.effects):
+        return _first_step(model.robot, model.tool_mm, meas, folds, seed)
+    diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress)
+    best = [c for c in diag.candidates if c.significant]
+    return best[0].effect if best else None
 
 
 def _step_label(step: str, effects) -> str:
