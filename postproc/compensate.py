@@ -27,6 +27,7 @@ import numpy as np
 
 from . import dialects, posture, segments
 from . import kinematics as kin
+from .effects import consumers_of
 from .errormodel import ErrorModel
 from .errors import InputError, JobError
 from .frames import invert_transform
@@ -121,7 +122,7 @@ class Report:
 def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
     """True where q is within SINGULAR_DEG of a wrist or elbow singularity or the shoulder one."""
     p = robot.opw
-    phi = np.deg2rad(p.signs * q - p.offsets_deg)
+    phi = kin.opw_angles(robot, q)
     wrist = np.abs(np.sin(phi[:, 4])) < np.sin(np.deg2rad(SINGULAR_DEG))
     elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < np.sin(np.deg2rad(SINGULAR_DEG))
     radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
@@ -132,13 +133,13 @@ def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
 class _Plant:
     """The robot as compensation sees it: command poses -> joints on a branch -> predicted TCP."""
 
-    def __init__(self, model: ErrorModel, tools: np.ndarray, tool_index: np.ndarray, temp_c, force_n):
+    def __init__(self, model: ErrorModel, tools: np.ndarray, tool_index: np.ndarray, temp_c, force_rows):
         self.model = model
         self.robot = model.robot
         self.tools = tools
         self.tool_index = tool_index
         self.temp_c = temp_c
-        self.force_n = force_n
+        self.force_rows = force_rows  # (rows of the program, 3) N in the base frame, or None
         self.inv_tools = np.linalg.inv(tools)
 
     def joints(self, tcp_poses: np.ndarray, rows: np.ndarray, q_ref: np.ndarray, branch_ref: np.ndarray):
@@ -155,15 +156,13 @@ class _Plant:
             if not sel.any():
                 continue
             m = replace(self.model, tool_mm=self.tools[t][:3, 3])
-            n = int(sel.sum())
-            temp = None if self.temp_c is None else np.full(n, self.temp_c)
-            force = None if self.force_n is None else np.broadcast_to(self.force_n, (n, 3))
-            approach = None
-            if m.effects.get("backlash") is not None and order_q is not None:
-                from .effects.backlash import approach_from_order
-
-                approach = approach_from_order(order_q)[rows][sel]
-            prep = m.prepare(q_deg=q[sel], force_n=force, approach=approach, temp_c=temp, time_s=None)
+            columns = {"temp": None if self.temp_c is None else np.full(int(sel.sum()), self.temp_c),
+                       "force": None if self.force_rows is None else self.force_rows[rows][sel], "approach": None}
+            if order_q is not None:
+                # Columns the effects derive from the program's path (e.g. approach directions).
+                for effect in m.effects:
+                    columns.update({group: col[rows][sel] for group, col in effect.path_columns(order_q).items()})
+            prep = m.prepare(q_deg=q[sel], force_n=columns["force"], approach=columns["approach"], temp_c=columns["temp"], time_s=None)
             out[sel] = m.predict_prepared(prep)
         return out
 
@@ -261,12 +260,9 @@ def _require_usable_model(model: ErrorModel) -> None:
 
 
 def _require_process_inputs(model: ErrorModel, temp_c, force_n) -> None:
-    """An effect that needs a process input (temperature, force) may not run without it."""
-    for effect in model.effects:
-        if effect.name == "thermal" and temp_c is None:
-            raise InputError("the model has a thermal effect: give the cell temperature (--temp)")
-        if effect.name == "external_load" and force_n is None:
-            raise InputError("the model has an external_load effect: give the process force (--force fx,fy,fz)")
+    """An effect that needs a process input (temperature, force) may not run without it,
+    and an input no effect of the model consumes is an error, not a no-op."""
+    check_inputs(model, {"temp": temp_c, "force": force_n})
 
 
 def _refuse_arcs(tp: Toolpath) -> None:
@@ -311,7 +307,7 @@ class _Problem:
     def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None) -> "_Problem":
         rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
         target = tp.base_poses()[rows]
-        plant = _Plant(model, tp.tools, tp.tool, temp_c, None if force_n is None else np.asarray(force_n, dtype=float))
+        plant = _Plant(model, tp.tools, tp.tool, temp_c, _force_rows(len(tp), rows, target, force_n))
         flange = target @ plant.inv_tools[tp.tool[rows]]
         q_ref, branch_ref, posture_problem, notes = _reference_joints(tp, model.robot, flange, rows, start_joints)
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
@@ -514,6 +510,37 @@ def _predicted_samples(problem: _Problem, sol: _Solution, commanded: np.ndarray,
     sols = kin.ik(problem.plant.robot, flange)
     q, _ = kin.select_branch(problem.plant.robot, sols, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
     return problem.plant.actual(q, rows, problem.order_q).reshape(m, k, 3)
+
+
+# The inputs effects may consume at compensation time: (what it is, the option giving it).
+_INPUTS = {"temp": ("the cell temperature in degC", "--temp"), "force": ("the process force (tool frame, N)", "--force fx,fy,fz")}
+
+
+def check_inputs(model: ErrorModel, given: dict) -> None:
+    """Every input an effect of the model consumes must be given, and every input given
+    must be consumed by an effect of the model: an option that would change nothing is an error."""
+    for effect in model.effects:
+        for group in effect.consumes:
+            if given.get(group) is None:
+                what, option = _INPUTS[group]
+                raise InputError(f"the model's {effect.name} effect needs {what}: give {option}")
+    for group, value in given.items():
+        if value is not None and not model.effects.consuming(group):
+            what, option = _INPUTS[group]
+            users = ", ".join(consumers_of(group)) or "none in the catalog"
+            raise InputError(
+                f"{option.split()[0]}: the model ({model.effects.spec()}) has no effect that uses {what} (effects that do: {users}); "
+                f"fit one, e.g. 'postproc fit MEAS.csv --robot ... --from MODEL.json --effects +{users.split(', ')[0]} -o MODEL2.json', or leave the option out"
+            )
+
+
+def _force_rows(n: int, rows: np.ndarray, target: np.ndarray, force_tool_n) -> np.ndarray | None:
+    """A constant tool-frame force as a base-frame force (n, 3) at every Cartesian target."""
+    if force_tool_n is None:
+        return None
+    out = np.zeros((n, 3))
+    out[rows] = target[:, :3, :3] @ np.asarray(force_tool_n, dtype=float).reshape(3)
+    return out
 
 
 def _scatter(n, rows, fill, values, dtype):

@@ -102,9 +102,9 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         effects = parse_effects(doc.get("effects", ""))
     except EffectSpecError as exc:
         raise fail("effects", str(exc)) from None
-    harmonics = effects.get("joint_harmonics")
-    if harmonics is not None and not harmonics.resolved:
-        raise fail("effects", "joint_harmonics must carry the joints and orders the fit chose")
+    for effect in effects:
+        if not effect.resolved:
+            raise fail("effects", f"{effect.name} must carry the terms the fit chose (its options)")
     model = ErrorModel.create(robot, tool, effects)
     params = doc.get("parameters")
     if not isinstance(params, dict):

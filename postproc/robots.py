@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .dh import forward_dh, opw_forward
 from .errors import RobotFileError, UnknownRobotError
 
 REQUIRED_UNITS = {"length": "mm", "angle": "deg", "mass": "kg", "stiffness": "N*m/rad"}
@@ -304,11 +305,9 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
 
 def _check_opw_matches_dh(model: RobotModel, reader: _Reader) -> None:
     """The OPW section must describe the same arm as the DH table, or IK would silently disagree with FK."""
-    from .kinematics import fk, opw_forward  # local import: kinematics imports this module
-
     q = np.random.default_rng(12345).uniform(-170.0, 170.0, size=(16, 6))
-    t_dh = fk(model, q)
-    t_opw = opw_forward(model, q)
+    t_dh = forward_dh(q * model.joint_sign + model.theta0_deg, model.d_mm, model.a_mm, model.alpha_deg)
+    t_opw = opw_forward(model.opw, q)
     pos_err = np.abs(t_dh[:, :3, 3] - t_opw[:, :3, 3]).max()
     rot_err = np.abs(t_dh[:, :3, :3] - t_opw[:, :3, :3]).max()
     if pos_err > 1e-6 or rot_err > 1e-9:

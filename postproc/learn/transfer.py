@@ -25,6 +25,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from .gp import GPRPredictor
+from .state import base_estimator_from_state, estimator_state
 
 
 def region_similarity(errors_a: np.ndarray, errors_b: np.ndarray) -> float:
@@ -205,16 +206,12 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         return _weighted_median(preds, self.learner_weights_)
 
     def to_state(self) -> dict:
-        from .residual import estimator_state
-
         return {"type": "tr-gpr", "params": self.get_params(), "learners": [estimator_state(m) for m in self.learners_], "learner_weights": self.learner_weights_.tolist()}
 
     @classmethod
     def from_state(cls, state: dict) -> "TrGPRPredictor":
-        from .residual import estimator_from_state
-
         est = cls(**state["params"])
-        est.learners_ = [estimator_from_state(s) for s in state["learners"]]
+        est.learners_ = [base_estimator_from_state(s) for s in state["learners"]]
         est.learner_weights_ = np.asarray(state["learner_weights"], dtype=float)
         est.n_features_in_ = est.learners_[0].n_features_in_
         return est
