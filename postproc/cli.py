@@ -913,6 +913,7 @@ def place_cmd(
 
 def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
     """The placement problem of the place command's inputs, and where its force and compliance come from."""
+    from .compliance import identified_compliance
     from .forces import load_cut_params
     from .place_program import problem_from_program
 
@@ -932,7 +933,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
         engagement = program_engagement(tp, params.diameter, load_stock(stock))
     problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
     sources = {"force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
-               "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
+               "stiffness": "identified by the model" if fitted is not None and identified_compliance(fitted) is not None else f"joint stiffness of {robot_model.name}"}
     return problem, sources
 
 

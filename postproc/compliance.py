@@ -19,12 +19,19 @@ from .robots import RobotModel
 def joint_compliance(robot: RobotModel, model=None) -> np.ndarray:
     """Joint compliances (6,) in rad/(N*m): a fitted model's identified ``compliance.c1..c6``
     when it has them (joint_compliance / external_load effects), else 1 / k of the robot file."""
-    if model is not None:
-        values = model.as_dict()
-        names = [f"compliance.c{i + 1}" for i in range(6)]
-        if all(n in values for n in names):
-            return np.array([values[n] for n in names], dtype=float)
-    return 1.0 / np.asarray(robot.stiffness_nm_per_rad, dtype=float)
+    identified = None if model is None else identified_compliance(model)
+    return identified if identified is not None else 1.0 / np.asarray(robot.stiffness_nm_per_rad, dtype=float)
+
+
+def identified_compliance(model) -> np.ndarray | None:
+    """The joint compliances a fitted model identified (through whichever effect models
+    joint stiffness), None where it has none."""
+    values = model.as_dict()
+    for effect in model.effects:
+        found = effect.joint_compliance(values)
+        if found is not None:
+            return found
+    return None
 
 
 def tcp_linear_jacobian(robot: RobotModel, q_deg: np.ndarray, flange_to_tcp_base: np.ndarray) -> np.ndarray:

@@ -70,11 +70,15 @@ def test_weights_and_normal_error():
 
 
 def test_identified_compliance_is_used(robot):
-    class Fitted:
-        def as_dict(self):
-            return {f"compliance.c{i}": 1e-6 * i for i in range(1, 7)}
+    from postproc.effects import parse_effects
+    from postproc.errormodel import ErrorModel
 
-    np.testing.assert_allclose(comp.joint_compliance(robot, Fitted()), 1e-6 * np.arange(1, 7))
+    for spec in ("joint_compliance", "geometric,external_load"):
+        base = ErrorModel.create(robot, [0, 0, 200], parse_effects(spec))
+        names = [p.name for p in base.params if p.name.endswith(tuple(f".c{i}" for i in range(1, 7)))]
+        fitted = base.with_values({n: 1e-6 * (i + 1) for i, n in enumerate(names)})
+        np.testing.assert_allclose(comp.joint_compliance(robot, fitted), 1e-6 * np.arange(1, 7))
+    assert comp.identified_compliance(ErrorModel.create(robot, [0, 0, 200], parse_effects("geometric"))) is None
     np.testing.assert_allclose(comp.joint_compliance(robot), 1 / robot.stiffness_nm_per_rad)
 
 

@@ -191,6 +191,11 @@ class Effect:
     def describe_finding(self) -> str:
         return self.finding or f"{self.name} accounts for part of the residual"
 
+    def joint_compliance(self, values: dict[str, float]) -> np.ndarray | None:
+        """The joint compliances (6,) rad/(N*m) this effect identified, from the model's
+        values by parameter name; None for an effect that does not model joint stiffness."""
+        return None
+
     def draw(self, param: Param, rng: np.random.Generator, magnitude: float) -> float:
         """A true value for the simulator: the initial value plus magnitude x typical x N(0, 1)."""
         return param.initial + magnitude * param.typical * rng.standard_normal()

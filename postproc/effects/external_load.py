@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from .base import Context, Effect, Param
-from .joint_compliance import COMPLIANCE_IDENTIFIABILITY, compliance_params, diagonal_basis, draw_compliance
+from .joint_compliance import COMPLIANCE_IDENTIFIABILITY, compliance_params, diagonal_basis, draw_compliance, identified_compliance
 
 
 class ExternalLoad(Effect):
@@ -20,6 +20,9 @@ class ExternalLoad(Effect):
     summary = "the joints give under a force at the tool (process or probing force): deflection = J^T F / stiffness"
     finding = "residuals grow with the load at the TCP"
     identifiability = COMPLIANCE_IDENTIFIABILITY + " With varied forces every loaded joint's compliance separates."
+
+    def joint_compliance(self, values):
+        return identified_compliance(values)
 
     def params(self, robot) -> list[Param]:
         return compliance_params(robot)

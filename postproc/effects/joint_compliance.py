@@ -26,6 +26,12 @@ def compliance_params(robot) -> list[Param]:
     ]
 
 
+def identified_compliance(values: dict[str, float]) -> np.ndarray | None:
+    """The compliances c1..c6 among a model's values, None where the model has none."""
+    names = [f"compliance.c{i + 1}" for i in range(6)]
+    return np.array([values[n] for n in names], dtype=float) if all(n in values for n in names) else None
+
+
 def draw_compliance(param: Param, rng: np.random.Generator) -> float:
     # A real robot's joints are as stiff as its data sheet says, give or take 15 % (one sigma).
     return param.initial * (1.0 + 0.15 * rng.standard_normal())
@@ -68,6 +74,9 @@ class JointCompliance(Effect):
         if len(com) != 3 or mass < 0:
             raise EffectSpecError(f"{cls.name}: payload_com needs x,y,z in mm (flange frame) and payload >= 0 kg")
         return cls(mass, com)
+
+    def joint_compliance(self, values):
+        return identified_compliance(values)
 
     def params(self, robot) -> list[Param]:
         return compliance_params(robot)

@@ -317,7 +317,6 @@ class GcodeParser:
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
         """The targets of the block table ``t`` (program order) with every modal state applied."""
-        n = len(t["offset"])
         motion = _ffill(t["motion"], np.nan)
         units = _ffill(t["units"], 21.0)
         dist = _ffill(t["dist"], 90.0)
