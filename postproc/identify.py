@@ -187,13 +187,13 @@ def fit(
     if harmonics is not None and not harmonics.resolved:
         say("choosing joint_harmonics terms")
         without = EffectSum(tuple(e for e in effects if e.name != "joint_harmonics"))
-        chosen = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
+        chosen, how = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
         if chosen.terms:
             effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
-            notes.append(f"joint_harmonics: data support {chosen.spec()}")
+            notes.append(f"joint_harmonics: data support {chosen.spec()} (terms and how often they were chosen: {how})")
         else:
             effects = without
-            notes.append("joint_harmonics: the data support no harmonic term; the effect is left out")
+            notes.append(f"joint_harmonics: the data support no harmonic term; the effect is left out ({how})")
     if len(meas) < 3:
         raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
 
@@ -331,42 +331,24 @@ def free_mask(result: "FitResult") -> np.ndarray:
     return np.array([p.name not in result.fixed for p in result.model.params])
 
 
-def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 8) -> JointHarmonics:
-    """Greedy forward selection of (joint, order) terms by cross-validated RMS.
+def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4) -> tuple[JointHarmonics, str]:
+    """(joint, order) terms by best-subset regression over the whole family, with
+    cross-validation and a stability check (``postproc.term_selection``), on the residual
+    of the model without harmonics linearised around its fit. Returns the terms and a
+    note of how stable the choice was."""
+    from .term_selection import select_terms, term_labels
 
-    Each step fits the model without harmonics plus the chosen terms, linearises around
-    it, and adds the candidate whose two columns most reduce the k-fold error of the
-    linearised residual; it stops when the best candidate gains less than 5 %.
-    """
     candidates = [(j, k) for j in range(1, 7) for k in (1, 2, 3, 4)]
-    chosen: list[tuple[int, int]] = []
-    folds = 5
-    fold_of = fold_assignment(len(meas), folds, seed)
-    q = np.deg2rad(meas.q_deg)
-    while len(chosen) < max_terms:
-        effects = others + JointHarmonics(tuple(chosen)) if chosen else others
-        result = fit(robot, tool_mm, effects, meas, cv_folds=0, prior=prior, seed=seed)
-        prep = result.model.prepare(meas)
-        pos, jac = result.model.evaluate(prep)
-        resid = (meas.measured_mm - pos).reshape(-1)
-        free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
-        base_cols = jac.reshape(jac.shape[0] * 3, jac.shape[-1])[:, free]
-        # d p / d q_j in the measurement frame, per degree.
-        jq = kin_joint_columns(result.model, prep)
-        baseline = _cv_linear(base_cols, resid, fold_of, folds)
-        best, best_err = None, baseline
-        for term in candidates:
-            if term in chosen:
-                continue
-            j, k = term
-            cols = np.stack([jq[:, :, j - 1] * np.sin(k * q[:, j - 1])[:, None], jq[:, :, j - 1] * np.cos(k * q[:, j - 1])[:, None]], axis=-1).reshape(-1, 2)
-            err = _cv_linear(np.hstack([base_cols, cols]), resid, fold_of, folds)
-            if err < best_err:
-                best, best_err = term, err
-        if best is None or best_err > 0.95 * baseline:
-            break
-        chosen.append(best)
-    return JointHarmonics(tuple(chosen))
+    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
+    prep = result.model.prepare(meas)
+    pos, jac = result.model.evaluate(prep)
+    free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
+    q, jq = np.deg2rad(meas.q_deg), kin_joint_columns(result.model, prep)  # d p / d q_j per degree
+    cols = np.concatenate([jq[:, :, [j - 1]] * np.stack([np.sin(k * q[:, j - 1]), np.cos(k * q[:, j - 1])], axis=1)[:, None, :] for j, k in candidates], axis=2)
+    pick = select_terms(cols.reshape(-1, cols.shape[-1]), (meas.measured_mm - pos).reshape(-1), [[2 * t, 2 * t + 1] for t in range(len(candidates))],
+                        np.repeat(fold_assignment(len(meas), 5, seed), 3), base=jac.reshape(-1, jac.shape[-1])[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
+    how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
+    return JointHarmonics(tuple(candidates[t] for t in pick.chosen)), (term_labels([f"{j}:{k}" for j, k in candidates], pick) + "; " if pick.chosen else "") + how
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
@@ -380,17 +362,6 @@ def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
         down = replace(prep, ctx=replace(prep.ctx, q_deg=prep.ctx.q_deg - dq))
         out[:, :, j] = (model.predict_prepared(up) - model.predict_prepared(down)) / (2 * h)
     return out
-
-
-def _cv_linear(cols: np.ndarray, target: np.ndarray, fold_of: np.ndarray, folds: int) -> float:
-    """k-fold RMS of a linear least-squares fit of target on cols, folds by pose (3 rows each)."""
-    row_fold = np.repeat(fold_of, 3)
-    sq = 0.0
-    for k in range(folds):
-        test = row_fold == k
-        coef, *_ = np.linalg.lstsq(cols[~test], target[~test], rcond=None)
-        sq += float(np.sum((target[test] - cols[test] @ coef) ** 2))
-    return float(np.sqrt(sq / (len(target) / 3)))
 
 
 def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0) -> ErrorModel:
