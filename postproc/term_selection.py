@@ -36,6 +36,7 @@ and how often the whole support came out exactly.
 from __future__ import annotations
 
 from dataclasses import dataclass
+
 import numpy as np
 
 BEAM = 3000  # supports of one size extended to the next; exhaustive for 24 terms up to size 3
@@ -144,7 +145,9 @@ def select_terms(
     design: (rows, n_cols) candidate columns; groups: one sequence of column indices per
     term; fold_of: (rows,) fold number of each row (rows of one unit - a pose's x, y, z -
     share a fold); base: (rows, n_base) columns always in the model, not penalised;
-    unit_of: (rows,) unit of each row for per-unit errors and resampling (default: rows).
+    unit_of: (rows,) unit of each row for per-unit errors and resampling (default: rows);
+    max_terms: the largest support tried; n_resamples: random halves for the stability
+    check; min_gain: the share of held-out MSE a size must gain to be preferred.
     """
     design = np.asarray(design, float)
     target = np.asarray(target, float)
@@ -152,33 +155,15 @@ def select_terms(
     base = np.zeros((len(target), 0)) if base is None else np.asarray(base, float)
     base = base / np.maximum(np.linalg.norm(base, axis=0), 1e-300)  # unit columns: the profiling solve is well scaled
     unit_of = np.arange(len(target)) if unit_of is None else np.unique(unit_of, return_inverse=True)[1]
-    n_units = int(unit_of.max()) + 1
     max_terms = min(max_terms, len(groups))
     term_cols = _padded_groups(groups, design.shape[1])  # the padding column of _Reduced
-    folds = np.unique(fold_of)
-    ones = np.ones(len(target))
+    problem = (design, base, target)
 
-    # Held-out squared error per unit for every size, the search redone in each fold.
-    unit_sq = np.zeros((max_terms + 1, n_units))
-    fold_supports = []
-    for k in folds:
-        test = fold_of == k
-        red = _reduce(design, base, target, (~test).astype(float))
-        best = _best_by_size(red, term_cols, max_terms, beam)
-        fold_supports.append((red, best))
-        for size, support in enumerate(best):
-            np.add.at(unit_sq[size], unit_of[test], _heldout_sq(design, base, target, red, support, groups, test))
+    unit_sq, fold_best = _cross_validate(problem, groups, term_cols, fold_of, unit_of, max_terms, beam)
     size = _one_standard_error(unit_sq, min_gain)
-    full = _reduce(design, base, target, ones)
+    full = _reduce(*problem, np.ones(len(target)))
     chosen = _best_by_size(full, term_cols, size, beam)[size]
-
-    # Stability: the chosen size's best support on each fold's training set and on random halves.
-    rng = np.random.default_rng(seed)
-    picks = [best[size] for _, best in fold_supports]
-    for _ in range(n_resamples):
-        half = rng.permutation(n_units)[: n_units // 2]
-        weight = np.isin(unit_of, half).astype(float)
-        picks.append(_best_by_size(_reduce(design, base, target, weight), term_cols, size, beam)[size])
+    picks = [best[size] for best in fold_best] + _half_sample_picks(problem, term_cols, unit_of, size, n_resamples, seed, beam)
     stability = np.zeros(len(groups))
     for pick in picks:
         stability[list(pick)] += 1
@@ -194,6 +179,33 @@ def select_terms(
         cv_rms_by_size=rms_by_size,
         coef=coef,
     )
+
+
+def _cross_validate(problem, groups, term_cols, fold_of, unit_of, max_terms, beam):
+    """Held-out squared error per unit (sizes x units), the search redone in each training
+    fold; and each fold's best support of every size."""
+    design, base, target = problem
+    unit_sq = np.zeros((max_terms + 1, int(unit_of.max()) + 1))
+    fold_best = []
+    for k in np.unique(fold_of):
+        test = fold_of == k
+        red = _reduce(design, base, target, (~test).astype(float))
+        best = _best_by_size(red, term_cols, max_terms, beam)
+        fold_best.append(best)
+        for size, support in enumerate(best):
+            np.add.at(unit_sq[size], unit_of[test], _heldout_sq(design, base, target, red, support, groups, test))
+    return unit_sq, fold_best
+
+
+def _half_sample_picks(problem, term_cols, unit_of, size, n_resamples, seed, beam) -> list[tuple[int, ...]]:
+    """The best support of ``size`` on random halves of the units (stability selection)."""
+    rng = np.random.default_rng(seed)
+    n_units = int(unit_of.max()) + 1
+    picks = []
+    for _ in range(n_resamples):
+        weight = np.isin(unit_of, rng.permutation(n_units)[: n_units // 2]).astype(float)
+        picks.append(_best_by_size(_reduce(*problem, weight), term_cols, size, beam)[size])
+    return picks
 
 
 def _one_standard_error(unit_sq: np.ndarray, min_gain: float) -> int:
