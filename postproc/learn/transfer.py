@@ -17,6 +17,13 @@ TrAdaBoost.R2 (eq. 19-24) then reweights: target samples by the weighted fitting
 relative to the largest target error, source samples that fit badly lose weight; the
 GPR base learners are combined by their weighted median (eq. 25). The kernel is fitted
 once and then kept, so every boosting round is one factorisation.
+eq. 26: the source-region GPR is kept and predicts poses inside the source region's base
+angle range (``keep_source``, on by default).
+
+``variant="paper"`` runs seed 001's eq. 11-25 as published instead (``transfer_paper``:
+T_j with its shift, a (3 + 3 + 1) x 3 H_j per sub-space weighted by omega_m, the paper's
+weight update); on the Table 7 design it is 1.35-2.8x GPR-378 where this default is 0.75-1.26x
+(README, "Seed 001 as published").
 """
 
 from __future__ import annotations
