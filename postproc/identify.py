@@ -346,7 +346,7 @@ def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, pr
     q, jq = np.deg2rad(meas.q_deg), kin_joint_columns(result.model, prep)  # d p / d q_j per degree
     cols = np.concatenate([jq[:, :, [j - 1]] * np.stack([np.sin(k * q[:, j - 1]), np.cos(k * q[:, j - 1])], axis=1)[:, None, :] for j, k in candidates], axis=2)
     pick = select_terms(cols.reshape(-1, cols.shape[-1]), (meas.measured_mm - pos).reshape(-1), [[2 * t, 2 * t + 1] for t in range(len(candidates))],
-                        np.repeat(fold_assignment(len(meas), 5, seed), 3), base=jac.reshape(-1, jac.shape[-1])[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
+                        np.repeat(fold_assignment(len(meas), 5, seed), 3), base=jac.reshape(3 * len(meas), -1)[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
     how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
     return JointHarmonics(tuple(candidates[t] for t in pick.chosen)), (term_labels([f"{j}:{k}" for j, k in candidates], pick) + "; " if pick.chosen else "") + how
 

@@ -133,3 +133,12 @@ def test_kr160_harmonics_on_several_joints_reach_the_noise_floor(terms, seed):
     stable = {tuple(int(v) for v in m[0].split(":")) for m in re.findall(r"(\d:\d) \((\d+) %\)", " ".join(notes)) if int(m[1]) >= 90}
     assert stable and stable <= truth and len(chosen) >= len(truth) - 1
     assert val_rms < 1.1 * FLOOR, f"validation RMS {val_rms:.4f} mm vs noise floor {FLOOR:.4f} mm"
+
+
+def test_without_base_columns():
+    """A model with no parameters of its own (``--effects none``): nothing to profile out."""
+    rng = np.random.default_rng(7)
+    design, base, groups = _family(rng, n_units=120)
+    y, _ = _target(rng, design, base[:, :0], (3, 11))
+    pick = select_terms(design, y, groups, _folds(len(y)), base=np.zeros((len(y), 0)), unit_of=_units(len(y)))
+    assert pick.chosen == (3, 11)
