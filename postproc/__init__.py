@@ -3,6 +3,7 @@
 from importlib.metadata import PackageNotFoundError, version
 
 from . import kinematics
+from .cam.post import post
 from .errors import InputError, JobError, KinematicsError, PostprocError, RobotFileError, UnknownRobotError
 from .kinematics import fk, gravity_torque, ik, jacobian
 from .robots import RobotModel, available_robots, load_robot
@@ -28,4 +29,5 @@ __all__ = [
     "jacobian",
     "kinematics",
     "load_robot",
+    "post",
 ]

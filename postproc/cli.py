@@ -18,7 +18,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import __version__
-from .errors import InputError, JobError, PostprocError
+from .errors import InputError, JobError, OutputError, PostprocError
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik
@@ -185,10 +185,40 @@ def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
             out.print(f"  {name}: {why}", highlight=False)
 
 
-def _load_measurements(path: Path):
-    from .measurements import read_measurements
+def _load_measurements(path: Path, robot=None, drop_invalid: bool = False):
+    """Read a measurement set; with a robot, rows beyond its joint limits are an error
+    (or, with --drop-invalid, dropped and listed on stderr)."""
+    from .measurements import check_joint_limits, read_measurements
 
-    return read_measurements(path)
+    data = read_measurements(path)
+    if robot is None:
+        return data
+    # Limits a robot file marks as estimates are not grounds to refuse measured data:
+    # rows beyond them are listed as warnings and kept.
+    enforce = not robot.estimates.get("limits", False)
+    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid, enforce=enforce)
+    if dropped and not enforce:
+        err.print(f"warning: {path}: {len(dropped)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; kept (first: {dropped[0]})")
+        dropped = []
+    for message in dropped:
+        err.print(f"dropped: {path}, {message}")
+    if dropped and len(data) == 0:
+        raise InputError(f"{path}: every row is outside the robot's joint limits; nothing left to use")
+    return data
+
+
+_DROP_INVALID_HELP = "Drop (and list) rows whose joints are outside the robot's limits instead of stopping."
+
+
+def _check_output_folder(path: Optional[Path], option: str) -> None:
+    """Fail before any computation when an output cannot be written where asked."""
+    if path is None or str(path) == "-":
+        return
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputError(f"{option} {path}: folder {folder} does not exist")
+    if path.is_dir():
+        raise OutputError(f"{option} {path}: is a folder, expected a file name")
 
 
 @app.command("fit")
@@ -205,6 +235,7 @@ def fit_cmd(
     loss: str = typer.Option("linear", "--loss", help="linear, soft_l1, huber or cauchy (robust to outliers)."),
     cv: int = typer.Option(5, "--cv", help="Folds of cross-validation (0 to skip)."),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Identify an error model from measurements and write MODEL.json."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -237,7 +268,8 @@ def fit_cmd(
         if robot is None or tool is None:
             raise InputError("fit needs --robot and --tool (or --from MODEL.json)")
         robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
-    data = _load_measurements(meas)
+    _check_output_folder(output, "-o")
+    data = _load_measurements(meas, robot_model, drop_invalid)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("fitting", total=None)
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=lambda msg: bar.update(task, description=msg))
@@ -256,6 +288,21 @@ def fit_cmd(
     out.print(f"model written to {output}", highlight=False)
 
 
+# A rigid 6-DOF registration needs three points that span a plane; a handful more makes
+# it an estimate rather than an interpolation of noise.
+_MIN_REGISTRATION_ROWS = 6
+
+
+def _check_registrable(path: Path, data) -> None:
+    """--reregister fits 6 degrees of freedom: refuse sets that cannot determine them."""
+    if len(data) < _MIN_REGISTRATION_ROWS:
+        raise InputError(f"{path}: --reregister fits the 6-DOF tracker frame and needs at least {_MIN_REGISTRATION_ROWS} rows, the set has {len(data)}")
+    centred = data.measured_mm - data.measured_mm.mean(axis=0)
+    spread = np.linalg.svd(centred, compute_uv=False)
+    if spread[1] < 1.0:
+        raise InputError(f"{path}: --reregister needs measured points that span a plane; these lie on a line (second singular value {spread[1]:.3g} mm)")
+
+
 @app.command("evaluate")
 @handles_errors
 def evaluate_cmd(
@@ -263,14 +310,16 @@ def evaluate_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV."),
     json_out: bool = typer.Option(False, "--json", help="Print {n, rms_mm, mean_mm, max_mm}."),
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Position error of a model on a measurement set."""
     from .identify import Stats, residuals
     from .model_io import load_model
 
     error_model, _ = load_model(model)
-    data = _load_measurements(meas)
+    data = _load_measurements(meas, error_model.robot, drop_invalid)
     if reregister:
+        _check_registrable(meas, data)
         from .identify import refit_base
 
         error_model = refit_base(error_model, data)
@@ -295,6 +344,7 @@ def diagnose_cmd(
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (sets the noise floor)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds."),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Where the model fails and which effect is missing."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -305,8 +355,9 @@ def diagnose_cmd(
 
     if folds < 2:
         raise InputError("--folds must be at least 2")
+    _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
-    data = _load_measurements(meas)
+    data = _load_measurements(meas, error_model.robot, drop_invalid)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
         task = bar.add_task("diagnosing", total=None)
         result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg))
@@ -354,6 +405,7 @@ def ladder_cmd(
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
     json_out: bool = typer.Option(False, "--json"),
     seed: int = typer.Option(0, "--seed"),
+    drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -362,8 +414,10 @@ def ladder_cmd(
     from .effects import _split_top_level, parse_effects
 
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
-    data = _load_measurements(meas)
-    val = _load_measurements(validation) if validation is not None else None
+    _check_output_folder(plot, "--plot")
+    _check_output_folder(report, "--report")
+    data = _load_measurements(meas, robot_model, drop_invalid)
+    val = _load_measurements(validation, robot_model, drop_invalid) if validation is not None else None
     steps = None
     if effects is not None:
         steps = _split_top_level(effects)
@@ -377,8 +431,13 @@ def ladder_cmd(
 
         fig = ladder_chart(rows, floor)
         tmp = plot.with_name(f".{plot.name}.tmp.png")
-        fig.savefig(tmp, dpi=110)
-        tmp.replace(plot)
+        try:
+            fig.savefig(tmp, dpi=110)
+            tmp.replace(plot)
+        except OSError as exc:
+            raise OutputError(f"--plot {plot}: cannot write ({exc.strerror})") from None
+        finally:
+            tmp.unlink(missing_ok=True)
     if report is not None:
         from .measurements import write_text_atomic
         from .report.html import ladder_report
@@ -504,49 +563,61 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 def compensate_cmd(
     program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
-    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output (refused when targets live in another file). KRL: its .dat (and a changed $config.dat) is written beside it."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    in_place: bool = typer.Option(False, "--in-place", help="Allow OUT to be the program's own file(s); each replaced file is kept as NAME.bak."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
     max_iter: int = typer.Option(25, "--max-iter"),
     scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
-    temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (models with a thermal effect)."),
-    force: Optional[str] = typer.Option(None, "--force", help="Process force fx,fy,fz in N, base frame (models with external_load)."),
+    temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal)."),
+    force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
+    start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
+    max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
+    grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
-    """Rewrite a program so the robot reaches its targets under the fitted error model."""
+    """Rewrite a program so the robot reaches its targets under the fitted error model
+    (or a five-axis G-code program for a calibrated machine file given as --model)."""
+    if model.suffix == ".toml":
+        from .fivex.commands import compensate_five_program
+
+        for line in compensate_five_program(Path(program), model, Path(output), grid, input_axes, dialect=dialect):
+            out.print(line)
+        return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .compensate import CompensationError, compensate
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .programs import emit_texts, parse_program, write_texts
 
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
+    if max_deviation is not None and not max_deviation > 0:
+        raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation}")
+    _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
-    if program == "-":
-        if dialect is None:
-            raise InputError("reading a program from standard input needs --dialect")
-        data = sys.stdin.buffer.read()
-        tp = parse_program("-", dialect, data)
-    else:
-        tp = parse_program(Path(program), dialect)
+    tp = _read_program(program, dialect)
     to_stdout = output == "-"
+    _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
     forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
-                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"), progress=lambda m: bar.update(task, description=m))
+                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
+                              start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                              max_deviation_mm=max_deviation, progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
     if report is not None:
         doc = {"summary": summary, "points": [
             {"line": int(rep.line[i]), "compensated": bool(rep.compensated[i]), "iterations": int(rep.iterations[i]),
              "before_mm": None if np.isnan(rep.before_mm[i]) else float(rep.before_mm[i]), "after_mm": None if np.isnan(rep.after_mm[i]) else float(rep.after_mm[i]),
              "correction_mm": None if np.isnan(rep.correction_mm[i]) else float(rep.correction_mm[i]), "converged": bool(rep.converged[i]),
-             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i])}
+             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i]),
+             "path_mm": None if rep.path_mm is None or np.isnan(rep.path_mm[i]) else float(rep.path_mm[i])}
             for i in range(len(rep.line))]}
         write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
     failures = rep.failures()
@@ -556,13 +627,7 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    texts = emit_texts(tp, new)
-    if to_stdout:
-        sys.stdout.buffer.write(texts[0].encode("latin-1"))
-        sys.stdout.buffer.flush()
-    else:
-        outputs = [Path(output)] + [Path(output).with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
-        write_texts(texts[: len(outputs)], outputs)
+    _write_compensated(tp, new, np.nonzero(rep.compensated)[0], output, in_place)
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -571,8 +636,51 @@ def compensate_cmd(
         )
     else:
         log.print("no Cartesian target to compensate (joint targets are kept as written)")
+    if summary["path"] is not None:
+        pth = summary["path"]
+        log.print(f"between targets ({pth['segments']} straight or circular segments, controller interpolation, model prediction): "
+                  f"largest distance from the intended path {pth['max_mm']:.4f} mm, on the segment into line {pth['line']}; "
+                  f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _read_program(program: str, dialect: str | None):
+    """The program at ``program``, or - for standard input (then ``dialect`` is needed)."""
+    from .programs import parse_program
+
+    if program != "-":
+        return parse_program(Path(program), dialect)
+    if dialect is None:
+        raise InputError("reading a program from standard input needs --dialect")
+    return parse_program("-", dialect, sys.stdin.buffer.read())
+
+
+def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
+    """Before the work: standard output only for one-file programs; no input overwritten
+    without --in-place (a changed $config.dat is checked again when the texts are known)."""
+    from .programs import files_for, refuse_overwrite, refuse_stdout
+
+    if output == "-":
+        refuse_stdout(tp)
+    else:
+        refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
+
+
+def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
+    """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
+    whole set of changed files at once, or the program to standard output."""
+    from .programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
+
+    texts = emit_texts(tp, new)
+    check_texts(tp, new, texts, rows)
+    if output == "-":
+        sys.stdout.buffer.write(texts[0].encode("latin-1"))
+        sys.stdout.buffer.flush()
+        return
+    files = files_for(tp, texts, output)
+    refuse_overwrite(tp, files, in_place)
+    write_set(files, backup=in_place)
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
@@ -645,14 +753,26 @@ def convert_cmd(
     to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
+    machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
+    rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
+    input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
+    max_deviation: float = typer.Option(0.01, "--max-deviation", help="--rtcp none: split moves until the tip stays this close (mm) to the straight path."),
 ):
-    """Write a new robot program with every target of another program."""
-    from .emit.writer import write_program
-    from .programs import parse_program, write_texts
+    """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
+    from .dialects import get
+    from .programs import parse_program, write_program, write_texts
 
+    if machine is not None or rtcp is not None:
+        from .fivex.commands import convert_five
+
+        if machine is None:
+            raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=max_deviation):
+            out.print(line)
+        return
+    outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
-    outputs = [output] if to == "rapid" else [output, output.with_suffix(".dat")]
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 
@@ -681,6 +801,190 @@ def roundtrip_cmd(
         if not same:
             status = max(status, 1)
     raise typer.Exit(status)
+
+
+@app.command("rtcp-calibrate")
+@handles_errors
+def rtcp_calibrate_cmd(
+    probes: Path = typer.Argument(..., help="Probing CSV (spec/probing.md): sphere centres or touches."),
+    machine: str = typer.Option(..., "--machine", help="Machine name from machines/ (e.g. xyzac-trt) or a machine file."),
+    json_out: bool = typer.Option(False, "--json", help="Print the calibration as JSON (spec/cli.md)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="Calibrated machine file; controller data are written beside it."),
+    axis: Optional[str] = typer.Option(None, "--axis", help="Rotary axis of every row when the file has no axis column."),
+    method: str = typer.Option("seed003", "--method", help="seed003 (Gauss-Newton circle) or seed004 (iterative re-centred circle)."),
+    sphere_radius: Optional[float] = typer.Option(None, "--sphere-radius", help="Calibration sphere radius, mm (touches; fitted when absent)."),
+    tip_radius: float = typer.Option(0.0, "--tip-radius", help="Probe tip radius, mm (touches)."),
+    min_outlier: float = typer.Option(0.01, "--min-outlier", help="A deviation below this (mm) is never an outlier (probing repeatability)."),
+    seed: int = typer.Option(0, "--seed", help="Seed of the random 3-point planes."),
+):
+    """Calibrate the rotary axes of a five-axis machine from probed sphere centres (seed 003)."""
+    from .fivex.commands import calibration_summary, rtcp_calibrate
+
+    doc, _ = rtcp_calibrate(probes, machine, output, axis, method, seed, sphere_radius, tip_radius, min_outlier)
+    if json_out:
+        print(json.dumps(doc))
+        return
+    for line in calibration_summary(doc):
+        out.print(line)
+
+
+@app.command("freecad-install-post")
+@handles_errors
+def freecad_install_post_cmd(
+    directory: Optional[Path] = typer.Option(None, "--dir", help="Folder to install into (default: FreeCAD's macro folder, asked of freecadcmd)."),
+    python: Optional[str] = typer.Option(None, "--python", help="postproc's Python that the post runs (default: this one)."),
+):
+    """Install the postproc post-processor (postproc_post.py) where FreeCAD's Path/CAM workbench finds it."""
+    from .cam.install import default_macro_dir, install_post
+
+    how = "given with --dir"
+    if directory is None:
+        directory, how = default_macro_dir()
+    target = install_post(directory, python)
+    out.print(f"installed {target} ({how}); in FreeCAD choose the post processor 'postproc' and give its arguments (--help lists them)")
+
+def _search_spec(text: str) -> list[tuple[float, float, float]]:
+    """'X0:X1:DX,Y0:Y1:DY,T0:T1:DT' -> three (start, stop, step)."""
+    parts = text.split(",")
+    if len(parts) != 3 or any(len(p.split(":")) != 3 for p in parts):
+        raise InputError(f"--search: expected X0:X1:DX,Y0:Y1:DY,T0:T1:DT (mm, mm, deg), got '{text}'")
+    try:
+        return [tuple(float(v) for v in p.split(":")) for p in parts]
+    except ValueError:
+        raise InputError(f"--search: expected numbers in X0:X1:DX,Y0:Y1:DY,T0:T1:DT, got '{text}'") from None
+
+
+@app.command("place")
+@handles_errors
+def place_cmd(
+    program: Path = typer.Argument(..., help="Program whose Cartesian targets are in one workpiece frame (RAPID work object, KRL $BASE)."),
+    robot: str = typer.Option(..., "--robot", help="Robot name from robots/ or a robot file."),
+    search_spec: str = typer.Option(..., "--search", help="X0:X1:DX,Y0:Y1:DY,T0:T1:DT: the grid of workpiece frames (mm, mm, deg about base z)."),
+    z: float = typer.Option(..., "--z", help="Height of the workpiece frame in the base frame, mm."),
+    force: Optional[str] = typer.Option(None, "--force", help="Constant cutting force fx,fy,fz on the tool, N, tool frame."),
+    cut: Optional[Path] = typer.Option(None, "--cut", help="Cutting-parameter TOML (tool, material, cut) for the mechanistic force model, instead of --force."),
+    stock: Optional[Path] = typer.Option(None, "--stock", help="Stock mesh (STL, OBJ, ...) in the workpiece frame: engagement per target from stock minus swept tool (with --cut; 3-axis Z-map)."),
+    model: Optional[Path] = typer.Option(None, "--model", help="Fitted model JSON: its identified joint compliance replaces the robot file's stiffness."),
+    json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
+    output: Optional[Path] = typer.Option(None, "-o", "--output", help="Write the program with the best workpiece frame here."),
+    plot: Optional[Path] = typer.Option(None, "--plot", help="Heat map PNG of the mean normal error per theta; the error along the path goes beside it (*_path.png)."),
+    refine: bool = typer.Option(True, "--refine/--no-refine", help="Bounded local refinement after the grid."),
+    singular_margin: float = typer.Option(5.0, "--singular-margin", help="Minimum distance from wrist and elbow singularities, deg."),
+    dialect: Optional[str] = typer.Option(None, "--dialect"),
+):
+    """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
+    from . import placement as pl
+    from .place_program import check_placed, placed_texts
+    from .programs import parse_program, write_texts
+
+    if (force is None) == (cut is None):
+        raise InputError("give the cutting force as either --force FX,FY,FZ or --cut CUT.toml")
+    axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
+    tp = parse_program(program, dialect)
+    problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin)
+    result = pl.search(problem, *axes, z, refine=refine)
+    frame0, cur = _current_placement(tp, problem)
+    doc = {"best": None, "evaluated": int(result.evaluated), "feasible": int(np.isfinite(result.grid_mean_mm).sum()),
+           "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None, **sources}
+    if not np.isfinite(result.best_mm):
+        if json_out:
+            print(json.dumps(doc))
+        raise JobError(f"no feasible placement in the search grid ({result.grid_mean_mm.size} candidates): every one leaves the reach, the joint limits or comes near a singularity")
+    doc["best"] = {"x": float(result.best[0]), "y": float(result.best[1]), "theta": float(result.best[2]), "z": z, "mean_normal_error_mm": result.best_mm}
+    doc["grid_best"] = {"x": float(result.grid_best[0]), "y": float(result.grid_best[1]), "theta": float(result.grid_best[2]), "mean_normal_error_mm": result.grid_best_mm}
+    if cur is not None and cur["mean_normal_error_mm"]:
+        doc["reduction_percent"] = 100.0 * (1.0 - result.best_mm / cur["mean_normal_error_mm"])
+    best_frame = pl.placement_frames(result.best, z)[0]
+    if output is not None:
+        texts = placed_texts(tp, best_frame)
+        check_placed(tp, texts, best_frame)
+        from .dialects import of as dialect_of
+
+        files = dialect_of(tp).files(tp, texts, output)
+        write_texts(list(files.values()), list(files.keys()))
+        doc["written"] = str(output)
+    if plot is not None:
+        doc["figures"] = _place_figures(plot, result, problem, best_frame, frame0, cur)
+    if json_out:
+        print(json.dumps(doc))
+        return
+    _print_placement(doc, z)
+
+
+def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
+    """The placement problem of the place command's inputs, and where its force and compliance come from."""
+    from .forces import load_cut_params
+    from .place_program import problem_from_program
+
+    fitted = None
+    if model is not None:
+        from .model_io import load_model
+
+        fitted, _ = load_model(model)
+    params = None if cut is None else load_cut_params(cut)
+    force_tool = None if force is None else _floats(force, 3, "--force")
+    engagement = None
+    if stock is not None:
+        if params is None:
+            raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
+        from .engagement import load_stock, program_engagement
+
+        engagement = program_engagement(tp, params.diameter, load_stock(stock))
+    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
+    sources = {"force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
+               "compliance": "identified by the model" if fitted is not None and "compliance.c1" in fitted.as_dict() else f"joint stiffness of {robot_model.name}"}
+    return problem, sources
+
+
+def _current_placement(tp, problem):
+    """The program's own workpiece frame and its mean normal error (None where undefined or infeasible)."""
+    from . import placement as pl
+    from .compliance import weighted_mean
+    from .place_program import current_frame, frame_xy_theta
+
+    frame0 = current_frame(tp)
+    if frame0 is None:
+        return None, None
+    err0, _, ok0 = pl.path_errors(problem, frame0)
+    x0, y0, t0, z0 = frame_xy_theta(frame0)
+    mean0 = float(weighted_mean(err0, problem.weights)) if ok0 else None
+    return frame0, {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
+
+
+def _print_placement(doc: dict, z: float) -> None:
+    b, cur = doc["best"], doc["current"]
+    out.print(f"{doc['evaluated']} placements evaluated ({doc['feasible']} of {doc['grid']} grid cells feasible)")
+    out.print(f"best: x {b['x']:.1f} mm, y {b['y']:.1f} mm, theta {b['theta']:.2f} deg, z {z:g} mm: mean normal error {b['mean_normal_error_mm'] * 1000:.2f} um")
+    if cur is not None:
+        now = "infeasible" if cur["mean_normal_error_mm"] is None else f"{cur['mean_normal_error_mm'] * 1000:.2f} um"
+        out.print(f"current: x {cur['x']:.1f}, y {cur['y']:.1f}, theta {cur['theta']:.2f}: {now}"
+                  + ("" if doc["reduction_percent"] is None else f"; reduction {doc['reduction_percent']:.1f} %"))
+
+
+def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> list[str]:
+    from . import placement as pl
+    from .errors import OutputError
+    from .report.placement_figures import error_maps, path_errors
+
+    steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))
+    dist = np.concatenate([[0.0], np.cumsum(steps)])  # length along the cut
+    err_best, _, _ = pl.path_errors(problem, best_frame)
+    err_cur = None
+    if frame0 is not None and cur["mean_normal_error_mm"] is not None:
+        err_cur, _, _ = pl.path_errors(problem, frame0)
+    current_xyt = None if cur is None else (cur["x"], cur["y"], cur["theta"])
+    paths = [plot, plot.with_name(plot.stem + "_path" + plot.suffix)]
+    cutting = problem.weights > 0
+    figs = [error_maps(result, current_xyt),
+            path_errors(dist[cutting], err_best[cutting], None if err_cur is None else err_cur[cutting])]
+    for fig, path in zip(figs, paths):
+        tmp = path.with_name("." + path.name + ".tmp.png")
+        try:
+            fig.savefig(tmp, dpi=110)
+            tmp.replace(path)
+        except OSError as exc:
+            raise OutputError(f"{path}: cannot write the figure ({exc.strerror})") from None
+    return [str(p) for p in paths]
 
 
 def main() -> None:

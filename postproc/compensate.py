@@ -25,7 +25,9 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from . import dialects, posture, segments
 from . import kinematics as kin
+from .effects import consumers_of
 from .errormodel import ErrorModel
 from .errors import InputError, JobError
 from .frames import invert_transform
@@ -55,21 +57,34 @@ class Report:
     within_limits: np.ndarray
     singular: np.ndarray
     branch_changed: np.ndarray
+    posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
+    path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
+    path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
 
     @property
     def failed(self) -> np.ndarray:
-        return self.compensated & ~(self.converged & self.within_limits & ~self.singular & ~self.branch_changed)
+        fine = self.converged & self.within_limits & ~self.singular & ~self.branch_changed
+        if self.posture is not None:
+            fine &= self.posture == 0
+        if self.path_limit_mm is not None and self.path_mm is not None:
+            fine &= ~(self.path_mm > self.path_limit_mm)
+        return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
         out = []
         for i in np.nonzero(self.failed)[0]:
             reasons = []
-            if not self.within_limits[i]:
+            if self.posture is not None and self.posture[i]:
+                reasons.append(_POSTURE_TEXT[int(self.posture[i])])
+            if not self.within_limits[i] and (self.posture is None or self.posture[i] != POSTURE_CONF):
                 reasons.append("out of reach or outside the joint limits")
             if self.singular[i]:
                 reasons.append("near a singularity")
             if self.branch_changed[i]:
                 reasons.append("would change IK branch")
+            if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
+                reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
+                               f"(over --max-deviation {self.path_limit_mm:g} mm; subdividing it is not implemented yet)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
@@ -92,13 +107,22 @@ class Report:
             "iterations_max": int(it.max()) if len(it) else None,
             "max_correction_mm": float(np.nanmax(self.correction_mm[c])) if c.any() else None,
             "failed": int(self.failed.sum()),
+            "path": self._path_summary(),
         }
+
+    def _path_summary(self) -> dict | None:
+        """Largest predicted distance from the intended path between targets, and where."""
+        if self.path_mm is None or not np.isfinite(self.path_mm).any():
+            return None
+        i = int(np.nanargmax(self.path_mm))
+        return {"max_mm": float(self.path_mm[i]), "line": int(self.line[i]), "segments": int(np.isfinite(self.path_mm).sum()),
+                "over_tolerance": int((self.path_mm > PATH_TOLERANCE_MM).sum()), "tolerance_mm": PATH_TOLERANCE_MM}
 
 
 def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
     """True where q is within SINGULAR_DEG of a wrist or elbow singularity or the shoulder one."""
     p = robot.opw
-    phi = np.deg2rad(p.signs * q - p.offsets_deg)
+    phi = kin.opw_angles(robot, q)
     wrist = np.abs(np.sin(phi[:, 4])) < np.sin(np.deg2rad(SINGULAR_DEG))
     elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < np.sin(np.deg2rad(SINGULAR_DEG))
     radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
@@ -109,13 +133,13 @@ def _wrist_elbow_shoulder(robot, q: np.ndarray) -> np.ndarray:
 class _Plant:
     """The robot as compensation sees it: command poses -> joints on a branch -> predicted TCP."""
 
-    def __init__(self, model: ErrorModel, tools: np.ndarray, tool_index: np.ndarray, temp_c, force_n):
+    def __init__(self, model: ErrorModel, tools: np.ndarray, tool_index: np.ndarray, temp_c, force_rows):
         self.model = model
         self.robot = model.robot
         self.tools = tools
         self.tool_index = tool_index
         self.temp_c = temp_c
-        self.force_n = force_n
+        self.force_rows = force_rows  # (rows of the program, 3) N in the base frame, or None
         self.inv_tools = np.linalg.inv(tools)
 
     def joints(self, tcp_poses: np.ndarray, rows: np.ndarray, q_ref: np.ndarray, branch_ref: np.ndarray):
@@ -132,48 +156,54 @@ class _Plant:
             if not sel.any():
                 continue
             m = replace(self.model, tool_mm=self.tools[t][:3, 3])
-            n = int(sel.sum())
-            temp = None if self.temp_c is None else np.full(n, self.temp_c)
-            force = None if self.force_n is None else np.broadcast_to(self.force_n, (n, 3))
-            approach = None
-            if m.effects.get("backlash") is not None and order_q is not None:
-                from .effects.backlash import approach_from_order
-
-                approach = approach_from_order(order_q)[rows][sel]
-            prep = m.prepare(q_deg=q[sel], force_n=force, approach=approach, temp_c=temp, time_s=None)
+            columns = {"temp": None if self.temp_c is None else np.full(int(sel.sum()), self.temp_c),
+                       "force": None if self.force_rows is None else self.force_rows[rows][sel], "approach": None}
+            if order_q is not None:
+                # Columns the effects derive from the program's path (e.g. approach directions).
+                for effect in m.effects:
+                    columns.update({group: col[rows][sel] for group, col in effect.path_columns(order_q).items()})
+            prep = m.prepare(q_deg=q[sel], force_n=columns["force"], approach=columns["approach"], temp_c=columns["temp"], time_s=None)
             out[sel] = m.predict_prepared(prep)
         return out
 
 
-def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, list[str]]:
-    """The joints the controller would use for each target as written: from the program's
-    configuration data where it has some, else by continuity along the path."""
-    notes: list[str] = []
-    sols = kin.ik(robot, flange)
-    conf = tp.conf[rows]
-    q = np.full((len(rows), 6), np.nan)
-    branch = np.full(len(rows), -1)
-    if tp.dialect == "rapid":
-        has = ~np.isnan(conf).any(axis=1)
-        if has.any():
-            q[has], branch[has] = kin.select_by_abb_conf(robot, sols[has], conf[has].astype(int))
-    elif tp.dialect == "krl":
-        has = ~np.isnan(conf[:, :2]).any(axis=1)
-        if has.any():
-            q[has], branch[has] = kin.select_by_kuka_status(robot, sols[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
-    missing = np.isnan(q).any(axis=1)
-    if missing.any():
-        if (~missing & ~np.isnan(conf).all(axis=1)).sum() < (~np.isnan(conf).all(axis=1)).sum():
-            notes.append("some configuration data match no IK solution of the nominal model; those targets follow the path instead")
-        # Without configuration data the controller keeps its branch along the path: the
-        # branch of the first target nearest the middle of the joint ranges.
-        start = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
-        path_q, path_branch, _ = kin.select_path(robot, sols if missing.all() else sols[missing], start)  # (no copy of all 8 solutions)
-        # Big steps between targets are the program's business; reachability is ours.
-        usable = kin.within_limits(robot, path_q)
-        q[missing] = np.where(usable[:, None], path_q, np.nan)
-        branch[missing] = np.where(usable, path_branch, -1)
-    return q, branch, notes
+def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray, start_q=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
+    """The joints and branch the controller takes for each Cartesian target as written, by
+    the dialect's rules (postproc.posture): joint targets and configuration data that apply
+    set the posture, every other target carries it. Also returns, per Cartesian target, why
+    the controller could not take that posture (POSTURE_* codes, 0 where it can)."""
+    n = len(tp)
+    sols = np.full((n, 8, 6), np.nan)
+    sols[rows] = kin.ik(robot, flange)
+    dialect = dialects.of(tp)
+    cartesian = np.zeros(n, dtype=bool)
+    cartesian[rows] = True
+    by_conf = dialect.conf_applies(tp) & cartesian
+    anchor_q = np.full((n, 6), np.nan)
+    if by_conf.any():
+        anchor_q[by_conf] = dialect.branch_from_conf(robot, sols[by_conf], tp.conf[by_conf])[0]
+    joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
+    anchor_q[joint_targets] = tp.joints[joint_targets]
+    carried = posture.carry(robot, sols, by_conf | joint_targets, anchor_q, start_q, lines=tp.line)
+    problem = np.zeros(n, dtype=int)
+    problem[by_conf & np.isnan(anchor_q).any(axis=1)] = POSTURE_CONF
+    q = np.where(problem[:, None] == POSTURE_CONF, np.nan, carried.q)
+    usable = ~np.isnan(q).any(axis=1) & kin.within_limits(robot, np.nan_to_num(q))
+    branch = np.where(usable, carried.branch, -1)
+    q[~usable] = np.nan
+    return q[rows], branch[rows], problem[rows], list(carried.notes)
+
+
+PATH_TOLERANCE_MM = 0.02  # segments straying further between targets are counted in the summary
+
+# What may keep the controller from the posture its rules give (Report.posture):
+POSTURE_CONF = 1  # the configuration data match no IK solution of the nominal robot
+POSTURE_PATH = 3  # the straight line to the compensated target passes a singularity or leaves reach
+_POSTURE_TEXT = {
+    POSTURE_CONF: "its configuration data match no IK solution of the nominal robot: the controller would stop there "
+                  "(write the configuration the robot takes, or let it choose: KRL LIN, RAPID ConfL\\Off / ConfJ\\Off)",
+    POSTURE_PATH: "the controller's straight line to the compensated target passes near a singularity or leaves reach on its posture",
+}
 
 
 def compensate(
@@ -187,11 +217,36 @@ def compensate(
     force_n=None,
     frames: dict | None = None,
     tools: dict | None = None,
+    start_joints=None,
+    max_deviation_mm: float | None = None,
     progress=lambda msg: None,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring)."""
-    if scheme not in ("broyden", "seed000"):
+    if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
+    _require_usable_model(model)
+    _require_process_inputs(model, temp_c, force_n)
+    _refuse_arcs(tp)
+    written = tp
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    _refuse_unplaced(tp)
+    problem = _Problem.of(tp, model, temp_c, force_n, start_joints)
+    progress("predicting the program as written")
+    before = problem.predicted_error_as_written()
+    solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
+    report = _report(problem, before, solution)
+    progress("predicting the path between targets")
+    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, _path_deviation(problem, solution), float),
+                     path_limit_mm=max_deviation_mm)
+    out = written.with_positions(problem.positions_for(solution.cmd))
+    if problem.notes:
+        out = replace(out, notes=out.notes + tuple(problem.notes))
+    return out, report
+
+
+def _require_usable_model(model: ErrorModel) -> None:
+    """Compensation solves the nominal IK and needs the model in the robot's base frame."""
     robot = model.robot
     if not robot.has_analytic_ik:
         raise InputError(f"robot '{robot.name}' has no analytic IK: compensation needs an ortho-parallel arm")
@@ -202,22 +257,25 @@ def compensate(
             f"the model's measurement frame is {np.linalg.norm(trans):.0f} mm and {angle:.1f} deg away from the robot base "
             "(a tracker frame?): compensation needs a model whose measurements are in the robot's base frame"
         )
-    for effect in model.effects:
-        if effect.name == "thermal" and temp_c is None:
-            raise InputError("the model has a thermal effect: give the cell temperature (--temp)")
-        if effect.name == "external_load" and force_n is None:
-            raise InputError("the model has an external_load effect: give the process force (--force fx,fy,fz)")
 
+
+def _require_process_inputs(model: ErrorModel, temp_c, force_n) -> None:
+    """An effect that needs a process input (temperature, force) may not run without it,
+    and an input no effect of the model consumes is an error, not a no-op."""
+    check_inputs(model, {"temp": temp_c, "force": force_n})
+
+
+def _refuse_arcs(tp: Toolpath) -> None:
     arcs = np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW))
     if arcs.any():
         # Moving an arc's end points without its centre would change its radius (LinuxCNC,
         # for one, rejects such an arc): refuse rather than write a program that may not run.
         lines = ", ".join(str(v) for v in tp.line[arcs][:10])
         raise InputError(f"G2/G3 arcs on lines {lines}: arc centres are not compensated yet; linearise the arcs (or use R-format moves) first")
-    written = tp
-    if frames or tools:
-        tp = tp.with_frames(frames, tools)
-    n = len(tp)
+
+
+def _refuse_unplaced(tp: Toolpath) -> None:
+    """Every Cartesian target must be placed in the base frame (point, frame and tool known)."""
     cart = tp.kind != Kind.ABSJ
     unplaced = cart & ~(tp.placed() & ~np.isnan(tp.position).any(axis=1))
     if unplaced.any():
@@ -229,129 +287,260 @@ def compensate(
             hint = " Define " + ", ".join([f"frame {m} (--frame {m}=X,Y,Z,A,B,C)" for m in missing] + [f"tool {m} (--tool {m}=X,Y,Z,A,B,C)" for m in missing_tools]) + "."
         lines = ", ".join(str(v) for v in tp.line[i][:10])
         raise InputError(f"targets on lines {lines} cannot be placed in the robot base frame (undefined point, frame or tool).{hint}")
-    rows = np.nonzero(cart)[0]
-    base = tp.base_poses()
-    if np.isnan(tp.orientation[rows]).any():
+    if np.isnan(tp.orientation[np.nonzero(cart)[0]]).any():
         raise InputError("targets without an orientation (3-axis G-code) need one: convert the program for a robot first")
-    target = base[rows]
-    plant = _Plant(model, tp.tools, tp.tool, temp_c, None if force_n is None else np.asarray(force_n, dtype=float))
-    flange0 = target @ plant.inv_tools[tp.tool[rows]]
-    q_ref, branch_ref, notes = _reference_joints(tp, robot, flange0, rows)
-    order_q = np.zeros((n, 6))
-    order_q[rows] = np.nan_to_num(q_ref)
 
-    goal = target[:, :3, 3]
-    progress("predicting the program as written")
-    before = plant.actual(q_ref, rows, order_q) - goal
-    within = ~np.isnan(q_ref).any(axis=1)
 
-    cmd = goal.copy()
-    err = before.copy()
-    iterations = np.zeros(len(rows), dtype=int)
-    converged = np.zeros(len(rows), dtype=bool)
-    q_now = q_ref.copy()
-    branch_now = branch_ref.copy()
+class _Problem:
+    """The Cartesian targets of one program and the robot that must reach them."""
 
-    def evaluate(c, active):
-        poses = target[active].copy()
-        poses[:, :3, 3] = c
-        q, b = plant.joints(poses, rows[active], q_ref[active], branch_ref[active])
-        order_q[rows[active]] = np.where(np.isnan(q), order_q[rows[active]], q)
-        return plant.actual(q, rows[active], order_q) - goal[active], q, b
+    def __init__(self, tp: Toolpath, plant: _Plant, rows: np.ndarray, target: np.ndarray, q_ref, branch_ref, posture_problem, notes):
+        self.tp, self.plant, self.rows, self.target = tp, plant, rows, target
+        self.goal = target[:, :3, 3]
+        self.q_ref, self.branch_ref, self.notes = q_ref, branch_ref, notes
+        self.posture_problem = posture_problem
+        # Joints of every target in program order (backlash depends on the approach direction).
+        self.order_q = np.zeros((len(tp), 6))
+        self.order_q[rows] = np.nan_to_num(q_ref)
 
-    if scheme == "broyden":
-        jac = np.repeat(np.eye(3)[None], len(rows), axis=0)
-        active = within & ~np.isnan(err).any(axis=1)
-        already = active & (np.linalg.norm(np.nan_to_num(err), axis=1) < tol_mm)
-        converged[already] = True
-        active &= ~already
-        for it in range(max_iter):
-            if not active.any():
-                break
-            progress(f"iteration {it + 1}: {int(active.sum())} points")
-            idx = np.nonzero(active)[0]
-            step = -np.linalg.solve(jac[idx], err[idx][..., None])[..., 0]
-            new_cmd = cmd[idx] + step
-            new_err, q, b = evaluate(new_cmd, active)
-            iterations[idx] += 1
-            lost = np.isnan(new_err).any(axis=1)
-            y = new_err - err[idx]
-            ss = np.einsum("ij,ij->i", step, step)
-            upd = ~lost & (ss > 0)
-            # Broyden: B += ((y - B s) s^T) / (s^T s)
-            bs = np.einsum("nij,nj->ni", jac[idx], step)
-            jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
-            keep = ~lost
-            cmd[idx[keep]] = new_cmd[keep]
-            err[idx[keep]] = new_err[keep]
-            q_now[idx[keep]] = q[keep]
-            branch_now[idx[keep]] = b[keep]
-            within[idx[lost]] = False
-            done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
-            converged[idx[done]] = True
-            active[idx[done | lost]] = False
-    else:
-        axis = target[:, :3, 2]  # the tool axis of each target
-        axial = np.einsum("ij,ij->i", err, axis)
-        # Across the tool axis: the first prediction's error is subtracted once (seed 000 step 2).
-        cmd = goal - (err - axial[:, None] * axis)
-        a_prev = np.zeros(len(rows))  # a0 = ap: no axial correction
-        f_prev = axial
-        a_now = -axial  # a1 = ap + e(a0), with e as (target - actual) along the axis
-        active = within & ~np.isnan(err).any(axis=1)
-        for it in range(max_iter):
-            if not active.any():
-                break
-            idx = np.nonzero(active)[0]
-            c = cmd[idx] + a_now[idx, None] * axis[idx]
-            e, q, b = evaluate(c, active)
-            iterations[idx] += 1
-            lost = np.isnan(e).any(axis=1)
-            f_now = np.einsum("ij,ij->i", e, axis[idx])
-            denom = f_now - f_prev[idx]
-            safe = np.abs(denom) > 1e-12
-            a_next = np.where(safe, a_now[idx] - f_now * (a_now[idx] - a_prev[idx]) / np.where(safe, denom, 1.0), a_now[idx])
-            keep = ~lost
-            err[idx[keep]] = e[keep]
-            q_now[idx[keep]] = q[keep]
-            branch_now[idx[keep]] = b[keep]
-            within[idx[lost]] = False
-            done = keep & (np.abs(a_next - a_now[idx]) < tol_mm)
-            converged[idx[done]] = True
-            a_prev[idx], f_prev[idx] = a_now[idx], f_now
-            a_now[idx] = np.where(done, a_now[idx], a_next)
-            active[idx[done | lost]] = False
-        cmd = cmd + a_now[:, None] * axis
+    @classmethod
+    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None) -> "_Problem":
+        rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
+        target = tp.base_poses()[rows]
+        plant = _Plant(model, tp.tools, tp.tool, temp_c, _force_rows(len(tp), rows, target, force_n))
+        flange = target @ plant.inv_tools[tp.tool[rows]]
+        q_ref, branch_ref, posture_problem, notes = _reference_joints(tp, model.robot, flange, rows, start_joints)
+        return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
 
+    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
+        """(Cartesian targets,) True where the nominal controller's straight line from the
+        previous target to this compensated one cannot be driven on the carried posture."""
+        tp, rows = self.tp, self.rows
+        straight = np.isin(tp.kind[rows], (Kind.LINEAR,))
+        has_prev = np.zeros(len(rows), dtype=bool)
+        has_prev[1:] = rows[1:] == rows[:-1] + 1  # the previous motion is a Cartesian target too
+        check = straight & has_prev & ~np.isnan(q).any(axis=1) & np.roll(~np.isnan(q).any(axis=1), 1)
+        blocked = np.zeros(len(rows), dtype=bool)
+        idx = np.nonzero(check)[0]
+        if idx.size:
+            poses = self.target.copy()
+            poses[:, :3, 3] = cmd
+            flange = poses @ self.plant.inv_tools[tp.tool[rows]]
+            reason = posture.check_linear_segments(self.plant.robot, flange[idx - 1], flange[idx], branch[idx], q[idx - 1])
+            blocked[idx] = reason != 0
+        return blocked
+
+    def predicted_error_as_written(self) -> np.ndarray:
+        return self.plant.actual(self.q_ref, self.rows, self.order_q) - self.goal
+
+    def evaluate(self, commands: np.ndarray, active: np.ndarray):
+        """Predicted error, joints and branch of the targets ``active`` commanded at ``commands``."""
+        rows = self.rows[active]
+        poses = self.target[active].copy()
+        poses[:, :3, 3] = commands
+        q, b = self.plant.joints(poses, rows, self.q_ref[active], self.branch_ref[active])
+        self.order_q[rows] = np.where(np.isnan(q), self.order_q[rows], q)
+        return self.plant.actual(q, rows, self.order_q) - self.goal[active], q, b
+
+    def positions_for(self, cmd: np.ndarray) -> np.ndarray:
+        """Target positions (all rows, each in its own frame) for base-frame commands ``cmd``."""
+        new_base = self.target.copy()
+        new_base[:, :3, 3] = cmd
+        local = invert_transform(self.tp.frames[self.tp.frame[self.rows]]) @ new_base
+        position = self.tp.position.copy()
+        position[self.rows] = local[:, :3, 3]
+        return position
+
+
+@dataclass
+class _Solution:
+    """Iteration state per Cartesian target."""
+
+    cmd: np.ndarray
+    err: np.ndarray
+    q: np.ndarray
+    branch: np.ndarray
+    within: np.ndarray
+    iterations: np.ndarray
+    converged: np.ndarray
+
+    @classmethod
+    def start(cls, problem: _Problem, before: np.ndarray) -> "_Solution":
+        n = len(problem.rows)
+        return cls(problem.goal.copy(), before.copy(), problem.q_ref.copy(), problem.branch_ref.copy(),
+                   ~np.isnan(problem.q_ref).any(axis=1), np.zeros(n, dtype=int), np.zeros(n, dtype=bool))
+
+    def accept(self, idx: np.ndarray, keep: np.ndarray, err: np.ndarray, q: np.ndarray, branch: np.ndarray) -> None:
+        """Take the new error and joints of the points ``idx[keep]``; the others left the workspace."""
+        self.err[idx[keep]] = err[keep]
+        self.q[idx[keep]] = q[keep]
+        self.branch[idx[keep]] = branch[keep]
+        self.within[idx[~keep]] = False
+
+
+def _solve_broyden(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
+    """Full 3-D position: secant / Broyden iteration per point, vectorised over points."""
+    sol = _Solution.start(problem, before)
+    jac = np.repeat(np.eye(3)[None], len(problem.rows), axis=0)
+    active = sol.within & ~np.isnan(sol.err).any(axis=1)
+    already = active & (np.linalg.norm(np.nan_to_num(sol.err), axis=1) < tol_mm)
+    sol.converged[already] = True
+    active &= ~already
+    for it in range(max_iter):
+        if not active.any():
+            break
+        progress(f"iteration {it + 1}: {int(active.sum())} points")
+        idx = np.nonzero(active)[0]
+        step = -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
+        new_cmd = sol.cmd[idx] + step
+        new_err, q, b = problem.evaluate(new_cmd, active)
+        sol.iterations[idx] += 1
+        keep = ~np.isnan(new_err).any(axis=1)
+        ss = np.einsum("ij,ij->i", step, step)
+        _broyden_update(jac, idx, step, new_err - sol.err[idx], ss, keep & (ss > 0))
+        sol.cmd[idx[keep]] = new_cmd[keep]
+        sol.accept(idx, keep, new_err, q, b)
+        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
+        sol.converged[idx[done]] = True
+        active[idx[done | ~keep]] = False
+    return sol
+
+
+def _broyden_update(jac, idx, step, y, ss, upd) -> None:
+    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx[upd]``."""
+    bs = np.einsum("nij,nj->ni", jac[idx], step)
+    jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
+
+
+def _solve_seed000(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
+    """Seed 000 (eq. 10-15): across the tool axis the first error is subtracted once; along
+    it, a secant iteration on the depth from a0 = ap, a1 = ap + e(a0)."""
+    sol = _Solution.start(problem, before)
+    axis = problem.target[:, :3, 2]  # the tool axis of each target
+    axial = np.einsum("ij,ij->i", sol.err, axis)
+    across = problem.goal - (sol.err - axial[:, None] * axis)
+    a_prev = np.zeros(len(problem.rows))  # a0 = ap: no axial correction
+    f_prev = axial
+    a_now = -axial  # a1 = ap + e(a0), with e as (target - actual) along the axis
+    active = sol.within & ~np.isnan(sol.err).any(axis=1)
+    for _ in range(max_iter):
+        if not active.any():
+            break
+        idx = np.nonzero(active)[0]
+        e, q, b = problem.evaluate(across[idx] + a_now[idx, None] * axis[idx], active)
+        sol.iterations[idx] += 1
+        keep = ~np.isnan(e).any(axis=1)
+        f_now = np.einsum("ij,ij->i", e, axis[idx])
+        a_next = _secant_step(a_prev[idx], a_now[idx], f_prev[idx], f_now)
+        sol.accept(idx, keep, e, q, b)
+        done = keep & (np.abs(a_next - a_now[idx]) < tol_mm)
+        sol.converged[idx[done]] = True
+        a_prev[idx], f_prev[idx] = a_now[idx], f_now
+        a_now[idx] = np.where(done, a_now[idx], a_next)
+        active[idx[done | ~keep]] = False
+    sol.cmd = across + a_now[:, None] * axis
+    return sol
+
+
+def _secant_step(a_prev, a_now, f_prev, f_now):
+    """Next depth of the secant iteration (kept where the two errors are equal)."""
+    denom = f_now - f_prev
+    safe = np.abs(denom) > 1e-12
+    return np.where(safe, a_now - f_now * (a_now - a_prev) / np.where(safe, denom, 1.0), a_now)
+
+
+_SCHEMES = {"broyden": _solve_broyden, "seed000": _solve_seed000}
+
+
+def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
+    robot, rows, n = problem.plant.robot, problem.rows, len(problem.tp)
     singular = np.zeros(len(rows), dtype=bool)
-    ok_q = ~np.isnan(q_now).any(axis=1)
-    singular[ok_q] = _wrist_elbow_shoulder(robot, q_now[ok_q])
-    changed = within & (branch_now != branch_ref)
-
-    # Commands back into each target's own frame.
-    new_base = target.copy()
-    new_base[:, :3, 3] = cmd
-    local = invert_transform(tp.frames[tp.frame[rows]]) @ new_base
-    position = tp.position.copy()
-    position[rows] = local[:, :3, 3]
-
+    ok_q = ~np.isnan(sol.q).any(axis=1)
+    singular[ok_q] = _wrist_elbow_shoulder(robot, sol.q[ok_q])
+    changed = sol.within & (sol.branch != problem.branch_ref)
+    posture_problem = problem.posture_problem.copy()
+    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch)
+    posture_problem[(posture_problem == 0) & blocked] = POSTURE_PATH
     full = lambda fill, values, dtype=float: _scatter(n, rows, fill, values, dtype)  # noqa: E731
-    report = Report(
-        line=tp.line,
+    return Report(
+        line=problem.tp.line,
         compensated=full(False, np.ones(len(rows), bool), bool),
-        iterations=full(0, iterations, int),
+        iterations=full(0, sol.iterations, int),
         before_mm=full(np.nan, np.linalg.norm(before, axis=1)),
-        after_mm=full(np.nan, np.linalg.norm(err, axis=1)),
-        correction_mm=full(np.nan, np.linalg.norm(cmd - goal, axis=1)),
-        converged=full(True, converged, bool),
-        within_limits=full(True, within, bool),
+        after_mm=full(np.nan, np.linalg.norm(sol.err, axis=1)),
+        correction_mm=full(np.nan, np.linalg.norm(sol.cmd - problem.goal, axis=1)),
+        converged=full(True, sol.converged, bool),
+        within_limits=full(True, sol.within, bool),
         singular=full(False, singular, bool),
         branch_changed=full(False, changed, bool),
+        posture=full(0, posture_problem, int),
     )
-    out = written.with_positions(position)
-    if notes:
-        out = replace(out, notes=out.notes + tuple(notes))
-    return out, report
+
+
+def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:
+    """Per Cartesian target: the largest predicted distance of the robot from the intended
+    path on the segment into it (straight for LIN, the arc for a CIRC end point), with the
+    controller interpolating the compensated commands; NaN where there is no such segment."""
+    tp, rows = problem.tp, problem.rows
+    kind = tp.kind[rows]
+    follows = np.zeros(len(rows), dtype=bool)
+    follows[1:] = rows[1:] == rows[:-1] + 1  # the previous motion is a Cartesian target too
+    commands = problem.target.copy()
+    commands[:, :3, 3] = sol.cmd
+    goal = problem.goal
+    deviation = np.full(len(rows), np.nan)
+    lin = np.nonzero((kind == Kind.LINEAR) & follows)[0]
+    if lin.size:
+        actual = _predicted_samples(problem, sol, segments.linear_samples(commands[lin - 1], commands[lin]), lin)
+        deviation[lin] = segments.distance_to_segments(actual, goal[lin - 1], goal[lin]).max(axis=1)
+    arc = np.nonzero((kind == Kind.CIRC_END) & follows & np.roll(follows, 1) & (np.roll(kind, 1) == Kind.CIRC_VIA))[0]
+    arc = arc[(arc >= 2) & dialects.of(tp).arc_ends_at_target(tp)[rows[arc]]]
+    if arc.size:
+        actual = _predicted_samples(problem, sol, segments.arc_samples(commands[arc - 2], commands[arc - 1], commands[arc]), arc)
+        deviation[arc] = segments.distance_to_circles(actual, goal[arc - 2], goal[arc - 1], goal[arc]).max(axis=1)
+    return deviation
+
+
+def _predicted_samples(problem: _Problem, sol: _Solution, commanded: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Predicted TCP (M, K, 3) where the controller's interpolated commands (M, K, 4, 4) on
+    the segments into targets ``idx`` put the robot (their end target's posture and tool)."""
+    m, k = commanded.shape[:2]
+    rows = np.repeat(problem.rows[idx], k)
+    flange = commanded.reshape(-1, 4, 4) @ problem.plant.inv_tools[problem.tp.tool[rows]]
+    sols = kin.ik(problem.plant.robot, flange)
+    q, _ = kin.select_branch(problem.plant.robot, sols, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
+    return problem.plant.actual(q, rows, problem.order_q).reshape(m, k, 3)
+
+
+# The inputs effects may consume at compensation time: (what it is, the option giving it).
+_INPUTS = {"temp": ("the cell temperature in degC", "--temp"), "force": ("the process force (tool frame, N)", "--force fx,fy,fz")}
+
+
+def check_inputs(model: ErrorModel, given: dict) -> None:
+    """Every input an effect of the model consumes must be given, and every input given
+    must be consumed by an effect of the model: an option that would change nothing is an error."""
+    for effect in model.effects:
+        for group in effect.consumes:
+            if given.get(group) is None:
+                what, option = _INPUTS[group]
+                raise InputError(f"the model's {effect.name} effect needs {what}: give {option}")
+    for group, value in given.items():
+        if value is not None and not model.effects.consuming(group):
+            what, option = _INPUTS[group]
+            users = ", ".join(consumers_of(group)) or "none in the catalog"
+            raise InputError(
+                f"{option.split()[0]}: the model ({model.effects.spec()}) has no effect that uses {what} (effects that do: {users}); "
+                f"fit one, e.g. 'postproc fit MEAS.csv --robot ... --from MODEL.json --effects +{users.split(', ')[0]} -o MODEL2.json', or leave the option out"
+            )
+
+
+def _force_rows(n: int, rows: np.ndarray, target: np.ndarray, force_tool_n) -> np.ndarray | None:
+    """A constant tool-frame force as a base-frame force (n, 3) at every Cartesian target."""
+    if force_tool_n is None:
+        return None
+    out = np.zeros((n, 3))
+    out[rows] = target[:, :3, :3] @ np.asarray(force_tool_n, dtype=float).reshape(3)
+    return out
 
 
 def _scatter(n, rows, fill, values, dtype):

@@ -30,8 +30,6 @@ ALPHA = 0.05
 MIN_EXPLAINED = 0.02  # a candidate must remove at least 2 % of the held-out residual variance
 BINS = 5
 
-_CANDIDATE_NEEDS = {"external_load": "force", "thermal": "temp"}
-
 
 @dataclass(frozen=True)
 class Breakdown:
@@ -182,43 +180,14 @@ def _breakdown(name: str, label: str, unit: str, values: np.ndarray, categorical
 
 
 def candidate_effects(model: ErrorModel, meas: MeasurementSet) -> list[str]:
-    """Catalog effects not in the model that the data's columns allow."""
+    """Catalog effects not in the model whose measurement columns the data have."""
     present = set(model.effects.names())
-    out = []
-    for name in CATALOG:
-        if name in present:
-            continue
-        group = _CANDIDATE_NEEDS.get(name)
-        if group is not None and not meas.has(group):
-            continue
-        out.append(name)
-    return out
-
-
-_MESSAGES = {
-    "geometric": "residuals follow the arm's geometry (link lengths, offsets and twists)",
-    "base_frame": "residuals follow a rigid shift and tilt of the whole workspace",
-    "tool_offset": "residuals follow the tool orientation (the measured point is not where the tool says)",
-    "joint_compliance": "residuals follow the gravity torque on the joints",
-    "external_load": "residuals grow with the load at the TCP",
-    "backlash": "residuals change with the direction each joint approached from",
-    "thermal": "residuals drift with temperature",
-}
+    return [name for name, cls in CATALOG.items() if name not in present and all(meas.has(group) for group in cls.needs)]
 
 
 def _message(spec: str, explained: float) -> str:
-    effects = parse_effects(spec)
-    effect = effects.effects[0]
-    if effect.name == "joint_harmonics" and effect.terms:
-        joints = sorted({j for j, _ in effect.terms})
-        parts = []
-        for j in joints:
-            orders = sorted(k for jj, k in effect.terms if jj == j)
-            parts.append(f"joint {j}" + (f" (order {', '.join(map(str, orders))})" if orders != [1] else ""))
-        what = "residuals follow sin/cos of " + " and ".join(parts)
-    else:
-        what = _MESSAGES.get(effect.name, f"{effect.name} accounts for part of the residual")
-    return f"{what}; {spec} explains {100 * explained:.0f}% of them"
+    effect = parse_effects(spec).effects[0]
+    return f"{effect.describe_finding()}; {spec} explains {100 * explained:.0f}% of them"
 
 
 def diagnose(
@@ -247,12 +216,29 @@ def diagnose(
     base_mse = float(base_sq.mean())
 
     names = candidate_effects(model, meas) if candidates is None else candidates
+    ranked = _rank_candidates(model, meas, names, base_fit.model, base_sq, folds, seed, progress)
+
+    floor = float(noise_mm * np.sqrt(3.0))
+    cv_rms = float(np.sqrt(base_mse))
+    findings = _findings(breakdowns, ranked, cv_rms, floor)
+    if model.residual is not None:
+        findings.append(
+            f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
+            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
+        )
+    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+
+
+def _rank_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], base: ErrorModel, base_sq: np.ndarray, folds: int, seed: int, progress) -> list[Candidate]:
+    """Add each candidate to the whole model, refit, and compare held-out errors pose by pose
+    with the model as it is (paired one-sided test, Holm-corrected over the candidates)."""
+    base_mse = float(base_sq.mean())
     raw = []
     for name in names:
         progress(f"trying {name}")
-        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base_fit.model, seed=seed)
+        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base, seed=seed)
         added = [e for e in result.model.effects if e.name not in set(model.effects.names())]
-        if not added:  # e.g. joint_harmonics when the data support no term
+        if not added:  # e.g. a term family when the data support no term
             raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0, ""))
             continue
         err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
@@ -268,16 +254,7 @@ def diagnose(
         significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
         ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained)) + chosen_how))
     ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
-
-    floor = float(noise_mm * np.sqrt(3.0))
-    cv_rms = float(np.sqrt(base_mse))
-    findings = _findings(breakdowns, ranked, cv_rms, floor)
-    if model.residual is not None:
-        findings.append(
-            f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
-            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
-        )
-    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+    return ranked
 
 
 def _findings(breakdowns, ranked, cv_rms, floor) -> list[str]:
@@ -335,33 +312,45 @@ def ladder(
     planned = list(steps) if steps is not None else None
     while len(rows) <= max_steps:
         if planned is not None:
-            if not planned:
-                break
-            nxt = planned.pop(0)
+            nxt = planned.pop(0) if planned else None
         else:
             progress(f"step {len(rows)}: diagnosing")
-            diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress) if len(current) else None
-            if diag is None:
-                nxt = _first_step(robot, tool_mm, meas, folds, seed)
-            else:
-                best = [c for c in diag.candidates if c.significant]
-                if not best:
-                    break
-                nxt = best[0].effect
+            nxt = _diagnosed_step(model, meas, folds, seed, noise_mm, progress)
+        if nxt is None:
+            break
         progress(f"step {len(rows)}: adding {nxt}")
         current = current + parse_effects(nxt)
         result = fit(robot, tool_mm, current, meas, cv_folds=0, prior=model if len(model.params) else None, seed=seed)
         current = result.model.effects
         err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
         model = result.model
-        record(nxt if "[" in nxt or nxt != "joint_harmonics" else current.get("joint_harmonics").spec(), model, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))))
+        record(_step_label(nxt, current), model, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))))
     return rows
 
 
+def _diagnosed_step(model: ErrorModel, meas: MeasurementSet, folds: int, seed: int, noise_mm: float, progress) -> str | None:
+    """The next effect for the ladder: the best first step from the nominal robot, else the
+    most significant candidate diagnose finds (None when none is significant)."""
+    if not len(model.effects):
+        return _first_step(model.robot, model.tool_mm, meas, folds, seed)
+    diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress)
+    best = [c for c in diag.candidates if c.significant]
+    return best[0].effect if best else None
+
+
+def _step_label(step: str, effects) -> str:
+    """A ladder step as fitted: a term family without options shows the terms the fit chose."""
+    if "[" in step:
+        return step
+    effect = effects.get(step)
+    return step if effect is None else effect.spec()
+
+
 def _first_step(robot, tool_mm, meas, folds, seed) -> str:
-    """From the nominal robot, the single effect with the lowest cross-validated error."""
+    """From the nominal robot, the single effect with the lowest cross-validated error
+    (among the effects the catalog marks as first steps: frames and geometry)."""
     best, best_rms = None, np.inf
-    for name in ("base_frame", "geometric", "tool_offset"):
+    for name in [name for name, cls in CATALOG.items() if cls.first_step]:
         result = fit(robot, tool_mm, parse_effects(name), meas, cv_folds=0, seed=seed)
         err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
         rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))

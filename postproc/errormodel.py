@@ -4,7 +4,10 @@
 ``ErrorModel.evaluate`` also gives the analytic Jacobian with respect to every parameter
 (the identification Jacobian), from the frames of the perturbed chain:
 d p / d theta_i = z_{i-1} x (p - o_{i-1}), d p / d d_i = z_{i-1}, d p / d a_i = x_i,
-d p / d alpha_i = x_i x (p - o_i); joint-space effects enter through d p / d theta.
+d p / d alpha_i = x_i x (p - o_i). Effects enter by kind (see ``postproc.effects.base``):
+joint offsets and DH changes through the derivatives of the DH table (chain rule over the
+geometry effects in their stage order), tool and Cartesian terms directly, the base
+transform last. This module never asks which effect it is dealing with.
 """
 
 from __future__ import annotations
@@ -14,14 +17,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from . import kinematics as kin
-from .effects import Context, EffectSpecError, EffectSum, Param
-from .effects.backlash import approach_from_order
-from .effects.base_frame import rotvec_to_matrix
+from .effects import DH, Context, Effect, EffectSpecError, EffectSum, Param
+from .effects.base import DH_CHANNELS
 from .errors import MeasurementError
+from .frames import rotvec_to_matrix  # noqa: F401  (re-exported: older callers import it from here)
 from .measurements import MeasurementSet
 from .robots import RobotModel
 
 _GROUP_COLUMNS = {"force": "fx, fy, fz", "approach": "s1..s6", "temp": "temp", "t": "t"}
+_DEG = np.pi / 180.0
+_ANGLES = {"theta": _DEG, "d": 1.0, "a": 1.0, "alpha": _DEG}  # DH channel unit -> radians / mm
 
 
 @dataclass(frozen=True)
@@ -29,9 +34,19 @@ class Prepared:
     """Everything about a measurement set that does not depend on the parameter values."""
 
     ctx: Context
-    bases: tuple[tuple[np.ndarray, np.ndarray], ...]  # (basis (N, 6, Pe) deg/unit, parameter indices)
-    delta_t: np.ndarray | None  # (N,) temperature minus the thermal reference
-    approach_inferred: bool
+    data: tuple  # per effect of the model, in its order: what Effect.prepare returned
+    indices: tuple[np.ndarray, ...]  # per effect: the indices of its parameters in the model
+    kinds: tuple[str, ...]  # per effect: its kind
+    notes: tuple[str, ...] = ()  # columns the effects inferred (e.g. approach directions from the row order)
+
+    @property
+    def approach_inferred(self) -> bool:
+        return bool(self.notes)
+
+    @property
+    def bases(self) -> tuple[tuple[np.ndarray, np.ndarray], ...]:
+        """(basis (N, 6, Pe) deg/unit, parameter indices) of the joint-space effects."""
+        return tuple((d, i) for d, i, k in zip(self.data, self.indices, self.kinds) if k == "joint")
 
 
 @dataclass(frozen=True)
@@ -65,6 +80,14 @@ class ErrorModel:
             if p.name == name:
                 return i
         raise KeyError(name)
+
+    def indices_of(self, effect: Effect) -> np.ndarray:
+        """Indices of one effect's parameters in this model (shared parameters included)."""
+        return np.array([self.index(p.name) for p in effect.params(self.robot)], dtype=int)
+
+    def owner(self, param_name: str) -> Effect:
+        """The first effect of the model that declares a parameter."""
+        return next(e for e in self.effects if any(p.name == param_name for p in e.params(self.robot)))
 
     def value(self, name: str, default: float = 0.0) -> float:
         try:
@@ -102,58 +125,67 @@ class ErrorModel:
             for group in effect.needs:
                 if not present[group]:
                     raise MeasurementError(source, 1, _GROUP_COLUMNS[group].split(",")[0], f"effect '{effect.name}' needs column(s) {_GROUP_COLUMNS[group]}, which the data lack")
-        inferred = False
-        if approach is None and self.effects.get("backlash") is not None:
-            approach = approach_from_order(q)
-            inferred = True
         force_torque = None
         if force_n is not None:
             jac = kin.jacobian(self.robot, q, tool=self.tool_mm)
             force_torque = np.einsum("nij,ni->nj", jac[:, :3], np.asarray(force_n, dtype=float)) / 1000.0
-        ctx = Context(q_deg=q, gravity_torque=None, force_torque=force_torque, approach=approach, temp_c=temp_c, time_s=time_s)
-        bases = []
+        ctx = Context(q_deg=q, gravity_torque=None, force_torque=force_torque, approach=approach, temp_c=temp_c, time_s=time_s,
+                      tool_mm=self.tool_mm, force_n=None if force_n is None else np.asarray(force_n, dtype=float))
+        notes = []
         for effect in self.effects:
-            if effect.kind == "joint":
-                idx = np.array([self.index(p.name) for p in effect.params(self.robot)], dtype=int)
-                bases.append((effect.joint_basis(ctx, self.robot), idx))
-        thermal = self.effects.get("thermal")
-        delta_t = None if thermal is None else np.asarray(temp_c, dtype=float) - thermal.reference_c
-        return Prepared(ctx, tuple(bases), delta_t, inferred)
+            ctx, note = effect.complete(ctx)
+            if note:
+                notes.append(note)
+        data = tuple(effect.prepare(ctx, self.robot) for effect in self.effects)
+        return Prepared(ctx, data, tuple(self.indices_of(e) for e in self.effects),
+                        tuple(e.kind for e in self.effects), tuple(notes))
+
+    def _parts(self, prep: Prepared, kind: str):
+        """(effect, prepared data, parameter indices) of the model's effects of one kind."""
+        parts = [(e, d, i) for e, d, i in zip(self.effects, prep.data, prep.indices) if e.kind == kind]
+        return sorted(parts, key=lambda part: part[0].stage) if kind == "geometry" else parts
 
     # ------------------------------------------------------------------ geometry
 
-    def _geometry(self, prep: Prepared, values: np.ndarray):
-        """DH angles (N, 6) deg, d, a ((6,) or (N, 6)) mm, alpha (6,) deg, tool (3,), base (R, t)."""
+    def _dh(self, prep: Prepared, values: np.ndarray) -> DH:
+        """The per-pose DH table with the joint-space effects, before the geometry effects."""
         robot = self.robot
         q = prep.ctx.q_deg
         dq = np.zeros_like(q)
-        for basis, idx in prep.bases:
+        for _, basis, idx in self._parts(prep, "joint"):
             dq += np.einsum("njp,p->nj", basis, values[idx])
-        theta = (q + dq) * robot.joint_sign + robot.theta0_deg
-        d, a, alpha = robot.d_mm.copy(), robot.a_mm.copy(), robot.alpha_deg.copy()
-        if self.effects.get("geometric") is not None:
-            geo = np.array([[values[self.index(f"geometric.{k}{i + 1}")] for k in ("dtheta", "dd", "da", "dalpha")] for i in range(6)])
-            theta = theta + geo[:, 0]
-            d, a, alpha = d + geo[:, 1], a + geo[:, 2], alpha + geo[:, 3]
-        if prep.delta_t is not None:
-            grow = 1.0 + values[self.index("thermal.alpha")] * prep.delta_t[:, None]
-            d, a = d[None, :] * grow, a[None, :] * grow
+        shape = q.shape
+        return DH((q + dq) * robot.joint_sign + robot.theta0_deg, np.broadcast_to(robot.d_mm, shape),
+                  np.broadcast_to(robot.a_mm, shape), np.broadcast_to(robot.alpha_deg, shape))
+
+    def _geometry(self, prep: Prepared, values: np.ndarray, dh: DH | None = None):
+        """The perturbed DH table, tool (3,) and base transform (R, t)."""
+        dh = self._dh(prep, values) if dh is None else dh
+        for effect, data, idx in self._parts(prep, "geometry"):
+            dh = effect.apply_dh(dh, values[idx], data)
         tool = self.tool_mm.copy()
-        if self.effects.get("tool_offset") is not None:
-            tool = tool + np.array([values[self.index(f"tool_offset.d{ax}")] for ax in "xyz"])
+        for effect, _, idx in self._parts(prep, "tool"):
+            tool = tool + effect.tool_basis() @ values[idx]
         rot, trans = self.base_rotation, self.base_translation
-        if self.effects.get("base_frame") is not None:
-            r = np.array([values[self.index(f"base_frame.r{ax}")] for ax in "xyz"])
-            t = np.array([values[self.index(f"base_frame.t{ax}")] for ax in "xyz"])
-            rot, trans = rotvec_to_matrix(r) @ rot, trans + t
-        return theta, d, a, alpha, tool, rot, trans
+        for effect, _, idx in self._parts(prep, "base"):
+            r, t = effect.transform(values[idx])
+            rot, trans = r @ rot, trans + t
+        return dh, tool, rot, trans
+
+    def _displacement(self, prep: Prepared, values: np.ndarray) -> np.ndarray | float:
+        """Cartesian effects' displacement of the measured point, robot base frame (N, 3) mm."""
+        out = 0.0
+        for _, basis, idx in self._parts(prep, "cartesian"):
+            out = out + np.einsum("ncp,p->nc", basis, values[idx])
+        return out
 
     def predict_prepared(self, prep: Prepared, values: np.ndarray | None = None) -> np.ndarray:
         """Predicted measured positions (N, 3) in the measurement frame: the effects, plus the
         data-driven residual predictor when the model has one (a hybrid model)."""
         values = self.values if values is None else values
-        theta, d, a, alpha, tool, rot, trans = self._geometry(prep, values)
-        pos = kin.forward_dh(theta, d, a, alpha, tool=tool)[:, :3, 3] @ rot.T + trans
+        dh, tool, rot, trans = self._geometry(prep, values)
+        pos = kin.forward_dh(dh.theta, dh.d, dh.a, dh.alpha, tool=tool)[:, :3, 3] + self._displacement(prep, values)
+        pos = pos @ rot.T + trans
         if self.residual is not None:
             pos = pos + self.residual.predict(self.robot, self.tool_mm, prep.ctx.q_deg)
         return pos
@@ -161,70 +193,76 @@ class ErrorModel:
     def predict(self, meas: MeasurementSet) -> np.ndarray:
         return self.predict_prepared(self.prepare(meas))
 
+    def _dh_jacobian(self, prep: Prepared, values: np.ndarray, dh: DH) -> dict[str, list]:
+        """d(DH channel)/d(parameters) by the chain rule, as blocks per channel: (parameter
+        indices, (N, 6, Pe) or constant (6, Pe)) — only the columns an effect touches."""
+        blocks: dict[str, list] = {ch: [] for ch in DH_CHANNELS}
+        for _, basis, idx in self._parts(prep, "joint"):
+            blocks["theta"].append((idx, self.robot.joint_sign[None, :, None] * basis))
+        for effect, data, idx in self._parts(prep, "geometry"):
+            scale, own = effect.dh_derivatives(dh, values[idx], data)
+            for ch, factor in scale.items():
+                blocks[ch] = [(i, np.asarray(factor)[..., None] * block) for i, block in blocks[ch]]
+            for ch, derivative in own.items():
+                blocks[ch].append((idx, derivative))
+            dh = effect.apply_dh(dh, values[idx], data)
+        return blocks
+
     def evaluate(self, prep: Prepared, values: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Predicted positions (N, 3) and their Jacobian (N, 3, P) with respect to every parameter."""
         values = self.values if values is None else values
-        robot = self.robot
-        theta, d, a, alpha, tool, rot, trans = self._geometry(prep, values)
-        rots, origins = kin.frames_dh(theta, d, a, alpha)
-        p = origins[:, 6] + rots[:, 6] @ tool  # TCP in the robot base frame
-        z_prev = rots[:, :6, :, 2]  # z_{i-1}, (N, 6, 3)
-        o_prev = origins[:, :6]
-        x_i = rots[:, 1:, :, 0]  # x_i
-        o_i = origins[:, 1:]
-        d_theta = np.cross(z_prev, p[:, None] - o_prev)  # per radian, (N, 6, 3)
-        d_d = z_prev
-        d_a = x_i
-        d_alpha = np.cross(x_i, p[:, None] - o_i)
+        dh0 = self._dh(prep, values)
+        blocks = self._dh_jacobian(prep, values, dh0)
+        dh, tool, rot, trans = self._geometry(prep, values, dh0)
+        rots, origins = kin.frames_dh(dh.theta, dh.d, dh.a, dh.alpha)
+        p = origins[:, 6] + rots[:, 6] @ tool  # measured point in the robot base frame
+        z_prev, o_prev = rots[:, :6, :, 2], origins[:, :6]  # z_{i-1}, o_{i-1}
+        x_i, o_i = rots[:, 1:, :, 0], origins[:, 1:]
+        d_point = {"theta": np.cross(z_prev, p[:, None] - o_prev), "d": z_prev, "a": x_i, "alpha": np.cross(x_i, p[:, None] - o_i)}
         n = len(p)
         jac = np.zeros((n, 3, len(self.params)))
-        deg = np.pi / 180.0
-        if self.effects.get("geometric") is not None:
-            for i in range(6):
-                jac[:, :, self.index(f"geometric.dtheta{i + 1}")] = d_theta[:, i] * deg
-                grow = 1.0 if prep.delta_t is None else (1.0 + values[self.index("thermal.alpha")] * prep.delta_t)[:, None]
-                jac[:, :, self.index(f"geometric.dd{i + 1}")] = d_d[:, i] * grow
-                jac[:, :, self.index(f"geometric.da{i + 1}")] = d_a[:, i] * grow
-                jac[:, :, self.index(f"geometric.dalpha{i + 1}")] = d_alpha[:, i] * deg
-        for basis, idx in prep.bases:
-            # d p / d param = sum_i d p / d theta_i * sign_i * (pi/180) * basis_i
-            jac[:, :, idx] += np.einsum("nic,ni,nip->ncp", d_theta, np.broadcast_to(robot.joint_sign * deg, (n, 6)), basis)
-        if prep.delta_t is not None:
-            d_base = np.broadcast_to(d, (n, 6)) / (1.0 + values[self.index("thermal.alpha")] * prep.delta_t)[:, None]
-            a_base = np.broadcast_to(a, (n, 6)) / (1.0 + values[self.index("thermal.alpha")] * prep.delta_t)[:, None]
-            growth = np.einsum("nic,ni->nc", d_d, d_base) + np.einsum("nic,ni->nc", d_a, a_base)
-            jac[:, :, self.index("thermal.alpha")] = growth * prep.delta_t[:, None]
-        if self.effects.get("tool_offset") is not None:
-            for k, ax in enumerate("xyz"):
-                jac[:, :, self.index(f"tool_offset.d{ax}")] = rots[:, 6, :, k]
-        # Into the measurement frame.
-        jac = np.einsum("ij,njp->nip", rot, jac)
+        for ch in DH_CHANNELS:
+            per_unit = np.ascontiguousarray((d_point[ch] * _ANGLES[ch]).transpose(0, 2, 1))  # (N, 3, 6)
+            for idx, block in blocks[ch]:
+                # d p / d params = d p / d channel_i . d channel_i / d params (a GEMM for constant blocks).
+                if block.ndim == 2:
+                    jac[:, :, _columns(idx)] += (per_unit.reshape(-1, 6) @ block).reshape(n, 3, -1)
+                else:
+                    jac[:, :, _columns(idx)] += np.matmul(per_unit, block)
+        for effect, _, idx in self._parts(prep, "tool"):
+            jac[:, :, _columns(idx)] += np.einsum("nij,jp->nip", rots[:, 6], effect.tool_basis())
+        for _, basis, idx in self._parts(prep, "cartesian"):
+            jac[:, :, _columns(idx)] += basis
+        p = p + self._displacement(prep, values)
+        jac = np.matmul(rot, jac)  # into the measurement frame
         measured = p @ rot.T + trans
-        if self.effects.get("base_frame") is not None:
-            for k, ax in enumerate("xyz"):
-                unit = np.zeros(3)
-                unit[k] = 1.0
-                jac[:, :, self.index(f"base_frame.t{ax}")] = unit
-                # A small rotation about axis k turns v = R p by (e_k x v).
-                jac[:, :, self.index(f"base_frame.r{ax}")] = np.cross(unit, measured - trans) * deg
+        for effect, _, idx in self._parts(prep, "base"):
+            jac[:, :, idx] = effect.base_jacobian(measured - trans, values[idx])
         return measured, jac
 
     # ---------------------------------------------------------------- summaries
 
     def base_transform(self) -> tuple[np.ndarray, np.ndarray]:
-        """Total robot-base -> measurement-frame transform (R, t): registration and base_frame parameters."""
-        if self.effects.get("base_frame") is None:
-            return self.base_rotation, self.base_translation
-        r = np.array([self.value(f"base_frame.r{ax}") for ax in "xyz"])
-        t = np.array([self.value(f"base_frame.t{ax}") for ax in "xyz"])
-        return rotvec_to_matrix(r) @ self.base_rotation, self.base_translation + t
+        """Total robot-base -> measurement-frame transform (R, t): registration and base-frame parameters."""
+        rot, trans = self.base_rotation, self.base_translation
+        for effect in self.effects.of_kind("base"):
+            r, t = effect.transform(self.values[self.indices_of(effect)])
+            rot, trans = r @ rot, trans + t
+        return rot, trans
 
     def nominal(self) -> "ErrorModel":
         """The same robot and tool with no effects (what the controller assumes)."""
         return ErrorModel.create(self.robot, self.tool_mm, EffectSum())
 
 
+def _columns(idx: np.ndarray):
+    """A run of consecutive parameter indices as a slice (an in-place view), else the indices."""
+    if len(idx) and np.all(np.diff(idx) == 1):
+        return slice(int(idx[0]), int(idx[-1]) + 1)
+    return idx
+
+
 def require_resolved(effects: EffectSum) -> None:
-    harmonics = effects.get("joint_harmonics")
-    if harmonics is not None and not harmonics.resolved:
-        raise EffectSpecError("joint_harmonics without options must be resolved by a fit before the model is evaluated")
+    for effect in effects:
+        if not effect.resolved:
+            raise EffectSpecError(f"{effect.name} without options must be resolved by a fit before the model is evaluated")

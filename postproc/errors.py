@@ -43,6 +43,16 @@ class FeatureUnavailableError(InputError):
     """A command is registered in the scripted interface but not built yet."""
 
 
+def located(path: str | Path, place: str, number: int | None, column: str | None) -> str:
+    """'FILE, line 3, column 'q2'' (or 'row 3'): the parts that are known."""
+    where = str(path)
+    if number is not None:
+        where += f", {place} {number}"
+    if column is not None:
+        where += f", column '{column}'"
+    return where
+
+
 class MeasurementError(InputError):
     """A measurement file is malformed: names the file, the CSV line and the column."""
 
@@ -50,12 +60,7 @@ class MeasurementError(InputError):
         self.path = str(path)
         self.line = line
         self.column = column
-        where = self.path
-        if line is not None:
-            where += f", line {line}"
-        if column is not None:
-            where += f", column '{column}'"
-        super().__init__(f"{where}: {message}")
+        super().__init__(f"{located(path, 'line', line, column)}: {message}")
 
 
 class ModelFileError(InputError):
@@ -86,3 +91,7 @@ class EmitError(InputError):
 
 class OutputError(InputError):
     """An output file cannot be written where the user asked (missing folder, no permission)."""
+
+
+class OutputCheckError(JobError):
+    """The text about to be written does not read back as the values it was meant to hold."""

@@ -138,3 +138,24 @@ def axis_to_quat_wxyz(axis: np.ndarray) -> np.ndarray:
     x /= np.linalg.norm(x, axis=-1, keepdims=True)
     y = np.cross(z, x)
     return matrix_to_quat_wxyz(np.stack([x, y, z], axis=-1))
+
+
+def rotvec_to_matrix(rotvec_deg: np.ndarray) -> np.ndarray:
+    """Rotation vector (degrees) -> matrix (Rodrigues)."""
+    r = np.deg2rad(np.asarray(rotvec_deg, dtype=float))
+    angle = np.linalg.norm(r)
+    if angle < 1e-15:
+        return np.eye(3)
+    k = r / angle
+    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * kx @ kx
+
+
+def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Rigid (R, t) minimising |R source + t - target|^2 over (N, 3) point sets (no scaling)."""
+    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
+    cov = (target - mu_t).T @ (source - mu_s)
+    u, _, vt = np.linalg.svd(cov)
+    d = np.sign(np.linalg.det(u @ vt))
+    rot = u @ np.diag([1.0, 1.0, d]) @ vt
+    return rot, mu_t - rot @ mu_s

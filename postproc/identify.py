@@ -11,16 +11,17 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from types import SimpleNamespace
 from typing import Callable
 
 import numpy as np
 from scipy.linalg import qr
 from scipy.optimize import least_squares
 
-from .effects import BaseFrame, EffectSum, JointHarmonics
-from .effects.base_frame import kabsch
+from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
 from .errors import IdentificationError
+from .frames import kabsch
 from .measurements import MeasurementSet
 from .robots import RobotModel
 
@@ -69,31 +70,20 @@ def residuals(model: ErrorModel, meas: MeasurementSet, prep: Prepared | None = N
     return model.predict_prepared(prep) - meas.measured_mm
 
 
+def _base_indices(model: ErrorModel) -> np.ndarray:
+    """Indices of the parameters of the model's base-frame effect(s)."""
+    idx = [model.indices_of(e) for e in model.effects.of_kind("base")]
+    return np.concatenate(idx) if idx else np.zeros(0, dtype=int)
+
+
 def register_base(model: ErrorModel, meas: MeasurementSet, prep: Prepared) -> ErrorModel:
     """Closed-form initial base frame (Kabsch) from the current model's positions to the measured ones."""
     unregistered = replace(model, base_rotation=np.eye(3), base_translation=np.zeros(3))
     values = unregistered.values.copy()
-    for ax in "xyz":
-        for kind in "tr":
-            values[model.index(f"base_frame.{kind}{ax}")] = 0.0
+    values[_base_indices(model)] = 0.0
     robot_frame = unregistered.predict_prepared(prep, values)
     rot, trans = kabsch(robot_frame, meas.measured_mm)
     return replace(unregistered, values=values, base_rotation=rot, base_translation=trans)
-
-
-_GEOMETRIC_ORDER = {"dtheta": 0, "dalpha": 1, "da": 2, "dd": 3}
-
-
-def _priority(name: str) -> tuple:
-    """Order in which parameters are kept when the data cannot separate them: frames first
-    (they absorb the DH errors they duplicate), then joint-space effects, then DH errors
-    by joint offset, twist, length a, offset d."""
-    if name.startswith(("base_frame.", "tool_offset.")):
-        return (0, name)
-    if name.startswith("geometric."):
-        kind = name[len("geometric.") : -1]
-        return (2, _GEOMETRIC_ORDER[kind], int(name[-1]))
-    return (1, name)
 
 
 def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) -> tuple[np.ndarray, dict[str, str]]:
@@ -101,14 +91,16 @@ def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) ->
     parameter fixed here, the reason (with the kept parameters that absorb it).
 
     Columns of the scaled identification Jacobian are normalised and taken in a fixed
-    priority order; a parameter is kept when its column adds a direction the earlier
-    ones do not span (|R_kk| of an unpivoted QR above RANK_TOL). The choice is
-    deterministic: it never flips between fits of similar data.
+    priority order (each effect's ``keep_priority``: frames first, as they absorb the DH
+    errors they duplicate, then joint-space effects, then DH errors); a parameter is kept
+    when its column adds a direction the earlier ones do not span (|R_kk| of an unpivoted
+    QR above RANK_TOL). The choice is deterministic: it never flips between fits of similar data.
     """
     _, jac = model.evaluate(prep)
     j = jac.reshape(jac.shape[0] * 3, jac.shape[-1]) * np.array([p.scale for p in model.params])
+    priority = {p.name: model.owner(p.name).keep_priority(p.name) for p in model.params}
     cols = np.nonzero(free_mask)[0]
-    cols = np.array(sorted(cols, key=lambda c: _priority(model.params[c].name)), dtype=int)
+    cols = np.array(sorted(cols, key=lambda c: priority[model.params[c].name]), dtype=int)
     sub = j[:, cols]
     norms = np.linalg.norm(sub, axis=0)
     fixed: dict[str, str] = {}
@@ -122,23 +114,28 @@ def identifiability(model: ErrorModel, prep: Prepared, free_mask: np.ndarray) ->
     keep_local = np.zeros(sub.shape[1], dtype=bool)
     keep_local[: min(sub.shape)] = np.abs(np.diag(r)) > RANK_TOL
     keep = cols[keep_local]
-    kept = sub[:, keep_local]
-    for k in np.nonzero(~keep_local)[0]:
-        coef, *_ = np.linalg.lstsq(kept, sub[:, k], rcond=None)
-        order = np.argsort(-np.abs(coef))
-        partners = [model.params[keep[i]].name for i in order[:3] if abs(coef[i]) > 0.05]
-        reason = "cannot be separated from " + (", ".join(partners) if partners else "the other parameters")
-        fixed[model.params[cols[k]].name] = reason + " (fixed; its effect is absorbed there)"
+    fixed.update(_absorbers(model, sub, keep_local, keep, cols))
     new_mask = np.zeros_like(free_mask)
     new_mask[keep] = True
     return new_mask, fixed
 
 
+def _absorbers(model: ErrorModel, sub: np.ndarray, keep_local: np.ndarray, keep: np.ndarray, cols: np.ndarray) -> dict[str, str]:
+    """For each dropped column, the kept parameters whose columns reproduce it."""
+    kept = sub[:, keep_local]
+    out = {}
+    for k in np.nonzero(~keep_local)[0]:
+        coef, *_ = np.linalg.lstsq(kept, sub[:, k], rcond=None)
+        order = np.argsort(-np.abs(coef))
+        partners = [model.params[keep[i]].name for i in order[:3] if abs(coef[i]) > 0.05]
+        reason = "cannot be separated from " + (", ".join(partners) if partners else "the other parameters")
+        out[model.params[cols[k]].name] = reason + " (fixed; its effect is absorbed there)"
+    return out
+
+
 def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None):
     free = np.asarray(free, dtype=bool)
     if not free.any():
-        from types import SimpleNamespace
-
         return model.values.copy(), SimpleNamespace(success=True, message="nothing to fit")
     scales = np.array([p.scale for p in model.params])[free]
     base = model.values.copy()
@@ -164,6 +161,23 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
     return unpack(res.x), res
 
 
+def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, say=lambda m: None) -> tuple[EffectSum, list[str]]:
+    """Effects whose terms the fit chooses (e.g. harmonics without options) get the terms the
+    data support, or are left out when they support none; returns the effects and notes."""
+    notes = []
+    for effect in [e for e in effects if not e.resolved]:
+        say(f"choosing {effect.name} terms")
+        without = EffectSum(tuple(e for e in effects if e is not effect))
+        chosen, how = select_terms(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
+        if chosen.terms:
+            effects = effects.replaced(effect, chosen)
+            notes.append(f"{effect.name}: data support {chosen.spec()} (terms and how often they were chosen: {how})")
+        else:
+            effects = without
+            notes.append(f"{effect.name}: the data support no term; the effect is left out ({how})")
+    return effects, notes
+
+
 def fit(
     robot: RobotModel,
     tool_mm,
@@ -182,35 +196,17 @@ def fit(
     start this fit, e.g. to extend a model by one effect.
     """
     say = progress or (lambda msg: None)
-    notes: list[str] = []
-    harmonics = effects.get("joint_harmonics")
-    if harmonics is not None and not harmonics.resolved:
-        say("choosing joint_harmonics terms")
-        without = EffectSum(tuple(e for e in effects if e.name != "joint_harmonics"))
-        chosen, how = select_harmonics(robot, tool_mm, without, meas, prior=prior, seed=seed)
-        if chosen.terms:
-            effects = EffectSum(tuple(chosen if e.name == "joint_harmonics" else e for e in effects))
-            notes.append(f"joint_harmonics: data support {chosen.spec()} (terms and how often they were chosen: {how})")
-        else:
-            effects = without
-            notes.append(f"joint_harmonics: the data support no harmonic term; the effect is left out ({how})")
-    if len(meas) < 3:
-        raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
-
-    model = ErrorModel.create(robot, tool_mm, effects)
-    if 3 * len(meas) < len(model.params):
-        raise IdentificationError(f"{meas.source}: {len(meas)} poses give {3 * len(meas)} equations for {len(model.params)} parameters; measure more poses")
-    if prior is not None:
-        model = replace(model.with_values(prior.as_dict()), base_rotation=prior.base_rotation, base_translation=prior.base_translation)
+    effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say)
+    model = _initial_model(robot, tool_mm, effects, meas, prior)
     prep = model.prepare(meas)
-    if prep.approach_inferred:
-        notes.append("backlash: approach directions inferred from the row order (no s1..s6 columns)")
-    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=effects.get("base_frame") is not None), meas))
+    notes.extend(prep.notes)
+    framed = bool(effects.of_kind("base"))
+    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=framed), meas))
     if not model.params:
         # --effects none: the nominal model, nothing to identify (a predictor may sit on top).
         return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=before,
                          cv_rms_mm=before.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
-    if effects.get("base_frame") is not None and prior is None:
+    if framed and prior is None:
         model = register_base(model, meas, prep)
 
     say("identifiability")
@@ -224,55 +220,66 @@ def fit(
     if not res.success:
         raise IdentificationError(f"{meas.source}: the fit did not converge ({res.message})")
     model = model.with_vector(values)
-    if effects.get("base_frame") is not None:
+    if framed:
         # Re-centre the registration on the fitted rotation so the small-angle Jacobian is exact.
         model = _recentre_base(model)
 
     resid = residuals(model, meas, prep)
-    m = resid.size
-    dof = max(m - int(free.sum()), 1)
+    cv = None
+    if cv_folds and cv_folds >= 2 and len(meas) >= 2 * cv_folds:
+        cv = cross_validate(model, meas, free, cv_folds, loss, f_scale, seed, say)
+    return FitResult(model=model, std=_standard_errors(model, prep, resid, free), fixed=fixed, outliers=_outliers(meas, resid),
+                     before=before, after=Stats.of(resid), cv_rms_mm=cv, approach_inferred=prep.approach_inferred, notes=tuple(notes))
+
+
+def _initial_model(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prior: ErrorModel | None) -> ErrorModel:
+    if len(meas) < 3:
+        raise IdentificationError(f"{meas.source}: {len(meas)} poses cannot identify anything")
+    model = ErrorModel.create(robot, tool_mm, effects)
+    if 3 * len(meas) < len(model.params):
+        raise IdentificationError(f"{meas.source}: {len(meas)} poses give {3 * len(meas)} equations for {len(model.params)} parameters; measure more poses")
+    if prior is not None:
+        model = replace(model.with_values(prior.as_dict()), base_rotation=prior.base_rotation, base_translation=prior.base_translation)
+    return model
+
+
+def _standard_errors(model: ErrorModel, prep: Prepared, resid: np.ndarray, free: np.ndarray) -> dict[str, float]:
+    """Standard error of every parameter from the Jacobian at the solution (0 for fixed ones)."""
+    dof = max(resid.size - int(free.sum()), 1)
     _, jj = model.evaluate(prep)
     jf = jj.reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
     s2 = float(np.sum(resid**2)) / dof
     try:
-        cov = s2 * np.linalg.inv(jf.T @ jf)
-        std_free = np.sqrt(np.clip(np.diag(cov), 0, None))
+        std_free = np.sqrt(np.clip(np.diag(s2 * np.linalg.inv(jf.T @ jf)), 0, None))
     except np.linalg.LinAlgError:
         std_free = np.full(int(free.sum()), np.nan)
     std = {p.name: 0.0 for p in model.params}
     for k, i in enumerate(np.nonzero(free)[0]):
         std[model.params[i].name] = float(std_free[k])
+    return std
 
+
+def _outliers(meas: MeasurementSet, resid: np.ndarray) -> tuple[str, ...]:
     sigma = 1.4826 * np.median(np.abs(resid - np.median(resid, axis=0)))
     norms = np.linalg.norm(resid, axis=1)
-    outliers = tuple(meas.ids[i] for i in np.nonzero(norms > OUTLIER_SIGMAS * max(sigma, 1e-9))[0])
+    return tuple(meas.ids[i] for i in np.nonzero(norms > OUTLIER_SIGMAS * max(sigma, 1e-9))[0])
 
-    cv = None
-    if cv_folds and cv_folds >= 2 and len(meas) >= 2 * cv_folds:
-        cv = cross_validate(model, meas, free, cv_folds, loss, f_scale, seed, say)
 
-    return FitResult(
-        model=model,
-        std=std,
-        fixed=fixed,
-        outliers=outliers,
-        before=before,
-        after=Stats.of(resid),
-        cv_rms_mm=cv,
-        approach_inferred=prep.approach_inferred,
-        notes=tuple(notes),
-    )
+def _frame_effect():
+    """A fresh instance of the catalog's base-frame effect (the one that re-registers a frame)."""
+    return catalog_of_kind("base")[0]()
 
 
 def refit_base(model: ErrorModel, meas: MeasurementSet) -> ErrorModel:
     """Re-register the measurement frame on another set (a tracker moved between series),
     keeping every other parameter: Kabsch, then a least-squares refinement of the 6 DOF."""
-    framed = model if model.effects.get("base_frame") is not None else ErrorModel.create(
-        model.robot, model.tool_mm, model.effects + BaseFrame(), model.as_dict()
+    framed = model if model.effects.of_kind("base") else ErrorModel.create(
+        model.robot, model.tool_mm, model.effects + _frame_effect(), model.as_dict()
     )
     prep = framed.prepare(meas)
     framed = register_base(framed, meas, prep)
-    free = np.array([p.name.startswith("base_frame.") for p in framed.params])
+    free = np.zeros(len(framed.params), dtype=bool)
+    free[_base_indices(framed)] = True
     values, _ = _solve(framed, prep, meas.measured_mm, free, "linear", 0.05)
     return _recentre_base(framed.with_vector(values))
 
@@ -282,20 +289,16 @@ def nominal_model(robot: RobotModel, tool_mm, meas: MeasurementSet, registered: 
     which is the fair 'before' for data measured in another frame (a tracker's)."""
     if not registered:
         return ErrorModel.create(robot, tool_mm, EffectSum())
-    reg = ErrorModel.create(robot, tool_mm, EffectSum((BaseFrame(),)))
+    reg = ErrorModel.create(robot, tool_mm, EffectSum((_frame_effect(),)))
     return register_base(reg, meas, reg.prepare(meas))
 
 
 def _recentre_base(model: ErrorModel) -> ErrorModel:
-    from .effects.base_frame import rotvec_to_matrix
-
-    r = np.array([model.value(f"base_frame.r{ax}") for ax in "xyz"])
-    t = np.array([model.value(f"base_frame.t{ax}") for ax in "xyz"])
+    """Move the fitted base-frame parameters into the registration (R0, t0) and zero them."""
+    rot, trans = model.base_transform()
     values = model.values.copy()
-    for ax in "xyz":
-        values[model.index(f"base_frame.r{ax}")] = 0.0
-        values[model.index(f"base_frame.t{ax}")] = 0.0
-    return replace(model, values=values, base_rotation=rotvec_to_matrix(r) @ model.base_rotation, base_translation=model.base_translation + t)
+    values[_base_indices(model)] = 0.0
+    return replace(model, values=values, base_rotation=rot, base_translation=trans)
 
 
 def cross_validate(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str, f_scale: float, seed: int, say=lambda m: None) -> float:
@@ -331,24 +334,26 @@ def free_mask(result: "FitResult") -> np.ndarray:
     return np.array([p.name not in result.fixed for p in result.model.params])
 
 
-def select_harmonics(robot, tool_mm, others: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4) -> tuple[JointHarmonics, str]:
-    """(joint, order) terms by best-subset regression over the whole family, with
-    cross-validation and a stability check (``postproc.term_selection``), on the residual
-    of the model without harmonics linearised around its fit. Returns the terms and a
-    note of how stable the choice was."""
-    from .term_selection import select_terms, term_labels
+def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4) -> tuple[Effect, str]:
+    """A term family's terms (e.g. harmonics' (joint, order)) by best-subset regression over
+    the whole family, with cross-validation and a stability check (``postproc.term_selection``),
+    on the residual of the model without the family linearised around its fit. Returns the
+    family with the chosen terms and a note of how stable the choice was."""
+    from .term_selection import select_terms as best_subset, term_labels
 
-    candidates = [(j, k) for j in range(1, 7) for k in (1, 2, 3, 4)]
     result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
     prep = result.model.prepare(meas)
     pos, jac = result.model.evaluate(prep)
     free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
-    q, jq = np.deg2rad(meas.q_deg), kin_joint_columns(result.model, prep)  # d p / d q_j per degree
-    cols = np.concatenate([jq[:, :, [j - 1]] * np.stack([np.sin(k * q[:, j - 1]), np.cos(k * q[:, j - 1])], axis=1)[:, None, :] for j, k in candidates], axis=2)
-    pick = select_terms(cols.reshape(-1, cols.shape[-1]), (meas.measured_mm - pos).reshape(-1), [[2 * t, 2 * t + 1] for t in range(len(candidates))],
-                        np.repeat(fold_assignment(len(meas), 5, seed), 3), base=jac.reshape(3 * len(meas), -1)[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
+    dp_dq = kin_joint_columns(result.model, prep)  # d p / d q_j in the measurement frame, per degree
+    candidates = family.candidate_terms()
+    cols = [family.term_columns(dp_dq, meas.q_deg, term).reshape(3 * len(meas), -1) for term in candidates]
+    groups = np.split(np.arange(sum(c.shape[1] for c in cols)), np.cumsum([c.shape[1] for c in cols])[:-1])
+    pick = best_subset(np.hstack(cols), (meas.measured_mm - pos).reshape(-1), groups, np.repeat(fold_assignment(len(meas), 5, seed), 3),
+                       base=jac.reshape(3 * len(meas), -1)[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
     how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
-    return JointHarmonics(tuple(candidates[t] for t in pick.chosen)), (term_labels([f"{j}:{k}" for j, k in candidates], pick) + "; " if pick.chosen else "") + how
+    labels = [":".join(map(str, t)) if isinstance(t, tuple) else str(t) for t in candidates]
+    return family.with_terms(tuple(candidates[t] for t in pick.chosen)), (term_labels(labels, pick) + "; " if pick.chosen else "") + how
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:

@@ -52,7 +52,7 @@ NF = len(FIELDS)
 class SourceDoc:
     path: str
     text: str  # decoded as Latin-1: one character per byte
-    role: str = "program"  # "program", "src", "dat"
+    role: str = "program"  # what the file is to its dialect: "program", KRL "src"/"dat"/"config", RAPID "pgf"/"module"
 
     @classmethod
     def read(cls, path, role: str = "program") -> "SourceDoc":

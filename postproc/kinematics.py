@@ -10,32 +10,27 @@ pool because NumPy releases the GIL inside its ufunc loops.
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 from numba import njit
 
+from .dh import CHUNK, _dh_kernel, forward_dh, frames_dh  # noqa: F401  (re-exported: the DH chain lives in dh)
+from .dh import as_joints as _as_joints
+from .dh import opw_angles as _phi_of
+from .dh import opw_forward as _opw_forward
+from .dh import opw_wrist_centre as _wrist_centre
+from .dh import dh_rows as _dh_rows
+from .dh import run_chunked as _run_chunked
+from .dh import tool_transform as _tool_transform
 from .errors import KinematicsError
 from .robots import RobotModel
 
-CHUNK = 16384
-_PARALLEL_MIN = 4 * CHUNK
 # |sin(theta5)| below this is treated as the wrist singularity: theta4 and theta6 are then
 # only defined through their sum (or difference), and theta4 is set to 0.
 WRIST_SINGULAR_EPS = 1e-12
 # Triangle inequalities violated by less than this (relative) are rounding at the reach
 # boundary, not unreachable poses.
 _ACOS_SLACK = 1e-10
-
-
-def _as_joints(q_deg) -> np.ndarray:
-    q = np.asarray(q_deg, dtype=float)
-    if q.ndim == 1 and q.shape[0] == 6:
-        q = q[None, :]
-    if q.ndim != 2 or q.shape[1] != 6:
-        raise KinematicsError(f"joint values must have shape (N, 6), got {q.shape}")
-    return q
 
 
 def _as_poses(t) -> np.ndarray:
@@ -45,159 +40,6 @@ def _as_poses(t) -> np.ndarray:
     if t.ndim != 3 or t.shape[1:] != (4, 4):
         raise KinematicsError(f"poses must have shape (N, 4, 4), got {t.shape}")
     return t
-
-
-def _tool_transform(tool) -> np.ndarray | None:
-    if tool is None:
-        return None
-    tool = np.asarray(tool, dtype=float)
-    if tool.shape == (3,):
-        out = np.eye(4)
-        out[:3, 3] = tool
-        return out
-    if tool.shape == (4, 4):
-        return tool
-    raise KinematicsError(f"tool must be an offset (3,) in mm or a transform (4, 4), got shape {tool.shape}")
-
-
-def _run_chunked(n: int, work) -> None:
-    """Call work(start, stop) over chunks, on threads when the batch is large."""
-    bounds = [(s, min(s + CHUNK, n)) for s in range(0, n, CHUNK)]
-    workers = min(os.cpu_count() or 1, len(bounds))
-    if n < _PARALLEL_MIN or workers < 2:
-        for s, e in bounds:
-            work(s, e)
-        return
-    with ThreadPoolExecutor(max_workers=workers) as pool:
-        list(pool.map(lambda b: work(*b), bounds))
-
-
-def _dh_thetas(robot: RobotModel, q_deg: np.ndarray) -> np.ndarray:
-    """(C, 6) controller degrees -> (6, C) DH angles in radians."""
-    return np.deg2rad(q_deg * robot.joint_sign + robot.theta0_deg).T.copy()
-
-
-def _chain(theta: np.ndarray, d, a, alpha, keep_frames: bool):
-    """Propagate the DH chain over a chunk.
-
-    theta (6, C) radians; d, a (mm) and alpha (radians) are (6,) constants or (6, C) per
-    pose. Returns the flange rotation columns (3 arrays (3, C)) and position (3, C); with
-    keep_frames also the list of (columns, origin) of frames 0..6.
-    """
-    c = theta.shape[1]
-    col0 = np.zeros((3, c))
-    col1 = np.zeros((3, c))
-    col2 = np.zeros((3, c))
-    col0[0] = col1[1] = col2[2] = 1.0
-    pos = np.zeros((3, c))
-    frames = [((col0, col1, col2), pos)] if keep_frames else None
-    for i in range(6):
-        ct, st = np.cos(theta[i]), np.sin(theta[i])
-        ca, sa = np.cos(alpha[i]), np.sin(alpha[i])
-        # T_i = T_{i-1} Rz(theta) Tz(d) Tx(a) Rx(alpha), column by column.
-        new0 = col0 * ct + col1 * st
-        rot1 = col1 * ct - col0 * st
-        new1 = rot1 * ca + col2 * sa
-        new2 = col2 * ca - rot1 * sa
-        pos = pos + d[i] * col2 + a[i] * new0
-        col0, col1, col2 = new0, new1, new2
-        if keep_frames:
-            frames.append(((col0, col1, col2), pos))
-    return (col0, col1, col2), pos, frames
-
-
-@njit(cache=True, nogil=True)
-def _dh_kernel(theta, d, a, alpha, rots, origins, flange):
-    """The DH chain of _chain, compiled: per pose, frames 0..6 into rots (N, 7, 3, 3) and
-    origins (N, 7, 3) when those have N rows, and the flange pose into flange (N, 4, 4)
-    when it has. theta (N, 6) radians; d, a, alpha (M, 6) with M = 1 (constants) or N."""
-    n = theta.shape[0]
-    keep = rots.shape[0] == n
-    want_flange = flange.shape[0] == n
-    for p in range(n):
-        gd = p if d.shape[0] > 1 else 0
-        ga = p if a.shape[0] > 1 else 0
-        gl = p if alpha.shape[0] > 1 else 0
-        c00, c01, c02 = 1.0, 0.0, 0.0  # columns of the rotation: c0 = (c00, c01, c02), ...
-        c10, c11, c12 = 0.0, 1.0, 0.0
-        c20, c21, c22 = 0.0, 0.0, 1.0
-        px, py, pz = 0.0, 0.0, 0.0
-        if keep:
-            for i in range(3):
-                for j in range(3):
-                    rots[p, 0, i, j] = 1.0 if i == j else 0.0
-                origins[p, 0, i] = 0.0
-        for i in range(6):
-            ct, st = math.cos(theta[p, i]), math.sin(theta[p, i])
-            ca, sa = math.cos(alpha[gl, i]), math.sin(alpha[gl, i])
-            n0x, n0y, n0z = c00 * ct + c10 * st, c01 * ct + c11 * st, c02 * ct + c12 * st
-            r1x, r1y, r1z = c10 * ct - c00 * st, c11 * ct - c01 * st, c12 * ct - c02 * st
-            n1x, n1y, n1z = r1x * ca + c20 * sa, r1y * ca + c21 * sa, r1z * ca + c22 * sa
-            n2x, n2y, n2z = c20 * ca - r1x * sa, c21 * ca - r1y * sa, c22 * ca - r1z * sa
-            px += d[gd, i] * c20 + a[ga, i] * n0x
-            py += d[gd, i] * c21 + a[ga, i] * n0y
-            pz += d[gd, i] * c22 + a[ga, i] * n0z
-            c00, c01, c02 = n0x, n0y, n0z
-            c10, c11, c12 = n1x, n1y, n1z
-            c20, c21, c22 = n2x, n2y, n2z
-            if keep:
-                f = i + 1
-                rots[p, f, 0, 0], rots[p, f, 1, 0], rots[p, f, 2, 0] = c00, c01, c02
-                rots[p, f, 0, 1], rots[p, f, 1, 1], rots[p, f, 2, 1] = c10, c11, c12
-                rots[p, f, 0, 2], rots[p, f, 1, 2], rots[p, f, 2, 2] = c20, c21, c22
-                origins[p, f, 0], origins[p, f, 1], origins[p, f, 2] = px, py, pz
-        if want_flange:
-            flange[p, 0, 0], flange[p, 1, 0], flange[p, 2, 0] = c00, c01, c02
-            flange[p, 0, 1], flange[p, 1, 1], flange[p, 2, 1] = c10, c11, c12
-            flange[p, 0, 2], flange[p, 1, 2], flange[p, 2, 2] = c20, c21, c22
-            flange[p, 0, 3], flange[p, 1, 3], flange[p, 2, 3] = px, py, pz
-            flange[p, 3, 0], flange[p, 3, 1], flange[p, 3, 2], flange[p, 3, 3] = 0.0, 0.0, 0.0, 1.0
-
-
-def _dh_rows(values, n: int, name: str) -> np.ndarray:
-    """A DH column set as (1, 6) constants or (N, 6) per pose, C-contiguous, for _dh_kernel."""
-    arr = np.asarray(values, dtype=float)
-    if arr.shape == (6,):
-        return arr.reshape(1, 6)
-    if arr.shape == (n, 6):
-        return np.ascontiguousarray(arr)
-    raise KinematicsError(f"DH '{name}' must have shape (6,) or (N, 6) with N = {n}, got {arr.shape}")
-
-
-def _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames: bool):
-    theta = np.ascontiguousarray(np.deg2rad(_as_joints(theta_deg)))
-    n = theta.shape[0]
-    d, a = _dh_rows(d_mm, n, "d"), _dh_rows(a_mm, n, "a")
-    alpha = np.deg2rad(_dh_rows(alpha_deg, n, "alpha"))
-    rots = np.empty((n if frames else 0, 7, 3, 3))
-    origins = np.empty((n if frames else 0, 7, 3))
-    flange = np.empty((0 if frames else n, 4, 4))
-
-    def rows(col, s, e):
-        return col[s:e] if len(col) > 1 else col
-
-    def work(s, e):
-        _dh_kernel(theta[s:e], rows(d, s, e), rows(a, s, e), rows(alpha, s, e), rots[s:e] if frames else rots, origins[s:e] if frames else origins, flange if frames else flange[s:e])
-
-    _run_chunked(n, work)
-    return (rots, origins) if frames else flange
-
-
-def forward_dh(theta_deg, d_mm, a_mm, alpha_deg, tool=None) -> np.ndarray:
-    """Poses (N, 4, 4) of a standard-DH chain whose parameters may vary per pose.
-
-    theta_deg (N, 6) are the DH angles (joint value times sign plus offset, plus any
-    error); d, a, alpha are (6,) or (N, 6). Used where the geometry differs from the
-    robot file's: identified errors, thermal growth.
-    """
-    out = _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames=False)
-    tool_t = _tool_transform(tool)
-    return out if tool_t is None else out @ tool_t
-
-
-def frames_dh(theta_deg, d_mm, a_mm, alpha_deg) -> tuple[np.ndarray, np.ndarray]:
-    """All frames 0..6 of a per-pose DH chain: rotations (N, 7, 3, 3), origins (N, 7, 3)."""
-    return _run_dh(theta_deg, d_mm, a_mm, alpha_deg, frames=True)
 
 
 def dh_angles(robot: RobotModel, q_deg) -> np.ndarray:
@@ -219,31 +61,20 @@ def jacobian(robot: RobotModel, q_deg, tool=None) -> np.ndarray:
     """Geometric Jacobian (N, 6, 6) of the flange (or TCP) in the base frame.
 
     Rows 0-2: linear velocity (mm/rad), rows 3-5: angular velocity (rad/rad), per unit of
-    the controller's joint value in radians (the joint sign is included).
+    the controller's joint value in radians (the joint sign is included). The frames come
+    from the compiled DH chain, a chunk of poses at a time (bounded memory).
     """
     q = _as_joints(q_deg)
     n = q.shape[0]
     out = np.zeros((n, 6, 6))
     tool_t = _tool_transform(tool)
-    alpha = np.deg2rad(robot.alpha_deg)
-
-    def work(s, e):
-        _, pos, frames = _chain(_dh_thetas(robot, q[s:e]), robot.d_mm, robot.a_mm, alpha, keep_frames=True)
-        end = pos
-        if tool_t is not None:
-            cols = frames[-1][0]
-            end = pos + cols[0] * tool_t[0, 3] + cols[1] * tool_t[1, 3] + cols[2] * tool_t[2, 3]
-        for i in range(6):
-            (_, _, z), origin = frames[i]
-            r = end - origin
-            sign = robot.joint_sign[i]
-            lin = np.stack(
-                [z[1] * r[2] - z[2] * r[1], z[2] * r[0] - z[0] * r[2], z[0] * r[1] - z[1] * r[0]]
-            )
-            out[s:e, :3, i] = (sign * lin).T
-            out[s:e, 3:, i] = (sign * z).T
-
-    _run_chunked(n, work)
+    offset = np.zeros(3) if tool_t is None else tool_t[:3, 3]
+    for s in range(0, n, CHUNK):
+        rots, origins = joint_frames(robot, q[s : s + CHUNK])
+        end = origins[:, 6] + rots[:, 6] @ offset
+        z = rots[:, :6, :, 2]  # joint axes z_0..z_5
+        out[s : s + CHUNK, :3] = (np.cross(z, end[:, None] - origins[:, :6]) * robot.joint_sign[None, :, None]).transpose(0, 2, 1)
+        out[s : s + CHUNK, 3:] = (z * robot.joint_sign[None, :, None]).transpose(0, 2, 1)
     return out
 
 
@@ -260,16 +91,7 @@ def _require_opw(robot: RobotModel):
 
 def opw_forward(robot: RobotModel, q_deg) -> np.ndarray:
     """Forward kinematics from the OPW parameters (used to check a robot file's two descriptions agree)."""
-    p = _require_opw(robot)
-    q = _as_joints(q_deg)
-    phi = np.deg2rad(p.signs * q - p.offsets_deg)
-    q1, q2, q3, q4, q5, q6 = phi.T
-    cx1, cz1 = wrist_centre_in_arm_plane(robot, phi)
-    centre = np.stack([cx1 * np.cos(q1) - p.b * np.sin(q1), cx1 * np.sin(q1) + p.b * np.cos(q1), cz1 + p.c1], -1)
-    from .frames import make_transform, rot_y, rot_z
-
-    rot = rot_z(q1) @ rot_y(q2 + q3) @ rot_z(q4) @ rot_y(q5) @ rot_z(q6)
-    return make_transform(rot, centre + p.c4 * rot[:, :, 2])
+    return _opw_forward(_require_opw(robot), q_deg)
 
 
 @njit(cache=True, inline="always")
@@ -505,19 +327,18 @@ def _opw_angles(robot: RobotModel, q: np.ndarray) -> np.ndarray:
     p = _require_opw(robot)
     if np.isnan(q).any():
         raise KinematicsError("joint values contain NaN: no configuration data for an unreachable pose")
-    return np.deg2rad(p.signs * q - p.offsets_deg)
+    return _phi_of(p, q)
+
+
+def opw_angles(robot: RobotModel, q_deg) -> np.ndarray:
+    """OPW joint angles phi (N, 6) in radians of controller joint values (degrees)."""
+    return _phi_of(_require_opw(robot), _as_joints(q_deg))
 
 
 def wrist_centre_in_arm_plane(robot: RobotModel, phi: np.ndarray):
     """Wrist centre in the plane of the arm, from OPW angles phi (radians): (forward of
     axis 1, height above joint 2), mm."""
-    p = robot.opw
-    psi3 = math.atan2(p.a2, p.c3)
-    k = math.hypot(p.a2, p.c3)
-    t2, t3 = phi[..., 1], phi[..., 2]
-    forward = p.c2 * np.sin(t2) + k * np.sin(t2 + t3 + psi3) + p.a1
-    up = p.c2 * np.cos(t2) + k * np.cos(t2 + t3 + psi3)
-    return forward, up
+    return _wrist_centre(robot.opw, phi)
 
 
 def abb_confdata(robot: RobotModel, q_deg) -> np.ndarray:
@@ -557,55 +378,63 @@ def kuka_status_turn(robot: RobotModel, q_deg) -> tuple[np.ndarray, np.ndarray]:
     return status, turn
 
 
-def _select_matching(robot: RobotModel, solutions, matches) -> tuple[np.ndarray, np.ndarray]:
-    sols = np.asarray(solutions, dtype=float)
-    n = sols.shape[0]
-    best = np.full((n, 6), np.nan)
-    idx = np.full(n, -1)
-    for b in range(sols.shape[1]):
-        for cand in _turn_variants(robot, sols[:, b]):
-            usable = within_limits(robot, cand)  # False on unreachable (NaN) rows
-            ok = np.isnan(best[:, 0]) & usable & matches(np.where(usable[:, None], cand, 0.0))
-            best[ok] = cand[ok]
-            idx[ok] = b
-    return best, idx
-
-
-def _turn_variants(robot: RobotModel, q: np.ndarray):
-    """q and the equivalents one or two turns away on each joint whose range allows it."""
-    yield q
-    wide = np.nonzero(robot.upper_deg - robot.lower_deg > 360.0)[0]
-    for joint in wide:
-        for turns in (1, -1, 2, -2):
-            alt = q.copy()
-            alt[:, joint] += 360.0 * turns
-            yield alt
-    if len(wide) >= 2:
-        for t_a in (1, -1):
-            for t_b in (1, -1):
-                alt = q.copy()
-                alt[:, wide[0]] += 360.0 * t_a
-                alt[:, wide[1]] += 360.0 * t_b
-                yield alt
+def _wide_joints(robot: RobotModel) -> np.ndarray:
+    """Joints whose range spans more than a turn (the only ones whose turn the program picks)."""
+    return np.nonzero(robot.upper_deg - robot.lower_deg > 360.0)[0]
 
 
 def select_by_abb_conf(robot: RobotModel, solutions, confdata) -> tuple[np.ndarray, np.ndarray]:
-    """Pick the solution whose ABB confdata [cf1, cf4, cf6, cfx] equals the given (N, 4) or (4,)."""
+    """Pick, per pose, the first branch whose solution has the given ABB confdata [cf1, cf4,
+    cf6, cfx] ((N, 4) or (4,)). Each wide joint's turn (a range over a turn) is computed
+    from the quadrant asked for rather than searched: 8 passes of ``abb_confdata``."""
     want = np.broadcast_to(np.asarray(confdata, dtype=int), (np.asarray(solutions).shape[0], 4))
-    return _select_matching(robot, solutions, lambda q: np.all(abb_confdata(robot, q) == want, axis=1))
+    quadrant_col = {0: 0, 3: 1, 5: 2}
+    return _first_matching(robot, solutions, lambda q, rows: np.all(abb_confdata(robot, q) == want[rows], axis=1),
+                           lambda q, j, rows: _turn_to_quadrant(q, want[rows, quadrant_col[j]]) if j in quadrant_col else q)
 
 
 def select_by_kuka_status(robot: RobotModel, solutions, status, turn) -> tuple[np.ndarray, np.ndarray]:
-    """Pick the solution whose KUKA Status and Turn equal the given values ((N,) or scalars)."""
+    """Pick, per pose, the first branch whose solution has the given KUKA Status and Turn
+    ((N,) or scalars): each wide joint is turned to the sign its Turn bit asks for."""
     n = np.asarray(solutions).shape[0]
     want_s = np.broadcast_to(np.asarray(status, dtype=int), (n,))
     want_t = np.broadcast_to(np.asarray(turn, dtype=int), (n,))
 
-    def matches(q):
-        s, t = kuka_status_turn(robot, q)
-        return (s == want_s) & (t == want_t)
+    def matches(q, rows):
+        st, tu = kuka_status_turn(robot, q)
+        return (st == want_s[rows]) & (tu == want_t[rows])
 
-    return _select_matching(robot, solutions, matches)
+    def turned(q, j, rows):
+        negative = (want_t[rows] >> j) & 1 == 1
+        return np.where(negative & (q >= 0), q - 360.0, np.where(~negative & (q < 0), q + 360.0, q))
+
+    return _first_matching(robot, solutions, matches, turned)
+
+
+def _turn_to_quadrant(q: np.ndarray, quadrant: np.ndarray) -> np.ndarray:
+    """q plus the whole turns that put it in the wanted quadrant floor(q / 90), when some do."""
+    turns = (quadrant - np.floor(q / 90.0)) / 4.0
+    return np.where(turns == np.round(turns), q + 360.0 * turns, q)
+
+
+def _first_matching(robot: RobotModel, solutions: np.ndarray, matches, turned):
+    sols = np.asarray(solutions, dtype=float)
+    n = sols.shape[0]
+    best = np.full((n, 6), np.nan)
+    idx = np.full(n, -1)
+    wide = _wide_joints(robot)
+    for b in range(sols.shape[1]):
+        open_rows = np.nonzero(idx < 0)[0]
+        if not len(open_rows):
+            break
+        cand = sols[open_rows, b].copy()
+        for j in wide:
+            cand[:, j] = turned(cand[:, j], j, open_rows)
+        usable = within_limits(robot, cand)
+        ok = usable & matches(np.where(usable[:, None], cand, 0.0), open_rows)
+        best[open_rows[ok]] = cand[ok]
+        idx[open_rows[ok]] = b
+    return best, idx
 
 
 # ------------------------------------------------------------------------ gravity

@@ -10,14 +10,12 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from .errors import MeasurementError, OutputError
+from .errors import MeasurementError
 
 JOINTS = tuple(f"q{i}" for i in range(1, 7))
 MEASURED = ("mx", "my", "mz")
@@ -41,6 +39,7 @@ class MeasurementSet:
     time_s: np.ndarray | None = None  # (N,)
     source: str = "<memory>"
     extra: dict[str, np.ndarray] = field(default_factory=dict)
+    lines: tuple[int, ...] | None = None  # file line of each row, for messages (None: not from a file)
 
     def __len__(self) -> int:
         return self.q_deg.shape[0]
@@ -65,7 +64,12 @@ class MeasurementSet:
             time_s=pick(self.time_s),
             source=self.source,
             extra={k: v[idx] for k, v in self.extra.items()},
+            lines=None if self.lines is None else tuple(np.asarray(self.lines)[idx].tolist()),
         )
+
+    def line_of(self, row: int) -> int | None:
+        """The file line of row ``row`` (0-based), when the set was read from a file."""
+        return None if self.lines is None else self.lines[row]
 
 
 _GROUP_FIELD = {"nominal": "nominal_mm", "force": "force_n", "approach": "approach", "temp": "temp_c", "t": "time_s"}
@@ -139,6 +143,7 @@ def parse_measurements(text: str, source: str) -> MeasurementSet:
                 raise MeasurementError(source, line, "id", f"duplicate id '{ident}' (first on line {first[ident]})")
             first[ident] = line
 
+    _check_magnitudes(source, body, data)
     measured = np.column_stack([data[c] for c in MEASURED])
     _check_millimetres(source, body, measured, MEASURED)
     q = np.column_stack([data[c] for c in JOINTS])
@@ -166,7 +171,51 @@ def parse_measurements(text: str, source: str) -> MeasurementSet:
         time_s=data["t"] if "t" in seen else None,
         source=source,
         extra={c: data[c] for c in extra_cols},
+        lines=tuple(line for line, _ in body),
     )
+
+
+# Positions farther than this from the origin are no robot cell's (the largest industrial
+# arms reach about 4 m): such a value is a unit or export error, never data to fit.
+ABSURD_POSITION_MM = 10_000.0
+_POSITION_COLUMNS = MEASURED + NOMINAL
+
+
+def _check_magnitudes(source, body, data) -> None:
+    """Refuse positions beyond 10 m (a unit or export error), naming the first such cell."""
+    for col in _POSITION_COLUMNS:
+        if col not in data:
+            continue
+        bad = np.nonzero(np.abs(data[col]) > ABSURD_POSITION_MM)[0]
+        if bad.size:
+            value = data[col][bad[0]]
+            raise MeasurementError(source, body[bad[0]][0], col, f"{value:g} mm is more than 10 m from the origin: not a position of a robot cell")
+
+
+def check_joint_limits(meas: MeasurementSet, lower_deg: np.ndarray, upper_deg: np.ndarray, drop_invalid: bool = False,
+                       enforce: bool = True) -> tuple[MeasurementSet, list[str]]:
+    """Rows whose joints lie outside the robot's limits: an error naming the first row's line
+    and column, or (``drop_invalid``) the set without them and one message per dropped row.
+    With ``enforce=False`` (limits that are only estimates) the rows are kept and the
+    messages returned as warnings."""
+    outside = (meas.q_deg < lower_deg - 1e-9) | (meas.q_deg > upper_deg + 1e-9)
+    bad_rows = np.nonzero(outside.any(axis=1))[0]
+    if bad_rows.size == 0:
+        return meas, []
+    messages = []
+    for row in bad_rows:
+        j = int(np.argmax(outside[row]))
+        where = f"line {meas.line_of(row)}" if meas.lines is not None else f"row {row + 1}"
+        messages.append(f"{where}, id {meas.ids[row]}: q{j + 1} = {meas.q_deg[row, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]")
+    if not enforce:
+        return meas, messages
+    if not drop_invalid:
+        first = int(bad_rows[0])
+        j = int(np.argmax(outside[first]))
+        raise MeasurementError(meas.source, meas.line_of(first), f"q{j + 1}",
+                               f"{meas.q_deg[first, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]"
+                               f" ({bad_rows.size} row(s) in all; --drop-invalid drops and lists them)")
+    return meas.subset(~outside.any(axis=1)), messages
 
 
 def _check_millimetres(source, body, xyz, cols):
@@ -204,26 +253,6 @@ def write_measurements(path: str | Path, meas: MeasurementSet, decimals: int = 4
 
 def write_text_atomic(path: str | Path, text: str, encoding: str = "utf-8") -> None:
     """Write a whole file or nothing: a temp file in the same folder, renamed over the target."""
-    path = Path(path)
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent if str(path.parent) else ".")
-    except OSError as exc:
-        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
-    try:
-        with os.fdopen(fd, "w", encoding=encoding, newline="") as fh:
-            # mkstemp creates the file private (0600); give it the mode a plain open() would.
-            os.fchmod(fh.fileno(), path.stat().st_mode & 0o7777 if path.exists() else 0o666 & ~_current_umask())
-            fh.write(text)
-        os.replace(tmp, path)
-    except OSError as exc:
-        Path(tmp).unlink(missing_ok=True)
-        raise OutputError(f"{path}: cannot write ({exc.strerror})") from None
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    from .files import write_all
 
-
-def _current_umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
+    write_all({Path(path): text.encode(encoding)})

@@ -69,6 +69,8 @@ def load_model(path: str | Path) -> tuple[ErrorModel, dict[str, Any]]:
         doc = json.loads(path.read_text(encoding="utf-8"))
     except OSError as exc:
         raise ModelFileError(f"{path}: cannot read model file ({exc.strerror})") from None
+    except UnicodeDecodeError as exc:
+        raise ModelFileError(f"{path}: not a model file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
     except json.JSONDecodeError as exc:
         raise ModelFileError(f"{path}, line {exc.lineno}, column {exc.colno}: not valid JSON ({exc.msg})") from None
     return model_from_document(doc, str(path)), doc
@@ -100,9 +102,9 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         effects = parse_effects(doc.get("effects", ""))
     except EffectSpecError as exc:
         raise fail("effects", str(exc)) from None
-    harmonics = effects.get("joint_harmonics")
-    if harmonics is not None and not harmonics.resolved:
-        raise fail("effects", "joint_harmonics must carry the joints and orders the fit chose")
+    for effect in effects:
+        if not effect.resolved:
+            raise fail("effects", f"{effect.name} must carry the terms the fit chose (its options)")
     model = ErrorModel.create(robot, tool, effects)
     params = doc.get("parameters")
     if not isinstance(params, dict):

@@ -1,78 +1,108 @@
-"""Programs as files: which dialect a file is, parse it, write it back (atomically)."""
+"""Programs as files: which dialect a file is, parse it, emit it, write the set atomically.
+
+What differs between languages is asked of the dialect (``postproc.dialects``); this
+module only strings the steps together.
+"""
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import InputError
-from .ir import Toolpath
-from .measurements import write_text_atomic
+import numpy as np
 
-DIALECTS = ("rapid", "krl", "gcode")
-_EXTENSIONS = {
-    ".mod": "rapid", ".modx": "rapid", ".prg": "rapid", ".sys": "rapid",
-    ".src": "krl", ".sub": "krl",
-    ".nc": "gcode", ".ngc": "gcode", ".gcode": "gcode", ".tap": "gcode", ".cnc": "gcode", ".mpf": "gcode", ".spf": "gcode", ".iso": "gcode", ".txt": "gcode",
-}
+from . import dialects
+from .errors import OutputCheckError, OutputError
+from .files import write_all
+from .ir import F_POS, Kind, SourceDoc, Toolpath
+
+DIALECTS = dialects.names()
 
 
 def sniff(path: str | Path, data: bytes | None = None) -> str:
-    """The dialect of a program from its extension, or from its content when that is unknown."""
-    suffix = Path(str(path)).suffix.lower()
-    if suffix in _EXTENSIONS and suffix != ".txt":
-        return _EXTENSIONS[suffix]
-    if data is None:
-        try:
-            data = Path(path).read_bytes()[:4096]
-        except OSError as exc:
-            raise InputError(f"{path}: cannot read ({exc.strerror})") from None
-    head = data[:4096].decode("latin-1").upper()
-    if "MODULE " in head and ("ENDMODULE" in head or "PROC " in head):
-        return "rapid"
-    if "DEF " in head and ("PTP " in head or "LIN " in head or "END" in head):
-        return "krl"
-    if any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2")):
-        return "gcode"
-    raise InputError(f"{path}: cannot tell the dialect (give --dialect rapid, krl or gcode)")
+    """The dialect name of a program from its extension, or from its content when that is unknown."""
+    return dialects.sniff(path, data).name
 
 
 def parse_program(path: str | Path, dialect: str | None = None, data: bytes | None = None) -> Toolpath:
     """Parse a program file (or ``data`` read from it, e.g. standard input) into a Toolpath."""
-    dialect = dialect or sniff(path, data)
-    if dialect not in DIALECTS:
-        raise InputError(f"--dialect: '{dialect}' is not one of {', '.join(DIALECTS)}")
-    if data is None:
-        try:
-            data = Path(path).read_bytes()
-        except OSError as exc:
-            raise InputError(f"{path}: cannot read ({exc.strerror})") from None
-    if dialect == "krl":
-        from .parse.krl import parse_krl
-
-        return parse_krl(path, data)
-    if dialect == "rapid":
-        from .parse.rapid import parse_rapid
-
-        return parse_rapid(str(path), data)
-    from .parse.gcode import parse_gcode
-
-    return parse_gcode(str(path), data)
+    lang = dialects.get(dialect) if dialect else dialects.sniff(path, data)
+    return lang.parse(path, data)
 
 
 def emit_texts(original: Toolpath, modified: Toolpath) -> list[str]:
     """New text of every source file of the program (unchanged files come back as they were)."""
-    from .emit.splice import splice
+    return dialects.of(original).emit_texts(original, modified)
 
-    inserter = None
-    if original.dialect == "krl":
-        inserter = lambda file, name, text: f", {name.upper()} {text}"  # noqa: E731
-    elif original.dialect == "gcode":
-        inserter = lambda file, name, text: f" {name.upper()}{text}"  # noqa: E731
-    return splice(original, modified, inserter)
+
+def emit_files(original: Toolpath, modified: Toolpath, output: str | Path) -> dict[Path, str]:
+    """{path: text} of every file to write for ``modified`` written at ``output``."""
+    return dialects.of(original).emit(original, modified, Path(output))
+
+
+def files_for(original: Toolpath, texts: list[str], output: str | Path) -> dict[Path, str]:
+    """{path: text} to write for the new ``texts`` (one per source) at ``output``."""
+    return dialects.of(original).files(original, texts, Path(output))
+
+
+def refuse_stdout(tp: Toolpath) -> None:
+    """Standard output carries one file: refused when target numbers live in another
+    (KRL .dat or $config.dat), whose changes would be lost."""
+    cart = tp.kind != Kind.ABSJ
+    used = np.unique(tp.spans[cart][:, F_POS, 0])
+    elsewhere = [tp.sources[int(i)].path for i in used if i > 0]
+    if elsewhere:
+        raise OutputError(f"-o -: targets of this program live in {', '.join(elsewhere)}, which standard output cannot carry; give -o PATH")
+
+
+def refuse_overwrite(original: Toolpath, files: dict[Path, str], in_place: bool) -> None:
+    """An output path that is one of the program's own files is refused unless ``in_place``."""
+    if in_place:
+        return
+    inputs = {Path(doc.path).resolve() for doc in original.sources if doc.path != "-"}
+    clash = [str(p) for p in files if Path(p).resolve() in inputs]
+    if clash:
+        raise OutputError(f"{', '.join(clash)}: the output would overwrite an input file; give another -o, or --in-place (keeps NAME.bak)")
+
+
+def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.ndarray) -> None:
+    """Re-parse the new ``texts`` (one per source) and confirm every target in ``rows``
+    reads back where ``modified`` puts it, within the writing tolerance; else an OutputCheckError."""
+    from .emit.splice import TOLERANCE
+
+    lang = dialects.of(original)
+    back = lang.parse_sources([SourceDoc(doc.path, text, doc.role) for doc, text in zip(original.sources, texts)])
+    if len(back) != len(modified):
+        raise OutputCheckError(f"{original.sources[0].path}: the new text has {len(back)} targets, the compensated program {len(modified)}; nothing was written")
+    tol = TOLERANCE[F_POS] * (1 + 1e-6)
+    want, got = modified.position[rows], back.position[rows]
+    bad = ~(np.abs(got - want) <= tol).all(axis=1)
+    if bad.any():
+        i = int(rows[np.nonzero(bad)[0][0]])
+        raise OutputCheckError(
+            f"{original.sources[int(original.file[i])].path}, line {original.line[i]}: the new text reads back as "
+            f"{np.round(back.position[i], 4).tolist()}, not the compensated {np.round(modified.position[i], 4).tolist()}; nothing was written"
+        )
+
+
+def write_set(files: dict[Path, str], backup: bool = False) -> None:
+    """Write every program file of one job, all or none (see ``postproc.files.write_all``)."""
+    write_all({Path(p): text.encode("latin-1") for p, text in files.items()}, backup=backup)  # encoding fails before any write
 
 
 def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
-    """Write each program text to its output path, each atomically, all only if all succeed to encode."""
-    encoded = [t.encode("latin-1") for t in texts]  # fails before anything is written
-    for data, out in zip(encoded, outputs):
-        write_text_atomic(out, data.decode("latin-1"), encoding="latin-1")
+    """Write each program text to its output path (see ``write_set``)."""
+    write_set(dict(zip(map(Path, outputs), texts)))
+
+
+def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[str]:
+    """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
+    ``Dialect.new_program_paths`` order)."""
+    from .emit.writer import drive
+    from .errors import EmitError
+
+    lang = dialects.get(dialect, "--to")
+    writer = lang.new_writer(name)
+    if writer is None:
+        able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
+        raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
+    return drive(writer, tp, name)

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from .dh import forward_dh, opw_forward
 from .errors import RobotFileError, UnknownRobotError
 
 REQUIRED_UNITS = {"length": "mm", "angle": "deg", "mass": "kg", "stiffness": "N*m/rad"}
@@ -93,7 +94,12 @@ def load_robot(name_or_path: str | Path) -> RobotModel:
     if candidate.suffix == ".toml" or candidate.exists():
         if not candidate.is_file():
             raise UnknownRobotError(f"{candidate}: robot file not found")
-        text = candidate.read_text(encoding="utf-8")
+        try:
+            text = candidate.read_text(encoding="utf-8")
+        except UnicodeDecodeError as exc:
+            raise RobotFileError(candidate, "-", f"not a robot file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
+        except OSError as exc:
+            raise UnknownRobotError(f"{candidate}: cannot read robot file ({exc.strerror})") from None
         return parse_robot_toml(text, str(candidate))
     name = str(name_or_path)
     resource = resources.files("postproc.robot_files") / f"{name}.toml"
@@ -299,11 +305,9 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
 
 def _check_opw_matches_dh(model: RobotModel, reader: _Reader) -> None:
     """The OPW section must describe the same arm as the DH table, or IK would silently disagree with FK."""
-    from .kinematics import fk, opw_forward  # local import: kinematics imports this module
-
     q = np.random.default_rng(12345).uniform(-170.0, 170.0, size=(16, 6))
-    t_dh = fk(model, q)
-    t_opw = opw_forward(model, q)
+    t_dh = forward_dh(q * model.joint_sign + model.theta0_deg, model.d_mm, model.a_mm, model.alpha_deg)
+    t_opw = opw_forward(model.opw, q)
     pos_err = np.abs(t_dh[:, :3, 3] - t_opw[:, :3, 3]).max()
     rot_err = np.abs(t_dh[:, :3, :3] - t_opw[:, :3, :3]).max()
     if pos_err > 1e-6 or rot_err > 1e-9:

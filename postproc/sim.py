@@ -15,10 +15,9 @@ import numpy as np
 
 from . import kinematics as kin
 from .effects import EffectSum
-from .effects.base_frame import rotvec_to_matrix
 from .errormodel import ErrorModel
 from .errors import InputError
-from .frames import make_transform, rot_x, rot_y, rot_z
+from .frames import make_transform, rot_x, rot_y, rot_z, rotvec_to_matrix
 from .measurements import MeasurementSet
 from .robots import RobotModel
 
@@ -56,21 +55,15 @@ class JointBox:
 
 
 def random_truth(robot: RobotModel, tool_mm, effects: EffectSum, rng: np.random.Generator, magnitude: float = 2.0) -> ErrorModel:
-    """A true robot: each parameter its initial value plus magnitude x typical x N(0, 1).
-
-    Compliances vary by +-15 % (one sigma) around the robot file's stiffness instead:
-    a real robot's joints are as stiff as its data sheet says, give or take.
+    """A true robot: each parameter drawn by the effect that owns it (``Effect.draw``; by
+    default its initial value plus magnitude x typical x N(0, 1); compliances, for one,
+    vary by +-15 % around the robot file's stiffness instead).
     The default magnitude 2 matches the shared KR160 sets (seed 001 Table 3, doubled).
     """
     model = ErrorModel.create(robot, tool_mm, effects)
     values = model.values.copy()
     for i, p in enumerate(model.params):
-        if p.name.startswith("compliance."):
-            values[i] = p.initial * (1.0 + 0.15 * rng.standard_normal())
-        elif p.name == "thermal.alpha":
-            values[i] = p.typical * (1.0 + 0.2 * rng.standard_normal())
-        else:
-            values[i] = p.initial + magnitude * p.typical * rng.standard_normal()
+        values[i] = model.owner(p.name).draw(p, rng, magnitude)
         if p.lower == 0.0 and values[i] < 0:  # a play or a compliance is never negative
             values[i] = -values[i]
         values[i] = np.clip(values[i], p.lower, p.upper)
@@ -142,13 +135,13 @@ def simulate(
 ) -> MeasurementSet:
     """Measure the true robot at q: all columns of the schema, noise ~ N(0, noise_mm) per axis.
 
-    Forces are drawn when the truth has ``external_load`` (or ``with_force``); approach
-    directions are random; temperature follows a warm-up (20 -> 28 degC) when the truth has
-    ``thermal``, otherwise a climate-controlled cell (21 +- 0.5 degC).
+    Forces are drawn when an effect of the truth needs them (or ``with_force``); approach
+    directions are random; temperature follows a warm-up (20 -> 28 degC) when an effect of
+    the truth needs it, otherwise a climate-controlled cell (21 +- 0.5 degC).
     """
     q = np.asarray(q_deg, dtype=float)
     n = len(q)
-    want_force = truth.effects.get("external_load") is not None if with_force is None else with_force
+    want_force = bool(truth.effects.needing("force")) if with_force is None else with_force
     force = None
     if want_force:
         direction = rng.standard_normal((n, 3))
@@ -156,7 +149,7 @@ def simulate(
         force = direction * rng.uniform(0.0, force_max_n, (n, 1))
     approach = rng.choice([-1.0, 1.0], size=(n, 6))
     time_s = np.cumsum(rng.uniform(*seconds_per_pose, n))
-    if truth.effects.get("thermal") is not None:
+    if truth.effects.needing("temp"):
         temp = 20.0 + 8.0 * (1.0 - np.exp(-time_s / 1800.0)) + rng.normal(0, 0.05, n)
     else:
         temp = 21.0 + rng.uniform(-0.5, 0.5, n)

@@ -87,7 +87,7 @@ def krl_program(tmp_path, with_dat=False):
 def rapid_program(tmp_path):
     lines = ["MODULE Part", "  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];",
              "  TASK PERS wobjdata wTable := [FALSE,TRUE,\"\",[[900,-100,300],[0.9659258,0,0,0.2588190]],[[0,0,0],[1,0,0,0]]];",
-             "  PROC main()"]
+             "  PROC main()", "    ConfL\\Off;"]  # the [0,0,0,0] confdata are placeholders, as CAM posts write them
     for i in range(40):
         x, y = 10.0 * (i % 20), 150.0 * (i // 20)
         lines.append(f"    MoveL [[{x:.3f},{y:.3f},150.000],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tSpindle\\WObj:=wTable;")

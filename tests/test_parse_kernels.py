@@ -11,7 +11,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from postproc.parse import gcode, krl, rapid
+from postproc.dialects.gcode import parse as gcode
+from postproc.dialects.krl import parse as krl
+from postproc.dialects.rapid import parse as rapid
 from postproc.parse.common import LineIndex, scan_numbers
 from postproc.parse.line_shapes import LineShapes, factorize_spans
 from postproc.parse.name_table import NameTable

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from postproc.errors import InputError
+from postproc.errors import InputError, ParseError
 from postproc.programs import emit_texts, parse_program
 
 CORPUS = Path(__file__).parent / "corpus"
@@ -122,8 +122,13 @@ def test_ten_thousand_fuzzed_inputs_never_crash(dialect):
         data = mutate(rng.choice(seeds), rng)
         try:
             tp = parse_program(name, dialect, data)
-        except InputError:
-            rejected += 1  # ParseError and its family: the expected answer to garbage
+        except ParseError as exc:
+            assert exc.line >= 1 and exc.column >= 1 and name in str(exc)  # refused with where
+            rejected += 1
+            continue
+        except InputError as exc:
+            assert name in str(exc), str(exc)  # any other refusal names the file
+            rejected += 1
             continue
         parsed += 1
         assert emit_texts(tp, tp)[0].encode("latin-1") == data

@@ -9,9 +9,9 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.emit.writer import RapidWriter, write_program
+from postproc.dialects.rapid.writer import RapidWriter
 from postproc.errors import EmitError
-from postproc.programs import parse_program
+from postproc.programs import parse_program, write_program
 
 CORPUS = Path(__file__).parent / "corpus"
 runner = CliRunner()

@@ -1,9 +1,18 @@
-"""The catalog of physical error effects (names fixed by spec/cli.md) and the effect-spec parser."""
+"""The catalog of physical error effects and the effect-spec parser.
+
+Every module of this package except ``base`` defines one ``Effect`` subclass; the
+catalog discovers them, so adding an effect is adding one file. Names are fixed by
+spec/cli.md (more may be added).
+"""
 
 from __future__ import annotations
 
+import importlib
+import inspect
+import pkgutil
+
 from .backlash import Backlash
-from .base import Context, Effect, EffectSpecError, EffectSum, Param
+from .base import DH, KINDS, Context, Effect, EffectSpecError, EffectSum, Param
 from .base_frame import BaseFrame
 from .external_load import ExternalLoad
 from .geometric import Geometric
@@ -12,16 +21,35 @@ from .joint_harmonics import JointHarmonics
 from .thermal import Thermal
 from .tool_offset import ToolOffset
 
-CATALOG: dict[str, type[Effect]] = {
-    "geometric": Geometric,
-    "base_frame": BaseFrame,
-    "tool_offset": ToolOffset,
-    "joint_compliance": JointCompliance,
-    "external_load": ExternalLoad,
-    "joint_harmonics": JointHarmonics,
-    "backlash": Backlash,
-    "thermal": Thermal,
-}
+
+def _discover() -> dict[str, type[Effect]]:
+    """name -> class of every Effect subclass defined in a module of this package."""
+    found: dict[str, type[Effect]] = {}
+    for info in sorted(pkgutil.iter_modules(__path__), key=lambda m: m.name):
+        if info.name.startswith("_") or info.name == "base":
+            continue
+        module = importlib.import_module(f"{__name__}.{info.name}")
+        for _, cls in inspect.getmembers(module, inspect.isclass):
+            if issubclass(cls, Effect) and cls.__module__ == module.__name__ and cls.name:
+                if cls.name in found:
+                    raise RuntimeError(f"two effects named '{cls.name}' ({found[cls.name].__module__}, {module.__name__})")
+                if cls.kind not in KINDS:
+                    raise RuntimeError(f"effect '{cls.name}' has kind '{cls.kind}', not one of {KINDS}")
+                found[cls.name] = cls
+    return found
+
+
+CATALOG: dict[str, type[Effect]] = _discover()
+
+
+def catalog_of_kind(kind: str) -> list[type[Effect]]:
+    """Catalog classes contributing in one way (e.g. the 'base' effect that re-registers a frame)."""
+    return [cls for cls in CATALOG.values() if cls.kind == kind]
+
+
+def consumers_of(group: str) -> list[str]:
+    """Names of the catalog effects that consume a compensation input (force, temp)."""
+    return [name for name, cls in CATALOG.items() if group in cls.consumes]
 
 
 def _split_top_level(text: str) -> list[str]:
@@ -60,12 +88,7 @@ def parse_effect(item: str) -> Effect:
             if not eq:
                 raise EffectSpecError(f"effect '{item}': option '{pair}' is not key=value")
             opts[key.strip()] = value.strip()
-    cls = CATALOG[name]
-    if hasattr(cls, "from_options"):
-        return cls.from_options(opts)
-    if opts:
-        raise EffectSpecError(f"effect '{name}' takes no options, got '{rest[:-1]}'")
-    return cls()
+    return CATALOG[name].from_options(opts)
 
 
 def parse_effects(text: str) -> EffectSum:
@@ -80,6 +103,7 @@ def parse_effects(text: str) -> EffectSum:
 
 __all__ = [
     "CATALOG",
+    "DH",
     "Backlash",
     "BaseFrame",
     "Context",
@@ -93,5 +117,7 @@ __all__ = [
     "Param",
     "Thermal",
     "ToolOffset",
+    "catalog_of_kind",
+    "consumers_of",
     "parse_effects",
 ]

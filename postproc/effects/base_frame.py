@@ -9,35 +9,41 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..frames import kabsch, rotvec_to_matrix  # noqa: F401  (kabsch: re-exported for callers of this module)
 from .base import Effect, Param
+
+_DEG = np.pi / 180.0
 
 
 class BaseFrame(Effect):
     name = "base_frame"
     kind = "base"
+    first_step = True
+    summary = "where the robot stands in the measurement frame: a rigid shift and small rotation (6 parameters)"
+    finding = "residuals follow a rigid shift and tilt of the whole workspace"
+    identifiability = (
+        "Kept before the DH errors it duplicates: a base rotation about z absorbs geometric.dtheta1, a shift "
+        "along z absorbs geometric.dd1; those DH errors are then fixed at zero."
+    )
 
     def params(self, robot) -> list[Param]:
-        trans = [Param(f"base_frame.t{axis}", "mm", 0.1, 0.5) for axis in "xyz"]
-        rots = [Param(f"base_frame.r{axis}", "deg", 0.01, typ) for axis, typ in zip("xyz", (0.01, 0.02, 0.01))]
+        trans = [Param(f"{self.name}.t{axis}", "mm", 0.1, 0.5) for axis in "xyz"]
+        rots = [Param(f"{self.name}.r{axis}", "deg", 0.01, typ) for axis, typ in zip("xyz", (0.01, 0.02, 0.01))]
         return trans + rots
 
+    def keep_priority(self, param_name: str) -> tuple:
+        return (0, param_name)
 
-def kabsch(source: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Rigid (R, t) minimising |R source + t - target|^2 over (N, 3) point sets (no scaling)."""
-    mu_s, mu_t = source.mean(axis=0), target.mean(axis=0)
-    cov = (target - mu_t).T @ (source - mu_s)
-    u, _, vt = np.linalg.svd(cov)
-    d = np.sign(np.linalg.det(u @ vt))
-    rot = u @ np.diag([1.0, 1.0, d]) @ vt
-    return rot, mu_t - rot @ mu_s
+    def transform(self, values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(R, t) of this effect's parameters, to be composed as R @ R0, t0 + t."""
+        return rotvec_to_matrix(values[3:6]), np.asarray(values[:3], dtype=float)
 
-
-def rotvec_to_matrix(rotvec_deg: np.ndarray) -> np.ndarray:
-    """Rotation vector (degrees) -> matrix (Rodrigues)."""
-    r = np.deg2rad(np.asarray(rotvec_deg, dtype=float))
-    angle = np.linalg.norm(r)
-    if angle < 1e-15:
-        return np.eye(3)
-    k = r / angle
-    kx = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
-    return np.eye(3) + np.sin(angle) * kx + (1 - np.cos(angle)) * kx @ kx
+    def base_jacobian(self, rotated: np.ndarray, values: np.ndarray) -> np.ndarray:
+        jac = np.zeros((len(rotated), 3, 6))
+        for k in range(3):
+            unit = np.zeros(3)
+            unit[k] = 1.0
+            jac[:, :, k] = unit
+            # A small rotation about axis k turns v = R p by (e_k x v).
+            jac[:, :, 3 + k] = np.cross(unit, rotated) * _DEG
+        return jac

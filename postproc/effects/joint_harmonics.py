@@ -1,7 +1,7 @@
 """Cyclic joint errors (gear and reducer eccentricity): delta q_j = sum_k a_jk sin(k q_j) + b_jk cos(k q_j).
 
 Without options the fit chooses the joints and orders the data support (see
-``postproc.identify.select_harmonics``) and records them in the model file.
+``postproc.identify.select_terms``, best subset with a stability check) and records them in the model file.
 """
 
 from __future__ import annotations
@@ -16,6 +16,13 @@ CANDIDATE_ORDERS = (1, 2, 3, 4)
 class JointHarmonics(Effect):
     name = "joint_harmonics"
     kind = "joint"
+    summary = "cyclic joint errors of gears and reducers: sin/cos of a joint's angle and its multiples"
+    finding = "residuals follow sin/cos of a joint angle"
+    identifiability = (
+        "The order-1 terms of a joint whose axis stays parallel to gravity's plane trade against its compliance and "
+        "the DH errors (cos q is the gravity torque's shape); higher orders separate given a joint range of more "
+        "than one period. Without options the fit keeps only the terms cross-validation supports."
+    )
 
     def __init__(self, terms: tuple[tuple[int, int], ...] | None = None):
         """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them."""
@@ -29,22 +36,22 @@ class JointHarmonics(Effect):
     def from_options(cls, opts: dict[str, str]) -> "JointHarmonics":
         unknown = set(opts) - {"joints", "orders", "terms"}
         if unknown:
-            raise EffectSpecError(f"joint_harmonics: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms)")
+            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms)")
         if "terms" in opts:
             pairs = []
             for item in opts["terms"].split(","):
                 try:
                     j, k = (int(v) for v in item.split(":"))
                 except ValueError:
-                    raise EffectSpecError(f"joint_harmonics: terms are joint:order pairs, got '{item}'") from None
+                    raise EffectSpecError(f"{cls.name}: terms are joint:order pairs, got '{item}'") from None
                 if not (1 <= j <= 6 and 1 <= k <= 12):
-                    raise EffectSpecError(f"joint_harmonics: term '{item}' out of range (joint 1..6, order 1..12)")
+                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..12)")
                 pairs.append((j, k))
             return cls(tuple(pairs))
         if not opts:
             return cls(None)
-        joints = parse_int_list("joint_harmonics", "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6)
-        orders = parse_int_list("joint_harmonics", "orders", opts.get("orders", "1,2,3,4"), 1, 12)
+        joints = parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6)
+        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, 12)
         return cls.grid(joints, orders)
 
     @property
@@ -62,17 +69,37 @@ class JointHarmonics(Effect):
 
     def _terms(self):
         if self.terms is None:
-            raise EffectSpecError("joint_harmonics without options is resolved by 'fit'; give joints and orders to use it here")
+            raise EffectSpecError(f"{self.name} without options is resolved by 'fit'; give joints and orders to use it here")
         return self.terms
 
     def params(self, robot) -> list[Param]:
         out = []
         for j, k in self._terms():
-            out.append(Param(f"joint_harmonics.j{j}_sin{k}", "deg", 0.01, 0.01))
-            out.append(Param(f"joint_harmonics.j{j}_cos{k}", "deg", 0.01, 0.01))
+            out.append(Param(f"{self.name}.j{j}_sin{k}", "deg", 0.01, 0.01))
+            out.append(Param(f"{self.name}.j{j}_cos{k}", "deg", 0.01, 0.01))
         return out
 
-    def joint_basis(self, ctx: Context, robot) -> np.ndarray:
+    def candidate_terms(self) -> list[tuple[int, int]]:
+        return [(j, k) for j in range(1, 7) for k in CANDIDATE_ORDERS]
+
+    def with_terms(self, terms) -> "JointHarmonics":
+        return JointHarmonics(tuple(terms))
+
+    def term_columns(self, dp_dq: np.ndarray, q_deg: np.ndarray, term) -> np.ndarray:
+        j, k = term
+        q = np.deg2rad(q_deg[:, j - 1])
+        return np.stack([dp_dq[:, :, j - 1] * np.sin(k * q)[:, None], dp_dq[:, :, j - 1] * np.cos(k * q)[:, None]], axis=-1)
+
+    def describe_finding(self) -> str:
+        if not self.terms:
+            return self.finding
+        parts = []
+        for j in sorted({j for j, _ in self.terms}):
+            orders = sorted(k for jj, k in self.terms if jj == j)
+            parts.append(f"joint {j}" + (f" (order {', '.join(map(str, orders))})" if orders != [1] else ""))
+        return "residuals follow sin/cos of " + " and ".join(parts)
+
+    def prepare(self, ctx: Context, robot) -> np.ndarray:
         terms = self._terms()
         q = np.deg2rad(ctx.q_deg)
         basis = np.zeros((q.shape[0], 6, 2 * len(terms)))

@@ -23,27 +23,19 @@ MAX_DECIMALS = 9
 
 
 def format_like(old: str, value: float, tol: float) -> str:
-    """Write value in the style of ``old`` with as many decimals as the tolerance needs."""
-    body = old.lstrip("+-")
-    decimals = len(body.split(".", 1)[1]) if "." in body and "e" not in body.lower() else 0
-    for d in range(decimals, MAX_DECIMALS + 1):
-        if abs(round(value, d) - value) <= tol:
-            decimals = d
-            break
-    else:
-        decimals = MAX_DECIMALS
-    text = f"{value:.{decimals}f}"
-    if text.startswith("-") and float(text) == 0.0:
-        text = text[1:]  # no "-0.000"
-    had_dot_style = "." in body
-    if decimals == 0 and had_dot_style:
-        text += "."
-    if old.startswith("+") and not text.startswith("-"):
-        text = "+" + text
-    if body.startswith(".") and text.lstrip("+-").startswith("0."):
-        sign = text[0] if text[0] in "+-" else ""
-        text = sign + text.lstrip("+-")[1:]
-    return text
+    """Write value in the style of ``old`` with as many decimals as the tolerance needs.
+
+    The same rules as the bulk path (``choose_decimals`` and the number kernel), for one
+    number; numbers of more than 18 digits are written by Python's format."""
+    raw = np.frombuffer(old.encode("latin-1"), dtype=np.uint8)
+    style = number_kernel.old_styles(raw, np.array([0]), np.array([len(old)]))
+    decimals = choose_decimals(np.array([value], dtype=float), np.array([tol]), style["old_decimals"])
+    digits, negative, too_big = number_kernel.round_digits(np.array([value], dtype=float), decimals)
+    d, plus, dot_style = int(decimals[0]), bool(style["plus"][0]), bool(style["dot_style"][0])
+    if too_big[0]:  # |value| >= 1e18 / 10^d: no leading-zero or negative-zero case here
+        text = f"{abs(value):.{d}f}" + ("." if d == 0 and dot_style else "")
+        return ("-" if value < 0 else "+" if plus else "") + text
+    return number_kernel.number_text(int(digits[0]), d, bool(negative[0]), plus, dot_style, bool(style["no_lead_zero"][0]))
 
 
 def choose_decimals(values: np.ndarray, tol: np.ndarray, old_decimals: np.ndarray) -> np.ndarray:
@@ -151,42 +143,40 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
     """
     if len(original) != len(modified) or original.sources != modified.sources:
         raise EmitError("the modified toolpath does not come from this program (targets or sources differ)")
-    new = _text_values(modified, original)
-    old = _text_values(original, original)
-    spans = original.spans
-    derived = np.zeros(spans.shape[:2], dtype=bool)
-    if original.offset_span is not None:
-        derived = original.offset_span[:, :, 1] >= 0
-    changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~original.relative[:, None] & ~derived
-    edits: dict[tuple[int, int], tuple[int, str, int, int]] = {}  # (file, start) -> (end, text, row, field)
+    job = _Splice(original, modified)
+    job.changed_numbers()
+    job.offsets()
+    job.refuse_expressions()
+    missing = job.missing_components(insert_field)
+    job.increments_and_inserts(missing, insert_field)
+    _check_shared(original, modified, job.edited_keys())
+    return [job.file_text(file) for file in range(len(original.sources))]
 
-    def tol(r, f):
-        return float(TOLERANCE[f] / max(abs(original.scale[r, f]), 1e-12))
 
-    written = np.array(modified.position, dtype=float)  # positions as the new text will give them
+class _Splice:
+    """The edits of one splice: bulk number edits (arrays) and literal edits (a dict),
+    and the position each target's new text will read back as."""
 
-    def put(r, f, value):
-        file, start, end = (int(v) for v in spans[r, f])
-        text = format_like(original.sources[file].text[start:end], float(value), tol(r, f))
-        if f < 3 and not original.relative[r]:
-            written[r, f] = float(text) * original.scale[r, f] + (original.offset[r, f] if original.offset is not None else 0.0)
-        key = (file, start)
-        other = edits[key][1] if key in edits else None
-        if other is None and bulk is not None and (i := bulk.lookup(file, start)) is not None:
-            other = bulk.text(i)
-        if other is not None and other != text:
-            other_row = edits[key][2] if key in edits else int(bulk.rows[bulk.lookup(file, start)])
-            raise EmitError(
-                f"{original.sources[file].path}: {FIELDS[f]} of point '{original.target_name[r] or '?'}' is used by lines "
-                f"{original.line[other_row]} and {original.line[r]} with different new values ({other} and {text})"
-            )
-        edits[key] = (end, text, r, f)
-        return float(text)
+    def __init__(self, original: Toolpath, modified: Toolpath):
+        self.original, self.modified = original, modified
+        self.spans = original.spans
+        self.edits: dict[tuple[int, int], tuple[int, str, int, int]] = {}  # (file, start) -> (end, text, row, field)
+        self.bulk: _BulkEdits | None = None
+        self.written = np.array(modified.position, dtype=float)  # positions as the new text will give them
 
-    rows, fields = np.nonzero(changed)
-    bulk = None
-    if len(rows):
-        bulk = _BulkEdits(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
+    def tol(self, r, f) -> float:
+        return float(TOLERANCE[f] / max(abs(self.original.scale[r, f]), 1e-12))
+
+    def changed_numbers(self) -> None:
+        """Every number of a target whose value changed, written in place (vectorised)."""
+        original, modified, spans = self.original, self.modified, self.spans
+        new = _text_values(modified, original)
+        old = _text_values(original, original)
+        changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~original.relative[:, None] & ~self.derived()
+        rows, fields = np.nonzero(changed)
+        if not len(rows):
+            return
+        self.bulk = bulk = _BulkEdits(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
         bulk.refuse_conflicts(original)
         pos = fields < 3
         if pos.any():
@@ -194,92 +184,152 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
             r, f = rows[pos], fields[pos]
             off = original.offset[r, f] if original.offset is not None else 0.0
             keep = ~original.relative[r]
-            written[r[keep], f[keep]] = (vals * original.scale[r, f] + off)[keep]
-    # Offsets (RAPID Offs) against the value their base point is written with.
-    for r, f in zip(*np.nonzero(derived & (spans[:, :, 1] >= 0))):
-        key = (int(original.offset_span[r, f, 0]), int(original.offset_span[r, f, 1]))
-        base_edit = bulk.lookup(*key) if bulk is not None else None
-        base_text = edits[key][1] if key in edits else (bulk.text(base_edit) if base_edit is not None else None)
-        base = float(base_text) if base_text is not None else original.offset[r, f]
-        target = modified.values[r, f]
-        if not np.isnan(target) and target != original.values[r, f] or base_text is not None:
-            put(r, f, (target - base) / original.scale[r, f])
-    # A number written as an expression (G-code X[#1*2]) is there but cannot be rewritten.
-    fixed = ~np.isnan(original.values[:, F_POS]) & (spans[:, F_POS, 1] < 0)
-    moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True)
-    if (fixed & moved).any():
-        r, f = (int(v[0]) for v in np.nonzero(fixed & moved))
-        raise EmitError(f"{original.sources[int(original.file[r])].path}, line {original.line[r]}: {FIELDS[f]} is not a plain number in the text and cannot be changed")
-    # Components the text leaves out (partial aggregates, modal axes) inherit the previous
-    # target's value: write one only where the new value differs from what it inherits.
-    inherited = np.vstack([np.full((1, 3), np.nan), modified.position[:-1]])
-    differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
-    # (An unmoved target still needs one when the target it inherits from moved.)
-    missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (spans[:, F_POS, 1] < 0)
-    if missing.any() and (insert_field is None or original.insert_at is None):
-        r = int(np.nonzero(missing.any(axis=1))[0][0])
-        raise EmitError(f"line {original.line[r]}: target has no {FIELDS[int(np.nonzero(missing[r])[0][0])]} in the text to change")
-    # One pass in program order over incremental targets and targets that need a word added:
-    # each increment is taken from where the previous target is written (rounding included),
-    # so rounding never accumulates along a run of incremental moves.
-    inserts: dict[tuple[int, int], list[str]] = {}
-    for r in np.nonzero(original.relative | missing.any(axis=1))[0].tolist():
-        prev_written = np.nan_to_num(written[r - 1]) if r > 0 else np.zeros(3)
-        prev_original = np.nan_to_num(original.position[r - 1]) if r > 0 else np.zeros(3)
-        for f in range(3):
-            if original.relative[r] and spans[r, f, 1] >= 0 and not np.isnan(modified.values[r, f]):
-                inc = (modified.values[r, f] - prev_written[f]) / original.scale[r, f]
-                old_inc = (original.values[r, f] - prev_original[f]) / original.scale[r, f]
-                if inc != old_inc:
-                    inc = put(r, f, inc)
-                written[r, f] = prev_written[f] + inc * original.scale[r, f]
-            elif missing[r, f]:
-                file, offset = (int(v) for v in original.insert_at[r])
-                if offset < 0:
-                    raise EmitError(f"line {original.line[r]}: target has no {FIELDS[f]} in the text and none can be added")
-                value = modified.position[r, f] - (prev_written[f] if original.relative[r] else 0.0)
-                text = format_like("0.000", float(value / original.scale[r, f]), tol(r, f))
-                piece = insert_field(file, FIELDS[f], text)
-                if piece is None:
-                    raise EmitError(f"line {original.line[r]}: cannot add {FIELDS[f]} to this target")
-                written[r, f] = (prev_written[f] if original.relative[r] else 0.0) + float(text) * original.scale[r, f]
-                pieces = inserts.setdefault((file, offset), [])
-                if piece not in pieces:
-                    pieces.append(piece)
-            elif original.relative[r] and np.isnan(original.values[r, f]):
-                written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
-    for (file, offset), pieces in inserts.items():
-        edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
-    edited = np.array([f * (1 << 40) + st for f, st in edits], dtype=np.int64)
-    if bulk is not None:
-        edited = np.concatenate([edited, bulk.keys()])
-    _check_shared(original, modified, edited)
-    texts = [doc.text for doc in original.sources]
-    for file in range(len(texts)):
-        literal = sorted((start, end, text) for (f, start), (end, text, _, _) in edits.items() if f == file)
+            self.written[r[keep], f[keep]] = (vals * original.scale[r, f] + off)[keep]
+
+    def derived(self) -> np.ndarray:
+        """(N, FIELDS) True where a number is an offset from another point's (RAPID Offs)."""
+        if self.original.offset_span is None:
+            return np.zeros(self.spans.shape[:2], dtype=bool)
+        return self.original.offset_span[:, :, 1] >= 0
+
+    def put(self, r: int, f: int, value: float) -> float:
+        """Write one number of target r, field f as a literal edit; returns the value written.
+        A number another target already changes must get the same text."""
+        original, bulk = self.original, self.bulk
+        file, start, end = (int(v) for v in self.spans[r, f])
+        text = format_like(original.sources[file].text[start:end], float(value), self.tol(r, f))
+        if f < 3 and not original.relative[r]:
+            self.written[r, f] = float(text) * original.scale[r, f] + (original.offset[r, f] if original.offset is not None else 0.0)
+        key = (file, start)
+        other = self.edits[key][1] if key in self.edits else None
+        if other is None and bulk is not None and (i := bulk.lookup(file, start)) is not None:
+            other = bulk.text(i)
+        if other is not None and other != text:
+            other_row = self.edits[key][2] if key in self.edits else int(bulk.rows[bulk.lookup(file, start)])
+            raise EmitError(
+                f"{original.sources[file].path}: {FIELDS[f]} of point '{original.target_name[r] or '?'}' is used by lines "
+                f"{original.line[other_row]} and {original.line[r]} with different new values ({other} and {text})"
+            )
+        self.edits[key] = (end, text, r, f)
+        return float(text)
+
+    def existing_text(self, key: tuple[int, int]) -> str | None:
+        """The new text already decided for the number at (file, start), if any."""
+        if key in self.edits:
+            return self.edits[key][1]
+        i = self.bulk.lookup(*key) if self.bulk is not None else None
+        return self.bulk.text(i) if i is not None else None
+
+    def offsets(self) -> None:
+        """Offsets (RAPID Offs) against the value their base point is written with."""
+        original = self.original
+        for r, f in zip(*np.nonzero(self.derived() & (self.spans[:, :, 1] >= 0))):
+            key = (int(original.offset_span[r, f, 0]), int(original.offset_span[r, f, 1]))
+            base_text = self.existing_text(key)
+            base = float(base_text) if base_text is not None else original.offset[r, f]
+            target = self.modified.values[r, f]
+            if not np.isnan(target) and target != original.values[r, f] or base_text is not None:
+                self.put(r, f, (target - base) / original.scale[r, f])
+
+    def refuse_expressions(self) -> None:
+        """A number written as an expression (G-code X[#1*2]) is there but cannot be rewritten."""
+        original = self.original
+        fixed = ~np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
+        moved = ~np.isclose(self.modified.position, original.position, rtol=0, atol=0, equal_nan=True)
+        if (fixed & moved).any():
+            r, f = (int(v[0]) for v in np.nonzero(fixed & moved))
+            raise EmitError(f"{original.sources[int(original.file[r])].path}, line {original.line[r]}: {FIELDS[f]} is not a plain number in the text and cannot be changed")
+
+    def missing_components(self, insert_field) -> np.ndarray:
+        """(N, 3) components the text leaves out (partial aggregates, modal axes) that must be
+        written: they inherit the previous target's value, so only where the new value
+        differs from what it inherits (an unmoved target too, when the one before moved)."""
+        original, modified = self.original, self.modified
+        inherited = np.vstack([np.full((1, 3), np.nan), modified.position[:-1]])
+        differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
+        missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
+        if missing.any() and (insert_field is None or original.insert_at is None):
+            r = int(np.nonzero(missing.any(axis=1))[0][0])
+            raise EmitError(f"line {original.line[r]}: target has no {FIELDS[int(np.nonzero(missing[r])[0][0])]} in the text to change")
+        return missing
+
+    def increments_and_inserts(self, missing: np.ndarray, insert_field) -> None:
+        """One pass in program order over incremental targets and targets that need a word
+        added: each increment is taken from where the previous target is written (rounding
+        included), so rounding never accumulates along a run of incremental moves."""
+        original = self.original
+        inserts: dict[tuple[int, int], list[str]] = {}
+        for r in np.nonzero(original.relative | missing.any(axis=1))[0].tolist():
+            prev_written = np.nan_to_num(self.written[r - 1]) if r > 0 else np.zeros(3)
+            prev_original = np.nan_to_num(original.position[r - 1]) if r > 0 else np.zeros(3)
+            for f in range(3):
+                if original.relative[r] and self.spans[r, f, 1] >= 0 and not np.isnan(self.modified.values[r, f]):
+                    self._increment(r, f, prev_written, prev_original)
+                elif missing[r, f]:
+                    self._insert(r, f, prev_written, insert_field, inserts)
+                elif original.relative[r] and np.isnan(original.values[r, f]):
+                    self.written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
+        for (file, offset), pieces in inserts.items():
+            self.edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
+
+    def _increment(self, r: int, f: int, prev_written, prev_original) -> None:
+        scale = self.original.scale[r, f]
+        inc = (self.modified.values[r, f] - prev_written[f]) / scale
+        old_inc = (self.original.values[r, f] - prev_original[f]) / scale
+        if inc != old_inc:
+            inc = self.put(r, f, inc)
+        self.written[r, f] = prev_written[f] + inc * scale
+
+    def _insert(self, r: int, f: int, prev_written, insert_field, inserts) -> None:
+        original = self.original
+        file, offset = (int(v) for v in original.insert_at[r])
+        if offset < 0:
+            raise EmitError(f"line {original.line[r]}: target has no {FIELDS[f]} in the text and none can be added")
+        start = prev_written[f] if original.relative[r] else 0.0
+        text = format_like("0.000", float((self.modified.position[r, f] - start) / original.scale[r, f]), self.tol(r, f))
+        piece = insert_field(file, FIELDS[f], text)
+        if piece is None:
+            raise EmitError(f"line {original.line[r]}: cannot add {FIELDS[f]} to this target")
+        self.written[r, f] = start + float(text) * original.scale[r, f]
+        pieces = inserts.setdefault((file, offset), [])
+        if piece not in pieces:
+            pieces.append(piece)
+
+    def edited_keys(self) -> np.ndarray:
+        """file * 2^40 + start of every edited number."""
+        edited = np.array([f * (1 << 40) + st for f, st in self.edits], dtype=np.int64)
+        return np.concatenate([edited, self.bulk.keys()]) if self.bulk is not None else edited
+
+    def file_text(self, file: int) -> str:
+        """The new text of one source: its bulk and literal edits spliced in by the kernel."""
+        original, bulk = self.original, self.bulk
+        text = original.sources[file].text
+        literal = sorted((start, end, t) for (f, start), (end, t, _, _) in self.edits.items() if f == file)
         numbers = bulk.for_file(file) if bulk is not None else np.zeros(0, np.int64)
         if not literal and not len(numbers):
-            continue
+            return text
         if literal and len(numbers):
-            # A number both changed as a target's and written by a special case: it must agree.
-            lit_starts = np.array([st for st, _, _ in literal])
-            clash = np.isin(bulk.start[numbers], lit_starts)
-            for i in numbers[clash].tolist():
-                text = next(t for st, _, t in literal if st == bulk.start[i])
-                if text != bulk.text(i):
-                    raise EmitError(f"{original.sources[file].path}, line {original.line[bulk.rows[i]]}: one number asked to be written as both {bulk.text(i)} and {text}")
-            numbers = numbers[~clash]
+            numbers = self._drop_agreeing_duplicates(file, literal, numbers)
         starts = np.concatenate([bulk.start[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([st for st, _, _ in literal], dtype=np.int64)])
         ends = np.concatenate([bulk.end[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([e for _, e, _ in literal], dtype=np.int64)])
         cols = {k: np.concatenate([getattr(bulk, k)[numbers] if bulk is not None else np.zeros(0), np.zeros(len(literal))]) for k in _BulkEdits.COLUMNS}
         order = np.argsort(starts, kind="stable")
         position = np.empty(len(order), np.int64)
         position[order] = np.arange(len(order))
-        literals = {int(position[len(numbers) + j]): text for j, (_, _, text) in enumerate(literal)}
+        literals = {int(position[len(numbers) + j]): t for j, (_, _, t) in enumerate(literal)}
         literals.update({int(position[k]): bulk.literal[i] for k, i in enumerate(numbers.tolist()) if i in bulk.literal} if bulk is not None and bulk.literal else {})
-        new_bytes = number_kernel.splice_bytes(texts[file].encode("latin-1"), starts[order], ends[order], {k: v[order] for k, v in cols.items()}, literals)
-        texts[file] = new_bytes.decode("latin-1")
-    return texts
+        return number_kernel.splice_bytes(text.encode("latin-1"), starts[order], ends[order], {k: v[order] for k, v in cols.items()}, literals).decode("latin-1")
+
+    def _drop_agreeing_duplicates(self, file: int, literal, numbers: np.ndarray) -> np.ndarray:
+        """A number both changed as a target's and written by a special case must agree; the literal edit stays."""
+        bulk = self.bulk
+        lit_starts = np.array([st for st, _, _ in literal])
+        clash = np.isin(bulk.start[numbers], lit_starts)
+        for i in numbers[clash].tolist():
+            text = next(t for st, _, t in literal if st == bulk.start[i])
+            if text != bulk.text(i):
+                raise EmitError(f"{self.original.sources[file].path}, line {self.original.line[bulk.rows[i]]}: one number asked to be written as both {bulk.text(i)} and {text}")
+        return numbers[~clash]
 
 
 def _check_shared(original: Toolpath, modified: Toolpath, edited: np.ndarray) -> None:

@@ -1,8 +1,9 @@
 """Writing a new robot program from a Toolpath (when the input was another language).
 
 A narrow event protocol, as CAM post-processors use: start, frame, tool, speed, zone,
-move_joint / move_linear / move_circular / move_joints, raw line, end. ``RapidWriter``
-and ``KrlWriter`` implement it; ``write_program`` drives one over a Toolpath.
+move_joint / move_linear / move_circular / move_joints, raw line, end. Each dialect that
+can write a new program implements it (``Dialect.new_writer``); ``drive`` plays a
+Toolpath through one.
 """
 
 from __future__ import annotations
@@ -12,7 +13,7 @@ import re
 import numpy as np
 
 from ..errors import EmitError
-from ..frames import matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
+from ..frames import quat_wxyz_to_matrix
 from ..ir import Kind, Toolpath
 
 # A tool pointing straight down (180 degrees about y): the orientation given to targets
@@ -20,139 +21,20 @@ from ..ir import Kind, Toolpath
 TOOL_DOWN = np.array([0.0, 0.0, 1.0, 0.0])
 
 
-def _name(text: str, prefix: str) -> str:
+def legal_name(text: str, prefix: str) -> str:
+    """``text`` as an identifier (letters, digits, '_', a letter first)."""
     clean = re.sub(r"[^A-Za-z0-9_]", "_", text).strip("_") or prefix
     return clean if clean[0].isalpha() else f"{prefix}_{clean}"
 
 
-def _n(v: float, decimals: int = 4) -> str:
+def short_number(v: float, decimals: int = 4) -> str:
+    """``v`` rounded to ``decimals``, without trailing zeros (and never '-0')."""
     text = f"{v:.{decimals}f}".rstrip("0").rstrip(".")
     return "0" if text in ("-0", "") else text
 
 
-class RapidWriter:
-    def __init__(self, module: str = "Converted"):
-        self.module = _name(module, "Module")
-        self.decl: list[str] = []
-        self.body: list[str] = []
-        self.tool_name, self.wobj_name = "tool0", "wobj0"
-        self.v, self.z = 100.0, 0.0
-        self.proc = "main"
-
-    def start(self, name: str) -> None:
-        self.proc = _name(name, "main")
-
-    def frame(self, name: str, base_T_frame: np.ndarray) -> None:
-        self.wobj_name = _name(name, "wobj")
-        if self.wobj_name != "wobj0":
-            q = matrix_to_quat_wxyz(base_T_frame[None, :3, :3])[0]
-            t = base_T_frame[:3, 3]
-            self.decl.append(f"  TASK PERS wobjdata {self.wobj_name} := [FALSE,TRUE,\"\",[[{','.join(_n(v) for v in t)}],[{','.join(_n(v, 7) for v in q)}]],[[0,0,0],[1,0,0,0]]];")
-
-    def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
-        self.tool_name = _name(name, "tool")
-        if self.tool_name != "tool0":
-            q = matrix_to_quat_wxyz(flange_T_tcp[None, :3, :3])[0]
-            t = flange_T_tcp[:3, 3]
-            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,[[{','.join(_n(v) for v in t)}],[{','.join(_n(v, 7) for v in q)}]],[1,[0,0,1],[1,0,0,0],0,0,0]];")
-
-    def speed(self, mm_s: float) -> None:
-        self.v = mm_s
-
-    def zone(self, mm: float) -> None:
-        self.z = mm
-
-    def _args(self) -> str:
-        speed = f"v1000\\V:={_n(self.v, 3)}" if np.isfinite(self.v) else "v100"
-        zone = "fine" if not np.isfinite(self.z) or self.z <= 0 else f"z10\\Z:={_n(self.z, 3)}"
-        wobj = "" if self.wobj_name == "wobj0" else f"\\WObj:={self.wobj_name}"
-        return f"{speed}, {zone}, {self.tool_name}{wobj}"
-
-    @staticmethod
-    def _target(pose: np.ndarray, conf=None) -> str:
-        q = matrix_to_quat_wxyz(pose[None, :3, :3])[0]
-        c = [0, 0, 0, 0] if conf is None or np.isnan(conf).any() else [int(v) for v in conf]
-        return f"[[{','.join(_n(v) for v in pose[:3, 3])}],[{','.join(_n(v, 7) for v in q)}],[{','.join(map(str, c))}],[9E9,9E9,9E9,9E9,9E9,9E9]]"
-
-    def move_joint(self, pose, conf=None) -> None:
-        self.body.append(f"    MoveJ {self._target(pose, conf)}, {self._args()};")
-
-    def move_linear(self, pose, conf=None) -> None:
-        self.body.append(f"    MoveL {self._target(pose, conf)}, {self._args()};")
-
-    def move_circular(self, via, end, conf=None) -> None:
-        self.body.append(f"    MoveC {self._target(via, conf)}, {self._target(end, conf)}, {self._args()};")
-
-    def move_joints(self, q) -> None:
-        self.body.append(f"    MoveAbsJ [[{','.join(_n(v) for v in q)}],[9E9,9E9,9E9,9E9,9E9,9E9]]\\NoEOffs, {self._args()};")
-
-    def raw(self, line: str) -> None:
-        self.body.append(f"    ! {line}")
-
-    def end(self) -> list[str]:
-        lines = [f"MODULE {self.module}", *dict.fromkeys(self.decl), f"  PROC {self.proc}()", *self.body, "  ENDPROC", "ENDMODULE", ""]
-        return ["\n".join(lines)]
-
-
-class KrlWriter:
-    def __init__(self, name: str = "converted"):
-        self.name = _name(name, "prog").lower()
-        self.body: list[str] = []
-        self.approx = False
-
-    def start(self, name: str) -> None:
-        pass
-
-    @staticmethod
-    def _frame(t: np.ndarray) -> str:
-        abc = matrix_to_abc(t[None, :3, :3])[0]
-        return "{" + ", ".join(f"{k} {_n(v)}" for k, v in zip("XYZABC", [*t[:3, 3], *abc])) + "}"
-
-    def frame(self, name: str, base_T_frame: np.ndarray) -> None:
-        self.body.append(f"$BASE = {self._frame(base_T_frame)}")
-
-    def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
-        self.body.append(f"$TOOL = {self._frame(flange_T_tcp)}")
-
-    def speed(self, mm_s: float) -> None:
-        if np.isfinite(mm_s):
-            self.body.append(f"$VEL.CP = {_n(mm_s / 1000.0, 6)}")
-
-    def zone(self, mm: float) -> None:
-        self.approx = np.isfinite(mm) and mm > 0
-        if self.approx:
-            self.body.append(f"$APO.CDIS = {_n(mm, 3)}")
-
-    def _c(self) -> str:
-        return " C_DIS" if self.approx else ""
-
-    def move_joint(self, pose, conf=None) -> None:
-        self.body.append(f"PTP {self._frame(pose)}{self._c()}")
-
-    def move_linear(self, pose, conf=None) -> None:
-        self.body.append(f"LIN {self._frame(pose)}{self._c()}")
-
-    def move_circular(self, via, end, conf=None) -> None:
-        self.body.append(f"CIRC {self._frame(via)}, {self._frame(end)}{self._c()}")
-
-    def move_joints(self, q) -> None:
-        self.body.append("PTP {" + ", ".join(f"A{i + 1} {_n(v)}" for i, v in enumerate(q)) + "}")
-
-    def raw(self, line: str) -> None:
-        self.body.append(f"; {line}")
-
-    def end(self) -> list[str]:
-        src = [f"DEF {self.name}( )", *self.body, "END", ""]
-        dat = [f"DEFDAT {self.name}", "ENDDAT", ""]  # every target is written inline
-        return ["\r\n".join(src), "\r\n".join(dat)]
-
-
-def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[str]:
-    """Texts of a new program (RAPID: [module]; KRL: [src, dat]) with every target of tp."""
-    writer = {"rapid": RapidWriter, "krl": KrlWriter}.get(dialect)
-    if writer is None:
-        raise EmitError(f"cannot write a new {dialect} program (rapid or krl)")
-    w = writer(name)
+def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
+    """Texts of a new program (the writer's files, e.g. KRL [src, dat]) with every target of tp."""
     w.start(name)
     bad = np.nonzero(np.isnan(tp.position).any(axis=1) & (tp.kind != Kind.ABSJ))[0]
     if len(bad):
@@ -163,6 +45,10 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[s
         poses[no_ori, :3, :3] = quat_wxyz_to_matrix(TOOL_DOWN[None])[0]
     frame = tool = -1
     speed = zone = None
+    # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
+    from .. import dialects  # (not at the top: the dialects' writers import this module)
+
+    per_second = dialects.of(tp).speed_to_mm_per_s
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:
@@ -173,7 +59,7 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[s
             w.tool(tp.tool_names[tool], tp.tools[tool])
         if speed is None or not np.array_equal(tp.speed[i], speed, equal_nan=True):
             speed = tp.speed[i]
-            w.speed(float(speed))
+            w.speed(float(speed) * per_second)
         if zone is None or not np.array_equal(tp.zone[i], zone, equal_nan=True):
             zone = tp.zone[i]
             w.zone(float(zone))

@@ -35,8 +35,10 @@ def seed001_transfer(seed: int = 0) -> list[dict]:
     # Reducer harmonics on joints 2 and 3 make the error field richer than a few poses per
     # sub-space can learn (as on seed 001's real robot), and repeat in every theta1 sector:
     # the situation transfer learning is for.
-    truth = random_truth(robot, TOOL, parse_effects("geometric,base_frame,joint_compliance,joint_harmonics[joints=2,3;orders=3,5]"), rng)
-    truth = truth.with_values({p.name: 0.03 * np.sign(v) + v for p, v in zip(truth.params, truth.values) if p.name.startswith("joint_harmonics.")})
+    effects = parse_effects("geometric,base_frame,joint_compliance,joint_harmonics[joints=2,3;orders=3,5]")
+    truth = random_truth(robot, TOOL, effects, rng)
+    cyclic = {p.name for p in effects.effects[-1].params(robot)}  # the recipe's last effect: the harmonics
+    truth = truth.with_values({p.name: 0.03 * np.sign(v) + v for p, v in zip(truth.params, truth.values) if p.name in cyclic})
 
     def measure(q):
         data = simulate(truth, q, rng)

@@ -13,11 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import InputError, ModelFileError
+from ..errors import ModelFileError
 from .features import features
-from .gp import GPRPredictor
-from .grid import GridPredictor
-from .nn import PSOBPPredictor
+from .state import base_estimator_from_state, estimator_state
+from .transfer import TrGPRPredictor
 
 FEATURES = {"gpr": "pose", "tr-gpr": "pose", "pso-bp": "joints+disp", "grid": "position"}
 
@@ -52,44 +51,8 @@ class Residual:
             raise ModelFileError(f"{source}: key 'predictor': not a readable predictor ({exc})") from None
 
 
-def estimator_state(est) -> dict:
-    if isinstance(est, GPRPredictor):
-        return {"type": "gpr", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
-                "theta": est.gpr_.kernel_.theta.tolist(), "weights": None if est.weights_ is None else est.weights_.tolist()}
-    if isinstance(est, PSOBPPredictor):
-        return {"type": "pso-bp", "params": est.get_params(), "weights": est.weights_.tolist(), "shapes": [list(s) for s in est.shapes_],
-                "x_mean": est.x_mean_.tolist(), "x_std": est.x_std_.tolist(), "y_mean": est.y_mean_.tolist(), "y_std": est.y_std_.tolist()}
-    if isinstance(est, GridPredictor):
-        return {"type": "grid", "params": est.get_params(), "axes": [a.tolist() for a in est.axes_], "values": est.interp_.values.tolist()}
-    if hasattr(est, "to_state"):
-        return est.to_state()
-    raise InputError(f"cannot save a predictor of type {type(est).__name__}")
-
-
 def estimator_from_state(state: dict):
-    kind = state["type"]
-    if kind == "gpr":
-        est = GPRPredictor(**state["params"])
-        w = state.get("weights")
-        return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w))
-    if kind == "pso-bp":
-        est = PSOBPPredictor(**state["params"])
-        est.weights_ = np.asarray(state["weights"], dtype=float)
-        est.shapes_ = [tuple(s) for s in state["shapes"]]
-        for key in ("x_mean", "x_std", "y_mean", "y_std"):
-            setattr(est, f"{key}_", np.asarray(state[key], dtype=float))
-        est.n_features_in_ = len(est.x_mean_)
-        return est
-    if kind == "grid":
-        from scipy.interpolate import RegularGridInterpolator
-
-        est = GridPredictor(**state["params"])
-        est.axes_ = [np.asarray(a) for a in state["axes"]]
-        est.interp_ = RegularGridInterpolator(est.axes_, np.asarray(state["values"]), method="linear", bounds_error=False, fill_value=np.nan)
-        est.n_features_in_ = 3
-        return est
-    if kind == "tr-gpr":
-        from .transfer import TrGPRPredictor
-
+    """Any predictor from its saved state: the transfer learner here, the base learners in ``state``."""
+    if state["type"] == "tr-gpr":
         return TrGPRPredictor.from_state(state)
-    raise ValueError(f"unknown predictor type '{kind}'")
+    return base_estimator_from_state(state)

@@ -32,6 +32,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from .gp import GPRPredictor
+from .state import base_estimator_from_state, estimator_state
 
 
 def region_similarity(errors_a: np.ndarray, errors_b: np.ndarray) -> float:
@@ -242,20 +243,16 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         return out
 
     def to_state(self) -> dict:
-        from .residual import estimator_state
-
         source = None if getattr(self, "source_model_", None) is None else estimator_state(self.source_model_)
         return {"type": "tr-gpr", "params": self.get_params(), "learners": [estimator_state(m) for m in self.learners_],
                 "learner_weights": self.learner_weights_.tolist(), "source": source, "source_theta_deg": list(getattr(self, "source_theta_", (0.0, 0.0)))}
 
     @classmethod
     def from_state(cls, state: dict) -> "TrGPRPredictor":
-        from .residual import estimator_from_state
-
         est = cls(**state["params"])
-        est.learners_ = [estimator_from_state(s) for s in state["learners"]]
+        est.learners_ = [base_estimator_from_state(s) for s in state["learners"]]
         est.learner_weights_ = np.asarray(state["learner_weights"], dtype=float)
-        est.source_model_ = None if state.get("source") is None else estimator_from_state(state["source"])
+        est.source_model_ = None if state.get("source") is None else base_estimator_from_state(state["source"])
         est.source_theta_ = tuple(state.get("source_theta_deg", (0.0, 0.0)))
         est.n_features_in_ = est.learners_[0].n_features_in_
         return est

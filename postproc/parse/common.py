@@ -132,69 +132,16 @@ class Builder:
     def build(self, orientation: bool = True) -> Toolpath:
         """The Toolpath; ``orientation=False`` leaves orientations NaN for a caller that
         computes them itself (KRL fills partial aggregates first)."""
-        defaults = {
-            "file": (np.int16, 0),
-            "kind": (np.int8, 0),
-            "line": (np.int32, 0),
-            "values": (float, np.nan),
-            "spans": (np.int64, -1),
-            "scale": (float, 1.0),
-            "relative": (bool, False),
-            "conf": (float, np.nan),
-            "speed": (float, np.nan),
-            "zone": (float, np.nan),
-            "tool": (np.int32, 0),
-            "frame": (np.int32, 0),
-            "resolved": (bool, True),
-            "name": (object, ""),
-            "insert_at": (np.int64, -1),
-            "offset": (float, 0.0),
-            "offset_span": (np.int64, -1),
-        }
-        shapes = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
-        total = sum(len(b["order"]) for b in self.blocks)
-        order = np.concatenate([b["order"] for b in self.blocks]) if self.blocks else np.zeros(0, np.int64)
-        # Program order is statement order; most programs arrive sorted and need no copy.
-        perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
-        cols = {}
-        for key, (dtype, fill) in defaults.items():
-            if key in ("offset", "offset_span") and not any(key in b for b in self.blocks):
-                cols[key] = None  # no Offs in this program: 600 bytes a target saved
-                continue
-            shape = shapes.get(key, ())
-            parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
-            if not parts:
-                col = np.full((0,) + shape, fill, dtype=dtype)
-            elif len(parts) == 1:
-                col = parts[0]
-            else:
-                col = np.concatenate(parts)
-            cols[key] = col if perm is None else col[perm]
+        cols = self._columns()
         values = cols["values"]
-        from ..frames import abc_to_quat_wxyz
-
-        position = values[:, 0:3].copy()
-        if not orientation:
-            orientation = np.full((total, 4), np.nan)
-        elif self.orientation_kind == "quat":
-            orientation = values[:, 3:7].copy()
-            norm = np.linalg.norm(orientation, axis=1, keepdims=True)
-            orientation = np.where(norm > 0, orientation / np.where(norm > 0, norm, 1), np.nan)
-        elif self.orientation_kind == "abc":
-            orientation = np.full((total, 4), np.nan)
-            ok = ~np.isnan(values[:, 3:6]).any(axis=1)
-            if ok.any():
-                orientation[ok] = abc_to_quat_wxyz(values[ok, 3:6])
-        else:
-            orientation = np.full((total, 4), np.nan)
         return Toolpath(
             dialect=self.dialect,
             sources=tuple(self.sources),
             kind=cols["kind"],
             line=cols["line"],
             file=cols["file"],
-            position=position,
-            orientation=orientation,
+            position=values[:, 0:3].copy(),
+            orientation=self._orientations(values) if orientation else np.full((len(values), 4), np.nan),
             orientation_kind=self.orientation_kind,
             joints=values[:, 7:13].copy(),
             ext=values[:, 13:19].copy(),
@@ -220,6 +167,66 @@ class Builder:
             offset_span=cols["offset_span"],
             notes=tuple(self.notes),
         )
+
+    def _columns(self) -> dict[str, np.ndarray | None]:
+        """Every per-target column, joined over the blocks in program order (defaults where a block has none)."""
+        total = sum(len(b["order"]) for b in self.blocks)
+        order = np.concatenate([b["order"] for b in self.blocks]) if self.blocks else np.zeros(0, np.int64)
+        # Program order is statement order; most programs arrive sorted and need no copy.
+        perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
+        cols = {}
+        for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
+            if key in ("offset", "offset_span") and not any(key in b for b in self.blocks):
+                cols[key] = None  # no Offs in this program: 600 bytes a target saved
+                continue
+            shape = _COLUMN_SHAPES.get(key, ())
+            parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
+            if not parts:
+                col = np.full((0,) + shape, fill, dtype=dtype)
+            elif len(parts) == 1:
+                col = parts[0]
+            else:
+                col = np.concatenate(parts)
+            cols[key] = col if perm is None else col[perm]
+        return cols
+
+    def _orientations(self, values: np.ndarray) -> np.ndarray:
+        """(N, 4) unit quaternions from the orientation numbers in the dialect's notation (NaN where none)."""
+        from ..frames import abc_to_quat_wxyz
+
+        if self.orientation_kind == "quat":
+            orientation = values[:, 3:7].copy()
+            norm = np.linalg.norm(orientation, axis=1, keepdims=True)
+            return np.where(norm > 0, orientation / np.where(norm > 0, norm, 1), np.nan)
+        orientation = np.full((len(values), 4), np.nan)
+        if self.orientation_kind == "abc":
+            ok = ~np.isnan(values[:, 3:6]).any(axis=1)
+            if ok.any():
+                orientation[ok] = abc_to_quat_wxyz(values[ok, 3:6])
+        return orientation
+
+
+# Per-target columns of the builder: dtype and the value a block that gives none gets.
+_COLUMN_DEFAULTS = {
+    "file": (np.int16, 0),
+    "kind": (np.int8, 0),
+    "line": (np.int32, 0),
+    "values": (float, np.nan),
+    "spans": (np.int64, -1),
+    "scale": (float, 1.0),
+    "relative": (bool, False),
+    "conf": (float, np.nan),
+    "speed": (float, np.nan),
+    "zone": (float, np.nan),
+    "tool": (np.int32, 0),
+    "frame": (np.int32, 0),
+    "resolved": (bool, True),
+    "name": (object, ""),
+    "insert_at": (np.int64, -1),
+    "offset": (float, 0.0),
+    "offset_span": (np.int64, -1),
+}
+_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
 
 
 __all__ = ["FIELDS", "Builder", "Kind", "LineIndex", "Numbers", "scan_numbers"]

@@ -47,6 +47,9 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title or 'postproc diagnosis')}</title><style>{CSS}</style></head><body>"]
     parts.append(f"<h1>{html.escape(title or 'Diagnosis')}</h1>")
     parts.append(f"<p>Robot <b>{html.escape(model.robot.name)}</b>, tool {model.tool_mm.tolist()} mm, model effects <code>{html.escape(model.effects.spec())}</code>; {st.n} poses from <code>{html.escape(meas.source)}</code>.</p>")
+    if len(model.effects):
+        # Each effect's own plain-language description (postproc.effects: Effect.summary).
+        parts.append("<ul>" + "".join(f"<li><code>{html.escape(e.spec())}</code>: {html.escape(e.summary)}</li>" for e in model.effects) + "</ul>")
     parts.append("<h2>What to do</h2>")
     parts.extend(f"<div class='finding'>{html.escape(f)}</div>" for f in diagnosis.findings)
     parts.append("<h2>Compare</h2><table><tr><th class='l'></th><th>RMS (mm)</th><th>mean (mm)</th><th>max (mm)</th><th>RMS x</th><th>RMS y</th><th>RMS z</th></tr>")

@@ -17,11 +17,11 @@ import numpy as np
 from lark import Token, Tree
 from numba import njit
 
-from ..frames import make_transform, quat_wxyz_to_matrix
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar, literal_number
-from .line_shapes import LineShapes
+from ...frames import make_transform, quat_wxyz_to_matrix
+from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.grammar import grammar, literal_number
+from ...parse.line_shapes import LineShapes
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -40,6 +40,10 @@ RE_MOVE_LIT = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<lit>{RT}){ARGS}{TAI
 RE_MOVE_NAME = re.compile(rf"^{W}(?P<mv>MoveL|MoveJ)[ \t]+(?P<name>{NAME}(?:\{{{W}\d+{W}\}})?){ARGS}{TAIL}", FLAGS)
 RE_DECL = re.compile(rf"^{W}(?:LOCAL[ \t]+)?(?:TASK[ \t]+)?(?:CONST|PERS|VAR)[ \t]+robtarget[ \t]+(?P<name>{NAME}){W}:={W}(?P<lit>{RT}){TAIL}", FLAGS)
 RE_COMMENT = re.compile(r'("[^"\n]*")|(![^\n]*)')
+
+# An external axis the robot does not have is written 9E9; anything this large is 'none'.
+NO_AXIS_TEXT = "9E9"
+NO_AXIS_ABOVE = 8.9e9
 
 # Where the 17 numbers of a robtarget go: x y z, q1..q4, cf1 cf4 cf6 cfx, e1..e6.
 _RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
@@ -76,9 +80,9 @@ def _zone(name: str) -> float:
 
 
 @njit(cache=True)
-def _gather_robtargets(first, num_start, num_end, num_value, fields):
-    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals whose 17
-    numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
+def _gather_robtargets(first, num_start, num_end, num_value, fields, source):
+    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals of module
+    ``source`` whose 17 numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
     m = len(first)
     values = np.full((m, NF), np.nan)
     spans = np.full((m, NF, 3), -1, np.int64)
@@ -90,29 +94,82 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields):
             v = num_value[i]
             if f < 0:
                 conf[r, -f - 1] = v
-            elif not (f >= 13 and abs(v) >= 8.9e9):
+            elif not (f >= 13 and abs(v) >= NO_AXIS_ABOVE):
                 values[r, f] = v
-                spans[r, f, 0] = 0
+                spans[r, f, 0] = source
                 spans[r, f, 1] = num_start[i]
                 spans[r, f, 2] = num_end[i]
     return values, spans, conf
+
+
+def _drop_absent_axes(values: np.ndarray, spans: np.ndarray) -> None:
+    """External axes written 9E9 (none) become NaN without a span (in place); the same
+    rule as the bulk kernel's."""
+    ext = values[F_EXT]
+    absent = ~(np.abs(ext) < NO_AXIS_ABOVE)  # (a number the scanner could not read too)
+    ext[absent] = np.nan
+    spans[F_EXT][absent] = -1
+
+
+def _no_spans() -> np.ndarray:
+    return np.full((NF, 3), -1, dtype=np.int64)
 
 
 def _pose(numbers7: np.ndarray) -> np.ndarray:
     return make_transform(quat_wxyz_to_matrix(numbers7[3:7][None])[0], numbers7[:3])
 
 
-class RapidParser:
-    def __init__(self, doc: SourceDoc):
-        self.doc = doc
-        self.code = blank_comments(doc.text)
-        self.lines = LineIndex(doc.text)
-        self.numbers = scan_numbers(self.code)
-        self.builder = Builder("rapid", "quat", [doc])
+def parse_modules(sources: list[SourceDoc]) -> Toolpath:
+    """The IR of a RAPID program: its modules share one set of data (robtargets, tools,
+    work objects), as the task's modules do on the controller. A program file (.pgf, role
+    'pgf') among the sources holds no targets and is kept as it is."""
+    builder = Builder("rapid", "quat", list(sources))
+    data = _Data()
+    modules = [RapidParser(doc, builder, data, index) for index, doc in enumerate(sources) if doc.role != "pgf"]
+    for module in modules:  # one-line declarations first: a data module may come after its users
+        module.declarations()
+    for module in modules:
+        module.statements()
+    for module in modules:
+        module.bulk_moves()
+    _bind_late_declarations(builder, data)
+    return builder.build()
+
+
+def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
+    """Tools and work objects a move used before the module declaring them was read: RAPID
+    data are visible to the whole task, whatever the order of the declarations."""
+    for names, known, table, register in ((builder.tool_names, builder.tool_known, data.tools, builder.tool_index),
+                                          (builder.frame_names, builder.frame_known, data.wobjs, builder.frame_index)):
+        for i, name in enumerate(list(names)):
+            if not known[i] and table.get(name.upper()) is not None:
+                register(name, table[name.upper()])
+
+
+class _Data:
+    """The program's named data: robtargets, tools and work objects by upper-case name."""
+
+    def __init__(self):
         self.points: dict[str, tuple] = {}  # name -> (values, spans, conf)
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
+
+
+class RapidParser:
+    """One module; ``index`` is its place among the program's sources (the span source)."""
+
+    def __init__(self, doc: SourceDoc, builder: Builder | None = None, data: _Data | None = None, index: int = 0):
+        self.doc = doc
+        self.index = index
+        self.order_base = index << 40  # program order: module, then offset
+        self.code = blank_comments(doc.text)
+        self.lines = LineIndex(doc.text)
+        self.numbers = scan_numbers(self.code)
+        self.builder = Builder("rapid", "quat", [doc]) if builder is None else builder
+        data = _Data() if data is None else data
+        self.points, self.tools, self.wobjs = data.points, data.tools, data.wobjs
         self.rows: list[dict] = []
+        self._shapes = None
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
@@ -127,33 +184,47 @@ class RapidParser:
         for k, f in enumerate(fields):
             if f >= 0:
                 values[f] = vals[k]
-                spans[f] = (0, self.numbers.start[sl][k], self.numbers.end[sl][k])
+                spans[f] = (self.index, self.numbers.start[sl][k], self.numbers.end[sl][k])
             else:
                 conf[-f - 1] = vals[k]
-        values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])  # 9E9: no axis
-        spans[13:19][np.isnan(values[13:19])] = -1
+        _drop_absent_axes(values, spans)
         return values, spans, conf
 
     def _bulk_literals(self, starts: np.ndarray):
         """Vectorised read of many one-line robtarget literals: values (M, NF), spans, conf."""
         lo = np.searchsorted(self.numbers.start, starts)
-        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS)
+        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS, self.index)
 
     # --------------------------------------------------------------- parse
     def parse(self) -> Toolpath:
+        """The IR of this module as a program on its own."""
+        self.declarations()
+        self.statements()
+        self.bulk_moves()
+        return self.builder.build()
+
+    def declarations(self) -> None:
+        """One-line robtarget declarations, read in bulk."""
         raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
         shapes = LineShapes(self.code, raw, self.lines.starts)
-        decls = shapes.match(RE_DECL)
-        lits = shapes.match(RE_MOVE_LIT)
-        named = shapes.match(RE_MOVE_NAME)
+        self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
+        decls = self._shapes["decls"]
         if len(decls):
             values, spans, conf = self._bulk_literals(decls.span("lit")[0])
             for i, name in enumerate(decls.group("name")):
                 self.points[name.upper()] = (values[i], spans[i], conf[i])
+
+    def statements(self) -> None:
+        """Every statement the bulk shapes leave, through the grammar, in module order."""
         skip = np.zeros(len(self.lines.starts), bool)
-        for matches in (decls, lits, named):
+        for matches in self._shapes.values():
             skip[matches.line] = True
         self._slow(skip)
+
+    def bulk_moves(self) -> None:
+        """One-line MoveL/MoveJ to a literal or a named target, read in bulk; then the
+        targets the grammar read."""
+        lits, named = self._shapes["lits"], self._shapes["named"]
         if len(lits):
             values, spans, conf = self._bulk_literals(lits.span("lit")[0])
             self._bulk_rows(lits, values, spans, conf, np.full(len(lits), "", dtype=object))
@@ -169,7 +240,10 @@ class RapidParser:
             spans = np.array([f[1] if f else nan_s for f in found])[codes]
             conf = np.array([f[2] if f else nan_c for f in found])[codes]
             self._bulk_rows(named, values, spans, conf, np.array(names, dtype=object)[codes])
-        return self._finish()
+        if self.rows:  # the grammar's targets, after the bulk ones (the builder sorts by order)
+            cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
+            order = cols.pop("order")
+            self.builder.add_block(order + self.order_base, line=self.lines.line(order), file=np.full(len(order), self.index), **cols)
 
     def _bulk_rows(self, matches, values, spans, conf, names):
         def per_row(group, convert, dtype=None):
@@ -179,7 +253,8 @@ class RapidParser:
         tool_idx = per_row("tool", lambda t: self._frame_index(t, self.tools, self.builder.tool_index), np.int32)
         wobj_idx = per_row("wobj", lambda t: self._frame_index(t or "wobj0", self.wobjs, self.builder.frame_index), np.int32)
         self.builder.add_block(
-            matches.start,
+            matches.start + self.order_base,
+            file=np.full(len(matches), self.index),
             kind=per_row("mv", lambda t: _MOVE_KIND[t.upper()], np.int8),
             line=matches.line + 1,
             values=values,
@@ -298,9 +373,7 @@ class RapidParser:
             lit = self._literal(s, e, _JT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"jointtarget {name} needs 12 numbers")
-            values, spans, conf = lit
-            values[13:19] = np.where(np.abs(values[13:19]) >= 8.9e9, np.nan, values[13:19])
-            self.points[name.upper()] = (values, spans, conf)
+            self.points[name.upper()] = lit
         elif dtype in ("tooldata", "wobjdata"):
             text = self.code[s:e].upper()
             holds = text.lstrip("[ \t").startswith("TRUE")
@@ -315,23 +388,26 @@ class RapidParser:
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
 
     def _target(self, node, start: int, joint: bool = False):
-        """values, spans, conf, offset, name of a target expression; None values where unknown."""
-        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF))
+        """(values, spans, conf, offset, offset_span), name of a target expression; NaN values where unknown.
+
+        ``offset`` and ``offset_span``: for Offs(p, dx, dy, dz) the value of p's numbers and
+        where they are written (the IR value is p + the offset written in the Offs call)."""
+        empty = (np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.zeros(NF), _no_spans())
         if isinstance(node, Tree) and node.data == "aggregate":
             s, e = self._span(node, start)
             lit = self._literal(s, e, _JT_FIELDS if joint else _RT_FIELDS)
             if lit is None:
                 raise self.lines.error(self.doc.path, s, f"a {'jointtarget' if joint else 'robtarget'} literal needs {12 if joint else 17} numbers")
-            return (*lit, np.zeros(NF)), ""
+            return (*lit, np.zeros(NF), _no_spans()), ""
         s, e = self._span(node, start)
         text = re.sub(r"\s+", "", self.doc.text[s:e])
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "OFFS":
             args = node.children[1].children if len(node.children) > 1 else []
             base_expr = args[0].children[0] if args else None
-            (values, spans, conf, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
+            (values, spans, conf, _, _), base_name = self._target(base_expr, start) if base_expr is not None else (empty, "")
             values, spans = values.copy(), spans.copy()
             offset = np.zeros(NF)
-            offset_span = np.full((NF, 3), -1, dtype=np.int64)
+            offset_span = _no_spans()
             for k in range(3):
                 arg = args[k + 1].children[0] if len(args) > k + 1 else None
                 a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
@@ -341,19 +417,18 @@ class RapidParser:
                     delta = float(self.numbers.value[sl][0])
                     offset[k] = values[k]
                     offset_span[k] = spans[k]
-                    spans[k] = (0, self.numbers.start[sl][0], self.numbers.end[sl][0])
+                    spans[k] = (self.index, self.numbers.start[sl][0], self.numbers.end[sl][0])
                     values[k] = values[k] + delta
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
                     spans[k] = -1
-            self._offset_span = offset_span
-            return (values, spans, conf, offset), text
+            return (values, spans, conf, offset, offset_span), text
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
             return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
             found = self.points.get(text.upper())
             if found is not None:
-                return (*found, np.zeros(NF)), text
+                return (*found, np.zeros(NF), _no_spans()), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
         return empty, text
 
@@ -361,12 +436,12 @@ class RapidParser:
         """RelTool(p, dx, dy, dz [Rx] [Ry] [Rz]): offset and turn in the tool frame of p.
 
         The result is reported but not editable (its numbers mix through p's rotation)."""
-        from ..frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
+        from ...frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
 
         args = node.children[1].children if len(node.children) > 1 else []
         if len(args) < 4:
             return empty
-        (values, _, conf, _), _ = self._target(args[0].children[0], start)
+        (values, _, conf, _, _), _ = self._target(args[0].children[0], start)
         deltas = [literal_number(a.children[0]) for a in args[1:4]]
         turns = {"RX": 0.0, "RY": 0.0, "RZ": 0.0}
         for a in args:
@@ -380,7 +455,7 @@ class RapidParser:
         out[:3] = values[:3] + rot @ np.array(deltas)
         turned = rot @ rot_x(np.radians(turns["RX"])) @ rot_y(np.radians(turns["RY"])) @ rot_z(np.radians(turns["RZ"]))
         out[3:7] = matrix_to_quat_wxyz(turned[None])[0]
-        return out, np.full((NF, 3), -1, dtype=np.int64), conf, np.zeros(NF)
+        return out, _no_spans(), conf, np.zeros(NF), _no_spans()
 
     def _move(self, node: Tree, start: int) -> None:
         mv = str(node.children[0]).upper()
@@ -409,23 +484,11 @@ class RapidParser:
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
         for k, tnode in zip(kinds, positional[:n_targets]):
-            self._offset_span = np.full((NF, 3), -1, dtype=np.int64)
-            (values, spans, conf, offset), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
+            (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=self._offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)
         return self.doc.text[s:e].strip()
-
-    def _finish(self) -> Toolpath:
-        if self.rows:
-            cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
-            order = cols.pop("order")
-            self.builder.add_block(order, line=self.lines.line(order), **cols)
-        return self.builder.build()
-
-
-def parse_rapid(path: str, data: bytes) -> Toolpath:
-    return RapidParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()

@@ -17,12 +17,12 @@ import re
 import numpy as np
 from lark import Token, Tree
 
-from ..frames import make_transform
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from . import scan_kernel
-from .common import Builder, LineIndex, parse_statement, scan_numbers
-from .grammar import grammar
-from .line_shapes import LineShapes
+from ...frames import make_transform
+from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...parse import scan_kernel
+from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.grammar import grammar
+from ...parse.line_shapes import LineShapes
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -40,6 +40,16 @@ _MOTION_KIND = {0: Kind.RAPID, 1: Kind.LINEAR, 2: Kind.ARC_CW, 3: Kind.ARC_CCW}
 _MOTION_KIND_CODES = np.array([_MOTION_KIND[c] for c in range(4)], dtype=np.int8)
 _NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
 _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
+# Modal G codes that set one state column: G code -> (column, value).
+_STATE_OF_G = {
+    **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
+    80.0: ("canned", 0.0),
+    **{g: ("units", g) for g in (20.0, 21.0)},
+    **{g: ("dist", g) for g in (90.0, 91.0)},
+    **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
+    **{g: ("wcs", float(w)) for g, w in _WCS.items()},
+    **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
+}
 
 
 class _Unknown(Exception):
@@ -76,7 +86,7 @@ class GcodeParser:
             lo = np.searchsorted(numbers.start, bulk_starts)
             hi = np.searchsorted(numbers.start, code_end)
             counts = hi - lo
-            from .common import _ranges
+            from ...parse.common import _ranges
 
             idx = _ranges(lo, hi)
             row = np.repeat(np.arange(nb), counts)
@@ -187,74 +197,85 @@ class GcodeParser:
         return int(self._eval(ref))
 
     def _block(self, tree: Tree, start: int, out, stack) -> None:
+        """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
         state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
-        nonmotion = g53 = False
         ok = True
         gcodes: list[float] = []
         for item in tree.children:
             if not isinstance(item, Tree):
                 continue
             if item.data == "assign":
-                try:
-                    self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
-                except (_Unknown, ValueError, ZeroDivisionError) as exc:
-                    self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
-                    self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
-                continue
-            if item.data == "oword":
-                if len(item.children) < 2:
-                    continue  # a program number (Fanuc O1000)
-                kw = str(item.children[1]).lower()
-                label = re.sub(r"\s+", "", str(item.children[0]).lower())
-                opens = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
-                if kw in opens:
-                    stack.append((f"{label} {opens[kw]}", start))
-                elif kw in ("endsub", "endif", "endwhile", "endrepeat") or (kw == "while" and stack and stack[-1][0] == f"{label} while"):
-                    if not stack or stack[-1][0] != f"{label} {kw}":
-                        raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
-                    stack.pop()
-                continue
-            if item.data == "keyword":
+                self._assign(item, start)
+            elif item.data == "oword":
+                self._oword(item, start, stack)
+            elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
-                continue
-            if item.data != "word":
-                continue
-            letter = str(item.children[0]).upper()
-            vnode = item.children[1]
-            try:
-                value = self._eval(vnode)
-            except (_Unknown, ValueError, ZeroDivisionError) as exc:
-                value = np.nan
-                ok = False
-                self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
-            if letter == "G":
-                gcodes.append(round(value, 1))
-            elif letter == "H":
-                state["h"] = value
-            elif letter in _AX:
-                values[_AX[letter]] = value
-                if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
-                    tok_start, tok_end = _token_span(vnode)
-                    spans[_AX[letter]] = (start + tok_start, start + tok_end)
+            elif item.data == "word":
+                ok &= self._word(item, start, values, spans, state, gcodes)
+        nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
+        out["offset"].append(start)
+        out["values"].append(values)
+        out["spans"].append(spans)
+        for k, v in state.items():
+            out[k].append(v)
+        out["nonmotion"].append(nonmotion)
+        out["ok"].append(ok)
+        out["g53"].append(g53)
+
+    def _assign(self, item: Tree, start: int) -> None:
+        """#n = expression: evaluated now (program order); a value that cannot be is forgotten."""
+        try:
+            self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
+            self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
+            self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
+
+    def _oword(self, item: Tree, start: int, stack) -> None:
+        """O-word blocks (sub, if, while, do, repeat) must close in order."""
+        if len(item.children) < 2:
+            return  # a program number (Fanuc O1000)
+        kw = str(item.children[1]).lower()
+        label = re.sub(r"\s+", "", str(item.children[0]).lower())
+        opens = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
+        if kw in opens:
+            stack.append((f"{label} {opens[kw]}", start))
+        elif kw in ("endsub", "endif", "endwhile", "endrepeat") or (kw == "while" and stack and stack[-1][0] == f"{label} while"):
+            if not stack or stack[-1][0] != f"{label} {kw}":
+                raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
+            stack.pop()
+
+    def _word(self, item: Tree, start: int, values, spans, state, gcodes) -> bool:
+        """One letter word into the block's values / state; False where its value is unknown."""
+        letter = str(item.children[0]).upper()
+        vnode = item.children[1]
+        known = True
+        try:
+            value = self._eval(vnode)
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
+            value, known = np.nan, False
+            self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
+        if letter == "G":
+            gcodes.append(round(value, 1))
+        elif letter == "H":
+            state["h"] = value
+        elif letter in _AX:
+            values[_AX[letter]] = value
+            if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
+                tok_start, tok_end = _token_span(vnode)
+                spans[_AX[letter]] = (start + tok_start, start + tok_end)
+        return known
+
+    def _apply_gcodes(self, gcodes: list[float], state: dict, values, start: int) -> tuple[bool, bool]:
+        """The block's G codes into its modal state; returns (no motion in this block, G53)."""
+        nonmotion = g53 = False
         for gc in gcodes:
-            if gc in (0.0, 1.0, 2.0, 3.0):
-                state["motion"] = gc
-            elif gc == 80.0:
-                state["canned"] = 0.0
+            if gc in _STATE_OF_G:
+                key, value = _STATE_OF_G[gc]
+                state[key] = value
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
-            elif gc in (20.0, 21.0):
-                state["units"] = gc
-            elif gc in (90.0, 91.0):
-                state["dist"] = gc
-            elif gc in (17.0, 18.0, 19.0):
-                state["plane"] = gc
-            elif gc in _WCS:
-                state["wcs"] = float(_WCS[gc])
-            elif gc in (43.0, 43.1, 43.4, 43.5, 49.0):
-                state["tlo"] = gc
             elif gc == 53.0:
                 g53 = True
             elif gc == 68.2:
@@ -269,18 +290,11 @@ class GcodeParser:
                 nonmotion = True
                 if gc == 10.0:
                     self._g10(values, start)
-        out["offset"].append(start)
-        out["values"].append(values)
-        out["spans"].append(spans)
-        for k, v in state.items():
-            out[k].append(v)
-        out["nonmotion"].append(nonmotion)
-        out["ok"].append(ok)
-        out["g53"].append(g53)
+        return nonmotion, g53
 
     def _tilt(self, values, start) -> None:
         """G68.2 X Y Z I J K (P0: Euler ZXZ): a tilted working plane until G69."""
-        from ..frames import rot_x, rot_z
+        from ...frames import rot_x, rot_z
 
         line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
         p = re.search(r"[Pp][ \t]*(\d+)", line)
@@ -302,118 +316,36 @@ class GcodeParser:
 
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
+        """The targets of the block table ``t`` (program order) with every modal state applied."""
         n = len(t["offset"])
-
-        def ffill(col, default):
-            has = ~np.isnan(col)
-            idx = np.where(has, np.arange(n), -1)
-            np.maximum.accumulate(idx, out=idx)
-            return np.where(idx >= 0, col[np.maximum(idx, 0)], default)
-
-        motion = ffill(t["motion"], np.nan)
-        units = ffill(t["units"], 21.0)
-        dist = ffill(t["dist"], 90.0)
-        canned = ffill(t["canned"], 0.0)
-        wcs = ffill(t["wcs"], 1.0).astype(int)
-        values = t["values"]
+        motion = _ffill(t["motion"], np.nan)
+        units = _ffill(t["units"], 21.0)
+        dist = _ffill(t["dist"], 90.0)
+        canned = _ffill(t["canned"], 0.0)
         linear_scale = np.where(units == 20.0, 25.4, 1.0)
+        values = t["values"]
         has_axis = ~np.isnan(values[:, :6]).all(axis=1)
         moves = has_axis & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
-        # Absolute positions: an absolute word resets the axis, an incremental one adds.
-        absolute = np.full((n, 6), np.nan)
-        for k in range(6):
-            v = values[:, k] * (linear_scale if k < 3 else 1.0)
-            has = ~np.isnan(v) & (moves | t["g53"])
-            rel = has & (dist == 91.0)
-            reset = has & (dist != 91.0)
-            inc = np.where(rel, v, 0.0)
-            cum = np.cumsum(inc)
-            base = np.where(reset, v - cum, np.nan)
-            known = np.where(reset, np.arange(n), -1)
-            np.maximum.accumulate(known, out=known)
-            base_ff = np.where(known >= 0, base[np.maximum(known, 0)], np.nan)
-            absolute[:, k] = base_ff + cum
+        absolute = _absolute_positions(values, moves | t["g53"], dist, linear_scale)
         rows = np.nonzero(moves)[0]
-        m = len(rows)
-        ir_values = np.full((m, NF), np.nan)
-        ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
-        scale = np.ones((m, NF))
-        field_of = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
-        for k, f in field_of.items():
-            ir_values[:, f] = np.where(~np.isnan(values[rows, k]), absolute[rows, k], np.nan)
-            sp = t["spans"][rows, k]
-            have = sp[:, 0] >= 0
-            ir_spans[have, f, 0] = 0
-            ir_spans[have, f, 1:] = sp[have]
-            if k < 3:
-                scale[:, f] = linear_scale[rows]
-        # Work offsets set by G10 in the program; others are unknown (zero, flagged).
-        frames_known = {}
-        g10 = sorted(self.g10, key=lambda event: event[0])
-        frame_idx = np.zeros(m, np.int32)
+        ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
-        for w in np.unique(wcs[rows]):
-            sel = wcs[rows] == w
-            events = [(o, off) for o, p, off in g10 if p == w]
-            name = f"G{[54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3][w - 1]:g}"
-            if not events:
-                frame_idx[sel] = self.builder.frame_index(name, None)
-                frames_known[name] = False
-                continue
-            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
-            ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
-            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
-        if self.tilts:
-            offs = np.array([o for o, _ in self.tilts])
-            at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
-            for k in np.unique(at[at >= 0]):
-                tilt = self.tilts[k][1]
-                sel = at == k
-                if tilt is None:
-                    continue
-                if isinstance(tilt, str):
-                    resolved[sel] = False
-                    continue
-                for f in np.unique(frame_idx[sel]):
-                    both = sel & (frame_idx == f)
-                    name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
-                    frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
+        frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
+        self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
         if g53.any():
             frame_idx[g53] = self.builder.frame_index("machine", np.eye(4), True)
-        unknown = [name for name, known in frames_known.items() if not known]
-        if unknown:
-            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
-        self.builder.notes.extend(self.notes)
-        # Tool length offsets: the tool number of G43 (its length is in the machine's tool table).
-        tlo = ffill(t["tlo"], 49.0)
-        hnum = ffill(t["h"], np.nan)
-        tool_idx = np.zeros(m, np.int32)
-        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
-        for h in np.unique(hnum[rows][active]):
-            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
-        if active.any():
-            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
-        # G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre.
-        ijk = [_AX["I"], _AX["J"], _AX["K"]]
-        axis_rows = (tlo[rows] == 43.5) & ~np.isnan(values[rows[:, None], ijk]).any(axis=1)
-        axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
-        for f_ir, k in zip((3, 4, 5), ijk):
-            ir_values[axis_rows, f_ir] = values[axis_at, k]
-            sp = t["spans"][axis_at, k]
-            have = sp[:, 0] >= 0
-            idx = np.nonzero(axis_rows)[0][have]
-            ir_spans[idx, f_ir, 0] = 0
-            ir_spans[idx, f_ir, 1:] = sp[have]
+        tlo = _ffill(t["tlo"], 49.0)
+        tool_idx = self._tool_lengths(t, rows, tlo)
+        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans)
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
-        motion_rows = motion[rows].astype(int)
+        self.builder.notes.extend(self.notes)
         offsets = t["offset"][rows]
-        # Insert missing axis words at the end of the block's code (before any comment).
-        ends = t["code_end"][rows]
+        m = len(rows)
         self.builder.add_block(
             offsets,
-            kind=_MOTION_KIND_CODES[motion_rows],
+            kind=_MOTION_KIND_CODES[motion[rows].astype(int)],
             line=self.lines.line(offsets),
             values=ir_values,
             spans=ir_spans,
@@ -422,22 +354,145 @@ class GcodeParser:
             frame=frame_idx,
             tool=tool_idx,
             resolved=resolved,
-            speed=ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
-            insert_at=np.stack([np.zeros(m, np.int64), ends], axis=1),
+            speed=_ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
+            # Missing axis words are inserted at the end of the block's code (before any comment).
+            insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
         )
-        tp = self.builder.build()
-        # Modal axes: a block without X keeps the previous X (already in ``absolute``).
-        from dataclasses import replace
+        return _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
 
-        position = absolute[rows, :3]
-        ext = np.full((m, 6), np.nan)
-        ext[:, :3] = absolute[rows, 3:6]
-        orientation = np.full((m, 4), np.nan)
-        if axis_rows.any():
-            from ..frames import axis_to_quat_wxyz
+    def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
+        """Frame index of each target: its work offset as set by G10 in the program before it;
+        one the program never sets is unknown (identity stands in, flagged)."""
+        unknown = []
+        g10 = sorted(self.g10, key=lambda event: event[0])
+        frame_idx = np.zeros(len(rows), np.int32)
+        for w in np.unique(wcs[rows]):
+            sel = wcs[rows] == w
+            events = [(o, off) for o, p, off in g10 if p == w]
+            name = f"G{_WCS_NAMES[w - 1]:g}"
+            if not events:
+                frame_idx[sel] = self.builder.frame_index(name, None)
+                unknown.append(name)
+                continue
+            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
+            ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
+            frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
+        if unknown:
+            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        return frame_idx
 
-            orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
-        return replace(tp, position=position, ext=ext, orientation=orientation)
+    def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
+        """G68.2 tilts each later target's frame (in place) until G69; a tilt that is not
+        evaluated unresolves the targets under it."""
+        if not self.tilts:
+            return
+        offs = np.array([o for o, _ in self.tilts])
+        at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
+        for k in np.unique(at[at >= 0]):
+            tilt = self.tilts[k][1]
+            sel = at == k
+            if tilt is None:
+                continue
+            if isinstance(tilt, str):
+                resolved[sel] = False
+                continue
+            for f in np.unique(frame_idx[sel]):
+                both = sel & (frame_idx == f)
+                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
+                frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
+
+    def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
+        """Tool index of each target: the H number of the active G43 (its length is in the
+        machine's tool table, not the program: an unknown tool)."""
+        hnum = _ffill(t["h"], np.nan)
+        tool_idx = np.zeros(len(rows), np.int32)
+        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
+        for h in np.unique(hnum[rows][active]):
+            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
+        if active.any():
+            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
+        return tool_idx
+
+
+_WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _ffill(col: np.ndarray, default: float) -> np.ndarray:
+    """Modal value of each block: the last one set at or before it, else ``default``."""
+    has = ~np.isnan(col)
+    idx = np.where(has, np.arange(len(col)), -1)
+    np.maximum.accumulate(idx, out=idx)
+    return np.where(idx >= 0, col[np.maximum(idx, 0)], default)
+
+
+def _absolute_positions(values: np.ndarray, counted: np.ndarray, dist: np.ndarray, linear_scale: np.ndarray) -> np.ndarray:
+    """(n, 6) absolute X Y Z A B C of every block (mm, degrees): an absolute word resets
+    the axis, an incremental one (G91) adds to it; only ``counted`` blocks move it."""
+    n = len(values)
+    absolute = np.full((n, 6), np.nan)
+    for k in range(6):
+        v = values[:, k] * (linear_scale if k < 3 else 1.0)
+        has = ~np.isnan(v) & counted
+        rel = has & (dist == 91.0)
+        reset = has & (dist != 91.0)
+        cum = np.cumsum(np.where(rel, v, 0.0))
+        base = np.where(reset, v - cum, np.nan)
+        known = np.where(reset, np.arange(n), -1)
+        np.maximum.accumulate(known, out=known)
+        absolute[:, k] = np.where(known >= 0, base[np.maximum(known, 0)], np.nan) + cum
+    return absolute
+
+
+_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
+
+
+def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: np.ndarray):
+    """IR values (m, NF), spans (m, NF, 3) and scale (m, NF) of the axis words of the blocks ``rows``."""
+    m = len(rows)
+    ir_values = np.full((m, NF), np.nan)
+    ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
+    scale = np.ones((m, NF))
+    for k, f in _IR_FIELD_OF_AXIS.items():
+        ir_values[:, f] = np.where(~np.isnan(t["values"][rows, k]), absolute[rows, k], np.nan)
+        _put_spans(ir_spans, np.arange(m), f, t["spans"][rows, k])
+        if k < 3:
+            scale[:, f] = linear_scale[rows]
+    return ir_values, ir_spans, scale
+
+
+def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarray) -> None:
+    """Spans (start, end) of the one source, -1 where none, into IR field ``field`` of rows ``at``."""
+    have = spans[:, 0] >= 0
+    ir_spans[at[have], field, 0] = 0
+    ir_spans[at[have], field, 1:] = spans[have]
+
+
+def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray:
+    """G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre. Puts
+    them in IR fields o1..o3 (in place); returns the targets that have one."""
+    ijk = [_AX["I"], _AX["J"], _AX["K"]]
+    axis_rows = (tlo[rows] == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
+    axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
+    for f_ir, k in zip((3, 4, 5), ijk):
+        ir_values[axis_rows, f_ir] = t["values"][axis_at, k]
+        _put_spans(ir_spans, np.nonzero(axis_rows)[0], f_ir, t["spans"][axis_at, k])
+    return axis_rows
+
+
+def _with_modal_positions(tp: Toolpath, absolute: np.ndarray, ir_values: np.ndarray, axis_rows: np.ndarray) -> Toolpath:
+    """Positions with modal axes (a block without X keeps the previous X), rotary axes as
+    external axes, and tool-axis orientations."""
+    from dataclasses import replace
+
+    from ...frames import axis_to_quat_wxyz
+
+    m = len(absolute)
+    ext = np.full((m, 6), np.nan)
+    ext[:, :3] = absolute[:, 3:6]
+    orientation = np.full((m, 4), np.nan)
+    if axis_rows.any():
+        orientation[axis_rows] = axis_to_quat_wxyz(ir_values[axis_rows, 3:6])
+    return replace(tp, position=absolute[:, :3], ext=ext, orientation=orientation)
 
 
 def _code_part(line: str) -> str:
@@ -463,7 +518,3 @@ def _token_span(node) -> tuple[int, int]:
         return node.meta.start_pos, inner_end
     tok = node.children[0]
     return tok.start_pos, tok.end_pos
-
-
-def parse_gcode(path: str, data: bytes) -> Toolpath:
-    return GcodeParser(SourceDoc(path, data.decode("latin-1"), "program")).parse()

@@ -11,18 +11,18 @@ block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack
 from __future__ import annotations
 
 import re
-from pathlib import Path
+from dataclasses import replace
 
 import numpy as np
 from lark import Token, Tree
 
-from ..frames import abc_to_matrix, make_transform
-from ..ir import NF, Kind, SourceDoc, Toolpath
-from . import scan_kernel
-from .common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
-from .grammar import grammar, literal_number
-from .line_shapes import LineShapes
-from .name_table import NameTable
+from ...frames import abc_to_matrix, abc_to_quat_wxyz, make_transform
+from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...parse import scan_kernel
+from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
+from ...parse.grammar import grammar, literal_number
+from ...parse.line_shapes import LineShapes
+from ...parse.name_table import NameTable
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -194,8 +194,9 @@ def _frame_of(values: np.ndarray) -> np.ndarray:
 
 
 class KrlParser:
-    def __init__(self, src: SourceDoc, dat: SourceDoc | None = None, config: SourceDoc | None = None):
-        docs = [d for d in (src, dat, config) if d is not None]
+    """Parses a program's files: the program first, then its data lists (.dat, $config.dat)."""
+
+    def __init__(self, docs: list[SourceDoc]):
         self.docs = [_Doc(d, i) for i, d in enumerate(docs)]
         self.builder = Builder("krl", "abc", docs)
         self.symbols = Symbols()
@@ -255,7 +256,6 @@ class KrlParser:
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
             if not tree.children:
                 continue
-            self._line_start = start  # positions inside the tree are relative to the line
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
@@ -293,7 +293,7 @@ class KrlParser:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
             return
         if kind == "decl":
-            self._decl(d, node)
+            self._decl(d, node, start)
             return
         if kind == "assignment":
             self._assignment(d, node, start)
@@ -305,54 +305,55 @@ class KrlParser:
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
 
     # ------------------------------------------------------------ semantics
-    def _decl(self, d: _Doc, node: Tree) -> None:
+    def _decl(self, d: _Doc, node: Tree, start: int) -> None:
         for decl in node.children:
             if isinstance(decl, Tree) and decl.data == "declarator" and len(decl.children) >= 2:
                 value = decl.children[-1]
                 if isinstance(value, Tree) and value.data == "aggregate":
-                    v, sp, c, ins = self._agg(d, value)
+                    v, sp, c, ins = self._agg(d, value, start)
                     self.symbols.add_many([str(decl.children[0])], [v], [sp], [c], [ins])
 
-    def _agg(self, d: _Doc, node: Tree):
-        s, e = node.meta.start_pos, node.meta.end_pos
-        v, sp, c, ins = d.aggregates(np.array([self._line_start + s]), np.array([self._line_start + e]))
+    def _agg(self, d: _Doc, node: Tree, start: int):
+        """An aggregate of the statement at ``start`` (tree positions are relative to it)."""
+        s, e = start + node.meta.start_pos, start + node.meta.end_pos
+        v, sp, c, ins = d.aggregates(np.array([s]), np.array([e]))
         # Status and Turn may be written as bits ('B010') or hex ('H22').
-        for key, base, digits in re.findall(r"\b([ST])[ \t]+'([BbHh])([0-9A-Fa-f]+)'", d.text[self._line_start + s : self._line_start + e]):
+        for key, base, digits in re.findall(r"\b([ST])[ \t]+'([BbHh])([0-9A-Fa-f]+)'", d.text[s:e]):
             c[0][0 if key.upper() == "S" else 1] = int(digits, 2 if base.upper() == "B" else 16)
         return v[0], sp[0], c[0], ins[0]
 
-    def _eval_frame(self, d: _Doc, node) -> tuple[np.ndarray, bool, str]:
+    def _eval_frame(self, d: _Doc, node, start: int) -> tuple[np.ndarray, bool, str]:
         """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
         if isinstance(node, Tree) and node.data == "geo":
             total, ok, names = np.eye(4), True, []
             for part in node.children:
-                t, r, n = self._eval_frame(d, part)
+                t, r, n = self._eval_frame(d, part, start)
                 total, ok = total @ t, ok and r
                 names.append(n)
             return total, ok, ":".join(names)
         if isinstance(node, Tree) and node.data == "aggregate":
-            v, _, _, _ = self._agg(d, node)
-            return _frame_of(v), True, self._text(d, node)
-        name = self._text(d, node)
+            v, _, _, _ = self._agg(d, node, start)
+            return _frame_of(v), True, self._text(d, node, start)
+        name = self._text(d, node, start)
         found = self.symbols.get(name)
         if found is None:
             return np.eye(4), False, name
         return _frame_of(found[0]), True, name
 
-    def _text(self, d: _Doc, node) -> str:
+    def _text(self, d: _Doc, node, start: int) -> str:
         s, e = _node_span(node)
-        return d.text[self._line_start + s : self._line_start + e].strip()
+        return d.text[start + s : start + e].strip()
 
     def _assignment(self, d: _Doc, node: Tree, start: int) -> None:
-        lhs = self._text(d, node.children[0]).upper().replace(" ", "")
+        lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
         if isinstance(rhs, Tree) and rhs.data == "aggregate":
-            v, sp, c, ins = self._agg(d, rhs)
+            v, sp, c, ins = self._agg(d, rhs, start)
             self.symbols.add_many([lhs], [v], [sp], [c], [ins])
         if d.index != 0:
             return
         if lhs in ("$BASE", "$TOOL"):
-            transform, ok, name = self._eval_frame(d, rhs)
+            transform, ok, name = self._eval_frame(d, rhs, start)
             self.events.append((start, lhs, (name, transform, ok)))
         elif lhs == "$VEL.CP":
             self.events.append((start, "vel", literal_number(rhs)))
@@ -374,10 +375,10 @@ class KrlParser:
         for k, tnode in zip(kinds, targets):
             expr = tnode.children[0]
             if isinstance(expr, Tree) and expr.data == "aggregate":
-                v, sp, c, ins = self._agg(d, expr)
+                v, sp, c, ins = self._agg(d, expr, start)
                 name = ""
             else:
-                name = self._text(d, expr)
+                name = self._text(d, expr, start)
                 found = self.symbols.get(name)
                 if found is None:
                     v, sp, c, ins = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.array([-1, -1])
@@ -385,8 +386,6 @@ class KrlParser:
                 else:
                     v, sp, c, ins = found
             self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
-
-    _line_start = 0
 
     def _bulk_moves(self, src: _Doc, inline, named) -> None:
         for moves in (inline, named):
@@ -422,70 +421,15 @@ class KrlParser:
         self._approx_blocks.append((offsets, approx))
 
     def _finish(self) -> Toolpath:
-        from dataclasses import replace
-
-        from ..frames import abc_to_quat_wxyz
-
-        if self.slow_targets:
-            rows = self.slow_targets
-            self._collect(
-                np.array([r[0] for r in rows]),
-                np.array([r[1] for r in rows]),
-                np.array([r[2] for r in rows]),
-                np.array([r[3] for r in rows]),
-                np.array([r[4] for r in rows]),
-                np.array([r[5] for r in rows]),
-                [r[6] for r in rows],
-                np.array([r[7] for r in rows]),
-                np.array([r[8] for r in rows]),
-            )
+        self._collect_slow_targets()
         offsets = np.concatenate([b[0] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, np.int64)
         approx = np.concatenate([b[1] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, bool)
         perm = np.argsort(offsets, kind="stable")  # the builder orders targets the same way
         offsets, approx = offsets[perm], approx[perm]
-        n = len(offsets)
-        # Program state at each target: the last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it.
-        frame = np.zeros(n, np.int32)
-        tool = np.zeros(n, np.int32)
-        speed = np.full(n, np.nan)
-        cdis = np.zeros(n)
-        resolved = np.ones(n, bool)
-        events = sorted(self.events, key=lambda e: e[0])
-        for key in ("$BASE", "$TOOL", "vel", "apo"):
-            ev = [(o, v) for o, k, v in events if k == key]
-            if not ev:
-                continue
-            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
-            has = at >= 0
-            if key in ("$BASE", "$TOOL"):
-                register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
-                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
-                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
-            else:
-                vals = np.array([v for _, v in ev], dtype=float)
-                if key == "vel":
-                    speed[has] = vals[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
-                else:
-                    cdis[has] = vals[at[has]]
+        frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
-        values = tp.values
-        # A partial aggregate ({X 10}) keeps the other components of the previous Cartesian target.
-        cart = ~np.isnan(values[:, :3]).all(axis=1)
-        pose = values[:, :6].copy()
-        for col in range(6):
-            column = np.where(cart, pose[:, col], np.nan)
-            last = np.where(~np.isnan(column), np.arange(n), -1)
-            np.maximum.accumulate(last, out=last)
-            pose[:, col] = np.where(cart & (last >= 0), column[np.maximum(last, 0)], np.nan)
-        if tp.relative.any():
-            # LIN_REL / PTP_REL: components are increments from the previous target.
-            for i in np.nonzero(tp.relative)[0]:
-                prev = pose[i - 1] if i > 0 else np.zeros(6)
-                pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
-        # The IR holds absolute values; the emitter turns them back into increments.
-        values = values.copy()
-        values[tp.relative, :6] = np.where(np.isnan(values[tp.relative, :6]), np.nan, pose[tp.relative])
-        orientation = np.full((n, 4), np.nan)
+        pose, values = _absolute_poses(tp.values, tp.relative)
+        orientation = np.full((len(offsets), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
             orientation[ok] = abc_to_quat_wxyz(pose[ok, 3:6])
@@ -501,8 +445,61 @@ class KrlParser:
             tool=tool,
             speed=speed,
             zone=np.where(approx, cdis, 0.0),
-            resolved=resolved & declared,
+            resolved=declared,
         )
+
+    def _collect_slow_targets(self) -> None:
+        """The targets the grammar read, as one block."""
+        if not self.slow_targets:
+            return
+        columns = list(zip(*self.slow_targets))  # offset, kind, values, spans, conf, insert, name, approx, relative
+        self._collect(*(np.array(c) for c in columns[:6]), list(columns[6]), np.array(columns[7]), np.array(columns[8]))
+
+    def _program_state(self, offsets: np.ndarray):
+        """Frame and tool index, speed (mm/s) and approximation distance at each target: the
+        last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it."""
+        n = len(offsets)
+        frame, tool = np.zeros(n, np.int32), np.zeros(n, np.int32)
+        speed, cdis = np.full(n, np.nan), np.zeros(n)
+        events = sorted(self.events, key=lambda e: e[0])
+        for key in ("$BASE", "$TOOL", "vel", "apo"):
+            ev = [(o, v) for o, k, v in events if k == key]
+            if not ev:
+                continue
+            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
+            has = at >= 0
+            if key in ("$BASE", "$TOOL"):
+                register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
+                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
+                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
+            elif key == "vel":
+                speed[has] = np.array([v for _, v in ev], dtype=float)[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
+            else:
+                cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
+        return frame, tool, speed, cdis
+
+
+def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(N, 6) X Y Z A B C of every target, and the IR values with absolute components.
+
+    A partial aggregate ({X 10}) keeps the other components of the previous Cartesian
+    target; LIN_REL / PTP_REL components are increments from the previous target (the IR
+    holds absolute values; the emitter turns them back into increments)."""
+    n = len(values)
+    cart = ~np.isnan(values[:, :3]).all(axis=1)
+    pose = values[:, :6].copy()
+    for col in range(6):
+        column = np.where(cart, pose[:, col], np.nan)
+        last = np.where(~np.isnan(column), np.arange(n), -1)
+        np.maximum.accumulate(last, out=last)
+        pose[:, col] = np.where(cart & (last >= 0), column[np.maximum(last, 0)], np.nan)
+    if relative.any():
+        for i in np.nonzero(relative)[0]:
+            prev = pose[i - 1] if i > 0 else np.zeros(6)
+            pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
+    values = values.copy()
+    values[relative, :6] = np.where(np.isnan(values[relative, :6]), np.nan, pose[relative])
+    return pose, values
 
 
 def _split_comment(line: str) -> tuple[str, str | None]:
@@ -528,16 +525,3 @@ def _first_column(node) -> int:
     if isinstance(node, Token):
         return node.column
     return node.meta.column if not node.meta.empty else 1
-
-
-def parse_krl(path: str | Path, text: bytes | None = None, dat: str | Path | None = None, config: str | Path | None = None) -> Toolpath:
-    """Parse a KRL .src; its .dat (same name) and a $config.dat in the same folder are read when present."""
-    path = Path(path)
-    src = SourceDoc(str(path), text.decode("latin-1"), "src") if text is not None else SourceDoc.read(path, "src")
-    dat_doc = None
-    dat_path = Path(dat) if dat is not None else path.with_suffix(".dat")
-    if str(path) != "-" and dat_path.is_file() and dat_path != path:
-        dat_doc = SourceDoc.read(dat_path, "dat")
-    config_path = Path(config) if config is not None else path.parent / "$config.dat"
-    config_doc = SourceDoc.read(config_path, "config") if str(path) != "-" and config_path.is_file() else None
-    return KrlParser(src, dat_doc, config_doc).parse()

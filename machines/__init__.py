@@ -1,0 +1,1 @@
+"""Five-axis machine data files (package data: ``postproc.machine_files``)."""

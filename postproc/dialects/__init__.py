@@ -1,0 +1,54 @@
+"""The languages postproc reads and writes: one package per dialect, and the registry.
+
+``REGISTRY`` maps a dialect's name (the ``--dialect`` / ``--to`` option value and
+``Toolpath.dialect``) to its ``Dialect`` object. Adding a language is one new package
+here with a ``Dialect`` subclass, plus its entry in ``REGISTRY`` below.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..errors import InputError
+from ..ir import Toolpath
+from .base import Dialect, read_head
+from .gcode import GCODE
+from .krl import KRL
+from .rapid import RAPID
+
+REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, KRL, GCODE)}  # sniffing tries them in this order
+
+
+def names() -> tuple[str, ...]:
+    return tuple(REGISTRY)
+
+
+def get(name: str, option: str = "--dialect") -> Dialect:
+    """The dialect called ``name``; an unknown name is an InputError naming the known ones."""
+    try:
+        return REGISTRY[name]
+    except KeyError:
+        raise InputError(f"{option}: '{name}' is not one of {', '.join(REGISTRY)}") from None
+
+
+def of(tp: Toolpath) -> Dialect:
+    """The dialect a toolpath was read in."""
+    return REGISTRY[tp.dialect]
+
+
+def sniff(path: str | Path, data: bytes | None = None) -> Dialect:
+    """The dialect of a program from its extension, or from its content when that is unknown."""
+    suffix = Path(str(path)).suffix.lower()
+    by_extension = [d for d in REGISTRY.values() if suffix in d.extensions]
+    if by_extension and suffix != ".txt":  # .txt is anything: look inside
+        return by_extension[0]
+    if data is None:
+        data = read_head(path)
+    head = data[:4096].decode("latin-1").upper()
+    for dialect in REGISTRY.values():
+        if dialect.sniff(head):
+            return dialect
+    raise InputError(f"{path}: cannot tell the dialect (give --dialect {', '.join(REGISTRY)})")
+
+
+__all__ = ["REGISTRY", "Dialect", "get", "names", "of", "sniff"]

@@ -1,0 +1,141 @@
+"""The Dialect interface: everything postproc knows about one robot or CNC language.
+
+A dialect owns: recognising its files (``extensions``, ``sniff``), the set of files a
+program spans (``read_sources``), parsing them to the IR (``parse_sources``; frames,
+tools and bases are resolved there by the language's rules), the controller's
+configuration (IK branch) rules (``branch_from_conf``), and writing back: ``emit``
+returns the new text of every file that must be written, keyed by path, so the caller
+writes one all-or-nothing set and cannot forget a file. The rest of postproc reaches a
+dialect only through this interface and the registry in ``postproc.dialects``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import EmitError, InputError
+from ..ir import SourceDoc, Toolpath
+
+
+class Dialect:
+    """Base class; a language overrides what differs from these defaults."""
+
+    name: str = ""
+    description: str = ""
+    extensions: tuple[str, ...] = ()  # lower case, with the dot
+    #: programs of this language drive machine axes (a CNC: five-axis emitters and machine
+    #: kinematics apply), not a robot controller's Cartesian targets
+    machine_program: bool = False
+    #: the program's speeds (as the IR keeps them) times this are mm/s (G-code feeds: mm/min)
+    speed_to_mm_per_s: float = 1.0
+
+    # ---------------------------------------------------------------- reading
+    def sniff(self, head: str) -> bool:
+        """True if ``head`` (the first 4 KB of a file, upper case) is a program of this language."""
+        return False
+
+    def read_sources(self, path: str | Path, data: bytes | None = None) -> list[SourceDoc]:
+        """Every file of the program at ``path`` (the program first); ``data`` is its bytes
+        when already read (standard input: then the program's other files are not looked for)."""
+        if data is None:
+            data = read_bytes(path)
+        return [SourceDoc(str(path), data.decode("latin-1"), "program")]
+
+    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+        """The IR of a program from its source files (as ``read_sources`` gives them)."""
+        raise NotImplementedError
+
+    def parse(self, path: str | Path, data: bytes | None = None) -> Toolpath:
+        return self.parse_sources(self.read_sources(path, data))
+
+    # ------------------------------------------------------------- controller
+    def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Joints (N, 6) and branch (N,) the controller takes for each target from the
+        configuration data the program gives (``conf`` (N, 4), NaN where none); NaN and -1
+        where the program gives none (the caller then follows the path)."""
+        return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
+
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        """(N,) True where the controller takes the target's configuration data as written
+        (it then selects the branch); elsewhere the robot keeps the posture it is in
+        (see postproc.posture). Default: wherever the program gives configuration data."""
+        return ~np.isnan(tp.conf).all(axis=1)
+
+    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
+        """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
+        return np.ones(len(tp.kind), dtype=bool)
+
+    # ---------------------------------------------------------------- writing
+    def insert_field(self, source: int, field: str, text: str) -> str | None:
+        """Text that adds a component a target leaves out (``LIN {X 1}`` without Y), or None
+        where the language cannot take one."""
+        return None
+
+    def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
+        """Where each source file of ``original`` goes when the program is written to
+        ``output``: the program there, any other file beside it under its own name."""
+        output = Path(output)
+        return [output] + [output.parent / Path(doc.path).name for doc in original.sources[1:]]
+
+    def travels_with_program(self, doc: SourceDoc) -> bool:
+        """True for a file written with the program even when unchanged (KRL's .dat)."""
+        return doc.role == "program"
+
+    def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
+        """New text of every source file, in ``original.sources`` order (unchanged ones as they were)."""
+        from ..emit.splice import splice
+
+        return splice(original, modified, self.insert_field)
+
+    def files(self, original: Toolpath, texts: list[str], output: Path) -> dict[Path, str]:
+        """{path: text} to write for the new ``texts`` of the program at ``output``: every
+        file that changed and every file that travels with the program."""
+        paths = self.output_paths(original, output)
+        if len(paths) != len(original.sources) or len(texts) != len(original.sources):
+            raise EmitError(f"{self.name}: {len(original.sources)} source files, {len(texts)} texts and {len(paths)} output paths: no file may be left out")
+        return {path: text for path, text, doc in zip(paths, texts, original.sources) if text != doc.text or self.travels_with_program(doc)}
+
+    def emit(self, original: Toolpath, modified: Toolpath, output: Path) -> dict[Path, str]:
+        """{path: text} of every file to write for ``modified`` at ``output`` (see ``files``)."""
+        return self.files(original, self.emit_texts(original, modified), output)
+
+    def place_workpiece(self, text: str, frame_name: str, new_frame: np.ndarray, path: str) -> str:
+        """``text`` (the program's main file) with its workpiece frame ``frame_name`` set to
+        ``new_frame`` (base_T_workpiece), for ``postproc place -o``."""
+        raise EmitError(f"{path}: writing a placed {self.name} program is not supported")
+
+    # ------------------------------------------------------------ new programs
+    def new_writer(self, name: str):
+        """An event writer (see postproc.emit.writer) for a new program, or None."""
+        return None
+
+    def new_program_paths(self, output: Path) -> list[Path]:
+        """Paths of the files a new program written to ``output`` consists of."""
+        return [Path(output)]
+
+
+NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # a plain decimal number literal
+
+
+def short_number(value: float, decimals: int) -> str:
+    """``value`` with at most ``decimals`` decimals and no trailing zeros ('-0' is '0')."""
+    text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
+    return "0" if text in ("-0", "") else text
+
+
+def read_bytes(path: str | Path) -> bytes:
+    try:
+        return Path(path).read_bytes()
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+
+
+def read_head(path: str | Path, size: int = 4096) -> bytes:
+    """The first ``size`` bytes of a file (enough to tell its language)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(size)
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None

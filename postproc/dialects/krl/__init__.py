@@ -1,0 +1,99 @@
+"""KUKA KRL: a .src program with its .dat and the robot's $config.dat."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ...ir import SourceDoc, Toolpath
+from ..base import Dialect, read_bytes
+
+CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
+
+
+class KrlDialect(Dialect):
+    name = "krl"
+    description = "KUKA KRL (.src with its .dat and $config.dat)"
+    extensions = (".src", ".sub")
+
+    def sniff(self, head: str) -> bool:
+        # A data list on its own starts with DEFDAT; a program with DEF and its motions.
+        return "DEFDAT " in head or ("DEF " in head and ("PTP " in head or "LIN " in head or "END" in head))
+
+    def read_sources(self, path: str | Path, data: bytes | None = None) -> list[SourceDoc]:
+        """The .src (or a .dat on its own), its .dat of the same name, and $config.dat of its folder."""
+        path = Path(path)
+        if data is None:
+            data = read_bytes(path)
+        own_role = "dat" if path.suffix.lower() == ".dat" else "src"
+        docs = [SourceDoc(str(path), data.decode("latin-1"), own_role)]
+        if str(path) == "-":
+            return docs  # standard input: no files beside it
+        dat = path.with_suffix(".dat")
+        if own_role == "src" and dat.is_file():
+            docs.append(SourceDoc.read(dat, "dat"))
+        config = path.parent / CONFIG_DAT
+        if config.is_file() and path.name.lower() != CONFIG_DAT:
+            docs.append(SourceDoc.read(config, "config"))
+        return docs
+
+    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+        from .parse import KrlParser
+
+        return KrlParser(sources).parse()
+
+    def branch_from_conf(self, robot, solutions, conf):
+        """KSS: a target's Status and Turn pick the branch (KUKA System Software 8, 'S and T')."""
+        from ...kinematics import select_by_kuka_status
+
+        q, branch = super().branch_from_conf(robot, solutions, conf)
+        has = ~np.isnan(conf[:, :2]).any(axis=1)
+        if has.any():
+            q[has], branch[has] = select_by_kuka_status(robot, solutions[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
+        return q, branch
+
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        """S and T count for PTP motions only; LIN, CIRC (and KSS 8 SLIN/SCIRC) ignore them
+        and keep the current posture (KUKA System Software 8.x operating and programming
+        manual, 'Status and Turn')."""
+        from ...ir import Kind
+
+        return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
+
+    def place_workpiece(self, text, frame_name, new_frame, path):
+        from .placing import set_base
+
+        return set_base(text, new_frame, path)
+
+    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
+        """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
+        import re
+
+        ca = re.compile(r"\bCA\b", re.IGNORECASE)
+        lines = [doc.text.split("\n") for doc in tp.sources]
+        return np.array([not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
+                         for f, n in zip(tp.file.tolist(), tp.line.tolist())], dtype=bool)
+
+    def insert_field(self, source: int, field: str, text: str) -> str:
+        return f", {field.upper()} {text}"  # one more component of the aggregate
+
+    def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
+        """The .src at ``output``, its .dat beside it (same name), $config.dat in that folder."""
+        output = Path(output)
+        where = {"src": output, "dat": output.with_suffix(".dat"), "config": output.parent / CONFIG_DAT}
+        return [where.get(doc.role, output.parent / Path(doc.path).name) for doc in original.sources]
+
+    def travels_with_program(self, doc: SourceDoc) -> bool:
+        return doc.role in ("src", "dat")  # a module is its .src and its .dat
+
+    def new_writer(self, name: str):
+        from .writer import KrlWriter
+
+        return KrlWriter(name)
+
+    def new_program_paths(self, output: Path) -> list[Path]:
+        return [Path(output), Path(output).with_suffix(".dat")]
+
+
+KRL = KrlDialect()

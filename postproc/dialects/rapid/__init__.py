@@ -1,0 +1,119 @@
+"""ABB RAPID: one module (.mod, .modx, .prg, .sys), or a program file (.pgf) and its modules."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import InputError
+from ...ir import SourceDoc, Toolpath
+from ..base import Dialect, read_bytes
+
+
+class RapidDialect(Dialect):
+    name = "rapid"
+    description = "ABB RAPID module, or a program file (.pgf) with its modules"
+    extensions = (".mod", ".modx", ".prg", ".sys", ".pgf")
+
+    def sniff(self, head: str) -> bool:
+        return "MODULE " in head and ("ENDMODULE" in head or "PROC " in head)
+
+    def read_sources(self, path: str | Path, data: bytes | None = None) -> list[SourceDoc]:
+        """A module on its own; or a program file (.pgf) and every module it lists, which
+        share their data (robtargets, tools, work objects) as the task's modules do."""
+        if Path(str(path)).suffix.lower() != ".pgf":
+            return super().read_sources(path, data)
+        path = Path(path)
+        data = read_bytes(path) if data is None else data
+        docs = [SourceDoc(str(path), data.decode("latin-1"), "pgf")]
+        for module in _pgf_modules(path, data):
+            if not (path.parent / module).is_file():
+                raise InputError(f"{path}: module {module} listed in the program file is not in {path.parent}")
+            docs.append(SourceDoc.read(path.parent / module, "module"))
+        return docs
+
+    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+        from .parse import parse_modules
+
+        return parse_modules(sources)
+
+    def branch_from_conf(self, robot, solutions, conf):
+        """confdata cf1, cf4, cf6, cfx pick the branch (RAPID reference, 'confdata')."""
+        from ...kinematics import select_by_abb_conf
+
+        q, branch = super().branch_from_conf(robot, solutions, conf)
+        has = ~np.isnan(conf).any(axis=1)
+        if has.any():
+            q[has], branch[has] = select_by_abb_conf(robot, solutions[has], conf[has].astype(int))
+        return q, branch
+
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        """MoveJ follows its confdata unless ConfJ\\Off is in force; MoveL/MoveC unless
+        ConfL\\Off is (RAPID reference, 'ConfJ', 'ConfL': with \\Off the robot takes the
+        configuration nearest the current one). The switches are taken in the order of the
+        module's text, which is the order of execution within one routine."""
+        from ...ir import Kind
+
+        has = ~np.isnan(tp.conf).any(axis=1)
+        lin_off, joint_off = _switch_state(tp, "CONFL"), _switch_state(tp, "CONFJ")
+        joint = tp.kind == Kind.JOINT
+        return has & np.where(joint, ~joint_off, ~lin_off)
+
+    def place_workpiece(self, text, frame_name, new_frame, path):
+        from .placing import set_work_object
+
+        return set_work_object(text, frame_name, new_frame, path)
+
+    def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
+        """A module at ``output``; a program file at ``output`` with its modules beside it
+        (in the same places relative to it as in the input)."""
+        first = original.sources[0]
+        if first.role != "pgf":
+            return [Path(output)]
+        folder = Path(first.path).parent
+        return [Path(output)] + [Path(output).parent / Path(doc.path).relative_to(folder) for doc in original.sources[1:]]
+
+    def travels_with_program(self, doc: SourceDoc) -> bool:
+        return True  # a program is all its modules
+
+    def new_writer(self, name: str):
+        from .writer import RapidWriter
+
+        return RapidWriter(name)
+
+
+def _switch_state(tp: Toolpath, switch: str) -> np.ndarray:
+    """(N,) True where the last ``ConfL``/``ConfJ`` instruction before the target's line in
+    its own module's text was ``\\Off``."""
+    pattern = re.compile(rf"^[ \t]*{switch}[ \t]*\\(ON|OFF)[ \t]*;", re.IGNORECASE | re.MULTILINE)
+    off_now = np.zeros(len(tp.line), dtype=bool)
+    for f, doc in enumerate(tp.sources):
+        events = [(doc.text.count("\n", 0, m.start()) + 1, m.group(1).upper() == "OFF") for m in pattern.finditer(doc.text)]
+        mine = tp.file == f
+        if not events or not mine.any():
+            continue
+        lines = np.array([line for line, _ in events])
+        off = np.array([state for _, state in events])
+        last = np.searchsorted(lines, tp.line[mine], side="right") - 1
+        off_now[mine] = np.where(last >= 0, off[np.maximum(last, 0)], False)
+    return off_now
+
+
+def _pgf_modules(path: Path, data: bytes) -> list[str]:
+    """The module file names a RobotWare program file lists (<Program><Module>x.mod</Module>...)."""
+    import xml.etree.ElementTree as ET
+
+    try:
+        root = ET.fromstring(data)
+    except ET.ParseError as exc:
+        line, column = exc.position
+        raise InputError(f"{path}:{line}:{column + 1}: not a RAPID program file ({exc})") from None
+    modules = [m.text.strip() for m in root.iter("Module") if m.text and m.text.strip()]
+    if not modules:
+        raise InputError(f"{path}: the program file lists no <Module>")
+    return modules
+
+
+RAPID = RapidDialect()

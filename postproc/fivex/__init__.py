@@ -1,0 +1,1 @@
+"""Five-axis machines: machine data, kinematics, rotary-axis calibration, RTCP emitters."""

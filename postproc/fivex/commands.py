@@ -1,0 +1,133 @@
+"""Library entry points of the five-axis CLI commands (cli.py only maps errors and prints)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .. import dialects
+from .calibrate import Calibration, calibrate_machine
+from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
+from .files import write_all
+from .machine import load_machine, machine_toml
+from .probes import read_probes
+
+
+def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, axis: str | None = None, method: str = "seed003",
+                   seed: int = 0, sphere_radius: float | None = None, tip_radius: float = 0.0, min_outlier_mm: float = 0.01) -> tuple[dict, Calibration]:
+    """Calibrate the rotary axes from a probing CSV; with ``output``, write the calibrated
+    machine file and the controller data beside it (all files or none). Returns the JSON
+    document (spec/cli.md) and the calibration."""
+    machine = load_machine(machine_name)
+    centres = read_probes(probes, axis=axis, sphere_radius=sphere_radius, tip_radius=tip_radius)
+    cal = calibrate_machine(machine, centres, method=method, seed=seed, min_outlier_mm=min_outlier_mm)
+    doc = cal.as_json()
+    doc["probes"] = str(probes)
+    controllers = {}
+    lcnc = linuxcnc_trt(cal.machine, machine)
+    sie = siemens_tc_carr(cal.machine)
+    if lcnc:
+        controllers["linuxcnc"] = {k: v for k, v in lcnc.items() if k != "text"}
+    if sie:
+        controllers["siemens"] = {k: v for k, v in sie.items() if k != "text"}
+    doc["controller_data"] = controllers
+    if output is not None:
+        output = Path(output)
+        header = (f"Calibrated by postproc rtcp-calibrate from {probes} ({method}); nominal machine {machine.source_path}.\n"
+                  "Rotary axes: fitted direction and a point on the axis (the fitted circle centre).")
+        files = {output: machine_toml(cal.machine, header), output.with_suffix(".heidenhain.csv"): heidenhain_csv(cal.machine)}
+        if lcnc:
+            files[output.with_suffix(".linuxcnc.hal")] = lcnc["text"]
+        if sie:
+            files[output.with_suffix(".siemens.spf")] = sie["text"]
+        write_all(files)
+        doc["files"] = {str(p): label for p, label in zip(files, ["calibrated machine (postproc TOML)", "Heidenhain-style kinematics table (CSV)",
+                                                                   *(["LinuxCNC trt kinematics HAL pins"] if lcnc else []),
+                                                                   *(["Siemens 840D $TC_CARR (type P)"] if sie else [])])}
+    return doc, cal
+
+
+def calibration_summary(doc: dict) -> list[str]:
+    lines = []
+    for name, ax in doc["axes"].items():
+        d, p, v = ax["direction"], ax["point"], ax["vs_nominal"]
+        lines.append(f"axis {name}: direction [{d[0]:.6f}, {d[1]:.6f}, {d[2]:.6f}] (+-{ax['direction_sigma_rad']:.1e} rad), "
+                     f"point [{p[0]:.4f}, {p[1]:.4f}, {p[2]:.4f}] mm (+-{ax['point_sigma_mm']:.4f}), circle RMS {ax['rms_mm']:.4f} mm, "
+                     f"{ax['kept']} of {ax['positions']} positions kept")
+        lines.append(f"  vs nominal: line distance {v['line_distance_mm']:.4f} mm, angle {v['angle_rad']:.2e} rad, "
+                     f"offset at the circle centre {v['offset_at_centre_mm']:.4f} mm")
+        for o in ax["removed"]:
+            lines.append(f"  removed id {o['id']} (row {o['row']}): {o['why']}")
+    for path, label in doc.get("files", {}).items():
+        lines.append(f"wrote {path} ({label})")
+    return lines
+
+
+def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: str | None, dialect: str | None = None,
+                 input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01) -> list[str]:
+    """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
+    robot program from a five-axis G-code one. Returns the summary lines."""
+    from ..emit.writer import write_program
+    from ..errors import InputError
+    from ..programs import parse_program
+    from .emit import MODES, emit
+    from .program import from_toolpath, to_robot_toolpath
+
+    machine = load_machine(machine_name)
+    if input_axes not in (None, "tip", "machine"):
+        raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
+    target = dialects.get(to, "--to")
+    if target.machine_program and rtcp not in MODES:
+        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
+    tp = parse_program(program, dialect)
+    path = from_toolpath(tp, machine, input_axes)
+    if target.machine_program:
+        if not max_deviation_mm > 0:
+            raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation_mm}")
+        result = emit(machine, path, rtcp, tool=tool, max_deviation_mm=max_deviation_mm)
+        write_all({Path(output): result.text}, encoding="latin-1")
+        lines = [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"]
+        if rtcp == "none":
+            lines.append(f"largest tip deviation at the middle of a move (axes interpolated linearly): {result.chord_error_mm:.4f} mm")
+        return lines + [f"note: {n}" for n in result.notes]
+    if not dialects.of(tp).machine_program:
+        raise InputError("--machine with --to rapid/krl converts a five-axis G-code program; this one is a robot program")
+    robot = to_robot_toolpath(tp, path)
+    texts = write_program(robot, to, Path(output).stem)
+    outputs = target.new_program_paths(Path(output))
+    write_all(dict(zip(outputs, texts)), encoding="latin-1")
+    return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]
+
+
+def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
+                            controller_name: str | None = None, dialect: str | None = None) -> list[str]:
+    """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
+    for the real machine; the written text is read back and checked before it is kept."""
+    import numpy as np
+
+    from ..errors import JobError
+    from ..programs import emit_texts, parse_program
+    from .compensate import actual_tip, compensate_five, controller_axes
+    from .errormap import load_grid
+    from .kinematics import fk
+    from .program import ROTARY_FIELD
+
+    true = load_machine(machine_file)
+    controller = load_machine(controller_name or true.name)
+    grid = load_grid(grid_file) if grid_file is not None else None
+    tp = parse_program(program, dialect)
+    new, report = compensate_five(tp, true, controller, grid, input_axes)
+    text = emit_texts(tp, new)[0]
+    # What the written numbers (rounded as the text has them) make the real machine do:
+    again = parse_program(program, tp.dialect, data=text.encode("latin-1"))
+    cols = [ROTARY_FIELD[n] for n in controller.rotary_names]
+    cmd = controller_axes(controller, again.position, again.ext[:, cols], input_axes)
+    intended, _ = fk(controller, controller_axes(controller, tp.position, tp.ext[:, cols], input_axes))
+    written = np.linalg.norm(actual_tip(true, grid, cmd) - intended, axis=1)
+    if not np.isfinite(written).all() or written.max() > 0.005:
+        i = int(np.nanargmax(np.where(np.isfinite(written), written, np.inf)))
+        raise JobError(f"{program}:{int(tp.line[i])}: the compensated numbers, as written, leave {written[i]:.4f} mm; nothing was written")
+    write_all({Path(output): text}, encoding="latin-1")
+    lines = [f"{len(tp)} targets compensated for {machine_file}{' and grid ' + str(grid_file) if grid is not None else ''}: "
+             f"predicted tip error max {report.before_mm.max():.4f} -> {written.max():.4f} mm (RMS {np.sqrt(np.mean(report.before_mm**2)):.4f} -> "
+             f"{np.sqrt(np.mean(written**2)):.4f} mm, as written); largest linear-axis correction {report.correction_mm.max():.4f} mm"]
+    return lines + [f"note: {n}" for n in report.notes]
