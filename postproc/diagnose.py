@@ -239,19 +239,20 @@ def _rank_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], 
         result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base, seed=seed)
         added = [e for e in result.model.effects if e.name not in set(model.effects.names())]
         if not added:  # e.g. a term family when the data support no term
-            raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0))
+            raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0, ""))
             continue
         err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
         sq = np.sum(err**2, axis=1)
         mse = float(sq.mean())
         gain = base_sq - sq
         p = float(sps.ttest_1samp(gain, 0.0, alternative="greater").pvalue) if np.std(gain) > 0 else 1.0
-        raw.append((added[0].spec(), 1.0 - mse / base_mse, float(np.sqrt(mse)), p))
+        chosen_how = "".join(f" ({n.split('how often they were chosen: ', 1)[1]}" for n in result.notes if "how often they were chosen: " in n)
+        raw.append((added[0].spec(), 1.0 - mse / base_mse, float(np.sqrt(mse)), p, chosen_how))  # terms a fit chose, with their stability
     adjusted = holm([r[3] for r in raw]) if raw else []
     ranked = []
-    for (spec, explained, rms, p), p_adj in zip(raw, adjusted):
+    for (spec, explained, rms, p, chosen_how), p_adj in zip(raw, adjusted):
         significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
-        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained))))
+        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained)) + chosen_how))
     ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
     return ranked
 

@@ -168,13 +168,13 @@ def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prio
     for effect in [e for e in effects if not e.resolved]:
         say(f"choosing {effect.name} terms")
         without = EffectSum(tuple(e for e in effects if e is not effect))
-        chosen = select_terms(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
+        chosen, how = select_terms(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
         if chosen.terms:
             effects = effects.replaced(effect, chosen)
-            notes.append(f"{effect.name}: data support {chosen.spec()}")
+            notes.append(f"{effect.name}: data support {chosen.spec()} (terms and how often they were chosen: {how})")
         else:
             effects = without
-            notes.append(f"{effect.name}: the data support no term; the effect is left out")
+            notes.append(f"{effect.name}: the data support no term; the effect is left out ({how})")
     return effects, notes
 
 
@@ -334,39 +334,26 @@ def free_mask(result: "FitResult") -> np.ndarray:
     return np.array([p.name not in result.fixed for p in result.model.params])
 
 
-def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 8) -> Effect:
-    """Greedy forward selection of a term family's terms (e.g. harmonics' (joint, order)) by
-    cross-validated RMS.
+def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4) -> tuple[Effect, str]:
+    """A term family's terms (e.g. harmonics' (joint, order)) by best-subset regression over
+    the whole family, with cross-validation and a stability check (``postproc.term_selection``),
+    on the residual of the model without the family linearised around its fit. Returns the
+    family with the chosen terms and a note of how stable the choice was."""
+    from .term_selection import select_terms as best_subset, term_labels
 
-    Each step fits the model without the family plus the chosen terms, linearises around
-    it, and adds the candidate whose columns most reduce the k-fold error of the
-    linearised residual; it stops when the best candidate gains less than 5 %.
-    """
-    chosen: list = []
-    folds = 5
-    fold_of = fold_assignment(len(meas), folds, seed)
-    while len(chosen) < max_terms:
-        effects = others + family.with_terms(tuple(chosen)) if chosen else others
-        result = fit(robot, tool_mm, effects, meas, cv_folds=0, prior=prior, seed=seed)
-        prep = result.model.prepare(meas)
-        pos, jac = result.model.evaluate(prep)
-        resid = (meas.measured_mm - pos).reshape(-1)
-        free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
-        base_cols = jac.reshape(jac.shape[0] * 3, jac.shape[-1])[:, free]
-        dp_dq = kin_joint_columns(result.model, prep)  # d p / d q_j in the measurement frame, per degree
-        baseline = _cv_linear(base_cols, resid, fold_of, folds)
-        best, best_err = None, baseline
-        for term in family.candidate_terms():
-            if term in chosen:
-                continue
-            cols = family.term_columns(dp_dq, meas.q_deg, term)
-            err = _cv_linear(np.hstack([base_cols, cols.reshape(-1, cols.shape[-1])]), resid, fold_of, folds)
-            if err < best_err:
-                best, best_err = term, err
-        if best is None or best_err > 0.95 * baseline:
-            break
-        chosen.append(best)
-    return family.with_terms(tuple(chosen))
+    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
+    prep = result.model.prepare(meas)
+    pos, jac = result.model.evaluate(prep)
+    free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
+    dp_dq = kin_joint_columns(result.model, prep)  # d p / d q_j in the measurement frame, per degree
+    candidates = family.candidate_terms()
+    cols = [family.term_columns(dp_dq, meas.q_deg, term).reshape(3 * len(meas), -1) for term in candidates]
+    groups = np.split(np.arange(sum(c.shape[1] for c in cols)), np.cumsum([c.shape[1] for c in cols])[:-1])
+    pick = best_subset(np.hstack(cols), (meas.measured_mm - pos).reshape(-1), groups, np.repeat(fold_assignment(len(meas), 5, seed), 3),
+                       base=jac.reshape(3 * len(meas), -1)[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
+    how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
+    labels = [":".join(map(str, t)) if isinstance(t, tuple) else str(t) for t in candidates]
+    return family.with_terms(tuple(candidates[t] for t in pick.chosen)), (term_labels(labels, pick) + "; " if pick.chosen else "") + how
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
@@ -380,17 +367,6 @@ def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
         down = replace(prep, ctx=replace(prep.ctx, q_deg=prep.ctx.q_deg - dq))
         out[:, :, j] = (model.predict_prepared(up) - model.predict_prepared(down)) / (2 * h)
     return out
-
-
-def _cv_linear(cols: np.ndarray, target: np.ndarray, fold_of: np.ndarray, folds: int) -> float:
-    """k-fold RMS of a linear least-squares fit of target on cols, folds by pose (3 rows each)."""
-    row_fold = np.repeat(fold_of, 3)
-    sq = 0.0
-    for k in range(folds):
-        test = row_fold == k
-        coef, *_ = np.linalg.lstsq(cols[~test], target[~test], rcond=None)
-        sq += float(np.sum((target[test] - cols[test] @ coef) ** 2))
-    return float(np.sqrt(sq / (len(target) / 3)))
 
 
 def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0) -> ErrorModel:

@@ -86,6 +86,7 @@ def test_plain_words_name_the_joint():
     top = result.candidates[0]
     assert top.message.startswith("residuals follow sin/cos of joint ")
     assert f"explains {100 * top.explained:.0f}% of them" in top.message
+    assert "% of resamples" in top.message  # how stable the chosen terms were
 
 
 def test_holm_adjustment():

@@ -1,7 +1,7 @@
 """Cyclic joint errors (gear and reducer eccentricity): delta q_j = sum_k a_jk sin(k q_j) + b_jk cos(k q_j).
 
 Without options the fit chooses the joints and orders the data support (see
-``postproc.identify.select_terms``) and records them in the model file.
+``postproc.identify.select_terms``, best subset with a stability check) and records them in the model file.
 """
 
 from __future__ import annotations

@@ -54,6 +54,7 @@ def seed001_transfer(seed: int = 0) -> list[dict]:
         "GPR-80 (target poses)": GPRPredictor(random_state=seed).fit(Xt, yt),
         "GPR-378 (validation region)": GPRPredictor(random_state=seed).fit(X378, y378),
         "Tr-GPR (126 source + 80 target)": TrGPRPredictor(random_state=seed).fit(Xt, yt, Xs, ys),
+        "Tr-GPR as published (eq. 11-26)": TrGPRPredictor(random_state=seed, variant="paper").fit(Xt, yt, Xs, ys),
     }
     rows = [_row("uncompensated", np.linalg.norm(yv, axis=1))]
     for name, model in models.items():

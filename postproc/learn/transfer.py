@@ -17,6 +17,13 @@ TrAdaBoost.R2 (eq. 19-24) then reweights: target samples by the weighted fitting
 relative to the largest target error, source samples that fit badly lose weight; the
 GPR base learners are combined by their weighted median (eq. 25). The kernel is fitted
 once and then kept, so every boosting round is one factorisation.
+eq. 26: the source-region GPR is kept and predicts poses inside the source region's base
+angle range (``keep_source``, on by default).
+
+``variant="paper"`` runs seed 001's eq. 11-25 as published instead (``transfer_paper``:
+T_j with its shift, a (3 + 3 + 1) x 3 H_j per sub-space weighted by omega_m, the paper's
+weight update); on the Table 7 design it is 1.35-2.8x GPR-378 where this default is 0.75-1.26x
+(README, "Seed 001 as published").
 """
 
 from __future__ import annotations
@@ -118,13 +125,21 @@ def _weighted_median(preds: np.ndarray, weights: np.ndarray) -> np.ndarray:
 
 
 class TrGPRPredictor(RegressorMixin, BaseEstimator):
-    def __init__(self, n_subspaces: int = 5, n_iter: int = 10, ridge: float | None = None, noise_mm: float = 0.02, shift: bool = False, random_state: int = 0):
+    """variant: "physics" (default: the turn's physics carries the labels, see the module
+    docstring) or "paper" (seed 001 eq. 11-25 as published, ``transfer_paper``).
+    keep_source: eq. 26, the source-region GPR predicts poses inside the source region's
+    base-angle range, the transfer model the rest."""
+
+    def __init__(self, n_subspaces: int = 5, n_iter: int = 10, ridge: float | None = None, noise_mm: float = 0.02, shift: bool = False,
+                 random_state: int = 0, variant: str = "physics", keep_source: bool = True):
         self.n_subspaces = n_subspaces
         self.shift = shift
         self.n_iter = n_iter
         self.ridge = ridge
         self.noise_mm = noise_mm
         self.random_state = random_state
+        self.variant = variant
+        self.keep_source = keep_source
 
     def fit(self, X, y, X_source=None, y_source=None):
         """X, y: target poses and errors (few); X_source, y_source: the source region's (many)."""
@@ -132,9 +147,27 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         y = np.asarray(y, dtype=float)
         if X_source is None or y_source is None:
             raise ValueError("tr-gpr needs source-domain data (X_source, y_source)")
+        if self.variant not in ("physics", "paper"):
+            raise ValueError(f"tr-gpr variant '{self.variant}' is not one of physics, paper")
         Xs = np.asarray(X_source, dtype=float)
         ys = np.asarray(y_source, dtype=float)
         source_model = GPRPredictor(random_state=self.random_state).fit(Xs, ys)
+        if self.variant == "paper":
+            from . import transfer_paper
+
+            sigma = np.full(3, self.noise_mm)
+            X_all, y_all, is_target, self.alignments_ = transfer_paper.align(X, y, Xs, ys, source_model, self.n_subspaces, sigma)
+            self.learners_, self.learner_weights_ = transfer_paper.boost(X_all, y_all, is_target, sigma, self.n_iter, self.random_state)
+        else:
+            X_all, y_all, is_target, self.alignments_ = self._align(X, y, Xs, ys, source_model)
+            self.learners_, self.learner_weights_ = self._boost(X_all, y_all, is_target)
+        self.source_model_ = source_model if self.keep_source else None
+        self.source_theta_ = (float(_theta1(Xs).min()), float(_theta1(Xs).max()))
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def _align(self, X, y, Xs, ys, source_model):
+        """Sub-space alignment by the turn's physics; the merged training set (eq. 15-17)."""
         order = np.argsort(_theta1(X))
         groups = np.array_split(order, self.n_subspaces)
         precision = 1.0 / self.noise_mm**2  # the tracker's precision weights the label fit
@@ -158,10 +191,8 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
             rz = _rz(theta)
             rows_a.append(_turn_design(rz, X[g, :3]))
             rows_b.append((y[g] - f_src @ rz.T).reshape(-1))
-        design, rhs = np.vstack(rows_a), np.concatenate(rows_b)
-        frame = np.linalg.lstsq(design, rhs, rcond=None)[0]  # 240 equations for 4 unknowns: no prior needed
-        parts_X, parts_y = [], []
-        self.alignments_ = []
+        frame = np.linalg.lstsq(np.vstack(rows_a), np.concatenate(rows_b), rcond=None)[0]  # 240 equations for 4 unknowns
+        parts_X, parts_y, alignments = [], [], []
         for g, theta, offset, f_src, design_g in zip(groups, turns, offsets, backs, rows_a):
             rz = _rz(theta)
             moved = _rotate(Xs, theta, offset)
@@ -171,12 +202,15 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
             labels = ys @ rz.T + (_turn_design(rz, moved[:, :3]) @ frame).reshape(-1, 3)
             parts_X.append(moved)
             parts_y.append(labels @ h)
-            self.alignments_.append({"theta_deg": theta, "offset_mm": offset.tolist(), "H": h.tolist(), "ridge": ridge})
+            alignments.append({"theta_deg": theta, "offset_mm": offset.tolist(), "H": h.tolist(), "ridge": ridge})
         n_src = sum(len(p) for p in parts_X)
-        X_all = np.vstack(parts_X + [X])
-        y_all = np.vstack(parts_y + [y])
-        is_target = np.r_[np.zeros(n_src, bool), np.ones(len(X), bool)]
+        return np.vstack(parts_X + [X]), np.vstack(parts_y + [y]), np.r_[np.zeros(n_src, bool), np.ones(len(X), bool)], alignments
+
+    def _boost(self, X_all, y_all, is_target):
+        """TrAdaBoost.R2 with a fixed kernel: target samples that fit badly gain weight, bad
+        source samples lose it (Pardoe & Stone); learners weighted ln(1/beta)."""
         weights = np.full(len(X_all), 1.0 / len(X_all))  # eq. 19 with no overlapping sub-spaces
+        n_src = int((~is_target).sum())
         beta_src = 1.0 / (1.0 + np.sqrt(2.0 * np.log(max(n_src, 2)) / max(self.n_iter, 1)))
         first = GPRPredictor(random_state=self.random_state).fit(X_all, y_all, sample_weight=weights * len(X_all))
         theta_kernel = first.gpr_.kernel_.theta
@@ -191,27 +225,34 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
             beta_t = max(eps, 1e-6) / (1.0 - eps)
             learners.append(learner)
             betas.append(beta_t)
-            # eq. 23: target samples that fit badly gain weight; bad source samples lose it.
             weights = np.where(is_target, weights * beta_t ** (-(e)), weights * beta_src**e)
             weights /= weights.sum()
         if not learners:
             learners, betas = [first], [0.5]
-        self.learners_ = learners
-        self.learner_weights_ = np.log(1.0 / np.asarray(betas))  # eq. 24-25
-        self.n_features_in_ = X.shape[1]
-        return self
+        return learners, np.log(1.0 / np.asarray(betas))  # eq. 24-25
 
     def predict(self, X):
-        preds = np.stack([m.predict(np.asarray(X, dtype=float)) for m in self.learners_])
-        return _weighted_median(preds, self.learner_weights_)
+        X = np.asarray(X, dtype=float)
+        out = _weighted_median(np.stack([m.predict(X) for m in self.learners_]), self.learner_weights_)
+        if getattr(self, "source_model_", None) is not None:
+            # eq. 26: inside the source region the source model, measured densely there, predicts.
+            theta = _theta1(X)
+            inside = (theta >= self.source_theta_[0]) & (theta <= self.source_theta_[1])
+            if inside.any():
+                out[inside] = self.source_model_.predict(X[inside])
+        return out
 
     def to_state(self) -> dict:
-        return {"type": "tr-gpr", "params": self.get_params(), "learners": [estimator_state(m) for m in self.learners_], "learner_weights": self.learner_weights_.tolist()}
+        source = None if getattr(self, "source_model_", None) is None else estimator_state(self.source_model_)
+        return {"type": "tr-gpr", "params": self.get_params(), "learners": [estimator_state(m) for m in self.learners_],
+                "learner_weights": self.learner_weights_.tolist(), "source": source, "source_theta_deg": list(getattr(self, "source_theta_", (0.0, 0.0)))}
 
     @classmethod
     def from_state(cls, state: dict) -> "TrGPRPredictor":
         est = cls(**state["params"])
         est.learners_ = [base_estimator_from_state(s) for s in state["learners"]]
         est.learner_weights_ = np.asarray(state["learner_weights"], dtype=float)
+        est.source_model_ = None if state.get("source") is None else base_estimator_from_state(state["source"])
+        est.source_theta_ = tuple(state.get("source_theta_deg", (0.0, 0.0)))
         est.n_features_in_ = est.learners_[0].n_features_in_
         return est
