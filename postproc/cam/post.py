@@ -13,7 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import dialects
+from ..dialects import get as get_dialect
+from ..dialects import names as dialect_names
+from ..dialects import of as dialect_of
 from ..errors import InputError
 from ..ir import Kind, Toolpath
 
@@ -21,7 +23,7 @@ from ..ir import Kind, Toolpath
 
 def robot_languages() -> tuple[str, ...]:
     """The dialects a robot program can be written in (those with a writer for new programs)."""
-    return tuple(name for name in dialects.names() if dialects.get(name).new_writer("p") is not None)
+    return tuple(name for name in dialect_names() if get_dialect(name).new_writer("p") is not None)
 
 
 def post(
@@ -56,7 +58,7 @@ def post(
     from ..emit.writer import write_program
     from ..programs import parse_program
 
-    target = dialects.get(to, "--to")
+    target = get_dialect(to, "--to")
     if to not in robot_languages():
         raise InputError(f"--to: '{to}' is not one of {', '.join(robot_languages())}"
                          + (" (five-axis machines: use 'postproc convert --to gcode --machine M --rtcp MODE')" if target.machine_program else ""))
@@ -125,7 +127,7 @@ def _refuse_what_a_robot_cannot_run(tp: Toolpath) -> None:
         raise InputError(f"G2/G3 arcs on lines {lines}: a robot program needs them as straight moves; linearise them first "
                          "(the FreeCAD post does, within --arc-tol)")
     rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1)
-    if dialects.of(tp).machine_program and rotary.any():
+    if dialect_of(tp).machine_program and rotary.any():
         lines = ", ".join(str(v) for v in tp.line[rotary][:10])
         raise InputError(f"rotary axis words (A/B/C) on lines {lines}: they belong to a five-axis machine, "
                          "whose kinematics postproc cannot emit yet; give the tool axis as G43.5 I J K for a robot")
