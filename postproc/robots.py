@@ -196,35 +196,47 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
     expected_stem = Path(path).stem
     if name != expected_stem:
         raise r.fail("name", f"'{name}' does not match the file name '{expected_stem}'")
-    description = r.string(data, "description", "")
-    verified = r.boolean(data, "verified", "")
+    _check_units(r)
+    sources: dict[str, str] = {}
+    estimates: dict[str, bool] = {}
+    fields: dict[str, Any] = {}
+    # Each section reader fills the RobotModel fields it owns, its source and its estimate flag.
+    for section, reader in (("kinematics", _read_kinematics), ("limits", _read_limits), ("masses", _read_masses), ("stiffness", _read_stiffness)):
+        table = r.section(section)
+        fields.update(reader(r, table))
+        sources[section] = r.string(table, "source", section)
+        estimates[section] = r.boolean(table, "estimate", section, default=False)
+    opw = _read_opw(r, sources)
+    model = RobotModel(name=name, description=r.string(data, "description", ""), source_path=path, verified=r.boolean(data, "verified", ""),
+                       opw=opw, sources=sources, estimates=estimates, **fields)
+    if opw is not None:
+        _check_opw_matches_dh(model, r)
+    return model
 
+
+def _check_units(r: "_Reader") -> None:
     units = r.section("units")
     r.check_keys(units, "units", set(REQUIRED_UNITS))
     for quantity, unit in REQUIRED_UNITS.items():
         if units.get(quantity) != unit:
             raise r.fail(f"units.{quantity}", f"must be '{unit}' (conventions.md), got {units.get(quantity)!r}")
 
-    sources: dict[str, str] = {}
-    estimates: dict[str, bool] = {}
 
-    kin = r.section("kinematics")
+def _read_kinematics(r: "_Reader", kin: dict) -> dict:
     r.check_keys(kin, "kinematics", {"convention", "theta0", "alpha", "d", "a", "joint_sign", "source", "estimate"})
     if kin.get("convention") != "standard_dh":
         raise r.fail("kinematics.convention", "must be 'standard_dh'")
-    theta0 = r.vector(kin, "theta0", "kinematics")
-    alpha = r.vector(kin, "alpha", "kinematics")
-    d = r.vector(kin, "d", "kinematics")
-    a = r.vector(kin, "a", "kinematics")
-    joint_sign = r.signs(kin, "joint_sign", "kinematics")
-    for key, lengths in (("d", d), ("a", a)):
+    out = {"theta0_deg": r.vector(kin, "theta0", "kinematics"), "alpha_deg": r.vector(kin, "alpha", "kinematics"),
+           "d_mm": r.vector(kin, "d", "kinematics"), "a_mm": r.vector(kin, "a", "kinematics"),
+           "joint_sign": r.signs(kin, "joint_sign", "kinematics")}
+    for key, lengths in (("d", out["d_mm"]), ("a", out["a_mm"])):
         largest = np.abs(lengths).max()
         if 0.0 < largest < 10.0:
             raise r.fail(f"kinematics.{key}", f"lengths look like metres (largest {largest:g}); this file must use mm")
-    sources["kinematics"] = r.string(kin, "source", "kinematics")
-    estimates["kinematics"] = r.boolean(kin, "estimate", "kinematics", default=False)
+    return out
 
-    limits = r.section("limits")
+
+def _read_limits(r: "_Reader", limits: dict) -> dict:
     r.check_keys(limits, "limits", {"lower", "upper", "coupling", "source", "estimate"})
     lower = r.vector(limits, "lower", "limits")
     upper = r.vector(limits, "upper", "limits")
@@ -241,10 +253,10 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
         if c_lo >= c_hi:
             raise r.fail(f"{prefix}.lower", "must be below upper")
         couplings.append(JointCoupling(r.vector(entry, "coeffs", prefix), c_lo, c_hi, r.string(entry, "description", prefix)))
-    sources["limits"] = r.string(limits, "source", "limits")
-    estimates["limits"] = r.boolean(limits, "estimate", "limits", default=False)
+    return {"lower_deg": lower, "upper_deg": upper, "couplings": tuple(couplings)}
 
-    masses = r.section("masses")
+
+def _read_masses(r: "_Reader", masses: dict) -> dict:
     r.check_keys(masses, "masses", {"mass", "com", "source", "estimate"})
     mass = r.vector(masses, "mass", "masses")
     if np.any(mass < 0):
@@ -254,53 +266,27 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
         raise r.fail("masses.com", "must be a list of 6 [x, y, z] centres of mass (mm, DH frame i)")
     com = np.stack([r.vector({"com": row}, "com", f"masses.com[{i}]", length=3) for i, row in enumerate(com_rows)])
     com.setflags(write=False)
-    sources["masses"] = r.string(masses, "source", "masses")
-    estimates["masses"] = r.boolean(masses, "estimate", "masses", default=False)
+    return {"mass_kg": mass, "com_mm": com}
 
-    stiff = r.section("stiffness")
+
+def _read_stiffness(r: "_Reader", stiff: dict) -> dict:
     r.check_keys(stiff, "stiffness", {"k", "source", "estimate"})
     k = r.vector(stiff, "k", "stiffness")
     if np.any(k <= 0):
         raise r.fail("stiffness.k", "joint stiffness must be > 0 N*m/rad")
     if k.max() < 1e3:
         raise r.fail("stiffness.k", f"values look like 10^6 N*m/rad or kN*m/rad (largest {k.max():g}); give N*m/rad")
-    sources["stiffness"] = r.string(stiff, "source", "stiffness")
-    estimates["stiffness"] = r.boolean(stiff, "estimate", "stiffness", default=False)
+    return {"stiffness_nm_per_rad": k}
 
-    opw = None
+
+def _read_opw(r: "_Reader", sources: dict) -> "OpwParameters | None":
     opw_table = r.section("opw", required=False)
-    if opw_table is not None:
-        r.check_keys(opw_table, "opw", set(_OPW_KEYS) | {"signs", "offsets", "source"})
-        opw = OpwParameters(
-            *(r.number(opw_table, key, "opw") for key in _OPW_KEYS),
-            signs=r.signs(opw_table, "signs", "opw"),
-            offsets_deg=r.vector(opw_table, "offsets", "opw"),
-        )
-        sources["opw"] = r.string(opw_table, "source", "opw")
-
-    model = RobotModel(
-        name=name,
-        description=description,
-        source_path=path,
-        verified=verified,
-        theta0_deg=theta0,
-        alpha_deg=alpha,
-        d_mm=d,
-        a_mm=a,
-        joint_sign=joint_sign,
-        lower_deg=lower,
-        upper_deg=upper,
-        couplings=tuple(couplings),
-        mass_kg=mass,
-        com_mm=com,
-        stiffness_nm_per_rad=k,
-        opw=opw,
-        sources=sources,
-        estimates=estimates,
-    )
-    if opw is not None:
-        _check_opw_matches_dh(model, r)
-    return model
+    if opw_table is None:
+        return None
+    r.check_keys(opw_table, "opw", set(_OPW_KEYS) | {"signs", "offsets", "source"})
+    sources["opw"] = r.string(opw_table, "source", "opw")
+    return OpwParameters(*(r.number(opw_table, key, "opw") for key in _OPW_KEYS),
+                         signs=r.signs(opw_table, "signs", "opw"), offsets_deg=r.vector(opw_table, "offsets", "opw"))
 
 
 def _check_opw_matches_dh(model: RobotModel, reader: _Reader) -> None:
