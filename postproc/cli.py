@@ -590,7 +590,6 @@ def compensate_cmd(
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .compensate import CompensationError, compensate
-    from .measurements import write_text_atomic
     from .model_io import load_model
 
     if tol <= 0 or max_iter < 1:
@@ -612,14 +611,7 @@ def compensate_cmd(
                               max_deviation_mm=max_deviation, progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
     if report is not None:
-        doc = {"summary": summary, "points": [
-            {"line": int(rep.line[i]), "compensated": bool(rep.compensated[i]), "iterations": int(rep.iterations[i]),
-             "before_mm": None if np.isnan(rep.before_mm[i]) else float(rep.before_mm[i]), "after_mm": None if np.isnan(rep.after_mm[i]) else float(rep.after_mm[i]),
-             "correction_mm": None if np.isnan(rep.correction_mm[i]) else float(rep.correction_mm[i]), "converged": bool(rep.converged[i]),
-             "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i]),
-             "path_mm": None if rep.path_mm is None or np.isnan(rep.path_mm[i]) else float(rep.path_mm[i])}
-            for i in range(len(rep.line))]}
-        write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
+        _write_point_report(report, rep, summary)
     failures = rep.failures()
     if failures:
         for line, reason in failures[:50]:
@@ -643,6 +635,23 @@ def compensate_cmd(
                   f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _write_point_report(report: Path, rep, summary: dict) -> None:
+    """--report: the summary and one entry per target, as JSON."""
+    from .measurements import write_text_atomic
+
+    def num(v):
+        return None if v is None or np.isnan(v) else float(v)
+
+    doc = {"summary": summary, "points": [
+        {"line": int(rep.line[i]), "compensated": bool(rep.compensated[i]), "iterations": int(rep.iterations[i]),
+         "before_mm": num(rep.before_mm[i]), "after_mm": num(rep.after_mm[i]),
+         "correction_mm": num(rep.correction_mm[i]), "converged": bool(rep.converged[i]),
+         "within_limits": bool(rep.within_limits[i]), "singular": bool(rep.singular[i]), "branch_changed": bool(rep.branch_changed[i]),
+         "path_mm": None if rep.path_mm is None else num(rep.path_mm[i])}
+        for i in range(len(rep.line))]}
+    write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
 
 
 def _read_program(program: str, dialect: str | None):
