@@ -575,6 +575,7 @@ def compensate_cmd(
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
+    cut: Optional[Path] = typer.Option(None, "--cut", help="Cut file (tool, material, engagement; see examples/cut_aluminium.toml): the mechanistic milling force of every cutting move, pre-compensated through the model's external_load effect."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
@@ -608,7 +609,8 @@ def compensate_cmd(
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
                               frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
                               start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                              max_deviation_mm=max_deviation, progress=lambda m: bar.update(task, description=m))
+                              force_per_target=_cut_forces(cut, tp, frame, tool), max_deviation_mm=max_deviation,
+                              progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
     if report is not None:
         _write_point_report(report, rep, summary)
@@ -635,6 +637,16 @@ def compensate_cmd(
                   f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _cut_forces(cut: Optional[Path], tp, frame, tool):
+    """--cut: the mechanistic force (N, 3) of every target in the base frame, None without it."""
+    if cut is None:
+        return None
+    from .forces import load_cut_params, program_forces
+
+    placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
+    return program_forces(placed, params=load_cut_params(cut))
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:

@@ -218,6 +218,7 @@ def compensate(
     frames: dict | None = None,
     tools: dict | None = None,
     start_joints=None,
+    force_per_target=None,
     max_deviation_mm: float | None = None,
     progress=lambda msg: None,
 ) -> tuple[Toolpath, Report]:
@@ -225,13 +226,15 @@ def compensate(
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
-    _require_process_inputs(model, temp_c, force_n)
+    if force_n is not None and force_per_target is not None:
+        raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
+    _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
     _refuse_arcs(tp)
     written = tp
     if frames or tools:
         tp = tp.with_frames(frames, tools)
     _refuse_unplaced(tp)
-    problem = _Problem.of(tp, model, temp_c, force_n, start_joints)
+    problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target)
     progress("predicting the program as written")
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
@@ -304,29 +307,39 @@ class _Problem:
         self.order_q[rows] = np.nan_to_num(q_ref)
 
     @classmethod
-    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None) -> "_Problem":
+    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None, force_per_target=None) -> "_Problem":
         rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
         target = tp.base_poses()[rows]
-        plant = _Plant(model, tp.tools, tp.tool, temp_c, _force_rows(len(tp), rows, target, force_n))
+        force_rows = _force_rows(len(tp), rows, target, force_n) if force_per_target is None else np.asarray(force_per_target, dtype=float)
+        plant = _Plant(model, tp.tools, tp.tool, temp_c, force_rows)
         flange = target @ plant.inv_tools[tp.tool[rows]]
         q_ref, branch_ref, posture_problem, notes = _reference_joints(tp, model.robot, flange, rows, start_joints)
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
 
     def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
         """(Cartesian targets,) True where the nominal controller's straight line from the
-        previous target to this compensated one cannot be driven on the carried posture."""
-        tp, rows = self.tp, self.rows
-        straight = np.isin(tp.kind[rows], (Kind.LINEAR,))
-        has_prev = np.zeros(len(rows), dtype=bool)
-        has_prev[1:] = rows[1:] == rows[:-1] + 1  # the previous motion is a Cartesian target too
-        check = straight & has_prev & ~np.isnan(q).any(axis=1) & np.roll(~np.isnan(q).any(axis=1), 1)
+        previous target (compensated, or a joint target as written) to this compensated one
+        cannot be driven on the carried posture."""
+        tp, rows, robot = self.tp, self.rows, self.plant.robot
+        n = len(tp)
+        # Flange pose and joints of every program row where the robot will be.
+        flange_all = np.full((n, 4, 4), np.nan)
+        q_all = np.full((n, 6), np.nan)
+        poses = self.target.copy()
+        poses[:, :3, 3] = cmd
+        flange_all[rows] = poses @ self.plant.inv_tools[tp.tool[rows]]
+        q_all[rows] = q
+        joint_rows = np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1))[0]
+        if joint_rows.size:
+            flange_all[joint_rows] = kin.fk(robot, tp.joints[joint_rows])
+            q_all[joint_rows] = tp.joints[joint_rows]
+        prev = rows - 1
+        check = (tp.kind[rows] == Kind.LINEAR) & (prev >= 0) & ~np.isnan(q).any(axis=1)
+        check[check] &= ~np.isnan(q_all[prev[check]]).any(axis=1)
         blocked = np.zeros(len(rows), dtype=bool)
         idx = np.nonzero(check)[0]
         if idx.size:
-            poses = self.target.copy()
-            poses[:, :3, 3] = cmd
-            flange = poses @ self.plant.inv_tools[tp.tool[rows]]
-            reason = posture.check_linear_segments(self.plant.robot, flange[idx - 1], flange[idx], branch[idx], q[idx - 1])
+            reason = posture.check_linear_segments(robot, flange_all[prev[idx]], flange_all[rows[idx]], branch[idx], q_all[prev[idx]])
             blocked[idx] = reason != 0
         return blocked
 

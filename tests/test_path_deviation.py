@@ -9,6 +9,7 @@ from typer.testing import CliRunner
 
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from postproc.cli import app
+from postproc import kinematics as kin
 from postproc.compensate import compensate
 from postproc.effects import parse_effects
 from postproc.identify import fit
@@ -33,8 +34,18 @@ def model():
 
 
 def _program(tmp_path, body):
+    """HEAD, then an axis PTP to the first target's own joints (the wrist as in HEAD's PTP),
+    then the body: the first straight move starts where the robot stands."""
+    first = parse_program(_write(tmp_path, HEAD + body[:1]))
+    flange = first.base_poses()[1:2] @ np.linalg.inv(first.tools[first.tool[1:2]])
+    q, _ = kin.select_nearest(kr160(), kin.ik(kr160(), flange), first.joints[0])
+    ptp = "PTP {" + ", ".join(f"A{i + 1} {v:.6f}" for i, v in enumerate(q[0])) + "}"
+    return _write(tmp_path, HEAD + [ptp] + body)
+
+
+def _write(tmp_path, lines):
     path = tmp_path / "part.src"
-    path.write_text("\n".join(HEAD + body + ["END"]) + "\n")
+    path.write_text("\n".join(lines + ["END"]) + "\n")
     return path
 
 
@@ -46,12 +57,12 @@ def test_lines_and_an_arc_are_measured_between_the_targets(model, tmp_path):
     body = [f"LIN {{{_pose(1000, -300, 500)}}}", f"LIN {{{_pose(1000, 300, 500)}}}",
             f"CIRC {{X 1150, Y 450, Z 500}}, {{{_pose(1300, 300, 500)}}}", f"LIN {{{_pose(1300, -300, 500)}}}"]
     tp = parse_program(_program(tmp_path, body))
-    assert list(tp.kind[1:]) == [Kind.LINEAR, Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.LINEAR]
+    assert list(tp.kind[2:]) == [Kind.LINEAR, Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.LINEAR]
     _, report = compensate(tp, model)
     assert not report.failed.any(), report.failures()
     path = report.path_mm
-    assert np.isnan(path[[0, 1, 3]]).all()  # the PTP, the first LIN (it follows a joint move), the auxiliary point
-    measured = path[[2, 4, 5]]
+    assert np.isnan(path[[0, 1, 2, 4]]).all()  # the PTPs, the first LIN (it starts where the robot stands), the auxiliary point
+    measured = path[[3, 5, 6]]
     assert np.isfinite(measured).all()
     # Compensated end points are exact under the model, but the robot's error changes along
     # a 600 mm line or a 300 mm arc: in between the path strays by about 0.1 mm (measured:
@@ -65,7 +76,7 @@ def test_the_uncompensated_path_is_far_off(model, tmp_path):
     body = [f"LIN {{{_pose(1000, -300, 500)}}}", f"LIN {{{_pose(1000, 300, 500)}}}"]
     tp = parse_program(_program(tmp_path, body))
     _, report = compensate(tp, model, max_iter=1, tol_mm=1e6)  # accepts the program as written
-    assert report.path_mm[2] > 0.3
+    assert report.path_mm[3] > 0.3
 
 
 def test_max_deviation_refuses_a_path_that_strays(model, tmp_path):
@@ -76,7 +87,7 @@ def test_max_deviation_refuses_a_path_that_strays(model, tmp_path):
     out = tmp_path / "out.src"
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out), "--max-deviation", "0.00001"])
     assert result.exit_code == 1, result.output
-    assert "line 6" in result.output and "strays" in result.output and "--max-deviation" in result.output
+    assert "line 7" in result.output and "strays" in result.output and "--max-deviation" in result.output
     assert not out.exists()
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out)])
     assert result.exit_code == 0, result.output
@@ -88,4 +99,4 @@ def test_an_arc_with_a_circular_angle_is_not_measured(model, tmp_path):
     body = [f"LIN {{{_pose(1000, 300, 500)}}}", f"CIRC {{X 1150, Y 450, Z 500}}, {{{_pose(1300, 300, 500)}}} CA 90"]
     tp = parse_program(_program(tmp_path, body))
     _, report = compensate(tp, model)
-    assert np.isnan(report.path_mm[3])
+    assert np.isnan(report.path_mm[4])
