@@ -30,8 +30,16 @@ def model():
 
 
 def _program(tmp_path):
+    from postproc import kinematics as kin
+    from postproc.frames import abc_to_matrix
+
+    # An axis PTP to the first target's own joints: the straight moves start where the robot stands.
+    first = np.eye(4)
+    first[:3, :3] = abc_to_matrix(np.array([[0.0, 180.0, 0.0]]))[0]
+    first[:3, 3] = [1000.0, -200.0, 450.0 + TOOL[2]]  # flange above the tool tip (tool along the flange z, pointing down)
+    q, _ = kin.select_nearest(kr160(), kin.ik(kr160(), first[None]), np.array([0.0, -60, 40, 0, 60, 0]))
     lines = ["DEF face( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",
-             "PTP {A1 0, A2 -60, A3 40, A4 0, A5 60, A6 0}"]
+             "PTP {" + ", ".join(f"A{i + 1} {v:.6f}" for i, v in enumerate(q[0])) + "}"]
     lines += [f"LIN {{X {1000 + 20 * i:.1f}, Y {-200 + 40 * i:.1f}, Z 450.0, A 0, B 180, C 0}}" for i in range(10)]
     path = tmp_path / "face.src"
     path.write_text("\n".join(lines + ["END"]) + "\n")
