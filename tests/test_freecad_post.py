@@ -124,7 +124,7 @@ def test_post_refuses_what_it_cannot_write_right(fitted):
 
 
 def test_feeds_of_gcode_become_mm_per_s():
-    from postproc.emit.writer import write_program
+    from postproc.programs import write_program
 
     tp = parse_program("-", "gcode", b"G10 L2 P1 X0 Y0 Z0\nG1 X800 Y0 Z400 F600\n")
     assert "$VEL.CP = 0.01" in write_program(tp, "krl")[0]  # 600 mm/min = 0.01 m/s

@@ -14,7 +14,7 @@ from postproc.errors import EmitError, InputError, ParseError
 from postproc.programs import emit_texts, parse_program
 
 CORPUS = Path(__file__).parent / "corpus"
-HOME_MADE = [p for p in CORPUS.rglob("*") if p.is_file() and p.relative_to(CORPUS).parts[0] != "real"]  # real/: tests/test_real_corpus.py
+HOME_MADE = [p for p in CORPUS.rglob("*") if p.is_file() and p.suffix != ".md" and p.relative_to(CORPUS).parts[0] not in ("real", "fivex")]  # real/: test_real_corpus.py; fivex/: test_fivex_*.py
 PROGRAMS = sorted(p for p in HOME_MADE if p.suffix.lower() != ".dat")
 runner = CliRunner()
 

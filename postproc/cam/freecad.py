@@ -217,7 +217,7 @@ def _prepare(request: dict):
     args = argument_parser().parse_args(shlex.split(request.get("argstring") or ""))
     if dialects.get(args.to, "--to").machine_program:
         raise InputError(f"--to {args.to}: the FreeCAD post writes robot programs (--to krl or rapid); "
-                         "for a five-axis machine post to G-code and run 'postproc convert --to gcode --machine M --rtcp MODE'")
+                         "for a five-axis machine (RTCP) post to G-code and run 'postproc convert --to gcode --machine M --rtcp MODE'")
     if args.model is None:
         raise InputError("post arguments: --model MODEL.json is required (a model from 'postproc fit')")
     gcode = commands_to_gcode(request.get("objects", []), args.arc_tol, args.start, args.initial_tool)

@@ -55,7 +55,7 @@ def post(
     cannot be compensated, listed by line of ``program``).
     """
     from ..compensate import CompensationError, compensate
-    from ..emit.writer import write_program
+    from ..programs import write_program
     from ..programs import parse_program
 
     target = get_dialect(to, "--to")

@@ -66,7 +66,7 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
                  input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
-    from ..emit.writer import write_program
+    from ..programs import write_program
     from ..errors import InputError
     from ..programs import parse_program
     from .emit import MODES, emit

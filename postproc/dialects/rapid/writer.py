@@ -25,6 +25,7 @@ class RapidWriter:
         self.tool_name, self.wobj_name = "tool0", "wobj0"
         self.v, self.z = 100.0, 0.0
         self.proc = "main"
+        self.placeholder_conf = False  # a target was written without configuration data
 
     def start(self, name: str) -> None:
         self.proc = legal_name(name, "main")
@@ -51,9 +52,10 @@ class RapidWriter:
         wobj = "" if self.wobj_name == "wobj0" else f"\\WObj:={self.wobj_name}"
         return f"{speed}, {zone}, {self.tool_name}{wobj}"
 
-    @staticmethod
-    def _target(pose: np.ndarray, conf=None) -> str:
-        c = [0, 0, 0, 0] if conf is None or np.isnan(conf).any() else [int(v) for v in conf]
+    def _target(self, pose: np.ndarray, conf=None) -> str:
+        missing = conf is None or np.isnan(conf).any()
+        self.placeholder_conf |= missing
+        c = [0, 0, 0, 0] if missing else [int(v) for v in conf]
         return f"[{_pose_literal(pose)[1:-1]},[{','.join(map(str, c))}],{NO_EXTERNAL_AXES}]"
 
     def move_joint(self, pose, conf=None) -> None:
@@ -72,5 +74,10 @@ class RapidWriter:
         self.body.append(f"    ! {line}")
 
     def end(self) -> list[str]:
-        lines = [f"MODULE {self.module}", *dict.fromkeys(self.decl), f"  PROC {self.proc}()", *self.body, "  ENDPROC", "ENDMODULE", ""]
+        # Targets without configuration data get [0,0,0,0]: under the default ConfJ\On /
+        # ConfL\On the controller would try to reach exactly that configuration (and stop
+        # where no solution has it), so the program lets it take the nearest one instead.
+        free = ["    ! no configuration data in the input: the robot keeps the configuration nearest its current one",
+                "    ConfJ\\Off;", "    ConfL\\Off;"] if self.placeholder_conf else []
+        lines = [f"MODULE {self.module}", *dict.fromkeys(self.decl), f"  PROC {self.proc}()", *free, *self.body, "  ENDPROC", "ENDMODULE", ""]
         return ["\n".join(lines)]
