@@ -9,7 +9,7 @@ writes the calibrated machine file (with LinuxCNC, Siemens and Heidenhain-style 
 a program with machine axes (no RTCP) computed from it. The figure shows each axis's
 centres in its fitted plane, the fitted circle and the removed points.
 
-Run: .venv/bin/python examples/fivex_calibration.py [OUT_DIR]   (default: ./fivex_out)
+Run: .venv/bin/python examples/fivex_calibration.py [OUT_DIR]   (default: out/fivex)
 """
 
 from __future__ import annotations
@@ -31,7 +31,7 @@ from postproc.fivex.program import from_toolpath  # noqa: E402
 from postproc.fivex.simulate import perturbed, probe_rows, rows_csv  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
 
-out = Path(sys.argv[1] if len(sys.argv) > 1 else "fivex_out")
+out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/fivex")
 out.mkdir(parents=True, exist_ok=True)
 rng = np.random.default_rng(2024)
 
