@@ -502,9 +502,12 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 @app.command("compensate")
 @handles_errors
 def compensate_cmd(
-    program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
+    programs: list[str] = typer.Argument(..., help="Program file, or - for standard input (then give --dialect); several with --out-dir."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
-    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    output: Optional[str] = typer.Option(None, "-o", "--output", help="Compensated program, or - for standard output. KRL: its .dat is written beside it."),
+    out_dir: Optional[Path] = typer.Option(None, "--out-dir", help="Many programs: write each (same file name) into this folder."),
+    jobs: Optional[int] = typer.Option(None, "--jobs", help="With --out-dir: local worker processes (Dask LocalCluster)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="With --out-dir: address of an existing Dask scheduler (tcp://host:port)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
     max_iter: int = typer.Option(25, "--max-iter"),
@@ -526,6 +529,14 @@ def compensate_cmd(
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
     error_model, _ = load_model(model)
+    forces = None if force is None else _floats(force, 3, "--force")
+    if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
+        options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
+                   "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool")}
+        raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
+    program = programs[0]
+    if output is None:
+        raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
     if program == "-":
         if dialect is None:
             raise InputError("reading a program from standard input needs --dialect")
@@ -535,7 +546,6 @@ def compensate_cmd(
         tp = parse_program(Path(program), dialect)
     to_stdout = output == "-"
     log = err if to_stdout else out
-    forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
@@ -573,6 +583,43 @@ def compensate_cmd(
         log.print("no Cartesian target to compensate (joint targets are kept as written)")
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
+    """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .batch import run_batch
+    from .measurements import write_text_atomic
+
+    if out_dir is None or output is not None:
+        raise InputError("several programs take --out-dir DIR (not -o)")
+    if jobs is not None and scheduler is not None:
+        raise InputError("give --jobs N or --scheduler ADDRESS, not both")
+    if jobs is not None and jobs < 1:
+        raise InputError("--jobs must be at least 1")
+    if "-" in programs:
+        raise InputError("standard input (-) is for a single program with -o")
+    with Progress(TextColumn("compensating"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
+        task = bar.add_task("programs", total=len(programs))
+        results = run_batch([Path(p) for p in programs], model, out_dir, options, jobs=jobs, scheduler=scheduler, dialect=dialect,
+                            on_done=lambda r: bar.advance(task))
+    table = Table(title=f"compensate: {len(programs)} programs -> {out_dir}", show_edge=False)
+    for col in ("program", "status", "targets", "RMS before (mm)", "RMS after (mm)", "message"):
+        table.add_column(col, justify="right" if "RMS" in col or col == "targets" else "left")
+    for r in results:
+        b, a = r.summary.get("predicted_before", {}), r.summary.get("predicted_after", {})
+        fmt = lambda v: "-" if v is None else f"{v:.4f}"  # noqa: E731
+        table.add_row(r.program, "written" if r.ok else "FAILED", str(r.summary.get("targets", "-")), fmt(b.get("rms_mm")), fmt(a.get("rms_mm")), r.error or "")
+        if not r.ok:
+            err.print(f"error: {r.program}: {r.error}")
+    out.print(table)
+    if report is not None:
+        rows = [{"program": r.program, "ok": r.ok, "outputs": list(r.outputs), "error": r.error, "summary": r.summary} for r in results]
+        write_text_atomic(report, json.dumps({"programs": rows}, indent=1) + "\n")
+    failed = sum(not r.ok for r in results)
+    out.print(f"{len(results) - failed} of {len(results)} programs written; {failed} failed")
+    return 1 if failed else 0
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
