@@ -205,8 +205,21 @@ def fit_cmd(
     loss: str = typer.Option("linear", "--loss", help="linear, soft_l1, huber or cauchy (robust to outliers)."),
     cv: int = typer.Option(5, "--cv", help="Folds of cross-validation (0 to skip)."),
     seed: int = typer.Option(0, "--seed"),
+    gp_method: str = typer.Option("auto", "--gp-method", help="gpr: exact, local (experts over workspace regions, 10^4-10^5 poses) or auto (exact up to 2,000 poses)."),
+    gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
+    memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
 ):
     """Identify an error model from measurements and write MODEL.json."""
+    if gp_method not in ("auto", "exact", "local"):
+        raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
+    try:
+        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit})
+    except KeyboardInterrupt:
+        err.print("interrupted: no model written", style="bold red")
+        raise typer.Exit(130) from None
+
+
+def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options):
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .effects import parse_effects
@@ -245,9 +258,12 @@ def fit_cmd(
     if predictor is not None:
         from .identify import Stats, fit_predictor, residuals
 
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-            bar.add_task(f"fitting the {predictor} predictor", total=None)
-            final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed)
+        from rich.progress import BarColumn, MofNCompleteColumn
+
+        with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
+            task = bar.add_task(f"fitting the {predictor} predictor", total=None)
+            final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed,
+                                  gp_options=gp_options, progress=lambda done, total, msg: bar.update(task, completed=done, total=total, description=msg))
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
     if predictor is not None:

@@ -393,7 +393,8 @@ def _cv_linear(cols: np.ndarray, target: np.ndarray, fold_of: np.ndarray, folds:
     return float(np.sqrt(sq / (len(target) / 3)))
 
 
-def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0) -> ErrorModel:
+def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0,
+                  gp_options: dict | None = None, progress=None) -> ErrorModel:
     """Attach a data-driven predictor of the model's residual (a hybrid model; with no
     effects, a purely data-driven one). tr-gpr takes a source-region set as well."""
     from dataclasses import replace as _replace
@@ -409,7 +410,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":
-        est = GPRPredictor(anisotropic=True, random_state=seed).fit(X, target)
+        est = GPRPredictor(anisotropic=True, random_state=seed, **(gp_options or {})).fit(X, target, progress=progress)
     elif kind == "pso-bp":
         est = PSOBPPredictor(random_state=seed).fit(X, target)
     elif kind == "grid":
