@@ -412,7 +412,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     if kind == "gpr":
         est = GPRPredictor(anisotropic=True, random_state=seed, **(gp_options or {})).fit(X, target, progress=progress)
     elif kind == "pso-bp":
-        est = PSOBPPredictor(random_state=seed).fit(X, target)
+        est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
     else:

@@ -74,3 +74,13 @@ def test_a_fit_that_would_not_fit_in_memory_is_refused_before_it_starts():
     with pytest.raises(MemoryBudgetError, match=r"needs about .* GB.*--gp-method local"):
         GPRPredictor(anisotropic=True, method="exact", memory_limit_gb=0.5).fit(X, y)
     assert gp_fit_bytes(11911, 6, True) > 24 * 1024**3  # what the kernel killed at 24 GB (issue 17)
+
+
+def test_pso_bp_on_a_large_set_uses_mini_batches_and_stops_early():
+    from postproc.learn import PSOBPPredictor
+
+    X, y, f = _field(3000)
+    seen = []
+    net = PSOBPPredictor(n_particles=8, pso_iters=4, epochs=200, patience=3, large_n=1000).fit(X, y, progress=lambda d, t, m: seen.append(d))
+    assert net.epochs_run_ < 200 and seen == list(range(1, net.epochs_run_ + 1))
+    assert np.mean((net.predict(X) - f) ** 2) < np.mean((f - f.mean(0)) ** 2)  # learned something
