@@ -84,3 +84,24 @@ def test_pso_bp_on_a_large_set_uses_mini_batches_and_stops_early():
     net = PSOBPPredictor(n_particles=8, pso_iters=4, epochs=200, patience=3, large_n=1000).fit(X, y, progress=lambda d, t, m: seen.append(d))
     assert net.epochs_run_ < 200 and seen == list(range(1, net.epochs_run_ + 1))
     assert np.mean((net.predict(X) - f) ** 2) < np.mean((f - f.mean(0)) ** 2)  # learned something
+
+
+def test_interrupted_fit_says_so_and_writes_no_model(tmp_path, monkeypatch):
+    from typer.testing import CliRunner
+
+    import postproc.identify
+    from postproc.cli import app
+
+    runner = CliRunner()
+    meas = tmp_path / "m.csv"
+    assert runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--n", "60", "-o", str(meas)]).exit_code == 0
+
+    def interrupted(*args, progress=None, **kwargs):
+        progress(1, 10, "expert 1 of 9")
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(postproc.identify, "fit_predictor", interrupted)
+    out = tmp_path / "model.json"
+    result = runner.invoke(app, ["fit", str(meas), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "--cv", "0", "--predictor", "gpr", "-o", str(out)])
+    assert result.exit_code == 130 and "interrupted: no model written" in result.stderr
+    assert not out.exists() and list(tmp_path.iterdir()) == [meas]
