@@ -236,8 +236,21 @@ def fit_cmd(
     cv: int = typer.Option(5, "--cv", help="Folds of cross-validation (0 to skip)."),
     seed: int = typer.Option(0, "--seed"),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
+    gp_method: str = typer.Option("auto", "--gp-method", help="gpr: exact, local (experts over workspace regions, 10^4-10^5 poses) or auto (exact up to 2,000 poses)."),
+    gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
+    memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
 ):
     """Identify an error model from measurements and write MODEL.json."""
+    if gp_method not in ("auto", "exact", "local"):
+        raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
+    try:
+        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit}, drop_invalid)
+    except KeyboardInterrupt:
+        err.print("interrupted: no model written", style="bold red")
+        raise typer.Exit(130) from None
+
+
+def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .effects import parse_effects
@@ -277,9 +290,12 @@ def fit_cmd(
     if predictor is not None:
         from .identify import Stats, fit_predictor, residuals
 
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-            bar.add_task(f"fitting the {predictor} predictor", total=None)
-            final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed)
+        from rich.progress import BarColumn, MofNCompleteColumn
+
+        with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
+            task = bar.add_task(f"fitting the {predictor} predictor", total=None)
+            final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed,
+                                  gp_options=gp_options, progress=lambda done, total, msg: bar.update(task, completed=done, total=total, description=msg))
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
     if predictor is not None:
@@ -561,9 +577,12 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 @app.command("compensate")
 @handles_errors
 def compensate_cmd(
-    program: str = typer.Argument(..., help="Program file, or - for standard input (then give --dialect)."),
+    programs: list[str] = typer.Argument(..., help="Program file, or - for standard input (then give --dialect); several with --out-dir."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
-    output: str = typer.Option(..., "-o", "--output", help="Compensated program, or - for standard output (refused when targets live in another file). KRL: its .dat (and a changed $config.dat) is written beside it."),
+    output: Optional[str] = typer.Option(None, "-o", "--output", help="Compensated program, or - for standard output (refused when targets live in another file). KRL: its .dat (and a changed $config.dat) is written beside it."),
+    out_dir: Optional[Path] = typer.Option(None, "--out-dir", help="Many programs: write each (same file name) into this folder."),
+    jobs: Optional[int] = typer.Option(None, "--jobs", help="With --out-dir: local worker processes (Dask LocalCluster)."),
+    scheduler: Optional[str] = typer.Option(None, "--scheduler", help="With --out-dir: address of an existing Dask scheduler (tcp://host:port)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
     in_place: bool = typer.Option(False, "--in-place", help="Allow OUT to be the program's own file(s); each replaced file is kept as NAME.bak."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
@@ -585,7 +604,9 @@ def compensate_cmd(
     if model.suffix == ".toml":
         from .fivex.commands import compensate_five_program
 
-        for line in compensate_five_program(Path(program), model, Path(output), grid, input_axes, dialect=dialect):
+        if len(programs) != 1 or output is None:
+            raise InputError("five-axis compensation takes one program and -o OUT")
+        for line in compensate_five_program(Path(programs[0]), model, Path(output), grid, input_axes, dialect=dialect):
             out.print(line)
         return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -599,11 +620,21 @@ def compensate_cmd(
         raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation}")
     _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
+    forces = None if force is None else _floats(force, 3, "--force")
+    if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
+        if cut is not None or in_place:
+            raise InputError("--cut and --in-place work on one program at a time (not with --out-dir)")
+        options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
+                   "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
+                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+        raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
+    program = programs[0]
+    if output is None:
+        raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
     tp = _read_program(program, dialect)
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
-    forces = None if force is None else _floats(force, 3, "--force")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
@@ -702,6 +733,42 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
     files = files_for(tp, texts, output)
     refuse_overwrite(tp, files, in_place)
     write_set(files, backup=in_place)
+
+def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
+    """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
+    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .batch import run_batch
+    from .measurements import write_text_atomic
+
+    if out_dir is None or output is not None:
+        raise InputError("several programs take --out-dir DIR (not -o)")
+    if jobs is not None and scheduler is not None:
+        raise InputError("give --jobs N or --scheduler ADDRESS, not both")
+    if jobs is not None and jobs < 1:
+        raise InputError("--jobs must be at least 1")
+    if "-" in programs:
+        raise InputError("standard input (-) is for a single program with -o")
+    with Progress(TextColumn("compensating"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
+        task = bar.add_task("programs", total=len(programs))
+        results = run_batch([Path(p) for p in programs], model, out_dir, options, jobs=jobs, scheduler=scheduler, dialect=dialect,
+                            on_done=lambda r: bar.advance(task))
+    table = Table(title=f"compensate: {len(programs)} programs -> {out_dir}", show_edge=False)
+    for col in ("program", "status", "targets", "RMS before (mm)", "RMS after (mm)", "message"):
+        table.add_column(col, justify="right" if "RMS" in col or col == "targets" else "left")
+    for r in results:
+        b, a = r.summary.get("predicted_before", {}), r.summary.get("predicted_after", {})
+        fmt = lambda v: "-" if v is None else f"{v:.4f}"  # noqa: E731
+        table.add_row(r.program, "written" if r.ok else "FAILED", str(r.summary.get("targets", "-")), fmt(b.get("rms_mm")), fmt(a.get("rms_mm")), r.error or "")
+        if not r.ok:
+            err.print(f"error: {r.program}: {r.error}")
+    out.print(table)
+    if report is not None:
+        rows = [{"program": r.program, "ok": r.ok, "outputs": list(r.outputs), "error": r.error, "summary": r.summary} for r in results]
+        write_text_atomic(report, json.dumps({"programs": rows}, indent=1) + "\n")
+    failed = sum(not r.ok for r in results)
+    out.print(f"{len(results) - failed} of {len(results)} programs written; {failed} failed")
+    return 1 if failed else 0
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}

@@ -369,7 +369,8 @@ def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
     return out
 
 
-def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0) -> ErrorModel:
+def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0,
+                  gp_options: dict | None = None, progress=None) -> ErrorModel:
     """Attach a data-driven predictor of the model's residual (a hybrid model; with no
     effects, a purely data-driven one). tr-gpr takes a source-region set as well."""
     from dataclasses import replace as _replace
@@ -385,9 +386,9 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":
-        est = GPRPredictor(anisotropic=True, random_state=seed).fit(X, target)
+        est = GPRPredictor(anisotropic=True, random_state=seed, **(gp_options or {})).fit(X, target, progress=progress)
     elif kind == "pso-bp":
-        est = PSOBPPredictor(random_state=seed).fit(X, target)
+        est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
     else:

@@ -3,6 +3,17 @@
 Kernel: sigma_f^2 exp(-|x - x'|^2 / (2 l^2)) on standardised inputs, plus white noise
 for the measurement variance; the constant mean is the training mean (normalize_y).
 Hyperparameters by marginal likelihood (scikit-learn), with seeded restarts.
+
+Two methods, chosen by ``method``:
+- ``exact``: one GP over all poses. O(N^3) time, O(N^2) memory (about 190 bytes per kernel
+  entry while fitting: 1.1 GB at 2,000 poses, 27 GB at 12,000);
+- ``local``: exact-GP experts over workspace regions, blended smoothly (local_gp.py says
+  why), for 10^4-10^5 poses: memory bounded by the region size, time linear in N;
+- ``auto`` (default): exact up to ``exact_max`` poses (2,000: about 0.8 GB and a minute or
+  two on 2 cores), local above.
+The memory a fit needs is estimated before it starts; a fit that would not fit in the free
+memory (or ``memory_limit_gb``) raises MemoryBudgetError naming the method that would.
+Predictions are made in blocks, so predicting a 10^6-point program stays bounded too.
 """
 
 from __future__ import annotations
@@ -11,19 +22,35 @@ import warnings
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
-from sklearn.exceptions import ConvergenceWarning
 from sklearn.preprocessing import StandardScaler
+
+from . import local_gp
+from .gp_lml import optimize_theta
+from .memory import GB, check_budget, gp_fit_bytes, lean_fit_bytes
+
+METHODS = ("auto", "exact", "local")
+EXACT_MAX = 2000  # auto: the exact GP up to this many poses (about 0.8 GB and 1-2 minutes to fit)
 
 
 class GPRPredictor(RegressorMixin, BaseEstimator):
-    def __init__(self, length_scale: float = 1.0, noise_level: float = 1e-2, n_restarts: int = 2, anisotropic: bool = False, random_state: int = 0):
+    def __init__(self, length_scale: float = 1.0, noise_level: float = 1e-2, n_restarts: int = 2, anisotropic: bool = False, random_state: int = 0,
+                 method: str = "auto", exact_max: int = EXACT_MAX, leaf_size: int = 500, overlap: float = 0.15, global_size: int = 600,
+                 expert_iter: int | None = 15, memory_limit_gb: float | None = None):
         self.length_scale = length_scale
         self.noise_level = noise_level
         self.n_restarts = n_restarts
         self.anisotropic = anisotropic
         self.random_state = random_state
+        self.method = method
+        self.exact_max = exact_max
+        self.leaf_size = leaf_size
+        self.overlap = overlap
+        self.global_size = global_size
+        self.expert_iter = expert_iter
+        self.memory_limit_gb = memory_limit_gb
 
     def _kernel(self, n_features: int):
         scale = np.full(n_features, self.length_scale) if self.anisotropic else self.length_scale
@@ -34,34 +61,123 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         # A sample weight w scales that sample's noise by 1/w (how a GP takes weights).
         return 1e-10 if sample_weight is None else 1e-10 + 1e-3 / np.maximum(np.asarray(sample_weight, dtype=float), 1e-9)
 
-    def fit(self, X, y, sample_weight=None):
+    def resolved_method(self, n_points: int) -> str:
+        if self.method not in METHODS:
+            raise ValueError(f"GPR method '{self.method}' is not one of {', '.join(METHODS)}")
+        if self.method == "auto":
+            return "exact" if n_points <= self.exact_max else "local"
+        return self.method
+
+    def fit_memory_bytes(self, n_points: int, n_features: int) -> int:
+        """Peak memory of fitting on n_points, by the method that would be used."""
+        if self.resolved_method(n_points) == "exact":
+            return gp_fit_bytes(n_points, n_features, self.anisotropic)
+        largest = max(min(n_points, 2 * self.leaf_size), min(n_points, self.global_size))
+        return lean_fit_bytes(largest) + 64 * n_points * (n_features + 3)
+
+    def _check_memory(self, n_points: int, n_features: int) -> str:
+        method = self.resolved_method(n_points)
+        need = self.fit_memory_bytes(n_points, n_features)
+        if method == "exact":
+            local = GPRPredictor(**{**self.get_params(), "method": "local"}).fit_memory_bytes(n_points, n_features)
+            alternative = f"the local-experts GP would need about {local / GB:.1f} GB (--gp-method local)"
+        else:
+            alternative = f"a smaller leaf size would need less (--gp-leaf-size {max(self.leaf_size // 2, 50)})"
+        check_budget(need, f"gpr ({method}) on {n_points} poses x {n_features} features", self.memory_limit_gb, alternative)
+        return method
+
+    def fit(self, X, y, sample_weight=None, progress=None):
+        """progress(done, total, message): called between stages (local: once per expert)."""
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
+        self.method_ = self._check_memory(len(X), X.shape[1])
+        if self.method_ == "local":
+            if sample_weight is not None:
+                raise ValueError("the local-experts GP takes no sample weights (use method='exact')")
+            return self._fit_local(X, y, progress)
         self.scaler_ = StandardScaler().fit(X)
         self.gpr_ = GaussianProcessRegressor(kernel=self._kernel(X.shape[1]), alpha=self._alpha(sample_weight), normalize_y=True,
                                              n_restarts_optimizer=self.n_restarts, random_state=self.random_state)
+        if progress is not None:
+            progress(0, 1, f"exact GP on {len(X)} poses")
         with warnings.catch_warnings():
             # A length scale at its bound (a residual that is only noise) is a valid answer.
             warnings.simplefilter("ignore", ConvergenceWarning)
             self.gpr_.fit(self.scaler_.transform(X), y)
+        self._keep(X, y, sample_weight)
+        return self
+
+    def _keep(self, X, y, sample_weight):
         self.X_train_, self.y_train_ = X, y
         self.weights_ = None if sample_weight is None else np.asarray(sample_weight, dtype=float)
         self.n_features_in_ = X.shape[1]
+
+    # ------------------------------------------------------------------ local experts
+    def _region_coords(self, X):
+        return (X[:, :3] - self.region_center_) / self.region_scale_
+
+    def _partition(self, X):
+        self.scaler_ = StandardScaler().fit(X)
+        self.region_center_ = X[:, :3].mean(axis=0)
+        self.region_scale_ = float(X[:, :3].std(axis=0).max()) or 1.0
+        P = self._region_coords(X)
+        regions, leaves = local_gp.split_regions(P, self.leaf_size, self.overlap)
+        rng = np.random.default_rng(self.random_state)
+        return regions, local_gp.expert_members(regions, leaves, P, 2 * self.leaf_size, rng)
+
+    def _fit_local(self, X, y, progress):
+        regions, members = self._partition(X)
+        Xs = self.scaler_.transform(X)
+        rng = np.random.default_rng(self.random_state)
+        sub = np.sort(rng.choice(len(X), min(len(X), self.global_size), replace=False))
+        total = len(members) + 1
+        if progress is not None:
+            progress(0, total, f"global hyperparameters on {len(sub)} of {len(X)} poses")
+        kernel = self._kernel(X.shape[1])
+        start = kernel.clone_with_theta(optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng))
+        experts = []
+        for k, idx in enumerate(members):
+            if progress is not None:
+                progress(k + 1, total, f"expert {k + 1} of {len(members)} ({len(idx)} poses)")
+            experts.append(local_gp.fit_expert(Xs[idx], y[idx], start, self.expert_iter))
+        self._set_local(regions, members, experts)
+        self._keep(X, y, None)
         return self
 
+    def _set_local(self, regions, members, experts):
+        self.regions_, self.members_, self.experts_ = regions, members, experts
+
+    def restore_local(self, X, y, regions, members, thetas, center, scale):
+        """The local-experts GP with every expert's kernel fixed (restoring a saved model)."""
+        self.method_ = "local"
+        self.scaler_ = StandardScaler().fit(X)
+        self.region_center_, self.region_scale_ = np.asarray(center, dtype=float), float(scale)
+        Xs = self.scaler_.transform(X)
+        kernel = self._kernel(X.shape[1])
+        experts = [local_gp.fit_expert(Xs[idx], y[idx], kernel.clone_with_theta(np.asarray(th, dtype=float)), None) for idx, th in zip(members, thetas)]
+        self._set_local(regions, members, experts)
+        self._keep(X, y, None)
+        return self
+
+    # ------------------------------------------------------------------ exact, restored
     def fit_fixed(self, X, y, theta, sample_weight=None):
-        """The same GP with its kernel hyperparameters fixed (restoring a saved model)."""
+        """The exact GP with its kernel hyperparameters fixed (restoring a saved model)."""
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
+        self.method_ = "exact"
         self.scaler_ = StandardScaler().fit(X)
         kernel = self._kernel(X.shape[1]).clone_with_theta(np.asarray(theta, dtype=float))
         self.gpr_ = GaussianProcessRegressor(kernel=kernel, alpha=self._alpha(sample_weight), normalize_y=True, optimizer=None)
         self.gpr_.fit(self.scaler_.transform(X), y)
-        self.X_train_, self.y_train_ = X, y
-        self.weights_ = None if sample_weight is None else np.asarray(sample_weight, dtype=float)
-        self.n_features_in_ = X.shape[1]
+        self._keep(X, y, sample_weight)
         return self
 
     def predict(self, X, return_std: bool = False):
-        Xs = self.scaler_.transform(np.asarray(X, dtype=float))
-        return self.gpr_.predict(Xs, return_std=return_std)
+        X = np.asarray(X, dtype=float)
+        Xs = self.scaler_.transform(X)
+        if getattr(self, "method_", "exact") == "local":
+            return local_gp.blend_predict(self.experts_, self.regions_, Xs, self._region_coords(X), return_std)
+        parts = [self.gpr_.predict(Xs[i : i + local_gp.PREDICT_CHUNK], return_std=return_std) for i in range(0, max(len(Xs), 1), local_gp.PREDICT_CHUNK)]
+        if not return_std:
+            return np.concatenate(parts)
+        return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])

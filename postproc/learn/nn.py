@@ -38,7 +38,12 @@ def _forward(params, x):
 
 
 class PSOBPPredictor(RegressorMixin, BaseEstimator):
-    def __init__(self, hidden: int = 13, n_particles: int = 40, pso_iters: int = 60, epochs: int = 600, lr: float = 1e-2, random_state: int = 0):
+    def __init__(self, hidden: int = 13, n_particles: int = 40, pso_iters: int = 60, epochs: int = 600, lr: float = 1e-2, random_state: int = 0,
+                 large_n: int = 2000, batch_size: int = 256, validation_fraction: float = 0.1, patience: int = 20):
+        self.large_n = large_n
+        self.batch_size = batch_size
+        self.validation_fraction = validation_fraction
+        self.patience = patience
         self.hidden = hidden
         self.n_particles = n_particles
         self.pso_iters = pso_iters
@@ -46,10 +51,16 @@ class PSOBPPredictor(RegressorMixin, BaseEstimator):
         self.lr = lr
         self.random_state = random_state
 
-    def fit(self, X, y):
+    def fit(self, X, y, progress=None):
+        """Up to large_n poses: full-batch, as seed 000. Above: the swarm scores a subsample of
+        large_n poses (memory: particles x poses x hidden), back-propagation runs on
+        mini-batches and stops early when a held-out validation split stops improving
+        (the best weights are kept). progress(done, total, message) once per epoch."""
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
         rng = np.random.default_rng(self.random_state)
+        if len(X) > self.large_n:
+            return self._fit_large(X, y, rng, progress)
         gen = torch.Generator().manual_seed(int(self.random_state))
         self.x_mean_, self.x_std_ = X.mean(axis=0), X.std(axis=0) + 1e-12
         self.y_mean_, self.y_std_ = y.mean(axis=0), y.std(axis=0) + 1e-12
@@ -92,6 +103,42 @@ class PSOBPPredictor(RegressorMixin, BaseEstimator):
             opt.step()
         self.weights_ = flat.detach()[0].numpy().copy()
         self.shapes_ = shapes
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def _fit_large(self, X, y, rng, progress):
+        order = rng.permutation(len(X))
+        n_val = max(int(self.validation_fraction * len(X)), 1)
+        val, train = order[:n_val], order[n_val:]
+        swarm = PSOBPPredictor(**{**self.get_params(), "epochs": 0}).fit(X[train[: self.large_n]], y[train[: self.large_n]])
+        for key in ("x_mean_", "x_std_", "y_mean_", "y_std_", "shapes_", "pso_mse_"):
+            setattr(self, key, getattr(swarm, key))
+        # Standardise with the swarm's statistics, so its weights mean the same here.
+        xt = torch.tensor((X - self.x_mean_) / self.x_std_, dtype=torch.float64)
+        yt = torch.tensor((y - self.y_mean_) / self.y_std_, dtype=torch.float64)
+        flat = torch.tensor(swarm.weights_[None]).requires_grad_(True)
+        opt = torch.optim.Adam([flat], lr=self.lr)
+        gen = torch.Generator().manual_seed(int(self.random_state))
+        tr, va = torch.tensor(train), torch.tensor(val)
+        best, best_loss, stale = flat.detach().clone(), np.inf, 0
+        for epoch in range(self.epochs):
+            for batch in tr[torch.randperm(len(tr), generator=gen)].split(self.batch_size):
+                opt.zero_grad()
+                loss = ((_forward(_unflatten(flat, self.shapes_), xt[batch]) - yt[batch]) ** 2).mean()
+                loss.backward()
+                opt.step()
+            with torch.no_grad():
+                val_loss = float(((_forward(_unflatten(flat, self.shapes_), xt[va]) - yt[va]) ** 2).mean())
+            if val_loss < best_loss:
+                best, best_loss, stale = flat.detach().clone(), val_loss, 0
+            else:
+                stale += 1
+            if progress is not None:
+                progress(epoch + 1, self.epochs, f"pso-bp epoch {epoch + 1}: validation MSE {val_loss:.4f} (best {best_loss:.4f})")
+            if stale >= self.patience:
+                break
+        self.weights_ = best[0].numpy().copy()
+        self.epochs_run_, self.val_mse_ = epoch + 1, best_loss
         self.n_features_in_ = X.shape[1]
         return self
 

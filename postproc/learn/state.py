@@ -17,6 +17,12 @@ from .nn import PSOBPPredictor
 
 
 def estimator_state(est) -> dict:
+    if isinstance(est, GPRPredictor) and getattr(est, "method_", "exact") == "local":
+        r = est.regions_
+        return {"type": "gpr-local", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
+                "members": [m.tolist() for m in est.members_], "thetas": [e.kernel_.theta.tolist() for e in est.experts_],
+                "lo": _finite_or_none(r.lo), "hi": _finite_or_none(r.hi), "margin": r.margin.tolist(),
+                "center": est.region_center_.tolist(), "scale": est.region_scale_}
     if isinstance(est, GPRPredictor):
         return {"type": "gpr", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
                 "theta": est.gpr_.kernel_.theta.tolist(), "weights": None if est.weights_ is None else est.weights_.tolist()}
@@ -37,6 +43,12 @@ def base_estimator_from_state(state: dict):
         est = GPRPredictor(**state["params"])
         w = state.get("weights")
         return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w))
+    if kind == "gpr-local":
+        from .local_gp import Regions
+
+        regions = Regions(_inf_from_none(state["lo"], -np.inf), _inf_from_none(state["hi"], np.inf), np.asarray(state["margin"], dtype=float))
+        return GPRPredictor(**state["params"]).restore_local(np.asarray(state["X"], dtype=float), np.asarray(state["y"], dtype=float), regions,
+                                                             [np.asarray(m, dtype=int) for m in state["members"]], state["thetas"], state["center"], state["scale"])
     if kind == "pso-bp":
         est = PSOBPPredictor(**state["params"])
         est.weights_ = np.asarray(state["weights"], dtype=float)
@@ -54,3 +66,12 @@ def base_estimator_from_state(state: dict):
         est.n_features_in_ = 3
         return est
     raise ValueError(f"unknown predictor type '{kind}'")
+
+
+def _finite_or_none(a: np.ndarray) -> list:
+    """JSON has no infinity: the outer regions' open sides are stored as null."""
+    return [[None if not np.isfinite(v) else float(v) for v in row] for row in a]
+
+
+def _inf_from_none(rows: list, fill: float) -> np.ndarray:
+    return np.array([[fill if v is None else v for v in row] for row in rows], dtype=float)

@@ -1,0 +1,170 @@
+"""Many programs against one model: local processes or an existing Dask cluster.
+
+``run_batch`` sends one task per program to a ``dask.distributed`` cluster: a
+``LocalCluster`` of ``jobs`` worker processes, or the scheduler at ``scheduler``. The model
+file is read once per worker (a worker plugin loads it at worker start-up and every task on
+that worker uses it), never once per program. Each program succeeds or fails on its own:
+a task returns a ``ProgramResult`` (its summary or its error message), a program that
+fails writes nothing, and the others go on. Each program's files (KRL: .src and .dat) are
+written together or not at all. Compensation itself is ``compensate_file``, the same
+library calls as the single-program ``postproc compensate PROGRAM -o OUT``: parse, compensate,
+emit, write.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from distributed import WorkerPlugin
+
+from .errors import InputError, JobError, OutputError, PostprocError
+
+PLUGIN_NAME = "postproc-model"
+
+
+@dataclass(frozen=True)
+class ProgramResult:
+    program: str
+    outputs: tuple[str, ...] = ()
+    ok: bool = False
+    error: str | None = None
+    exit_code: int = 0  # this program alone: 0 written, 1 job problem, 2 bad input
+    summary: dict = field(default_factory=dict)
+
+
+def output_paths(program: Path, out_dir: Path, tp) -> list[Path]:
+    """Where a program's compensated files go: its own name inside out_dir (KRL: .dat beside)."""
+    main = out_dir / program.name
+    return [main] + [main.with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
+
+
+def write_together(texts: list[str], outputs: list[Path]) -> None:
+    """All files written or none: every text goes to a temp file first, then all are renamed."""
+    encoded = [t.encode("latin-1") for t in texts]
+    temps: list[str] = []
+    try:
+        for data, out in zip(encoded, outputs):
+            fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
+            temps.append(tmp)
+            with os.fdopen(fd, "wb") as fh:
+                os.fchmod(fh.fileno(), 0o666 & ~_umask())
+                fh.write(data)
+        for tmp, out in zip(temps, outputs):
+            os.replace(tmp, out)
+    except OSError as exc:
+        raise OutputError(f"{outputs[0]}: cannot write ({exc.strerror})") from None
+    finally:
+        for tmp in temps:
+            Path(tmp).unlink(missing_ok=True)
+
+
+def _umask() -> int:
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
+def compensate_file(program: str | Path, model, out_dir: str | Path, options: dict, dialect: str | None = None) -> ProgramResult:
+    """Compensate one program file into out_dir; never raises for a bad program, reports it."""
+    from .compensate import CompensationError, compensate
+    from .programs import emit_texts, parse_program
+
+    program = Path(program)
+    try:
+        tp = parse_program(program, dialect)
+        new, rep = compensate(tp, model, **options)
+        failures = rep.failures()
+        if failures:
+            first = "; ".join(f"line {line}: {reason}" for line, reason in failures[:3])
+            raise CompensationError(f"{len(failures)} target(s) cannot be compensated ({first}); nothing was written", rep)
+        outputs = output_paths(program, Path(out_dir), tp)
+        if any(out.resolve() == Path(doc.path).resolve() for out in outputs for doc in tp.sources):
+            raise InputError(f"{program}: the output would overwrite the input (choose another --out-dir)")
+        write_together(emit_texts(tp, new)[: len(outputs)], outputs)
+    except PostprocError as exc:
+        return ProgramResult(str(program), error=str(exc), exit_code=1 if isinstance(exc, JobError) else 2)
+    return ProgramResult(str(program), tuple(str(o) for o in outputs), True, summary=rep.summary())
+
+
+class ModelPlugin(WorkerPlugin):
+    """Worker plugin: loads the model file once when the worker starts; tasks read ``model``."""
+
+    name = PLUGIN_NAME
+
+    def __init__(self, model_path: str):
+        self.model_path = model_path
+        self.model = None
+
+    def setup(self, worker=None):
+        from .model_io import load_model
+
+        self.model, _ = load_model(self.model_path)
+
+    def teardown(self, worker=None):
+        self.model = None
+
+
+def _task(program: str, out_dir: str, options: dict, dialect: str | None) -> ProgramResult:
+    from distributed import get_worker
+
+    return compensate_file(program, get_worker().plugins[PLUGIN_NAME].model, out_dir, options, dialect)
+
+
+def check_programs(programs: list[Path], out_dir: Path) -> None:
+    """Refuse before any work: a missing out-dir, or two programs that would write the same file."""
+    if not out_dir.is_dir():
+        raise InputError(f"--out-dir {out_dir}: not an existing folder")
+    seen: dict[str, Path] = {}
+    for program in programs:
+        if program.name in seen:
+            raise InputError(f"{program} and {seen[program.name]} would both be written to {out_dir / program.name}")
+        seen[program.name] = program
+
+
+def run_batch(programs: list[Path], model_path: Path, out_dir: Path, options: dict, *, jobs: int | None = None,
+              scheduler: str | None = None, dialect: str | None = None, on_done=None) -> list[ProgramResult]:
+    """Compensate every program on a Dask cluster; results in the programs' order.
+
+    on_done(result) is called as each program finishes (for a progress display)."""
+    from distributed import Client, LocalCluster, as_completed
+
+    check_programs(programs, out_dir)
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=max(jobs or 1, 1), threads_per_worker=1, processes=True, dashboard_address=None)
+        client = Client(cluster)
+    else:
+        cluster = None
+        client = _connect(scheduler)
+    try:
+        client.register_plugin(ModelPlugin(str(model_path.resolve())), name=PLUGIN_NAME)
+        futures = {client.submit(_task, str(p.resolve()), str(out_dir.resolve()), options, dialect, pure=False): str(p) for p in programs}
+        results = {}
+        for fut in as_completed(futures):
+            results[futures[fut]] = _result_of(fut, futures[fut])
+            if on_done is not None:
+                on_done(results[futures[fut]])
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+    return [results[str(p)] for p in programs]
+
+
+def _connect(address: str):
+    from distributed import Client
+
+    try:
+        return Client(address, timeout="10s")
+    except (OSError, TimeoutError) as exc:
+        raise InputError(f"--scheduler {address}: cannot connect ({exc})") from None
+
+
+def _result_of(future, program: str) -> ProgramResult:
+    """A finished task's result; a task that crashed (a bug, a lost worker) is that program's failure."""
+    try:
+        return future.result()
+    except Exception as exc:  # noqa: BLE001 - any crash is reported as this program's failure
+        return ProgramResult(program, error=f"internal error: {type(exc).__name__}: {exc}", exit_code=2)
