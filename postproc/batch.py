@@ -13,14 +13,12 @@ emit, write.
 
 from __future__ import annotations
 
-import os
-import tempfile
 from dataclasses import dataclass, field
 from pathlib import Path
 
 from distributed import WorkerPlugin
 
-from .errors import InputError, JobError, OutputError, PostprocError
+from .errors import InputError, JobError, PostprocError
 
 PLUGIN_NAME = "postproc-model"
 
@@ -35,42 +33,12 @@ class ProgramResult:
     summary: dict = field(default_factory=dict)
 
 
-def output_paths(program: Path, out_dir: Path, tp) -> list[Path]:
-    """Where a program's compensated files go: its own name inside out_dir (KRL: .dat beside)."""
-    main = out_dir / program.name
-    return [main] + [main.with_suffix(".dat") for doc in tp.sources[1:] if doc.role == "dat"]
-
-
-def write_together(texts: list[str], outputs: list[Path]) -> None:
-    """All files written or none: every text goes to a temp file first, then all are renamed."""
-    encoded = [t.encode("latin-1") for t in texts]
-    temps: list[str] = []
-    try:
-        for data, out in zip(encoded, outputs):
-            fd, tmp = tempfile.mkstemp(prefix=f".{out.name}.", suffix=".tmp", dir=out.parent)
-            temps.append(tmp)
-            with os.fdopen(fd, "wb") as fh:
-                os.fchmod(fh.fileno(), 0o666 & ~_umask())
-                fh.write(data)
-        for tmp, out in zip(temps, outputs):
-            os.replace(tmp, out)
-    except OSError as exc:
-        raise OutputError(f"{outputs[0]}: cannot write ({exc.strerror})") from None
-    finally:
-        for tmp in temps:
-            Path(tmp).unlink(missing_ok=True)
-
-
-def _umask() -> int:
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
-
-
 def compensate_file(program: str | Path, model, out_dir: str | Path, options: dict, dialect: str | None = None) -> ProgramResult:
     """Compensate one program file into out_dir; never raises for a bad program, reports it."""
+    import numpy as np
+
     from .compensate import CompensationError, compensate
-    from .programs import emit_texts, parse_program
+    from .programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, write_set
 
     program = Path(program)
     try:
@@ -80,10 +48,14 @@ def compensate_file(program: str | Path, model, out_dir: str | Path, options: di
         if failures:
             first = "; ".join(f"line {line}: {reason}" for line, reason in failures[:3])
             raise CompensationError(f"{len(failures)} target(s) cannot be compensated ({first}); nothing was written", rep)
-        outputs = output_paths(program, Path(out_dir), tp)
-        if any(out.resolve() == Path(doc.path).resolve() for out in outputs for doc in tp.sources):
-            raise InputError(f"{program}: the output would overwrite the input (choose another --out-dir)")
-        write_together(emit_texts(tp, new)[: len(outputs)], outputs)
+        # The same steps as one program: every changed file (the dialect's set), re-parsed
+        # before writing, never over an input, all written or none.
+        texts = emit_texts(tp, new)
+        check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
+        files = files_for(tp, texts, Path(out_dir) / program.name)
+        refuse_overwrite(tp, files, in_place=False)
+        write_set(files)
+        outputs = list(files)
     except PostprocError as exc:
         return ProgramResult(str(program), error=str(exc), exit_code=1 if isinstance(exc, JobError) else 2)
     return ProgramResult(str(program), tuple(str(o) for o in outputs), True, summary=rep.summary())

@@ -12,7 +12,8 @@ from helpers import FRAME_AND_COMPLIANCE, TOOL
 from typer.testing import CliRunner
 
 import postproc
-from postproc.batch import compensate_file, write_together
+from postproc.batch import compensate_file
+from postproc.programs import write_texts
 from postproc.cli import app
 from postproc.effects import parse_effects
 from postproc.errors import OutputError
@@ -24,7 +25,7 @@ runner = CliRunner()
 
 def _rapid(path, shift):
     lines = ["MODULE Part", "  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];",
-             "  TASK PERS wobjdata wTable := [FALSE,TRUE,\"\",[[900,-100,300],[0.9659258,0,0,0.2588190]],[[0,0,0],[1,0,0,0]]];", "  PROC main()"]
+             "  TASK PERS wobjdata wTable := [FALSE,TRUE,\"\",[[900,-100,300],[0.9659258,0,0,0.2588190]],[[0,0,0],[1,0,0,0]]];", "  PROC main()", "    ConfL\\Off;"]
     for i in range(30):
         x, y = 10.0 * (i % 15) + shift, 120.0 * (i // 15)
         lines.append(f"    MoveL [[{x:.3f},{y:.3f},150.000],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tSpindle\\WObj:=wTable;")
@@ -100,13 +101,13 @@ def test_compensate_file_refuses_to_overwrite_its_input(batch_inputs):
     model, _ = load_model(root / "model.json")
     before = programs[0].read_bytes()
     res = compensate_file(programs[0], model, programs[0].parent, {})
-    assert not res.ok and res.exit_code == 2 and "overwrite the input" in res.error
+    assert not res.ok and res.exit_code == 2 and "would overwrite an input file" in res.error
     assert programs[0].read_bytes() == before
 
 
-def test_write_together_writes_all_files_or_none(tmp_path):
+def test_a_program_set_is_written_whole_or_not_at_all(tmp_path):
     (tmp_path / "a.src").write_text("old a")
     with pytest.raises(OutputError):
-        write_together(["new a", "new b"], [tmp_path / "a.src", tmp_path / "missing" / "b.dat"])
+        write_texts(["new a", "new b"], [tmp_path / "a.src", tmp_path / "missing" / "b.dat"])
     assert (tmp_path / "a.src").read_text() == "old a"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["a.src"]  # no temp file left behind
