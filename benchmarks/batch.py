@@ -44,4 +44,7 @@ if __name__ == "__main__":
         results = run_batch(programs, root / "model.json", root / "out", {}, jobs=jobs)
         wall = time.perf_counter() - t0
     ok = sum(r.ok for r in results)
+    for r in results:
+        if not r.ok:
+            print(f"failed: {r.program}: {r.error}")
     print(f"{count} programs x {targets} targets, --jobs {jobs}: {wall:.1f} s wall ({ok} written), {count / wall:.2f} programs/s, {count * targets / wall:.0f} targets/s")
