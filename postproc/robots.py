@@ -196,6 +196,7 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
     expected_stem = Path(path).stem
     if name != expected_stem:
         raise r.fail("name", f"'{name}' does not match the file name '{expected_stem}'")
+    description, verified = r.string(data, "description", ""), r.boolean(data, "verified", "")
     _check_units(r)
     sources: dict[str, str] = {}
     estimates: dict[str, bool] = {}
@@ -207,7 +208,7 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
         sources[section] = r.string(table, "source", section)
         estimates[section] = r.boolean(table, "estimate", section, default=False)
     opw = _read_opw(r, sources)
-    model = RobotModel(name=name, description=r.string(data, "description", ""), source_path=path, verified=r.boolean(data, "verified", ""),
+    model = RobotModel(name=name, description=description, source_path=path, verified=verified,
                        opw=opw, sources=sources, estimates=estimates, **fields)
     if opw is not None:
         _check_opw_matches_dh(model, r)
