@@ -22,6 +22,7 @@ import numpy as np
 from . import compliance as comp
 from . import dialects
 from . import kinematics as kin
+from .posture import singularity_margins
 from .errors import InputError
 from .robots import RobotModel
 
@@ -63,17 +64,6 @@ def placement_frames(candidates: np.ndarray, z_mm: float) -> np.ndarray:
     out[:, 2, 2] = out[:, 3, 3] = 1.0
     out[:, 0, 3], out[:, 1, 3], out[:, 2, 3] = cand[:, 0], cand[:, 1], z_mm
     return out
-
-
-def singularity_margins(robot: RobotModel, q_deg: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Distances (deg, deg, mm) from the wrist (axis 5 straight), elbow (arm stretched) and
-    shoulder (wrist centre on axis 1) singularities of an ortho-parallel arm."""
-    p = robot.opw
-    phi = np.radians(p.signs * q_deg - p.offsets_deg)
-    wrist = np.degrees(np.arcsin(np.minimum(np.abs(np.sin(phi[..., 4])), 1.0)))
-    elbow = np.degrees(np.arcsin(np.minimum(np.abs(np.sin(phi[..., 2] + math.atan2(p.a2, p.c3))), 1.0)))
-    radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
-    return wrist, elbow, np.abs(radial)
 
 
 def _program_branch(problem: PlacementProblem, sols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

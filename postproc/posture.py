@@ -130,13 +130,36 @@ SHOULDER_MM = 20.0  # wrist centre closer than this to axis 1
 def near_singular(robot, q_deg: np.ndarray) -> np.ndarray:
     """True where joints q (N, 6) are within SINGULAR_DEG of the wrist or elbow singularity,
     or the wrist centre within SHOULDER_MM of axis 1 (the shoulder singularity)."""
+    wrist, elbow, shoulder = singularity_margins(robot, q_deg)
+    return (wrist < SINGULAR_DEG) | (elbow < SINGULAR_DEG) | (shoulder < SHOULDER_MM)
+
+
+SCREEN_MARGIN_DEG = 10.0  # both ends this far from the wrist and elbow singularities ...
+SCREEN_MARGIN_MM = 200.0  # ... and the shoulder one ...
+SCREEN_STEP_DEG = 5.0  # ... and no joint moving more than this: the segment needs no sampling
+
+
+def clearly_regular(robot, q_start: np.ndarray, q_end: np.ndarray) -> np.ndarray:
+    """(M,) True for straight segments that cannot come near a singularity: both ends
+    SCREEN_MARGIN_DEG / _MM away from every singularity and no joint moving more than
+    SCREEN_STEP_DEG between them. Along such a short move the joints stay within a few
+    tenths of a degree of their straight interpolation, far from the 2 deg zone, so
+    sampling it would find nothing (a long program's many small steps skip the IK)."""
+    steps = np.abs((q_end - q_start + 180.0) % 360.0 - 180.0).max(axis=1)
+    margins = [singularity_margins(robot, q) for q in (q_start, q_end)]
+    far = np.all([(w >= SCREEN_MARGIN_DEG) & (e >= SCREEN_MARGIN_DEG) & (s >= SCREEN_MARGIN_MM) for w, e, s in margins], axis=0)
+    return far & (steps <= SCREEN_STEP_DEG)
+
+
+def singularity_margins(robot, q_deg: np.ndarray):
+    """Distances (deg, deg, mm) of joints q (..., 6) from the wrist (axis 5 straight), elbow
+    (arm stretched) and shoulder (wrist centre on axis 1) singularities of an OPW arm."""
     p = robot.opw
     phi = np.deg2rad(p.signs * q_deg - p.offsets_deg)
-    limit = np.sin(np.deg2rad(SINGULAR_DEG))
-    wrist = np.abs(np.sin(phi[:, 4])) < limit
-    elbow = np.abs(np.sin(phi[:, 2] + np.arctan2(p.a2, p.c3))) < limit
+    wrist = np.degrees(np.arcsin(np.minimum(np.abs(np.sin(phi[..., 4])), 1.0)))
+    elbow = np.degrees(np.arcsin(np.minimum(np.abs(np.sin(phi[..., 2] + np.arctan2(p.a2, p.c3))), 1.0)))
     radial, _ = kin.wrist_centre_in_arm_plane(robot, phi)
-    return wrist | elbow | (np.abs(radial) < SHOULDER_MM)
+    return wrist, elbow, np.abs(radial)
 
 
 def interpolate_poses(start: np.ndarray, end: np.ndarray, fractions: np.ndarray) -> np.ndarray:
