@@ -28,6 +28,18 @@ def identifiable_truth(robot, effects_spec: str, seed: int, n: int = 300, noise:
     return truth, q, rng
 
 
+def truth_and_fit(robot, effects_spec: str, seed: int, n: int = 300, region=None, cv_folds: int = 5, poses=None):
+    """A random true robot with these effects and a model of the same effects fitted to n
+    simulated poses of it (``poses`` may map the sampled joints, e.g. onto other branches)."""
+    effects = parse_effects(effects_spec)
+    rng = np.random.default_rng(seed)
+    truth = random_truth(robot, TOOL, effects, rng)
+    q = sample_poses(robot, TOOL, n, region or Cylinder(), rng)
+    if poses is not None:
+        q = poses(q, rng)
+    return truth, fit(robot, TOOL, effects, simulate(truth, q, rng), cv_folds=cv_folds).model
+
+
 def z_scores(result, truth) -> dict[str, float]:
     """(fitted - true) / standard error for every identified parameter; base frame compared as a whole transform."""
     z = {}

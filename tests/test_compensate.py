@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, truth_and_fit
 from typer.testing import CliRunner
 
 import postproc
@@ -44,11 +44,7 @@ def robot():
 
 @pytest.fixture(scope="module")
 def truth_and_model(robot):
-    rng = np.random.default_rng(21)
-    effects = parse_effects(EFFECTS)
-    truth = random_truth(robot, TOOL, effects, rng)
-    data = simulate(truth, sample_poses(robot, TOOL, 300, Cylinder(), rng), rng)
-    return truth, fit(robot, TOOL, effects, data).model
+    return truth_and_fit(robot, EFFECTS, seed=21)
 
 
 def run_on(truth, tp, q_ref=None):

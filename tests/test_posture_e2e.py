@@ -16,13 +16,10 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, truth_and_fit
 from postproc import kinematics as kin
 from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.identify import fit
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 # A pose whose IK solutions include every configuration the KR160's limits allow away from
 # singularities: four (wrist flipped or not, elbow up or down); the other four need joint
@@ -39,12 +36,7 @@ def robot():
 
 @pytest.fixture(scope="module")
 def truth_and_model(robot):
-    rng = np.random.default_rng(5)
-    effects = parse_effects(FRAME_AND_COMPLIANCE)
-    truth = random_truth(robot, TOOL, effects, rng)
-    q = _in_every_configuration(robot, sample_poses(robot, TOOL, 400, Cylinder(), rng), rng)
-    data = simulate(truth, q, rng)
-    return truth, fit(robot, TOOL, effects, data, cv_folds=0).model
+    return truth_and_fit(robot, FRAME_AND_COMPLIANCE, seed=5, n=400, cv_folds=0, poses=lambda q, rng: _in_every_configuration(robot, q, rng))
 
 
 def _in_every_configuration(robot, q, rng):
