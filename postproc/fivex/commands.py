@@ -7,7 +7,7 @@ from pathlib import Path
 from .. import dialects
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
-from .files import write_all
+from ..files import write_all as write_bytes
 from .machine import load_machine, machine_toml
 from .probes import read_probes
 
@@ -131,3 +131,8 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
              f"predicted tip error max {report.before_mm.max():.4f} -> {written.max():.4f} mm (RMS {np.sqrt(np.mean(report.before_mm**2)):.4f} -> "
              f"{np.sqrt(np.mean(written**2)):.4f} mm, as written); largest linear-axis correction {report.correction_mm.max():.4f} mm"]
     return lines + [f"note: {n}" for n in report.notes]
+
+
+def write_all(files: dict, encoding: str = "utf-8") -> None:
+    """The texts of one job encoded first, then written together or not at all (postproc.files)."""
+    write_bytes({Path(path): text.encode(encoding) for path, text in files.items()})
