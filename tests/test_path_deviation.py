@@ -96,7 +96,7 @@ def test_max_deviation_refuses_a_path_that_strays(model, tmp_path):
 
 def test_an_arc_with_a_circular_angle_is_not_measured(model, tmp_path):
     """KRL CA makes the arc end elsewhere than its end point: not measured rather than wrong."""
-    body = [f"LIN {{{_pose(1000, 300, 500)}}}", f"CIRC {{X 1150, Y 450, Z 500}}, {{{_pose(1300, 300, 500)}}} CA 90"]
+    body = [f"LIN {{{_pose(1000, 300, 500)}}}", f"CIRC {{X 1150, Y 450, Z 500}}, {{{_pose(1300, 300, 500)}}}, CA 90"]
     tp = parse_program(_program(tmp_path, body))
     _, report = compensate(tp, model)
     assert np.isnan(report.path_mm[4])

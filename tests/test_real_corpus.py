@@ -62,16 +62,6 @@ ROUND_TRIP_XFAIL = {
     "gcode/LinuxCNC_linuxcnc__interp_do-while-break.ngc": "`o100 do` ... `o100 while [..]` do-while not recognised (do-while-break.ngc:27)",
     "gcode/LinuxCNC_linuxcnc__interp_g10-l2-while-active.ngc": "unary function as a word value `g1 y sqrt[2]` (g10-l2-while-active.ngc:12)",
     # KRL
-    "krl/CentroEPiaggio_kuka-lwr__ros_control.src": "DECL of a user/system structure type `DECL FRISTATE retVal` (ros_control.dat:15)",
-    "krl/antlr_grammars-v4__kuka_example1.src": "typed aggregate assignment `jpos = {AXIS: A1 0,...}` (kuka_example1.src:8)",
-    "krl/kroshu_kuka-external-control-sdk__kss_command_handler.src": "`GLOBAL CONST INT STATE_COUNT = 3` in the .dat (kss_command_handler.dat:4)",
-    "krl/kroshu_kuka-external-control-sdk__kss_mappings.dat": "lone .dat not sniffed as KRL (DEFDAT) (kss_mappings.dat:1)",
-    "krl/kroshu_kuka-external-control-sdk__kss_program_handler.src": "`GLOBAL CONST INT CYCLE_TIME_COUNT = 3` in the .dat (kss_program_handler.dat:4)",
-    "krl/kroshu_kuka-external-control-sdk__kss_status.src": "DECL of a user ENUM type `DECL ControlMode control_mode = #INACTIVE` (kss_status.dat:3)",
-    "krl/kroshu_kuka-external-control-sdk__os2_mappings.src": "`DECL CONST AxisTypeTuple AXIS_TYPE_TUPLES[3]` (user STRUC array constant) (os2_mappings.dat:13)",
-    "krl/roboticsdojo_kuka_kvp_command_interface__test_kvp_krl.src": "typed aggregate assignment `$BASE = {FRAME: X 0, ...}` (test_kvp_krl.src:19)",
-    "krl/ros-industrial_kuka_experimental__KR_C2_ros_rsi.src": "DECL of a system type `DECL RSIERR err` (KR_C2_ros_rsi.src:47)",
-    "krl/ros-industrial_kuka_experimental__kuka_eki_hw_interface.src": "lower-case DECL of a system type `decl eki_status eki_ret` inside a DEF (kuka_eki_hw_interface.src:83)",
     # RAPID
     "rapid/kth-ros-pkg_yumi__RWS_ROS_motion_left.mod": "switch argument `\\FromMoveTask` in a function call inside IF (RWS_ROS_motion_left.mod:148)",
     "rapid/kth-ros-pkg_yumi__TCameraMain.mod": "`LOCAL RECORD CAMERA_RECORD` record declaration (TCameraMain.mod:46)",

@@ -23,6 +23,7 @@ from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statemen
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
+from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -200,15 +201,20 @@ class KrlParser:
         self.docs = [_Doc(d, i) for i, d in enumerate(docs)]
         self.builder = Builder("krl", "abc", docs)
         self.symbols = Symbols()
-        self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value)
+        self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value): speed and approximation
+        self.changes: list[Event] = []  # points and frames the program changes (see state.py)
+        self.timeline = Timeline()
+        self._has_goto = False
+        self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
-        """Bulk point declarations and array elements of one file; returns the lines they fill."""
+        """Bulk point declarations and array elements of one file; returns the lines they fill.
+        In the program an element assignment runs in order: the grammar reads it (an Event)."""
         done = np.zeros(len(d.lines.starts), bool)
-        for regex in (RE_DECL, RE_ELEM):
+        for regex in (RE_DECL, RE_ELEM) if d.index else (RE_DECL,):
             matches = d.shapes().match(regex)
             if not len(matches):
                 continue
@@ -232,6 +238,7 @@ class KrlParser:
         skip = src_decl.copy()
         skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
+        self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
         self._bulk_moves(src, inline, named)
         return self._finish()
 
@@ -256,10 +263,20 @@ class KrlParser:
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
             if not tree.children:
                 continue
+            self._where = self._context(stack, start)
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
             raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
+
+    def _context(self, stack, start: int) -> tuple[int, bool]:
+        """(offset from which a change made here may apply, straight-line?) of a statement:
+        inside a block the controller may run it before or again after any line of the
+        outermost block; in a second DEF (a subprogram) at any time."""
+        if self._defs > 1:
+            return 0, False
+        blocks = [where for want, where in stack if want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD")]
+        return (blocks[0], False) if blocks else (start, True)
 
     def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
         if stack and stack[-1][0] == keyword:
@@ -278,6 +295,7 @@ class KrlParser:
             kw = node.children[0]
             word = str(kw).split()[-1].upper()
             if word in ("DEF", "DEFFCT", "DEFDAT"):
+                self._defs += d.index == 0 and word != "DEFDAT"
                 stack.append(({"DEF": "END", "DEFFCT": "ENDFCT", "DEFDAT": "ENDDAT"}[word], start))
             else:
                 self._close(d, stack, word, start + kw.column - 1)
@@ -294,6 +312,12 @@ class KrlParser:
             return
         if kind == "decl":
             self._decl(d, node, start)
+            return
+        if kind == "goto":
+            self._has_goto = True
+            return
+        if kind == "call" and is_program:
+            self._bas(d, node, start)
             return
         if kind == "assignment":
             self._assignment(d, node, start)
@@ -322,12 +346,28 @@ class KrlParser:
             c[0][0 if key.upper() == "S" else 1] = int(digits, 2 if base.upper() == "B" else 16)
         return v[0], sp[0], c[0], ins[0]
 
-    def _eval_frame(self, d: _Doc, node, start: int) -> tuple[np.ndarray, bool, str]:
+    def _declared(self, key: str) -> Point | None:
+        found = self.symbols.get(key)
+        return None if found is None else Point(*(np.array(v) for v in found))
+
+    def _read_agg(self, d: _Doc, ev: Event) -> Point:
+        return Point(*self._agg(d, ev.rhs, ev.line_offset))
+
+    def _frame_value(self, d: _Doc, ev: Event, current) -> tuple[str, np.ndarray | None]:
+        """(name, transform) of a frame expression; the transform is None when unknown."""
+        if isinstance(ev.rhs, str):  # BAS(#BASE, n): BASE_DATA[n]
+            point = current(ev.rhs)
+            known = point is not None and point.known and not np.isnan(point.values[:6]).all()
+            return ev.rhs, _frame_of(point.values) if known else None
+        transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current)
+        return name, transform if ok else None
+
+    def _eval_frame(self, d: _Doc, node, start: int, current=None) -> tuple[np.ndarray, bool, str]:
         """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
         if isinstance(node, Tree) and node.data == "geo":
             total, ok, names = np.eye(4), True, []
             for part in node.children:
-                t, r, n = self._eval_frame(d, part, start)
+                t, r, n = self._eval_frame(d, part, start, current)
                 total, ok = total @ t, ok and r
                 names.append(n)
             return total, ok, ":".join(names)
@@ -335,30 +375,59 @@ class KrlParser:
             v, _, _, _ = self._agg(d, node, start)
             return _frame_of(v), True, self._text(d, node, start)
         name = self._text(d, node, start)
-        found = self.symbols.get(name)
-        if found is None:
+        key = _lvalue_text(node) if isinstance(node, Tree) and node.data == "lvalue" else None
+        point = current(key) if current is not None and key else self._declared(name)
+        if point is None or not point.known or np.isnan(point.values[:6]).all():
             return np.eye(4), False, name
-        return _frame_of(found[0]), True, name
+        return _frame_of(point.values), True, name
 
     def _text(self, d: _Doc, node, start: int) -> str:
         s, e = _node_span(node)
         return d.text[start + s : start + e].strip()
 
-    def _assignment(self, d: _Doc, node: Tree, start: int) -> None:
+    def _assignment(self, d: _Doc, node: Tree, start: int, where: tuple[int, bool] | None = None) -> None:
         lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
-        if isinstance(rhs, Tree) and rhs.data == "aggregate":
-            v, sp, c, ins = self._agg(d, rhs, start)
-            self.symbols.add_many([lhs], [v], [sp], [c], [ins])
         if d.index != 0:
+            if isinstance(rhs, Tree) and rhs.data == "aggregate":
+                v, sp, c, ins = self._agg(d, rhs, start)
+                self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
-        if lhs in ("$BASE", "$TOOL"):
-            transform, ok, name = self._eval_frame(d, rhs, start)
-            self.events.append((start, lhs, (name, transform, ok)))
-        elif lhs == "$VEL.CP":
+        self._change(d, node.children[0], rhs, start, where or self._where)
+        if lhs == "$VEL.CP":
             self.events.append((start, "vel", literal_number(rhs)))
         elif lhs == "$APO.CDIS":
             self.events.append((start, "apo", literal_number(rhs)))
+
+    def _change(self, d: _Doc, lvalue: Tree, rhs, start: int, where: tuple[int, bool]) -> None:
+        """An assignment of the program: an Event for the point or frame it may change."""
+        text = _lvalue_text(lvalue)
+        offset, exact = where
+        line = int(d.lines.line(start))
+        rhs_text = self._text(d, rhs, start)
+        if text is None:  # an element with a computed index, or deeper: the whole array (or variable) may change
+            self.changes.append(Event(offset, start, str(lvalue.children[0]).upper() + "[", False, line=line))
+            return
+        key, _, field = text.partition(".")
+        if "." in field:  # XP1.X.Y: not a position component
+            field = "?"
+        self.changes.append(Event(offset, start, key, exact, field, rhs, rhs_text, line))
+
+    def _bas(self, d: _Doc, node: Tree, start: int) -> None:
+        """BAS(#BASE, n) and BAS(#TOOL, n) set $BASE = BASE_DATA[n] / $TOOL = TOOL_DATA[n]
+        (KUKA BAS.SRC); any other BAS command that may touch the frames makes them unknown."""
+        m = re.match(r"(?i)\s*BAS\s*\(\s*#(\w+)\s*(?:,\s*([^)]*?))?\s*\)\s*$", str(node.children[0]) if node.children else "")
+        if not m or m.group(1).upper() in BAS_KEEPS_FRAMES:
+            return
+        offset, exact = self._where
+        line = int(d.lines.line(start))
+        command, arg = m.group(1).upper(), (m.group(2) or "").strip()
+        number = re.fullmatch(r"\d+", arg)
+        for key, table in (("$BASE", "BASE_DATA"), ("$TOOL", "TOOL_DATA")):
+            if command == key[1:] and number and int(arg) > 0:
+                self.changes.append(Event(offset, start, key, exact, "", f"{table}[{int(arg)}]", f"{table}[{int(arg)}]", line))
+            elif command not in ("BASE", "TOOL") or command == key[1:]:
+                self.changes.append(Event(offset, start, key, False, line=line))
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
         move = str(node.children[0]).upper()
@@ -372,6 +441,7 @@ class KrlParser:
             kinds = [_MOVE_KIND[base_move]]
         if len(targets) != len(kinds):
             raise d.lines.error(d.doc.path, start, f"{move} takes {len(kinds)} target(s), got {len(targets)}")
+        self._with_clause(d, node, start)
         for k, tnode in zip(kinds, targets):
             expr = tnode.children[0]
             if isinstance(expr, Tree) and expr.data == "aggregate":
@@ -386,6 +456,16 @@ class KrlParser:
                 else:
                     v, sp, c, ins = found
             self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
+
+    def _with_clause(self, d: _Doc, node: Tree, start: int) -> None:
+        """``WITH $BASE = .., $TOOL = ..``: the values hold for this motion (KSS 8 spline
+        motions); what the controller has after it is not read here, so it is unknown."""
+        for clause in (c for c in node.children if isinstance(c, Tree) and c.data == "with_clause"):
+            for assignment in (c for c in clause.children if isinstance(c, Tree)):
+                key = _lvalue_text(assignment.children[0])
+                if key in FRAME_KEYS or (key or "").split(".")[0] in FRAME_KEYS:
+                    self._assignment(d, assignment, start, self._where)
+                    self.changes.append(Event(self._where[0] + 1 if self._where[1] else self._where[0], start + 1, key.split(".")[0], False, line=int(d.lines.line(start))))
 
     def _bulk_moves(self, src: _Doc, inline, named) -> None:
         for moves in (inline, named):
@@ -407,6 +487,7 @@ class KrlParser:
             self._collect(moves.start, kinds, values, spans, conf, insert, names, approx, line=moves.line + 1)
 
     def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None, line=None):
+        values, spans, conf, insert = self._changed_points(offsets, names, values, spans, conf, insert)
         self.builder.add_block(
             offsets,
             kind=kinds,
@@ -419,6 +500,25 @@ class KrlParser:
             line=self.docs[0].lines.line(offsets) if line is None else line,
         )
         self._approx_blocks.append((offsets, approx))
+
+    def _changed_points(self, offsets, names, values, spans, conf, insert):
+        """Targets naming a point the program changes take its state at their line."""
+        tl = self.timeline
+        if not (tl.points or tl.arrays) or not len(offsets):
+            return values, spans, conf, insert
+        keys = np.char.upper(np.char.replace(np.char.replace(np.asarray(names, dtype=str), " ", ""), "\t", ""))
+        changed = np.isin(keys, list(tl.points)) | np.zeros(len(keys), bool)
+        for prefix in tl.arrays:
+            changed |= np.char.startswith(keys, prefix)
+        rows = np.nonzero(changed)[0]
+        if not len(rows):
+            return values, spans, conf, insert
+        values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
+        for r in rows.tolist():
+            point = tl.point_at(str(keys[r]), int(offsets[r]))
+            if point is not None:
+                values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
+        return values, spans, conf, insert
 
     def _finish(self) -> Toolpath:
         self._collect_slow_targets()
@@ -463,14 +563,17 @@ class KrlParser:
         speed, cdis = np.full(n, np.nan), np.zeros(n)
         events = sorted(self.events, key=lambda e: e[0])
         for key in ("$BASE", "$TOOL", "vel", "apo"):
-            ev = [(o, v) for o, k, v in events if k == key]
+            if key in FRAME_KEYS:
+                ev = [(o, f) for o, f in self.timeline.frames[key]]
+            else:
+                ev = [(o, v) for o, k, v in events if k == key]
             if not ev:
                 continue
             at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
             has = at >= 0
-            if key in ("$BASE", "$TOOL"):
+            if key in FRAME_KEYS:
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
-                ids = np.array([register(name, transform, ok) for _, (name, transform, ok) in ev])
+                ids = np.array([register(f.name, None if f.pose is None else f.transform(), f.pose is not None) for _, f in ev])
                 (frame if key == "$BASE" else tool)[has] = ids[at[has]]
             elif key == "vel":
                 speed[has] = np.array([v for _, v in ev], dtype=float)[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s

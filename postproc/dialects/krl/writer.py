@@ -41,7 +41,10 @@ class KrlWriter:
         return " C_DIS" if self.approx else ""
 
     def move_joint(self, pose, conf=None) -> None:
-        self.body.append(f"PTP {self._frame(pose)}{self._c()}")
+        # No C_DIS after PTP: a PTP motion is approximated by C_PTP with $APO.CPTP, a
+        # percentage no distance maps to (KSS 8.x programming manual, "Approximate
+        # positioning": C_DIS is for CP motions); a PTP point is reached exactly instead.
+        self.body.append(f"PTP {self._frame(pose)}")
 
     def move_linear(self, pose, conf=None) -> None:
         self.body.append(f"LIN {self._frame(pose)}{self._c()}")

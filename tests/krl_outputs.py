@@ -1,0 +1,100 @@
+"""Every kind of KRL text postproc writes, written to a folder (the texts ANTLR's KRL grammar judges).
+
+    .venv/bin/python tests/krl_outputs.py OUT_DIR
+
+writes, for the programs of tests/corpus (KRL, RAPID, G-code) and examples/data:
+  emit/<name>            a KRL program's files re-emitted unchanged (.src, .dat, $config.dat)
+  moved/<name>           the same with every Cartesian target moved (the splice a compensation writes,
+                         numbers changed and missing components inserted)
+  convert/<stem>.src/.dat  `convert --to krl` of every program (the new-program writer)
+  place/<name>           `place -o`: a program's one $BASE literal replaced
+Inputs a step refuses (EmitError, InputError: nothing is written by postproc either) are skipped.
+This script only writes KRL texts; tests/test_antlr_krl.py compares their SHA-256 with the
+recorded ANTLR verdicts in tests/data/antlr_krl/.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+
+REPO = Path(__file__).resolve().parents[1]
+INPUTS = sorted(p for folder in ("tests/corpus/krl", "tests/corpus/rapid", "tests/corpus/gcode", "examples/data")
+                for p in (REPO / folder).iterdir() if p.is_file() and p.suffix.lower() not in (".dat", ".md"))
+SHIFT = np.array([0.1234, -0.0567, 0.0089])  # mm: every number moves, some by a carry
+
+
+def _out_name(path: Path, name: str) -> str:
+    return f"{path.parent.name}__{name}"
+
+
+def _krl_texts(tp, path: Path) -> dict[str, str]:
+    """emit/ and moved/ texts of a KRL program (each file of the program)."""
+    from postproc.errors import EmitError, InputError
+    from postproc.programs import emit_texts
+
+    out = {}
+    names = [Path(doc.path).name for doc in tp.sources]
+    for text, name in zip(emit_texts(tp, tp), names):
+        out[f"emit/{_out_name(path, name)}"] = text
+    known = ~np.isnan(tp.position).any(axis=1)
+    try:
+        moved = emit_texts(tp, tp.with_positions(np.where(known[:, None], tp.position + SHIFT, tp.position)))
+    except (EmitError, InputError):
+        return out
+    for text, name in zip(moved, names):
+        out[f"moved/{_out_name(path, name)}"] = text
+    return out
+
+
+def _placed(path: Path) -> dict[str, str]:
+    from postproc.dialects.krl.placing import set_base
+    from postproc.errors import EmitError
+    from postproc.frames import abc_to_matrix, make_transform
+
+    text = path.read_bytes().decode("latin-1")
+    frame = make_transform(abc_to_matrix(np.array([[12.5, -3.25, 178.0]]))[0], np.array([1250.5, -300.25, 410.125]))
+    try:
+        return {f"place/{_out_name(path, path.name)}": set_base(text, frame, str(path))}
+    except EmitError:
+        return {}
+
+
+def krl_outputs() -> dict[str, str]:
+    """Relative output name -> KRL text, for every input and every way postproc writes KRL."""
+    from postproc.errors import EmitError, InputError, ParseError
+    from postproc.programs import parse_program, write_program
+
+    out: dict[str, str] = {}
+    for path in INPUTS:
+        try:
+            tp = parse_program(path)
+        except (ParseError, InputError):
+            continue
+        if tp.dialect == "krl":
+            out.update(_krl_texts(tp, path))
+            out.update(_placed(path))
+        try:
+            src, dat = write_program(tp, "krl", path.stem)
+        except (EmitError, InputError):
+            continue
+        stem = _out_name(path, path.stem)
+        out[f"convert/{stem}.src"], out[f"convert/{stem}.dat"] = src, dat
+    return out
+
+
+def write(folder: Path) -> list[Path]:
+    written = []
+    for name, text in sorted(krl_outputs().items()):
+        target = folder / name
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_bytes(text.encode("latin-1"))
+        written.append(target)
+    return written
+
+
+if __name__ == "__main__":
+    for p in write(Path(sys.argv[1])):
+        print(p)
