@@ -269,14 +269,14 @@ class KrlParser:
             want, where = stack[-1]
             raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
 
-    def _context(self, stack, start: int) -> tuple[int, bool]:
-        """(offset from which a change made here may apply, straight-line?) of a statement:
-        inside a block the controller may run it before or again after any line of the
-        outermost block; in a second DEF (a subprogram) at any time."""
+    def _context(self, stack, start: int) -> tuple[int, bool, bool]:
+        """(offset from which a change made here may apply, straight-line?, at any time?) of a
+        statement: inside a block the controller may run it before or again after any line
+        of the outermost block; in a second DEF (a subprogram) at any time."""
         if self._defs > 1:
-            return 0, False
+            return 0, False, True
         blocks = [where for want, where in stack if want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD")]
-        return (blocks[0], False) if blocks else (start, True)
+        return (blocks[0], False, False) if blocks else (start, True, False)
 
     def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
         if stack and stack[-1][0] == keyword:
@@ -385,7 +385,7 @@ class KrlParser:
         s, e = _node_span(node)
         return d.text[start + s : start + e].strip()
 
-    def _assignment(self, d: _Doc, node: Tree, start: int, where: tuple[int, bool] | None = None) -> None:
+    def _assignment(self, d: _Doc, node: Tree, start: int, where: tuple[int, bool, bool] | None = None) -> None:
         lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
         if d.index != 0:
@@ -399,19 +399,19 @@ class KrlParser:
         elif lhs == "$APO.CDIS":
             self.events.append((start, "apo", literal_number(rhs)))
 
-    def _change(self, d: _Doc, lvalue: Tree, rhs, start: int, where: tuple[int, bool]) -> None:
+    def _change(self, d: _Doc, lvalue: Tree, rhs, start: int, where: tuple[int, bool, bool]) -> None:
         """An assignment of the program: an Event for the point or frame it may change."""
         text = _lvalue_text(lvalue)
-        offset, exact = where
+        offset, exact, anytime = where
         line = int(d.lines.line(start))
         rhs_text = self._text(d, rhs, start)
         if text is None:  # an element with a computed index, or deeper: the whole array (or variable) may change
-            self.changes.append(Event(offset, start, str(lvalue.children[0]).upper() + "[", False, line=line))
+            self.changes.append(Event(offset, start, str(lvalue.children[0]).upper() + "[", False, line=line, anytime=anytime))
             return
         key, _, field = text.partition(".")
         if "." in field:  # XP1.X.Y: not a position component
             field = "?"
-        self.changes.append(Event(offset, start, key, exact, field, rhs, rhs_text, line))
+        self.changes.append(Event(offset, start, key, exact, field, rhs, rhs_text, line, anytime))
 
     def _bas(self, d: _Doc, node: Tree, start: int) -> None:
         """BAS(#BASE, n) and BAS(#TOOL, n) set $BASE = BASE_DATA[n] / $TOOL = TOOL_DATA[n]
@@ -419,15 +419,15 @@ class KrlParser:
         m = re.match(r"(?i)\s*BAS\s*\(\s*#(\w+)\s*(?:,\s*([^)]*?))?\s*\)\s*$", str(node.children[0]) if node.children else "")
         if not m or m.group(1).upper() in BAS_KEEPS_FRAMES:
             return
-        offset, exact = self._where
+        offset, exact, anytime = self._where
         line = int(d.lines.line(start))
         command, arg = m.group(1).upper(), (m.group(2) or "").strip()
         number = re.fullmatch(r"\d+", arg)
         for key, table in (("$BASE", "BASE_DATA"), ("$TOOL", "TOOL_DATA")):
             if command == key[1:] and number and int(arg) > 0:
-                self.changes.append(Event(offset, start, key, exact, "", f"{table}[{int(arg)}]", f"{table}[{int(arg)}]", line))
+                self.changes.append(Event(offset, start, key, exact, "", f"{table}[{int(arg)}]", f"{table}[{int(arg)}]", line, anytime))
             elif command not in ("BASE", "TOOL") or command == key[1:]:
-                self.changes.append(Event(offset, start, key, False, line=line))
+                self.changes.append(Event(offset, start, key, False, line=line, anytime=anytime))
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
         move = str(node.children[0]).upper()
@@ -465,7 +465,8 @@ class KrlParser:
                 key = _lvalue_text(assignment.children[0])
                 if key in FRAME_KEYS or (key or "").split(".")[0] in FRAME_KEYS:
                     self._assignment(d, assignment, start, self._where)
-                    self.changes.append(Event(self._where[0] + 1 if self._where[1] else self._where[0], start + 1, key.split(".")[0], False, line=int(d.lines.line(start))))
+                    offset, exact, anytime = self._where
+                    self.changes.append(Event(offset + 1 if exact else offset, start + 1, key.split(".")[0], False, line=int(d.lines.line(start)), anytime=anytime))
 
     def _bulk_moves(self, src: _Doc, inline, named) -> None:
         for moves in (inline, named):

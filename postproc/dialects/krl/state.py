@@ -35,6 +35,7 @@ class Event:
     rhs: object = None  # the value's parse tree; None: unknown
     text: str = ""  # the statement's text (names the frame)
     line: int = 0
+    anytime: bool = False  # in a subprogram or in a program with GOTO: may run before any line
 
 
 @dataclass
@@ -161,8 +162,18 @@ class Replay:
 
     def run(self, events: list[Event], exact_allowed: bool) -> Timeline:
         tl = Timeline()
+        anytime = {ev.key for ev in events if ev.anytime or not exact_allowed}
+        for key in anytime:  # unknown everywhere: no later line makes it known for sure
+            if key in self.frames:
+                tl.frames[key].append((0, Frame(f"{key} as changed at any time (subprogram or GOTO)", None)))
+            elif key.endswith("["):
+                tl.arrays[key] = 0
+            else:
+                tl.points[key] = [(0, Point.unknown())]
         for ev in sorted(events, key=lambda e: (e.offset, e.line_offset)):
-            exact = ev.exact and exact_allowed and ev.rhs is not None
+            if ev.key in anytime:
+                continue
+            exact = ev.exact and ev.rhs is not None
             if ev.key in self.frames:
                 self.frames[ev.key] = self._unique(self._frame(ev, exact), ev)
                 tl.frames[ev.key].append((ev.offset, self.frames[ev.key]))
