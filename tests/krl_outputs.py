@@ -62,12 +62,37 @@ def _placed(path: Path) -> dict[str, str]:
         return {}
 
 
+# A program whose points live in its .dat and in the robot's $config.dat (our own text): the
+# $config.dat that a compensation rewrites.
+WITH_CONFIG = {
+    "cell.src": "&ACCESS RVP\r\n&REL 1\r\nDEF cell( )\r\n$BASE = BASE_DATA[1]\r\n$TOOL = TOOL_DATA[1]\r\n"
+                "PTP XHOME\r\nLIN XPDAT C_DIS\r\nLIN XPCFG\r\nLIN {X 950, Y 50, Z 420, A 0, B 180, C 0}\r\nEND\r\n",
+    "cell.dat": "&ACCESS RVP\r\nDEFDAT cell\r\nDECL E6AXIS XHOME={A1 0,A2 -90,A3 90,A4 0,A5 0,A6 0}\r\n"
+                "DECL E6POS XPDAT={X 1000,Y -60,Z 430,A 0,B 180,C 0,S 6,T 50}\r\nENDDAT\r\n",
+    "$config.dat": "&ACCESS RVP\r\nDEFDAT $CONFIG\r\nDECL GLOBAL E6POS XPCFG={X 1050,Y 80,Z 440,A 0,B 180,C 0}\r\n"
+                   "BASE_DATA[1]={X 500,Y -200,Z 0,A 90,B 0,C 0}\r\nTOOL_DATA[1]={X 0,Y 0,Z 200,A 0,B 0,C 0}\r\nENDDAT\r\n",
+}
+
+
+def _with_config() -> dict[str, str]:
+    import tempfile
+
+    from postproc.programs import parse_program
+
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(tmp) / "config"
+        folder.mkdir()
+        for name, text in WITH_CONFIG.items():
+            (folder / name).write_bytes(text.encode("latin-1"))
+        return _krl_texts(parse_program(folder / "cell.src"), folder / "cell.src")
+
+
 def krl_outputs() -> dict[str, str]:
     """Relative output name -> KRL text, for every input and every way postproc writes KRL."""
     from postproc.errors import EmitError, InputError, ParseError
     from postproc.programs import parse_program, write_program
 
-    out: dict[str, str] = {}
+    out: dict[str, str] = _with_config()
     for path in INPUTS:
         try:
             tp = parse_program(path)
