@@ -65,10 +65,11 @@ def test_a_whole_new_value_applies_after_its_line_only(tmp_path):
 
 def test_bas_base_and_tool_read_config_dat(tmp_path):
     # BAS.SRC: BAS(#BASE, 2) -> $BASE = BASE_DATA[2] = {X 0, Y 2000, A 90}: (100, 0, 500) turned 90
-    # degrees about Z is (0, 100, 500), plus (0, 2000, 0). $BASE = BASE_DATA[1] shifts X by 1000.
-    tp = program(tmp_path, "BAS(#BASE, 2)\nBAS(#TOOL, 1)\nLIN XP1\n$BASE = BASE_DATA[1]\n$TOOL = TOOL_DATA[1]\nLIN XP1")
-    np.testing.assert_allclose(placed_positions(tp), [[0, 2100, 500], [1100, 0, 500]], atol=1e-9)
-    np.testing.assert_allclose(tp.tools[tp.tool][:, :3, 3], [[0, 0, 100], [0, 0, 100]], atol=1e-9)
+    # degrees about Z is (0, 100, 500), plus (0, 2000, 0). $BASE = BASE_DATA[1] shifts X by 1000;
+    # $NULLFRAME is the zero frame {X 0, Y 0, Z 0, A 0, B 0, C 0}.
+    tp = program(tmp_path, "BAS(#BASE, 2)\nBAS(#TOOL, 1)\nLIN XP1\n$BASE = BASE_DATA[1]\n$TOOL = TOOL_DATA[1]\nLIN XP1\n$BASE = $NULLFRAME\nLIN XP1")
+    np.testing.assert_allclose(placed_positions(tp), [[0, 2100, 500], [1100, 0, 500], [100, 0, 500]], atol=1e-9)
+    np.testing.assert_allclose(tp.tools[tp.tool][:, :3, 3], [[0, 0, 100]] * 3, atol=1e-9)
 
 
 def test_initmov_and_frames_from_fdat_leave_the_frames_unknown(tmp_path):

@@ -359,6 +359,8 @@ class KrlParser:
             point = current(ev.rhs)
             known = point is not None and point.known and not np.isnan(point.values[:6]).all()
             return ev.rhs, _frame_of(point.values) if known else None
+        if isinstance(ev.rhs, Tree) and ev.rhs.data == "lvalue" and _lvalue_text(ev.rhs) == "$NULLFRAME":
+            return "$NULLFRAME", np.eye(4)  # the system's zero frame {X 0, Y 0, Z 0, A 0, B 0, C 0}
         transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current)
         return name, transform if ok else None
 
@@ -507,16 +509,19 @@ class KrlParser:
         tl = self.timeline
         if not (tl.points or tl.arrays) or not len(offsets):
             return values, spans, conf, insert
-        keys = np.char.upper(np.char.replace(np.char.replace(np.asarray(names, dtype=str), " ", ""), "\t", ""))
-        changed = np.isin(keys, list(tl.points)) | np.zeros(len(keys), bool)
+        named = np.nonzero(np.asarray(names, dtype=object) != "")[0]  # inline aggregates have no name
+        if not len(named):
+            return values, spans, conf, insert
+        keys = np.char.upper(np.char.replace(np.char.replace(np.asarray(names, dtype=object)[named].astype(str), " ", ""), "\t", ""))
+        changed = np.isin(keys, list(tl.points))
         for prefix in tl.arrays:
             changed |= np.char.startswith(keys, prefix)
-        rows = np.nonzero(changed)[0]
-        if not len(rows):
+        if not changed.any():
             return values, spans, conf, insert
         values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
-        for r in rows.tolist():
-            point = tl.point_at(str(keys[r]), int(offsets[r]))
+        for k in np.nonzero(changed)[0].tolist():
+            r = int(named[k])
+            point = tl.point_at(str(keys[k]), int(offsets[r]))
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
         return values, spans, conf, insert
