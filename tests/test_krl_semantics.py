@@ -149,3 +149,21 @@ def test_a_subprogram_that_changes_a_frame_makes_it_unknown_everywhere(tmp_path)
     (tmp_path / "p.dat").write_text(DAT)
     (tmp_path / "$config.dat").write_text(CONFIG)
     assert not parse_program(tmp_path / "p.src").placed().any()
+
+
+def test_a_compensation_cannot_silently_move_a_derived_point(tmp_path):
+    # XP1.X = XP1.X + 300: the second target's X is the declaration's X plus 300. Moving only the
+    # first target rewrites the declaration, which moves the second one too: the written program
+    # reads back with the second target 0.1 mm off, so nothing is written.
+    from postproc.errors import EmitError, OutputCheckError
+    from postproc.programs import check_texts, emit_texts
+
+    tp = program(tmp_path, "PTP XP1\nXP1.X = XP1.X + 300\nLIN XP1")
+    np.testing.assert_allclose(tp.position, [[100, 0, 500], [400, 0, 500]])
+    with pytest.raises(EmitError, match="line 4: x is not a plain number"):
+        emit_texts(tp, tp.with_positions(tp.position + 0.1))
+    new = tp.with_positions(tp.position + [[0.1, 0, 0], [0, 0, 0]])
+    texts = emit_texts(tp, new)
+    assert "X 100.1," in texts[1]
+    with pytest.raises(OutputCheckError, match="line 4"):
+        check_texts(tp, new, texts, np.arange(len(tp)))
