@@ -313,8 +313,8 @@ class KrlParser:
         if kind == "decl":
             self._decl(d, node, start)
             return
-        if kind == "goto":
-            self._has_goto = True
+        if kind == "goto":  # a jump in the main DEF; in a subprogram every change is unknown anyway
+            self._has_goto |= d.index == 0 and self._defs == 1
             return
         if kind == "call" and is_program:
             self._bas(d, node, start)
