@@ -371,3 +371,33 @@ def _deviation(problem, sol, intended: Arcs, commanded: Arcs, at: np.ndarray) ->
     actual = _local(tp, interior.rows, interior.goal + err).reshape(len(at), len(fractions), 3)
     dist = intended.distance(actual)
     return np.where(np.isnan(dist).any(axis=1), np.inf, dist.max(axis=1))
+
+
+# ---------------------------------------------------------------- output
+
+def check_words(original: Toolpath, modified: Toolpath, back: Toolpath, rows: np.ndarray) -> None:
+    """The re-parsed output ``back`` gives every compensated arc of ``rows`` the centre words
+    the compensation wrote (an omitted word reads as 0), within the writing tolerance."""
+    from .emit.splice import TOLERANCE
+    from .errors import OutputCheckError
+
+    if modified.arc is None or not len(rows):
+        return
+    want, got = modified.values[rows][:, F_ARC], back.values[rows][:, F_ARC]
+    bad = ~np.isnan(want) & ~(np.abs(np.nan_to_num(got) - np.nan_to_num(want)) <= TOLERANCE[F_ARC] * (1 + 1e-6))
+    if bad.any():
+        i, k = (int(v[0]) for v in np.nonzero(bad))
+        r = int(rows[i])
+        raise OutputCheckError(f"{original.sources[int(original.file[r])].path}, line {original.line[r]}: the arc's "
+                               f"{'IJKR'[k]} reads back as {got[i, k]:.4f}, not the compensated {want[i, k]:.4f}; nothing was written")
+
+
+def summary(tp: Toolpath, path_mm: np.ndarray | None) -> dict | None:
+    """The circular motions' predicted largest distance from the intended arc (CIRC / MoveC
+    end points and G2/G3 targets; the report's ``path_mm`` of their rows), and where."""
+    circular = np.isin(tp.kind, (Kind.CIRC_END, Kind.ARC_CW, Kind.ARC_CCW))
+    if path_mm is None or not (circular & np.isfinite(path_mm)).any():
+        return None
+    dev = np.where(circular, path_mm, np.nan)
+    i = int(np.nanargmax(dev))
+    return {"arcs": int((circular & np.isfinite(path_mm)).sum()), "max_mm": float(dev[i]), "line": int(tp.line[i])}

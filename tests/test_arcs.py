@@ -202,3 +202,30 @@ def test_a_program_starting_with_an_arc_is_refused(tmp_path, model):
     prog.write_text("G21 G90 G17 G54\nG43.5 H1\nG2 X10 Y0 I5\nM30\n")
     with pytest.raises(InputError, match=r"first\.ngc:3:12: the program starts with an arc"):
         compensate(parse_program(prog), model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
+
+
+def test_the_cli_reports_the_mid_arc_deviation_and_refuses_beyond_max_deviation(tmp_path, model):
+    import json
+
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+    from postproc.model_io import save_model
+
+    runner = CliRunner()
+    model_path = tmp_path / "model.json"
+    save_model(model_path, model)
+    prog = _program(tmp_path, BODY)
+    out, report = tmp_path / "out.ngc", tmp_path / "report.json"
+    args = ["compensate", str(prog), "--model", str(model_path), "--frame", "G54=1000,-100,400,0,0,180", "--tool", "H1=0,0,200",
+            "--start-joints", ",".join(f"{v:g}" for v in START)]
+    result = runner.invoke(app, args + ["-o", str(out), "--report", str(report)])
+    assert result.exit_code == 0, result.output
+    assert "circular motions (6, CIRC / MoveC / G2 / G3): largest predicted distance from the intended arc" in result.output
+    doc = json.loads(report.read_text())
+    assert doc["summary"]["arcs"]["line"] == 7  # the full circle `G2 I-30`
+    arc_points = [p for p in doc["points"] if p["line"] in (5, 6, 7, 8, 10, 11)]
+    assert all(p["path_mm"] is not None for p in arc_points)
+    refused = tmp_path / "refused.ngc"
+    result = runner.invoke(app, args + ["-o", str(refused), "--max-deviation", "0.05"])
+    assert result.exit_code == 1 and "line 7" in result.output and "strays" in result.output and not refused.exists()
