@@ -71,8 +71,11 @@ def arc_words(t: dict, rows: np.ndarray, arc_rows: np.ndarray, plane: np.ndarray
     arc = np.full((len(rows), 3), np.nan)
     arc[at, 0] = plane[at]
     arc[at, 1] = (ijk_mode[at] == 90.1).astype(float)
-    arc[at, 2] = [_turns(text, int(t["offset"][b]), int(t["code_end"][b])) for b in blocks]
+    arc[at, 2] = _all_turns(text, t["offset"][blocks], t["code_end"][blocks])
     return arc
+
+
+_ALLOWED = {17.0: [True, True, False], 18.0: [True, False, True], 19.0: [False, True, True]}
 
 
 def _refuse_mixed(t: dict, blocks: np.ndarray, words: np.ndarray, plane: np.ndarray, error_at) -> None:
@@ -80,18 +83,34 @@ def _refuse_mixed(t: dict, blocks: np.ndarray, words: np.ndarray, plane: np.ndar
     (LinuxCNC refuses `G17 G2 ... K1`)."""
     from .parse import AXES
 
-    for n, (b, w, p) in enumerate(zip(blocks, words, plane)):
-        given = {c for c, v in zip(WORDS, w) if not np.isnan(v)}
-        bad = (given & set("IJK")) - set(_IN_PLANE[p])
-        if "R" in given and given & set("IJK"):
-            bad = given & set("IJK")
-            reason = "an arc takes either a radius (R) or centre words, not both"
-        else:
-            reason = f"{'/'.join(sorted(bad))} is not a centre word of the G{p:g} plane (it takes {' and '.join(_IN_PLANE[p])})"
-        if bad:
-            col = AXES.index(sorted(bad)[0])
-            at = t["spans"][b, col, 0] if t["spans"][b, col, 0] >= 0 else t["offset"][b]
-            raise error_at(at, reason)
+    given = ~np.isnan(words)
+    allowed = np.array([_ALLOWED[p] for p in np.unique(plane)])[np.searchsorted(np.unique(plane), plane)]
+    both = given[:, 3] & given[:, :3].any(axis=1)
+    off = given[:, :3] & ~allowed
+    bad = both | off.any(axis=1)
+    if not bad.any():
+        return
+    n = int(np.nonzero(bad)[0][0])
+    b, p = blocks[n], plane[n]
+    letters = [c for c, g in zip("IJK", (given[n, :3] if both[n] else off[n])) if g]
+    if both[n]:
+        reason = "an arc takes either a radius (R) or centre words, not both"
+    else:
+        reason = f"{'/'.join(letters)} is not a centre word of the G{p:g} plane (it takes {' and '.join(_IN_PLANE[p])})"
+    col = AXES.index(letters[0])
+    at = t["spans"][b, col, 0] if t["spans"][b, col, 0] >= 0 else t["offset"][b]
+    raise error_at(at, reason)
+
+
+def _all_turns(text: str, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """P of each arc block (1 where the block has no P at all: found vectorised)."""
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    p_at = np.nonzero((raw == ord("P")) | (raw == ord("p")))[0]
+    maybe = np.searchsorted(p_at, ends) > np.searchsorted(p_at, starts)
+    turns = np.ones(len(starts))
+    for i in np.nonzero(maybe)[0]:
+        turns[i] = _turns(text, int(starts[i]), int(ends[i]))
+    return turns
 
 
 def _turns(text: str, start: int, end: int) -> float:
