@@ -401,3 +401,22 @@ def summary(tp: Toolpath, path_mm: np.ndarray | None) -> dict | None:
     dev = np.where(circular, path_mm, np.nan)
     i = int(np.nanargmax(dev))
     return {"arcs": int((circular & np.isfinite(path_mm)).sum()), "max_mm": float(dev[i]), "line": int(tp.line[i])}
+
+
+def describe(tp: Toolpath) -> dict[int, dict]:
+    """Per G2/G3 target row: plane, direction, centre (robot base / machine frame, at the
+    start's height along the plane's normal), radius at the start, full circle, turns."""
+    geo = geometry(tp)
+    if not len(geo.rows):
+        return {}
+    centre = geo.start.copy()
+    m = np.arange(len(geo.rows))[:, None]
+    centre[m, geo.axes[:, :2]] = geo.centre
+    base = _to_base(tp, geo.rows, centre)
+    radius = np.linalg.norm(geo.in_plane(geo.start) - geo.centre, axis=1)
+    def num(v):
+        return round(float(v), 6) if np.isfinite(v) else None  # an axis the program has not given yet
+
+    return {int(r): {"plane": f"G{int(tp.arc[r, 0])}", "direction": "ccw" if ccw else "cw", "centre": [num(v) for v in c],
+                     "radius": num(rad), "full_circle": bool(full), "turns": num(tp.arc[r, 2])}
+            for r, ccw, c, rad, full in zip(geo.rows, geo.ccw, base, radius, geo.full)}

@@ -807,6 +807,9 @@ def inspect_cmd(
         return None if v is None or not np.isfinite(v) else round(float(v), 6)
 
     placed = tp.placed()
+    from .arcs import describe
+
+    arc_of = describe(tp)  # G2/G3: plane, direction, centre, radius
     moves = []
     for i in range(len(tp)):
         entry = {
@@ -827,6 +830,8 @@ def inspect_cmd(
             entry["ext"] = [num(v) for v in tp.ext[i]]
         if not np.isnan(tp.conf[i]).all():
             entry["conf"] = [num(v) for v in tp.conf[i]]
+        if i in arc_of:
+            entry["arc"] = arc_of[i]
         entry["speed"] = num(tp.speed[i])
         entry["zone"] = num(tp.zone[i])
         moves.append(entry)

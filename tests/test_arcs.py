@@ -229,3 +229,21 @@ def test_the_cli_reports_the_mid_arc_deviation_and_refuses_beyond_max_deviation(
     refused = tmp_path / "refused.ngc"
     result = runner.invoke(app, args + ["-o", str(refused), "--max-deviation", "0.05"])
     assert result.exit_code == 1 and "line 7" in result.output and "strays" in result.output and not refused.exists()
+
+
+def test_inspect_json_gives_each_arc_its_plane_centre_and_radius(tmp_path):
+    import json
+
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    prog = tmp_path / "p.ngc"
+    prog.write_text("G21 G90 G17\nG1 X100 Y0 Z0 F500\nG2 X200 Y0 I50 J0\nG2 I-50\nG18 G2 X250 Z-50 I50 K0\nG0 Z5\nM2\n")
+    result = CliRunner().invoke(app, ["inspect", str(prog), "--json"])
+    assert result.exit_code == 0, result.output
+    moves = {m["line"]: m for m in json.loads(result.stdout)["moves"]}
+    assert moves[3]["arc"] == {"plane": "G17", "direction": "cw", "centre": [150.0, 0.0, 0.0], "radius": 50.0, "full_circle": False, "turns": 1.0}
+    assert moves[4]["xyz"] == [200.0, 0.0, 0.0] and moves[4]["arc"]["full_circle"] and moves[4]["arc"]["centre"] == [150.0, 0.0, 0.0]
+    assert moves[5]["arc"]["plane"] == "G18" and moves[5]["arc"]["centre"] == [250.0, 0.0, 0.0]
+    assert "arc" not in moves[6]
