@@ -247,3 +247,24 @@ def test_inspect_json_gives_each_arc_its_plane_centre_and_radius(tmp_path):
     assert moves[4]["xyz"] == [200.0, 0.0, 0.0] and moves[4]["arc"]["full_circle"] and moves[4]["arc"]["centre"] == [150.0, 0.0, 0.0]
     assert moves[5]["arc"]["plane"] == "G18" and moves[5]["arc"]["centre"] == [250.0, 0.0, 0.0]
     assert "arc" not in moves[6]
+
+
+@pytest.mark.parametrize("head, body", [
+    ("G20", "G1 X4 Y0 Z0 I0 J0 K1\nG2 X6 Y0 I1\nG3 X7 Y1 R1\nG2 I-1\n"),  # inches: words scaled by 25.4 and written back in inches
+    ("G21", "G91 G1 X100 Y0 Z0 I0 J0 K1\nG2 X60 Y0 I30\nG3 X30 Y30 R30\nG2 I-30\nG90\n"),  # incremental end points
+])
+def test_inch_and_incremental_arcs_are_compensated(tmp_path, model, head, body):
+    prog = tmp_path / "units.ngc"
+    prog.write_text(f"{head} G90 G17 G54\nG43.5 H1\nG1 X0 Y0 Z0 I0 J0 K1 F500\n{body}M30\n")
+    tp = parse_program(prog)
+    new, report = compensate(tp, model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
+    assert not report.failed.any(), report.failures()
+    out = tmp_path / "out.ngc"
+    out.write_bytes(emit_texts(tp, new)[0].encode("latin-1"))
+    back = parse_program(out)
+    np.testing.assert_allclose(back.position, new.position, atol=6e-4)
+    want = arcs.geometry(new.with_frames({"G54": WORK}, {"H1": H1}))
+    got = arcs.geometry(back.with_frames({"G54": WORK}, {"H1": H1}))
+    np.testing.assert_allclose(got.centre, want.centre, atol=2e-3)
+    arc = report.path_mm[arcs.arc_rows(tp)]
+    assert (arc[~got.full] < 0.05).all(), arc
