@@ -18,12 +18,12 @@ A1 beyond its range): all four are run, with each dialect.
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pytest
 
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, TOOL, truth_and_fit
 from postproc import arcs
 from postproc import kinematics as kin
 from postproc.compensate import compensate
@@ -31,9 +31,32 @@ from postproc.frames import matrix_to_abc, matrix_to_quat_wxyz
 from postproc.ir import Kind
 from postproc.posture import interpolate_poses
 from postproc.programs import emit_texts, parse_program
+from postproc.robots import load_robot
+from postproc.sim import JointBox
 from postproc.segments import circle_through, distance_to_circles, distance_to_segments
 
-Q_CENTRE = np.array([-104.0, -6.0, 53.0, 161.0, -59.0, 169.0])  # the path's first pose (tests/test_posture_e2e.py)
+
+@dataclass(frozen=True)
+class Cell:
+    """A robot, the pose the path starts at, and the path's turn about the tool axis and scale
+    there (chosen so that every configuration the limits allow follows the whole path)."""
+
+    robot_name: str
+    q_centre: tuple
+    turn_deg: float
+    scale: float
+    configurations: int
+
+    @property
+    def robot(self):
+        return load_robot(self.robot_name)
+
+
+# KR160: four of the eight configurations (the shoulder-flipped ones need A2 beyond its range);
+# KR6 R700 sixx: all eight, on a path of 0.4 times the size (its reach is 700 mm).
+CELLS = {"kr160": Cell("kr160_r1570", (-104.0, -6.0, 53.0, 161.0, -59.0, 169.0), -90.0, 1.0, 4),
+         "kr6": Cell("kr6_r700_sixx", (-104.9, -170.8, 116.0, 133.7, 90.4, -19.7), 180.0, 0.4, 8)}
+CASES = [(name, config) for name, cell in CELLS.items() for config in range(cell.configurations)]
 SAMPLES = np.linspace(0.0, 1.0, 10)[1:]  # interior samples and the end of every motion
 # The path in the tool plane of the first pose (mm): a 250 mm line, a half circle, a line
 # back, a quarter circle and a full circle of radius 25 mm.
@@ -41,13 +64,24 @@ LINE = [(0.0, 0.0), (250.0, 0.0)]
 
 
 @pytest.fixture(scope="module")
-def robot():
-    return kr160()
+def fitted():
+    """Per cell, lazily: a true robot and a model of the same effects fitted to 800 poses in
+    every configuration."""
+    cache = {}
+
+    def get(name):
+        if name not in cache:
+            cache[name] = _truth_and_model(CELLS[name])
+        return cache[name]
+
+    return get
 
 
-@pytest.fixture(scope="module")
-def truth_and_model(robot):
-    return truth_and_fit(robot, FRAME_AND_COMPLIANCE, seed=5, n=800, cv_folds=0, poses=lambda q, rng: _in_every_configuration(robot, q, rng))
+def _truth_and_model(cell):
+    robot = cell.robot
+    region = None if cell.robot_name == "kr160_r1570" else JointBox()  # the default cylinder is a KR160's workspace
+    return truth_and_fit(robot, FRAME_AND_COMPLIANCE, seed=5, n=800, cv_folds=0, region=region,
+                         poses=lambda q, rng: _in_every_configuration(robot, q, rng))
 
 
 def _in_every_configuration(robot, q, rng):
@@ -58,31 +92,33 @@ def _in_every_configuration(robot, q, rng):
     return sols[np.arange(len(q)), pick]
 
 
-def _configurations(robot):
-    sols = kin.ik(robot, kin.fk(robot, Q_CENTRE[None]))[0]
+def _configurations(cell):
+    robot = cell.robot
+    sols = kin.ik(robot, kin.fk(robot, np.array(cell.q_centre)[None]))[0]
     return [s for s in sols if not np.isnan(s).any() and kin.within_limits(robot, s[None])[0]]
 
 
-def _work_frame(robot):
+def _work_frame(cell):
     """The first pose's TCP frame: the path lies in its x-y plane, the tool along its z."""
-    return kin.fk(robot, Q_CENTRE[None], tool=TOOL)[0]
+    return kin.fk(cell.robot, np.array(cell.q_centre)[None], tool=TOOL)[0]
 
 
 # ------------------------------------------------------------------ the programs
 
-def _turned(x, y):
-    """Path coordinates into the work frame: turned -90 deg about the tool axis (the path then
-    runs where all four configurations reach within the joint limits)."""
-    return y, -x
+def _turned(cell, x, y):
+    """Path coordinates into the work frame: turned about the tool axis and scaled (the path
+    then runs where every configuration reaches within the joint limits)."""
+    c, s = np.cos(np.radians(cell.turn_deg)), np.sin(np.radians(cell.turn_deg))
+    return cell.scale * (c * x - s * y), cell.scale * (s * x + c * y)
 
 
-def _gcode(folder, frame):
+def _gcode(folder, frame, cell):
     def xy(x, y, letters="XY"):
-        u, v = _turned(x, y)
-        return f"{letters[0]}{u:g} {letters[1]}{v:g}"
+        u, v = _turned(cell, x, y)
+        return f"{letters[0]}{u:.4f} {letters[1]}{v:.4f}"
 
     text = ["G21 G90 G17 G54", "G43.5 H1", f"G1 {xy(0, 0)} Z0 I0 J0 K1 F600", f"G1 {xy(250, 0)} Z0 I0 J0 K1",
-            f"G3 {xy(250, 60)} {xy(0, 30, 'IJ')}", f"G1 {xy(150, 60)} Z0 I0 J0 K1", f"G2 {xy(125, 85)} R25", f"G2 {xy(0, -25, 'IJ')}",
+            f"G3 {xy(250, 60)} {xy(0, 30, 'IJ')}", f"G1 {xy(150, 60)} Z0 I0 J0 K1", f"G2 {xy(125, 85)} R{25 * cell.scale:g}", f"G2 {xy(0, -25, 'IJ')}",
             f"G1 {xy(125, 120)} Z0 I0 J0 K1", "M30", ""]
     path = folder / "part.ngc"
     path.write_text("\n".join(text))
@@ -95,15 +131,15 @@ def _tool():
     return t
 
 
-def _base_points(frame, xy):
-    return (frame[:3, :3] @ np.array([[*_turned(x, y), 0.0] for x, y in xy]).T).T + frame[:3, 3]
+def _base_points(frame, cell, xy):
+    return (frame[:3, :3] @ np.array([[*_turned(cell, x, y), 0.0] for x, y in xy]).T).T + frame[:3, 3]
 
 
-def _krl(folder, frame, q_start):
+def _krl(folder, frame, cell, q_start):
     """PTP into the configuration, then the path as LIN / CIRC; the line's end is a
     $config.dat target, the half circle's end a .dat target."""
     a, b, c = matrix_to_abc(frame[None, :3, :3])[0]
-    p = _base_points(frame, [(0, 0), (250, 0), (280, 30), (250, 60), (150, 60), (132.322, 67.322), (125, 85), (125, 120)])
+    p = _base_points(frame, cell, [(0, 0), (250, 0), (280, 30), (250, 60), (150, 60), (132.322, 67.322), (125, 85), (125, 120)])
 
     def pose(v, ori=True):
         xyz = f"X {v[0]:.4f}, Y {v[1]:.4f}, Z {v[2]:.4f}"
@@ -120,9 +156,9 @@ def _krl(folder, frame, q_start):
     return folder / "part.src", {}
 
 
-def _rapid(folder, frame, q_start):
+def _rapid(folder, frame, cell, q_start):
     q = matrix_to_quat_wxyz(frame[None, :3, :3])[0]
-    p = _base_points(frame, [(0, 0), (250, 0), (280, 30), (250, 60), (150, 60), (132.322, 67.322), (125, 85), (125, 120)])
+    p = _base_points(frame, cell, [(0, 0), (250, 0), (280, 30), (250, 60), (150, 60), (132.322, 67.322), (125, 85), (125, 120)])
 
     def rt(v):
         return (f"[[{v[0]:.4f},{v[1]:.4f},{v[2]:.4f}],[{q[0]:.7f},{q[1]:.7f},{q[2]:.7f},{q[3]:.7f}],[0,0,0,0],"
@@ -213,8 +249,9 @@ def _distances(intended_tp, tcp):
 
 # ------------------------------------------------------------------ the tests
 
-def test_the_path_pose_has_four_configurations(robot):
-    assert len(_configurations(robot)) == 4
+@pytest.mark.parametrize("name", CELLS)
+def test_the_path_pose_has_the_configurations_named(name):
+    assert len(_configurations(CELLS[name])) == CELLS[name].configurations
 
 
 def _write_and_reparse(tp, new, folder):
@@ -226,9 +263,9 @@ def _write_and_reparse(tp, new, folder):
 
 
 @pytest.mark.parametrize("dialect", ["krl", "rapid", "gcode"])
-@pytest.mark.parametrize("config", range(4))
-def test_every_configuration_follows_the_intended_path(robot, truth_and_model, tmp_path, dialect, config):
-    row = _follow(robot, truth_and_model, tmp_path, dialect, config)
+@pytest.mark.parametrize("name, config", CASES)
+def test_every_configuration_follows_the_intended_path(fitted, tmp_path, name, dialect, config):
+    row = _follow(CELLS[name], fitted(name), tmp_path, dialect, config)
     rms, model_rms = row["after_rms_mm"], row["model_rms_mm"]
     assert row["before_rms_mm"] > 0.3  # the robot really is off the path before compensation
     assert rms <= max(0.05, 1.1 * model_rms + 0.005), row
@@ -238,13 +275,14 @@ def test_every_configuration_follows_the_intended_path(robot, truth_and_model, t
     assert (row["true_max_mm"] <= row["reported_mm"] + 3 * model_rms).all(), row
 
 
-def _follow(robot, truth_and_model, tmp_path, dialect, config) -> dict:
+def _follow(cell, truth_and_model, tmp_path, dialect, config) -> dict:
     """Compensate, write, re-parse and run one program on the true robot: the numbers."""
     truth, model = truth_and_model
-    q_start = _configurations(robot)[config]
-    frame = _work_frame(robot)
-    path, extra = {"krl": lambda: _krl(tmp_path, frame, q_start), "rapid": lambda: _rapid(tmp_path, frame, q_start),
-                   "gcode": lambda: _gcode(tmp_path, frame)}[dialect]()
+    robot = cell.robot
+    q_start = _configurations(cell)[config]
+    frame = _work_frame(cell)
+    path, extra = {"krl": lambda: _krl(tmp_path, frame, cell, q_start), "rapid": lambda: _rapid(tmp_path, frame, cell, q_start),
+                   "gcode": lambda: _gcode(tmp_path, frame, cell)}[dialect]()
     tp = parse_program(path)
     new, report = compensate(tp, model, start_joints=q_start if dialect == "gcode" else None, **extra)
     assert not report.failed.any(), report.failures()
@@ -266,12 +304,12 @@ if __name__ == "__main__":  # the numbers: .venv/bin/python tests/test_arcs_e2e.
     import tempfile
     from pathlib import Path
 
-    rob = kr160()
-    pair = truth_and_fit(rob, FRAME_AND_COMPLIANCE, seed=5, n=800, cv_folds=0, poses=lambda q, rng: _in_every_configuration(rob, q, rng))
-    print("dialect  configuration (deg)                          true RMS along the path before -> after (mm)  model error there (mm)  largest true / reported per motion (mm)")
-    for c in range(4):
-        for d in ("krl", "rapid", "gcode"):
-            with tempfile.TemporaryDirectory() as folder:
-                r = _follow(rob, pair, Path(folder), d, c)
-            print(f"{d:7s}  {str(r['configuration']):44s} {r['before_rms_mm']:.3f} -> {r['after_rms_mm']:.4f}{'':30s}{r['model_rms_mm']:.4f}"
-                  f"{'':16s}{r['true_max_mm'].max():.4f} / {np.nanmax(r['reported_mm']):.4f}")
+    print("robot  dialect  configuration (deg)                             true RMS along the path before -> after (mm)  model error there (mm)  largest true / reported per motion (mm)")
+    for name, cell in CELLS.items():
+        pair = _truth_and_model(cell)
+        for c in range(cell.configurations):
+            for d in ("krl", "rapid", "gcode"):
+                with tempfile.TemporaryDirectory() as folder:
+                    r = _follow(cell, pair, Path(folder), d, c)
+                print(f"{name:6s} {d:7s}  {str(r['configuration']):47s} {r['before_rms_mm']:.3f} -> {r['after_rms_mm']:.4f}{'':30s}"
+                      f"{r['model_rms_mm']:.4f}{'':16s}{r['true_max_mm'].max():.4f} / {np.nanmax(r['reported_mm']):.4f}")
