@@ -59,6 +59,9 @@ class Arcs:
     ccw: np.ndarray  # (M,) bool: G3
     full: np.ndarray  # (M,) bool: the end is the start in the plane
 
+    def take(self, idx) -> "Arcs":
+        return Arcs(self.rows[idx], self.axes[idx], self.start[idx], self.end[idx], self.centre[idx], self.ccw[idx], self.full[idx])
+
     def in_plane(self, p: np.ndarray) -> np.ndarray:
         """(M, ..., 2) in-plane coordinates of points (M, ..., 3)."""
         idx = self.axes[:, :2].reshape((len(self.rows),) + (1,) * (p.ndim - 2) + (2,))
@@ -221,23 +224,27 @@ class ArcFit:
         return replace(tp, values=values)
 
 
+CHUNK = 20_000  # arcs compensated at once (their interior points and samples): memory bounded
+
+
 def fit(problem, sol, tol_mm: float, max_iter: int, solve, progress=lambda msg: None) -> ArcFit:
     """Compensate the arcs of ``problem`` (compensate._Problem) given the solved targets
     ``sol`` (its cmd of full-circle ends is set to their start): new centres and words."""
     tp, rows_all = problem.tp, problem.rows
     arcs = geometry(tp)
-    if not len(arcs.rows):
-        return ArcFit(arcs.rows, np.zeros((0, 4)), np.zeros(0))
-    progress(f"compensating {len(arcs.rows)} arcs")
-    at = np.searchsorted(rows_all, arcs.rows)  # the arcs' ends among the Cartesian targets (their starts are at - 1)
-    cmd = sol.cmd
-    _close_full_circles(tp, arcs, at, cmd)
-    interior = _solve_interior(problem, arcs, at, tol_mm, max_iter, solve)
-    commanded = Arcs(arcs.rows, arcs.axes, _local(tp, arcs.rows, cmd[at - 1]), _local(tp, arcs.rows, cmd[at]), arcs.centre, arcs.ccw, arcs.full)
-    centre = _centre_through(commanded, np.stack([_local(tp, arcs.rows, interior[:, k]) for k in range(interior.shape[1])], axis=1))
-    commanded = Arcs(commanded.rows, commanded.axes, commanded.start, commanded.end, centre, commanded.ccw, commanded.full)
-    words = _words(tp, commanded)
-    return ArcFit(arcs.rows, words, _deviation(problem, sol, arcs, commanded, at))
+    words, deviation = np.zeros((len(arcs.rows), 4)), np.zeros(len(arcs.rows))
+    for lo in range(0, len(arcs.rows), CHUNK):
+        part = arcs.take(slice(lo, lo + CHUNK))
+        progress(f"compensating arcs {lo + 1}-{lo + len(part.rows)} of {len(arcs.rows)}")
+        at = np.searchsorted(rows_all, part.rows)  # the arcs' ends among the Cartesian targets (their starts are at - 1)
+        _close_full_circles(tp, part, at, sol.cmd)
+        interior = _solve_interior(problem, part, at, tol_mm, max_iter, solve)
+        commanded = Arcs(part.rows, part.axes, _local(tp, part.rows, sol.cmd[at - 1]), _local(tp, part.rows, sol.cmd[at]), part.centre, part.ccw, part.full)
+        centre = _centre_through(commanded, np.stack([_local(tp, part.rows, interior[:, k]) for k in range(interior.shape[1])], axis=1))
+        commanded = Arcs(commanded.rows, commanded.axes, commanded.start, commanded.end, centre, commanded.ccw, commanded.full)
+        words[lo : lo + CHUNK] = _words(tp, commanded)
+        deviation[lo : lo + CHUNK] = _deviation(problem, sol, part, commanded, at)
+    return ArcFit(arcs.rows, words, deviation)
 
 
 def _close_full_circles(tp: Toolpath, arcs: Arcs, at: np.ndarray, cmd: np.ndarray) -> None:

@@ -268,3 +268,13 @@ def test_inch_and_incremental_arcs_are_compensated(tmp_path, model, head, body):
     np.testing.assert_allclose(got.centre, want.centre, atol=2e-3)
     arc = report.path_mm[arcs.arc_rows(tp)]
     assert (arc[~got.full] < 0.05).all(), arc
+
+
+def test_arcs_in_chunks_give_the_same_program(tmp_path, model, monkeypatch):
+    """Long programs compensate their arcs CHUNK at a time (memory bounded): same words."""
+    tp = parse_program(_program(tmp_path, BODY))
+    kwargs = dict(frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
+    whole, _ = compensate(tp, model, **kwargs)
+    monkeypatch.setattr(arcs, "CHUNK", 2)
+    chunked, _ = compensate(tp, model, **kwargs)
+    np.testing.assert_array_equal(np.nan_to_num(chunked.values), np.nan_to_num(whole.values))
