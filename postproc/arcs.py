@@ -377,7 +377,12 @@ def _deviation(problem, sol, intended: Arcs, commanded: Arcs, at: np.ndarray) ->
     err, _, _ = interior.evaluate(interior.goal, np.ones(len(interior.goal), bool))
     actual = _local(tp, interior.rows, interior.goal + err).reshape(len(at), len(fractions), 3)
     dist = intended.distance(actual)
-    return np.where(np.isnan(dist).any(axis=1), np.inf, dist.max(axis=1))
+    lost = np.isnan(dist).any(axis=1)
+    if lost.any():
+        row = int(intended.rows[np.nonzero(lost)[0][0]])
+        raise InputError(_where(tp, row, I_) + "the controller's arc to the compensated end leaves the robot's reach or posture "
+                         "(no IK solution on the branch somewhere along it)")
+    return dist.max(axis=1)
 
 
 # ---------------------------------------------------------------- output

@@ -278,3 +278,10 @@ def test_arcs_in_chunks_give_the_same_program(tmp_path, model, monkeypatch):
     monkeypatch.setattr(arcs, "CHUNK", 2)
     chunked, _ = compensate(tp, model, **kwargs)
     np.testing.assert_array_equal(np.nan_to_num(chunked.values), np.nan_to_num(whole.values))
+
+
+def test_an_arc_leaving_the_reach_on_the_way_is_refused(tmp_path, model):
+    """Both ends within reach, the arc between them not: refused with the arc's position."""
+    body = "G1 X100 Y0 Z0 I0 J0 K1\nG3 X100 Y-1 I-1500 J-0.5\n"  # a 1.5 m radius, nearly full circle
+    with pytest.raises(InputError, match=r"arcs\.ngc:5:\d+: .*(reach|cannot be compensated)"):
+        compensate(parse_program(_program(tmp_path, body)), model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
