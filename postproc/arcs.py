@@ -365,6 +365,19 @@ def _radius_words(tp: Toolpath, arcs: Arcs, by_r: np.ndarray) -> np.ndarray:
     return radius
 
 
+def _refuse_singular_arcs(tp: Toolpath, rows: np.ndarray, q: np.ndarray, robot) -> None:
+    """The controller's arc may not pass near a wrist, elbow or shoulder singularity on the
+    posture it is driven in (postproc.posture.near_singular at its samples)."""
+    from .posture import near_singular
+
+    finite = ~np.isnan(q).any(axis=2)
+    near = np.zeros(finite.shape, bool)
+    near[finite] = near_singular(robot, q[finite])
+    if near.any():
+        row = int(rows[np.nonzero(near.any(axis=1))[0][0]])
+        raise InputError(_where(tp, row, I_) + "the controller's arc passes near a singularity on the robot's posture")
+
+
 def _deviation(problem, sol, intended: Arcs, commanded: Arcs, at: np.ndarray) -> np.ndarray:
     """(M,) largest predicted distance of the robot from the intended arc along the
     controller's commanded arc (SAMPLES interior points, on the arc end's posture)."""
@@ -374,9 +387,10 @@ def _deviation(problem, sol, intended: Arcs, commanded: Arcs, at: np.ndarray) ->
     interior = _Interior(problem, _interior_poses(problem, commanded, at, base, fractions), at)
     interior.q_ref = np.repeat(sol.q[at], len(fractions), axis=0)
     interior.branch_ref = np.repeat(sol.branch[at], len(fractions))
-    err, _, _ = interior.evaluate(interior.goal, np.ones(len(interior.goal), bool))
+    err, q, _ = interior.evaluate(interior.goal, np.ones(len(interior.goal), bool))
     actual = _local(tp, interior.rows, interior.goal + err).reshape(len(at), len(fractions), 3)
     dist = intended.distance(actual)
+    _refuse_singular_arcs(tp, intended.rows, q.reshape(len(at), len(fractions), 6), robot=problem.plant.robot)
     lost = np.isnan(dist).any(axis=1)
     if lost.any():
         row = int(intended.rows[np.nonzero(lost)[0][0]])

@@ -285,3 +285,13 @@ def test_an_arc_leaving_the_reach_on_the_way_is_refused(tmp_path, model):
     body = "G1 X100 Y0 Z0 I0 J0 K1\nG3 X100 Y-1 I-1500 J-0.5\n"  # a 1.5 m radius, nearly full circle
     with pytest.raises(InputError, match=r"arcs\.ngc:5:\d+: .*(reach|cannot be compensated)"):
         compensate(parse_program(_program(tmp_path, body)), model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
+
+
+def test_an_arc_through_a_wrist_singularity_is_refused(tmp_path, model):
+    """At its samples the arc's joints come within 2 deg of A5 = 0: refused with the arc's position."""
+    tp = parse_program(_program(tmp_path, "G1 X100 Y0 Z0 I0 J0 K1\nG2 X160 Y0 I30\n"))
+    q = np.tile(np.array([0.0, -60.0, 40.0, 30.0, 20.0, 0.0]), (1, 5, 1))
+    arcs._refuse_singular_arcs(tp, np.array([2]), q, model.robot)  # far from it: fine
+    q[0, 2, 4] = 0.5
+    with pytest.raises(InputError, match=r"arcs\.ngc:5:\d+: the controller's arc passes near a singularity"):
+        arcs._refuse_singular_arcs(tp, np.array([2]), q, model.robot)
