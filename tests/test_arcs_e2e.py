@@ -2,7 +2,7 @@
 
 The same workpiece path (a long straight line, circular arcs, a full circle) is written as
 a KRL program (PTP into the configuration, LIN, CIRC, one target in $config.dat and one in
-the .dat), a RAPID program (MoveAbsJ into it, ConfL\\Off, MoveL, MoveC) and a G-code program
+the .dat; SPTP / SLIN / SCIRC for the KR6), a RAPID program (MoveAbsJ into it, ConfL\\Off, MoveL, MoveC) and a G-code program
 for the robot (G43.5 tool axis, G1, G2/G3 with I J and R, a full circle; the start posture
 given as --start-joints would give it). Each is compensated, written, re-parsed, and run on
 the true robot by a controller written here: every commanded target and every sample of
@@ -46,6 +46,7 @@ class Cell:
     turn_deg: float
     scale: float
     configurations: int
+    poses: int  # measured poses of the fitted model
 
     @property
     def robot(self):
@@ -54,8 +55,8 @@ class Cell:
 
 # KR160: four of the eight configurations (the shoulder-flipped ones need A2 beyond its range);
 # KR6 R700 sixx: all eight, on a path of 0.4 times the size (its reach is 700 mm).
-CELLS = {"kr160": Cell("kr160_r1570", (-104.0, -6.0, 53.0, 161.0, -59.0, 169.0), -90.0, 1.0, 4),
-         "kr6": Cell("kr6_r700_sixx", (-104.9, -170.8, 116.0, 133.7, 90.4, -19.7), 180.0, 0.4, 8)}
+CELLS = {"kr160": Cell("kr160_r1570", (-104.0, -6.0, 53.0, 161.0, -59.0, 169.0), -90.0, 1.0, 4, 800),
+         "kr6": Cell("kr6_r700_sixx", (-104.9, -170.8, 116.0, 133.7, 90.4, -19.7), 180.0, 0.4, 8, 400)}
 CASES = [(name, config) for name, cell in CELLS.items() for config in range(cell.configurations)]
 SAMPLES = np.linspace(0.0, 1.0, 10)[1:]  # interior samples and the end of every motion
 # The path in the tool plane of the first pose (mm): a 250 mm line, a half circle, a line
@@ -65,7 +66,7 @@ LINE = [(0.0, 0.0), (250.0, 0.0)]
 
 @pytest.fixture(scope="module")
 def fitted():
-    """Per cell, lazily: a true robot and a model of the same effects fitted to 800 poses in
+    """Per cell, lazily: a true robot and a model of the same effects fitted to poses in
     every configuration."""
     cache = {}
 
@@ -80,7 +81,7 @@ def fitted():
 def _truth_and_model(cell):
     robot = cell.robot
     region = None if cell.robot_name == "kr160_r1570" else JointBox()  # the default cylinder is a KR160's workspace
-    return truth_and_fit(robot, FRAME_AND_COMPLIANCE, seed=5, n=800, cv_folds=0, region=region,
+    return truth_and_fit(robot, FRAME_AND_COMPLIANCE, seed=5, n=cell.poses, cv_folds=0, region=region,
                          poses=lambda q, rng: _in_every_configuration(robot, q, rng))
 
 
@@ -145,10 +146,12 @@ def _krl(folder, frame, cell, q_start):
         xyz = f"X {v[0]:.4f}, Y {v[1]:.4f}, Z {v[2]:.4f}"
         return "{" + xyz + (f", A {a:.5f}, B {b:.5f}, C {c:.5f}" if ori else "") + "}"
 
+    # The KR6 program is written for KSS 8's spline motions (SPTP / SLIN / SCIRC: the same rules).
+    ptp, lin, circ = ("SPTP", "SLIN", "SCIRC") if cell.robot_name == "kr6_r700_sixx" else ("PTP", "LIN", "CIRC")
     src = ["DEF part( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",
-           "PTP {" + ", ".join(f"A{i + 1} {v:.4f}" for i, v in enumerate(q_start)) + "}",
-           f"LIN {pose(p[0])}", "LIN XPLONG", f"CIRC {pose(p[2], False)}, XPHALF", f"LIN {pose(p[4])}",
-           f"CIRC {pose(p[5], False)}, {pose(p[6])}", f"LIN {pose(p[7])}", "END"]
+           f"{ptp} {{" + ", ".join(f"A{i + 1} {v:.4f}" for i, v in enumerate(q_start)) + "}",
+           f"{lin} {pose(p[0])}", f"{lin} XPLONG", f"{circ} {pose(p[2], False)}, XPHALF", f"{lin} {pose(p[4])}",
+           f"{circ} {pose(p[5], False)}, {pose(p[6])}", f"{lin} {pose(p[7])}", "END"]
     dat = ["DEFDAT part", f"DECL E6POS XPHALF={pose(p[3]).replace(', ', ',')}", "ENDDAT"]
     cfg = ["DEFDAT $CONFIG", f"DECL GLOBAL E6POS XPLONG={pose(p[1])}", "ENDDAT"]
     for name, lines in (("part.src", src), ("part.dat", dat), ("$config.dat", cfg)):
