@@ -167,7 +167,7 @@ def _rapid(folder, frame, cell, q_start):
         return (f"[[{v[0]:.4f},{v[1]:.4f},{v[2]:.4f}],[{q[0]:.7f},{q[1]:.7f},{q[2]:.7f},{q[3]:.7f}],[0,0,0,0],"
                 "[9E9,9E9,9E9,9E9,9E9,9E9]]")
 
-    tool = f"tSpindle"
+    tool = "tSpindle"
     lines = ["MODULE Part", f"  PERS tooldata {tool} := [TRUE,[[0,0,{TOOL[2]:g}],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];",
              "  PROC main()", "    MoveAbsJ [[" + ",".join(f"{v:.4f}" for v in q_start) + "],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tool0;",
              "    ConfL\\Off;", f"    MoveL {rt(p[0])}, v100, fine, {tool};", f"    MoveL {rt(p[1])}, v100, z1, {tool};",
