@@ -643,6 +643,9 @@ def compensate_cmd(
                               force_per_target=_cut_forces(cut, tp, frame, tool), max_deviation_mm=max_deviation,
                               progress=lambda m: bar.update(task, description=m))
     summary = rep.summary()
+    from .arcs import summary as arc_summary
+
+    summary["arcs"] = arc_summary(tp, rep.path_mm)
     if report is not None:
         _write_point_report(report, rep, summary)
     failures = rep.failures()
@@ -666,8 +669,16 @@ def compensate_cmd(
         log.print(f"between targets ({pth['segments']} straight or circular segments, controller interpolation, model prediction): "
                   f"largest distance from the intended path {pth['max_mm']:.4f} mm, on the segment into line {pth['line']}; "
                   f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
+    _print_arc_deviation(summary["arcs"], log)
     for note in new.notes:
         log.print(f"note: {note}")
+
+
+def _print_arc_deviation(arcs: dict | None, log) -> None:
+    """The circular motions' largest predicted distance from the intended arc (issue 13: the mid-arc deviation)."""
+    if arcs is not None:
+        log.print(f"circular motions ({arcs['arcs']}, CIRC / MoveC / G2 / G3): largest predicted distance from the intended arc "
+                  f"{arcs['max_mm']:.4f} mm, on the arc into line {arcs['line']}")
 
 
 def _cut_forces(cut: Optional[Path], tp, frame, tool):
@@ -796,6 +807,9 @@ def inspect_cmd(
         return None if v is None or not np.isfinite(v) else round(float(v), 6)
 
     placed = tp.placed()
+    from .arcs import describe
+
+    arc_of = describe(tp)  # G2/G3: plane, direction, centre, radius
     moves = []
     for i in range(len(tp)):
         entry = {
@@ -816,6 +830,8 @@ def inspect_cmd(
             entry["ext"] = [num(v) for v in tp.ext[i]]
         if not np.isnan(tp.conf[i]).all():
             entry["conf"] = [num(v) for v in tp.conf[i]]
+        if i in arc_of:
+            entry["arc"] = arc_of[i]
         entry["speed"] = num(tp.speed[i])
         entry["zone"] = num(tp.zone[i])
         moves.append(entry)

@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import dialects, posture, segments
+from . import arcs, dialects, posture, segments
 from . import kinematics as kin
 from .effects import consumers_of
 from .errormodel import ErrorModel
@@ -217,7 +217,7 @@ def compensate(
     if force_n is not None and force_per_target is not None:
         raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
     _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
-    _refuse_arcs(tp)
+    arcs.refuse_uncompensable(tp)
     written = tp
     if frames or tools:
         tp = tp.with_frames(frames, tools)
@@ -226,11 +226,13 @@ def compensate(
     progress("predicting the program as written")
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
+    arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
     report = _report(problem, before, solution)
     progress("predicting the path between targets")
-    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, _path_deviation(problem, solution), float),
-                     path_limit_mm=max_deviation_mm)
-    out = written.with_positions(problem.positions_for(solution.cmd))
+    path = _path_deviation(problem, solution)
+    arc_fit.put_deviation(path, problem.rows)
+    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm)
+    out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
     if problem.notes:
         out = replace(out, notes=out.notes + tuple(problem.notes))
     return out, report
@@ -254,15 +256,6 @@ def _require_process_inputs(model: ErrorModel, temp_c, force_n) -> None:
     """An effect that needs a process input (temperature, force) may not run without it,
     and an input no effect of the model consumes is an error, not a no-op."""
     check_inputs(model, {"temp": temp_c, "force": force_n})
-
-
-def _refuse_arcs(tp: Toolpath) -> None:
-    arcs = np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW))
-    if arcs.any():
-        # Moving an arc's end points without its centre would change its radius (LinuxCNC,
-        # for one, rejects such an arc): refuse rather than write a program that may not run.
-        lines = ", ".join(str(v) for v in tp.line[arcs][:10])
-        raise InputError(f"G2/G3 arcs on lines {lines}: arc centres are not compensated yet; linearise the arcs (or use R-format moves) first")
 
 
 def _refuse_unplaced(tp: Toolpath) -> None:

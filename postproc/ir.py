@@ -40,11 +40,12 @@ class Kind(IntEnum):
     ARC_CCW = 7  # G3
 
 
-FIELDS = ("x", "y", "z", "o1", "o2", "o3", "o4", "j1", "j2", "j3", "j4", "j5", "j6", "e1", "e2", "e3", "e4", "e5", "e6")
+FIELDS = ("x", "y", "z", "o1", "o2", "o3", "o4", "j1", "j2", "j3", "j4", "j5", "j6", "e1", "e2", "e3", "e4", "e5", "e6", "i", "j", "k", "r")
 F_POS = slice(0, 3)
 F_ORI = slice(3, 7)
 F_JOINT = slice(7, 13)
 F_EXT = slice(13, 19)
+F_ARC = slice(19, 23)  # G-code arc words I J K (mm, as the text gives them: see postproc.arcs) and R
 NF = len(FIELDS)
 
 
@@ -96,9 +97,13 @@ class Toolpath:
     frame_known: np.ndarray = field(repr=False, default=None)  # (F,) False where the program does not define the frame
     tool_known: np.ndarray = field(repr=False, default=None)  # (T,) False where the program does not define the tool
     notes: tuple[str, ...] = ()
+    # (N, 3) G-code arcs (ARC_CW / ARC_CCW rows): plane (17, 18, 19), IJK absolute (1: G90.1) or
+    # incremental from the start (0: G91.1), full turns P (1 when absent); NaN on other rows.
+    # None when the program has no G2/G3 (see postproc.arcs).
+    arc: np.ndarray | None = field(repr=False, default=None)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

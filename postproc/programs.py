@@ -82,6 +82,9 @@ def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: 
             f"{original.sources[int(original.file[i])].path}, line {original.line[i]}: the new text reads back as "
             f"{np.round(back.position[i], 4).tolist()}, not the compensated {np.round(modified.position[i], 4).tolist()}; nothing was written"
         )
+    from .arcs import check_words
+
+    check_words(original, modified, back, rows)  # G2/G3 centre words as compensated
 
 
 def write_set(files: dict[Path, str], backup: bool = False) -> None:

@@ -240,8 +240,9 @@ def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
         compensate(parse_program(rapid_program(tmp_path)), thermal)
 
 
-def test_gcode_arcs_are_refused_not_silently_broken(truth_and_model):
+def test_three_axis_gcode_arcs_are_refused_not_silently_broken(truth_and_model):
+    """G2/G3 are compensated (tests/test_arcs.py); a 3-axis program has no tool orientation for a robot."""
     _, model = truth_and_model
     tp = parse_program(Path(__file__).parent / "corpus" / "gcode" / "arcs_ijk.ngc")
-    with pytest.raises(InputError, match="arc centres are not compensated"):
-        compensate(tp, model)
+    with pytest.raises(InputError, match="cannot be placed|need one"):
+        compensate(tp, model, frames={"G54": np.eye(4)} if "G54" in tp.frame_names else None)

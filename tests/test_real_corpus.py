@@ -89,8 +89,6 @@ RS274_XFAIL = {
     "gcode/LinuxCNC_linuxcnc__hole-circle.ngc": "refused by the parser: polar `^60` with G81 L6 repeats (hole-circle.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__offsets.ngc": "refused by the parser: `o10 do` / `o10 while` (offsets.ngc:5-12)",
     "gcode/LinuxCNC_linuxcnc__polar.ngc": "refused by the parser: polar `^120` (polar.ngc:10)",
-    "gcode/LinuxCNC_linuxcnc__3dtest.ngc": "full circles without an end point `g02 i.5 j.5` are dropped from the IR, exit 0 (3dtest.ngc:6, :23, :39)",
-    "gcode/LinuxCNC_linuxcnc__gmoccapy_2_tools_with_cutter_radius_compensation.ngc": "full circles `G3 I -20` / `G3 I-15` dropped from the IR (gmoccapy...ngc:42, :82)",
     "gcode/pcb2gcode_pcb2gcode__D1MiniGSR_drill.ngc": "G81 canned-cycle blocks and their modal continuation are missing from the IR: no hole is a target (drill.ngc:24-27); rs274 makes 65 moves, the IR 5",
     "gcode/LinuxCNC_linuxcnc__daisy.ngc": "`O100 call` / `O200 call [..]` with arguments not unrolled: sub bodies listed once, unresolved (daisy.ngc:83-93); rs274 52 moves, IR 3 targets",
     "gcode/LinuxCNC_linuxcnc__flowsnake.ngc": "recursive `o1000 call` not unrolled (flowsnake.ngc); rs274 3076 moves, IR 4 targets",

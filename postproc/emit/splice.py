@@ -13,12 +13,12 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import EmitError
-from ..ir import F_POS, FIELDS, Toolpath
+from ..ir import F_ARC, F_POS, FIELDS, Toolpath
 from . import number_kernel
 
 # Largest rounding error accepted when writing a field (mm for positions, degrees for
 # angles, unit quaternion components).
-TOLERANCE = np.array([5e-4] * 3 + [5e-7] * 4 + [5e-5] * 6 + [5e-4] * 6)
+TOLERANCE = np.array([5e-4] * 3 + [5e-7] * 4 + [5e-5] * 6 + [5e-4] * 6 + [5e-4] * 4)
 MAX_DECIMALS = 9
 
 
@@ -149,6 +149,7 @@ def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[st
     job.refuse_expressions()
     missing = job.missing_components(insert_field)
     job.increments_and_inserts(missing, insert_field)
+    job.arc_word_inserts(insert_field)
     _check_shared(original, modified, job.edited_keys())
     return [job.file_text(file) for file in range(len(original.sources))]
 
@@ -172,7 +173,10 @@ class _Splice:
         original, modified, spans = self.original, self.modified, self.spans
         new = _text_values(modified, original)
         old = _text_values(original, original)
-        changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~original.relative[:, None] & ~self.derived()
+        # An incremental (G91) target's position numbers are written in increments_and_inserts;
+        # its arc words (I J K relative to the arc's start, or R) are plain numbers.
+        incremental = original.relative[:, None] & (np.arange(len(FIELDS)) < F_ARC.start)[None, :]
+        changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~incremental & ~self.derived()
         rows, fields = np.nonzero(changed)
         if not len(rows):
             return
@@ -271,6 +275,22 @@ class _Splice:
                     self.written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
         for (file, offset), pieces in inserts.items():
             self.edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
+
+    def arc_word_inserts(self, insert_field) -> None:
+        """Arc words (I J K R) the compensation gives a value where the text has none (an
+        omitted J reads as 0): added at the target's insertion point, after its axis words."""
+        original, modified = self.original, self.modified
+        new = modified.values[:, F_ARC]
+        lacking = ~np.isnan(new) & np.isnan(original.values[:, F_ARC]) & (self.spans[:, F_ARC, 1] < 0) & (new != 0.0)
+        for r, k in zip(*np.nonzero(lacking)):
+            f = F_ARC.start + int(k)
+            file, offset = (int(v) for v in original.insert_at[r]) if original.insert_at is not None else (-1, -1)
+            text = format_like("0.0000", float(new[r, k] / original.scale[r, f]), self.tol(r, f))
+            piece = insert_field(file, FIELDS[f], text) if insert_field is not None and offset >= 0 else None
+            if piece is None:
+                raise EmitError(f"line {original.line[r]}: cannot add the arc word {FIELDS[f].upper()} to this block")
+            end, before, _, _ = self.edits.get((file, offset), (offset, "", -1, -1))
+            self.edits[(file, offset)] = (end, before + piece, -1, -1)
 
     def _increment(self, r: int, f: int, prev_written, prev_original) -> None:
         scale = self.original.scale[r, f]

@@ -165,6 +165,7 @@ class Builder:
             tool_known=np.array(self.tool_known, dtype=bool),
             offset=cols["offset"],
             offset_span=cols["offset_span"],
+            arc=cols["arc"],
             notes=tuple(self.notes),
         )
 
@@ -176,7 +177,7 @@ class Builder:
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
-            if key in ("offset", "offset_span") and not any(key in b for b in self.blocks):
+            if key in ("offset", "offset_span", "arc") and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             shape = _COLUMN_SHAPES.get(key, ())
@@ -225,8 +226,9 @@ _COLUMN_DEFAULTS = {
     "insert_at": (np.int64, -1),
     "offset": (float, 0.0),
     "offset_span": (np.int64, -1),
+    "arc": (float, np.nan),
 }
-_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
+_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,)}
 
 
 __all__ = ["FIELDS", "Builder", "Kind", "LineIndex", "Numbers", "scan_numbers"]

@@ -23,6 +23,7 @@ from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
+from . import arcwords
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -47,6 +48,7 @@ _STATE_OF_G = {
     **{g: ("units", g) for g in (20.0, 21.0)},
     **{g: ("dist", g) for g in (90.0, 91.0)},
     **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
+    **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
     **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
 }
@@ -100,7 +102,7 @@ class GcodeParser:
             spans[row[keep], code[keep], 0] = starts[keep]
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
             nan = np.full(nb, np.nan)
-            block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
+            block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, ijk=nan, wcs=nan,
                          nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan)
         else:
             block = None
@@ -119,7 +121,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist():
@@ -141,7 +143,7 @@ class GcodeParser:
             "code_end": np.array(out["code_end"], dtype=np.int64),
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")},
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -200,7 +202,7 @@ class GcodeParser:
         """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h")}
         ok = True
         gcodes: list[float] = []
         for item in tree.children:
@@ -324,7 +326,9 @@ class GcodeParser:
         linear_scale = np.where(units == 20.0, 25.4, 1.0)
         values = t["values"]
         has_axis = ~np.isnan(values[:, :6]).all(axis=1)
-        moves = has_axis & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
+        arc_motion = np.isin(motion, (2.0, 3.0))
+        circle = arcwords.full_circles(t, arc_motion & ~has_axis & ~t["nonmotion"] & (canned == 0.0), self._error_at)
+        moves = (has_axis | circle) & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
         absolute = _absolute_positions(values, moves | t["g53"], dist, linear_scale)
         rows = np.nonzero(moves)[0]
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
@@ -336,7 +340,10 @@ class GcodeParser:
             frame_idx[g53] = self.builder.frame_index("machine", np.eye(4), True)
         tlo = _ffill(t["tlo"], 49.0)
         tool_idx = self._tool_lengths(t, rows, tlo)
-        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans)
+        arc = arcwords.arc_words(t, rows, arc_motion[rows], _ffill(t["plane"], 17.0)[rows], _ffill(t["ijk"], 91.1)[rows],
+                                 linear_scale[rows], ir_values, ir_spans, scale, self.text, self._error_at)
+        # Under G43.5, I J K of a G2/G3 block are its centre: the tool axis stays (arcwords.carry_tool_axis).
+        axis_rows = _tool_axes(t, rows, np.where(arc_motion, 49.0, tlo), ir_values, ir_spans)
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
         self.builder.notes.extend(self.notes)
@@ -356,8 +363,14 @@ class GcodeParser:
             speed=_ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
+            **({"arc": arc} if arc is not None else {}),
         )
-        return _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
+        tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
+        return arcwords.carry_tool_axis(tp, arc_motion[rows] & (tlo[rows] == 43.5))
+
+    def _error_at(self, offset: int, message: str):
+        """A ParseError at a character offset of the program (file:line:column)."""
+        return self.lines.error(self.doc.path, int(offset), message)
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
         """Frame index of each target: its work offset as set by G10 in the program before it;
