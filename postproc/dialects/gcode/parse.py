@@ -23,6 +23,7 @@ from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
+from . import flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -66,9 +67,13 @@ class GcodeParser:
         self.notes: list[str] = []
         self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
         self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
+        self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
+        self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
 
     def parse(self) -> Toolpath:
         text = self.text
+        if flow.needs_flow(text):
+            return self._parse_flow()
         raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
         # RE_BULK accepts any G number (so that line shapes decide a match); only G0-G3
         # (G00-G03) blocks are bulk motion, the others go to the grammar.
@@ -116,20 +121,36 @@ class GcodeParser:
         table = {k: v[order] for k, v in table.items()}
         return self._resolve(table)
 
+    def _parse_flow(self) -> Toolpath:
+        """Programs with O-word control flow or M98: blocks read in execution order (flow.py)."""
+        runner = flow.Runner(self)
+        table = self._slow(None, runner.run())
+        if not len(table["offset"]):
+            return self.builder.build()
+        table["seq"] = np.arange(len(table["offset"]))
+        if runner.tainted_from is not None:
+            table["ok"][runner.tainted_from :] = False
+        return self._resolve(table)
+
+    def _when(self, start: int) -> int:
+        """Time of an event (G10, G68.2) in the block table's order: its offset, or its execution index."""
+        return start if self.clock is None else self.clock
+
     # ------------------------------------------------------------- slow path
-    def _slow(self, skip: np.ndarray) -> dict:
+    def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
         g = grammar("gcode")
         out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         stack: list[tuple[str, int]] = []
         text = self.text
-        for start in self.lines.starts[~skip].tolist():
+        for start in self.lines.starts[~skip].tolist() if starts is None else starts:
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             line = text[start:end].rstrip("\r")
             stripped = line.strip()
             if not stripped or stripped == "%":
                 continue
-            tree = parse_statement(g, line, self.lines, self.doc.path, start, "G-code block")
+            tree = self.trees.get(start) if self.trees else None
+            tree = tree or parse_statement(g, line, self.lines, self.doc.path, start, "G-code block")
             self._block(tree, start, out, stack)
             out["code_end"].append(start + len(_code_part(line)))
         if stack:
@@ -282,10 +303,10 @@ class GcodeParser:
                 nonmotion = True
                 self._tilt(values, start)
             elif gc == 69.0:
-                self.tilts.append((start, None))
+                self.tilts.append((self._when(start), None))
             elif gc in (68.0, 68.3, 68.4):
                 self.notes.append(f"line {self.lines.line(start)}: G{gc:g} coordinate rotation is not evaluated; later targets are flagged")
-                self.tilts.append((start, "unknown"))
+                self.tilts.append((self._when(start), "unknown"))
             elif gc in _NONMOTION:
                 nonmotion = True
                 if gc == 10.0:
@@ -300,11 +321,11 @@ class GcodeParser:
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         if p and p.group(1) != "0":
             self.notes.append(f"line {self.lines.line(start)}: G68.2 P{p.group(1)} is not evaluated (only P0, Euler ZXZ); later targets are flagged")
-            self.tilts.append((start, "unknown"))
+            self.tilts.append((self._when(start), "unknown"))
             return
         v = np.nan_to_num(values)
         rot = rot_z(np.radians(v[_AX["I"]])) @ rot_x(np.radians(v[_AX["J"]])) @ rot_z(np.radians(v[_AX["K"]]))
-        self.tilts.append((start, make_transform(rot, v[:3])))
+        self.tilts.append((self._when(start), make_transform(rot, v[:3])))
 
     def _g10(self, values, start) -> None:
         """G10 L2/L20 Pn X Y Z: a work offset set in the program (recorded as an event)."""
@@ -312,7 +333,7 @@ class GcodeParser:
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         lcode = re.search(r"[Ll][ \t]*(\d+)", line)
         if p and lcode and lcode.group(1) in ("2", "20"):
-            self.g10.append((start, int(p.group(1)), np.nan_to_num(values[:3])))
+            self.g10.append((self._when(start), int(p.group(1)), np.nan_to_num(values[:3])))
 
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
@@ -343,7 +364,7 @@ class GcodeParser:
         offsets = t["offset"][rows]
         m = len(rows)
         self.builder.add_block(
-            offsets,
+            t["seq"][rows] if "seq" in t else offsets,  # flow.py: execution order
             kind=_MOTION_KIND_CODES[motion[rows].astype(int)],
             line=self.lines.line(offsets),
             values=ir_values,
@@ -373,7 +394,7 @@ class GcodeParser:
                 frame_idx[sel] = self.builder.frame_index(name, None)
                 unknown.append(name)
                 continue
-            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
+            at = np.searchsorted(np.array([o for o, _ in events]), t.get("seq", t["offset"])[rows][sel], side="right") - 1
             ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
             frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
         if unknown:
@@ -386,7 +407,7 @@ class GcodeParser:
         if not self.tilts:
             return
         offs = np.array([o for o, _ in self.tilts])
-        at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
+        at = np.searchsorted(offs, t.get("seq", t["offset"])[rows], side="right") - 1
         for k in np.unique(at[at >= 0]):
             tilt = self.tilts[k][1]
             sel = at == k

@@ -1,0 +1,430 @@
+"""G-code control flow, executed as LinuxCNC's interpreter executes it.
+
+O-word subroutines (``o<name> sub`` / ``call [args]`` / ``return [value]`` / ``endsub``),
+``if/elseif/else``, ``while``, ``do ... while``, ``repeat``, ``break``/``continue`` and Fanuc
+``M98 P.. L..`` calls of ``O<n> ... M99``: the program is walked with a program counter and
+every executed block is handed, in execution order, to the parser's block reader, which
+evaluates its # parameters at that moment. A text span executed several times (a loop body,
+a sub) thus gives several IR rows that share spans.
+
+Parameter scopes follow LinuxCNC (docs "O Codes", "Parameters"): a ``call`` opens a new
+scope where #1..#30 are the call's arguments (0 where not given) and named parameters
+without a leading underscore are local; ``#<_name>`` and #31 and up are global; ``return
+[e]`` / ``endsub [e]`` set ``#<_value>`` and ``#<_value_returned>``. ``M98`` shares the
+caller's parameters (Fanuc).
+
+A decision the program text cannot make (a condition or count reading a parameter that is
+unknown at post time: ``#<_hal[...]>``, an unset ``#5220``) is never guessed: from that block
+on, every target is flagged unresolved, every loop body runs once and every if-branch is
+listed once, so each target is still reported with its line.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from lark import Tree
+
+from ...parse.common import parse_statement
+from ...parse.grammar import grammar
+
+# Executed blocks (lines) before the program is refused: bounds time and memory of a
+# `while [1]` (one IR row is ~1 kB while the block table is built).
+MAX_EXECUTED_BLOCKS = 1_000_000
+MAX_CALL_DEPTH = 100  # nested calls (LinuxCNC's own limit is lower); deeper is refused
+
+_FLOW = re.compile(r"(?im)^[ \t]*(?:/[ \t]*)?(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b|[Mm][ \t]*9[89](?!\d)")
+_OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
+_LOOPS = ("while", "do", "repeat")
+
+
+def needs_flow(text: str) -> bool:
+    """True where the program has O-word control flow or Fanuc M98/M99 calls."""
+    return _FLOW.search(text) is not None
+
+
+class Params:
+    """# parameters with LinuxCNC's scopes: a dict-like view the block reader uses unchanged."""
+
+    def __init__(self):
+        self.globals: dict = {}
+        self.frames: list[dict] = [{}]
+
+    def _where(self, key) -> dict:
+        if isinstance(key, int):
+            return self.frames[-1] if 1 <= key <= 30 else self.globals
+        return self.globals if key.startswith("_") else self.frames[-1]
+
+    @staticmethod
+    def _norm(key):
+        return re.sub(r"\s+", "", key).lower() if isinstance(key, str) else key
+
+    def __contains__(self, key) -> bool:
+        key = self._norm(key)
+        return key in self._where(key)
+
+    def __getitem__(self, key):
+        key = self._norm(key)
+        return self._where(key)[key]
+
+    def __setitem__(self, key, value) -> None:
+        key = self._norm(key)
+        self._where(key)[key] = value
+
+    def pop(self, key, default=None):
+        key = self._norm(key)
+        return self._where(key).pop(key, default) if key is not None else default
+
+
+@dataclass
+class Line:
+    start: int
+    tree: Tree
+    label: str = ""  # O-word label, lower case, blanks removed ('' for a plain block)
+    keyword: str = ""  # sub, call, if, ... ('' for a plain block or a Fanuc program number)
+    args: list = field(default_factory=list)  # the O-word's expressions
+    m: set = field(default_factory=set)  # M codes of a plain block
+    words: dict = field(default_factory=dict)  # literal P and L of a plain block
+
+
+@dataclass
+class Frame:
+    return_to: int  # line index to continue at after the call
+    sub: str  # label ('' for the main program), or 'O<n>' of a Fanuc M98 call
+    counters: dict = field(default_factory=dict)  # repeat line -> passes left
+    passes_left: int = 0  # Fanuc M98 L: further passes of the sub
+    entry: int = 0  # first line of the sub (Fanuc M98 repeats)
+
+
+class Structure:
+    """The static shape of the program: matching O-word lines, subs, Fanuc program numbers."""
+
+    def __init__(self, lines: list[Line], error):
+        self.partner: dict[int, int] = {}  # opening line <-> closing line
+        self.clauses: dict[int, list[int]] = {}  # if line -> its elseif/else lines and endif
+        self.endif_of: dict[int, int] = {}  # elseif/else line -> endif line
+        self.loop_of: dict[int, int] = {}  # break/continue line -> opening line of its loop
+        self.subs: dict[str, int] = {}
+        self.fanuc: dict[str, int] = {}  # Fanuc program number 'O1' -> its line
+        stack: list[tuple[str, str, int]] = []
+        for i, ln in enumerate(lines):
+            kw, label = ln.keyword, ln.label
+            if not label:
+                continue
+            if not kw:
+                self.fanuc[label] = i
+            elif kw == "while" and stack and stack[-1][:2] == (label, "do"):
+                self._close(stack, i, lines)
+            elif kw in _OPENS:
+                if kw == "sub":
+                    self.subs[label] = i
+                if kw == "if":
+                    self.clauses[i] = []
+                stack.append((label, kw, i))
+            elif kw in ("elseif", "else"):
+                if not stack or stack[-1][:2] != (label, "if"):
+                    raise error(ln.start, f"o{label} {kw} is not inside o{label} if")
+                self.clauses[stack[-1][2]].append(i)
+            elif kw in ("endsub", "endif", "endwhile", "endrepeat"):
+                if not stack or _OPENS[stack[-1][1]] != kw or stack[-1][0] != label:
+                    raise error(ln.start, f"o{label} {kw} does not close the open O-word block ({self._open_name(stack)})")
+                self._close(stack, i, lines)
+            elif kw in ("break", "continue"):
+                loop = next((o for lab, k, o in reversed(stack) if lab == label and k in _LOOPS), None)
+                if loop is None:
+                    raise error(ln.start, f"o{label} {kw} is not inside an o{label} loop")
+                self.loop_of[i] = loop
+        if stack:
+            label, kw, where = stack[-1]
+            raise error(lines[where].start, f"O-word block opened here is never closed (missing o{label} {_OPENS[kw]})")
+
+    @staticmethod
+    def _open_name(stack) -> str:
+        return f"o{stack[-1][0]} {stack[-1][1]}" if stack else "none open"
+
+    def _close(self, stack, i: int, lines: list[Line]) -> None:
+        _, kw, opened = stack.pop()
+        self.partner[opened], self.partner[i] = i, opened
+        if kw == "if":
+            self.clauses[opened].append(i)
+            for c in self.clauses[opened][:-1]:
+                self.endif_of[c] = i
+
+
+class _Refused(Exception):
+    pass
+
+
+class Runner:
+    """Walks the program and yields the start offset of each executed block, in order.
+
+    The parser reads each yielded block before the next is asked for, so conditions see the
+    parameters as the blocks before them left them."""
+
+    def __init__(self, parser):
+        self.parser = parser
+        parser.params = Params()
+        self.lines = self._read_lines()
+        parser.trees = {ln.start: ln.tree for ln in self.lines}
+        self.shape = Structure(self.lines, self._error)
+        self.tainted_from: int | None = None  # first row whose position depends on a guess: none are made
+        self.rows = 0
+
+    # ------------------------------------------------------------ reading
+    def _error(self, offset: int, message: str):
+        return self.parser.lines.error(self.parser.doc.path, offset, message)
+
+    def _read_lines(self) -> list[Line]:
+        g, text, p = grammar("gcode"), self.parser.text, self.parser
+        out = []
+        for start in p.lines.starts.tolist():
+            end = text.find("\n", start)
+            line = text[start : len(text) if end < 0 else end].rstrip("\r")
+            if not line.strip() or line.strip() == "%":
+                continue
+            tree = parse_statement(g, line, p.lines, p.doc.path, start, "G-code block")
+            out.append(self._classify(Line(start, tree)))
+        return out
+
+    def _classify(self, ln: Line) -> Line:
+        for item in ln.tree.children:
+            if not isinstance(item, Tree):
+                continue
+            if item.data == "oword":
+                ln.label = re.sub(r"\s+", "", str(item.children[0])[1:].lower()).strip("<>")
+                if len(item.children) > 1:
+                    ln.keyword = str(item.children[1]).lower()
+                    ln.args = list(item.children[2:])
+            elif item.data == "word":
+                letter = str(item.children[0]).upper()
+                value = _literal(item.children[1])
+                if letter == "M" and value is not None:
+                    ln.m.add(round(value, 1))
+                elif letter in "PL" and value is not None:
+                    ln.words[letter] = value
+        if ln.keyword and any(isinstance(i, Tree) and i.data == "word" for i in ln.tree.children):
+            raise self._error(ln.start, f"o{ln.label} {ln.keyword}: an O-word line takes no other words")
+        return ln
+
+    # ------------------------------------------------------------ running
+    def run(self):
+        """Generator of executed block offsets (the parser's clock is set before each)."""
+        frames = [Frame(len(self.lines), "")]
+        pc, executed = 0, 0
+        while pc < len(self.lines):
+            executed += 1
+            if executed > MAX_EXECUTED_BLOCKS:
+                raise self._error(self.lines[pc].start, f"more than {MAX_EXECUTED_BLOCKS:,} blocks executed: a loop that does not end at post time is refused")
+            ln = self.lines[pc]
+            if ln.keyword:
+                pc = self._oword(pc, ln, frames)
+                continue
+            if ln.label and not ln.keyword:  # a Fanuc program number: its body runs only when called
+                pc = self._skip_fanuc(pc) if len(frames) == 1 else pc + 1
+                continue
+            self.parser.clock = self.rows
+            self.rows += 1
+            yield ln.start
+            if ln.m & {2.0, 30.0}:
+                return
+            pc = self._m98_m99(pc, ln, frames)
+
+    def _skip_fanuc(self, pc: int) -> int:
+        """Main-program flow reaching `O1`: LinuxCNC skips the Fanuc sub to its M99."""
+        for j in range(pc + 1, len(self.lines)):
+            if 99.0 in self.lines[j].m:
+                return j + 1
+        return len(self.lines)
+
+    def _m98_m99(self, pc: int, ln: Line, frames: list[Frame]) -> int:
+        if 98.0 in ln.m:
+            label = f"{ln.words.get('P', float('nan')):g}"
+            entry = self.shape.fanuc.get(label)
+            if entry is None:
+                raise self._error(ln.start, f"M98 P{label}: no O{label} in this program")
+            passes = int(ln.words.get("L", 1))
+            if passes <= 0:
+                return pc + 1
+            self._push(frames, Frame(pc + 1, f"O{label}", passes_left=passes - 1, entry=entry + 1), ln)
+            return entry + 1
+        if 99.0 in ln.m:
+            if len(frames) == 1 or not frames[-1].sub.startswith("O"):
+                raise self._error(ln.start, "M99 outside an M98 call (a main program's M99 repeats it forever)")
+            frame = frames[-1]
+            if frame.passes_left > 0 and not self._unsure():
+                frame.passes_left -= 1
+                return frame.entry
+            frames.pop()
+            return frame.return_to
+        return pc + 1
+
+    def _push(self, frames: list[Frame], frame: Frame, ln: Line) -> None:
+        if len(frames) > MAX_CALL_DEPTH:
+            raise self._error(ln.start, f"calls nested deeper than {MAX_CALL_DEPTH}: recursion that does not end at post time is refused")
+        frames.append(frame)
+
+    def _unsure(self) -> bool:
+        return self.tainted_from is not None
+
+    def _taint(self, ln: Line, what: str) -> None:
+        if self.tainted_from is None:
+            self.tainted_from = self.rows
+            self.parser.notes.append(
+                f"line {self.parser.lines.line(ln.start)}: {what} cannot be decided at post time; "
+                "from here on each target is listed once and flagged unresolved")
+
+    def _value(self, ln: Line, node, what: str):
+        """An O-word expression's value, or None (and the run is marked unsure) when unknown."""
+        from .parse import _Unknown
+
+        try:
+            return self.parser._eval(node)
+        except (_Unknown, ValueError, ZeroDivisionError, KeyError) as exc:
+            self._taint(ln, f"{what} ({exc})")
+            return None
+
+    def _oword(self, pc: int, ln: Line, frames: list[Frame]) -> int:
+        handler = getattr(self, f"_kw_{ln.keyword}")
+        return handler(pc, ln, frames)
+
+    # ---- subs
+    def _kw_sub(self, pc, ln, frames):
+        return self.shape.partner[pc] + 1  # a definition: skipped
+
+    def _kw_call(self, pc, ln, frames):
+        entry = self.shape.subs.get(ln.label)
+        if entry is None:
+            raise self._error(ln.start, f"o<{ln.label}> call: no o<{ln.label}> sub in this program, and {self._sub_file(ln.label)} next to it is not read")
+        if self._unsure() and any(f.sub == ln.label for f in frames):
+            return pc + 1  # recursion under an unknown condition: listed once already
+        args = []
+        for node in ln.args:
+            value = self._value_quiet(node)
+            args.append(value)
+        params = self.parser.params
+        self._push(frames, Frame(pc + 1, ln.label), ln)
+        params.frames.append({i: a for i, a in enumerate(args + [0.0] * (30 - len(args)), start=1) if a is not None})
+        return entry + 1
+
+    def _value_quiet(self, node):
+        """An argument's value, None when unknown (reading it in the sub then flags the target)."""
+        from .parse import _Unknown
+
+        try:
+            return self.parser._eval(node)
+        except (_Unknown, ValueError, ZeroDivisionError, KeyError):
+            return None
+
+    def _sub_file(self, label: str) -> str:
+        return str(Path(self.parser.doc.path).with_name(f"{label}.ngc"))
+
+    def _kw_return(self, pc, ln, frames):
+        return self._leave(ln, frames)
+
+    def _kw_endsub(self, pc, ln, frames):
+        return self._leave(ln, frames)
+
+    def _leave(self, ln: Line, frames: list[Frame]) -> int:
+        params = self.parser.params
+        if len(frames) == 1 or frames[-1].sub != ln.label:
+            raise self._error(ln.start, f"o{ln.label} {ln.keyword} outside a call of o{ln.label}")
+        value = self._value_quiet(ln.args[0]) if ln.args else None  # read in the sub's scope
+        frame = frames.pop()
+        params.frames.pop()
+        params.globals["_value_returned"] = 1.0 if ln.args else 0.0
+        if value is not None:
+            params.globals["_value"] = value
+        elif ln.args:
+            params.globals.pop("_value", None)  # an unknown return value stays unknown
+        return frame.return_to
+
+    # ---- if / elseif / else
+    def _kw_if(self, pc, ln, frames):
+        if self._unsure():
+            return pc + 1
+        cond = self._value(ln, ln.args[0], f"o{ln.label} if condition")
+        if cond is None or cond:
+            return pc + 1
+        for c in self.shape.clauses[pc]:
+            cl = self.lines[c]
+            if cl.keyword == "elseif":
+                v = self._value(cl, cl.args[0], f"o{ln.label} elseif condition")
+                if v is None or v:
+                    return c + 1
+            else:  # else or endif
+                return c + 1
+        raise AssertionError("an if has its endif")
+
+    def _kw_elseif(self, pc, ln, frames):
+        return pc + 1 if self._unsure() else self.shape.endif_of[pc] + 1  # reached from a taken branch
+
+    _kw_else = _kw_elseif
+
+    def _kw_endif(self, pc, ln, frames):
+        return pc + 1
+
+    # ---- loops
+    def _kw_while(self, pc, ln, frames):
+        opened = self.shape.partner[pc]
+        if self.lines[opened].keyword == "do":  # the end of a do-while
+            if self._unsure():
+                return pc + 1
+            cond = self._value(ln, ln.args[0], f"o{ln.label} while condition")
+            return opened + 1 if cond else pc + 1
+        if self._unsure() and frames[-1].counters.get(pc):  # unsure: one pass
+            frames[-1].counters.pop(pc)
+            return opened + 1
+        cond = True if self._unsure() else self._value(ln, ln.args[0], f"o{ln.label} while condition")
+        if cond is None or cond:
+            frames[-1].counters[pc] = 1
+            return pc + 1
+        frames[-1].counters.pop(pc, None)
+        return opened + 1
+
+    def _kw_endwhile(self, pc, ln, frames):
+        return self.shape.partner[pc]
+
+    def _kw_do(self, pc, ln, frames):
+        return pc + 1
+
+    def _kw_repeat(self, pc, ln, frames):
+        count = 1 if self._unsure() else self._value(ln, ln.args[0], f"o{ln.label} repeat count")
+        count = 1 if count is None else int(count)
+        if count <= 0:
+            return self.shape.partner[pc] + 1
+        frames[-1].counters[pc] = count
+        return pc + 1
+
+    def _kw_endrepeat(self, pc, ln, frames):
+        opened = self.shape.partner[pc]
+        left = frames[-1].counters.get(opened, 1) - 1
+        if left > 0 and not self._unsure():
+            frames[-1].counters[opened] = left
+            return opened + 1
+        frames[-1].counters.pop(opened, None)
+        return pc + 1
+
+    def _kw_break(self, pc, ln, frames):
+        opened = self.shape.loop_of[pc]
+        frames[-1].counters.pop(opened, None)
+        return self.shape.partner[opened] + 1
+
+    def _kw_continue(self, pc, ln, frames):
+        opened = self.shape.loop_of[pc]
+        close = self.shape.partner[opened]
+        if self._unsure():
+            frames[-1].counters.pop(opened, None)
+            return close + 1
+        if self.lines[opened].keyword == "while":
+            return opened
+        return close  # do: evaluate the closing while; repeat: count the pass at endrepeat
+
+
+def _literal(node) -> float | None:
+    if isinstance(node, Tree) and node.data == "number":
+        return float(node.children[0])
+    if isinstance(node, Tree) and node.data in ("neg", "pos") and _literal(node.children[-1]) is not None:
+        return -_literal(node.children[-1]) if node.data == "neg" else _literal(node.children[-1])
+    return None
