@@ -25,9 +25,11 @@ import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from lark import Tree
 
-from ...parse.common import parse_statement
+from ...ir import SourceDoc, Toolpath
+from ...parse.common import LineIndex, parse_statement
 from ...parse.grammar import grammar
 
 # Executed blocks (lines) before the program is refused: bounds time and memory of a
@@ -38,6 +40,49 @@ MAX_CALL_DEPTH = 100  # nested calls (LinuxCNC's own limit is lower); deeper is 
 _FLOW = re.compile(r"(?im)^[ \t]*(?:/[ \t]*)?(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b|[Mm][ \t]*9[89](?!\d)")
 _OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
 _LOOPS = ("while", "do", "repeat")
+
+
+_CALL = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*call\b")
+_SUB = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*sub\b")
+MAX_SIDE_FILES = 50
+
+
+def _name(label: str) -> str:
+    return re.sub(r"\s+", "", label).lower()
+
+
+def side_files(doc: SourceDoc) -> list[SourceDoc]:
+    """Files of the subs the program calls but does not define: LinuxCNC looks for
+    ``o<name> call`` in ``<name>.ngc`` on its subroutine path; here, beside the program
+    (and beside those files, for the subs they call)."""
+    docs, looked = [doc], set()
+    for d in docs:
+        defined = {_name(n) for dd in docs for n in _SUB.findall(dd.text)}
+        for name in map(_name, _CALL.findall(d.text)):
+            if name in defined or name in looked or len(docs) > MAX_SIDE_FILES:
+                continue
+            looked.add(name)
+            path = Path(doc.path).with_name(f"{name}.ngc")
+            if path.is_file() and path.resolve() != Path(doc.path).resolve():
+                docs.append(SourceDoc.read(path, "subroutine"))
+    return docs[1:]
+
+
+class _JoinedLines(LineIndex):
+    """Lines of several files read as one text (each starting at ``bases[k]``); errors name the file."""
+
+    def __init__(self, docs: list[SourceDoc], bases: np.ndarray, text: str):
+        super().__init__(text)
+        self.bases = bases
+        self.parts = [(LineIndex(d.text), d.path) for d in docs]
+
+    def part(self, offset) -> np.ndarray:
+        return np.searchsorted(self.bases, offset, side="right") - 1
+
+    def error(self, path: str, offset: int, message: str):
+        k = int(self.part(offset))
+        index, own_path = self.parts[k]
+        return index.error(own_path, offset - int(self.bases[k]), message)
 
 
 def needs_flow(text: str) -> bool:
@@ -166,14 +211,43 @@ class Runner:
     def __init__(self, parser):
         self.parser = parser
         parser.params = Params()
+        self.docs = [parser.doc] + list(parser.side_docs)
+        self.joined = None
+        if len(self.docs) > 1:
+            texts = [d.text if d.text.endswith("\n") else d.text + "\n" for d in self.docs]
+            bases = np.cumsum([0] + [len(t) for t in texts[:-1]]).astype(np.int64)
+            parser.text = "".join(texts)
+            parser.lines = self.joined = _JoinedLines(self.docs, bases, parser.text)
         self.lines = self._read_lines()
         parser.trees = {ln.start: ln.tree for ln in self.lines}
         self.shape = Structure(self.lines, self._error)
         self.tainted_from: int | None = None  # first row whose position depends on a guess: none are made
         self.rows = 0
+        main_len = len(self.docs[0].text)
+        self.main_end = next((i for i, ln in enumerate(self.lines) if ln.start >= main_len), len(self.lines))
+
+    def finish(self, tp: Toolpath) -> Toolpath:
+        """The toolpath with rows read from a sub's own file pointing into that file."""
+        from dataclasses import replace
+
+        if self.joined is None or not len(tp):
+            return replace(tp, sources=tuple(self.docs)) if self.joined is not None else tp
+        bases, at = self.joined.bases, tp.insert_at[:, 1]
+        part = self.joined.part(at)
+        line = np.array([self.joined.parts[k][0].line(a - bases[k]) for k, a in zip(part.tolist(), at.tolist())], dtype=tp.line.dtype)
+        spans = tp.spans.copy()
+        have = spans[:, :, 1] >= 0
+        span_part = self.joined.part(spans[:, :, 1])
+        spans[:, :, 0] = np.where(have, span_part, -1)
+        spans[:, :, 1:] -= np.where(have, bases[span_part], 0)[:, :, None]
+        insert_at = np.stack([part, at - bases[part]], axis=1).astype(tp.insert_at.dtype)
+        return replace(tp, sources=tuple(self.docs), file=part.astype(tp.file.dtype), line=line, spans=spans, insert_at=insert_at)
 
     # ------------------------------------------------------------ reading
     def _error(self, offset: int, message: str):
+        text = self.parser.text
+        while offset < len(text) and text[offset] in " \t":  # point at the block, not its indent
+            offset += 1
         return self.parser.lines.error(self.parser.doc.path, offset, message)
 
     def _read_lines(self) -> list[Line]:
@@ -213,7 +287,7 @@ class Runner:
         """Generator of executed block offsets (the parser's clock is set before each)."""
         frames = [Frame(len(self.lines), "")]
         pc, executed = 0, 0
-        while pc < len(self.lines):
+        while pc < len(self.lines) and not (pc >= self.main_end and len(frames) == 1):
             executed += 1
             if executed > MAX_EXECUTED_BLOCKS:
                 raise self._error(self.lines[pc].start, f"more than {MAX_EXECUTED_BLOCKS:,} blocks executed: a loop that does not end at post time is refused")
@@ -296,7 +370,7 @@ class Runner:
     def _kw_call(self, pc, ln, frames):
         entry = self.shape.subs.get(ln.label)
         if entry is None:
-            raise self._error(ln.start, f"o<{ln.label}> call: no o<{ln.label}> sub in this program, and {self._sub_file(ln.label)} next to it is not read")
+            raise self._error(ln.start, f"o<{ln.label}> call: no o<{ln.label}> sub in this program, and no {self._sub_file(ln.label)} beside it")
         if self._unsure() and any(f.sub == ln.label for f in frames):
             return pc + 1  # recursion under an unknown condition: listed once already
         args = []

@@ -69,6 +69,7 @@ class GcodeParser:
         self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
+        self.side_docs: list[SourceDoc] = []  # flow.py: files of subs the program calls (LinuxCNC <name>.ngc)
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -126,11 +127,11 @@ class GcodeParser:
         runner = flow.Runner(self)
         table = self._slow(None, runner.run())
         if not len(table["offset"]):
-            return self.builder.build()
+            return runner.finish(self.builder.build())
         table["seq"] = np.arange(len(table["offset"]))
         if runner.tainted_from is not None:
             table["ok"][runner.tainted_from :] = False
-        return self._resolve(table)
+        return runner.finish(self._resolve(table))
 
     def _when(self, start: int) -> int:
         """Time of an event (G10, G68.2) in the block table's order: its offset, or its execution index."""
@@ -275,7 +276,8 @@ class GcodeParser:
         try:
             value = self._eval(vnode)
         except (_Unknown, ValueError, ZeroDivisionError) as exc:
-            value, known = np.nan, False
+            # +inf: an axis, -inf: a feed, unknown until the next absolute word (never the old value)
+            value, known = (np.inf if letter in "XYZABC" else -np.inf if letter == "F" else np.nan), False
             self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
         if letter == "G":
             gcodes.append(round(value, 1))
@@ -347,9 +349,12 @@ class GcodeParser:
         has_axis = ~np.isnan(values[:, :6]).all(axis=1)
         moves = has_axis & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
         absolute = _absolute_positions(values, moves | t["g53"], dist, linear_scale)
+        absolute[np.isinf(absolute)] = np.nan  # axes that follow from a word the program cannot evaluate
         rows = np.nonzero(moves)[0]
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
+        speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
+        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~np.isneginf(speed)
+        speed[np.isneginf(speed)] = np.nan  # moves at a feed the program cannot know: flagged
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
@@ -374,7 +379,7 @@ class GcodeParser:
             frame=frame_idx,
             tool=tool_idx,
             resolved=resolved,
-            speed=_ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
+            speed=speed,
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
         )
