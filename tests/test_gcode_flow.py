@@ -179,3 +179,69 @@ def test_the_same_correction_for_every_execution_is_written_once(tmp_path):
     new[:, 1] += 0.25
     text = emit_texts(tp, tp.with_positions(new))[0]
     assert "G1 X#1 Y5.25 F100\n" in text and text.count("Y") == 1
+
+
+# ------------------------------------------------------------------ Siemens SINUMERIK 828D / 840D
+# SINUMERIK 840D sl / 828D "Job Planning" programming manual (6FC5398-2BP40): DEF (an INT or
+# REAL without an initial value is 0; REAL assigned to INT is rounded), IF/ELSE/ENDIF,
+# WHILE/ENDWHILE, FOR var = a TO b / ENDFOR (body while var <= b, step 1), REPEAT/UNTIL,
+# MSG (a message, no motion), PROC / EXTERN / call NAME(args) / RET; "Fundamentals"
+# (6FC5398-1BP40): G70/G700 inch, G71/G710 metric; SUPA: this block in machine coordinates.
+
+SIEMENS_SUB = "PROC SIDE(REAL _X, INT _N)\nDEF INT IDX\nFOR IDX = 1 TO _N\n  G1 SUPA X=_X Y=IDX F100\nENDFOR\nRET\n"
+
+
+def test_siemens_variables_loops_and_branches(tmp_path):
+    tp = _read(tmp_path, "G71 G90\nDEF INT CNT, KK=2\nDEF REAL RR\nMSG(\"start\")\nRR = 2.25\nCNT = RR * 2\nG0 X=CNT Y0 Z0\n"
+                         "WHILE CNT > 3\n  CNT = CNT - 1\n  G1 X=CNT F100\nENDWHILE\nIF KK == 2\n  G0 Y1\nELSE\n  G0 Y2\nENDIF\n"
+                         "REPEAT\n  KK = KK + 1\n  G0 Z=KK\nUNTIL KK >= 4\nG70\nG0 X1\nM30\n", "MAIN.MPF")
+    # CNT = 4.5 rounded (INT) = 5: X5; while CNT > 3: X4, X3; KK == 2: Y1; repeat: Z3, Z4; G70: X1 inch
+    assert tp.position.tolist() == [[5, 0, 0], [4, 0, 0], [3, 0, 0], [3, 1, 0], [3, 1, 3], [3, 1, 4], [25.4, 1, 4]]
+    assert tp.resolved.all()
+
+
+def test_siemens_subprogram_in_its_own_file(tmp_path):
+    (tmp_path / "SIDE.SPF").write_text(SIEMENS_SUB)
+    tp = _read(tmp_path, "EXTERN SIDE(REAL, INT)\nG71 G90 G0 SUPA X0 Y0 Z0\nSIDE(7, 2)\nSIDE(8, 0)\nG0 SUPA X9\nM30\n", "MAIN.MPF")
+    assert tp.position[:, :2].tolist() == [[0, 0], [7, 1], [7, 2], [9, 2]]
+    assert tp.file.tolist() == [0, 1, 1, 0] and tp.line.tolist() == [2, 4, 4, 5]
+    assert tp.resolved.all() and (tp.frame_names[tp.frame[0]] == "machine")
+
+
+def test_siemens_subprogram_alone_is_listed_once_and_flagged(tmp_path):
+    tp = _read(tmp_path, SIEMENS_SUB, "SIDE.SPF")
+    assert len(tp) == 1 and not tp.resolved.any()  # _N unknown: the FOR body once, flagged
+    assert any("FOR" in n for n in tp.notes)
+
+
+def _warmup(tmp_path: Path, program: str) -> Path:
+    """A corpus Siemens program with WARMUP_CYCLE.SPF beside it under the name the controller uses."""
+    from test_real_corpus import corpus_file
+
+    prefix = "gcode/AlloyX-MFG_syil-X7-warmup-routines__"
+    for name in (program, "WARMUP_CYCLE.SPF"):
+        (tmp_path / name).write_bytes(corpus_file(prefix + name).read_bytes())
+    return tmp_path / program
+
+
+def test_siemens_daily_warmup_from_the_corpus(tmp_path):
+    # DAILY.MPF (AlloyX-MFG/syil-X7-warmup-routines): G70 inch; G0 SUPA Z0, G0 SUPA X0 Y0; then
+    # WARMUP_CYCLE(3600, 600) and (7200, 600): CYCLES = 600 / 15 = 40 passes of 13 SUPA moves;
+    # then G0 SUPA Z0 and G0 SUPA X0 Y0.
+    tp = parse_program(_warmup(tmp_path, "DAILY.MPF"))
+    cycle = np.array([[0, 0, -4], [-5, 0, -4], [-5, -5, -4], [-5, -5, 0], [0, -5, 0], [0, 0, 0], [-5, -5, 0],
+                      [-5, -5, -4], [0, 0, -4], [0, 0, 0], [0, -5, 0], [-5, 0, 0], [0, 0, 0]], float) * 25.4
+    expected = np.vstack([[[np.nan, np.nan, 0], [0, 0, 0]], np.tile(cycle, (80, 1)), [[0, 0, 0], [0, 0, 0]]])
+    assert len(tp) == 2 + 80 * 13 + 2
+    np.testing.assert_allclose(tp.position, expected)
+    assert tp.resolved[1:].all() and set(tp.file.tolist()) == {0, 1}
+    texts = emit_texts(tp, tp)
+    assert [t.encode("latin-1") for t in texts] == [Path(d.path).read_bytes() for d in tp.sources]
+
+
+def test_siemens_run_in_without_its_subprogram_is_flagged_not_refused(tmp_path):
+    from test_real_corpus import corpus_file
+
+    tp = _read(tmp_path, corpus_file("gcode/AlloyX-MFG_syil-X7-warmup-routines__FIRST_SPINDLE_RUN_IN.MPF").read_text(encoding="latin-1"), "RUN_IN.MPF")
+    assert len(tp) == 4 and tp.resolved.tolist() == [False, True, False, False]
+    assert any("WARMUP_CYCLE" in n for n in tp.notes)

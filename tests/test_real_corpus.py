@@ -49,9 +49,6 @@ GCODE = [r["file"] for r in ROWS if r["file"].startswith("gcode/")]
 # file -> why it does not round-trip today (the first construct the parser stops at, file:line)
 ROUND_TRIP_XFAIL = {
     # G-code
-    "gcode/AlloyX-MFG_syil-X7-warmup-routines__DAILY.MPF": "Siemens EXTERN declaration `EXTERN WARMUP_CYCLE(REAL, REAL)` (DAILY.MPF:9)",
-    "gcode/AlloyX-MFG_syil-X7-warmup-routines__FIRST_SPINDLE_RUN_IN.MPF": "Siemens EXTERN declaration `EXTERN WARMUP_CYCLE(REAL, REAL)` (FIRST_SPINDLE_RUN_IN.MPF:10)",
-    "gcode/AlloyX-MFG_syil-X7-warmup-routines__WARMUP_CYCLE.SPF": "Siemens `PROC WARMUP_CYCLE(REAL _RPM, REAL _DURATION)` subprogram header (WARMUP_CYCLE.SPF:9)",
     "gcode/LinuxCNC_linuxcnc__hole-circle.ngc": "LinuxCNC polar coordinates `^60` in a G81 block with L6 repeat (hole-circle.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__nestedcall.ngc": "`O<g20sub> callsub` (LinuxCNC call of a sub in another file) (nestedcall.ngc:11)",
     "gcode/LinuxCNC_linuxcnc__polar.ngc": "LinuxCNC polar coordinates `^120` (polar.ngc:10)",

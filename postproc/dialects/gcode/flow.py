@@ -31,6 +31,7 @@ from lark import Tree
 from ...ir import SourceDoc, Toolpath
 from ...parse.common import LineIndex, parse_statement
 from ...parse.grammar import grammar
+from . import siemens
 
 # Executed blocks (lines) before the program is refused: bounds time and memory of a
 # `while [1]` (one IR row is ~1 kB while the block table is built).
@@ -38,8 +39,9 @@ MAX_EXECUTED_BLOCKS = 1_000_000
 MAX_CALL_DEPTH = 100  # nested calls (LinuxCNC's own limit is lower); deeper is refused
 
 _FLOW = re.compile(r"(?im)^[ \t]*(?:/[ \t]*)?(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b|[Mm][ \t]*9[89](?!\d)")
-_OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat"}
-_LOOPS = ("while", "do", "repeat")
+_OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat", "for": "endfor"}
+_LOOPS = ("while", "do", "repeat", "for")
+_SIEMENS_FLOW = re.compile(r"(?im)^[ \t]*(?:PROC|EXTERN|DEF|IF|WHILE|FOR|REPEAT)[ \t]")
 
 
 _CALL = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*call\b")
@@ -58,12 +60,14 @@ def side_files(doc: SourceDoc) -> list[SourceDoc]:
     docs, looked = [doc], set()
     for d in docs:
         defined = {_name(n) for dd in docs for n in _SUB.findall(dd.text)}
-        for name in map(_name, _CALL.findall(d.text)):
+        wanted = [(n, (f"{n}.ngc",)) for n in map(_name, _CALL.findall(d.text))]
+        wanted += [(n.lower(), (f"{n}.SPF", f"{n}.spf", f"{n.lower()}.spf")) for n in siemens.externs(d.text)]
+        for name, files in wanted:
             if name in defined or name in looked or len(docs) > MAX_SIDE_FILES:
                 continue
             looked.add(name)
-            path = Path(doc.path).with_name(f"{name}.ngc")
-            if path.is_file() and path.resolve() != Path(doc.path).resolve():
+            path = next((p for f in files if (p := Path(doc.path).with_name(f)).is_file()), None)
+            if path is not None and path.resolve() != Path(doc.path).resolve():
                 docs.append(SourceDoc.read(path, "subroutine"))
     return docs[1:]
 
@@ -87,17 +91,20 @@ class _JoinedLines(LineIndex):
 
 def needs_flow(text: str) -> bool:
     """True where the program has O-word control flow or Fanuc M98/M99 calls."""
-    return _FLOW.search(text) is not None
+    return _FLOW.search(text) is not None or _SIEMENS_FLOW.search(text) is not None
 
 
 class Params:
     """# parameters with LinuxCNC's scopes: a dict-like view the block reader uses unchanged."""
 
-    def __init__(self):
+    def __init__(self, siemens_names: bool = False):
         self.globals: dict = {}
         self.frames: list[dict] = [{}]
+        self.siemens_names = siemens_names  # SINUMERIK: a DEF'd or PROC variable is local to its program
 
     def _where(self, key) -> dict:
+        if self.siemens_names and isinstance(key, str):
+            return self.frames[-1]
         if isinstance(key, int):
             return self.frames[-1] if 1 <= key <= 30 else self.globals
         return self.globals if key.startswith("_") else self.frames[-1]
@@ -132,12 +139,15 @@ class Line:
     args: list = field(default_factory=list)  # the O-word's expressions
     m: set = field(default_factory=set)  # M codes of a plain block
     words: dict = field(default_factory=dict)  # literal P and L of a plain block
+    doc: int = 0  # which file
+    extra: dict = field(default_factory=dict)  # Siemens statement details (siemens.classify)
 
 
 @dataclass
 class Frame:
     return_to: int  # line index to continue at after the call
     sub: str  # label ('' for the main program), or 'O<n>' of a Fanuc M98 call
+    doc: int | None = None  # a Siemens subprogram: its file (leaving it returns)
     counters: dict = field(default_factory=dict)  # repeat line -> passes left
     passes_left: int = 0  # Fanuc M98 L: further passes of the sub
     entry: int = 0  # first line of the sub (Fanuc M98 repeats)
@@ -160,7 +170,9 @@ class Structure:
                 continue
             if not kw:
                 self.fanuc[label] = i
-            elif kw == "while" and stack and stack[-1][:2] == (label, "do"):
+            elif kw == "proc":
+                self.subs[label] = i
+            elif kw in ("while", "until") and stack and stack[-1][:2] == (label, "do"):
                 self._close(stack, i, lines)
             elif kw in _OPENS:
                 if kw == "sub":
@@ -172,7 +184,7 @@ class Structure:
                 if not stack or stack[-1][:2] != (label, "if"):
                     raise error(ln.start, f"o{label} {kw} is not inside o{label} if")
                 self.clauses[stack[-1][2]].append(i)
-            elif kw in ("endsub", "endif", "endwhile", "endrepeat"):
+            elif kw in ("endsub", "endif", "endwhile", "endrepeat", "endfor"):
                 if not stack or _OPENS[stack[-1][1]] != kw or stack[-1][0] != label:
                     raise error(ln.start, f"o{label} {kw} does not close the open O-word block ({self._open_name(stack)})")
                 self._close(stack, i, lines)
@@ -210,8 +222,10 @@ class Runner:
 
     def __init__(self, parser):
         self.parser = parser
-        parser.params = Params()
         self.docs = [parser.doc] + list(parser.side_docs)
+        parser.siemens = self.siemens = siemens.is_siemens(parser.doc.path, parser.doc.text)
+        parser.params = Params(self.siemens)
+        self.ints: set[str] = set()  # Siemens INT variables (a REAL assigned is rounded)
         self.joined = None
         if len(self.docs) > 1:
             texts = [d.text if d.text.endswith("\n") else d.text + "\n" for d in self.docs]
@@ -219,7 +233,7 @@ class Runner:
             parser.text = "".join(texts)
             parser.lines = self.joined = _JoinedLines(self.docs, bases, parser.text)
         self.lines = self._read_lines()
-        parser.trees = {ln.start: ln.tree for ln in self.lines}
+        parser.trees = {ln.start: ln.tree for ln in self.lines if ln.tree is not None}
         self.shape = Structure(self.lines, self._error)
         self.tainted_from: int | None = None  # first row whose position depends on a guess: none are made
         self.rows = 0
@@ -252,15 +266,74 @@ class Runner:
 
     def _read_lines(self) -> list[Line]:
         g, text, p = grammar("gcode"), self.parser.text, self.parser
-        out = []
+        out, blocks = [], []
+        bases = self.joined.bases if self.joined is not None else np.zeros(1, np.int64)
         for start in p.lines.starts.tolist():
             end = text.find("\n", start)
             line = text[start : len(text) if end < 0 else end].rstrip("\r")
             if not line.strip() or line.strip() == "%":
                 continue
+            doc = int(np.searchsorted(bases, start, side="right") - 1)
+            statement = siemens.classify(line) if self.siemens else None
+            if statement is not None:
+                out.append(self._siemens_line(Line(start, None, doc=doc), statement, blocks))
+                continue
             tree = parse_statement(g, line, p.lines, p.doc.path, start, "G-code block")
-            out.append(self._classify(Line(start, tree)))
+            out.append(self._classify(Line(start, tree, doc=doc)))
+        if blocks:
+            raise self._error(blocks[-1][2], f"{blocks[-1][0]} opened here is never closed")
         return out
+
+    _SIEMENS_KW = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "WHILE": "while", "ENDWHILE": "endwhile", "FOR": "for", "ENDFOR": "endfor",
+                   "REPEAT": "do", "UNTIL": "until", "RET": "ret", "PROC": "proc", "DEF": "def", "ASSIGN": "assign", "CALL": "scall",
+                   "EXTERN": "nop", "MSG": "nop"}
+    _SIEMENS_OPENS = {"IF": "ENDIF", "WHILE": "ENDWHILE", "FOR": "ENDFOR", "REPEAT": "UNTIL"}
+
+    def _siemens_line(self, ln: Line, statement, blocks: list) -> Line:
+        """A SINUMERIK statement as an O-word line: IF/WHILE/FOR/REPEAT get a label of their own."""
+        kw, extra = statement
+        if kw not in self._SIEMENS_KW:
+            raise self._error(ln.start, f"Siemens {kw} is not supported (jumps and endless loops are not unrolled)")
+        ln.keyword, ln.extra = self._SIEMENS_KW[kw], extra
+        if kw in self._SIEMENS_OPENS:
+            ln.label = f"siemens{ln.start}"
+            blocks.append((kw, ln.label, ln.start))
+        elif kw in ("ELSE", "ENDIF", "ENDWHILE", "ENDFOR", "UNTIL"):
+            opener = {"ELSE": "IF", "ENDIF": "IF", "ENDWHILE": "WHILE", "ENDFOR": "FOR", "UNTIL": "REPEAT"}[kw]
+            if not blocks or blocks[-1][0] != opener:
+                raise self._error(ln.start, f"{kw} does not close the open block ({blocks[-1][0] if blocks else 'none open'})")
+            ln.label = blocks[-1][1]
+            if kw != "ELSE":
+                blocks.pop()
+        elif kw == "PROC":
+            ln.label, extra["params"] = siemens.proc_signature(extra["rest"])
+        rest = extra.get("rest", "")
+        if kw in ("IF", "WHILE", "UNTIL"):
+            ln.args = [self._expr(ln, rest)]
+        elif kw == "FOR":
+            m = re.match(r"(?i)\s*([A-Za-z_]\w*)\s*=(.*)\bTO\b(.*)", rest)
+            if not m:
+                raise self._error(ln.start, "FOR takes `FOR var = start TO end`")
+            extra["var"] = m.group(1).lower()
+            ln.args = [self._expr(ln, m.group(2)), self._expr(ln, m.group(3))]
+        elif kw == "ASSIGN":
+            ln.args = [self._expr(ln, extra["expr"])]
+        elif kw == "CALL":
+            ln.label = extra["name"].lower()
+            ln.args = [self._expr(ln, a) for a in extra["args"]]
+        elif kw == "DEF":
+            extra["kind"], names = siemens.definitions(rest)
+            extra["names"] = [(n, self._expr(ln, v) if v else None) for n, v in names]
+        return ln
+
+    def _expr(self, ln: Line, text: str):
+        """A Siemens expression as a grammar tree (None where it cannot be read: then unknown)."""
+        text = text.split(";")[0]
+        try:
+            tree = grammar("gcode").parse(f"o1 if {siemens.expression(text)}")
+        except Exception:  # noqa: BLE001 - any expression we cannot translate is an unknown value, never a guess
+            return None
+        return tree.children[0].children[2]
 
     def _classify(self, ln: Line) -> Line:
         for item in ln.tree.children:
@@ -287,13 +360,20 @@ class Runner:
         """Generator of executed block offsets (the parser's clock is set before each)."""
         frames = [Frame(len(self.lines), "")]
         pc, executed = 0, 0
-        while pc < len(self.lines) and not (pc >= self.main_end and len(frames) == 1):
+        while True:
+            if len(frames) > 1 and frames[-1].doc is not None and (pc >= len(self.lines) or self.lines[pc].doc != frames[-1].doc):
+                pc = self._return(frames)  # a Siemens subprogram ends with its file
+                continue
+            if pc >= len(self.lines) or (pc >= self.main_end and len(frames) == 1):
+                return
             executed += 1
             if executed > MAX_EXECUTED_BLOCKS:
                 raise self._error(self.lines[pc].start, f"more than {MAX_EXECUTED_BLOCKS:,} blocks executed: a loop that does not end at post time is refused")
             ln = self.lines[pc]
             if ln.keyword:
                 pc = self._oword(pc, ln, frames)
+                if pc is None:  # RET of the main program
+                    return
                 continue
             if ln.label and not ln.keyword:  # a Fanuc program number: its body runs only when called
                 pc = self._skip_fanuc(pc) if len(frames) == 1 else pc + 1
@@ -323,6 +403,8 @@ class Runner:
                 return pc + 1
             self._push(frames, Frame(pc + 1, f"O{label}", passes_left=passes - 1, entry=entry + 1), ln)
             return entry + 1
+        if 17.0 in ln.m and self.siemens:
+            return self._return(frames) if len(frames) > 1 else len(self.lines)
         if 99.0 in ln.m:
             if len(frames) == 1 or not frames[-1].sub.startswith("O"):
                 raise self._error(ln.start, "M99 outside an M98 call (a main program's M99 repeats it forever)")
@@ -353,6 +435,8 @@ class Runner:
         """An O-word expression's value, or None (and the run is marked unsure) when unknown."""
         from .parse import _Unknown
 
+        if node is None:
+            return self._value_none(ln, what)
         try:
             return self.parser._eval(node)
         except (_Unknown, ValueError, ZeroDivisionError, KeyError) as exc:
@@ -386,6 +470,8 @@ class Runner:
         """An argument's value, None when unknown (reading it in the sub then flags the target)."""
         from .parse import _Unknown
 
+        if node is None:
+            return None
         try:
             return self.parser._eval(node)
         except (_Unknown, ValueError, ZeroDivisionError, KeyError):
@@ -393,6 +479,92 @@ class Runner:
 
     def _sub_file(self, label: str) -> str:
         return str(Path(self.parser.doc.path).with_name(f"{label}.ngc"))
+
+    # ---- Siemens
+    def _return(self, frames: list[Frame]) -> int:
+        frame = frames.pop()
+        self.parser.params.frames.pop()
+        return frame.return_to
+
+    def _kw_nop(self, pc, ln, frames):
+        return pc + 1
+
+    def _kw_proc(self, pc, ln, frames):
+        return pc + 1  # the head of the program being run (its parameters are not known)
+
+    def _kw_ret(self, pc, ln, frames):
+        return self._return(frames) if len(frames) > 1 else None
+
+    def _kw_def(self, pc, ln, frames):
+        for name, node in ln.extra["names"]:
+            if ln.extra["kind"] == "INT":
+                self.ints.add(name)
+            self._set(name, 0.0 if node is None else self._value_quiet(node))
+        return pc + 1
+
+    def _set(self, name: str, value) -> None:
+        """A Siemens variable; INT rounds (half away from zero); an unknown value stays unknown."""
+        params = self.parser.params
+        if value is None:
+            params.pop(name)
+            return
+        if name in self.ints:
+            value = float(np.sign(value) * np.floor(abs(value) + 0.5))
+        params[name] = value
+
+    def _kw_assign(self, pc, ln, frames):
+        node = ln.args[0]
+        self._set(ln.extra["name"].lower(), None if node is None else self._value_quiet(node))
+        return pc + 1
+
+    def _kw_scall(self, pc, ln, frames):
+        entry = self.shape.subs.get(ln.label)
+        if entry is None:
+            self._taint(ln, f"subprogram {ln.extra['name']} (its {ln.extra['name']}.SPF is not beside the program)")
+            return pc + 1
+        names = self.lines[entry].extra.get("params", [])
+        values = [None if a is None else self._value_quiet(a) for a in ln.args]
+        self._push(frames, Frame(pc + 1, ln.label, doc=self.lines[entry].doc), ln)
+        self.parser.params.frames.append({n: v for n, v in zip(names, values) if v is not None})
+        return entry + 1
+
+    def _kw_for(self, pc, ln, frames):
+        counters = frames[-1].counters
+        var = ln.extra["var"]
+        if pc not in counters:  # entering: var = start
+            self._set(var, self._value(ln, ln.args[0], "FOR start") if ln.args[0] is not None else self._value_none(ln, "FOR start"))
+        elif self._unsure():
+            counters.pop(pc)
+            return self.shape.partner[pc] + 1
+        else:
+            value = self.parser.params[var] if var in self.parser.params else None
+            self._set(var, None if value is None else value + 1)
+        counters[pc] = 1
+        if self._unsure():
+            return pc + 1
+        end = self._value(ln, ln.args[1], "FOR end") if ln.args[1] is not None else self._value_none(ln, "FOR end")
+        current = self.parser.params[var] if var in self.parser.params else None
+        if end is None or current is None:
+            self._taint(ln, "the FOR loop's count")
+            return pc + 1
+        if current <= end:
+            return pc + 1
+        counters.pop(pc)
+        return self.shape.partner[pc] + 1
+
+    def _value_none(self, ln: Line, what: str):
+        self._taint(ln, f"{what} (an expression that is not read)")
+        return None
+
+    def _kw_endfor(self, pc, ln, frames):
+        return self.shape.partner[pc]
+
+    def _kw_until(self, pc, ln, frames):
+        opened = self.shape.partner[pc]
+        if self._unsure():
+            return pc + 1
+        cond = self._value(ln, ln.args[0], "UNTIL condition") if ln.args[0] is not None else self._value_none(ln, "UNTIL condition")
+        return pc + 1 if cond is None or cond else opened + 1
 
     def _kw_return(self, pc, ln, frames):
         return self._leave(ln, frames)
@@ -418,13 +590,13 @@ class Runner:
     def _kw_if(self, pc, ln, frames):
         if self._unsure():
             return pc + 1
-        cond = self._value(ln, ln.args[0], f"o{ln.label} if condition")
+        cond = self._value(ln, ln.args[0], f"{_shown(ln)} condition")
         if cond is None or cond:
             return pc + 1
         for c in self.shape.clauses[pc]:
             cl = self.lines[c]
             if cl.keyword == "elseif":
-                v = self._value(cl, cl.args[0], f"o{ln.label} elseif condition")
+                v = self._value(cl, cl.args[0], f"{_shown(cl)} condition")
                 if v is None or v:
                     return c + 1
             else:  # else or endif
@@ -445,12 +617,12 @@ class Runner:
         if self.lines[opened].keyword == "do":  # the end of a do-while
             if self._unsure():
                 return pc + 1
-            cond = self._value(ln, ln.args[0], f"o{ln.label} while condition")
+            cond = self._value(ln, ln.args[0], f"{_shown(ln)} condition")
             return opened + 1 if cond else pc + 1
         if self._unsure() and frames[-1].counters.get(pc):  # unsure: one pass
             frames[-1].counters.pop(pc)
             return opened + 1
-        cond = True if self._unsure() else self._value(ln, ln.args[0], f"o{ln.label} while condition")
+        cond = True if self._unsure() else self._value(ln, ln.args[0], f"{_shown(ln)} condition")
         if cond is None or cond:
             frames[-1].counters[pc] = 1
             return pc + 1
@@ -464,7 +636,7 @@ class Runner:
         return pc + 1
 
     def _kw_repeat(self, pc, ln, frames):
-        count = 1 if self._unsure() else self._value(ln, ln.args[0], f"o{ln.label} repeat count")
+        count = 1 if self._unsure() else self._value(ln, ln.args[0], f"{_shown(ln)} count")
         count = 1 if count is None else int(count)
         if count <= 0:
             return self.shape.partner[pc] + 1
@@ -494,6 +666,13 @@ class Runner:
         if self.lines[opened].keyword == "while":
             return opened
         return close  # do: evaluate the closing while; repeat: count the pass at endrepeat
+
+
+def _shown(ln: Line) -> str:
+    """How a control line is named in a note: `o100 while`, or the Siemens keyword."""
+    if ln.label.startswith("siemens"):
+        return {"do": "REPEAT", "until": "UNTIL"}.get(ln.keyword, ln.keyword.upper())
+    return f"o{ln.label} {ln.keyword}"
 
 
 def _literal(node) -> float | None:

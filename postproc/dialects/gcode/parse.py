@@ -70,6 +70,7 @@ class GcodeParser:
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
         self.side_docs: list[SourceDoc] = []  # flow.py: files of subs the program calls (LinuxCNC <name>.ngc)
+        self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -232,6 +233,8 @@ class GcodeParser:
                 self._assign(item, start)
             elif item.data == "oword":
                 self._oword(item, start, stack)
+            elif item.data == "keyword" and self.siemens and str(item.children[0]).upper() == "SUPA":
+                gcodes.append(53.0)  # SUPA: this block in machine coordinates, as G53
             elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
@@ -294,7 +297,9 @@ class GcodeParser:
         """The block's G codes into its modal state; returns (no motion in this block, G53)."""
         nonmotion = g53 = False
         for gc in gcodes:
-            if gc in _STATE_OF_G:
+            if self.siemens and gc in (70.0, 700.0, 71.0, 710.0):
+                state["units"] = 20.0 if gc in (70.0, 700.0) else 21.0  # SINUMERIK inch / metric
+            elif gc in _STATE_OF_G:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
             elif 73.0 <= gc <= 89.0:
