@@ -19,15 +19,7 @@ class GcodeDialect(Dialect):
     def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import GcodeParser
 
-        parser = GcodeParser(sources[0])
-        parser.side_docs = list(sources[1:])  # subroutine files the program calls (flow.py)
-        return parser.parse()
-
-    def read_sources(self, path, data=None) -> list[SourceDoc]:
-        from .flow import side_files
-
-        docs = super().read_sources(path, data)
-        return docs + side_files(docs[0]) if data is None else docs
+        return GcodeParser(sources[0]).parse()
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f" {field.upper()}{text}"  # one more axis word in the block

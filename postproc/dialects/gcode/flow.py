@@ -38,10 +38,14 @@ from . import siemens
 MAX_EXECUTED_BLOCKS = 1_000_000
 MAX_CALL_DEPTH = 100  # nested calls (LinuxCNC's own limit is lower); deeper is refused
 
-_FLOW = re.compile(r"(?im)^[ \t]*(?:/[ \t]*)?(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b|[Mm][ \t]*9[89](?!\d)")
+# Searched in the lower-cased text, and only where a cheap substring test finds a keyword:
+# a plain CAM file of 10^6 lines never runs them.
+_FLOW = re.compile(r"(?m)^[ \t]*(?:/[ \t]*)?(?:n[ \t]*\d+[ \t]*)?o[ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b")
+_M98 = re.compile(r"m[ \t]*9[89](?!\d)")
+_FLOW_WORDS = ("sub", "call", "if", "while", "do", "repeat", "proc", "extern", "def", "for")
 _OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat", "for": "endfor"}
 _LOOPS = ("while", "do", "repeat", "for")
-_SIEMENS_FLOW = re.compile(r"(?im)^[ \t]*(?:PROC|EXTERN|DEF|IF|WHILE|FOR|REPEAT)[ \t]")
+_SIEMENS_FLOW = re.compile(r"(?m)^[ \t]*(?:proc|extern|def|if|while|for|repeat)[ \t]")
 
 
 _CALL = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*call\b")
@@ -59,6 +63,9 @@ def side_files(doc: SourceDoc) -> list[SourceDoc]:
     (and beside those files, for the subs they call)."""
     docs, looked = [doc], set()
     for d in docs:
+        low = d.text.lower()
+        if "call" not in low and "extern" not in low:
+            continue
         defined = {_name(n) for dd in docs for n in _SUB.findall(dd.text)}
         wanted = [(n, (f"{n}.ngc",)) for n in map(_name, _CALL.findall(d.text))]
         wanted += [(n.lower(), (f"{n}.SPF", f"{n}.spf", f"{n.lower()}.spf")) for n in siemens.externs(d.text)]
@@ -89,9 +96,23 @@ class _JoinedLines(LineIndex):
         return index.error(own_path, offset - int(self.bases[k]), message)
 
 
+def needs_flow_in(text: str, starts) -> bool:
+    """needs_flow over the lines starting at ``starts`` (the blocks the bulk reader left)."""
+    pieces = []
+    for start in starts.tolist():
+        end = text.find("\n", start)
+        pieces.append(text[start : len(text) if end < 0 else end])
+    return needs_flow("\n".join(pieces))
+
+
 def needs_flow(text: str) -> bool:
     """True where the program has O-word control flow or Fanuc M98/M99 calls."""
-    return _FLOW.search(text) is not None or _SIEMENS_FLOW.search(text) is not None
+    low = text.lower()
+    if "m" in low and _M98.search(low):
+        return True
+    if not any(word in low for word in _FLOW_WORDS):
+        return False
+    return _FLOW.search(low) is not None or _SIEMENS_FLOW.search(low) is not None
 
 
 class Params:
@@ -222,7 +243,7 @@ class Runner:
 
     def __init__(self, parser):
         self.parser = parser
-        self.docs = [parser.doc] + list(parser.side_docs)
+        self.docs = [parser.doc] + (side_files(parser.doc) if Path(parser.doc.path).is_file() else [])
         parser.siemens = self.siemens = siemens.is_siemens(parser.doc.path, parser.doc.text)
         parser.params = Params(self.siemens)
         self.ints: set[str] = set()  # Siemens INT variables (a REAL assigned is rounded)

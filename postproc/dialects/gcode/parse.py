@@ -69,13 +69,10 @@ class GcodeParser:
         self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
-        self.side_docs: list[SourceDoc] = []  # flow.py: files of subs the program calls (LinuxCNC <name>.ngc)
         self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
 
     def parse(self) -> Toolpath:
         text = self.text
-        if flow.needs_flow(text):
-            return self._parse_flow()
         raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
         # RE_BULK accepts any G number (so that line shapes decide a match); only G0-G3
         # (G00-G03) blocks are bulk motion, the others go to the grammar.
@@ -114,6 +111,8 @@ class GcodeParser:
         # ---- slow blocks, in order (parameters are evaluated in program order)
         skip = np.zeros(len(self.lines.starts), bool)
         skip[bulk.line] = True
+        if flow.needs_flow_in(text, self.lines.starts[~skip]):  # O-words, M98, Siemens statements are never bulk lines
+            return self._parse_flow()
         slow = self._slow(skip)
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:

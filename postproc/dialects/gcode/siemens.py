@@ -35,7 +35,10 @@ _KEYWORDS = {"EXTERN", "PROC", "DEF", "IF", "ELSE", "ENDIF", "WHILE", "ENDWHILE"
 
 
 def is_siemens(path: str, text: str) -> bool:
-    return path.lower().endswith((".mpf", ".spf")) or _DETECT.search(text) is not None
+    if path.lower().endswith((".mpf", ".spf")):
+        return True
+    low = text.lower()
+    return any(w in low for w in ("proc", "extern", "def")) and _DETECT.search(text) is not None
 
 
 def externs(text: str) -> list[str]:
