@@ -50,7 +50,7 @@ GCODE = [r["file"] for r in ROWS if r["file"].startswith("gcode/")]
 ROUND_TRIP_XFAIL = {
     # G-code
     "gcode/LinuxCNC_linuxcnc__hole-circle.ngc": "LinuxCNC polar coordinates `^60` in a G81 block with L6 repeat (hole-circle.ngc:10)",
-    "gcode/LinuxCNC_linuxcnc__nestedcall.ngc": "`O<g20sub> callsub` (LinuxCNC call of a sub in another file) (nestedcall.ngc:11)",
+    "gcode/LinuxCNC_linuxcnc__nestedcall.ngc": "`O<g20sub> callsub`: `callsub` is no O-word keyword, refused at nestedcall.ngc:11:12 as rs274 refuses it (Unexpected character after O-word)",
     "gcode/LinuxCNC_linuxcnc__polar.ngc": "LinuxCNC polar coordinates `^120` (polar.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__interp_g10-l2-while-active.ngc": "unary function as a word value `g1 y sqrt[2]` (g10-l2-while-active.ngc:12)",
     # KRL

@@ -357,8 +357,9 @@ class GcodeParser:
         rows = np.nonzero(moves)[0]
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~np.isneginf(speed)
-        speed[np.isneginf(speed)] = np.nan  # moves at a feed the program cannot know: flagged
+        unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
+        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed
+        speed[np.isneginf(speed)] = np.nan
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
