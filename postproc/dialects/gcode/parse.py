@@ -53,6 +53,16 @@ _STATE_OF_G = {
 }
 
 
+_FUNCS = {"SIN": lambda v: math.sin(math.radians(v)), "COS": lambda v: math.cos(math.radians(v)), "TAN": lambda v: math.tan(math.radians(v)),
+          "ASIN": lambda v: math.degrees(math.asin(v)), "ACOS": lambda v: math.degrees(math.acos(v)), "ABS": abs, "SQRT": math.sqrt,
+          "EXP": math.exp, "LN": math.log, "ROUND": lambda v: float(round(v)), "FIX": lambda v: float(math.floor(v)), "FUP": lambda v: float(math.ceil(v))}
+# Binary operators, built once (evaluated per executed block in loops and subs).
+_BINOPS = {"+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a * b, "/": lambda a, b: a / b if b else math.inf,
+           "MOD": lambda a, b: math.fmod(a, b) if b else math.nan, "EQ": lambda a, b: float(a == b), "NE": lambda a, b: float(a != b),
+           "GT": lambda a, b: float(a > b), "GE": lambda a, b: float(a >= b), "LT": lambda a, b: float(a < b), "LE": lambda a, b: float(a <= b),
+           "AND": lambda a, b: float(bool(a) and bool(b)), "OR": lambda a, b: float(bool(a) or bool(b)), "XOR": lambda a, b: float(bool(a) != bool(b))}
+
+
 class _Unknown(Exception):
     """A parameter or expression whose value the program text does not determine."""
 
@@ -188,10 +198,7 @@ class GcodeParser:
             return self.params[key]
         if kind == "func":
             name, arg = str(node.children[0]).upper(), self._eval(node.children[1])
-            fns = {"SIN": lambda v: math.sin(math.radians(v)), "COS": lambda v: math.cos(math.radians(v)), "TAN": lambda v: math.tan(math.radians(v)),
-                   "ASIN": lambda v: math.degrees(math.asin(v)), "ACOS": lambda v: math.degrees(math.acos(v)), "ABS": abs, "SQRT": math.sqrt,
-                   "EXP": math.exp, "LN": math.log, "ROUND": lambda v: float(round(v)), "FIX": lambda v: float(math.floor(v)), "FUP": lambda v: float(math.ceil(v))}
-            return fns[name](arg)
+            return _FUNCS[name](arg)
         if kind == "atan2":
             return math.degrees(math.atan2(self._eval(node.children[1]), self._eval(node.children[2])))
         if kind in ("sum_expr", "prod_expr", "or_expr", "and_expr", "cmp_expr", "pow_expr"):
@@ -199,10 +206,7 @@ class GcodeParser:
             acc = self._eval(ch[0])
             for op, rhs in zip(ch[1::2], ch[2::2]):
                 b = self._eval(rhs)
-                o = str(op).upper()
-                acc = {"+": acc + b, "-": acc - b, "*": acc * b, "/": acc / b if b else math.inf, "MOD": math.fmod(acc, b) if b else math.nan,
-                       "EQ": float(acc == b), "NE": float(acc != b), "GT": float(acc > b), "GE": float(acc >= b), "LT": float(acc < b), "LE": float(acc <= b),
-                       "AND": float(bool(acc) and bool(b)), "OR": float(bool(acc) or bool(b)), "XOR": float(bool(acc) != bool(b))}[o]
+                acc = _BINOPS[str(op).upper()](acc, b)
             if kind == "pow_expr" and len(ch) == 2:
                 acc = self._eval(ch[0]) ** self._eval(ch[1])
             return acc
