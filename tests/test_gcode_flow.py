@@ -245,3 +245,10 @@ def test_siemens_run_in_without_its_subprogram_is_flagged_not_refused(tmp_path):
     tp = _read(tmp_path, corpus_file("gcode/AlloyX-MFG_syil-X7-warmup-routines__FIRST_SPINDLE_RUN_IN.MPF").read_text(encoding="latin-1"), "RUN_IN.MPF")
     assert len(tp) == 4 and tp.resolved.tolist() == [False, True, False, False]
     assert any("WARMUP_CYCLE" in n for n in tp.notes)
+
+
+def test_a_lines_parameter_settings_take_effect_after_the_line(tmp_path):
+    # LinuxCNC "Parameters": all parameter values on a line are read before any is set.
+    tp = _read(tmp_path, "#1 = 1\n#1 = 5 #2 = #1\nG0 X#1 Y#2 Z0\n#3 = #<_hal[x]>\n#3 = 7 G0 X#3\n#3 = #<_hal[x]>\nG0 Y#3\nM2\n")
+    assert tp.position[0].tolist() == [5, 1, 0]
+    assert np.isnan(tp.position[1, 0]) and np.isnan(tp.position[2, 1])  # never the old #3 (7)

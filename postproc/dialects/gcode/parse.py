@@ -229,11 +229,12 @@ class GcodeParser:
         state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
         ok = True
         gcodes: list[float] = []
+        assigns: list[tuple] = []
         for item in tree.children:
             if not isinstance(item, Tree):
                 continue
             if item.data == "assign":
-                self._assign(item, start)
+                assigns.append(self._assign(item, start))
             elif item.data == "oword":
                 self._oword(item, start, stack)
             elif item.data == "keyword" and self.siemens and str(item.children[0]).upper() == "SUPA":
@@ -242,6 +243,11 @@ class GcodeParser:
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
                 ok &= self._word(item, start, values, spans, state, gcodes)
+        for key, value in assigns:  # LinuxCNC: a line's parameter settings take effect after the whole line is read
+            if value is None:
+                self.params.pop(key, None)  # unknown from here on, never the old value
+            elif key is not None:
+                self.params[key] = value
         nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
         out["offset"].append(start)
         out["values"].append(values)
@@ -252,13 +258,19 @@ class GcodeParser:
         out["ok"].append(ok)
         out["g53"].append(g53)
 
-    def _assign(self, item: Tree, start: int) -> None:
-        """#n = expression: evaluated now (program order); a value that cannot be is forgotten."""
+    def _assign(self, item: Tree, start: int) -> tuple:
+        """#n = expression: (key, value) evaluated now (program order); value None where it
+        cannot be (the parameter is then unknown); key None where the target is unknown."""
         try:
-            self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
+            key = self._param_key(item.children[0])
         except (_Unknown, ValueError, ZeroDivisionError) as exc:
-            self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
+            self.notes.append(f"line {self.lines.line(start)}: the parameter number cannot be evaluated ({exc})")
+            return None, 0.0
+        try:
+            return key, self._eval(item.children[1])
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
             self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
+            return key, None
 
     def _oword(self, item: Tree, start: int, stack) -> None:
         """O-word blocks (sub, if, while, do, repeat) must close in order."""
