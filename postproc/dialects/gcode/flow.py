@@ -162,6 +162,7 @@ class Line:
     words: dict = field(default_factory=dict)  # literal P and L of a plain block
     doc: int = 0  # which file
     extra: dict = field(default_factory=dict)  # Siemens statement details (siemens.classify)
+    assigns: list = field(default_factory=list)  # a block of only `#n = e` settings: evaluated here, no IR row
 
 
 @dataclass
@@ -372,6 +373,9 @@ class Runner:
                     ln.m.add(round(value, 1))
                 elif letter in "PL" and value is not None:
                     ln.words[letter] = value
+        items = [i for i in ln.tree.children if isinstance(i, Tree) and i.data != "comment"]
+        if items and all(i.data == "assign" for i in items):
+            ln.assigns = items
         if ln.keyword and any(isinstance(i, Tree) and i.data == "word" for i in ln.tree.children):
             raise self._error(ln.start, f"o{ln.label} {ln.keyword}: an O-word line takes no other words")
         return ln
@@ -396,6 +400,10 @@ class Runner:
                 if pc is None:  # RET of the main program
                     return
                 continue
+            if ln.assigns:
+                self._set_params(ln)
+                pc += 1
+                continue
             if ln.label and not ln.keyword:  # a Fanuc program number: its body runs only when called
                 pc = self._skip_fanuc(pc) if len(frames) == 1 else pc + 1
                 continue
@@ -405,6 +413,15 @@ class Runner:
             if ln.m & {2.0, 30.0}:
                 return
             pc = self._m98_m99(pc, ln, frames)
+
+    def _set_params(self, ln: Line) -> None:
+        """A block of parameter settings only: read all, then set (as the block reader does)."""
+        params = self.parser.params
+        for key, value in [self.parser._assign(item, ln.start) for item in ln.assigns]:
+            if value is None:
+                params.pop(key, None)
+            elif key is not None:
+                params[key] = value
 
     def _skip_fanuc(self, pc: int) -> int:
         """Main-program flow reaching `O1`: LinuxCNC skips the Fanuc sub to its M99."""
