@@ -81,7 +81,7 @@ def test_nested_loops_with_break_and_continue(tmp_path):
 def test_fanuc_m98_calls_o_number_until_m99(tmp_path):
     # Fanuc / LinuxCNC M98 P<n> L<count>: O<n> ... M99 runs <count> times; L0 runs it not at all;
     # the parameters are the caller's (no new scope).
-    tp = _read(tmp_path, "#1 = 0\nM98 P1 L3\nM98 P1 L0\nG0 Y1\nM30\nO1\n#1 = [#1 + 1]\nG0 X#1\nM99\n")
+    tp = _read(tmp_path, "#1 = 0\nM98 P1 L3\nM98 P1 L0\nG0 Y1\nM30\nO0001\n#1 = [#1 + 1]\nG0 X#1\nM99\n")
     assert tp.position[:, 0].tolist() == [1, 2, 3, 3]
     assert tp.position[-1, 1] == 1
 

@@ -363,6 +363,7 @@ class Runner:
                 continue
             if item.data == "oword":
                 ln.label = re.sub(r"\s+", "", str(item.children[0])[1:].lower()).strip("<>")
+                ln.label = str(int(ln.label)) if ln.label.isdigit() else ln.label  # O0001 is O1 (M98 P1)
                 if len(item.children) > 1:
                     ln.keyword = str(item.children[1]).lower()
                     ln.args = list(item.children[2:])
