@@ -460,6 +460,15 @@ class Runner:
             raise self._error(ln.start, f"calls nested deeper than {MAX_CALL_DEPTH}: recursion that does not end at post time is refused")
         frames.append(frame)
 
+    def _where(self, offset: int) -> str:
+        """`line N` of the program, or `FILE:N` in a sub's own file."""
+        if self.joined is None:
+            return f"line {self.parser.lines.line(offset)}"
+        k = int(self.joined.part(offset))
+        index, path = self.joined.parts[k]
+        line = int(index.line(offset - int(self.joined.bases[k])))
+        return f"line {line}" if k == 0 else f"{Path(path).name}:{line}"
+
     def _unsure(self) -> bool:
         return self.tainted_from is not None
 
@@ -467,7 +476,7 @@ class Runner:
         if self.tainted_from is None:
             self.tainted_from = self.rows
             self.parser.notes.append(
-                f"line {self.parser.lines.line(ln.start)}: {what} cannot be decided at post time; "
+                f"{self._where(ln.start)}: {what} cannot be decided at post time; "
                 "from here on each target is listed once and flagged unresolved")
 
     def _value(self, ln: Line, node, what: str):
