@@ -252,3 +252,9 @@ def test_a_lines_parameter_settings_take_effect_after_the_line(tmp_path):
     tp = _read(tmp_path, "#1 = 1\n#1 = 5 #2 = #1\nG0 X#1 Y#2 Z0\n#3 = #<_hal[x]>\n#3 = 7 G0 X#3\n#3 = #<_hal[x]>\nG0 Y#3\nM2\n")
     assert tp.position[0].tolist() == [5, 1, 0]
     assert np.isnan(tp.position[1, 0]) and np.isnan(tp.position[2, 1])  # never the old #3 (7)
+
+
+def test_a_tilted_plane_set_in_a_loop_is_named_by_its_line(tmp_path):
+    tp = _read(tmp_path, "G0 X0 Y0 Z0\no1 repeat [2]\nG68.2 X0 Y0 Z0 I0 J0 K90\nG1 X1 F100\nG69\no1 endrepeat\nM2\n")
+    assert len(tp) == 3 and {tp.frame_names[f] for f in tp.frame[1:]} == {"G54+G68.2@line3"}
+    np.testing.assert_allclose(tp.base_positions()[1:], [[0, 1, 0]] * 2, atol=1e-12)  # X1 turned 90 degrees about Z

@@ -78,6 +78,7 @@ class GcodeParser:
         self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
         self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
+        self.event_offsets: dict[int, int] = {}  # flow.py: execution index of an event -> its offset in the text
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
         self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
 
@@ -145,7 +146,10 @@ class GcodeParser:
 
     def _when(self, start: int) -> int:
         """Time of an event (G10, G68.2) in the block table's order: its offset, or its execution index."""
-        return start if self.clock is None else self.clock
+        if self.clock is None:
+            return start
+        self.event_offsets[self.clock] = start
+        return self.clock
 
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
@@ -444,7 +448,7 @@ class GcodeParser:
                 continue
             for f in np.unique(frame_idx[sel]):
                 both = sel & (frame_idx == f)
-                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
+                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.event_offsets.get(self.tilts[k][0], self.tilts[k][0]))}"
                 frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
 
     def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
