@@ -89,6 +89,15 @@ class EmitError(InputError):
     """A modified toolpath cannot be written back into its source text."""
 
 
+class SharedNumberError(EmitError):
+    """One number of the text would need different new values for the targets that use it
+    (a loop body or subroutine executed several times, a named point used by several moves)."""
+
+    def __init__(self, path: str, line: int, column: int, message: str):
+        self.path, self.line, self.column = path, line, column
+        super().__init__(f"{path}:{line}:{column}: {message}")
+
+
 class OutputError(InputError):
     """An output file cannot be written where the user asked (missing folder, no permission)."""
 

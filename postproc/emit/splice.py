@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import EmitError
+from ..errors import EmitError, SharedNumberError
 from ..ir import F_ARC, F_POS, FIELDS, Toolpath
 from . import number_kernel
 
@@ -97,11 +97,7 @@ class _BulkEdits:
         for j in dup.tolist():
             a, b = order[j], order[j + 1]
             if self.text(a) != self.text(b) if a in self.literal or b in self.literal else (self.digits[a], self.decimals[a], self.negative[a]) != (self.digits[b], self.decimals[b], self.negative[b]):
-                name = original.target_name[self.rows[a]] or "?"
-                raise EmitError(
-                    f"{original.sources[int(self.file[a])].path}: {FIELDS[self.fields[a]]} of point '{name}' is used by lines "
-                    f"{original.line[self.rows[a]]} and {original.line[self.rows[b]]} with different new values ({self.text(a)} and {self.text(b)})"
-                )
+                raise shared_number_error(original, int(self.file[a]), int(self.start[a]), int(self.fields[a]), [int(self.rows[a]), int(self.rows[b])], (self.text(a), self.text(b)))
         # One edit per number from here on.
         first = np.ones(len(k), bool)
         first[1:] = k[1:] != k[:-1]
@@ -210,10 +206,7 @@ class _Splice:
             other = bulk.text(i)
         if other is not None and other != text:
             other_row = self.edits[key][2] if key in self.edits else int(bulk.rows[bulk.lookup(file, start)])
-            raise EmitError(
-                f"{original.sources[file].path}: {FIELDS[f]} of point '{original.target_name[r] or '?'}' is used by lines "
-                f"{original.line[other_row]} and {original.line[r]} with different new values ({other} and {text})"
-            )
+            raise shared_number_error(original, file, start, f, [other_row, r], (other, text))
         self.edits[key] = (end, text, r, f)
         return float(text)
 
@@ -274,7 +267,7 @@ class _Splice:
                 elif original.relative[r] and np.isnan(original.values[r, f]):
                     self.written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
         for (file, offset), pieces in inserts.items():
-            self.edits[(file, offset)] = (offset, "".join(pieces), -1, -1)
+            self.edits[(file, offset)] = (offset, "".join(p for p, _ in pieces.values()), -1, -1)
 
     def arc_word_inserts(self, insert_field) -> None:
         """Arc words (I J K R) the compensation gives a value where the text has none (an
@@ -311,9 +304,10 @@ class _Splice:
         if piece is None:
             raise EmitError(f"line {original.line[r]}: cannot add {FIELDS[f]} to this target")
         self.written[r, f] = start + float(text) * original.scale[r, f]
-        pieces = inserts.setdefault((file, offset), [])
-        if piece not in pieces:
-            pieces.append(piece)
+        pieces = inserts.setdefault((file, offset), {})
+        if pieces.get(f, (piece, r))[0] != piece:  # one block executed several times (a loop, a sub)
+            raise shared_number_error(original, file, offset, f, [pieces[f][1], r], (pieces[f][0].strip(), piece.strip()), added=True)
+        pieces.setdefault(f, (piece, r))
 
     def edited_keys(self) -> np.ndarray:
         """file * 2^40 + start of every edited number."""
@@ -372,9 +366,19 @@ def _check_shared(original: Toolpath, modified: Toolpath, edited: np.ndarray) ->
             continue
         values = {float(modified.values[r, f]) for r, f in users}
         if len(values) > 1:
-            lines = sorted({int(original.line[r]) for r, _ in users})
-            name = original.target_name[users[0][0]] or "?"
-            raise EmitError(
-                f"{original.sources[key[0]].path}: point '{name}' is used by lines {', '.join(map(str, lines))}, "
-                "which ask for different new values; give each use its own point"
-            )
+            raise shared_number_error(original, key[0], key[1], users[0][1], [r for r, _ in users], tuple(f"{v:g}" for v in sorted(values)))
+
+
+def shared_number_error(original: Toolpath, file: int, start: int, field: int, rows, texts, added: bool = False) -> SharedNumberError:
+    """The refusal of one text position that targets ``rows`` would write differently."""
+    text = original.sources[file].text
+    line = text.count("\n", 0, start) + 1
+    column = start - (text.rfind("\n", 0, start) + 1) + 1
+    lines = sorted({int(original.line[r]) for r in rows})
+    name = original.target_name[rows[0]] or ""
+    what = f"{FIELDS[field]} {'to be added here' if added else 'written here'}"
+    owner = f"point '{name}'" if name else "one block executed several times: a loop body or a subroutine"
+    return SharedNumberError(
+        original.sources[file].path, line, column,
+        f"{what} ({owner}) is used by lines {', '.join(map(str, lines))}, which ask for different new values ({' and '.join(texts)}); "
+        "give each use its own point (unroll the loop or the call)")

@@ -23,7 +23,7 @@ from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
-from . import arcwords
+from . import arcwords, flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -54,6 +54,16 @@ _STATE_OF_G = {
 }
 
 
+_FUNCS = {"SIN": lambda v: math.sin(math.radians(v)), "COS": lambda v: math.cos(math.radians(v)), "TAN": lambda v: math.tan(math.radians(v)),
+          "ASIN": lambda v: math.degrees(math.asin(v)), "ACOS": lambda v: math.degrees(math.acos(v)), "ABS": abs, "SQRT": math.sqrt,
+          "EXP": math.exp, "LN": math.log, "ROUND": lambda v: float(round(v)), "FIX": lambda v: float(math.floor(v)), "FUP": lambda v: float(math.ceil(v))}
+# Binary operators, built once (evaluated per executed block in loops and subs).
+_BINOPS = {"+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a * b, "/": lambda a, b: a / b if b else math.inf,
+           "MOD": lambda a, b: math.fmod(a, b) if b else math.nan, "EQ": lambda a, b: float(a == b), "NE": lambda a, b: float(a != b),
+           "GT": lambda a, b: float(a > b), "GE": lambda a, b: float(a >= b), "LT": lambda a, b: float(a < b), "LE": lambda a, b: float(a <= b),
+           "AND": lambda a, b: float(bool(a) and bool(b)), "OR": lambda a, b: float(bool(a) or bool(b)), "XOR": lambda a, b: float(bool(a) != bool(b))}
+
+
 class _Unknown(Exception):
     """A parameter or expression whose value the program text does not determine."""
 
@@ -68,6 +78,10 @@ class GcodeParser:
         self.notes: list[str] = []
         self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
         self.tilts: list[tuple[int, object]] = []  # (offset, G68.2 frame, None after G69, or "unknown")
+        self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
+        self.event_offsets: dict[int, int] = {}  # flow.py: execution index of an event -> its offset in the text
+        self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
+        self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -109,6 +123,8 @@ class GcodeParser:
         # ---- slow blocks, in order (parameters are evaluated in program order)
         skip = np.zeros(len(self.lines.starts), bool)
         skip[bulk.line] = True
+        if flow.needs_flow_in(text, self.lines.starts[~skip]):  # O-words, M98, Siemens statements are never bulk lines
+            return self._parse_flow()
         slow = self._slow(skip)
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:
@@ -118,20 +134,39 @@ class GcodeParser:
         table = {k: v[order] for k, v in table.items()}
         return self._resolve(table)
 
+    def _parse_flow(self) -> Toolpath:
+        """Programs with O-word control flow or M98: blocks read in execution order (flow.py)."""
+        runner = flow.Runner(self)
+        table = self._slow(None, runner.run())
+        if not len(table["offset"]):
+            return runner.finish(self.builder.build())
+        table["seq"] = np.arange(len(table["offset"]))
+        if runner.tainted_from is not None:
+            table["ok"][runner.tainted_from :] = False
+        return runner.finish(self._resolve(table))
+
+    def _when(self, start: int) -> int:
+        """Time of an event (G10, G68.2) in the block table's order: its offset, or its execution index."""
+        if self.clock is None:
+            return start
+        self.event_offsets[self.clock] = start
+        return self.clock
+
     # ------------------------------------------------------------- slow path
-    def _slow(self, skip: np.ndarray) -> dict:
+    def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
         g = grammar("gcode")
         out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
         stack: list[tuple[str, int]] = []
         text = self.text
-        for start in self.lines.starts[~skip].tolist():
+        for start in self.lines.starts[~skip].tolist() if starts is None else starts:
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             line = text[start:end].rstrip("\r")
             stripped = line.strip()
             if not stripped or stripped == "%":
                 continue
-            tree = parse_statement(g, line, self.lines, self.doc.path, start, "G-code block")
+            tree = self.trees.get(start) if self.trees else None
+            tree = tree or parse_statement(g, line, self.lines, self.doc.path, start, "G-code block")
             self._block(tree, start, out, stack)
             out["code_end"].append(start + len(_code_part(line)))
         if stack:
@@ -168,10 +203,7 @@ class GcodeParser:
             return self.params[key]
         if kind == "func":
             name, arg = str(node.children[0]).upper(), self._eval(node.children[1])
-            fns = {"SIN": lambda v: math.sin(math.radians(v)), "COS": lambda v: math.cos(math.radians(v)), "TAN": lambda v: math.tan(math.radians(v)),
-                   "ASIN": lambda v: math.degrees(math.asin(v)), "ACOS": lambda v: math.degrees(math.acos(v)), "ABS": abs, "SQRT": math.sqrt,
-                   "EXP": math.exp, "LN": math.log, "ROUND": lambda v: float(round(v)), "FIX": lambda v: float(math.floor(v)), "FUP": lambda v: float(math.ceil(v))}
-            return fns[name](arg)
+            return _FUNCS[name](arg)
         if kind == "atan2":
             return math.degrees(math.atan2(self._eval(node.children[1]), self._eval(node.children[2])))
         if kind in ("sum_expr", "prod_expr", "or_expr", "and_expr", "cmp_expr", "pow_expr"):
@@ -179,10 +211,7 @@ class GcodeParser:
             acc = self._eval(ch[0])
             for op, rhs in zip(ch[1::2], ch[2::2]):
                 b = self._eval(rhs)
-                o = str(op).upper()
-                acc = {"+": acc + b, "-": acc - b, "*": acc * b, "/": acc / b if b else math.inf, "MOD": math.fmod(acc, b) if b else math.nan,
-                       "EQ": float(acc == b), "NE": float(acc != b), "GT": float(acc > b), "GE": float(acc >= b), "LT": float(acc < b), "LE": float(acc <= b),
-                       "AND": float(bool(acc) and bool(b)), "OR": float(bool(acc) or bool(b)), "XOR": float(bool(acc) != bool(b))}[o]
+                acc = _BINOPS[str(op).upper()](acc, b)
             if kind == "pow_expr" and len(ch) == 2:
                 acc = self._eval(ch[0]) ** self._eval(ch[1])
             return acc
@@ -205,17 +234,25 @@ class GcodeParser:
         state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h")}
         ok = True
         gcodes: list[float] = []
+        assigns: list[tuple] = []
         for item in tree.children:
             if not isinstance(item, Tree):
                 continue
             if item.data == "assign":
-                self._assign(item, start)
+                assigns.append(self._assign(item, start))
             elif item.data == "oword":
                 self._oword(item, start, stack)
+            elif item.data == "keyword" and self.siemens and str(item.children[0]).upper() == "SUPA":
+                gcodes.append(53.0)  # SUPA: this block in machine coordinates, as G53
             elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
                 ok &= self._word(item, start, values, spans, state, gcodes)
+        for key, value in assigns:  # LinuxCNC: a line's parameter settings take effect after the whole line is read
+            if value is None:
+                self.params.pop(key, None)  # unknown from here on, never the old value
+            elif key is not None:
+                self.params[key] = value
         nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
         out["offset"].append(start)
         out["values"].append(values)
@@ -226,13 +263,19 @@ class GcodeParser:
         out["ok"].append(ok)
         out["g53"].append(g53)
 
-    def _assign(self, item: Tree, start: int) -> None:
-        """#n = expression: evaluated now (program order); a value that cannot be is forgotten."""
+    def _assign(self, item: Tree, start: int) -> tuple:
+        """#n = expression: (key, value) evaluated now (program order); value None where it
+        cannot be (the parameter is then unknown); key None where the target is unknown."""
         try:
-            self.params[self._param_key(item.children[0])] = self._eval(item.children[1])
+            key = self._param_key(item.children[0])
         except (_Unknown, ValueError, ZeroDivisionError) as exc:
-            self.params.pop(self._param_key(item.children[0]) if not isinstance(exc, _Unknown) else None, None)
+            self.notes.append(f"line {self.lines.line(start)}: the parameter number cannot be evaluated ({exc})")
+            return None, 0.0
+        try:
+            return key, self._eval(item.children[1])
+        except (_Unknown, ValueError, ZeroDivisionError) as exc:
             self.notes.append(f"line {self.lines.line(start)}: parameter value cannot be evaluated ({exc})")
+            return key, None
 
     def _oword(self, item: Tree, start: int, stack) -> None:
         """O-word blocks (sub, if, while, do, repeat) must close in order."""
@@ -256,7 +299,8 @@ class GcodeParser:
         try:
             value = self._eval(vnode)
         except (_Unknown, ValueError, ZeroDivisionError) as exc:
-            value, known = np.nan, False
+            # +inf: an axis, -inf: a feed, unknown until the next absolute word (never the old value)
+            value, known = (np.inf if letter in "XYZABC" else -np.inf if letter == "F" else np.nan), False
             self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
         if letter == "G":
             gcodes.append(round(value, 1))
@@ -273,7 +317,9 @@ class GcodeParser:
         """The block's G codes into its modal state; returns (no motion in this block, G53)."""
         nonmotion = g53 = False
         for gc in gcodes:
-            if gc in _STATE_OF_G:
+            if self.siemens and gc in (70.0, 700.0, 71.0, 710.0):
+                state["units"] = 20.0 if gc in (70.0, 700.0) else 21.0  # SINUMERIK inch / metric
+            elif gc in _STATE_OF_G:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
             elif 73.0 <= gc <= 89.0:
@@ -284,10 +330,10 @@ class GcodeParser:
                 nonmotion = True
                 self._tilt(values, start)
             elif gc == 69.0:
-                self.tilts.append((start, None))
+                self.tilts.append((self._when(start), None))
             elif gc in (68.0, 68.3, 68.4):
                 self.notes.append(f"line {self.lines.line(start)}: G{gc:g} coordinate rotation is not evaluated; later targets are flagged")
-                self.tilts.append((start, "unknown"))
+                self.tilts.append((self._when(start), "unknown"))
             elif gc in _NONMOTION:
                 nonmotion = True
                 if gc == 10.0:
@@ -302,11 +348,11 @@ class GcodeParser:
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         if p and p.group(1) != "0":
             self.notes.append(f"line {self.lines.line(start)}: G68.2 P{p.group(1)} is not evaluated (only P0, Euler ZXZ); later targets are flagged")
-            self.tilts.append((start, "unknown"))
+            self.tilts.append((self._when(start), "unknown"))
             return
         v = np.nan_to_num(values)
         rot = rot_z(np.radians(v[_AX["I"]])) @ rot_x(np.radians(v[_AX["J"]])) @ rot_z(np.radians(v[_AX["K"]]))
-        self.tilts.append((start, make_transform(rot, v[:3])))
+        self.tilts.append((self._when(start), make_transform(rot, v[:3])))
 
     def _g10(self, values, start) -> None:
         """G10 L2/L20 Pn X Y Z: a work offset set in the program (recorded as an event)."""
@@ -314,7 +360,7 @@ class GcodeParser:
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         lcode = re.search(r"[Ll][ \t]*(\d+)", line)
         if p and lcode and lcode.group(1) in ("2", "20"):
-            self.g10.append((start, int(p.group(1)), np.nan_to_num(values[:3])))
+            self.g10.append((self._when(start), int(p.group(1)), np.nan_to_num(values[:3])))
 
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
@@ -330,9 +376,13 @@ class GcodeParser:
         circle = arcwords.full_circles(t, arc_motion & ~has_axis & ~t["nonmotion"] & (canned == 0.0), self._error_at)
         moves = (has_axis | circle) & ~t["nonmotion"] & (canned == 0.0) & ~np.isnan(motion)
         absolute = _absolute_positions(values, moves | t["g53"], dist, linear_scale)
+        absolute[np.isinf(absolute)] = np.nan  # axes that follow from a word the program cannot evaluate
         rows = np.nonzero(moves)[0]
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1)
+        speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
+        unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
+        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed
+        speed[np.isneginf(speed)] = np.nan
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
@@ -350,7 +400,7 @@ class GcodeParser:
         offsets = t["offset"][rows]
         m = len(rows)
         self.builder.add_block(
-            offsets,
+            t["seq"][rows] if "seq" in t else offsets,  # flow.py: execution order
             kind=_MOTION_KIND_CODES[motion[rows].astype(int)],
             line=self.lines.line(offsets),
             values=ir_values,
@@ -360,7 +410,7 @@ class GcodeParser:
             frame=frame_idx,
             tool=tool_idx,
             resolved=resolved,
-            speed=_ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows],
+            speed=speed,
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
             **({"arc": arc} if arc is not None else {}),
@@ -386,7 +436,7 @@ class GcodeParser:
                 frame_idx[sel] = self.builder.frame_index(name, None)
                 unknown.append(name)
                 continue
-            at = np.searchsorted(np.array([o for o, _ in events]), t["offset"][rows][sel], side="right") - 1
+            at = np.searchsorted(np.array([o for o, _ in events]), t.get("seq", t["offset"])[rows][sel], side="right") - 1
             ids = np.array([self.builder.frame_index(f"{name}@{i}", make_transform(np.eye(3)[None], off[None])[0]) for i, (_, off) in enumerate(events)])
             frame_idx[sel] = np.where(at >= 0, ids[np.maximum(at, 0)], self.builder.frame_index(name, None))
         if unknown:
@@ -399,7 +449,7 @@ class GcodeParser:
         if not self.tilts:
             return
         offs = np.array([o for o, _ in self.tilts])
-        at = np.searchsorted(offs, t["offset"][rows], side="right") - 1
+        at = np.searchsorted(offs, t.get("seq", t["offset"])[rows], side="right") - 1
         for k in np.unique(at[at >= 0]):
             tilt = self.tilts[k][1]
             sel = at == k
@@ -410,7 +460,7 @@ class GcodeParser:
                 continue
             for f in np.unique(frame_idx[sel]):
                 both = sel & (frame_idx == f)
-                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.tilts[k][0])}"
+                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.event_offsets.get(self.tilts[k][0], self.tilts[k][0]))}"
                 frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
 
     def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
