@@ -80,12 +80,13 @@ def _zone(name: str) -> float:
 
 
 @njit(cache=True)
-def _gather_robtargets(first, num_start, num_end, num_value, fields, source):
-    """values (M, NF), spans (M, NF, 3), conf (M, 4) of M robtarget literals of module
-    ``source`` whose 17 numbers start at number index ``first``; an external axis of 9E9 is 'none'."""
+def _gather_robtargets(first, num_start, num_end, num_value, fields, source, nf):
+    """values (M, nf), spans (M, nf, 3), conf (M, 4) of M robtarget literals of module
+    ``source`` whose 17 numbers start at number index ``first``; an external axis of 9E9 is 'none'.
+    (The IR width ``nf`` is an argument: numba's on-disk cache would keep a global's old value.)"""
     m = len(first)
-    values = np.full((m, NF), np.nan)
-    spans = np.full((m, NF, 3), -1, np.int64)
+    values = np.full((m, nf), np.nan)
+    spans = np.full((m, nf, 3), -1, np.int64)
     conf = np.empty((m, 4))
     for r in range(m):
         for k in range(len(fields)):
@@ -193,7 +194,7 @@ class RapidParser:
     def _bulk_literals(self, starts: np.ndarray):
         """Vectorised read of many one-line robtarget literals: values (M, NF), spans, conf."""
         lo = np.searchsorted(self.numbers.start, starts)
-        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS, self.index)
+        return _gather_robtargets(lo, self.numbers.start, self.numbers.end, self.numbers.value, _RT_FIELDS, self.index, NF)
 
     # --------------------------------------------------------------- parse
     def parse(self) -> Toolpath:
