@@ -596,6 +596,7 @@ def compensate_cmd(
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
     cut: Optional[Path] = typer.Option(None, "--cut", help="Cut file (tool, material, engagement; see examples/cut_aluminium.toml): the mechanistic milling force of every cutting move, pre-compensated through the model's external_load effect."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
+    subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
@@ -622,8 +623,8 @@ def compensate_cmd(
     error_model, _ = load_model(model)
     forces = None if force is None else _floats(force, 3, "--force")
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
-        if cut is not None or in_place:
-            raise InputError("--cut and --in-place work on one program at a time (not with --out-dir)")
+        if cut is not None or in_place or subdivide:
+            raise InputError("--cut, --in-place and --subdivide work on one program at a time (not with --out-dir)")
         options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
                    "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
                    "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
@@ -637,11 +638,18 @@ def compensate_cmd(
     log = err if to_stdout else out
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
-        new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
-                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
-                              start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                              force_per_target=_cut_forces(cut, tp, frame, tool), max_deviation_mm=max_deviation,
-                              progress=lambda m: bar.update(task, description=m))
+        options = dict(tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
+                       frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
+                       start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                       force_per_target=_cut_forces(cut, tp, frame, tool), progress=lambda m: bar.update(task, description=m))
+        written, added = tp, ()
+        if subdivide:
+            from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
+
+            sub = compensate_subdivided(tp, error_model, max_deviation or DEFAULT_TOLERANCE_MM, **options)
+            written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
+        else:
+            new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
     summary = rep.summary()
     if report is not None:
         _write_point_report(report, rep, summary)
@@ -652,7 +660,9 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    _write_compensated(tp, new, np.nonzero(rep.compensated)[0], output, in_place)
+    _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
+    if added:
+        log.print(f"{len(added)} new target(s) subdivide straight segments (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -719,10 +729,13 @@ def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
         refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
 
 
-def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
+def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None) -> None:
     """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
-    whole set of changed files at once, or the program to standard output."""
+    whole set of changed files at once, or the program to standard output. ``original``:
+    the program as read when ``tp`` has new targets (files differing from it are written)."""
     from .programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
+
+    original = tp if original is None else original
 
     texts = emit_texts(tp, new)
     check_texts(tp, new, texts, rows)
@@ -730,8 +743,8 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
         sys.stdout.buffer.write(texts[0].encode("latin-1"))
         sys.stdout.buffer.flush()
         return
-    files = files_for(tp, texts, output)
-    refuse_overwrite(tp, files, in_place)
+    files = files_for(original, texts, output)
+    refuse_overwrite(original, files, in_place)
     write_set(files, backup=in_place)
 
 def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:

@@ -87,6 +87,8 @@ class KrlDialect(Dialect):
     def travels_with_program(self, doc: SourceDoc) -> bool:
         return doc.role in ("src", "dat")  # a module is its .src and its .dat
 
+    point_name_limit = 24  # KRL names: at most 24 characters (KSS 8 programming manual, "Names")
+
     def new_writer(self, name: str):
         from .writer import KrlWriter
 

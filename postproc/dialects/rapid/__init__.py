@@ -78,6 +78,19 @@ class RapidDialect(Dialect):
     def travels_with_program(self, doc: SourceDoc) -> bool:
         return True  # a program is all its modules
 
+    point_name_limit = 32  # RAPID identifiers: at most 32 characters (RAPID overview, "Identifiers")
+    statement_end = ";"
+
+    def conf_of_joints(self, robot, q_deg):
+        from ...kinematics import abb_confdata
+
+        return abb_confdata(robot, q_deg).astype(float)
+
+    def set_conf_text(self, text: str, conf) -> str:
+        from .targets import set_robtarget_conf
+
+        return set_robtarget_conf(text, conf)
+
     def new_writer(self, name: str):
         from .writer import RapidWriter
 

@@ -1,0 +1,162 @@
+"""Subdividing straight segments (issue 13, `compensate --subdivide`): where the predicted
+path between compensated targets strays more than the tolerance from the intended line,
+new compensated targets are written the language's way, and the re-parsed output holds
+every target (old and new) at its compensated value with the path within the tolerance."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
+from postproc import dialects
+from postproc import kinematics as kin
+from postproc.cli import app
+from postproc.compensate import compensate
+from postproc.effects import parse_effects
+from postproc.emit.insert import NewPoint
+from postproc.errors import EmitError
+from postproc.identify import fit
+from postproc.ir import Kind
+from postproc.model_io import save_model
+from postproc.programs import parse_program
+from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.subdivide import compensate_subdivided, new_points
+
+runner = CliRunner()
+DOWN = "A 0, B 180, C 0"
+
+
+@pytest.fixture(scope="module")
+def model():
+    robot = kr160()
+    rng = np.random.default_rng(3)
+    effects = parse_effects(FRAME_AND_COMPLIANCE)
+    truth = random_truth(robot, TOOL, effects, rng)
+    data = simulate(truth, sample_poses(robot, TOOL, 300, Cylinder(), rng), rng)
+    return fit(robot, TOOL, effects, data, cv_folds=0).model
+
+
+def _start_ptp(x, y, z):
+    """An axis PTP to the joints of the first target (the wrist as a KR160 usually holds it)."""
+    from postproc.frames import abc_to_matrix, make_transform
+
+    pose = make_transform(abc_to_matrix(np.array([[0.0, 180.0, 0.0]]))[0], np.array([x, y, z]))
+    flange = pose @ np.linalg.inv(make_transform(np.eye(3), TOOL))
+    q, _ = kin.select_nearest(kr160(), kin.ik(kr160(), flange[None]), np.array([[0, -60, 40, 0, 60, 0.0]]))
+    return "PTP {" + ", ".join(f"A{i + 1} {v:.6f}" for i, v in enumerate(q[0])) + "}"
+
+
+def _krl(tmp_path):
+    """A .src with named points in its .dat (long LINs) and an inline LIN."""
+    src = ["DEF part( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",
+           _start_ptp(1000, -300, 500), "LIN XPSTART C_DIS", "LIN XP_LONG_POINT_NAME_2345 C_DIS",
+           f"LIN {{X 1300, Y 300, Z 500, {DOWN}}}", "END"]
+    dat = ["DEFDAT part", f"DECL E6POS XPSTART={{X 1000,Y -300,Z 500,{DOWN},S 2,T 35,E1 0,E2 0,E3 0,E4 0,E5 0,E6 0}}",
+           f"DECL E6POS XP_LONG_POINT_NAME_2345={{X 1000,Y 300,Z 500,{DOWN},S 2,T 35,E1 0,E2 0,E3 0,E4 0,E5 0,E6 0}}", "ENDDAT"]
+    (tmp_path / "part.src").write_text("\n".join(src) + "\n")
+    (tmp_path / "part.dat").write_text("\n".join(dat) + "\n")
+    return tmp_path / "part.src"
+
+
+def test_long_lines_get_compensated_targets_and_the_path_is_within_tolerance(model, tmp_path):
+    tp = parse_program(_krl(tmp_path))
+    _, plain = compensate(tp, model)
+    assert np.nanmax(plain.path_mm) > 0.05  # 600 mm and 300 mm lines bow by ~0.1 mm
+    sub = compensate_subdivided(tp, model, 0.02)
+    assert not sub.report.failed.any(), sub.report.failures()
+    assert np.nanmax(sub.report.path_mm) <= 0.02
+    assert len(sub.program) > len(tp) and len(sub.added) == len(sub.program) - len(tp)
+    assert all(len(name) <= 24 for _, name in sub.added)  # KRL names
+    assert set(sub.program.kind[[i for i in range(len(sub.program)) if sub.program.line[i] in {l for l, _ in sub.added}]]) == {Kind.LINEAR}
+
+
+def test_cli_writes_src_and_dat_and_they_read_back_compensated(model, tmp_path):
+    prog = _krl(tmp_path)
+    save_model(tmp_path / "m.json", model)
+    out = tmp_path / "out" / "part.src"
+    out.parent.mkdir()
+    res = runner.invoke(app, ["compensate", str(prog), "--model", str(tmp_path / "m.json"), "-o", str(out), "--subdivide"])
+    assert res.exit_code == 0, res.output
+    assert "new target(s) subdivide" in res.output
+    dat = (out.with_suffix(".dat")).read_text()
+    src = out.read_text()
+    assert "DECL E6POS XP_LONG_POINT_NAME_23_S1=" in dat and "LIN XP_LONG_POINT_NAME_23_S1 C_DIS" in src
+    assert "LIN {X 1" in src and src.count("LIN {") > 1  # the inline LIN got inline copies
+    # The written program, compensated again under the same model, needs (almost) nothing:
+    # every target is where the compensation put it, and the path stays within 0.02 mm.
+    written = parse_program(out)
+    sub = compensate_subdivided(parse_program(prog), model, 0.02)
+    np.testing.assert_allclose(written.base_positions(), sub.compensated.base_positions(), atol=1e-3)
+    assert np.nanmax(sub.report.path_mm) <= 0.02
+
+
+def test_without_subdivide_max_deviation_refuses(model, tmp_path):
+    prog = _krl(tmp_path)
+    save_model(tmp_path / "m.json", model)
+    out = tmp_path / "o.src"
+    res = runner.invoke(app, ["compensate", str(prog), "--model", str(tmp_path / "m.json"), "-o", str(out), "--max-deviation", "0.02"])
+    assert res.exit_code == 1 and "--subdivide adds targets" in res.output
+    assert not out.exists() and not out.with_suffix(".dat").exists()
+
+
+RAPID = """MODULE part
+  CONST robtarget p1 := [[1000,-300,500],[0,0,1,0],[-1,0,-1,1],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  CONST robtarget p2 := [[1000,300,500],
+     [0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    MoveL p1, v100, z10, tool0;
+    MoveL p2, v100, z10, tool0;
+    MoveL [[1300,300,500],[0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]], v200, fine, tool0;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_rapid_robtargets_and_moves_are_copied_with_their_confdata(tmp_path):
+    (tmp_path / "part.mod").write_text(RAPID)
+    tp = parse_program(tmp_path / "part.mod")
+    points = new_points(tp, kr160(), np.array([1, 2]), np.array([3, 2]))
+    sources, names = dialects.of(tp).insert_points(tp, points)
+    text = sources[0].text
+    assert names == ["p2_S1", "p2_S2", ""]
+    assert "CONST robtarget p2_S1 := [[1000,-100,500]," in text and "MoveL p2_S2, v100, z10, tool0;" in text
+    assert "MoveL [[1150,300,500],[0,0,1,0]," in text and text.count("v200, fine") == 2
+    back = dialects.of(tp).parse_sources(sources)
+    assert len(back) == 6 and (back.kind == Kind.LINEAR).all()
+    # confdata of each new point is its own (the line crosses axis 1's quadrant boundary at
+    # y = 0: cf1 -1 before it, 0 after), not a copy of the end target's
+    np.testing.assert_array_equal(back.conf[1:3], [[-1, 0, -1, 1], [0, 0, 0, 1]])
+
+
+def test_gcode_blocks_are_copied_without_block_numbers(tmp_path):
+    path = tmp_path / "p.ngc"
+    path.write_text("G21 G90\nN10 G0 X0 Y0 Z10\nN20 G1 X100 Y0 Z10 F600\nN30 X100 Y50\nM30\n")
+    tp = parse_program(path)
+    lang = dialects.of(tp)
+    end = int(np.nonzero(tp.line == 3)[0][0])
+    values = tp.values[end].copy()
+    values[:3] = [50, 0, 10]
+    sources, _ = lang.insert_points(tp, [NewPoint(end, values, np.full(4, np.nan))])
+    assert sources[0].text.splitlines()[2] == "G1 X50 Y0 Z10 F600"
+    back = lang.parse_sources(sources)
+    assert len(back) == len(tp) + 1 and back.kind[end] == Kind.LINEAR
+    np.testing.assert_allclose(back.position[end], [50, 0, 10])
+
+
+def test_gcode_block_that_also_changes_the_tool_is_not_copied(tmp_path):
+    path = tmp_path / "p.ngc"
+    path.write_text("G21 G90\nG0 X0 Y0 Z10\nT2 M6 G1 X100 Y0 Z10 F600\nM30\n")
+    tp = parse_program(path)
+    end = int(np.nonzero(tp.line == 3)[0][0])
+    with pytest.raises(EmitError, match="line 3: the block also does T2 M6"):
+        dialects.of(tp).insert_points(tp, [NewPoint(end, tp.values[end], np.full(4, np.nan))])
+
+
+def test_rapid_offs_target_is_refused_with_its_line(tmp_path):
+    (tmp_path / "o.mod").write_text(RAPID.replace("    MoveL [[1300", "    MoveL Offs(p2,300,0,0), v100, fine, tool0;\n    MoveL [[1300"))
+    tp = parse_program(tmp_path / "o.mod")
+    row = int(np.nonzero(tp.target_name == np.array(tp.target_name))[0][2])
+    with pytest.raises(EmitError, match="line 8: the target is an expression"):
+        dialects.of(tp).insert_points(tp, [NewPoint(row, tp.values[row], np.full(4, np.nan))])
