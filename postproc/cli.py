@@ -596,6 +596,8 @@ def compensate_cmd(
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
     cut: Optional[Path] = typer.Option(None, "--cut", help="Cut file (tool, material, engagement; see examples/cut_aluminium.toml): the mechanistic milling force of every cutting move, pre-compensated through the model's external_load effect."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program is for (a name from robots/ or a file): must be the model's."),
+    allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Compensate although the program's robot, tool or payload differ from the model's (printed as notes)."),
     subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
@@ -627,7 +629,8 @@ def compensate_cmd(
             raise InputError("--cut, --in-place and --subdivide work on one program at a time (not with --out-dir)")
         options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
                    "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
-                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                   "model_check": (str(model), robot, allow_mismatch)}
         raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
     program = programs[0]
     if output is None:
@@ -636,6 +639,10 @@ def compensate_cmd(
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
+    from .program_check import check_model_fits
+
+    for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
+        log.print(f"note: {note} (--allow-model-mismatch)")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         options = dict(tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,

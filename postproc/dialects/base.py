@@ -63,6 +63,10 @@ class Dialect:
         (see postproc.posture). Default: wherever the program gives configuration data."""
         return ~np.isnan(tp.conf).all(axis=1)
 
+    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
+        """(mass kg, 'FILE, line N') of every payload the program states (none by default)."""
+        return []
+
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
         """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
         return np.ones(len(tp.kind), dtype=bool)

@@ -61,6 +61,13 @@ class KrlDialect(Dialect):
 
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
 
+    def payloads(self, tp: Toolpath):
+        """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
+        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""
+        from .loads import load_masses
+
+        return load_masses(tp)
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_base
 

@@ -61,6 +61,12 @@ class RapidDialect(Dialect):
         joint = tp.kind == Kind.JOINT
         return has & np.where(joint, ~joint_off, ~lin_off)
 
+    def payloads(self, tp: Toolpath):
+        """The load (tload mass) of every tooldata the program's Cartesian targets use."""
+        from .targets import tool_masses
+
+        return tool_masses(tp)
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_work_object
 

@@ -28,3 +28,24 @@ def set_robtarget_conf(text: str, conf: np.ndarray) -> str:
         elif ch == "," and depth == 1:
             part += 1
     raise EmitError(f"no confdata in the robtarget '{text.strip()[:80]}'")
+
+
+def tool_masses(tp) -> list[tuple[float, str]]:
+    """(mass kg, 'FILE, line N') of the tload of each tooldata the Cartesian targets use:
+    tooldata is [robhold, [[x,y,z],[q1..q4]], [mass, [cog], [aom], ix, iy, iz]]."""
+    import re
+
+    from ...ir import Kind
+    from ..base import NUMBER
+
+    used = {tp.tool_names[t].upper() for t in np.unique(tp.tool[tp.kind != Kind.ABSJ])}
+    out = []
+    for doc in tp.sources:
+        for m in re.finditer(r"\btooldata\s+(\w+)\s*:=\s*\[", doc.text, re.IGNORECASE):
+            if m.group(1).upper() not in used:
+                continue
+            end = doc.text.find(";", m.end())
+            nums = re.findall(NUMBER, doc.text[m.end() : end])
+            if len(nums) >= 8:
+                out.append((float(nums[7]), f"{doc.path}, line {doc.text.count(chr(10), 0, m.start()) + 1} (tooldata {m.group(1)})"))
+    return out
