@@ -598,6 +598,7 @@ def compensate_cmd(
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
     robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program is for (a name from robots/ or a file): must be the model's."),
     allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Compensate although the program's robot, tool or payload differ from the model's (printed as notes)."),
+    force_file: Optional[Path] = typer.Option(None, "--force-file", help="CSV line,fx,fy,fz[,file]: the process force (N, tool frame) of each motion block by its line (needs a model effect that uses it, e.g. external_load)."),
     subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
@@ -625,8 +626,8 @@ def compensate_cmd(
     error_model, _ = load_model(model)
     forces = None if force is None else _floats(force, 3, "--force")
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
-        if cut is not None or in_place or subdivide:
-            raise InputError("--cut, --in-place and --subdivide work on one program at a time (not with --out-dir)")
+        if cut is not None or in_place or subdivide or force_file is not None:
+            raise InputError("--cut, --force-file, --in-place and --subdivide work on one program at a time (not with --out-dir)")
         options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
                    "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
                    "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
@@ -648,7 +649,7 @@ def compensate_cmd(
         options = dict(tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
                        frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
                        start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                       force_per_target=_cut_forces(cut, tp, frame, tool), progress=lambda m: bar.update(task, description=m))
+                       force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=lambda m: bar.update(task, description=m))
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -695,6 +696,21 @@ def _cut_forces(cut: Optional[Path], tp, frame, tool):
 
     placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
     return program_forces(placed, params=load_cut_params(cut))
+
+
+def _block_forces(cut, force_file, forces, tp, frame, tool, log):
+    """The force of every target in the base frame from --cut or --force-file, None without them."""
+    if force_file is None:
+        return _cut_forces(cut, tp, frame, tool)
+    from .force_file import base_frame_forces, read_force_file
+
+    if cut is not None or forces is not None:
+        raise InputError("--force-file gives the force of every motion block: not with --force or --cut")
+    tool_frame, unlisted = read_force_file(force_file, tp)
+    if unlisted:
+        log.print(f"note: {unlisted} Cartesian target(s) have no row in {force_file}: no process force there")
+    placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
+    return base_frame_forces(placed, tool_frame)
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:

@@ -61,10 +61,25 @@ def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOL
         sources, _ = lang.insert_points(tp, points)
         longer = lang.parse_sources(sources)
         new_index = check_inserted(tp, longer, placed, points, options)
+        options = _options_for_longer(options, tp, points, new_index)
         added_rows = [int(new_index[r]) for r in added_rows] + [int(i) for i in _inserted_rows(tp, points, new_index)]
         tp = longer
     added = tuple((int(tp.line[r]), tp.target_name[r]) for r in sorted(added_rows))
     return Subdivided(tp, new, report, added)
+
+
+def _options_for_longer(options: dict, tp: Toolpath, points: list[NewPoint], new_index: np.ndarray) -> dict:
+    """Per-target options (a force per motion block) for the longer program: a new target
+    gets the value of the motion it was copied from."""
+    per_target = options.get("force_per_target")
+    if per_target is None:
+        return options
+    per_target = np.asarray(per_target)
+    out = np.zeros((len(tp) + len(points),) + per_target.shape[1:])
+    out[new_index] = per_target
+    rows = sorted(p.row for p in points)
+    out[_inserted_rows(tp, points, new_index)] = per_target[rows]
+    return {**options, "force_per_target": out}
 
 
 def _segments_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndarray:
