@@ -53,11 +53,14 @@ class RapidDialect(Dialect):
         """MoveJ follows its confdata unless ConfJ\\Off is in force; MoveL/MoveC unless
         ConfL\\Off is (RAPID reference, 'ConfJ', 'ConfL': with \\Off the robot takes the
         configuration nearest the current one). The switches are taken in the order of the
-        module's text, which is the order of execution within one routine."""
+        program's execution from main (postproc.dialects.rapid.confswitch: routines in the
+        order they are called; a motion reached both ways is an error)."""
         from ...ir import Kind
+        from .confswitch import switch_states
 
         has = ~np.isnan(tp.conf).any(axis=1)
-        lin_off, joint_off = _switch_state(tp, "CONFL"), _switch_state(tp, "CONFJ")
+        states = switch_states(tp, {"CONFL": _switch_state(tp, "CONFL"), "CONFJ": _switch_state(tp, "CONFJ")})
+        lin_off, joint_off = states["CONFL"], states["CONFJ"]
         joint = tp.kind == Kind.JOINT
         return has & np.where(joint, ~joint_off, ~lin_off)
 
