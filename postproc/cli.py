@@ -84,6 +84,13 @@ def _floats(text: str, count: int, what: str) -> np.ndarray:
 # ------------------------------------------------------------------ working commands
 
 
+def _refuse_unused(why: str, options: dict[str, bool]) -> None:
+    """Options given (True) that this use of the command would not use are an error, not a no-op."""
+    unused = [name for name, given in options.items() if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used {why}; leave {'it' if len(unused) == 1 else 'them'} out")
+
+
 @app.command("robots")
 @handles_errors
 def robots_cmd(json_out: bool = typer.Option(False, "--json", help="Machine-readable output.")):
@@ -243,6 +250,9 @@ def fit_cmd(
     """Identify an error model from measurements and write MODEL.json."""
     if gp_method not in ("auto", "exact", "local"):
         raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
+    _refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
+    _refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
+                                               "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
         _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit}, drop_invalid)
     except KeyboardInterrupt:
@@ -487,6 +497,7 @@ def similarity_cmd(
     from .model_io import load_model
 
     if model is not None:
+        _refuse_unused("with --model (the model gives the robot and tool)", {"--robot": robot is not None, "--tool": tool is not None})
         error_model, _ = load_model(model)
     elif robot is not None and tool is not None:
         error_model = ErrorModel.create(load_robot(robot), _floats(tool, 3, "--tool"), EffectSum())
@@ -608,6 +619,13 @@ def compensate_cmd(
     if model.suffix == ".toml":
         from .fivex.commands import compensate_five_program
 
+        _refuse_unused("by five-axis compensation (--model MACHINE.toml)", {
+            "--out-dir": out_dir is not None, "--jobs": jobs is not None, "--scheduler": scheduler is not None, "--in-place": in_place,
+            "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
+            "--force": force is not None, "--report": report is not None, "--frame": bool(frame), "--tool": bool(tool),
+            "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
+            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch})
+
         if len(programs) != 1 or output is None:
             raise InputError("five-axis compensation takes one program and -o OUT")
         for line in compensate_five_program(Path(programs[0]), model, Path(output), grid, input_axes, dialect=dialect):
@@ -618,6 +636,7 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .model_io import load_model
 
+    _refuse_unused("with a robot model (five-axis only: --model MACHINE.toml)", {"--grid": grid is not None, "--input-axes": input_axes is not None})
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
     if max_deviation is not None and not max_deviation > 0:
@@ -880,7 +899,7 @@ def convert_cmd(
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
-    max_deviation: float = typer.Option(0.01, "--max-deviation", help="--rtcp none: split moves until the tip stays this close (mm) to the straight path."),
+    max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
@@ -891,9 +910,11 @@ def convert_cmd(
 
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
-        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=max_deviation):
+        _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation):
             out.print(line)
         return
+    _refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
     outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
@@ -944,12 +965,24 @@ def rtcp_calibrate_cmd(
     """Calibrate the rotary axes of a five-axis machine from probed sphere centres (seed 003)."""
     from .fivex.commands import calibration_summary, rtcp_calibrate
 
+    if tip_radius and not _has_touch_column(probes):
+        raise InputError(f"{probes}: --tip-radius is for touch probing; these rows are sphere centres (no touch column): leave it out")
     doc, _ = rtcp_calibrate(probes, machine, output, axis, method, seed, sphere_radius, tip_radius, min_outlier)
     if json_out:
         print(json.dumps(doc))
         return
     for line in calibration_summary(doc):
         out.print(line)
+
+
+def _has_touch_column(probes: Path) -> bool:
+    """The probing CSV's header (the first line not a # comment) names a touch column."""
+    try:
+        with open(probes, encoding="utf-8-sig", errors="replace") as fh:
+            header = next((line for line in fh if line.strip() and not line.lstrip().startswith("#")), "")
+    except OSError:
+        return True  # unreadable: the reader names the error
+    return "touch" in [h.strip().lower() for h in header.split(",")]
 
 
 @app.command("freecad-install-post")
