@@ -205,3 +205,33 @@ def test_on_the_true_robot_the_subdivided_path_follows_the_line(truth_and_model,
     # measured: 0.092 mm plain, 0.011 mm subdivided (pytest -s prints them)
     print(f"true path: plain {worst_plain:.4f} mm, subdivided {worst_sub:.4f} mm")
     assert worst_plain > 0.06 and worst_sub < 0.035 and worst_sub < worst_plain / 2, (worst_plain, worst_sub)
+
+
+def test_rapid_program_subdivided_through_the_cli(model, tmp_path):
+    """ConfL on (the default): the new robtargets carry their own confdata (axis 1 changes
+    quadrant along the 600 mm line), and the whole module reads back compensated."""
+    text = RAPID.replace("tool0", "tSp").replace("MoveL p1, v100, z10", "MoveJ p1, v100, fine").replace(
+        "  CONST robtarget p1", "  PERS tooldata tSp := [TRUE,[[0,0,200],[1,0,0,0]],[1,[0,0,1],[1,0,0,0],0,0,0]];\n  CONST robtarget p1")
+    (tmp_path / "part.mod").write_text(text)
+    save_model(tmp_path / "m.json", model)
+    out = tmp_path / "out.mod"
+    res = runner.invoke(app, ["compensate", str(tmp_path / "part.mod"), "--model", str(tmp_path / "m.json"), "-o", str(out), "--subdivide"])
+    assert res.exit_code == 0, res.output
+    written = out.read_text()
+    assert "CONST robtarget p2_S1 := [[" in written and "MoveL p2_S1, v100, z10, tSp;" in written
+    back = parse_program(out)
+    names = list(back.target_name)
+    assert back.conf[names.index("p2_S1")][0] == -1 and back.conf[names.index("p2")][0] == 0
+
+
+def test_a_force_per_block_follows_the_new_targets(tmp_path):
+    """--force-file / --cut forces are per target: a new target gets its motion's force."""
+    from postproc.subdivide import _new_index, _options_for_longer
+
+    (tmp_path / "part.mod").write_text(RAPID)
+    tp = parse_program(tmp_path / "part.mod")
+    points = new_points(tp, kr160(), np.array([1, 2]), np.array([3, 2]))
+    force = np.array([[1.0, 0, 0], [2.0, 0, 0], [3.0, 0, 0]])
+    longer = _options_for_longer({"force_per_target": force, "tol_mm": 0.01}, tp, points, _new_index(tp, points))
+    np.testing.assert_array_equal(longer["force_per_target"][:, 0], [1, 2, 2, 2, 3, 3])
+    assert longer["tol_mm"] == 0.01
