@@ -106,6 +106,7 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
         local = invert_transform(tp.frames[tp.frame[r]]) @ poses
         values = np.repeat(tp.values[r][None], k - 1, axis=0)
         values[:, 0:3] = np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
+        _require_inherited(tp, r, local)
         values[:, 3:7] = _orientation_values(tp, r, local[:, :3, :3], values[:, 3:7])
         ext_start, ext_end = tp.values[r - 1, F_EXT], tp.values[r, F_EXT]
         both = ~np.isnan(ext_start) & ~np.isnan(ext_end)
@@ -113,6 +114,19 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
         conf = _conf(lang, robot, tp, r, poses)
         points += [NewPoint(r, values[j], conf[j]) for j in range(k - 1)]
     return points
+
+
+def _require_inherited(tp: Toolpath, r: int, local: np.ndarray) -> None:
+    """A coordinate or orientation the target leaves out (it keeps the previous value) must
+    not change along the segment, or a copy that leaves it out too would be elsewhere."""
+    from .errors import EmitError
+
+    missing = np.isnan(tp.values[r, 0:3])
+    moves = np.abs(local[:, :3, 3][:, missing] - tp.position[r, missing]).max(initial=0.0) > 1e-6
+    turns = np.isnan(tp.values[r, 3:6]).all() and np.abs(local[:, :3, :3] - tp.target_poses()[r, :3, :3]).max() > 1e-9
+    if moves or turns:
+        raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the target leaves out a coordinate that changes "
+                        "along the segment into it: a point before it cannot be written as a copy")
 
 
 def _orientation_values(tp: Toolpath, r: int, rot: np.ndarray, like: np.ndarray) -> np.ndarray:
@@ -184,8 +198,10 @@ def check_inserted(tp: Toolpath, longer: Toolpath, placed: Toolpath, points: lis
     intended = np.stack([_pose_from_values(placed, points[i]) for i in order])
     checks = [(new_index, want, "a target"), (inserted, intended, "a new target")]
     for rows, poses, what in checks:
-        bad = np.abs(got[rows, :3, 3] - poses[:, :3, 3]).max(axis=1) > 1e-3
-        bad |= np.abs(got[rows, :3, :3] - poses[:, :3, :3]).max(axis=(1, 2)) > 1e-5
+        same_unknown = np.isnan(got[rows]) & np.isnan(poses)  # an old target unknown before stays so
+        diff = np.where(same_unknown, 0.0, np.abs(got[rows] - poses))
+        bad = ~(diff[:, :3, 3].max(axis=1) <= 1e-3)  # NaN (unknown where it was known): bad
+        bad |= ~(diff[:, :3, :3].max(axis=(1, 2)) <= 1e-5)
         bad |= longer.kind[rows] != (tp.kind if what == "a target" else tp.kind[[points[i].row for i in order]])
         if bad.any():
             i = int(rows[np.nonzero(bad)[0][0]])
@@ -203,4 +219,5 @@ def _pose_from_values(placed: Toolpath, p: NewPoint) -> np.ndarray:
         rot = quat_wxyz_to_matrix(abc_to_quat_wxyz(v[None, 3:6]))[0]
     else:
         rot = placed.target_poses()[p.row][:3, :3]
-    return placed.frames[placed.frame[p.row]] @ make_transform(rot[None], v[None, 0:3])[0]
+    position = np.where(np.isnan(v[0:3]), placed.position[p.row], v[0:3])  # left out: kept from before
+    return placed.frames[placed.frame[p.row]] @ make_transform(rot[None], position[None])[0]

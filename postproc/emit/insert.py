@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -64,8 +65,10 @@ def _clone(dialect, tp: Toolpath, p: NewPoint, taken: set[str]):
     where = f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}"
     spans = tp.spans[r]
     fields = [f for f in _WRITTEN if spans[f, 0] >= 0]
-    if any(spans[f, 0] < 0 for f in range(F_POS.start, F_POS.stop)):
-        raise EmitError(f"{where}: the target does not write all of X, Y, Z: a point before it cannot be written as a copy")
+    if not fields or spans[F_POS, 0].max() < 0:
+        raise EmitError(f"{where}: the target writes no coordinate: a point before it cannot be written as a copy")
+    # A coordinate the target leaves out keeps its value from the previous target (G-code
+    # modal axes, a KRL aggregate without Y): so does the copy, on the same line between them.
     if tp.offset_span is not None and (tp.offset_span[r, :, 0] >= 0).any():
         raise EmitError(f"{where}: the target is an expression on another point (Offs, RelTool, ...): a point before it cannot be written as a copy")
     if tp.relative[r]:
@@ -115,11 +118,14 @@ def _set_conf(dialect, text: str, p: NewPoint, tp: Toolpath, r: int, start: int)
 
 
 def _line_start(tp: Toolpath, r: int) -> int:
-    text = tp.sources[int(tp.file[r])].text
-    at = 0
-    for _ in range(int(tp.line[r]) - 1):
-        at = text.index("\n", at) + 1
-    return at
+    """Offset of the first character of target ``r``'s motion line."""
+    return int(_line_starts(tp.sources[int(tp.file[r])].text)[int(tp.line[r]) - 1])
+
+
+@lru_cache(maxsize=8)
+def _line_starts(text: str) -> np.ndarray:
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    return np.concatenate([[0], np.nonzero(raw == 10)[0] + 1])
 
 
 def _statement_end(dialect, text: str, at: int) -> int:
