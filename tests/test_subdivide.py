@@ -275,3 +275,15 @@ def test_real_gcode_segments_are_copied_and_read_back(shared):
         segments += len(rows)
     print(f"{segments} segments subdivided and read back, {len(refused)} refused")
     assert segments > 6000 and len(refused) < 0.02 * segments, (segments, refused[:5])
+
+
+def test_krl_copies_get_their_own_status_and_turn():
+    from postproc.dialects.krl import KRL
+
+    decl = "DECL E6POS XP1={X 1000,Y -300,Z 500,A 0,B 180,C 0,S 2,T 35,E1 0}"
+    assert KRL.set_conf_text(decl, np.array([6, 27, np.nan, np.nan])) == decl.replace("S 2,T 35", "S 6,T 27")
+    assert KRL.set_conf_text("LIN {X 1, Y 2, Z 3}", np.array([6, 27, np.nan, np.nan])) == "LIN {X 1, Y 2, Z 3}"
+    q = np.array([[10.0, -60, 40, 0, 60, 0], [-10.0, -60, 100, 0, -60, 0]])
+    conf = KRL.conf_of_joints(kr160(), q)
+    status, turn = kin.kuka_status_turn(kr160(), q)
+    np.testing.assert_array_equal(conf[:, :2], np.column_stack([status, turn]))
