@@ -17,7 +17,7 @@ every old one unchanged; the caller re-parses the compensated output as for any 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 

@@ -3,7 +3,6 @@ is an error naming both (exit 2, nothing written), or notes with --allow-model-m
 
 from __future__ import annotations
 
-import numpy as np
 import pytest
 from typer.testing import CliRunner
 
