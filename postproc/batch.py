@@ -43,7 +43,12 @@ def compensate_file(program: str | Path, model, out_dir: str | Path, options: di
     program = Path(program)
     try:
         tp = parse_program(program, dialect)
-        new, rep = compensate(tp, model, **options)
+        check = options.get("model_check")  # (model path, --robot, --allow-model-mismatch)
+        if check is not None:
+            from .program_check import check_model_fits
+
+            check_model_fits(tp, model, *check)
+        new, rep = compensate(tp, model, **{k: v for k, v in options.items() if k != "model_check"})
         failures = rep.failures()
         if failures:
             first = "; ".join(f"line {line}: {reason}" for line, reason in failures[:3])

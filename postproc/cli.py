@@ -84,6 +84,13 @@ def _floats(text: str, count: int, what: str) -> np.ndarray:
 # ------------------------------------------------------------------ working commands
 
 
+def _refuse_unused(why: str, options: dict[str, bool]) -> None:
+    """Options given (True) that this use of the command would not use are an error, not a no-op."""
+    unused = [name for name, given in options.items() if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used {why}; leave {'it' if len(unused) == 1 else 'them'} out")
+
+
 @app.command("robots")
 @handles_errors
 def robots_cmd(json_out: bool = typer.Option(False, "--json", help="Machine-readable output.")):
@@ -243,6 +250,9 @@ def fit_cmd(
     """Identify an error model from measurements and write MODEL.json."""
     if gp_method not in ("auto", "exact", "local"):
         raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
+    _refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
+    _refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
+                                               "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
         _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit}, drop_invalid)
     except KeyboardInterrupt:
@@ -487,6 +497,7 @@ def similarity_cmd(
     from .model_io import load_model
 
     if model is not None:
+        _refuse_unused("with --model (the model gives the robot and tool)", {"--robot": robot is not None, "--tool": tool is not None})
         error_model, _ = load_model(model)
     elif robot is not None and tool is not None:
         error_model = ErrorModel.create(load_robot(robot), _floats(tool, 3, "--tool"), EffectSum())
@@ -596,6 +607,10 @@ def compensate_cmd(
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
     cut: Optional[Path] = typer.Option(None, "--cut", help="Cut file (tool, material, engagement; see examples/cut_aluminium.toml): the mechanistic milling force of every cutting move, pre-compensated through the model's external_load effect."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="mm: refuse (exit 1) when the predicted path between two compensated targets strays further from the intended line or arc (default: report only)."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program is for (a name from robots/ or a file): must be the model's."),
+    allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Compensate although the program's robot, tool or payload differ from the model's (printed as notes)."),
+    force_file: Optional[Path] = typer.Option(None, "--force-file", help="CSV line,fx,fy,fz[,file]: the process force (N, tool frame) of each motion block by its line (needs a model effect that uses it, e.g. external_load)."),
+    subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
 ):
@@ -603,6 +618,13 @@ def compensate_cmd(
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
     if model.suffix == ".toml":
         from .fivex.commands import compensate_five_program
+
+        _refuse_unused("by five-axis compensation (--model MACHINE.toml)", {
+            "--out-dir": out_dir is not None, "--jobs": jobs is not None, "--scheduler": scheduler is not None, "--in-place": in_place,
+            "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
+            "--force": force is not None, "--report": report is not None, "--frame": bool(frame), "--tool": bool(tool),
+            "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
+            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch})
 
         if len(programs) != 1 or output is None:
             raise InputError("five-axis compensation takes one program and -o OUT")
@@ -614,6 +636,7 @@ def compensate_cmd(
     from .compensate import CompensationError, compensate
     from .model_io import load_model
 
+    _refuse_unused("with a robot model (five-axis only: --model MACHINE.toml)", {"--grid": grid is not None, "--input-axes": input_axes is not None})
     if tol <= 0 or max_iter < 1:
         raise InputError("--tol must be > 0 and --max-iter >= 1")
     if max_deviation is not None and not max_deviation > 0:
@@ -622,11 +645,12 @@ def compensate_cmd(
     error_model, _ = load_model(model)
     forces = None if force is None else _floats(force, 3, "--force")
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
-        if cut is not None or in_place:
-            raise InputError("--cut and --in-place work on one program at a time (not with --out-dir)")
+        if cut is not None or in_place or subdivide or force_file is not None:
+            raise InputError("--cut, --force-file, --in-place and --subdivide work on one program at a time (not with --out-dir)")
         options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
                    "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
-                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                   "model_check": (str(model), robot, allow_mismatch)}
         raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
     program = programs[0]
     if output is None:
@@ -635,13 +659,24 @@ def compensate_cmd(
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
+    from .program_check import check_model_fits
+
+    for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
+        log.print(f"note: {note} (--allow-model-mismatch)")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
-        new, rep = compensate(tp, error_model, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
-                              frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
-                              start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                              force_per_target=_cut_forces(cut, tp, frame, tool), max_deviation_mm=max_deviation,
-                              progress=lambda m: bar.update(task, description=m))
+        options = dict(tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
+                       frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
+                       start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+                       force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=lambda m: bar.update(task, description=m))
+        written, added = tp, ()
+        if subdivide:
+            from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
+
+            sub = compensate_subdivided(tp, error_model, max_deviation or DEFAULT_TOLERANCE_MM, **options)
+            written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
+        else:
+            new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
     summary = rep.summary()
     from .arcs import summary as arc_summary
 
@@ -655,7 +690,9 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    _write_compensated(tp, new, np.nonzero(rep.compensated)[0], output, in_place)
+    _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
+    if added:
+        log.print(f"{len(added)} new target(s) subdivide straight segments (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -689,6 +726,21 @@ def _cut_forces(cut: Optional[Path], tp, frame, tool):
 
     placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
     return program_forces(placed, params=load_cut_params(cut))
+
+
+def _block_forces(cut, force_file, forces, tp, frame, tool, log):
+    """The force of every target in the base frame from --cut or --force-file, None without them."""
+    if force_file is None:
+        return _cut_forces(cut, tp, frame, tool)
+    from .force_file import base_frame_forces, read_force_file
+
+    if cut is not None or forces is not None:
+        raise InputError("--force-file gives the force of every motion block: not with --force or --cut")
+    tool_frame, unlisted = read_force_file(force_file, tp)
+    if unlisted:
+        log.print(f"note: {unlisted} Cartesian target(s) have no row in {force_file}: no process force there")
+    placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
+    return base_frame_forces(placed, tool_frame)
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:
@@ -730,10 +782,13 @@ def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
         refuse_overwrite(tp, files_for(tp, [doc.text for doc in tp.sources], output), in_place)
 
 
-def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
+def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None) -> None:
     """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
-    whole set of changed files at once, or the program to standard output."""
+    whole set of changed files at once, or the program to standard output. ``original``:
+    the program as read when ``tp`` has new targets (files differing from it are written)."""
     from .programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
+
+    original = tp if original is None else original
 
     texts = emit_texts(tp, new)
     check_texts(tp, new, texts, rows)
@@ -741,8 +796,8 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool) -> None:
         sys.stdout.buffer.write(texts[0].encode("latin-1"))
         sys.stdout.buffer.flush()
         return
-    files = files_for(tp, texts, output)
-    refuse_overwrite(tp, files, in_place)
+    files = files_for(original, texts, output)
+    refuse_overwrite(original, files, in_place)
     write_set(files, backup=in_place)
 
 def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
@@ -860,7 +915,7 @@ def convert_cmd(
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
-    max_deviation: float = typer.Option(0.01, "--max-deviation", help="--rtcp none: split moves until the tip stays this close (mm) to the straight path."),
+    max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
@@ -871,9 +926,11 @@ def convert_cmd(
 
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
-        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=max_deviation):
+        _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation):
             out.print(line)
         return
+    _refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
     outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     texts = write_program(tp, to, output.stem)
@@ -924,12 +981,24 @@ def rtcp_calibrate_cmd(
     """Calibrate the rotary axes of a five-axis machine from probed sphere centres (seed 003)."""
     from .fivex.commands import calibration_summary, rtcp_calibrate
 
+    if tip_radius and not _has_touch_column(probes):
+        raise InputError(f"{probes}: --tip-radius is for touch probing; these rows are sphere centres (no touch column): leave it out")
     doc, _ = rtcp_calibrate(probes, machine, output, axis, method, seed, sphere_radius, tip_radius, min_outlier)
     if json_out:
         print(json.dumps(doc))
         return
     for line in calibration_summary(doc):
         out.print(line)
+
+
+def _has_touch_column(probes: Path) -> bool:
+    """The probing CSV's header (the first line not a # comment) names a touch column."""
+    try:
+        with open(probes, encoding="utf-8-sig", errors="replace") as fh:
+            header = next((line for line in fh if line.strip() and not line.lstrip().startswith("#")), "")
+    except OSError:
+        return True  # unreadable: the reader names the error
+    return "touch" in [h.strip().lower() for h in header.split(",")]
 
 
 @app.command("freecad-install-post")

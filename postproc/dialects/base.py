@@ -63,6 +63,10 @@ class Dialect:
         (see postproc.posture). Default: wherever the program gives configuration data."""
         return ~np.isnan(tp.conf).all(axis=1)
 
+    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
+        """(mass kg, 'FILE, line N') of every payload the program states (none by default)."""
+        return []
+
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
         """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
         return np.ones(len(tp.kind), dtype=bool)
@@ -100,6 +104,33 @@ class Dialect:
     def emit(self, original: Toolpath, modified: Toolpath, output: Path) -> dict[Path, str]:
         """{path: text} of every file to write for ``modified`` at ``output`` (see ``files``)."""
         return self.files(original, self.emit_texts(original, modified), output)
+
+    # ------------------------------------------------------- new targets (subdividing)
+    #: longest name of a declared point (0: the language has no named points)
+    point_name_limit: int = 0
+    #: what ends a statement that may run over several lines ("\n": one line each)
+    statement_end: str = "\n"
+
+    def conf_of_joints(self, robot, q_deg: np.ndarray) -> np.ndarray:
+        """Configuration data (N, 4) a new target reached at joints q (N, 6) is written with
+        (NaN: the copy keeps the data of the target it was copied from)."""
+        return np.full((len(q_deg), 4), np.nan)
+
+    def set_conf_text(self, text: str, conf: np.ndarray) -> str:
+        """``text`` (a copied target's declaration or motion) with configuration data ``conf``."""
+        return text
+
+    def clone_motion(self, text: str, where: str) -> str:
+        """A copy of the motion statement ``text`` to drive to a new point before it (e.g.
+        without a block number); an EmitError where the statement does more than move."""
+        return text
+
+    def insert_points(self, tp: Toolpath, points: list) -> tuple[list[SourceDoc], list[str]]:
+        """New sources with new targets (``postproc.emit.insert.NewPoint``) written before the
+        motions they subdivide, the language's way, and each new point's name."""
+        from ..emit.insert import insert_points
+
+        return insert_points(self, tp, points)
 
     def place_workpiece(self, text: str, frame_name: str, new_frame: np.ndarray, path: str) -> str:
         """``text`` (the program's main file) with its workpiece frame ``frame_name`` set to

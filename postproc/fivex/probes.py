@@ -54,6 +54,8 @@ def read_probes(path: str | Path, axis: str | None = None, sphere_radius: float 
     for name in ("x", "y", "z"):
         if name not in header:
             raise ProbeFileError(path, None, name, "required column missing")
+    if "axis" in header and axis is not None:
+        raise ProbeFileError(path, 1, "axis", "the file has an axis column: --axis is for files without one; leave it out")
     if "axis" not in header and axis is None:
         raise ProbeFileError(path, None, "axis", "no axis column: give --axis A, B or C")
     if not data:
@@ -76,6 +78,8 @@ def read_probes(path: str | Path, axis: str | None = None, sphere_radius: float 
         axes.append(ax)
         ids.append(row[col["id"]].strip() if "id" in col and row[col["id"]].strip() else str(k))
     if "touch" not in col:
+        if sphere_radius is not None:
+            raise ProbeFileError(path, 1, "touch", "a sphere radius is for touch probing; these rows are sphere centres (no touch column): leave it out")
         return Centres(tuple(ids), tuple(axes), angle, xyz, tuple(range(1, n + 1)), np.full(n, np.nan), np.full(n, np.nan))
     return _touch_centres(path, ids, axes, angle, xyz, sphere_radius, tip_radius)
 

@@ -24,5 +24,20 @@ class GcodeDialect(Dialect):
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f" {field.upper()}{text}"  # one more axis word in the block
 
+    def clone_motion(self, text: str, where: str) -> str:
+        """The block without its block number; a block that also changes tools, spindle,
+        coolant or modes cannot be repeated."""
+        import re
+
+        from ...errors import EmitError
+
+        body, _, comment = text.rstrip("\r\n").partition(";")
+        body = re.sub(r"^\s*N\d+\s*", "", body, flags=re.IGNORECASE)
+        words = re.findall(r"([A-Z])\s*([-+]?[\d.]+)", re.sub(r"\([^)]*\)", "", body).upper())
+        other = [w + v for w, v in words if w not in "XYZABCUVWIJKF" and not (w == "G" and float(v) in (0.0, 1.0))]
+        if other:
+            raise EmitError(f"{where}: the block also does {' '.join(other)}: a point before it cannot be written as a copy")
+        return body + text[len(text.rstrip("\r\n")):]
+
 
 GCODE = GcodeDialect()

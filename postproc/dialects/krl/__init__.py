@@ -61,6 +61,13 @@ class KrlDialect(Dialect):
 
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
 
+    def payloads(self, tp: Toolpath):
+        """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
+        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""
+        from .loads import load_masses
+
+        return load_masses(tp)
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_base
 
@@ -86,6 +93,24 @@ class KrlDialect(Dialect):
 
     def travels_with_program(self, doc: SourceDoc) -> bool:
         return doc.role in ("src", "dat")  # a module is its .src and its .dat
+
+    point_name_limit = 24  # KRL names: at most 24 characters (KSS 8 programming manual, "Names")
+
+    def conf_of_joints(self, robot, q_deg):
+        """S and T of new points (LIN ignores them; a PTP to the point later would take them)."""
+        from ...kinematics import kuka_status_turn
+
+        status, turn = kuka_status_turn(robot, q_deg)
+        return np.column_stack([status, turn, np.full((len(status), 2), np.nan)])
+
+    def set_conf_text(self, text: str, conf) -> str:
+        """The S and T components of a copied aggregate set to ``conf`` (left out where absent)."""
+        import re
+
+        for name, value in (("S", conf[0]), ("T", conf[1])):
+            if np.isfinite(value):
+                text = re.sub(rf"([{{,][ \t]*){name}[ \t]+\d+", lambda m: f"{m.group(1)}{name} {int(value)}", text, count=1, flags=re.IGNORECASE)
+        return text
 
     def new_writer(self, name: str):
         from .writer import KrlWriter

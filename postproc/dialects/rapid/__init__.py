@@ -53,13 +53,22 @@ class RapidDialect(Dialect):
         """MoveJ follows its confdata unless ConfJ\\Off is in force; MoveL/MoveC unless
         ConfL\\Off is (RAPID reference, 'ConfJ', 'ConfL': with \\Off the robot takes the
         configuration nearest the current one). The switches are taken in the order of the
-        module's text, which is the order of execution within one routine."""
+        program's execution from main (postproc.dialects.rapid.confswitch: routines in the
+        order they are called; a motion reached both ways is an error)."""
         from ...ir import Kind
+        from .confswitch import switch_states
 
         has = ~np.isnan(tp.conf).any(axis=1)
-        lin_off, joint_off = _switch_state(tp, "CONFL"), _switch_state(tp, "CONFJ")
+        states = switch_states(tp, {"CONFL": _switch_state(tp, "CONFL"), "CONFJ": _switch_state(tp, "CONFJ")})
+        lin_off, joint_off = states["CONFL"], states["CONFJ"]
         joint = tp.kind == Kind.JOINT
         return has & np.where(joint, ~joint_off, ~lin_off)
+
+    def payloads(self, tp: Toolpath):
+        """The load (tload mass) of every tooldata the program's Cartesian targets use."""
+        from .targets import tool_masses
+
+        return tool_masses(tp)
 
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_work_object
@@ -77,6 +86,19 @@ class RapidDialect(Dialect):
 
     def travels_with_program(self, doc: SourceDoc) -> bool:
         return True  # a program is all its modules
+
+    point_name_limit = 32  # RAPID identifiers: at most 32 characters (RAPID overview, "Identifiers")
+    statement_end = ";"
+
+    def conf_of_joints(self, robot, q_deg):
+        from ...kinematics import abb_confdata
+
+        return abb_confdata(robot, q_deg).astype(float)
+
+    def set_conf_text(self, text: str, conf) -> str:
+        from .targets import set_robtarget_conf
+
+        return set_robtarget_conf(text, conf)
 
     def new_writer(self, name: str):
         from .writer import RapidWriter

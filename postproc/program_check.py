@@ -1,0 +1,96 @@
+"""Does the model belong to the program? Robot, tool and payload checked before compensating.
+
+A model predicts one robot's error with one measured tool and the load it carried during
+the measurements. A program written for another robot, cutting with another tool or
+carrying another payload would be "compensated" with the wrong numbers and exit 0. So:
+
+- robot: the robot the user names (``--robot``) must be the model's; every joint target
+  of the program must lie within the model robot's joint ranges (a program for a robot
+  with other ranges is for another robot);
+- tool: every tool the program's Cartesian targets use (its frame, ``$TOOL``/``TOOL_DATA``,
+  RAPID tooldata) must put the TCP where the model's tool is (``TOOL_TOLERANCE_MM``);
+- payload: where both the program (KRL ``$LOAD``/``LOAD_DATA``, RAPID tooldata's tload)
+  and the model (an effect's payload option, ``payload_kg`` of the effect; a model fitted
+  without one states none) state one, they agree (``PAYLOAD_TOLERANCE_KG``).
+
+A mismatch is a ``ModelMismatchError`` naming both sides; ``allow`` (``--allow-model-mismatch``)
+turns the errors into notes for a user who knows why they differ.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import dialects
+from .errors import InputError
+from .ir import Kind, Toolpath
+
+TOOL_TOLERANCE_MM = 0.1
+PAYLOAD_TOLERANCE_KG = 0.5
+
+
+class ModelMismatchError(InputError):
+    """The model was made for another robot, tool or payload than the program uses."""
+
+
+def check_model_fits(tp: Toolpath, model, model_path: str, robot_name: str | None = None, allow: bool = False) -> list[str]:
+    """Every mismatch between the program and the model, as errors (or notes with ``allow``)."""
+    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path)
+    if problems and not allow:
+        more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
+        raise ModelMismatchError(f"{problems[0]}{more}; give the model fitted for this set-up, or --allow-model-mismatch if the difference is known to be harmless")
+    return problems
+
+
+def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list[str]:
+    robot = model.robot
+    out = []
+    if robot_name is not None and robot_name not in (robot.name, robot.source_path):
+        out.append(f"--robot {robot_name}: the model {model_path} is for robot {robot.name}")
+    joints = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
+    if joints.any():
+        q = tp.joints[joints]
+        outside = (q < robot.lower_deg - 1e-6) | (q > robot.upper_deg + 1e-6)
+        if outside.any():
+            i, j = np.argwhere(outside)[0]
+            row = int(np.nonzero(joints)[0][i])
+            out.append(f"{_where(tp, row)}: axis {j + 1} = {q[i, j]:g} deg is outside the range [{robot.lower_deg[j]:g}, {robot.upper_deg[j]:g}] "
+                       f"of the model's robot {robot.name} ({model_path}): the program is for another robot")
+    return out
+
+
+def _tools(tp: Toolpath, model, model_path: str) -> list[str]:
+    out = []
+    cart = np.nonzero(tp.kind != Kind.ABSJ)[0]
+    for t in np.unique(tp.tool[cart]):
+        if tp.tool_known is not None and not tp.tool_known[t]:
+            continue  # undefined in the program: --tool gives it, or compensation refuses
+        offset = tp.tools[t][:3, 3]
+        if np.linalg.norm(offset - model.tool_mm) > TOOL_TOLERANCE_MM:
+            row = int(cart[tp.tool[cart] == t][0])
+            out.append(f"{_where(tp, row)}: the program's tool {tp.tool_names[t]} has its TCP at {_xyz(offset)} mm from the flange; "
+                       f"the model {model_path} was fitted for the tool at {_xyz(model.tool_mm)} mm")
+    return out
+
+
+def _payload(tp: Toolpath, model, model_path: str) -> list[str]:
+    # A payload the model states: an effect's payload option (0 is the option left out: the
+    # fit then took the load as part of the arm, and there is nothing to compare).
+    stated = [float(getattr(e, "payload_kg", 0.0) or 0.0) for e in model.effects]
+    stated = [m for m in stated if m > 0]
+    if not stated:
+        return []
+    model_kg = stated[0]
+    out = []
+    for mass, where in dialects.of(tp).payloads(tp):
+        if abs(mass - model_kg) > PAYLOAD_TOLERANCE_KG:
+            out.append(f"{where}: the program's payload is {mass:g} kg; the model {model_path} was fitted with {model_kg:g} kg")
+    return out
+
+
+def _where(tp: Toolpath, row: int) -> str:
+    return f"{tp.sources[int(tp.file[row])].path}, line {tp.line[row]}"
+
+
+def _xyz(v) -> str:
+    return "(" + ", ".join(f"{x:g}" for x in np.round(v, 3)) + ")"

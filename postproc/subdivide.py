@@ -1,0 +1,223 @@
+"""Subdividing straight segments whose predicted path strays from the intended line.
+
+Compensation makes every target exact under the model, but between two targets the
+controller interpolates the commands while the robot's error changes: the predicted path
+bows away from the intended line (``compensate.Report.path_mm``). Where that exceeds the
+tolerance (``--max-deviation``, 0.02 mm by default with ``--subdivide``), the segment gets
+new targets on the intended line, evenly spaced, written as copies of the segment's own
+motion (same instruction, speed, zone, tool, frame; named points declared the language's
+way, see ``postproc.emit.insert``); then the whole program is compensated again, so new and
+old targets are compensated together. The error's departure from its chord grows with the
+square of the segment's length, so k pieces bring a deviation d to about d / k^2; rounds
+repeat until every straight segment is within the tolerance (or refuse with the lines).
+
+The new text is re-parsed and every new point must read back where it was meant to be,
+every old one unchanged; the caller re-parses the compensated output as for any program.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import dialects
+from . import kinematics as kin
+from .compensate import Report, compensate
+from .emit.insert import NewPoint
+from .errors import OutputCheckError
+from .frames import invert_transform, matrix_to_abc, matrix_to_quat_wxyz
+from .ir import F_EXT, Kind, Toolpath
+from .posture import interpolate_poses
+
+DEFAULT_TOLERANCE_MM = 0.02
+MAX_ROUNDS = 4
+MAX_PIECES = 64  # per segment and round: more means the model, not the segment, is the problem
+
+
+@dataclass(frozen=True)
+class Subdivided:
+    """The program with its new targets (as written, uncompensated), compensated, and the report."""
+
+    program: Toolpath
+    compensated: Toolpath
+    report: Report
+    added: tuple[tuple[int, str], ...]  # (line in the new program's file, name or '') of each new target
+
+
+def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOLERANCE_MM, **options) -> Subdivided:
+    """Compensate ``tp`` (``options`` as ``compensate``), subdividing every straight segment whose
+    predicted path strays more than ``tolerance_mm`` from the intended line, and compensating again."""
+    lang = dialects.of(tp)
+    added_rows: list[int] = []
+    for round_ in range(MAX_ROUNDS + 1):
+        new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, **options)
+        over = _segments_over(tp, report, tolerance_mm)
+        others = report.failed & ~np.isin(np.arange(len(tp)), over)
+        if not len(over) or others.any() or round_ == MAX_ROUNDS:
+            break
+        placed = tp.with_frames(options.get("frames"), options.get("tools")) if options.get("frames") or options.get("tools") else tp
+        points = new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm))
+        sources, _ = lang.insert_points(tp, points)
+        longer = lang.parse_sources(sources)
+        new_index = check_inserted(tp, longer, placed, points, options)
+        options = _options_for_longer(options, tp, points, new_index)
+        added_rows = [int(new_index[r]) for r in added_rows] + [int(i) for i in _inserted_rows(tp, points, new_index)]
+        tp = longer
+    added = tuple((int(tp.line[r]), tp.target_name[r]) for r in sorted(added_rows))
+    return Subdivided(tp, new, report, added)
+
+
+def _options_for_longer(options: dict, tp: Toolpath, points: list[NewPoint], new_index: np.ndarray) -> dict:
+    """Per-target options (a force per motion block) for the longer program: a new target
+    gets the value of the motion it was copied from."""
+    per_target = options.get("force_per_target")
+    if per_target is None:
+        return options
+    per_target = np.asarray(per_target)
+    out = np.zeros((len(tp) + len(points),) + per_target.shape[1:])
+    out[new_index] = per_target
+    rows = sorted(p.row for p in points)
+    out[_inserted_rows(tp, points, new_index)] = per_target[rows]
+    return {**options, "force_per_target": out}
+
+
+def _segments_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndarray:
+    path = np.nan_to_num(report.path_mm, nan=0.0)
+    return np.nonzero((path > tolerance_mm) & (tp.kind == Kind.LINEAR))[0]
+
+
+def pieces(deviation_mm: np.ndarray, tolerance_mm: float) -> np.ndarray:
+    """Pieces per segment so that deviation / pieces^2 is 0.7 of the tolerance (at least 2)."""
+    k = np.ceil(np.sqrt(np.asarray(deviation_mm) / (0.7 * tolerance_mm)))
+    return np.clip(k, 2, MAX_PIECES).astype(int)
+
+
+def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list[NewPoint]:
+    """Targets evenly spaced on the intended straight segments into ``rows`` (``count[i]``
+    pieces each), with orientation interpolated as the controller does, in each end
+    target's frame and notation."""
+    lang = dialects.of(tp)
+    base = tp.base_poses()
+    points = []
+    for r, k in zip(rows.tolist(), count.tolist()):
+        t = np.arange(1, k) / k
+        poses = interpolate_poses(base[r - 1 : r], base[r : r + 1], t)[0]
+        local = invert_transform(tp.frames[tp.frame[r]]) @ poses
+        values = np.repeat(tp.values[r][None], k - 1, axis=0)
+        values[:, 0:3] = np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
+        _require_inherited(tp, r, local)
+        values[:, 3:7] = _orientation_values(tp, r, local[:, :3, :3], values[:, 3:7])
+        ext_start, ext_end = tp.values[r - 1, F_EXT], tp.values[r, F_EXT]
+        both = ~np.isnan(ext_start) & ~np.isnan(ext_end)
+        values[:, F_EXT] = np.where(both, ext_start + t[:, None] * (ext_end - ext_start), values[:, F_EXT])
+        conf = _conf(lang, robot, tp, r, poses)
+        points += [NewPoint(r, values[j], conf[j]) for j in range(k - 1)]
+    return points
+
+
+def _require_inherited(tp: Toolpath, r: int, local: np.ndarray) -> None:
+    """A coordinate or orientation the target leaves out (it keeps the previous value) must
+    not change along the segment, or a copy that leaves it out too would be elsewhere."""
+    from .errors import EmitError
+
+    missing = np.isnan(tp.values[r, 0:3])
+    moves = np.abs(local[:, :3, 3][:, missing] - tp.position[r, missing]).max(initial=0.0) > 1e-6
+    turns = np.isnan(tp.values[r, 3:6]).all() and np.abs(local[:, :3, :3] - tp.target_poses()[r, :3, :3]).max() > 1e-9
+    if moves or turns:
+        raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the target leaves out a coordinate that changes "
+                        "along the segment into it: a point before it cannot be written as a copy")
+
+
+def _orientation_values(tp: Toolpath, r: int, rot: np.ndarray, like: np.ndarray) -> np.ndarray:
+    """Orientation numbers (K, 4) in the program's notation, each close to the end target's."""
+    out = like.copy()
+    end = tp.values[r, 3:7]
+    if tp.orientation_kind == "quat":
+        q = matrix_to_quat_wxyz(rot)
+        q *= np.where(np.einsum("ij,j->i", q, np.nan_to_num(end)) < 0, -1.0, 1.0)[:, None]
+        out[:, :4] = q
+    elif tp.orientation_kind == "abc":
+        abc = matrix_to_abc(rot)
+        other = np.column_stack([abc[:, 0] + 180.0, 180.0 - abc[:, 1], abc[:, 2] + 180.0])  # the same rotation
+        ref = np.nan_to_num(end[:3])
+        cands = [ref + (c - ref + 180.0) % 360.0 - 180.0 for c in (abc, other)]
+        pick = np.abs(cands[1] - ref).sum(axis=1) < np.abs(cands[0] - ref).sum(axis=1)
+        out[:, :3] = np.where(pick[:, None], cands[1], cands[0])
+    elif tp.orientation_kind == "axis":
+        out[:, :3] = rot[:, :, 2]
+    return np.where(np.isnan(like), np.nan, out)
+
+
+def _conf(lang, robot, tp: Toolpath, r: int, poses: np.ndarray) -> np.ndarray:
+    """Configuration data of the new points: the joints on the end target's branch, in the
+    language's notation; NaN (copy the end target's) where it gives none or the branch has no solution."""
+    k = len(poses)
+    conf = np.full((k, 4), np.nan)
+    if np.isnan(tp.conf[r]).all():
+        return conf
+    inv_tool = np.linalg.inv(tp.tools[tp.tool[r]])
+    end_flange = (tp.base_poses()[r] @ inv_tool)[None]
+    q_end, branch = lang.branch_from_conf(robot, kin.ik(robot, end_flange), tp.conf[r][None])
+    if branch[0] < 0:
+        return conf
+    q, b = kin.select_branch(robot, kin.ik(robot, poses @ inv_tool), np.repeat(branch, k), np.repeat(q_end, k, axis=0))
+    ok = b >= 0
+    if ok.any():
+        conf[ok] = lang.conf_of_joints(robot, q[ok])
+    return conf
+
+
+def _new_index(tp: Toolpath, points: list[NewPoint]) -> np.ndarray:
+    """Index in the longer program of every old row (new points go just before their row)."""
+    before = np.bincount([p.row for p in points], minlength=len(tp))
+    return np.arange(len(tp)) + np.cumsum(before)
+
+
+def _inserted_rows(tp: Toolpath, points: list[NewPoint], new_index: np.ndarray) -> list[int]:
+    out = []
+    for r in sorted({p.row for p in points}):
+        k = sum(p.row == r for p in points)
+        out += list(range(int(new_index[r]) - k, int(new_index[r])))
+    return out
+
+
+def check_inserted(tp: Toolpath, longer: Toolpath, placed: Toolpath, points: list[NewPoint], options: dict) -> np.ndarray:
+    """The re-parsed program must hold every old target unchanged and every new one where it
+    was meant (position 1e-3 mm, orientation 1e-6), of its segment's kind; else an OutputCheckError.
+    Returns the new index of every old row."""
+    where = tp.sources[0].path
+    if len(longer) != len(tp) + len(points):
+        raise OutputCheckError(f"{where}: with {len(points)} new targets the program reads back with {len(longer)} targets, not {len(tp) + len(points)}")
+    new_index = _new_index(tp, points)
+    frames, tools = options.get("frames"), options.get("tools")
+    longer_placed = longer.with_frames(frames, tools) if frames or tools else longer
+    got, want = longer_placed.base_poses(), placed.base_poses()
+    inserted = np.array(_inserted_rows(tp, points, new_index), dtype=int)
+    order = np.argsort([p.row for p in points], kind="stable")
+    intended = np.stack([_pose_from_values(placed, points[i]) for i in order])
+    checks = [(new_index, want, "a target"), (inserted, intended, "a new target")]
+    for rows, poses, what in checks:
+        same_unknown = np.isnan(got[rows]) & np.isnan(poses)  # an old target unknown before stays so
+        diff = np.where(same_unknown, 0.0, np.abs(got[rows] - poses))
+        bad = ~(diff[:, :3, 3].max(axis=1) <= 1e-3)  # NaN (unknown where it was known): bad
+        bad |= ~(diff[:, :3, :3].max(axis=(1, 2)) <= 1e-5)
+        bad |= longer.kind[rows] != (tp.kind if what == "a target" else tp.kind[[points[i].row for i in order]])
+        if bad.any():
+            i = int(rows[np.nonzero(bad)[0][0]])
+            raise OutputCheckError(f"{longer.sources[int(longer.file[i])].path}, line {longer.line[i]}: {what} reads back wrong after subdividing; nothing was written")
+    return new_index
+
+
+def _pose_from_values(placed: Toolpath, p: NewPoint) -> np.ndarray:
+    from .frames import abc_to_quat_wxyz, make_transform, quat_wxyz_to_matrix
+
+    v = p.values  # as the parser reads the numbers (postproc.parse.common)
+    if placed.orientation_kind == "quat" and not np.isnan(v[3:7]).any():
+        rot = quat_wxyz_to_matrix(v[None, 3:7])[0]
+    elif placed.orientation_kind == "abc" and not np.isnan(v[3:6]).any():
+        rot = quat_wxyz_to_matrix(abc_to_quat_wxyz(v[None, 3:6]))[0]
+    else:
+        rot = placed.target_poses()[p.row][:3, :3]
+    position = np.where(np.isnan(v[0:3]), placed.position[p.row], v[0:3])  # left out: kept from before
+    return placed.frames[placed.frame[p.row]] @ make_transform(rot[None], position[None])[0]

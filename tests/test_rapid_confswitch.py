@@ -1,0 +1,68 @@
+"""RAPID ConfL/ConfJ by execution order (issue 13): the switch in force at a motion is the
+one that last ran, following the calls from main, not the module's text order; a motion
+reached with the switch both on and off is refused with its line."""
+
+from __future__ import annotations
+
+import pytest
+
+from postproc import dialects
+from postproc.errors import InputError
+from postproc.programs import parse_program
+
+T = "[[900,0,900],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
+
+
+def _applies(tmp_path, text, name="p.mod"):
+    path = tmp_path / name
+    path.write_text(text)
+    tp = parse_program(path)
+    return dialects.of(tp).conf_applies(tp).tolist(), tp
+
+
+def test_a_routine_written_after_confl_off_but_called_before_it_runs_with_confl_on(tmp_path):
+    # Text order: main (ConfL\Off at its end), then approach: text order would say Off for
+    # approach's MoveL; but main calls approach before switching: On.
+    text = ("MODULE P\n  PROC main()\n    approach;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
+            f"  PROC approach()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
+            f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    applies, _ = _applies(tmp_path, text)
+    assert applies == [True, False]
+
+
+def test_a_routine_written_before_the_switch_but_called_after_it_runs_with_confl_off(tmp_path):
+    text = ("MODULE P\n"
+            f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
+            f"  PROC main()\n    ConfL\\Off;\n    cut;\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    applies, _ = _applies(tmp_path, text)
+    assert applies == [False, True]
+
+
+def test_calls_across_modules_of_a_program_file(tmp_path):
+    (tmp_path / "Main.mod").write_text("MODULE Main\n  PROC main()\n    ConfJ\\Off;\n    Work;\n  ENDPROC\nENDMODULE\n")
+    (tmp_path / "Work.mod").write_text(f"MODULE Work\n  PROC Work()\n    MoveJ {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    (tmp_path / "cell.pgf").write_text('<?xml version="1.0" encoding="ISO-8859-1" ?>\n<Program>\n  <Module>Main.mod</Module>\n  <Module>Work.mod</Module>\n</Program>\n')
+    tp = parse_program(tmp_path / "cell.pgf")
+    assert dialects.of(tp).conf_applies(tp).tolist() == [False]
+
+
+def test_a_routine_called_with_both_states_is_refused_with_its_line(tmp_path):
+    text = ("MODULE P\n  PROC main()\n    cut;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
+            f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    with pytest.raises(InputError, match=r"p.mod, line 8: this motion runs with ConfL/ConfJ both on and off .*main -> cut \(line 5\)"):
+        _applies(tmp_path, text)
+
+
+def test_a_routine_that_sets_the_switch_itself_is_not_ambiguous(tmp_path):
+    text = ("MODULE P\n  PROC main()\n    cut;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
+            f"  PROC cut()\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    applies, _ = _applies(tmp_path, text)
+    assert applies == [True]
+
+
+def test_without_main_the_module_text_order_is_kept(tmp_path):
+    text = ("MODULE Lib\n"
+            f"  PROC a()\n    ConfL\\Off;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
+            f"  PROC b()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    applies, _ = _applies(tmp_path, text)
+    assert applies == [False, False]
