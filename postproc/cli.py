@@ -680,7 +680,7 @@ def compensate_cmd(
     summary = rep.summary()
     from .arcs import summary as arc_summary
 
-    summary["arcs"] = arc_summary(tp, rep.path_mm)
+    summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if report is not None:
         _write_point_report(report, rep, summary)
     failures = rep.failures()

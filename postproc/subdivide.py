@@ -100,7 +100,13 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
     lang = dialects.of(tp)
     base = tp.base_poses()
     points = []
+    repeated = _runs_more_than_once(tp)
     for r, k in zip(rows.tolist(), count.tolist()):
+        if repeated[r]:
+            from .errors import EmitError
+
+            raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the block runs more than once (a loop or "
+                            "subprogram body): a point inserted before it would run every time")
         t = np.arange(1, k) / k
         poses = interpolate_poses(base[r - 1 : r], base[r : r + 1], t)[0]
         local = invert_transform(tp.frames[tp.frame[r]]) @ poses
@@ -114,6 +120,15 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
         conf = _conf(lang, robot, tp, r, poses)
         points += [NewPoint(r, values[j], conf[j]) for j in range(k - 1)]
     return points
+
+
+def _runs_more_than_once(tp: Toolpath) -> np.ndarray:
+    """(N,) True where the target's text is executed by several rows (G-code loops and subs
+    are unrolled into one row per execution, sharing the text's spans)."""
+    spans = np.where(tp.spans[:, :, 0] >= 0, tp.spans[:, :, 1], np.iinfo(np.int64).max).min(axis=1)
+    keys = np.stack([tp.file.astype(np.int64), tp.line.astype(np.int64), spans], axis=1)
+    _, inverse, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    return counts[inverse.ravel()] > 1
 
 
 def _require_inherited(tp: Toolpath, r: int, local: np.ndarray) -> None:
