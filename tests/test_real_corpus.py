@@ -53,14 +53,11 @@ ROUND_TRIP_XFAIL = {
     "gcode/AlloyX-MFG_syil-X7-warmup-routines__FIRST_SPINDLE_RUN_IN.MPF": "Siemens EXTERN declaration `EXTERN WARMUP_CYCLE(REAL, REAL)` (FIRST_SPINDLE_RUN_IN.MPF:10)",
     "gcode/AlloyX-MFG_syil-X7-warmup-routines__WARMUP_CYCLE.SPF": "Siemens `PROC WARMUP_CYCLE(REAL _RPM, REAL _DURATION)` subprogram header (WARMUP_CYCLE.SPF:9)",
     "gcode/CauldronDevelopmentLLC_CAMotics__genes-encoder.ngc": "nested O-word loops: `o300 endwhile` taken as closing `o20` (genes-encoder.ngc:219)",
-    "gcode/LinuxCNC_linuxcnc__hole-circle.ngc": "LinuxCNC polar coordinates `^60` in a G81 block with L6 repeat (hole-circle.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__nestedcall.ngc": "`O<g20sub> callsub` (LinuxCNC call of a sub in another file) (nestedcall.ngc:11)",
     "gcode/LinuxCNC_linuxcnc__offsets.ngc": "`o10 do` ... `o10 while [...]` loop not recognised (offsets.ngc:5-12)",
     "gcode/LinuxCNC_linuxcnc__plasmac_metric_wrench.ngc": "`F#<_hal[plasmac.cut-feed-rate]>` HAL parameter (environment value, must be 'unresolved') (metric_wrench.ngc:9)",
-    "gcode/LinuxCNC_linuxcnc__polar.ngc": "LinuxCNC polar coordinates `^120` (polar.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__interp_cam-nisley.ngc": "`O300 DO` ... `O300 WHILE [..]` do-while taken as a new while block (cam-nisley.ngc:116-118)",
     "gcode/LinuxCNC_linuxcnc__interp_do-while-break.ngc": "`o100 do` ... `o100 while [..]` do-while not recognised (do-while-break.ngc:27)",
-    "gcode/LinuxCNC_linuxcnc__interp_g10-l2-while-active.ngc": "unary function as a word value `g1 y sqrt[2]` (g10-l2-while-active.ngc:12)",
     # KRL
     "krl/CentroEPiaggio_kuka-lwr__ros_control.src": "DECL of a user/system structure type `DECL FRISTATE retVal` (ros_control.dat:15)",
     "krl/antlr_grammars-v4__kuka_example1.src": "typed aggregate assignment `jpos = {AXIS: A1 0,...}` (kuka_example1.src:8)",
@@ -96,24 +93,15 @@ RS274_REFUSED = {
 # file -> why the IR's motion differs from rs274's today
 RS274_XFAIL = {
     "gcode/CauldronDevelopmentLLC_CAMotics__genes-encoder.ngc": "refused by the parser: nested O-word while loops (genes-encoder.ngc:219)",
-    "gcode/LinuxCNC_linuxcnc__hole-circle.ngc": "refused by the parser: polar `^60` with G81 L6 repeats (hole-circle.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__offsets.ngc": "refused by the parser: `o10 do` / `o10 while` (offsets.ngc:5-12)",
-    "gcode/LinuxCNC_linuxcnc__polar.ngc": "refused by the parser: polar `^120` (polar.ngc:10)",
     "gcode/LinuxCNC_linuxcnc__3dtest.ngc": "full circles without an end point `g02 i.5 j.5` are dropped from the IR, exit 0 (3dtest.ngc:6, :23, :39)",
     "gcode/LinuxCNC_linuxcnc__gmoccapy_2_tools_with_cutter_radius_compensation.ngc": "full circles `G3 I -20` / `G3 I-15` dropped from the IR (gmoccapy...ngc:42, :82)",
-    "gcode/pcb2gcode_pcb2gcode__D1MiniGSR_drill.ngc": "G81 canned-cycle blocks and their modal continuation are missing from the IR: no hole is a target (drill.ngc:24-27); rs274 makes 65 moves, the IR 5",
     "gcode/LinuxCNC_linuxcnc__daisy.ngc": "`O100 call` / `O200 call [..]` with arguments not unrolled: sub bodies listed once, unresolved (daisy.ngc:83-93); rs274 52 moves, IR 3 targets",
     "gcode/LinuxCNC_linuxcnc__flowsnake.ngc": "recursive `o1000 call` not unrolled (flowsnake.ngc); rs274 3076 moves, IR 4 targets",
     "gcode/LinuxCNC_linuxcnc__mmount.ngc": "15 `o100 call [..]` with a `o101 while` in the sub not unrolled (mmount.ngc:135-...); rs274 546 moves, IR 2 targets",
     "gcode/LinuxCNC_linuxcnc__ngcgui_simp.ngc": "a sub that is never called: the IR lists its `g0x0y0z1` (simp.ngc:8) as a target, rs274 executes nothing",
     "gcode/LinuxCNC_linuxcnc__interp_cam-nisley.ngc": "refused by the parser: `O300 DO` / `O300 WHILE` (cam-nisley.ngc:118)",
     "gcode/LinuxCNC_linuxcnc__interp_do-while-break.ngc": "refused by the parser: `o100 do` / `o100 while` (do-while-break.ngc:27)",
-    "gcode/LinuxCNC_linuxcnc__interp_g10-l2-while-active.ngc": "refused by the parser: `g1 y sqrt[2]` (g10-l2-while-active.ngc:12)",
-    "gcode/LinuxCNC_linuxcnc__ccomp_mill-g90g91g92.ngc": "G92 Z.5 is not applied: IR Z 0 mm where rs274 has 12.7 mm, target marked resolved (mill-g90g91g92.ngc:17 -> :20)",
-    "gcode/LinuxCNC_linuxcnc__interp_g10-l20-while-active.ngc": "G10 L20 (offset from the current position) with a G10 L2 R45 rotation: IR (-1, 0, 0) mm where rs274 has (17.96, 17.96, 0), marked resolved (g10-l20-while-active.ngc:6 -> :8)",
-    "gcode/LinuxCNC_linuxcnc__interp_rotation-g53.ngc": "G10 L2 R45 work-offset rotation, G53 and G92 together: IR (1, 1, ?) mm where rs274 has (0, 1.414, 0) mm (rotation-g53.ngc:2 -> :6); flagged unresolved",
-    "gcode/LinuxCNC_linuxcnc__interp_g17-g98-g81.ngc": "G81 with G98 (and R above/below the old Z) not expanded: 1 IR target, 38 rs274 moves (g17-g98-g81.ngc:18-)",
-    "gcode/LinuxCNC_linuxcnc__interp_g18-g99-g81.ngc": "G81 in G18 with G99 not expanded: 1 IR target, 37 rs274 moves (g18-g99-g81.ngc)",
     "gcode/LinuxCNC_linuxcnc__interp_inverse-time-with-comp.ngc": "`o100 call` (3 calls, the G42.1 diameter #100 changed between them) not unrolled, body marked resolved: IR 11 targets, rs274 40 moves (inverse-time-with-comp.ngc:18-22)",
     "gcode/LinuxCNC_linuxcnc__interp_m98-loops.ngc": "Fanuc `M98 P1 L10` calls of `O1 ... M99` not unrolled and the sub's `G91 G99 G81` (line 23) missing, not flagged: IR 3 targets, rs274 40 moves (m98-loops.ngc:8, :13, :18)",
 }
@@ -275,8 +263,11 @@ def machine_positions(tp) -> np.ndarray:
     over the whole row through the 4x4 product)."""
     frames = tp.frames[tp.frame]
     rot, shift = frames[:, :3, :3], frames[:, :3, 3]
-    plain = np.all(np.abs(rot - np.eye(3)) < 1e-12, axis=(1, 2))
-    return np.where(plain[:, None], tp.position + shift, tp.base_positions())
+    # A work offset turned about Z only (G10 L2 ... R) keeps Z apart from X and Y.
+    about_z = np.abs(rot[:, 2, 2] - 1) < 1e-12
+    xy = np.einsum("nij,nj->ni", rot[:, :2, :2], tp.position[:, :2]) + shift[:, :2]
+    turned = np.hstack([xy, tp.position[:, 2:3] + shift[:, 2:3]])
+    return np.where(about_z[:, None], turned, tp.base_positions())
 
 
 def test_rs274_judges_every_gcode_file():

@@ -247,6 +247,13 @@ class _Splice:
         original, modified = self.original, self.modified
         inherited = np.vstack([np.full((1, 3), np.nan), modified.position[:-1]])
         differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
+        # Across a change of frame (G-code G92, G10 L20) the value a target inherits is the
+        # previous point seen from the new frame: a word is needed where the target or the
+        # one before it moves, never where neither does (the text already says it).
+        differs |= np.concatenate([[False], original.frame[1:] != original.frame[:-1]])[:, None]
+        moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True)
+        moved = moved | np.vstack([np.zeros((1, 3), bool), moved[:-1]])
+        differs &= moved
         missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
         if missing.any() and (insert_field is None or original.insert_at is None):
             r = int(np.nonzero(missing.any(axis=1))[0][0])

@@ -24,7 +24,7 @@ from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
 
-AXES = "XYZABCIJKRF"
+AXES = "XYZABCIJKRFLPQ@^"  # L P Q @ ^ (repeats, dwell, peck, polar) are read by the grammar only
 _AX = {c: i for i, c in enumerate(AXES)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
@@ -101,7 +101,7 @@ class GcodeParser:
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, wcs=nan,
-                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan)
+                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan, retract=nan, setup=nan)
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
@@ -119,7 +119,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist():
@@ -141,7 +141,7 @@ class GcodeParser:
             "code_end": np.array(out["code_end"], dtype=np.int64),
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")},
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h", "retract", "setup")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -200,7 +200,7 @@ class GcodeParser:
         """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h")}
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h", "retract", "setup")}
         ok = True
         gcodes: list[float] = []
         for item in tree.children:
@@ -276,6 +276,8 @@ class GcodeParser:
                 state[key] = value
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
+            elif gc in (98.0, 99.0):
+                state["retract"] = gc
             elif gc == 53.0:
                 g53 = True
             elif gc == 68.2:
@@ -288,6 +290,7 @@ class GcodeParser:
                 self.tilts.append((start, "unknown"))
             elif gc in _NONMOTION:
                 nonmotion = True
+                state["setup"] = gc
                 if gc == 10.0:
                     self._g10(values, start)
         return nonmotion, g53
@@ -317,6 +320,10 @@ class GcodeParser:
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
         """The targets of the block table ``t`` (program order) with every modal state applied."""
+        from .interp import needs_interpreter
+
+        if needs_interpreter(t, AXES):
+            return self._resolve_blocks(t)
         motion = _ffill(t["motion"], np.nan)
         units = _ffill(t["units"], 21.0)
         dist = _ffill(t["dist"], 90.0)
@@ -358,6 +365,67 @@ class GcodeParser:
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
         )
         return _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
+
+    def _resolve_blocks(self, t: dict) -> Toolpath:
+        """The targets of a program read block by block (interp.py: canned cycles, G92,
+        G10 L20 / R, G53, polar words). Targets the controller makes without axis words
+        for them (cycle moves, polar ends) have no span and nowhere to insert one."""
+        from . import interp
+
+        scale = np.where(_ffill(t["units"], 21.0) == 20.0, 25.4, 1.0)
+        dist = _ffill(t["dist"], 90.0)
+        mode, sets_mode = interp.modal_mode(t["motion"], t["canned"])
+        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": _ffill(t["plane"], 17.0).tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
+                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist()}
+        try:
+            moves = interp.run(t, AXES, modal, self.lines.line(t["offset"]))
+        except interp.BlockError as exc:
+            raise self.lines.error(self.doc.path, int(t["offset"][exc.row]), str(exc)) from None
+        rows, own = moves.row, ~moves.generated
+        m = len(rows)
+        ir_values, ir_spans, ir_scale = np.full((m, NF), np.nan), np.full((m, NF, 3), -1, dtype=np.int64), np.ones((m, NF))
+        point = np.hstack([moves.position, moves.abc])
+        for k, f in _IR_FIELD_OF_AXIS.items():
+            word = own & ~np.isnan(t["values"][rows, k])
+            ir_values[:, f] = np.where(word, point[:, k], np.nan)
+            _put_spans(ir_spans, np.nonzero(own)[0], f, t["spans"][rows[own], k])
+            if k < 3:
+                ir_scale[:, f] = scale[rows]
+        frame_idx, frame_ok = self._frames_of(moves.frame)
+        resolved = t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok
+        self._tilted_planes(t, rows, frame_idx, resolved)
+        machine = np.array([f is None for f in moves.frame], dtype=bool)
+        frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
+        tlo = _ffill(t["tlo"], 49.0)
+        tool_idx = self._tool_lengths(t, rows, tlo)
+        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans) & own
+        if axis_rows.any():
+            self.builder.orientation_kind = "axis"
+        self.builder.notes.extend(self.notes)
+        offsets = t["offset"][rows]
+        insert_at = np.stack([np.where(own, 0, -1), np.where(own, t["code_end"][rows], -1)], axis=1)
+        self.builder.add_block(offsets, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
+                               relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
+                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
+        return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+
+    def _frames_of(self, keys: list) -> tuple[np.ndarray, np.ndarray]:
+        """Frame index of each target's frame key (interp.Offsets.key), and False where the
+        frame is not a number (an offset taken from a point that is not known)."""
+        from .offsets import Offsets
+
+        index, ok, cache = np.zeros(len(keys), np.int32), np.ones(len(keys), bool), {}
+        for i, key in enumerate(keys):
+            if key is None:
+                continue
+            if key not in cache:
+                system, _, _, set_at, _, g92_at = key
+                name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
+                transform = Offsets.transform(key)
+                finite = bool(np.isfinite(transform).all())
+                cache[key] = (self.builder.frame_index(name, transform if finite else None, set_at is not None and finite), finite)
+            index[i], ok[i] = cache[key]
+        return index, ok
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
         """Frame index of each target: its work offset as set by G10 in the program before it;

@@ -1,0 +1,203 @@
+"""Block-by-block reading of the G-code that moves by the controller's running state.
+
+Most programs are read by parse.py's vectorised resolver (forward fills and cumulative
+sums). A block whose end point depends on where the machine is and on offsets set while
+the program runs cannot be: canned cycles (their initial level, R in G91, L repeats), G92 /
+G52 (the current point reads as the words), G10 L20 and G10 L2 ... R (work offsets set,
+rotated, from the current point), G53 (machine coordinates in the middle of a program) and
+polar ``@`` ``^`` words. Programs that have one are run here, one block after another,
+with the state rs274ngc keeps (offsets.py, canned.py, polar.py); each motion target comes
+out in program coordinates of the frame it is in (machine coordinates for G53).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import EmitError
+
+from . import canned
+from .canned import CycleError, CycleState
+from .offsets import Offsets
+from .polar import PolarError, polar_end
+
+LENGTH_WORDS = set("XYZIJKQ@")  # words in program length units (R: a length in a cycle, degrees in G10)
+SETUP_CODES = (10.0, 52.0, 92.0, 92.1, 92.2, 92.3)
+
+
+class BlockError(ValueError):
+    """A block the controller refuses: ``row`` of the block table, rs274's reason."""
+
+    def __init__(self, row: int, message: str):
+        super().__init__(message)
+        self.row = row
+
+
+def needs_interpreter(t: dict, letters: str) -> bool:
+    """True where the block table has a construct only a block-by-block reading gets right."""
+    col = {c: i for i, c in enumerate(letters)}
+    if np.isin(t["setup"], SETUP_CODES).any() or t["g53"].any():
+        return True
+    if np.isin(t["canned"], canned.CYCLES).any():
+        return True
+    return bool((~np.isnan(t["values"][:, [col["@"], col["^"]]])).any())
+
+
+@dataclass
+class Moves:
+    """The targets of a program in order: source block, move code (0-3), end point in its
+    frame (mm), rotary axes, frame key (see Offsets.key; None: machine frame, G53), and
+    whether the controller makes the move without the block's axis words saying so
+    (canned-cycle moves, polar end points: not writable in place)."""
+
+    row: np.ndarray
+    motion: np.ndarray
+    position: np.ndarray
+    abc: np.ndarray
+    frame: list
+    generated: np.ndarray
+
+
+class _Run:
+    def __init__(self, t: dict, letters: str, modal: dict):
+        self.t, self.modal = t, modal
+        self.col = {c: i for i, c in enumerate(letters)}
+        self.values = t["values"].tolist()
+        self.offsets, self.cycle = Offsets(), CycleState()
+        self.cur, self.abc = [math.nan] * 3, [math.nan] * 3
+        self.out: dict[str, list] = {k: [] for k in ("row", "motion", "position", "abc", "frame", "generated")}
+
+    def words(self, i: int) -> dict:
+        """The block's words (X Y Z ... as mm, A B C degrees, R as written) present in it."""
+        scale = self.modal["scale"][i]
+        row = self.values[i]
+        return {c: (v * scale if c in LENGTH_WORDS else v) for c, k in self.col.items() if not math.isnan(v := row[k])}
+
+    def emit(self, i: int, motion: int, position: list, frame, generated: bool) -> None:
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated)):
+            self.out[key].append(value)
+
+    def block(self, i: int, line: int) -> None:
+        m, t = self.modal, self.t
+        words = self.words(i)
+        self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
+        setup = t["setup"][i]
+        if setup == 10.0 and int(words.get("L", 0)) in (2, 20):
+            length = {k: v for k, v in words.items() if k in "XYZR"}
+            self.cur = self.offsets.g10(int(words["L"]), int(words.get("P", 0)), length, self.cur, line)
+        elif setup in SETUP_CODES:
+            self.cur = self.offsets.g92_family(setup, words, self.cur, line)
+        mode = m["mode"][i]
+        moving = not t["nonmotion"][i] and not math.isnan(mode) and any(c in words for c in "XYZABC@^")
+        if m["sets_mode"][i] and mode not in canned.CYCLES:
+            self.cycle.end_run(mode)
+        if not moving:
+            return
+        if mode == 80.0:  # axis words after G80: Fanuc moves in the G0-G3 mode in force (rs274 refuses them)
+            mode = m["motion"][i]
+            if math.isnan(mode):
+                raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
+        if mode in canned.CYCLES:
+            self._cycle(i, mode, words)
+            return
+        self.cycle.end_run(mode)
+        if t["g53"][i]:
+            program, machine = self.offsets.g53(words, self.cur)
+            self._rotary(words, absolute=True)
+            self.cur = program
+            self.emit(i, int(mode), machine, None, False)
+        else:
+            self.cur = self._straight_end(i, words)
+            self.emit(i, int(mode), self.cur, self.offsets.key(), "@" in words or "^" in words)
+
+    def _straight_end(self, i: int, words: dict) -> list:
+        incremental = self.modal["dist"][i] == 91.0
+        end = [(c + words.get(a, 0.0)) if incremental else words.get(a, c) for a, c in zip("XYZ", self.cur)]
+        if "@" in words or "^" in words:
+            if "X" in words or "Y" in words:
+                raise PolarError("cannot give X or Y words with polar coordinates")
+            end[0], end[1] = polar_end(self.cur[0], self.cur[1], words.get("@"), words.get("^"), incremental)
+        self._rotary(words, absolute=not incremental)
+        return end
+
+    def _rotary(self, words: dict, absolute: bool) -> None:
+        for k, a in enumerate("ABC"):
+            if a in words:
+                self.abc[k] = words[a] if absolute else self.abc[k] + words[a]
+
+    def _cycle(self, i: int, mode: float, words: dict) -> None:
+        cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
+        block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
+        moves, self.cur = canned.expand(block, self.cycle, self.cur)
+        for kind, point in moves:
+            self.emit(i, kind, point, self.offsets.key(), True)
+
+
+def run(t: dict, letters: str, modal: dict, lines: np.ndarray) -> Moves:
+    """Every motion target of the block table ``t`` (program order). ``modal`` holds the
+    forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
+    motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
+    (the block names one)."""
+    state = _Run(t, letters, modal)
+    for i in range(len(t["offset"])):
+        try:
+            state.block(i, int(lines[i]))
+        except (CycleError, PolarError) as exc:
+            raise BlockError(i, str(exc)) from None
+    out = state.out
+    m = len(out["row"])
+    return Moves(
+        row=np.array(out["row"], np.int64),
+        motion=np.array(out["motion"], np.int64),
+        position=np.array(out["position"], float).reshape(m, 3),
+        abc=np.array(out["abc"], float).reshape(m, 3),
+        frame=out["frame"],
+        generated=np.array(out["generated"], bool),
+    )
+
+
+def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(mode in force at each block, the block names a motion or cycle code): G0-G3 and the
+    cycles G73-G89 (G80: 80) are one modal group, the one named last is in force."""
+    cycle = np.where(cycle_codes == 0.0, 80.0, cycle_codes)
+    named = np.where(~np.isnan(motion), motion, cycle)
+    has = ~np.isnan(named)
+    idx = np.where(has, np.arange(len(named)), -1)
+    np.maximum.accumulate(idx, out=idx)
+    return np.where(idx >= 0, named[np.maximum(idx, 0)], np.nan), has
+
+
+_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9])(?![\d.])|[@^]")
+
+
+def refuse_unwritable(original, modified) -> None:
+    """Compensation must never leave a move the controller makes silently uncompensated:
+    a canned-cycle move or a polar end point (no axis words of its own, insert_at -1) that
+    ``modified`` moves, or a G91 increment after a change of frame that it moves, cannot be
+    written in place: EmitError naming file:line:column of the block."""
+    moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True).all(axis=1)
+    generated = original.insert_at[:, 1] < 0 if original.insert_at is not None else np.zeros(len(original), bool)
+    new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
+    after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
+    for rows, why in ((moved & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
+                       "compensated moves cannot be put in place; expand the cycle / polar moves to G0/G1 X Y Z blocks first"),
+                      (after, "a G91 increment after an offset change or a canned cycle cannot be rewritten exactly; write the program in G90 first")):
+        if rows.any():
+            r = int(np.nonzero(rows)[0][0])
+            doc = original.sources[int(original.file[r])]
+            start = _line_start(doc.text, int(original.line[r]))
+            end = doc.text.find("\n", start)
+            found = _GENERATOR.search(doc.text, start, len(doc.text) if end < 0 else end)
+            column = (found.start() - start + 1) if found else 1
+            raise EmitError(f"{doc.path}:{original.line[r]}:{column}: this block cannot be compensated: {why}")
+
+
+def _line_start(text: str, line: int) -> int:
+    start = 0
+    for _ in range(line - 1):
+        start = text.index("\n", start) + 1
+    return start
