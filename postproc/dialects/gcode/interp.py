@@ -85,12 +85,9 @@ class _Run:
         m, t = self.modal, self.t
         words = self.words(i)
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
-        setup = t["setup"][i]
-        if setup == 10.0 and int(words.get("L", 0)) in (2, 20):
-            length = {k: v for k, v in words.items() if k in "XYZR"}
-            self.cur = self.offsets.g10(int(words["L"]), int(words.get("P", 0)), length, self.cur, line)
-        elif setup in SETUP_CODES:
-            self.cur = self.offsets.g92_family(setup, words, self.cur, line)
+        setup, known = t["setup"][i], bool(t["ok"][i])
+        if setup in SETUP_CODES:
+            self._setup(setup, words, known, line)
         mode = m["mode"][i]
         moving = not t["nonmotion"][i] and not math.isnan(mode) and any(c in words for c in "XYZABC@^")
         if m["sets_mode"][i] and mode not in canned.CYCLES:
@@ -101,6 +98,11 @@ class _Run:
             mode = m["motion"][i]
             if math.isnan(mode):
                 raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
+        if not known:  # a word the program text does not determine: the target and all after it are flagged
+            self.cycle.end_run(mode)
+            self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, self.offsets.key(), mode in canned.CYCLES)
+            self.cur = [math.nan] * 3
+            return
         if mode in canned.CYCLES:
             self._cycle(i, mode, words)
             return
@@ -113,6 +115,25 @@ class _Run:
         else:
             self.cur = self._straight_end(i, words)
             self.emit(i, int(mode), self.cur, self.offsets.key(), "@" in words or "^" in words)
+
+    def _setup(self, code: float, words: dict, known: bool, line: int) -> None:
+        """G10 L2 / L20 and the G92 family; one whose words are not all known leaves the
+        offsets it sets unknown (NaN: every target in them is flagged)."""
+        if code == 10.0:
+            lcode, p = words.get("L", math.nan), words.get("P", 0.0)
+            if lcode not in (2.0, 20.0):
+                return  # G10 L1 / L10 / L11: the tool table
+            if not (0 <= p <= 9 and p == int(p)):
+                raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
+            self.cur = self.offsets.g10(int(lcode), int(p), {k: v for k, v in words.items() if k in "XYZR"}, self.cur, line)
+            if not known:
+                system = int(p) or self.offsets.index
+                self.offsets.origin[system] = [math.nan] * 3
+                self.cur = [math.nan] * 3
+            return
+        self.cur = self.offsets.g92_family(code, words, self.cur, line)
+        if not known:
+            self.offsets.g92, self.offsets.g92_params, self.cur = [math.nan] * 3, [math.nan] * 3, [math.nan] * 3
 
     def _straight_end(self, i: int, words: dict) -> list:
         incremental = self.modal["dist"][i] == 91.0
@@ -146,7 +167,7 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray) -> Moves:
     for i in range(len(t["offset"])):
         try:
             state.block(i, int(lines[i]))
-        except (CycleError, PolarError) as exc:
+        except (ValueError, OverflowError) as exc:  # CycleError, PolarError; int() of an infinite word value
             raise BlockError(i, str(exc)) from None
     out = state.out
     m = len(out["row"])
@@ -177,13 +198,14 @@ _GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9])(?![\d.])|[@^]")
 def refuse_unwritable(original, modified) -> None:
     """Compensation must never leave a move the controller makes silently uncompensated:
     a canned-cycle move or a polar end point (no axis words of its own, insert_at -1) that
-    ``modified`` moves, or a G91 increment after a change of frame that it moves, cannot be
+    ``modified`` moves or whose previous target it moves (the cycle starts from there), or a G91 increment after a change of frame that it moves, cannot be
     written in place: EmitError naming file:line:column of the block."""
     moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True).all(axis=1)
     generated = original.insert_at[:, 1] < 0 if original.insert_at is not None else np.zeros(len(original), bool)
     new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
+    moved_before = np.concatenate([[False], moved[:-1]])  # a cycle starts from where the tool is: its moves follow
     after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
-    for rows, why in ((moved & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
+    for rows, why in (((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
                        "compensated moves cannot be put in place; expand the cycle / polar moves to G0/G1 X Y Z blocks first"),
                       (after, "a G91 increment after an offset change or a canned cycle cannot be rewritten exactly; write the program in G90 first")):
         if rows.any():
