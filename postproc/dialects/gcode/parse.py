@@ -425,6 +425,9 @@ class GcodeParser:
                 finite = bool(np.isfinite(transform).all())
                 cache[key] = (self.builder.frame_index(name, transform if finite else None, set_at is not None and finite), finite)
             index[i], ok[i] = cache[key]
+        unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in cache if key[3] is None})
+        if unknown:
+            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
         return index, ok
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
