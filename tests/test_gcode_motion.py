@@ -225,3 +225,24 @@ if __name__ == "__main__":
 
         with tempfile.TemporaryDirectory() as tmp:
             record(Path(tmp))
+
+
+def test_runs_of_holes_read_at_once_equal_the_block_by_block_reading(tmp_path, monkeypatch):
+    """Blocks that only give the next hole are expanded for the whole run at once; the
+    result must be the block-by-block one (G98 below R, G99, G83 pecks, G18, F words)."""
+    import postproc.dialects.gcode.interp as interp
+
+    holes = "".join(f"X{i * 1.5:.3f} Y{(i % 7) * 0.5:.3f}{' F80' if i % 5 == 0 else ''}\n" for i in range(40))
+    zx_holes = "".join(f"X{i * 1.5:.3f} Z{(i % 3) * 0.5:.3f}\n" for i in range(10))
+    text = ("G21 G17 G90 F100\nG0 X0 Y0 Z0\nG98 G81 X1 Y1 Z-3 R2\n" + holes + "G99 G83 X0 Y0 Z-4 R1 Q1.5\n" + holes
+            + "G80\nG18 G0 Y5\nG81 X0 Z0 Y-1 R1\n" + zx_holes + "G80\nM2\n")
+    path = tmp_path / "holes.ngc"
+    path.write_text(text)
+    fast = parse_program(path)
+    slow_run = interp.run
+    monkeypatch.setattr(interp, "run", lambda *a, **k: slow_run(*a, **{**k, "fast": False}))
+    slow = parse_program(path)
+    assert len(fast) == len(slow) > 3 * 90
+    np.testing.assert_array_equal(fast.position, slow.position)
+    np.testing.assert_array_equal(fast.kind, slow.kind)
+    np.testing.assert_array_equal(fast.line, slow.line)

@@ -35,6 +35,7 @@ class CycleState:
     initial: float | None = None  # initial level (cycle_il) while a run of cycles lasts
     last: float | None = None  # motion code of the last motion executed
     sticky: dict = field(default_factory=dict)  # R, the bottom word, P, Q, I, J, K
+    levels: tuple = ()  # (R, clear, bottom) of the last cycle block, mm
 
     def end_run(self, motion: float) -> None:
         """A motion that is not a cycle ends the run: the next cycle takes a new initial level."""
@@ -105,10 +106,28 @@ def expand(block: Block, state: CycleState, cur: list) -> tuple[list[tuple[int, 
             if clear > r:
                 put(RAPID, a, b, r)
         _body(block, sticky, put, a, b, r, clear, bottom)
-    state.last = block.code
+    state.last, state.levels = block.code, (r, clear, bottom)
     end = list(cur)
     end[a_i], end[b_i], end[c_i] = a, b, clear
     return moves, end
+
+
+REPEATABLE = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 89.0)  # every hole the same moves over its X Y
+
+
+def repeat_pattern(code: float, plane: float, state: CycleState) -> list[tuple[int, float, bool]]:
+    """The moves of each further hole of a cycle in force, for blocks that give only the
+    hole's position in the plane (G90, no R, bottom, L, P or Q: what ``expand`` would do
+    with the sticky numbers): [(RAPID|FEED, level on the drilling axis, at the previous
+    hole?)]. A run of such blocks is then expanded for all holes at once."""
+    r, clear, bottom = state.levels
+    pattern = [(RAPID, r, True)] if state.initial < r else []  # a cycle below R goes straight up first, where it is
+    pattern.append((RAPID, clear, False))
+    if clear > r:
+        pattern.append((RAPID, r, False))
+    block = Block(code, {}, plane, False, clear == r)
+    _body(block, state.sticky, lambda kind, p1, p2, p3: pattern.append((kind, p3, False)), 0.0, 0.0, r, clear, bottom)
+    return pattern
 
 
 def _sticky(block: Block, state: CycleState, same: bool, perpendicular: str) -> dict:

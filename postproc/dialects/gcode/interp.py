@@ -50,7 +50,7 @@ def needs_interpreter(t: dict, letters: str) -> bool:
 @dataclass
 class Moves:
     """The targets of a program in order: source block, move code (0-3), end point in its
-    frame (mm), rotary axes, frame key (see Offsets.key; None: machine frame, G53), and
+    frame (mm), rotary axes, frame (see Offsets.key; -1: the machine frame, G53), and
     whether the controller makes the move without the block's axis words saying so
     (canned-cycle moves, polar end points: not writable in place)."""
 
@@ -58,7 +58,8 @@ class Moves:
     motion: np.ndarray
     position: np.ndarray
     abc: np.ndarray
-    frame: list
+    frame: np.ndarray  # index into frames, -1: the machine frame (G53)
+    frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
 
 
@@ -66,23 +67,61 @@ class _Run:
     def __init__(self, t: dict, letters: str, modal: dict):
         self.t, self.modal = t, modal
         self.col = {c: i for i, c in enumerate(letters)}
-        self.values = t["values"].tolist()
         self.offsets, self.cycle = Offsets(), CycleState()
         self.cur, self.abc = [math.nan] * 3, [math.nan] * 3
-        self.out: dict[str, list] = {k: [] for k in ("row", "motion", "position", "abc", "frame", "generated")}
+        self.last_was_cycle = False  # the last block ran a cycle (its levels are in self.cycle)
+        self.out: dict[str, list] = {k: [] for k in _FIELDS}  # targets not yet in a chunk
+        self.chunks: list[dict] = []  # the targets so far, as arrays
+        self.frames: dict = {}  # frame key -> its number in Moves.frames
+
+    def frame_id(self) -> int | None:
+        key = self.offsets.key()
+        return self.frames.setdefault(key, len(self.frames))
+
+    def flush(self) -> None:
+        if self.out["row"]:
+            self.chunks.append(_chunk(**self.out))
+            self.out = {k: [] for k in _FIELDS}
+
+    def extend(self, rows: np.ndarray, motion: np.ndarray, points: np.ndarray) -> None:
+        """Many generated targets at once (a run of holes), in order."""
+        self.flush()
+        n = len(rows)
+        self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
+                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool)})
+
+    def holes(self, i: int, j: int) -> None:
+        """Blocks i..j-1 each give one more hole of the cycle in force and nothing else
+        (``simple_holes``): every hole makes the same moves over its own X Y."""
+        m = self.modal
+        plane, scale = m["plane"][i], m["scale"][i]
+        a_i, b_i, c_i = canned.PLANE_AXES[plane]
+        pattern = canned.repeat_pattern(m["mode"][i], plane, self.cycle)
+        ab = [_ffill_from(self.t["values"][i:j, self.col["XYZ"[k]]] * scale, self.cur[k]) for k in (a_i, b_i)]
+        prev = [np.concatenate([[self.cur[k]], v[:-1]]) for k, v in zip((a_i, b_i), ab)]
+        points = np.empty((j - i, len(pattern), 3))
+        for k, (_, level, at_previous) in enumerate(pattern):
+            here = prev if at_previous else ab
+            points[:, k, a_i], points[:, k, b_i], points[:, k, c_i] = here[0], here[1], level
+        kinds = np.tile(np.array([kind for kind, _, _ in pattern]), j - i)
+        self.extend(np.repeat(np.arange(i, j), len(pattern)), kinds, points.reshape(-1, 3))
+        self.cur[a_i], self.cur[b_i], self.cur[c_i] = float(ab[0][-1]), float(ab[1][-1]), self.cycle.levels[1]
 
     def words(self, i: int) -> dict:
         """The block's words (X Y Z ... as mm, A B C degrees, R as written) present in it."""
         scale = self.modal["scale"][i]
-        row = self.values[i]
+        row = self.t["values"][i].tolist()
         return {c: (v * scale if c in LENGTH_WORDS else v) for c, k in self.col.items() if not math.isnan(v := row[k])}
 
-    def emit(self, i: int, motion: int, position: list, frame, generated: bool) -> None:
+    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False) -> None:
+        """One target of block i, in the frame in force (the machine frame for G53)."""
+        frame = -1 if machine_frame else self.frame_id()
         for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated)):
             self.out[key].append(value)
 
     def block(self, i: int, line: int) -> None:
         m, t = self.modal, self.t
+        self.last_was_cycle = False
         words = self.words(i)
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
         setup, known = t["setup"][i], bool(t["ok"][i])
@@ -100,21 +139,22 @@ class _Run:
                 raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
         if not known:  # a word the program text does not determine: the target and all after it are flagged
             self.cycle.end_run(mode)
-            self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, self.offsets.key(), mode in canned.CYCLES)
+            self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
             self.cur = [math.nan] * 3
             return
         if mode in canned.CYCLES:
             self._cycle(i, mode, words)
+            self.last_was_cycle = True
             return
         self.cycle.end_run(mode)
         if t["g53"][i]:
             program, machine = self.offsets.g53(words, self.cur)
             self._rotary(words, absolute=True)
             self.cur = program
-            self.emit(i, int(mode), machine, None, False)
+            self.emit(i, int(mode), machine, False, machine_frame=True)
         else:
             self.cur = self._straight_end(i, words)
-            self.emit(i, int(mode), self.cur, self.offsets.key(), "@" in words or "^" in words)
+            self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
 
     def _setup(self, code: float, words: dict, known: bool, line: int) -> None:
         """G10 L2 / L20 and the G92 family; one whose words are not all known leaves the
@@ -155,30 +195,69 @@ class _Run:
         block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
         moves, self.cur = canned.expand(block, self.cycle, self.cur)
         for kind, point in moves:
-            self.emit(i, kind, point, self.offsets.key(), True)
+            self.emit(i, kind, point, True)
 
 
-def run(t: dict, letters: str, modal: dict, lines: np.ndarray) -> Moves:
+_FIELDS = ("row", "motion", "position", "abc", "frame", "generated")
+
+
+def _chunk(**lists) -> dict:
+    return {k: np.array(v, dtype=float if k in ("position", "abc") else np.int64 if k != "generated" else bool) for k, v in lists.items()}
+
+
+def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
+    """``col`` with each NaN replaced by the last value before it (``start`` before the first)."""
+    values = np.concatenate([[start], col])
+    idx = np.where(~np.isnan(values), np.arange(len(values)), 0)
+    np.maximum.accumulate(idx, out=idx)
+    return values[idx][1:]
+
+
+def simple_holes(t: dict, letters: str, modal: dict) -> np.ndarray:
+    """(n,) True for a block that only gives the next hole of the cycle in force: X Y (in the
+    cycle's plane) and perhaps F, in G90, with every modal state as in the block before."""
+    col = {c: i for i, c in enumerate(letters)}
+    present = ~np.isnan(t["values"])
+    xyz = present[:, [col["X"], col["Y"], col["Z"]]]
+    others = present[:, [i for c, i in col.items() if c not in "XYZF"]].any(axis=1)
+    plane = np.asarray(modal["plane"])
+    drilling_axis = np.select([plane == 18.0, plane == 19.0], [1, 0], 2)
+    mode = np.asarray(modal["mode"])
+
+    def same(key):
+        v = np.asarray(modal[key])
+        return np.concatenate([[False], v[1:] == v[:-1]])
+
+    return (xyz.any(axis=1) & ~xyz[np.arange(len(plane)), drilling_axis] & ~others & np.isin(mode, canned.REPEATABLE)
+            & ~np.asarray(modal["sets_mode"]) & np.isnan(t["setup"]) & t["ok"] & ~t["g53"] & ~t["nonmotion"] & (np.asarray(modal["dist"]) == 90.0)
+            & same("wcs") & same("retract") & same("scale") & same("plane") & same("mode"))
+
+
+def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True) -> Moves:
     """Every motion target of the block table ``t`` (program order). ``modal`` holds the
     forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
     motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
     (the block names one)."""
     state = _Run(t, letters, modal)
-    for i in range(len(t["offset"])):
+    n = len(t["offset"])
+    simple = simple_holes(t, letters, modal) if fast else np.zeros(n, bool)
+    # end of the run of simple hole blocks that starts at each block
+    run_end = np.minimum.accumulate(np.where(simple, n, np.arange(n))[::-1])[::-1]
+    i = 0
+    while i < n:
         try:
             state.block(i, int(lines[i]))
         except (ValueError, OverflowError) as exc:  # CycleError, PolarError; int() of an infinite word value
             raise BlockError(i, str(exc)) from None
-    out = state.out
-    m = len(out["row"])
-    return Moves(
-        row=np.array(out["row"], np.int64),
-        motion=np.array(out["motion"], np.int64),
-        position=np.array(out["position"], float).reshape(m, 3),
-        abc=np.array(out["abc"], float).reshape(m, 3),
-        frame=out["frame"],
-        generated=np.array(out["generated"], bool),
-    )
+        i += 1
+        if i < n and simple[i] and state.last_was_cycle:
+            end = int(run_end[i])
+            state.holes(i, end)
+            i = end
+    state.flush()
+    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
+    return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
+                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool))
 
 
 def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -391,10 +391,10 @@ class GcodeParser:
             _put_spans(ir_spans, np.nonzero(own)[0], f, t["spans"][rows[own], k])
             if k < 3:
                 ir_scale[:, f] = scale[rows]
-        frame_idx, frame_ok = self._frames_of(moves.frame)
+        frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
         resolved = t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok
+        machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
-        machine = np.array([f is None for f in moves.frame], dtype=bool)
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
         tlo = _ffill(t["tlo"], 49.0)
         tool_idx = self._tool_lengths(t, rows, tlo)
@@ -409,26 +409,24 @@ class GcodeParser:
                                speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
         return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
 
-    def _frames_of(self, keys: list) -> tuple[np.ndarray, np.ndarray]:
-        """Frame index of each target's frame key (interp.Offsets.key), and False where the
-        frame is not a number (an offset taken from a point that is not known)."""
+    def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:
+        """Frame index of each target (``frame`` indexes the frame ``keys``, see interp.Offsets.key;
+        -1 the machine frame), and False where the frame is not a number (an offset taken
+        from a point that is not known)."""
         from .offsets import Offsets
 
-        index, ok, cache = np.zeros(len(keys), np.int32), np.ones(len(keys), bool), {}
-        for i, key in enumerate(keys):
-            if key is None:
-                continue
-            if key not in cache:
-                system, _, _, set_at, _, g92_at = key
-                name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
-                transform = Offsets.transform(key)
-                finite = bool(np.isfinite(transform).all())
-                cache[key] = (self.builder.frame_index(name, transform if finite else None, set_at is not None and finite), finite)
-            index[i], ok[i] = cache[key]
-        unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in cache if key[3] is None})
+        ids, finite = np.zeros(len(keys) + 1, np.int32), np.ones(len(keys) + 1, bool)
+        for k, key in enumerate(keys):
+            system, _, _, set_at, _, g92_at = key
+            name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
+            transform = Offsets.transform(key)
+            finite[k] = bool(np.isfinite(transform).all())
+            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, set_at is not None and finite[k])
+        ids[-1] = self.builder.frame_index("machine", np.eye(4), True)
+        unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in keys if key[3] is None})
         if unknown:
             self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
-        return index, ok
+        return ids[frame], finite[frame]
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
         """Frame index of each target: its work offset as set by G10 in the program before it;
