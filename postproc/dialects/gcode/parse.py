@@ -5,8 +5,10 @@ optional comment) are recognised by one regular expression over the whole text a
 by the vectorised scanner; all other blocks are parsed by ``gcode.lark``, with #
 parameters evaluated in program order (a value that cannot be evaluated is flagged, never
 guessed). Modal state — motion mode, units, absolute/incremental, work offset, tool
-length, canned cycles — is then resolved over the whole block table at once: forward
-fills and cumulative sums, no per-target Python loop.
+length — is then resolved over the whole block table at once: forward fills and
+cumulative sums, no per-target Python loop. Programs whose end points depend on the
+running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^) are run block by block
+by interp.py instead, as LinuxCNC's interpreter runs them.
 """
 
 from __future__ import annotations
