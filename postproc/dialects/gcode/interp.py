@@ -37,14 +37,14 @@ class BlockError(ValueError):
         self.row = row
 
 
-def needs_interpreter(t: dict, letters: str) -> bool:
-    """True where the block table has a construct only a block-by-block reading gets right."""
-    col = {c: i for i, c in enumerate(letters)}
+def needs_interpreter(t: dict) -> bool:
+    """True where the block table has a construct only a block-by-block reading gets right
+    (t["more"] holds the words L P Q @ ^)."""
     if np.isin(t["setup"], SETUP_CODES).any() or t["g53"].any():
         return True
     if np.isin(t["canned"], canned.CYCLES).any():
         return True
-    return bool((~np.isnan(t["values"][:, [col["@"], col["^"]]])).any())
+    return bool((~np.isnan(t["more"][:, 3:5])).any())
 
 
 @dataclass
@@ -110,7 +110,7 @@ class _Run:
     def words(self, i: int) -> dict:
         """The block's words (X Y Z ... as mm, A B C degrees, R as written) present in it."""
         scale = self.modal["scale"][i]
-        row = self.t["values"][i].tolist()
+        row = self.t["values"][i].tolist() + self.t["more"][i].tolist()
         return {c: (v * scale if c in LENGTH_WORDS else v) for c, k in self.col.items() if not math.isnan(v := row[k])}
 
     def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False) -> None:
@@ -217,7 +217,7 @@ def simple_holes(t: dict, letters: str, modal: dict) -> np.ndarray:
     """(n,) True for a block that only gives the next hole of the cycle in force: X Y (in the
     cycle's plane) and perhaps F, in G90, with every modal state as in the block before."""
     col = {c: i for i, c in enumerate(letters)}
-    present = ~np.isnan(t["values"])
+    present = np.hstack([~np.isnan(t["values"]), ~np.isnan(t["more"])])
     xyz = present[:, [col["X"], col["Y"], col["Z"]]]
     others = present[:, [i for c, i in col.items() if c not in "XYZF"]].any(axis=1)
     plane = np.asarray(modal["plane"])

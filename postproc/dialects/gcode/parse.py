@@ -26,8 +26,10 @@ from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
 
-AXES = "XYZABCIJKRFLPQ@^"  # L P Q @ ^ (repeats, dwell, peck, polar) are read by the grammar only
+AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
+MORE = "LPQ@^"  # repeats, dwell / G10 P, peck, polar: words only the grammar reads (no spans)
+_MORE = {c: i for i, c in enumerate(MORE)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
     rf"^(?P<code>[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg](?P<mode>\d+)(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}(?:[ \t]+(?=[XYZABCIJKRFxyzabcijkrf]))?)+)[ \t]*(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
@@ -113,15 +115,16 @@ class GcodeParser:
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:
             return self.builder.build()
-        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0]}
+        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0] if k != "more"}
         order = np.argsort(table["offset"], kind="stable")
         table = {k: v[order] for k, v in table.items()}
+        table["more"] = _more_words(order, len(table["offset"]) - len(slow["offset"]), slow["more"])
         return self._resolve(table)
 
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup", "more")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist():
@@ -143,6 +146,7 @@ class GcodeParser:
             "code_end": np.array(out["code_end"], dtype=np.int64),
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
+            "more": np.array(out["more"], dtype=float).reshape(n, len(MORE)),
             **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h", "retract", "setup")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
@@ -202,6 +206,7 @@ class GcodeParser:
         """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
+        more = np.full(len(MORE), np.nan)
         state = {k: np.nan for k in ("motion", "units", "dist", "plane", "wcs", "canned", "tlo", "h", "retract", "setup")}
         ok = True
         gcodes: list[float] = []
@@ -215,10 +220,11 @@ class GcodeParser:
             elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
-                ok &= self._word(item, start, values, spans, state, gcodes)
+                ok &= self._word(item, start, values, spans, state, gcodes, more)
         nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
         out["offset"].append(start)
         out["values"].append(values)
+        out["more"].append(more)
         out["spans"].append(spans)
         for k, v in state.items():
             out[k].append(v)
@@ -248,7 +254,7 @@ class GcodeParser:
                 raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
             stack.pop()
 
-    def _word(self, item: Tree, start: int, values, spans, state, gcodes) -> bool:
+    def _word(self, item: Tree, start: int, values, spans, state, gcodes, more) -> bool:
         """One letter word into the block's values / state; False where its value is unknown."""
         letter = str(item.children[0]).upper()
         vnode = item.children[1]
@@ -262,6 +268,8 @@ class GcodeParser:
             gcodes.append(round(value, 1))
         elif letter == "H":
             state["h"] = value
+        elif letter in _MORE:
+            more[_MORE[letter]] = value
         elif letter in _AX:
             values[_AX[letter]] = value
             if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
@@ -324,7 +332,7 @@ class GcodeParser:
         """The targets of the block table ``t`` (program order) with every modal state applied."""
         from .interp import needs_interpreter
 
-        if needs_interpreter(t, AXES):
+        if needs_interpreter(t):
             return self._resolve_blocks(t)
         motion = _ffill(t["motion"], np.nan)
         units = _ffill(t["units"], 21.0)
@@ -380,7 +388,7 @@ class GcodeParser:
         modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": _ffill(t["plane"], 17.0).tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
                  "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist()}
         try:
-            moves = interp.run(t, AXES, modal, self.lines.line(t["offset"]))
+            moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
             raise self.lines.error(self.doc.path, int(t["offset"][exc.row]), str(exc)) from None
         rows, own = moves.row, ~moves.generated
@@ -485,6 +493,18 @@ class GcodeParser:
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _more_words(order: np.ndarray, n_bulk: int, slow_more: np.ndarray) -> np.ndarray:
+    """(n, len(MORE)) L P Q @ ^ of every block in program order: only grammar blocks have
+    them (a read-only NaN view where none has any, so that plain programs pay nothing)."""
+    n = len(order)
+    if not (~np.isnan(slow_more)).any():
+        return np.broadcast_to(np.full(len(MORE), np.nan), (n, len(MORE)))
+    more = np.full((n, len(MORE)), np.nan)
+    rows = np.nonzero(order >= n_bulk)[0]
+    more[rows] = slow_more[order[rows] - n_bulk]
+    return more
 
 
 def _ffill(col: np.ndarray, default: float) -> np.ndarray:
