@@ -36,6 +36,8 @@ PROGRAMS = {
     "g81_g91_l3": "G21 G17 G90 F100\nG0 X1 Y2 Z3\nG91 G98 G81 X4 Y5 Z-6 R1 L3\nG90 G80\nM2\n",
     # G18: the cycle plane is Z X, the drilling axis Y
     "g81_g18": "G21 G18 G90 F100\nG0 X0 Y10 Z0\nG99 G81 X5 Z5 Y-2 R2\nG80\nM2\n",
+    # G19: the cycle plane is Y Z, the drilling axis X; G98 with `Y8` repeating it
+    "g81_g19": "G21 G19 G90 F100\nG0 X10 Y0 Z0\nG98 G81 Y5 Z5 X-2 R2\nY8\nG80\nM2\n",
     # G83 peck drilling, Q1.5 (G99 is rs274's start-up retract mode)
     "g83_peck": "G21 G17 G90 F100\nG0 X0 Y0 Z5\nG83 X1 Y1 Z-3 R1 Q1.5\nG80\nM2\n",
     # G92, G92.2, G92.3, G92.1
@@ -93,6 +95,13 @@ def test_g81_in_the_g18_plane(tmp_path):
     """Manual, "Canned Cycles": in G18 the hole is drilled along Y, positioned in Z X."""
     expected = [(5, 10, 5), (5, 2, 5), (5, -2, 5), (5, 2, 5)]
     np.testing.assert_allclose(_machine("g81_g18", tmp_path)[1:], expected, atol=1e-9)
+
+
+def test_g81_in_the_g19_plane(tmp_path):
+    """Manual, "Canned Cycles": in G19 the hole is drilled along X, positioned in Y Z; G98
+    returns to the initial X10 before the next hole."""
+    expected = [(10, 5, 5), (2, 5, 5), (-2, 5, 5), (10, 5, 5), (10, 8, 5), (2, 8, 5), (-2, 8, 5), (10, 8, 5)]
+    np.testing.assert_allclose(_machine("g81_g19", tmp_path)[1:], expected, atol=1e-9)
 
 
 def test_g83_pecks(tmp_path):
