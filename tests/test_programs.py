@@ -48,7 +48,9 @@ def _editable(tp):
     """Targets whose every position number is in the text as a plain number (or inherited)."""
     present = ~np.isnan(tp.values[:, :3])
     plain = tp.spans[:, :3, 1] >= 0
-    return (~present | plain).all(axis=1) & ~np.isnan(tp.position).any(axis=1)
+    # G-code canned-cycle moves and polar ends have no words of their own and nowhere to put one
+    writable = tp.insert_at[:, 1] >= 0 if tp.dialect == "gcode" else np.ones(len(tp), bool)
+    return (~present | plain).all(axis=1) & ~np.isnan(tp.position).any(axis=1) & writable
 
 
 @pytest.mark.parametrize("path", PROGRAMS, ids=lambda p: f"{p.parent.name}/{p.name}")
@@ -80,6 +82,9 @@ def _assert_refusal_is_justified(tp, moved, exc):
     if "used by lines" in str(exc):
         names = [tp.target_name[i] for i in np.nonzero(moved)[0] if tp.target_name[i]]
         assert len(set(names)) < len(names), "refused as shared, but no point is used twice"
+    elif "cannot be compensated" in str(exc):
+        assert (tp.insert_at[:, 1] < 0).any(), "refused as a controller-made move, but the program has none"
+        assert re.match(r".+:\d+:\d+: ", str(exc)), "the refusal must name file:line:column"
     else:
         assert "cannot be changed" in str(exc), str(exc)
         expression = ~np.isnan(tp.values[:, :3]) & (tp.spans[:, :3, 1] < 0)

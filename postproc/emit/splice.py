@@ -131,6 +131,18 @@ def _text_values(modified: Toolpath, original: Toolpath) -> np.ndarray:
     return values / modified.scale
 
 
+def _seen_from_next_frame(original: Toolpath, position: np.ndarray) -> np.ndarray:
+    """(N-1, 3) each target's point but the last, in the frame of the target after it: what
+    that target inherits for an axis it leaves out (a G-code G92 or G10 L20 between them
+    changes the frame, not where the tool is)."""
+    prev = position[:-1].copy()
+    change = np.nonzero(original.frame[1:] != original.frame[:-1])[0]
+    if len(change):
+        step = np.linalg.inv(original.frames[original.frame[change + 1]]) @ original.frames[original.frame[change]]
+        prev[change] = np.einsum("nij,nj->ni", step[:, :3, :3], prev[change]) + step[:, :3, 3]
+    return prev
+
+
 def splice(original: Toolpath, modified: Toolpath, insert_field=None) -> list[str]:
     """New text of every source of ``original`` with the numbers ``modified`` changed.
 
@@ -242,8 +254,13 @@ class _Splice:
         written: they inherit the previous target's value, so only where the new value
         differs from what it inherits (an unmoved target too, when the one before moved)."""
         original, modified = self.original, self.modified
-        inherited = np.vstack([np.full((1, 3), np.nan), modified.position[:-1]])
+        inherited = np.vstack([np.full((1, 3), np.nan), _seen_from_next_frame(original, modified.position)])
         differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
+        # A word is needed where the target or the one before it moves, never where neither
+        # does (the text already says where it is).
+        moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True)
+        moved = moved | np.vstack([np.zeros((1, 3), bool), moved[:-1]])
+        differs &= moved
         missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
         if missing.any() and (insert_field is None or original.insert_at is None):
             r = int(np.nonzero(missing.any(axis=1))[0][0])

@@ -21,6 +21,12 @@ class GcodeDialect(Dialect):
 
         return GcodeParser(sources[0]).parse()
 
+    def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
+        from .interp import refuse_unwritable
+
+        refuse_unwritable(original, modified)  # canned-cycle and polar moves: refused by file:line:column, never left as they were
+        return super().emit_texts(original, modified)
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f" {field.upper()}{text}"  # one more axis word in the block
 

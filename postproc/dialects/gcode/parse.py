@@ -5,8 +5,10 @@ optional comment) are recognised by one regular expression over the whole text a
 by the vectorised scanner; all other blocks are parsed by ``gcode.lark``, with #
 parameters evaluated in program order (a value that cannot be evaluated is flagged, never
 guessed). Modal state — motion mode, units, absolute/incremental, work offset, tool
-length, canned cycles — is then resolved over the whole block table at once: forward
-fills and cumulative sums, no per-target Python loop.
+length — is then resolved over the whole block table at once: forward fills and
+cumulative sums, no per-target Python loop. Programs whose end points depend on the
+running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^) are run block by block
+by interp.py instead, as LinuxCNC's interpreter runs them.
 """
 
 from __future__ import annotations
@@ -27,6 +29,8 @@ from . import arcwords, flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
+MORE = "LPQ@^"  # repeats, dwell / G10 P, peck, polar: words only the grammar reads (no spans)
+_MORE = {c: i for i, c in enumerate(MORE)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
     rf"^(?P<code>[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?(?P<g>[Gg](?P<mode>\d+)(?![\d.])[ \t]*)?(?:[XYZABCIJKRFxyzabcijkrf][ \t]*{NUM}(?:[ \t]+(?=[XYZABCIJKRFxyzabcijkrf]))?)+)[ \t]*(?:\([^()\n]*\)[ \t]*|;[^\n]*)?\r?$",
@@ -51,6 +55,10 @@ _STATE_OF_G = {
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
     **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
+    # Cutter radius compensation: the controller offsets the path by the tool radius, which
+    # the program text does not determine (tool table), so targets under it are flagged.
+    **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
+    40.0: ("ccomp", 0.0),
 }
 
 
@@ -62,6 +70,9 @@ _BINOPS = {"+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a
            "MOD": lambda a, b: math.fmod(a, b) if b else math.nan, "EQ": lambda a, b: float(a == b), "NE": lambda a, b: float(a != b),
            "GT": lambda a, b: float(a > b), "GE": lambda a, b: float(a >= b), "LT": lambda a, b: float(a < b), "LE": lambda a, b: float(a <= b),
            "AND": lambda a, b: float(bool(a) and bool(b)), "OR": lambda a, b: float(bool(a) or bool(b)), "XOR": lambda a, b: float(bool(a) != bool(b))}
+
+
+_UNMODELLED_AXES = frozenset("UVW")
 
 
 class _Unknown(Exception):
@@ -117,7 +128,7 @@ class GcodeParser:
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, ijk=nan, wcs=nan,
-                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan)
+                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan, retract=nan, setup=nan, ccomp=nan)
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
@@ -129,9 +140,10 @@ class GcodeParser:
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:
             return self.builder.build()
-        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0]}
+        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0] if k != "more"}
         order = np.argsort(table["offset"], kind="stable")
         table = {k: v[order] for k, v in table.items()}
+        table["more"] = _more_words(order, len(table["offset"]) - len(slow["offset"]), slow["more"])
         return self._resolve(table)
 
     def _parse_flow(self) -> Toolpath:
@@ -155,7 +167,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup", "ccomp", "more")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist() if starts is None else starts:
@@ -178,7 +190,8 @@ class GcodeParser:
             "code_end": np.array(out["code_end"], dtype=np.int64),
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h")},
+            "more": np.array(out["more"], dtype=float).reshape(n, len(MORE)),
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -231,7 +244,8 @@ class GcodeParser:
         """One block read by the grammar: its words into the block table ``out``."""
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h")}
+        more = np.full(len(MORE), np.nan)
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")}
         ok = True
         gcodes: list[float] = []
         assigns: list[tuple] = []
@@ -247,7 +261,7 @@ class GcodeParser:
             elif item.data == "keyword":
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
-                ok &= self._word(item, start, values, spans, state, gcodes)
+                ok &= self._word(item, start, values, spans, state, gcodes, more)
         for key, value in assigns:  # LinuxCNC: a line's parameter settings take effect after the whole line is read
             if value is None:
                 self.params.pop(key, None)  # unknown from here on, never the old value
@@ -256,6 +270,7 @@ class GcodeParser:
         nonmotion, g53 = self._apply_gcodes(gcodes, state, values, start)
         out["offset"].append(start)
         out["values"].append(values)
+        out["more"].append(more)
         out["spans"].append(spans)
         for k, v in state.items():
             out[k].append(v)
@@ -291,10 +306,14 @@ class GcodeParser:
                 raise self.lines.error(self.doc.path, start, f"{label} {kw} does not close the open O-word block ({stack[-1][0] if stack else 'none open'})")
             stack.pop()
 
-    def _word(self, item: Tree, start: int, values, spans, state, gcodes) -> bool:
+    def _word(self, item: Tree, start: int, values, spans, state, gcodes, more) -> bool:
         """One letter word into the block's values / state; False where its value is unknown."""
         letter = str(item.children[0]).upper()
         vnode = item.children[1]
+        if letter in _UNMODELLED_AXES and not self.siemens:
+            # A U V W axis moves the machine, but the IR has no place for it: refuse, never drop.
+            raise self.lines.error(self.doc.path, start + item.meta.start_pos if hasattr(item, "meta") and not item.meta.empty else start,
+                                   f"axis word {letter}: the {letter} axis moves the machine but postproc models only X Y Z A B C")
         known = True
         try:
             value = self._eval(vnode)
@@ -306,6 +325,8 @@ class GcodeParser:
             gcodes.append(round(value, 1))
         elif letter == "H":
             state["h"] = value
+        elif letter in _MORE:
+            more[_MORE[letter]] = value
         elif letter in _AX:
             values[_AX[letter]] = value
             if isinstance(vnode, Tree) and vnode.data in ("number", "neg", "pos") and _plain_number(vnode):
@@ -324,6 +345,8 @@ class GcodeParser:
                 state[key] = value
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
+            elif gc in (98.0, 99.0):
+                state["retract"] = gc
             elif gc == 53.0:
                 g53 = True
             elif gc == 68.2:
@@ -336,6 +359,7 @@ class GcodeParser:
                 self.tilts.append((self._when(start), "unknown"))
             elif gc in _NONMOTION:
                 nonmotion = True
+                state["setup"] = gc
                 if gc == 10.0:
                     self._g10(values, start)
         return nonmotion, g53
@@ -365,6 +389,10 @@ class GcodeParser:
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
         """The targets of the block table ``t`` (program order) with every modal state applied."""
+        from .interp import needs_interpreter
+
+        if needs_interpreter(t):
+            return self._resolve_blocks(t)
         motion = _ffill(t["motion"], np.nan)
         units = _ffill(t["units"], 21.0)
         dist = _ffill(t["dist"], 90.0)
@@ -381,7 +409,7 @@ class GcodeParser:
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
         unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed
+        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
         speed[np.isneginf(speed)] = np.nan
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -418,9 +446,82 @@ class GcodeParser:
         tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_motion[rows] & (tlo[rows] == 43.5))
 
+    def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
+        """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
+        runs is offset from these targets by a radius the IR does not model (noted once)."""
+        active = _ffill(t["ccomp"], 0.0)[rows] == 1.0
+        if active.any():
+            first = int(self.lines.line(t["offset"][rows[np.argmax(active)]]))
+            self.builder.notes.append(f"line {first}: cutter radius compensation (G41/G42) is active: the controller offsets the path by the "
+                                      f"tool radius, which is not modelled; {int(active.sum())} target(s) under it are flagged")
+        return active
+
     def _error_at(self, offset: int, message: str):
         """A ParseError at a character offset of the program (file:line:column)."""
         return self.lines.error(self.doc.path, int(offset), message)
+
+    def _resolve_blocks(self, t: dict) -> Toolpath:
+        """The targets of a program read block by block (interp.py: canned cycles, G92,
+        G10 L20 / R, G53, polar words). Targets the controller makes without axis words
+        for them (cycle moves, polar ends) have no span and nowhere to insert one."""
+        from . import interp
+
+        scale = np.where(_ffill(t["units"], 21.0) == 20.0, 25.4, 1.0)
+        dist = _ffill(t["dist"], 90.0)
+        mode, sets_mode = interp.modal_mode(t["motion"], t["canned"])
+        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": _ffill(t["plane"], 17.0).tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
+                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist()}
+        try:
+            moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
+        except interp.BlockError as exc:
+            raise self.lines.error(self.doc.path, int(t["offset"][exc.row]), str(exc)) from None
+        rows, own = moves.row, ~moves.generated
+        m = len(rows)
+        ir_values, ir_spans, ir_scale = np.full((m, NF), np.nan), np.full((m, NF, 3), -1, dtype=np.int64), np.ones((m, NF))
+        point = np.hstack([moves.position, moves.abc])
+        for k, f in _IR_FIELD_OF_AXIS.items():
+            word = own & ~np.isnan(t["values"][rows, k])
+            ir_values[:, f] = np.where(word, point[:, k], np.nan)
+            _put_spans(ir_spans, np.nonzero(own)[0], f, t["spans"][rows[own], k])
+            if k < 3:
+                ir_scale[:, f] = scale[rows]
+        frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
+        resolved = t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows)
+        machine = moves.frame < 0
+        self._tilted_planes(t, rows, frame_idx, resolved)
+        frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
+        tlo = _ffill(t["tlo"], 49.0)
+        tool_idx = self._tool_lengths(t, rows, tlo)
+        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans) & own
+        if axis_rows.any():
+            self.builder.orientation_kind = "axis"
+        self.builder.notes.extend(self.notes)
+        offsets = t["offset"][rows]
+        insert_at = np.stack([np.where(own, 0, -1), np.where(own, t["code_end"][rows], -1)], axis=1)
+        order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
+        self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
+                               relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
+                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
+        return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+
+    def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:
+        """Frame index of each target (``frame`` indexes the frame ``keys``, see interp.Offsets.key;
+        -1 the machine frame), and False where the frame is not a number (an offset taken
+        from a point that is not known)."""
+        from .offsets import Offsets
+
+        ids, finite = np.zeros(len(keys) + 1, np.int32), np.ones(len(keys) + 1, bool)
+        for k, key in enumerate(keys):
+            system, _, _, set_at, _, g92_at = key
+            name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
+            transform = Offsets.transform(key)
+            finite[k] = bool(np.isfinite(transform).all())
+            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, set_at is not None and finite[k])
+        ids[-1] = self.builder.frame_index("machine", np.eye(4), True)
+        unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in keys if key[3] is None})
+        if unknown:
+            self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        return ids[frame], finite[frame]
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
         """Frame index of each target: its work offset as set by G10 in the program before it;
@@ -477,6 +578,18 @@ class GcodeParser:
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _more_words(order: np.ndarray, n_bulk: int, slow_more: np.ndarray) -> np.ndarray:
+    """(n, len(MORE)) L P Q @ ^ of every block in program order: only grammar blocks have
+    them (a read-only NaN view where none has any, so that plain programs pay nothing)."""
+    n = len(order)
+    if not (~np.isnan(slow_more)).any():
+        return np.broadcast_to(np.full(len(MORE), np.nan), (n, len(MORE)))
+    more = np.full((n, len(MORE)), np.nan)
+    rows = np.nonzero(order >= n_bulk)[0]
+    more[rows] = slow_more[order[rows] - n_bulk]
+    return more
 
 
 def _ffill(col: np.ndarray, default: float) -> np.ndarray:

@@ -1,0 +1,205 @@
+"""Canned cycles G73, G74, G81-G89 expanded into the moves LinuxCNC makes.
+
+LinuxCNC manual, "G-code", section "Canned cycles" (G80-G89, "Preliminary and In-Between
+Motion", "Retract": G98 back to the initial level, G99 to R; "L": repeats, with X Y
+increments in G91; "Sticky numbers"), checked against rs274ngc's interp_cycles.cc
+(convert_cycle_xy / _zx / _yz, CYCLE_MACRO): in the plane of the cycle (G17: X Y, G18:
+Z X, G19: Y Z) the tool is positioned, then the perpendicular axis moves to R, to the
+bottom and back. In G91, R is an increment from the initial level and the bottom an
+increment from R. A cycle stays in force for later blocks with axis words until G80 or
+another motion code. All lengths are mm.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .polar import polar_end, polar_step
+
+RAPID, FEED = 0, 1  # move codes (G0, G1)
+# (first, second, perpendicular) axis of the cycle plane: G17 X Y Z, G18 Z X Y, G19 Y Z X
+PLANE_AXES = {17.0: (0, 1, 2), 18.0: (2, 0, 1), 19.0: (1, 2, 0)}
+PERPENDICULAR = {17.0: "Z", 18.0: "Y", 19.0: "X"}
+PECK_CLEARANCE_MM = 0.254  # rs274's G73/G83 back-off (0.010 in), when no D word
+CYCLES = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 87.0, 88.0, 89.0)
+
+
+class CycleError(ValueError):
+    """A cycle block LinuxCNC refuses (the message is rs274's reason)."""
+
+
+@dataclass
+class CycleState:
+    """The 'sticky' numbers of the cycle in force (rs274ngc's cycle_* settings)."""
+
+    initial: float | None = None  # initial level (cycle_il) while a run of cycles lasts
+    last: float | None = None  # motion code of the last motion executed
+    sticky: dict = field(default_factory=dict)  # R, the bottom word, P, Q, I, J, K
+    levels: tuple = ()  # (R, clear, bottom) of the last cycle block, mm
+
+    def end_run(self, motion: float) -> None:
+        """A motion that is not a cycle ends the run: the next cycle takes a new initial level."""
+        self.initial = None
+        self.last = motion
+
+
+@dataclass
+class Block:
+    """What one cycle block says (mm): words present, plane, G90/G91, G98/G99."""
+
+    code: float
+    words: dict
+    plane: float
+    incremental: bool
+    retract_to_r: bool
+
+
+def expand(block: Block, state: CycleState, cur: list) -> tuple[list[tuple[int, list]], list]:
+    """Moves [(RAPID|FEED, [x, y, z])] of one cycle block from the current point ``cur``,
+    and the point the interpreter holds afterwards."""
+    a_i, b_i, c_i = PLANE_AXES[block.plane]
+    axis = "XYZ"
+    words, same = block.words, state.last == block.code
+    if not same and axis[c_i] not in words:
+        raise CycleError(f"{PERPENDICULAR[block.plane]} value unspecified in the canned cycle (G{block.code:g})")
+    sticky = _sticky(block, state, same, axis[c_i])
+    if state.initial is None:
+        state.initial = cur[c_i]
+    old_cc, current_cc = state.initial, cur[c_i]
+    a, b = cur[a_i], cur[b_i]
+    inc = (0.0, 0.0, 0.0, 0.0)
+    if block.incremental:
+        inc = (words.get(axis[a_i], 0.0), words.get(axis[b_i], 0.0), words.get("@", 0.0), words.get("^", 0.0))
+        r = sticky["R"] + old_cc
+        bottom = r + sticky["bottom"]
+    else:
+        r, bottom = sticky["R"], sticky["bottom"]
+        if ("@" in words or "^" in words) and block.plane == 17.0:
+            a, b = polar_end(a, b, words.get("@"), words.get("^"), incremental=False)
+        else:
+            a, b = words.get(axis[a_i], a), words.get(axis[b_i], b)
+    if r < bottom:
+        raise CycleError(f"R less than {PERPENDICULAR[block.plane]} in the canned cycle (G{block.code:g})")
+    moves: list[tuple[int, list]] = []
+
+    def put(kind: int, p1: float, p2: float, p3: float) -> None:
+        point = [0.0, 0.0, 0.0]
+        point[a_i], point[b_i], point[c_i] = p1, p2, p3
+        moves.append((kind, point))
+
+    if old_cc < r:  # below the R plane: straight up to it first
+        put(RAPID, cur[a_i], cur[b_i], r)
+        old_cc = current_cc = r
+    clear = r if block.retract_to_r else old_cc
+    repeats = int(round(words.get("L", 1.0)))
+    if repeats < 1:
+        raise CycleError("cannot do zero repeats of a canned cycle (L0)")
+    for repeat in range(repeats, 0, -1):
+        a, b = a + inc[0], b + inc[1]
+        if inc[2] or inc[3]:
+            a, b = polar_step(a, b, inc[2], inc[3])
+        if repeat == repeats and current_cc > r:
+            put(RAPID, a, b, current_cc)
+            put(RAPID, a, b, r)
+        else:
+            put(RAPID, a, b, clear)
+            if clear > r:
+                put(RAPID, a, b, r)
+        _body(block, sticky, put, a, b, r, clear, bottom)
+    state.last, state.levels = block.code, (r, clear, bottom)
+    end = list(cur)
+    end[a_i], end[b_i], end[c_i] = a, b, clear
+    return moves, end
+
+
+REPEATABLE = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 89.0)  # every hole the same moves over its X Y
+
+
+def repeat_pattern(code: float, plane: float, state: CycleState) -> list[tuple[int, float, bool]]:
+    """The moves of each further hole of a cycle in force, for blocks that give only the
+    hole's position in the plane (G90, no R, bottom, L, P or Q: what ``expand`` would do
+    with the sticky numbers): [(RAPID|FEED, level on the drilling axis, at the previous
+    hole?)]. A run of such blocks is then expanded for all holes at once."""
+    r, clear, bottom = state.levels
+    pattern = [(RAPID, r, True)] if state.initial < r else []  # a cycle below R goes straight up first, where it is
+    pattern.append((RAPID, clear, False))
+    if clear > r:
+        pattern.append((RAPID, r, False))
+    block = Block(code, {}, plane, False, clear == r)
+    _body(block, state.sticky, lambda kind, p1, p2, p3: pattern.append((kind, p3, False)), 0.0, 0.0, r, clear, bottom)
+    return pattern
+
+
+def _sticky(block: Block, state: CycleState, same: bool, perpendicular: str) -> dict:
+    """R, bottom, P, Q, I, J, K of this block: its words, else the values kept from the
+    previous block of the same cycle (a new cycle needs its own)."""
+    words, kept = block.words, state.sticky if same else {}
+    if "R" not in words and "R" not in kept:
+        raise CycleError(f"R clearance plane unspecified in the canned cycle (G{block.code:g})")
+    out = dict(state.sticky)
+    out["R"] = words.get("R", kept.get("R"))
+    out["bottom"] = words.get(perpendicular, state.sticky.get("bottom"))
+    for letter in "PQIJK":
+        if letter in words:
+            out[letter] = words[letter]
+    need = {73.0: "Q", 83.0: "Q", 82.0: "P", 86.0: "P", 88.0: "P", 89.0: "P"}.get(block.code)
+    if need and need not in words and not same:
+        raise CycleError(f"{need} word missing with G{block.code:g}")
+    if block.code == 87.0 and not same and any(k not in words for k in "IJK"):
+        raise CycleError("I, J and K words are needed with G87")
+    state.sticky = out
+    return out
+
+
+def _body(block: Block, sticky: dict, put, a: float, b: float, r: float, clear: float, bottom: float) -> None:
+    """The cycle proper, once the tool is over the hole at R (interp_cycles.cc)."""
+    code = block.code
+    if code in (73.0, 83.0):
+        _peck(code, sticky, put, a, b, r, bottom, block.words.get("D", PECK_CLEARANCE_MM))
+        put(RAPID, a, b, clear)
+    elif code in (81.0, 82.0, 86.0):
+        put(FEED, a, b, bottom)
+        put(RAPID, a, b, clear)
+    elif code in (74.0, 84.0, 89.0):
+        put(FEED, a, b, bottom)
+        put(FEED, a, b, clear)
+    elif code == 85.0:
+        put(FEED, a, b, bottom)
+        put(FEED, a, b, r)
+        put(RAPID, a, b, clear)
+    elif code == 88.0:
+        put(FEED, a, b, bottom)  # then the program stops: the operator retracts by hand
+    elif code == 87.0:
+        if block.plane != 17.0:
+            raise CycleError("G87 back boring is read in the G17 plane only")
+        _back_bore(block, sticky, put, a, b, r, clear, bottom)
+
+
+def _peck(code: float, sticky: dict, put, a: float, b: float, r: float, bottom: float, back_off: float) -> None:
+    """G83: feed Q deeper, rapid out to R and back down to just above the last depth;
+    G73: feed Q deeper, rapid back a little (chip break)."""
+    delta = sticky["Q"]
+    if delta <= 0:
+        raise CycleError(f"negative or zero Q value with G{code:g}")
+    depth = r - delta
+    while depth > bottom:
+        put(FEED, a, b, depth)
+        if code == 83.0:
+            put(RAPID, a, b, r)
+        put(RAPID, a, b, depth + back_off)
+        depth -= delta
+    put(FEED, a, b, bottom)
+
+
+def _back_bore(block: Block, sticky: dict, put, a: float, b: float, r: float, clear: float, bottom: float) -> None:
+    """G87: in beside the hole (I, J), down, over the hole, feed up to K and back, out."""
+    oa, ob = a + sticky["I"], b + sticky["J"]
+    top = bottom + sticky["K"] if block.incremental else sticky["K"]
+    put(RAPID, oa, ob, r)
+    put(RAPID, oa, ob, bottom)
+    put(RAPID, a, b, bottom)
+    put(FEED, a, b, top)
+    put(FEED, a, b, bottom)
+    put(RAPID, oa, ob, bottom)
+    put(RAPID, oa, ob, clear)
+    put(RAPID, a, b, clear)

@@ -1,0 +1,304 @@
+"""Block-by-block reading of the G-code that moves by the controller's running state.
+
+Most programs are read by parse.py's vectorised resolver (forward fills and cumulative
+sums). A block whose end point depends on where the machine is and on offsets set while
+the program runs cannot be: canned cycles (their initial level, R in G91, L repeats), G92 /
+G52 (the current point reads as the words), G10 L20 and G10 L2 ... R (work offsets set,
+rotated, from the current point), G53 (machine coordinates in the middle of a program) and
+polar ``@`` ``^`` words. Programs that have one are run here, one block after another,
+with the state rs274ngc keeps (offsets.py, canned.py, polar.py); each motion target comes
+out in program coordinates of the frame it is in (machine coordinates for G53).
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...errors import EmitError
+
+from . import canned
+from .canned import CycleError, CycleState
+from .offsets import Offsets
+from .polar import PolarError, polar_end
+
+LENGTH_WORDS = set("XYZIJKQ@")  # words in program length units (R: a length in a cycle, degrees in G10)
+SETUP_CODES = (10.0, 52.0, 92.0, 92.1, 92.2, 92.3)
+
+
+class BlockError(ValueError):
+    """A block the controller refuses: ``row`` of the block table, rs274's reason."""
+
+    def __init__(self, row: int, message: str):
+        super().__init__(message)
+        self.row = row
+
+
+def needs_interpreter(t: dict) -> bool:
+    """True where the block table has a construct only a block-by-block reading gets right
+    (t["more"] holds the words L P Q @ ^)."""
+    if np.isin(t["setup"], SETUP_CODES).any() or t["g53"].any():
+        return True
+    if np.isin(t["canned"], canned.CYCLES).any():
+        return True
+    return bool((~np.isnan(t["more"][:, 3:5])).any())
+
+
+@dataclass
+class Moves:
+    """The targets of a program in order: source block, move code (0-3), end point in its
+    frame (mm), rotary axes, frame (see Offsets.key; -1: the machine frame, G53), and
+    whether the controller makes the move without the block's axis words saying so
+    (canned-cycle moves, polar end points: not writable in place)."""
+
+    row: np.ndarray
+    motion: np.ndarray
+    position: np.ndarray
+    abc: np.ndarray
+    frame: np.ndarray  # index into frames, -1: the machine frame (G53)
+    frames: list  # frame keys (Offsets.key)
+    generated: np.ndarray
+
+
+class _Run:
+    def __init__(self, t: dict, letters: str, modal: dict):
+        self.t, self.modal = t, modal
+        self.col = {c: i for i, c in enumerate(letters)}
+        self.offsets, self.cycle = Offsets(), CycleState()
+        self.cur, self.abc = [math.nan] * 3, [math.nan] * 3
+        self.last_was_cycle = False  # the last block ran a cycle (its levels are in self.cycle)
+        self.out: dict[str, list] = {k: [] for k in _FIELDS}  # targets not yet in a chunk
+        self.chunks: list[dict] = []  # the targets so far, as arrays
+        self.frames: dict = {}  # frame key -> its number in Moves.frames
+
+    def frame_id(self) -> int | None:
+        key = self.offsets.key()
+        return self.frames.setdefault(key, len(self.frames))
+
+    def flush(self) -> None:
+        if self.out["row"]:
+            self.chunks.append(_chunk(**self.out))
+            self.out = {k: [] for k in _FIELDS}
+
+    def extend(self, rows: np.ndarray, motion: np.ndarray, points: np.ndarray) -> None:
+        """Many generated targets at once (a run of holes), in order."""
+        self.flush()
+        n = len(rows)
+        self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
+                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool)})
+
+    def holes(self, i: int, j: int) -> None:
+        """Blocks i..j-1 each give one more hole of the cycle in force and nothing else
+        (``simple_holes``): every hole makes the same moves over its own X Y."""
+        m = self.modal
+        plane, scale = m["plane"][i], m["scale"][i]
+        a_i, b_i, c_i = canned.PLANE_AXES[plane]
+        pattern = canned.repeat_pattern(m["mode"][i], plane, self.cycle)
+        ab = [_ffill_from(self.t["values"][i:j, self.col["XYZ"[k]]] * scale, self.cur[k]) for k in (a_i, b_i)]
+        prev = [np.concatenate([[self.cur[k]], v[:-1]]) for k, v in zip((a_i, b_i), ab)]
+        points = np.empty((j - i, len(pattern), 3))
+        for k, (_, level, at_previous) in enumerate(pattern):
+            here = prev if at_previous else ab
+            points[:, k, a_i], points[:, k, b_i], points[:, k, c_i] = here[0], here[1], level
+        kinds = np.tile(np.array([kind for kind, _, _ in pattern]), j - i)
+        self.extend(np.repeat(np.arange(i, j), len(pattern)), kinds, points.reshape(-1, 3))
+        self.cur[a_i], self.cur[b_i], self.cur[c_i] = float(ab[0][-1]), float(ab[1][-1]), self.cycle.levels[1]
+
+    def words(self, i: int) -> dict:
+        """The block's words (X Y Z ... as mm, A B C degrees, R as written) present in it."""
+        scale = self.modal["scale"][i]
+        row = self.t["values"][i].tolist() + self.t["more"][i].tolist()
+        return {c: (v * scale if c in LENGTH_WORDS else v) for c, k in self.col.items() if not math.isnan(v := row[k])}
+
+    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False) -> None:
+        """One target of block i, in the frame in force (the machine frame for G53)."""
+        frame = -1 if machine_frame else self.frame_id()
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated)):
+            self.out[key].append(value)
+
+    def block(self, i: int, line: int) -> None:
+        m, t = self.modal, self.t
+        self.last_was_cycle = False
+        words = self.words(i)
+        self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
+        setup, known = t["setup"][i], bool(t["ok"][i])
+        if setup in SETUP_CODES:
+            self._setup(setup, words, known, line)
+        mode = m["mode"][i]
+        moving = not t["nonmotion"][i] and not math.isnan(mode) and any(c in words for c in "XYZABC@^")
+        if m["sets_mode"][i] and mode not in canned.CYCLES:
+            self.cycle.end_run(mode)
+        if not moving:
+            return
+        if mode == 80.0:  # axis words after G80: Fanuc moves in the G0-G3 mode in force (rs274 refuses them)
+            mode = m["motion"][i]
+            if math.isnan(mode):
+                raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
+        if not known:  # a word the program text does not determine: the target and all after it are flagged
+            self.cycle.end_run(mode)
+            self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
+            self.cur = [math.nan] * 3
+            return
+        if mode in canned.CYCLES:
+            self._cycle(i, mode, words)
+            self.last_was_cycle = True
+            return
+        self.cycle.end_run(mode)
+        if t["g53"][i]:
+            program, machine = self.offsets.g53(words, self.cur)
+            self._rotary(words, absolute=True)
+            self.cur = program
+            self.emit(i, int(mode), machine, False, machine_frame=True)
+        else:
+            self.cur = self._straight_end(i, words)
+            self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
+
+    def _setup(self, code: float, words: dict, known: bool, line: int) -> None:
+        """G10 L2 / L20 and the G92 family; one whose words are not all known leaves the
+        offsets it sets unknown (NaN: every target in them is flagged)."""
+        if code == 10.0:
+            lcode, p = words.get("L", math.nan), words.get("P", 0.0)
+            if lcode not in (2.0, 20.0):
+                return  # G10 L1 / L10 / L11: the tool table
+            if not (0 <= p <= 9 and p == int(p)):
+                raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
+            self.cur = self.offsets.g10(int(lcode), int(p), {k: v for k, v in words.items() if k in "XYZR"}, self.cur, line)
+            if not known:
+                system = int(p) or self.offsets.index
+                self.offsets.origin[system] = [math.nan] * 3
+                self.cur = [math.nan] * 3
+            return
+        self.cur = self.offsets.g92_family(code, words, self.cur, line)
+        if not known:
+            self.offsets.g92, self.offsets.g92_params, self.cur = [math.nan] * 3, [math.nan] * 3, [math.nan] * 3
+
+    def _straight_end(self, i: int, words: dict) -> list:
+        incremental = self.modal["dist"][i] == 91.0
+        end = [(c + words.get(a, 0.0)) if incremental else words.get(a, c) for a, c in zip("XYZ", self.cur)]
+        if "@" in words or "^" in words:
+            if "X" in words or "Y" in words:
+                raise PolarError("cannot give X or Y words with polar coordinates")
+            end[0], end[1] = polar_end(self.cur[0], self.cur[1], words.get("@"), words.get("^"), incremental)
+        self._rotary(words, absolute=not incremental)
+        return end
+
+    def _rotary(self, words: dict, absolute: bool) -> None:
+        for k, a in enumerate("ABC"):
+            if a in words:
+                self.abc[k] = words[a] if absolute else self.abc[k] + words[a]
+
+    def _cycle(self, i: int, mode: float, words: dict) -> None:
+        cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
+        block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
+        moves, self.cur = canned.expand(block, self.cycle, self.cur)
+        for kind, point in moves:
+            self.emit(i, kind, point, True)
+
+
+_FIELDS = ("row", "motion", "position", "abc", "frame", "generated")
+
+
+def _chunk(**lists) -> dict:
+    return {k: np.array(v, dtype=float if k in ("position", "abc") else np.int64 if k != "generated" else bool) for k, v in lists.items()}
+
+
+def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
+    """``col`` with each NaN replaced by the last value before it (``start`` before the first)."""
+    values = np.concatenate([[start], col])
+    idx = np.where(~np.isnan(values), np.arange(len(values)), 0)
+    np.maximum.accumulate(idx, out=idx)
+    return values[idx][1:]
+
+
+def simple_holes(t: dict, letters: str, modal: dict) -> np.ndarray:
+    """(n,) True for a block that only gives the next hole of the cycle in force: X Y (in the
+    cycle's plane) and perhaps F, in G90, with every modal state as in the block before."""
+    col = {c: i for i, c in enumerate(letters)}
+    present = np.hstack([~np.isnan(t["values"]), ~np.isnan(t["more"])])
+    xyz = present[:, [col["X"], col["Y"], col["Z"]]]
+    others = present[:, [i for c, i in col.items() if c not in "XYZF"]].any(axis=1)
+    plane = np.asarray(modal["plane"])
+    drilling_axis = np.select([plane == 18.0, plane == 19.0], [1, 0], 2)
+    mode = np.asarray(modal["mode"])
+
+    def same(key):
+        v = np.asarray(modal[key])
+        return np.concatenate([[False], v[1:] == v[:-1]])
+
+    return (xyz.any(axis=1) & ~xyz[np.arange(len(plane)), drilling_axis] & ~others & np.isin(mode, canned.REPEATABLE)
+            & ~np.asarray(modal["sets_mode"]) & np.isnan(t["setup"]) & t["ok"] & ~t["g53"] & ~t["nonmotion"] & (np.asarray(modal["dist"]) == 90.0)
+            & same("wcs") & same("retract") & same("scale") & same("plane") & same("mode"))
+
+
+def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True) -> Moves:
+    """Every motion target of the block table ``t`` (program order). ``modal`` holds the
+    forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
+    motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
+    (the block names one)."""
+    state = _Run(t, letters, modal)
+    n = len(t["offset"])
+    simple = simple_holes(t, letters, modal) if fast else np.zeros(n, bool)
+    # end of the run of simple hole blocks that starts at each block
+    run_end = np.minimum.accumulate(np.where(simple, n, np.arange(n))[::-1])[::-1]
+    i = 0
+    while i < n:
+        try:
+            state.block(i, int(lines[i]))
+        except (ValueError, OverflowError) as exc:  # CycleError, PolarError; int() of an infinite word value
+            raise BlockError(i, str(exc)) from None
+        i += 1
+        if i < n and simple[i] and state.last_was_cycle:
+            end = int(run_end[i])
+            state.holes(i, end)
+            i = end
+    state.flush()
+    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
+    return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
+                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool))
+
+
+def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(mode in force at each block, the block names a motion or cycle code): G0-G3 and the
+    cycles G73-G89 (G80: 80) are one modal group, the one named last is in force."""
+    cycle = np.where(cycle_codes == 0.0, 80.0, cycle_codes)
+    named = np.where(~np.isnan(motion), motion, cycle)
+    has = ~np.isnan(named)
+    idx = np.where(has, np.arange(len(named)), -1)
+    np.maximum.accumulate(idx, out=idx)
+    return np.where(idx >= 0, named[np.maximum(idx, 0)], np.nan), has
+
+
+_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9])(?![\d.])|[@^]")
+
+
+def refuse_unwritable(original, modified) -> None:
+    """Compensation must never leave a move the controller makes silently uncompensated:
+    a canned-cycle move or a polar end point (no axis words of its own, insert_at -1) that
+    ``modified`` moves or whose previous target it moves (the cycle starts from there), or a G91 increment after a change of frame that it moves, cannot be
+    written in place: EmitError naming file:line:column of the block."""
+    moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True).all(axis=1)
+    generated = original.insert_at[:, 1] < 0 if original.insert_at is not None else np.zeros(len(original), bool)
+    new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
+    moved_before = np.concatenate([[False], moved[:-1]])  # a cycle starts from where the tool is: its moves follow
+    after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
+    for rows, why in (((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
+                       "compensated moves cannot be put in place; expand the cycle / polar moves to G0/G1 X Y Z blocks first"),
+                      (after, "a G91 increment after an offset change or a canned cycle cannot be rewritten exactly; write the program in G90 first")):
+        if rows.any():
+            r = int(np.nonzero(rows)[0][0])
+            doc = original.sources[int(original.file[r])]
+            start = _line_start(doc.text, int(original.line[r]))
+            end = doc.text.find("\n", start)
+            found = _GENERATOR.search(doc.text, start, len(doc.text) if end < 0 else end)
+            column = (found.start() - start + 1) if found else 1
+            raise EmitError(f"{doc.path}:{original.line[r]}:{column}: this block cannot be compensated: {why}")
+
+
+def _line_start(text: str, line: int) -> int:
+    start = 0
+    for _ in range(line - 1):
+        start = text.index("\n", start) + 1
+    return start
