@@ -121,7 +121,7 @@ def geometry(tp: Toolpath, base_positions: np.ndarray | None = None, words: np.n
     rows = rows[rows > 0]
     if tp.arc is None or not len(rows):
         z = np.zeros((0, 3))
-        return Arcs(rows, np.zeros((0, 3), int), z, z, np.zeros((0, 2)), np.zeros(0, bool), np.zeros(0, bool))
+        return Arcs(rows[:0], np.zeros((0, 3), int), z, z, np.zeros((0, 2)), np.zeros(0, bool), np.zeros(0, bool))
     base = tp.base_positions() if base_positions is None else base_positions
     words = tp.values[:, F_ARC] if words is None else words
     start = _local(tp, rows, base[rows - 1])
@@ -173,6 +173,9 @@ def refuse_uncompensable(tp: Toolpath) -> None:
     rows = arc_rows(tp)
     if not len(rows):
         return
+    if tp.arc is None:  # the block-by-block reader (canned cycles, G92, G10, polar words) keeps end points only
+        raise InputError(_where(tp, int(rows[0]), I_) + "arcs in a program with canned cycles, G92, G10 or polar words are not "
+                         "compensated (their centres are not carried through that reader)")
     if rows[0] == 0:
         raise InputError(_where(tp, 0, I_) + "the program starts with an arc: its start is where the machine stands, unknown to the "
                          "post-processor (move to the start first)")
