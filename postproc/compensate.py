@@ -58,6 +58,7 @@ class Report:
     posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
+    end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
 
     @property
     def failed(self) -> np.ndarray:
@@ -229,7 +230,7 @@ def compensate(
     report = _report(problem, before, solution)
     progress("predicting the path between targets")
     report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, _path_deviation(problem, solution), float),
-                     path_limit_mm=max_deviation_mm)
+                     path_limit_mm=max_deviation_mm, end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
     out = written.with_positions(problem.positions_for(solution.cmd))
     if problem.notes:
         out = replace(out, notes=out.notes + tuple(problem.notes))

@@ -21,6 +21,11 @@ class GcodeDialect(Dialect):
 
         return GcodeParser(sources[0]).parse()
 
+    def stream_rules(self):
+        from .stream import RULES
+
+        return RULES
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f" {field.upper()}{text}"  # one more axis word in the block
 
