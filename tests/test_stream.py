@@ -84,3 +84,74 @@ def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model,
         assert result.summary["predicted_after"]["max_mm"] == pytest.approx(rep.summary()["predicted_after"]["max_mm"], rel=1e-9)
     assert result.summary["chunks"] == 1
     assert compensate_streamed(program, model, tmp_path / "s.src", chunk_lines=97, **options).summary["chunks"] > 5
+
+
+def test_posture_is_carried_across_cuts(tmp_path, model):
+    """A start posture with the wrist flipped: every chunk keeps it (as the whole program does)."""
+    from postproc import kinematics as kin
+
+    program = _krl(tmp_path / "p.src", n=400)
+    tp = parse_program(program)
+    flange = tp.base_poses()[:1] @ np.linalg.inv(tp.tools[tp.tool[0]])
+    sols = kin.ik(model.robot, flange)[0]
+    ok = ~np.isnan(sols).any(axis=1) & kin.within_limits(model.robot, np.nan_to_num(sols))
+    default = _whole(program, model, tmp_path / "default.src")
+    flipped = [q for q in sols[ok] if np.sign(q[4]) != np.sign(sols[ok][np.argmin(np.abs(sols[ok]).sum(axis=1))][4])]
+    assert flipped, "no flipped-wrist solution to start from"
+    start = {"start_joints": flipped[0]}
+    _whole(program, model, tmp_path / "whole.src", **start)
+    assert (tmp_path / "whole.src").read_bytes() != (tmp_path / "default.src").read_bytes()  # the posture matters here
+    compensate_streamed(program, model, tmp_path / "stream.src", chunk_lines=60, **start)
+    assert (tmp_path / "stream.src").read_bytes() == (tmp_path / "whole.src").read_bytes()
+    assert default.summary()["failed"] == 0
+
+
+def test_state_changes_after_the_moves_are_read_in_context(tmp_path, model):
+    """Lines that are not plain moves end the chunked part; the rest is one chunk read after
+    the restated state (a $BASE change then more moves)."""
+    extra = ["$BASE = {X 10, Y 0, Z 0, A 0, B 0, C 0}", "LIN {X 950, Y 0, Z 440, A 0, B 180, C 0}", "LIN {X 960}"]
+    program = _krl(tmp_path / "p.src", n=300, extra=extra)
+    _whole(program, model, tmp_path / "whole.src")
+    result = compensate_streamed(program, model, tmp_path / "stream.src", chunk_lines=50)
+    assert (tmp_path / "stream.src").read_bytes() == (tmp_path / "whole.src").read_bytes()
+    assert result.summary["chunks"] > 3
+
+
+def test_path_dependent_models_and_other_languages_are_read_whole(tmp_path, model):
+    robot = postproc.load_robot("kr160_r1570")
+    backlash = random_truth(robot, TOOL, parse_effects(FRAME_AND_COMPLIANCE + ",backlash"), np.random.default_rng(3))
+    with pytest.raises(StreamFallback, match="backlash"):
+        compensate_streamed(_krl(tmp_path / "p.src", n=50), backlash, tmp_path / "o.src")
+    rapid = tmp_path / "p.mod"
+    rapid.write_text("MODULE M\n  PROC main()\n    MoveL [[1,2,3],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
+    with pytest.raises(StreamFallback, match="rapid"):
+        compensate_streamed(rapid, model, tmp_path / "o.mod")
+    assert not (tmp_path / "o.src").exists() and not (tmp_path / "o.mod").exists()
+
+
+def test_a_failure_in_a_late_chunk_writes_nothing_and_names_the_program_line(tmp_path, model):
+    program = _krl(tmp_path / "p.src", n=300)
+    lines = program.read_bytes().decode("latin-1").split("\r\n")
+    bad = 250  # 1-based line of a target far out of reach, in a late chunk
+    lines[bad - 1] = "LIN {X 5000, Y 0, Z 450, A 0, B 180, C 0} C_DIS"
+    program.write_text("\r\n".join(lines), encoding="latin-1")
+    out = tmp_path / "out" / "p.src"
+    out.parent.mkdir()
+    with pytest.raises(CompensationError) as caught:
+        compensate_streamed(program, model, out, chunk_lines=40)
+    assert bad in [line for line, _ in caught.value.failures]
+    assert list(out.parent.iterdir()) == []  # no output, no temporary file
+
+
+def test_cli_streams_and_falls_back(tmp_path, model):
+    program = _krl(tmp_path / "p.src", n=200)
+    save_model(tmp_path / "m.json", model)
+    outs = {}
+    for mode in ("always", "never"):
+        outs[mode] = tmp_path / f"{mode}.src"
+        res = runner.invoke(app, ["compensate", str(program), "--model", str(tmp_path / "m.json"), "-o", str(outs[mode]), "--stream", mode])
+        assert res.exit_code == 0, res.output
+        assert ("chunks" in res.output) == (mode == "always")
+    assert outs["always"].read_bytes() == outs["never"].read_bytes()
+    bad = runner.invoke(app, ["compensate", str(program), "--model", str(tmp_path / "m.json"), "-o", str(tmp_path / "x.src"), "--stream", "sometimes"])
+    assert bad.exit_code == 2 and "--stream" in bad.output
