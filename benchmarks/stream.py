@@ -138,12 +138,12 @@ def main() -> None:
     if args.child:
         child(args.child[0], Path(args.child[1]), Path(args.child[2]), args.child[3])
         return
-    sizes = [int(s) for s in args.sizes.split(",")] + ([10_000_000] if args.huge else [])
+    sizes = [int(s) for s in args.sizes.split(",") if s] + ([10_000_000] if args.huge else [])
     suffix = ".src" if args.dialect == "krl" else ".ngc"
     print(f"{args.dialect} raster, KR160 physics model; each run in a fresh process (wall time includes start-up and the model)")
     print("work: the job after start-up (imports); CPU: its CPU seconds, all threads (on a shared machine wall time is contention)")
     print(f"{'moves':>11}  {'path':<7}{'work wall':>10}  {'points/s':>9}  {'work CPU':>9}  {'points/CPU s':>12}  {'peak RSS':>9}")
-    with tempfile.TemporaryDirectory(dir=Path(__file__).resolve().parent.parent) as tmp:
+    with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
         loop = measure("loop", tmp / f"p{suffix}", tmp / f"l{suffix}", args.dialect)
         for n in sizes:

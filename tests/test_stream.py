@@ -80,8 +80,12 @@ def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model,
         result = compensate_streamed(program, model, out, chunk_lines=chunk, **options)
         assert out.read_bytes() == whole.read_bytes(), chunk
         assert result.summary["targets"] == rep.summary()["targets"]
-        assert result.summary["iterations_max"] == rep.summary()["iterations_max"]
-        assert result.summary["predicted_after"]["max_mm"] == pytest.approx(rep.summary()["predicted_after"]["max_mm"], rel=1e-9)
+        want = rep.summary()
+        for key in ("targets", "compensated", "iterations_max", "iterations_median", "failed"):
+            assert result.summary[key] == want[key], key
+        for key in ("predicted_before", "predicted_after"):
+            assert result.summary[key] == pytest.approx(want[key], rel=1e-9)
+        assert result.summary["path"] == pytest.approx(want["path"], rel=1e-9)
     assert result.summary["chunks"] == 1
     assert compensate_streamed(program, model, tmp_path / "s.src", chunk_lines=97, **options).summary["chunks"] > 5
 
