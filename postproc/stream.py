@@ -72,7 +72,10 @@ def wants_stream(path: str | Path, mode: str) -> bool:
         raise InputError(f"--stream: '{mode}' is not one of auto, always, never")
     if mode == "never" or str(path) == "-":
         return False
-    return mode == "always" or Path(path).stat().st_size > STREAM_MIN_BYTES
+    try:
+        return mode == "always" or Path(path).stat().st_size > STREAM_MIN_BYTES
+    except OSError:
+        return False  # the whole-program path says why it cannot be read
 
 
 @dataclass
