@@ -18,6 +18,7 @@ Every fit runs in this one process: the peak RSS printed is the largest of them 
 
 from __future__ import annotations
 
+import os
 import resource
 import sys
 import time
@@ -112,7 +113,7 @@ if __name__ == "__main__":
     if mode == "sim":
         sim(int(sys.argv[2]) if len(sys.argv) > 2 else 100_000)
     elif mode == "ur10":
-        default = Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10_ipa"
+        default = Path(os.environ.get("POSTPROC_SHARED", Path(__file__).resolve().parents[2] / "shared")) / "data" / "ur10_ipa"
         ur10(Path(sys.argv[2]) if len(sys.argv) > 2 else default, int(sys.argv[3]) if len(sys.argv) > 3 else 2000)
     else:
         sys.exit(__doc__)
