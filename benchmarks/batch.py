@@ -16,7 +16,11 @@ import numpy as np
 
 def program(path: Path, n: int) -> None:
     lines = ["MODULE Part", "  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];",
-             "  TASK PERS wobjdata wTable := [FALSE,TRUE,\"\",[[900,-100,300],[0.9659258,0,0,0.2588190]],[[0,0,0],[1,0,0,0]]];", "  PROC main()"]
+             "  TASK PERS wobjdata wTable := [FALSE,TRUE,\"\",[[1150,-100,300],[0.9659258,0,0,0.2588190]],[[0,0,0],[1,0,0,0]]];", "  PROC main()",
+             # The programs' confdata [0,0,0,0] is not a KR160 posture at these targets (every
+             # target used to fail with "configuration data match no IK solution"): let the
+             # controller take the configuration nearest the current one, as a CAM post does.
+             "    ConfL\\Off;"]
     for i in range(n):
         lines.append(f"    MoveL [[{200 * np.sin(i / 50):.3f},{150 * np.cos(i / 70):.3f},150.000],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tSpindle\\WObj:=wTable;")
     path.write_text("\n".join(lines + ["  ENDPROC", "ENDMODULE", ""]))

@@ -613,6 +613,7 @@ def compensate_cmd(
     subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
+    stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
@@ -655,6 +656,11 @@ def compensate_cmd(
     program = programs[0]
     if output is None:
         raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
+    stream_options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces, "max_deviation_mm": max_deviation,
+                      "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
+                      "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+    if cut is None and report is None and output != "-" and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
+        return
     tp = _read_program(program, dialect)
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
@@ -1167,3 +1173,42 @@ def main() -> None:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
+    """compensate --stream: a long program in chunks (postproc.stream); False where the
+    whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .compensate import CompensationError
+    from .stream import StreamFallback, compensate_streamed, wants_stream
+
+    if not wants_stream(program, mode):
+        return False
+    try:
+        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+            task = bar.add_task("compensating in chunks", total=None)
+            result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place,
+                                         progress=lambda m: bar.update(task, description=m), **options)
+    except StreamFallback as exc:
+        err.print(f"note: the program is read whole, not in chunks: {exc}")
+        return False
+    except CompensationError as exc:
+        failures = getattr(exc, "failures", [])
+        for line, reason in failures[:50]:
+            err.print(f"line {line}: {reason}")
+        raise
+    s = result.summary
+    b, a = s["predicted_before"], s["predicted_after"]
+    if b["rms_mm"] is not None:
+        out.print(f"{s['compensated']} of {s['targets']} targets compensated ({options['scheme']}, {s['chunks']} chunks); predicted error RMS "
+                  f"{b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, max {b['max_mm']:.4f} -> {a['max_mm']:.4f} mm; "
+                  f"iterations median {s['iterations_median']:.0f}, max {s['iterations_max']}")
+    if s["path"] is not None:
+        pth = s["path"]
+        out.print(f"between targets ({pth['segments']} straight or circular segments, controller interpolation, model prediction): "
+                  f"largest distance from the intended path {pth['max_mm']:.4f} mm, on the segment into line {pth['line']}; "
+                  f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
+    for note in result.notes:
+        out.print(f"note: {note}")
+    return True

@@ -58,6 +58,7 @@ class Report:
     posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
+    end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
 
     @property
     def failed(self) -> np.ndarray:
@@ -231,7 +232,8 @@ def compensate(
     progress("predicting the path between targets")
     path = _path_deviation(problem, solution)
     arc_fit.put_deviation(path, problem.rows)
-    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm)
+    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
+                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
     out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
     if problem.notes:
         out = replace(out, notes=out.notes + tuple(problem.notes))

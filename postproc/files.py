@@ -6,12 +6,17 @@ import os
 import shutil
 import tempfile
 from pathlib import Path
+from typing import Iterable
 
 from .errors import OutputError
 
 
-def write_all(files: dict[Path, bytes], backup: bool = False) -> None:
+def write_all(files: dict[Path, bytes | Iterable[bytes]], backup: bool = False) -> None:
     """Write every file of one job, or none of them.
+
+    A file's content may be an iterable of byte strings (a long program written as it is
+    computed, postproc.stream): it is staged piece by piece, and an exception raised while
+    producing it leaves nothing behind.
 
     Each file is written to a temporary file in its target's folder first (a missing
     folder or a full disk fails here, before anything is replaced); only when all are
@@ -46,7 +51,11 @@ def _stage(path: Path, data: bytes) -> str:
         with os.fdopen(fd, "wb") as fh:
             # mkstemp creates the file private (0600); give it the mode a plain open() would.
             os.fchmod(fh.fileno(), path.stat().st_mode & 0o7777 if path.exists() else 0o666 & ~_current_umask())
-            fh.write(data)
+            if isinstance(data, (bytes, bytearray)):
+                fh.write(data)
+            else:
+                for part in data:
+                    fh.write(part)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise

@@ -11,7 +11,10 @@ dialect only through this interface and the registry in ``postproc.dialects``.
 
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -137,6 +140,12 @@ class Dialect:
         ``new_frame`` (base_T_workpiece), for ``postproc place -o``."""
         raise EmitError(f"{path}: writing a placed {self.name} program is not supported")
 
+    # ------------------------------------------------------------- streaming
+    def stream_rules(self) -> "StreamRules | None":
+        """How a long program of this language may be compensated in chunks
+        (``postproc.stream``), or None: its programs are always read whole."""
+        return None
+
     # ------------------------------------------------------------ new programs
     def new_writer(self, name: str):
         """An event writer (see postproc.emit.writer) for a new program, or None."""
@@ -145,6 +154,29 @@ class Dialect:
     def new_program_paths(self, output: Path) -> list[Path]:
         """Paths of the files a new program written to ``output`` consists of."""
         return [Path(output)]
+
+
+@dataclass(frozen=True)
+class StreamRules:
+    """What ``postproc.stream`` needs from a language to cut a long program into chunks.
+
+    A chunk after the first is parsed as: the program's header (its lines before the first
+    ``move`` line, any target lines in it blanked), one line from ``restate`` that puts the
+    parser where the program is after the previous chunk's last target, the chunk's lines,
+    and ``tail`` (what closes a program, KRL's END) unless it is the last chunk. Chunks are
+    cut only between ``body`` lines: lines that change no state but the position (moves,
+    comments, M codes, ...); the restated target is checked against the previous chunk's
+    last one (position, orientation, frame, tool, speed, motion kind) before it is used."""
+
+    move: re.Pattern  # a line that starts the body: one plain Cartesian move
+    body: re.Pattern  # (?:LINE\n)*: a run of lines the chunks may be cut between
+    restate: Callable[[Toolpath, np.ndarray], str]  # (last target as a 1-row Toolpath, its carried field values (NF,)) -> a line
+    tail: str = ""
+
+
+def plain_number(value: float) -> str:
+    """``value`` exactly (shortest round trip), without an exponent: what a parser reads back as the same float."""
+    return np.format_float_positional(float(value), unique=True, trim="-")
 
 
 NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # a plain decimal number literal

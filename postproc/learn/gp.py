@@ -73,7 +73,7 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         if self.resolved_method(n_points) == "exact":
             return gp_fit_bytes(n_points, n_features, self.anisotropic)
         largest = max(min(n_points, 2 * self.leaf_size), min(n_points, self.global_size))
-        return lean_fit_bytes(largest) + 64 * n_points * (n_features + 3)
+        return lean_fit_bytes(largest) * local_gp.fit_workers() + 64 * n_points * (n_features + 3)
 
     def _check_memory(self, n_points: int, n_features: int) -> str:
         method = self.resolved_method(n_points)
@@ -136,10 +136,10 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         kernel = self._kernel(X.shape[1])
         start = kernel.clone_with_theta(optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng))
         experts = []
-        for k, idx in enumerate(members):
+        for k, expert in enumerate(local_gp.fit_experts(Xs, y, members, start, self.expert_iter)):
+            experts.append(expert)
             if progress is not None:
-                progress(k + 1, total, f"expert {k + 1} of {len(members)} ({len(idx)} poses)")
-            experts.append(local_gp.fit_expert(Xs[idx], y[idx], start, self.expert_iter))
+                progress(k + 1, total, f"expert {k + 1} of {len(members)} ({len(members[k])} poses)")
         self._set_local(regions, members, experts)
         self._keep(X, y, None)
         return self

@@ -27,6 +27,11 @@ class GcodeDialect(Dialect):
         refuse_unwritable(original, modified)  # canned-cycle and polar moves: refused by file:line:column, never left as they were
         return super().emit_texts(original, modified)
 
+    def stream_rules(self):
+        from .stream import RULES
+
+        return RULES
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f" {field.upper()}{text}"  # one more axis word in the block
 

@@ -82,6 +82,11 @@ class KrlDialect(Dialect):
         return np.array([not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
                          for f, n in zip(tp.file.tolist(), tp.line.tolist())], dtype=bool)
 
+    def stream_rules(self):
+        from .stream import RULES
+
+        return RULES
+
     def insert_field(self, source: int, field: str, text: str) -> str:
         return f", {field.upper()} {text}"  # one more component of the aggregate
 

@@ -1,0 +1,171 @@
+"""Long programs end to end, streamed in chunks against the whole-program path (issue 17).
+
+Run: .venv/bin/python benchmarks/stream.py [--sizes 100000,1000000] [--huge] [--dialect krl|gcode] [--whole-max 1000000]
+Each size and path runs in a fresh process (peak RSS is per process): a raster program of
+N moves (KRL ``LIN {X .., Y .., Z .., A 0, B 180, C 0} C_DIS`` or five-axis G-code with
+G43.5 tool axis vectors) is compensated with a physics model of the KR160 (geometric,
+base_frame, tool_offset, joint_compliance) by
+- ``stream``: ``postproc.stream.compensate_streamed`` (parse, compensate, emit, re-parse
+  check and write, chunk by chunk, one temporary file renamed at the end);
+- ``whole``: the whole-program path of ``postproc compensate`` (parse, compensate, emit,
+  re-parse check, write), up to --whole-max moves (it needs ~2.6 GB per 10^6);
+- ``loop``: the same library calls on one target at a time, on 200 targets (points/s).
+--huge adds 10^7 moves (streamed only). Prints the work's wall and CPU time, points/s and
+peak RSS; the two
+paths' outputs are compared byte for byte where both ran.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+G54 = np.array([[1.0, 0, 0, 900.0], [0, -1.0, 0, -100.0], [0, 0, -1.0, 350.0], [0, 0, 0, 1.0]])
+H1 = np.array([[1.0, 0, 0, 0], [0, 1.0, 0, 0], [0, 0, 1.0, 200.0], [0, 0, 0, 1.0]])
+
+
+def make_program(path: Path, n: int, dialect: str) -> None:
+    side = int(np.ceil(np.sqrt(n)))
+    block = 100_000
+    with open(path, "w", encoding="latin-1", newline="\n") as fh:
+        if dialect == "krl":
+            fh.write("DEF raster( )\n$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}\n$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}\n$APO.CDIS = 0.2\n")
+        else:
+            fh.write("%\n(raster, tool axis vectors)\nG21 G90 G17 G54\nG43.5 H1\n")
+        for start in range(0, n, block):
+            i = np.arange(start, min(n, start + block))
+            u, v = (i // side) / side, (i % side) / side
+            if dialect == "krl":
+                x, y = 850.0 + 300.0 * u, -250.0 + 500.0 * v
+                fh.writelines(f"LIN {{X {a:.3f}, Y {b:.3f}, Z 450.000, A 0, B 180, C 0}} C_DIS\n" for a, b in zip(x, y))
+            else:
+                x, y, tilt = -150.0 + 300.0 * u, -250.0 + 500.0 * v, np.radians(10.0 * np.sin(i / 500.0))
+                fh.writelines(f"G1 X{a:.3f} Y{b:.3f} Z0 I{np.sin(t):.6f} J0 K{np.cos(t):.6f} F3000\n" for a, b, t in zip(x, y, tilt))
+        fh.write("END\n" if dialect == "krl" else "G49\nM30\n%\n")
+
+
+def model():
+    import postproc
+    from postproc.effects import parse_effects
+    from postproc.sim import random_truth
+
+    robot = postproc.load_robot("kr160_r1570")
+    return random_truth(robot, np.array([0.0, 0.0, 200.0]), parse_effects("geometric,base_frame,tool_offset,joint_compliance"), np.random.default_rng(0))
+
+
+def options(dialect: str) -> dict:
+    return {} if dialect == "krl" else {"frames": {"G54": G54}, "tools": {"H1": H1}}
+
+
+def run_stream(src: Path, out: Path, dialect: str) -> None:
+    from postproc.stream import compensate_streamed
+
+    compensate_streamed(src, model(), out, **options(dialect))
+
+
+def run_whole(src: Path, out: Path, dialect: str) -> None:
+    from postproc.compensate import compensate
+    from postproc.programs import check_texts, emit_texts, files_for, parse_program, write_set
+
+    tp = parse_program(src)
+    new, rep = compensate(tp, model(), **options(dialect))
+    assert not rep.failures()
+    texts = emit_texts(tp, new)
+    check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
+    write_set(files_for(tp, texts, out))
+
+
+def run_loop(src: Path, out: Path, dialect: str) -> None:
+    from postproc.compensate import compensate
+    from postproc.programs import emit_texts, parse_program
+
+    small = src.with_name("loop" + src.suffix)
+    make_program(small, 200, dialect)
+    tp, m = parse_program(small), model()
+    t0 = time.perf_counter()
+    for i in range(len(tp)):
+        one = tp.take([i])
+        new, _ = compensate(one, m, **options(dialect))
+        emit_texts(one, new)
+    print(f"RATE {len(tp) / (time.perf_counter() - t0):.1f}")
+
+
+def child(path: str, src: Path, out: Path, dialect: str) -> None:
+    import postproc.compensate  # noqa: F401  (imports are start-up, not work)
+    import postproc.stream  # noqa: F401
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    {"stream": run_stream, "whole": run_whole, "loop": run_loop}[path](src, out, dialect)
+    print(f"WORK {time.perf_counter() - t0:.3f} {time.process_time() - c0:.3f}")
+    print(f"PEAK {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2:.3f}")
+
+
+def measure(path: str, src: Path, out: Path, dialect: str) -> dict:
+    t0 = time.perf_counter()
+    proc = subprocess.run([sys.executable, __file__, "--child", path, str(src), str(out), dialect], capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if proc.returncode:
+        return {"error": (proc.stderr or proc.stdout).strip().splitlines()[-1]}
+    found = dict(line.split(" ", 1) for line in proc.stdout.splitlines() if line[:4] in ("PEAK", "RATE", "WORK"))
+    work, cpu = (float(v) for v in found["WORK"].split())
+    return {"wall": wall, "work": work, "cpu": cpu, "peak": float(found["PEAK"]), "rate": float(found.get("RATE", "nan"))}
+
+
+def digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 24), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", default="100000,1000000")
+    parser.add_argument("--huge", action="store_true", help="add 10^7 moves (streamed only; minutes)")
+    parser.add_argument("--dialect", default="krl", choices=("krl", "gcode"))
+    parser.add_argument("--whole-max", type=int, default=1_000_000)
+    parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        child(args.child[0], Path(args.child[1]), Path(args.child[2]), args.child[3])
+        return
+    sizes = [int(s) for s in args.sizes.split(",") if s] + ([10_000_000] if args.huge else [])
+    suffix = ".src" if args.dialect == "krl" else ".ngc"
+    print(f"{args.dialect} raster, KR160 physics model; each run in a fresh process (wall time includes start-up and the model)")
+    print("work: the job after start-up (imports); CPU: its CPU seconds, all threads (on a shared machine wall time is contention)")
+    print(f"{'moves':>11}  {'path':<7}{'work wall':>10}  {'points/s':>9}  {'work CPU':>9}  {'points/CPU s':>12}  {'peak RSS':>9}")
+    with tempfile.TemporaryDirectory() as tmp:
+        tmp = Path(tmp)
+        loop = measure("loop", tmp / f"p{suffix}", tmp / f"l{suffix}", args.dialect)
+        for n in sizes:
+            src = tmp / f"p{suffix}"
+            make_program(src, n, args.dialect)
+            outs = {}
+            for path in ("stream", "whole") if n <= args.whole_max else ("stream",):
+                outs[path] = tmp / f"{path}{suffix}"
+                r = measure(path, src, outs[path], args.dialect)
+                if "error" in r:
+                    print(f"{n:>11,}  {path:<7}failed: {r['error']}")
+                    outs.pop(path)
+                    continue
+                print(f"{n:>11,}  {path:<7}{r['work']:9.1f}s  {n / r['work']:>9,.0f}  {r['cpu']:8.1f}s  {n / r['cpu']:>12,.0f}  {r['peak']:>7.2f} GB", flush=True)
+            if len(outs) == 2:
+                same = digest(outs["stream"]) == digest(outs["whole"])
+                print(f"{'':>11}  outputs byte-identical: {'yes' if same else 'NO'}")
+            for f in list(outs.values()) + [src]:
+                f.unlink(missing_ok=True)
+    if "rate" in loop:
+        print(f"per-point loop (the same calls on one target at a time, 200 targets): {loop['rate']:,.0f} points/s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,369 @@
+"""Programs of any length: parse -> compensate -> emit -> check, one chunk of lines at a time.
+
+A program whose targets are all written in its one main file (a CAM G-code program, a KRL
+.src with inline targets) is read in chunks of ``chunk_lines`` lines; memory depends on the
+chunk, not on the program's length. The language says which lines may be cut between and
+how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.StreamRules``):
+
+- the program's header (the lines before its first plain move, target lines blanked) and
+  one restated move to the previous chunk's last target are put before every later chunk,
+  so the parser reads each chunk where the whole program would be (modal axes, motion mode,
+  feed, frame and tool); the restated target must parse back as exactly the previous
+  chunk's last target (position, orientation, external axes, frame, tool, speed, kind),
+  else the program is not streamed;
+- compensation starts each chunk from the posture the controller holds at the previous
+  chunk's last target (``Report.end_joints``), and the restated target gives the first
+  segment of the chunk its start (straight-line reach, path between targets); its own
+  result, the same as in the previous chunk, is dropped;
+- every chunk's new text is re-parsed (``programs.check_texts``) and appended to one
+  temporary file beside the output; the program's other files (KRL .dat) are staged with
+  it and all are renamed at the end (``files.write_all``): all or nothing.
+
+What is not streamed (``StreamFallback``; the caller reads the program whole, as before): a
+language without stream rules, a model with an effect that depends on the path's history
+(backlash's approach direction couples every target to the one before, across any cut),
+a header of more than HEADER_MAX_LINES lines, more than TRAILER_MAX_LINES lines after the
+last cut that are not plain moves, a restated target that does not read back exactly, and
+any input error (the whole-program path reports it with the program's own line numbers).
+Both paths give byte-identical output on a program both can take
+(tests/test_stream.py).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from itertools import chain, islice
+from pathlib import Path
+
+import numpy as np
+
+from . import dialects
+from .compensate import PATH_TOLERANCE_MM, CompensationError, Report, compensate
+from .errors import InputError
+from .files import write_all
+from .ir import SourceDoc, Toolpath
+
+STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
+CHUNK_LINES = 100_000
+HEADER_MAX_LINES = 10_000
+TRAILER_MAX_LINES = 100_000
+
+
+class StreamFallback(Exception):
+    """The program cannot be compensated in chunks (the reason); read it whole instead."""
+
+
+def stream_rules_for(path: str | Path, dialect: str | None, model) -> tuple[object, object]:
+    """(dialect, its stream rules) for compensating ``path`` in chunks; StreamFallback if not."""
+    lang = dialects.get(dialect) if dialect else dialects.sniff(path)
+    rules = lang.stream_rules()
+    if rules is None:
+        raise StreamFallback(f"{lang.name} programs are not read in chunks")
+    probe = np.zeros((3, 6))
+    history = [e.name for e in model.effects if e.path_columns(probe)]
+    if history:
+        raise StreamFallback(f"the model's {', '.join(history)} effect depends on the path before each target")
+    return lang, rules
+
+
+def wants_stream(path: str | Path, mode: str) -> bool:
+    """--stream auto|always|never: auto streams files of more than STREAM_MIN_BYTES."""
+    if mode not in ("auto", "always", "never"):
+        raise InputError(f"--stream: '{mode}' is not one of auto, always, never")
+    if mode == "never" or str(path) == "-":
+        return False
+    try:
+        return mode == "always" or Path(path).stat().st_size > STREAM_MIN_BYTES
+    except OSError:
+        return False  # the whole-program path says why it cannot be read
+
+
+@dataclass
+class Totals:
+    """The summary of every chunk's report, gathered without keeping per-target arrays."""
+
+    targets: int = 0
+    compensated: int = 0
+    sq_before: float = 0.0
+    sq_after: float = 0.0
+    n_before: int = 0
+    n_after: int = 0
+    max_before: float = 0.0
+    max_after: float = 0.0
+    max_correction: float = 0.0
+    iterations: np.ndarray = field(default_factory=lambda: np.zeros(1, dtype=np.int64))
+    path_max: float = -1.0
+    path_line: int = 0
+    segments: int = 0
+    over_tolerance: int = 0
+    failed: int = 0
+    failures: list = field(default_factory=list)
+    chunks: int = 0
+
+    def add(self, rep: Report, keep: np.ndarray, line_shift: int, first_line: int) -> None:
+        """One chunk's report: its targets ``keep`` (from line ``first_line`` of the chunk) count;
+        ``line_shift`` turns the chunk's line numbers into the program's."""
+        self.chunks += 1
+        self.targets += int(keep.sum())
+        c = rep.compensated & keep
+        self.compensated += int(c.sum())
+        for name in ("before", "after"):
+            v = getattr(rep, f"{name}_mm")[c]
+            v = v[np.isfinite(v)]
+            setattr(self, f"sq_{name}", getattr(self, f"sq_{name}") + float(np.sum(v * v)))
+            setattr(self, f"n_{name}", getattr(self, f"n_{name}") + len(v))
+            if len(v):
+                setattr(self, f"max_{name}", max(getattr(self, f"max_{name}"), float(v.max())))
+        if c.any():
+            self.max_correction = max(self.max_correction, float(np.nanmax(rep.correction_mm[c])))
+            counts = np.bincount(rep.iterations[c])
+            if len(counts) > len(self.iterations):
+                self.iterations = np.pad(self.iterations, (0, len(counts) - len(self.iterations)))
+            self.iterations[: len(counts)] += counts
+        self._add_path(rep, keep, line_shift)
+        failed = rep.failed & keep
+        self.failed += int(failed.sum())
+        if failed.any() and len(self.failures) < 1000:
+            self.failures += [(line + line_shift, reason) for line, reason in rep.failures() if line >= first_line][:1000]
+
+    def _add_path(self, rep: Report, keep: np.ndarray, line_shift: int) -> None:
+        if rep.path_mm is None:
+            return
+        p = np.where(keep, rep.path_mm, np.nan)
+        finite = np.isfinite(p)
+        self.segments += int(finite.sum())
+        self.over_tolerance += int((p[finite] > PATH_TOLERANCE_MM).sum())
+        if finite.any() and np.nanmax(p) > self.path_max:
+            i = int(np.nanargmax(p))
+            self.path_max, self.path_line = float(p[i]), int(rep.line[i]) + line_shift
+
+    def summary(self) -> dict:
+        """As ``Report.summary``."""
+        def stats(sq, n, mx):
+            return {"rms_mm": float(np.sqrt(sq / n)) if n else None, "max_mm": mx if n else None}
+
+        it = self.iterations
+        median = None
+        if it.sum():
+            cum = np.cumsum(it)
+            total = cum[-1]
+            lo, hi = int(np.searchsorted(cum, (total + 1) // 2)), int(np.searchsorted(cum, total // 2 + 1))
+            median = 0.5 * (lo + hi)
+        return {
+            "targets": self.targets, "compensated": self.compensated,
+            "predicted_before": stats(self.sq_before, self.n_before, self.max_before),
+            "predicted_after": stats(self.sq_after, self.n_after, self.max_after),
+            "iterations_median": median, "iterations_max": int(np.nonzero(it)[0].max()) if it.sum() else None,
+            "max_correction_mm": self.max_correction if self.compensated else None,
+            "failed": self.failed,
+            "path": None if self.path_max < 0 else {"max_mm": self.path_max, "line": self.path_line, "segments": self.segments,
+                                                     "over_tolerance": self.over_tolerance, "tolerance_mm": PATH_TOLERANCE_MM},
+            "chunks": self.chunks,
+        }
+
+
+@dataclass
+class _Program:
+    """A program being read in chunks: its header, where each chunk starts, its other files."""
+
+    path: Path
+    lang: object
+    rules: object
+    header: list[str]
+    others: list[SourceDoc]
+    role: str
+
+    def docs(self, text: str) -> list[SourceDoc]:
+        return [SourceDoc(str(self.path), text, self.role)] + self.others
+
+
+def _open(path: Path, lang, rules, fh) -> tuple[_Program, str]:
+    """The program's header (lines before its first plain move) and that move's line."""
+    header = []
+    for line in fh:
+        if rules.move.match(line):
+            docs = lang.read_sources(path, "".join(header).encode("latin-1"))
+            return _Program(path, lang, rules, header, docs[1:], docs[0].role), line
+        header.append(line)
+        if len(header) > HEADER_MAX_LINES:
+            raise StreamFallback(f"no plain move in the first {HEADER_MAX_LINES} lines")
+    raise StreamFallback("no plain move")
+
+
+def _is_body(rules, text: str) -> int:
+    """Length of the run of body lines at the start of ``text``."""
+    probe = text if text.endswith("\n") else text + "\n"
+    return min(rules.body.match(probe).end(), len(text))
+
+
+def _batches(fh, first: str, rules, chunk_lines: int):
+    """(text, is_last) of each chunk's own lines; cuts only inside the run of body lines."""
+    pending = [first] + list(islice(fh, chunk_lines - 1))
+    while True:
+        text = "".join(pending)
+        if _is_body(rules, text) < len(text):
+            rest = list(islice(fh, TRAILER_MAX_LINES + 1))
+            if len(rest) > TRAILER_MAX_LINES:
+                raise StreamFallback(f"more than {TRAILER_MAX_LINES} lines after the last plain moves")
+            yield text + "".join(rest), True
+            return
+        following = list(islice(fh, chunk_lines))
+        yield text, not following
+        if not following:
+            return
+        pending = following
+
+
+@dataclass
+class _Carry:
+    """What the next chunk needs from the one before: its last target and the posture there."""
+
+    last: Toolpath
+    carried: np.ndarray  # (NF,) every field's last value as read
+    joints: np.ndarray | None
+
+
+def _carry_of(tp: Toolpath, rep: Report) -> _Carry:
+    values = tp.values
+    has = ~np.isnan(values)
+    idx = np.where(has.any(axis=0), len(values) - 1 - np.argmax(has[::-1], axis=0), -1)
+    carried = np.where(idx >= 0, values[np.maximum(idx, 0), np.arange(values.shape[1])], np.nan)
+    return _Carry(tp.take([len(tp) - 1]), carried, rep.end_joints)
+
+
+_SAME = ("kind", "position", "orientation", "ext", "relative", "resolved")
+
+
+def _check_restated(tp: Toolpath, row: int, prev: _Carry, line: int) -> None:
+    """The restated target must read back as exactly the previous chunk's last target."""
+    if len(tp) <= row or int(tp.line[row]) != line:
+        raise StreamFallback("the restated target was not read as a target")
+    a, b = tp.take([row]), prev.last
+    same = all(np.array_equal(getattr(a, k), getattr(b, k), equal_nan=True) for k in _SAME)
+    same &= np.array_equal(a.speed, b.speed, equal_nan=True)
+    same &= a.frame_names[a.frame[0]] == b.frame_names[b.frame[0]] and np.array_equal(a.frames[a.frame[0]], b.frames[b.frame[0]])
+    same &= a.tool_names[a.tool[0]] == b.tool_names[b.tool[0]] and np.array_equal(a.tools[a.tool[0]], b.tools[b.tool[0]])
+    if not same:
+        raise StreamFallback(f"the state at the cut before line {line} is not restated exactly (frame, tool, speed or mode changes)")
+
+
+class _Job:
+    """One program compensated chunk by chunk: ``run`` yields the new text of the main file."""
+
+    def __init__(self, program: _Program, model, options: dict, progress):
+        self.program, self.model, self.options, self.progress = program, model, options, progress
+        self.totals = Totals()
+        self.notes: list[str] = []
+        self.first_tp: Toolpath | None = None
+        self.other_texts: list[str] | None = None
+        self.blanked = list(program.header)  # the header, its target lines blanked after the first chunk
+        self.prefix_lines = len(self.blanked) + 1  # header, then the restated target
+
+    def _prefix(self, carry: _Carry) -> str:
+        line = self.program.rules.restate(carry.last, carry.carried)
+        if line is None:
+            raise StreamFallback("the last target before a cut has no complete position to restate")
+        return "".join(self.blanked) + line + "\n"
+
+    def chunk(self, own: str, is_last: bool, first_line: int, carry: _Carry | None) -> tuple[str, _Carry]:
+        """The new text of one chunk's own lines (``own`` starts at program line ``first_line``)."""
+        lang, rules = self.program.lang, self.program.rules
+        prefix = "" if carry is None else self._prefix(carry)
+        tail = "" if is_last else rules.tail
+        docs = self.program.docs(prefix + own + tail)
+        try:
+            tp = lang.parse_sources(docs)
+            shift = 0 if carry is None else first_line - 1 - self.prefix_lines
+            if carry is not None:
+                _check_restated(tp, 0, carry, self.prefix_lines)
+            options = dict(self.options)
+            if carry is not None:
+                options["start_joints"] = carry.joints
+            new, rep = compensate(tp, self.model, **options)
+        except InputError as exc:
+            raise StreamFallback(f"input error in a chunk ({exc})") from None
+        keep = np.ones(len(tp), dtype=bool) if carry is None else tp.line > self.prefix_lines
+        self.totals.add(rep, keep, shift, 1 if carry is None else self.prefix_lines + 1)
+        if carry is None:
+            self._first(tp, new)
+        self.progress(f"chunk {self.totals.chunks}: {self.totals.targets:,} targets")
+        if self.totals.failed:
+            return "", _carry_of(tp, rep)  # nothing will be written; go on to report every failure
+        return self._text(tp, new, rep, prefix, tail), _carry_of(tp, rep)
+
+    def _first(self, tp: Toolpath, new: Toolpath) -> None:
+        """The first chunk: its notes, and the header's target lines blanked for the later chunks."""
+        self.first_tp = tp
+        self.notes = list(new.notes)
+        in_header = tp.line[(tp.line <= len(self.blanked)) & (tp.file == 0)]
+        for line in np.unique(in_header):
+            self.blanked[int(line) - 1] = "\n"
+
+    def _text(self, tp: Toolpath, new: Toolpath, rep: Report, prefix: str, tail: str) -> str:
+        from .programs import check_texts
+
+        texts = self.program.lang.emit_texts(tp, new)
+        check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
+        if self.other_texts is None:
+            self.other_texts = texts[1:]
+        elif texts[1:] != self.other_texts:
+            raise StreamFallback("a later chunk changes the program's other files")
+        main = texts[0]
+        if prefix:
+            # The header has no target left (blanked), so only the restated line changed length.
+            main = main[main.find("\n", sum(map(len, self.blanked))) + 1 :]
+        if tail:
+            if not main.endswith(tail):
+                raise StreamFallback("the chunk's closing text changed")
+            main = main[: len(main) - len(tail)]
+        return main
+
+
+@dataclass
+class StreamResult:
+    summary: dict
+    notes: list[str]
+    outputs: list[Path]
+
+
+def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
+                        in_place: bool = False, progress=lambda msg: None, **options) -> StreamResult:
+    """Compensate the program at ``path`` into ``output`` chunk by chunk (module docstring).
+    Raises StreamFallback (nothing written) when the program cannot be streamed; a
+    CompensationError (nothing written) whose ``failures`` list the targets that failed."""
+    from .programs import refuse_overwrite
+
+    path, output = Path(path), Path(output)
+    lang, rules = stream_rules_for(path, dialect, model)
+    try:
+        fh = open(path, encoding="latin-1", newline="")
+    except OSError as exc:
+        raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+    with fh:
+        program, first = _open(path, lang, rules, fh)
+        job = _Job(program, model, options, progress)
+        batches = _batches(fh, first, rules, chunk_lines)
+        own, is_last = next(batches)
+        text, carry = job.chunk("".join(program.header) + own, is_last, 1, None)
+        main = lang.output_paths(job.first_tp, output)[0]
+        files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
+        files[main] = ""
+        refuse_overwrite(job.first_tp, files, in_place)
+        rest = _continue(job, batches, carry, len(program.header) + 1 + own.count("\n"))
+        try:
+            write_all({main: chain([text.encode("latin-1")], rest),
+                       **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
+        except CompensationError as exc:
+            exc.failures = job.totals.failures
+            raise
+    return StreamResult(job.totals.summary(), job.notes, list(files))
+
+
+def _continue(job: _Job, batches, carry: _Carry, first_line: int):
+    """The new text of every chunk after the first, then the failures if any."""
+    for own, is_last in batches:
+        text, carry = job.chunk(own, is_last, first_line, carry)
+        first_line += own.count("\n")
+        yield text.encode("latin-1")
+    if job.totals.failed:
+        raise CompensationError(f"{job.totals.failed} target(s) cannot be compensated; nothing was written", None)
