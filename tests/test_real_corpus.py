@@ -73,13 +73,6 @@ ROUND_TRIP_XFAIL = {
     "krl/ros-industrial_kuka_experimental__KR_C2_ros_rsi.src": "DECL of a system type `DECL RSIERR err` (KR_C2_ros_rsi.src:47)",
     "krl/ros-industrial_kuka_experimental__kuka_eki_hw_interface.src": "lower-case DECL of a system type `decl eki_status eki_ret` inside a DEF (kuka_eki_hw_interface.src:83)",
     # RAPID
-    "rapid/kth-ros-pkg_yumi__RWS_ROS_motion_left.mod": "switch argument `\\FromMoveTask` in a function call inside IF (RWS_ROS_motion_left.mod:148)",
-    "rapid/kth-ros-pkg_yumi__TCameraMain.mod": "`LOCAL RECORD CAMERA_RECORD` record declaration (TCameraMain.mod:46)",
-    "rapid/ros-industrial_abb_driver__ROS_motion.mod": "`CONNECT intr_new_trajectory WITH new_trajectory_handler;` (ROS_motion.mod:45)",
-    "rapid/ros-industrial_abb_driver__ROS_stateServer.mod": "`ERROR (ERR_SOCK_TIMEOUT, ERR_SOCK_CLOSED)` error handler with an error-number list (ROS_stateServer.mod:49)",
-    "rapid/rpiRobotics_abb_motion_program_exec__error_reporter.mod": "`CONNECT ... WITH ...;` (error_reporter.mod:6)",
-    "rapid/rpiRobotics_abb_motion_program_exec__motion_program_exec.mod": "`CONNECT motion_trigg_intno WITH motion_trigg_trap;` (motion_program_exec.mod:88)",
-    "rapid/rpiRobotics_abb_motion_program_exec__motion_program_logger.mod": "`CONNECT rmqint_open WITH rmq_message_string;` (motion_program_logger.mod:27)",
 }
 
 # G-code files rs274 refuses (no recording): what LinuxCNC says

@@ -55,6 +55,32 @@ _OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open"
 _CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
 _BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
 _LABEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*\s*:\s*$")
+_HEAD_END = re.compile(r"(?:^|[^A-Za-z0-9_])(?:THEN|DO)$", re.IGNORECASE)
+_HEADS = {"IF": "head", "ELSEIF": "head", "WHILE": "head", "FOR": "head", "CASE": ":", "DEFAULT": ":",
+          "MODULE": "paren", "PROC": "paren", "FUNC": "paren", "TRAP": "paren", "ERROR": "paren", "RECORD": "paren"}
+
+
+def _closer(line: str) -> str:
+    """What ends the statement that starts on ``line``: ';' (an instruction or a declaration),
+    'head' (THEN/DO, or ';' for a one-statement IF), ':' (CASE), 'paren' (a header whose
+    parentheses must close), 'line' (any other block line, and labels)."""
+    m = _BLOCK_WORDS.match(line)
+    if m is None:
+        return "line" if _LABEL.match(line) else ";"
+    return _HEADS.get(m.group(1).upper(), "line")
+
+
+def _complete(stripped: str, closer: str, depth: int) -> bool:
+    """Whether a statement whose text so far ends with ``stripped`` is whole."""
+    if closer == ";":
+        return stripped.endswith(";")
+    if closer == "head":
+        return stripped.endswith(";") or _HEAD_END.search(stripped) is not None
+    if closer == ":":
+        return stripped.endswith(":") or stripped.endswith(";")
+    if closer == "paren":
+        return depth <= 0
+    return True
 
 
 def blank_comments(text: str) -> str:
@@ -219,6 +245,7 @@ class RapidParser:
         skip = np.zeros(len(self.lines.starts), bool)
         for matches in self._shapes.values():
             skip[matches.line] = True
+        self._skip = skip
         self._slow(skip)
 
     def bulk_moves(self) -> None:
@@ -275,36 +302,51 @@ class RapidParser:
 
     # ----------------------------------------------------------- slow path
     def _statements(self, skip: np.ndarray):
-        """(start offset, end offset) of each statement outside the bulk lines (``skip``, by line)."""
+        """(start offset, end offset) of each statement outside the bulk lines (``skip``, by line).
+
+        RAPID is free-form: a statement ends with ';', or is a block line. A block head
+        ends where its own syntax ends: IF/ELSEIF/WHILE/FOR at THEN/DO (an IF without THEN
+        is the one-statement form and ends at ';'), PROC/FUNC/ERROR when its parentheses
+        close, CASE/DEFAULT at ':'. A one-statement IF whose statement is a bulk line takes
+        that line in (the bulk path has read its move)."""
         code = self.code
-        pending = None
+        pending, closer, depth = None, ";", 0
         header = False  # the %%% ... %%% block of old .prg files
         starts = self.lines.starts
         previous = -1
         for li in np.nonzero(~skip)[0].tolist():
             start = int(starts[li])
             if pending is not None and not header and li > previous + 1:
-                raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")  # a bulk line came first
+                if closer != "head":
+                    raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")  # a bulk line came first
+                yield pending, self._line_end(previous + 1)  # IF cond <newline> bulk move;
+                pending = None
             previous = li
             if code.startswith("%%%", start):
                 header = not header
                 continue
             if header:
                 continue
-            end = code.find("\n", start)
-            end = len(code) if end < 0 else end
+            end = self._line_end(li)
             line = code[start:end]
             stripped = line.strip()
             if not stripped or stripped.startswith("%%%"):
                 continue
-            first = pending if pending is not None else start + (len(line) - len(line.lstrip()))
-            if stripped.endswith(";") or (pending is None and (_BLOCK_WORDS.match(line) or _LABEL.match(line))):
-                yield first, end
+            if pending is None:
+                first = start + (len(line) - len(line.lstrip()))
+                closer, depth = _closer(line), 0
+            depth += line.count("(") - line.count(")")
+            if _complete(stripped, closer, depth):
+                yield (pending if pending is not None else first), end
                 pending = None
             elif pending is None:
                 pending = first
         if pending is not None:
             raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
+
+    def _line_end(self, li: int) -> int:
+        end = self.code.find("\n", int(self.lines.starts[li]))
+        return len(self.code) if end < 0 else end
 
     def _slow(self, skip: np.ndarray) -> None:
         g = grammar("rapid")
@@ -340,6 +382,12 @@ class RapidParser:
             if not any(s[0] == "ENDROUTINE" for s in stack):
                 raise self.lines.error(self.doc.path, start, "motion instruction outside a routine")
             self._move(node, start)
+        elif kind == "short_if":
+            inner = node.children[-1]
+            inner_start = self._span(inner, start)[0]
+            if isinstance(inner, Tree) and inner.data == "move" and self._skip[self.lines.line(inner_start) - 1]:
+                return  # IF cond <newline> a bulk move: the bulk path has read it
+            self._statement(inner, start, stack)
 
     def _span(self, node, start: int) -> tuple[int, int]:
         if isinstance(node, Token):
@@ -486,7 +534,7 @@ class RapidParser:
         for k, tnode in zip(kinds, positional[:n_targets]):
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
-            self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
+            self.rows.append(dict(order=self._span(node, start)[0], kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
                                   tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:
