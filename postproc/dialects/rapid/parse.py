@@ -22,6 +22,7 @@ from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
+from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -49,8 +50,10 @@ NO_AXIS_ABOVE = 8.9e9
 _RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
 _JT_FIELDS = np.array([7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18])
 _MOVE_KIND = {"MOVEL": Kind.LINEAR, "MOVEJ": Kind.JOINT, "MOVELDO": Kind.LINEAR, "MOVEJDO": Kind.JOINT, "MOVELSYNC": Kind.LINEAR, "MOVEJSYNC": Kind.JOINT,
-              "MOVELGO": Kind.LINEAR, "MOVEJGO": Kind.JOINT, "MOVELAO": Kind.LINEAR, "MOVEJAO": Kind.JOINT, "SEARCHL": Kind.LINEAR}
-_CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC"}
+              "MOVELGO": Kind.LINEAR, "MOVEJGO": Kind.JOINT, "MOVELAO": Kind.LINEAR, "MOVEJAO": Kind.JOINT, "SEARCHL": Kind.LINEAR,
+              "TRIGGL": Kind.LINEAR, "TRIGGJ": Kind.JOINT}
+_CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC", "TRIGGC"}
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open": "ENDRECORD", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "test_open": "ENDTEST"}
 _CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
 _BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
@@ -81,6 +84,13 @@ def _complete(stripped: str, closer: str, depth: int) -> bool:
     if closer == "paren":
         return depth <= 0
     return True
+
+
+def _root(node) -> str | None:
+    """The data name an lvalue expression starts with (p1 in p1.trans.x, path in path{2})."""
+    if isinstance(node, Tree) and node.data == "lvalue":
+        return str(node.children[0])
+    return None
 
 
 def blank_comments(text: str) -> str:
@@ -159,7 +169,35 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
     for module in modules:
         module.bulk_moves()
     _bind_late_declarations(builder, data)
+    _runtime_changes(builder, data.facts)
     return builder.build()
+
+
+def _runtime_changes(builder: Builder, facts: RuntimeFacts) -> None:
+    """Targets whose robtarget, tool or work object the program changes while it runs
+    (``p1.trans.x := ...``, ``wobj1.oframe.trans := [...]``, SearchL's search point, an INOUT
+    argument), and every target once a program displacement (PDispOn, EOffsSet, ...) is in
+    the program, are not resolved: their declared values are not where the robot goes."""
+    check_calls(facts, builder.notes)
+    for where in facts.displaced:
+        builder.notes.append(f"{where} displaces every later target at run time: no target is resolved")
+    used = set()
+    for block in builder.blocks:
+        names = block.get("name")
+        changed = np.zeros(len(block["order"]), bool)
+        if facts.displaced:
+            changed[:] = True
+        for i in range(len(changed)):
+            refs = set(_IDENT.findall(str(names[i]).upper())) if names is not None else set()
+            refs |= {builder.tool_names[int(np.asarray(block["tool"])[i])].upper(), builder.frame_names[int(np.asarray(block["frame"])[i])].upper()}
+            hit = refs & facts.changed.keys()
+            if hit:
+                changed[i] = True
+                used |= hit
+        if changed.any():
+            block["resolved"] = np.asarray(block["resolved"], bool) & ~changed
+    for name in sorted(used):
+        builder.notes.append(facts.changed[name] + " while the program runs: the targets that use it are not resolved")
 
 
 def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
@@ -179,6 +217,7 @@ class _Data:
         self.points: dict[str, tuple] = {}  # name -> (values, spans, conf)
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
+        self.facts = RuntimeFacts()
 
 
 class RapidParser:
@@ -193,7 +232,7 @@ class RapidParser:
         self.numbers = scan_numbers(self.code)
         self.builder = Builder("rapid", "quat", [doc]) if builder is None else builder
         data = _Data() if data is None else data
-        self.points, self.tools, self.wobjs = data.points, data.tools, data.wobjs
+        self.points, self.tools, self.wobjs, self.facts = data.points, data.tools, data.wobjs, data.facts
         self.rows: list[dict] = []
         self._shapes = None
 
@@ -227,6 +266,7 @@ class RapidParser:
         self.declarations()
         self.statements()
         self.bulk_moves()
+        _runtime_changes(self.builder, self.facts)
         return self.builder.build()
 
     def declarations(self) -> None:
@@ -364,6 +404,8 @@ class RapidParser:
         kind = node.data if isinstance(node, Tree) else None
         if kind in _OPEN:
             stack.append((_OPEN[kind], start))
+            if kind == "routine_open":
+                self._routine(node)
         elif kind in _CLOSE:
             if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
                 want, where = stack[-1]
@@ -382,12 +424,37 @@ class RapidParser:
             if not any(s[0] == "ENDROUTINE" for s in stack):
                 raise self.lines.error(self.doc.path, start, "motion instruction outside a routine")
             self._move(node, start)
+        elif kind == "assign":
+            self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
+        elif kind == "call":
+            self._call(node, start)
         elif kind == "short_if":
             inner = node.children[-1]
             inner_start = self._span(inner, start)[0]
             if isinstance(inner, Tree) and inner.data == "move" and self._skip[self.lines.line(inner_start) - 1]:
                 return  # IF cond <newline> a bulk move: the bulk path has read it
             self._statement(inner, start, stack)
+
+    def _where(self, offset: int) -> str:
+        return f"{self.doc.path}:{self.lines.line(offset)}"
+
+    def _call(self, node: Tree, start: int) -> None:
+        """A procedure call: kept for the checks made once every module is read (its
+        arguments' data names, in case the procedure writes them)."""
+        name = str(node.children[0])
+        args = node.children[1].children if len(node.children) > 1 else []
+        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        path, lines = self.doc.path, self.lines
+        self.facts.calls.append((name, roots, self._where(start), lambda message: lines.error(path, start, message)))
+
+    def _routine(self, node: Tree) -> None:
+        """PROC/FUNC parameters that the routine may write (INOUT, VAR, PERS)."""
+        names = [c for c in node.children if isinstance(c, Token) and c.type == "NAME"]
+        params = next((c for c in node.children if isinstance(c, Tree) and c.data == "params"), None)
+        if not names:
+            return
+        writable = [any(isinstance(t, Token) and t.type in ("VAR", "PERS", "INOUT", "STORAGE") for t in p.children) for p in (params.children if params else [])]
+        self.facts.procs[str(names[-1]).upper()] = writable  # PROC name, FUNC type name, TRAP name
 
     def _span(self, node, start: int) -> tuple[int, int]:
         if isinstance(node, Token):
@@ -516,22 +583,27 @@ class RapidParser:
                 if isinstance(o, Tree) and o.data == "optarg":
                     key = str(o.children[0]).upper()
                     options[key] = o.children[1] if len(o.children) > 1 else None
-        n_targets = 2 if mv in _CIRC else 1
-        if len(positional) < n_targets + 3:
+        targets, at_speed, at_zone, at_tool = LAYOUTS.get(mv, CIRCULAR_LAYOUT if mv in _CIRC else LINEAR_LAYOUT)
+        if len(positional) <= max(at_tool, targets[-1]):
             raise self.lines.error(self.doc.path, start, f"{mv} needs target(s), speed, zone and tool")
         kinds = [Kind.CIRC_VIA, Kind.CIRC_END] if mv in _CIRC else [Kind.ABSJ if mv in ("MOVEABSJ", "MOVEEXTJ") else _MOVE_KIND.get(mv, Kind.LINEAR)]
-        speed_node, zone_node, tool_node = positional[n_targets : n_targets + 3]
+        if mv in SEARCH_POINT:  # the search point is written with where the signal came (SearchL, 'SearchPoint')
+            root = _root(positional[SEARCH_POINT[mv]].children[0])
+            if root:
+                self.facts.change(root, f"{self._where(start)}: {{name}} is written by {mv.title()}")
+        speed_node, tool_node = positional[at_speed], positional[at_tool]
+        zone_node = positional[at_zone] if at_zone is not None else None
         speed = _speed(self._text(speed_node, start))
         if "V" in options and options["V"] is not None:
             speed = literal_number(options["V"])
-        zone = _zone(self._text(zone_node, start))
+        zone = _zone(self._text(zone_node, start)) if zone_node is not None else np.nan
         if "Z" in options and options["Z"] is not None:
             zone = literal_number(options["Z"])
         tool = self._text(tool_node.children[0], start)
         wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
-        for k, tnode in zip(kinds, positional[:n_targets]):
+        for k, tnode in zip(kinds, [positional[i] for i in targets]):
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             self.rows.append(dict(order=self._span(node, start)[0], kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
