@@ -428,6 +428,11 @@ class RapidParser:
             self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
         elif kind == "call":
             self._call(node, start)
+        elif kind == "record_field" and not (stack and stack[-1][0] == "ENDRECORD"):
+            # `name arg;` outside a RECORD is a call with one argument (grammar: same shape as a field)
+            name, arg = node.children[0], node.children[1]
+            path, lines = self.doc.path, self.lines
+            self.facts.calls.append((str(name), [str(arg)], self._where(start), lambda message: lines.error(path, start, message)))
         elif kind == "short_if":
             inner = node.children[-1]
             inner_start = self._span(inner, start)[0]
