@@ -181,19 +181,21 @@ def _runtime_changes(builder: Builder, facts: RuntimeFacts) -> None:
     check_calls(facts, builder.notes)
     for where in facts.displaced:
         builder.notes.append(f"{where} displaces every later target at run time: no target is resolved")
-    used = set()
+    if not facts.changed and not facts.displaced:
+        return
+    changed_names = facts.changed.keys()
+    tool_hit = np.array([n.upper() in changed_names for n in builder.tool_names])
+    frame_hit = np.array([n.upper() in changed_names for n in builder.frame_names])
+    used = {n.upper() for n in builder.tool_names + builder.frame_names} & changed_names
     for block in builder.blocks:
-        names = block.get("name")
-        changed = np.zeros(len(block["order"]), bool)
-        if facts.displaced:
-            changed[:] = True
-        for i in range(len(changed)):
-            refs = set(_IDENT.findall(str(names[i]).upper())) if names is not None else set()
-            refs |= {builder.tool_names[int(np.asarray(block["tool"])[i])].upper(), builder.frame_names[int(np.asarray(block["frame"])[i])].upper()}
-            hit = refs & facts.changed.keys()
-            if hit:
-                changed[i] = True
-                used |= hit
+        n_rows = len(block["order"])
+        changed = np.full(n_rows, bool(facts.displaced))
+        changed |= tool_hit[np.asarray(block["tool"], np.int64)] | frame_hit[np.asarray(block["frame"], np.int64)]
+        if block.get("name") is not None and n_rows:
+            texts, codes = np.unique(np.asarray(block["name"], dtype=object).astype(str), return_inverse=True)
+            refs = [set(_IDENT.findall(t.upper())) & changed_names for t in texts]  # one look per distinct target text
+            used.update(*refs)
+            changed |= np.array([bool(r) for r in refs])[codes]
         if changed.any():
             block["resolved"] = np.asarray(block["resolved"], bool) & ~changed
     for name in sorted(used):
