@@ -1,7 +1,8 @@
 """Fuzzing the three parsers: 10^5 generated and mutated programs (issue 12, "Must show").
 
-Run: .venv/bin/python benchmarks/fuzz.py [--examples 100000] [--jobs 3] [--out FILE]
-The examples are split evenly over RAPID, KRL and G-code (and over --jobs processes). Each
+Run: .venv/bin/python benchmarks/fuzz.py [--examples 100000] [--jobs 3] [--out benchmarks/results/fuzz.txt]
+The examples are split evenly over RAPID, KRL and G-code, in chunks of 1,000 with their own
+fixed seeds, run by --jobs processes; the report is rewritten after every chunk. Each
 is a program generated from the grammar's constructs or a real/own corpus file (a window of
 40 lines), then 0-4 mutations (tests/fuzzing.py). Counts: accepted (and round-tripped
 byte-identically), refused with file:line:column (ParseError), refused naming the file
@@ -51,42 +52,53 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
     return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes}
 
 
+CHUNK = 1000  # examples per task: progress and partial results are written after each
+
+
+def report(results: list[dict], elapsed: float, jobs: int, wanted: int) -> str:
+    dialects = ("rapid", "krl", "gcode")
+    lines = [f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
+    total: collections.Counter = collections.Counter()
+    for d in dialects:
+        c: collections.Counter = collections.Counter()
+        for r in results:
+            if r["dialect"] == d:
+                c.update(r["counts"])
+        seeds = next((r["seeds"] for r in results if r["dialect"] == d), 0)
+        total.update(c)
+        lines.append(f"{d:<8}{sum(c.values()):>11,}{c['accepted']:>24,}{c['refused']:>19,}{c['refused-file']:>16,}{c['crashed']:>9,}   {seeds} files")
+    done = sum(total.values())
+    lines.append(f"{'all':<8}{done:>11,}{total['accepted']:>24,}{total['refused']:>19,}{total['refused-file']:>16,}{total['crashed']:>9,}")
+    lines.append(f"time {elapsed:.0f} s with {jobs} processes ({done / max(elapsed, 1e-9):,.1f} programs/s); {done:,} of {wanted:,} done; crashed must be 0")
+    crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
+    for c in crashes[:10]:
+        lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}\n  input: {c['data'][:300]!r}")
+    return "\n".join(lines)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--examples", type=int, default=100_000)
     parser.add_argument("--jobs", type=int, default=3)
-    parser.add_argument("--out", type=Path, help="also write the report and the crashes (JSON) here")
+    parser.add_argument("--out", type=Path, help="also write the report (after every chunk) and the crashes (JSON) here")
     args = parser.parse_args()
     dialects = ("rapid", "krl", "gcode")
     per_dialect = args.examples // len(dialects)
-    parts = max(1, args.jobs // len(dialects)) if args.jobs >= len(dialects) else 1
-    jobs = [(d, per_dialect // parts + (1 if p < per_dialect % parts else 0), p) for d in dialects for p in range(parts)]
+    # chunks interleaved over the dialects, so a run cut short has sampled all three alike
+    jobs = [(d, min(CHUNK, per_dialect - k * CHUNK), k) for k in range(-(-per_dialect // CHUNK)) for d in dialects]
+    results: list[dict] = []
     t0 = time.perf_counter()
-    with multiprocessing.Pool(min(args.jobs, len(jobs))) as pool:
-        results = pool.map(run_chunk, jobs)
-    elapsed = time.perf_counter() - t0
-    lines = [f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
-    total: collections.Counter = collections.Counter()
-    for d in dialects:
-        c = collections.Counter()
-        for r in results:
-            if r["dialect"] == d:
-                c.update(r["counts"])
-        seeds = next(r["seeds"] for r in results if r["dialect"] == d)
-        n = sum(c.values())
-        total.update(c)
-        lines.append(f"{d:<8}{n:>11,}{c['accepted']:>24,}{c['refused']:>19,}{c['refused-file']:>16,}{c['crashed']:>9,}   {seeds} files")
-    lines.append(f"{'all':<8}{sum(total.values()):>11,}{total['accepted']:>24,}{total['refused']:>19,}{total['refused-file']:>16,}{total['crashed']:>9,}")
-    lines.append(f"time {elapsed:.0f} s with {args.jobs} processes ({sum(total.values()) / elapsed:,.0f} programs/s); crashed must be 0")
-    crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
-    for c in crashes[:10]:
-        lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}\n  input: {c['data'][:300]!r}")
-    print("\n".join(lines))
-    if args.out:
-        args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text("\n".join(lines) + "\n", encoding="utf-8")
-        args.out.with_suffix(".crashes.json").write_text(json.dumps(crashes, indent=1), encoding="utf-8")
-    sys.exit(1 if total["crashed"] else 0)
+    with multiprocessing.Pool(args.jobs) as pool:
+        for result in pool.imap_unordered(run_chunk, jobs):
+            results.append(result)
+            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects))
+            if args.out:
+                args.out.parent.mkdir(parents=True, exist_ok=True)
+                args.out.write_text(text + "\n", encoding="utf-8")
+                crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
+                args.out.with_suffix(".crashes.json").write_text(json.dumps(crashes, indent=1), encoding="utf-8")
+    print(text)
+    sys.exit(1 if any(r["counts"].get("crashed") for r in results) else 0)
 
 
 if __name__ == "__main__":

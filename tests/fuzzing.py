@@ -28,7 +28,7 @@ from postproc.programs import emit_texts, parse_program
 HERE = Path(__file__).parent
 DIALECTS = ("rapid", "krl", "gcode")
 FILE_NAME = {"rapid": "fuzz.mod", "krl": "fuzz.src", "gcode": "fuzz.ngc"}
-SEED_LINES = 40  # a longer seed is cut to a window of this many lines (keeps one example fast)
+SEED_LINES = 30  # a longer seed is cut to a window of this many lines (keeps one example fast)
 
 TOKENS = {
     "rapid": ["MoveL ", "MoveJ ", "MoveC ", "MoveAbsJ ", "MoveLDO ", "SearchL ", "TriggL ", "MoveQ ", "IF ", " THEN", "ELSE",
