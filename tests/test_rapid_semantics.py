@@ -194,3 +194,10 @@ def test_an_unknown_instruction_that_does_not_move_is_a_note_with_its_line():
     tp = read(module("    MoveL p1, v100, z1, tool0;", "    Hand_GripInward;", "    Hand_GripInward;", "    TPWrite \"ok\";"))
     assert len(tp) == 1 and [n for n in tp.notes if "Hand_GripInward" in n] == [
         "m.mod:5: Hand_GripInward is neither a PROC of this program nor a RAPID instruction postproc knows; read as not moving the robot (and 1 more calls)"]
+
+
+def test_moveextj_moves_external_axes_with_no_tool():
+    """MoveExtJ ToJointPos Speed Zone (instruction MoveExtJ): no tool argument; the external
+    axes of the jointtarget are its target."""
+    tp = read(module("    MoveExtJ [[9E9,9E9,9E9,9E9,9E9,9E9],[250,9E9,9E9,9E9,9E9,9E9]], v100, fine;"))
+    assert tp.kind.tolist() == [Kind.ABSJ] and tp.ext[0, 0] == 250 and np.isnan(tp.ext[0, 1:]).all()

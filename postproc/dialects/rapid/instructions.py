@@ -16,7 +16,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass, field
 
-# positional indices: (targets, speed, zone or None, tool)
+# positional indices: (targets, speed, zone or None, tool or None)
 LINEAR_LAYOUT = ((0,), 1, 2, 3)
 LAYOUTS = {
     "SEARCHL": ((2,), 3, None, 4),  # SearchL Signal SearchPoint ToPoint Speed Tool
@@ -24,7 +24,8 @@ LAYOUTS = {
     "TRIGGL": ((0,), 1, 3, 4),  # TriggL ToPoint Speed Trigg_1 Zone Tool
     "TRIGGJ": ((0,), 1, 3, 4),
     "TRIGGC": ((0, 1), 2, 4, 5),  # TriggC CirPoint ToPoint Speed Trigg_1 Zone Tool
-    "CONTACTL": ((0,), 1, None, 2),  # ContactL [\DesiredTorque] ToPoint Speed [\Zone] Tool
+    "CONTACTL": ((0,), 1, None, 2),
+    "MOVEEXTJ": ((0,), 1, 2, None),  # MoveExtJ ToJointPos Speed Zone (external axes only, no tool)  # ContactL [\DesiredTorque] ToPoint Speed [\Zone] Tool
 }
 CIRCULAR_LAYOUT = ((0, 1), 2, 3, 4)
 SEARCH_POINT = {"SEARCHL": 1, "SEARCHC": 1}  # the INOUT robtarget the instruction writes

@@ -591,14 +591,14 @@ class RapidParser:
                     key = str(o.children[0]).upper()
                     options[key] = o.children[1] if len(o.children) > 1 else None
         targets, at_speed, at_zone, at_tool = LAYOUTS.get(mv, CIRCULAR_LAYOUT if mv in _CIRC else LINEAR_LAYOUT)
-        if len(positional) <= max(at_tool, targets[-1]):
+        if len(positional) <= max(at_tool or 0, at_speed, targets[-1]):
             raise self.lines.error(self.doc.path, start, f"{mv} needs target(s), speed, zone and tool")
         kinds = [Kind.CIRC_VIA, Kind.CIRC_END] if mv in _CIRC else [Kind.ABSJ if mv in ("MOVEABSJ", "MOVEEXTJ") else _MOVE_KIND.get(mv, Kind.LINEAR)]
         if mv in SEARCH_POINT:  # the search point is written with where the signal came (SearchL, 'SearchPoint')
             root = _root(positional[SEARCH_POINT[mv]].children[0])
             if root:
                 self.facts.change(root, f"{self._where(start)}: {{name}} is written by {mv.title()}")
-        speed_node, tool_node = positional[at_speed], positional[at_tool]
+        speed_node, tool_node = positional[at_speed], positional[at_tool] if at_tool is not None else None
         zone_node = positional[at_zone] if at_zone is not None else None
         speed = _speed(self._text(speed_node, start))
         if "V" in options and options["V"] is not None:
@@ -606,7 +606,7 @@ class RapidParser:
         zone = _zone(self._text(zone_node, start)) if zone_node is not None else np.nan
         if "Z" in options and options["Z"] is not None:
             zone = literal_number(options["Z"])
-        tool = self._text(tool_node.children[0], start)
+        tool = self._text(tool_node.children[0], start) if tool_node is not None else "tool0"  # MoveExtJ moves no robot tool
         wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
