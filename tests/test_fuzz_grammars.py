@@ -125,3 +125,14 @@ def test_gcode_g53_without_a_motion_mode_round_trips_or_is_refused():
     except ParseError:
         return
     assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
+@pytest.mark.xfail(strict=True, reason="KRL: an unchanged emit rewrites a number: `LIN_REL XP1` (a declared point used as an "
+                   "increment) after partial targets changes XP1's X -1789.293770 to -1789.293277 in its DECL (found by "
+                   "benchmarks/fuzz.py)")
+def test_krl_relative_move_to_a_declared_point_keeps_its_numbers():
+    text = (b"DEF fuzz( )\r\nDECL E6POS XP1 = {Z 0.0, A -227, C -554, Y 2082, X -1789.293770, S 6, T 27}\r\n"
+            b"LIN {A 1831.2505, B -367.247271, X 447.221493, Z 1310.35, C 00012, Y -1627, S 6, T 27}\r\n"
+            b"PTP {C 486.456979} C_PTP\r\nLIN {Z 2205.55002, S 6, T 27}\r\nLIN_REL XP1\r\nEND\r\n")
+    tp = parse_program("fuzz.src", "krl", text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text
