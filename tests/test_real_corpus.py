@@ -53,13 +53,6 @@ ROUND_TRIP_XFAIL = {
     "gcode/LinuxCNC_linuxcnc__nestedcall.ngc": "`O<g20sub> callsub`: `callsub` is no O-word keyword, refused at nestedcall.ngc:11:12 as rs274 refuses it (Unexpected character after O-word)",
     # KRL
     # RAPID
-    "rapid/kth-ros-pkg_yumi__RWS_ROS_motion_left.mod": "switch argument `\\FromMoveTask` in a function call inside IF (RWS_ROS_motion_left.mod:148)",
-    "rapid/kth-ros-pkg_yumi__TCameraMain.mod": "`LOCAL RECORD CAMERA_RECORD` record declaration (TCameraMain.mod:46)",
-    "rapid/ros-industrial_abb_driver__ROS_motion.mod": "`CONNECT intr_new_trajectory WITH new_trajectory_handler;` (ROS_motion.mod:45)",
-    "rapid/ros-industrial_abb_driver__ROS_stateServer.mod": "`ERROR (ERR_SOCK_TIMEOUT, ERR_SOCK_CLOSED)` error handler with an error-number list (ROS_stateServer.mod:49)",
-    "rapid/rpiRobotics_abb_motion_program_exec__error_reporter.mod": "`CONNECT ... WITH ...;` (error_reporter.mod:6)",
-    "rapid/rpiRobotics_abb_motion_program_exec__motion_program_exec.mod": "`CONNECT motion_trigg_intno WITH motion_trigg_trap;` (motion_program_exec.mod:88)",
-    "rapid/rpiRobotics_abb_motion_program_exec__motion_program_logger.mod": "`CONNECT rmqint_open WITH rmq_message_string;` (motion_program_logger.mod:27)",
 }
 
 # G-code files rs274 refuses (no recording): what LinuxCNC says

@@ -22,6 +22,7 @@ from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
+from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -49,12 +50,47 @@ NO_AXIS_ABOVE = 8.9e9
 _RT_FIELDS = np.array([0, 1, 2, 3, 4, 5, 6, -1, -2, -3, -4, 13, 14, 15, 16, 17, 18])
 _JT_FIELDS = np.array([7, 8, 9, 10, 11, 12, 13, 14, 15, 16, 17, 18])
 _MOVE_KIND = {"MOVEL": Kind.LINEAR, "MOVEJ": Kind.JOINT, "MOVELDO": Kind.LINEAR, "MOVEJDO": Kind.JOINT, "MOVELSYNC": Kind.LINEAR, "MOVEJSYNC": Kind.JOINT,
-              "MOVELGO": Kind.LINEAR, "MOVEJGO": Kind.JOINT, "MOVELAO": Kind.LINEAR, "MOVEJAO": Kind.JOINT, "SEARCHL": Kind.LINEAR}
-_CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC"}
+              "MOVELGO": Kind.LINEAR, "MOVEJGO": Kind.JOINT, "MOVELAO": Kind.LINEAR, "MOVEJAO": Kind.JOINT, "SEARCHL": Kind.LINEAR,
+              "TRIGGL": Kind.LINEAR, "TRIGGJ": Kind.JOINT}
+_CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC", "TRIGGC"}
+_IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open": "ENDRECORD", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "test_open": "ENDTEST"}
 _CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
 _BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
 _LABEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*\s*:\s*$")
+_HEAD_END = re.compile(r"(?:^|[^A-Za-z0-9_])(?:THEN|DO)$", re.IGNORECASE)
+_HEADS = {"IF": "head", "ELSEIF": "head", "WHILE": "head", "FOR": "head", "CASE": ":", "DEFAULT": ":",
+          "MODULE": "paren", "PROC": "paren", "FUNC": "paren", "TRAP": "paren", "ERROR": "paren", "RECORD": "paren"}
+
+
+def _closer(line: str) -> str:
+    """What ends the statement that starts on ``line``: ';' (an instruction or a declaration),
+    'head' (THEN/DO, or ';' for a one-statement IF), ':' (CASE), 'paren' (a header whose
+    parentheses must close), 'line' (any other block line, and labels)."""
+    m = _BLOCK_WORDS.match(line)
+    if m is None:
+        return "line" if _LABEL.match(line) else ";"
+    return _HEADS.get(m.group(1).upper(), "line")
+
+
+def _complete(stripped: str, closer: str, depth: int) -> bool:
+    """Whether a statement whose text so far ends with ``stripped`` is whole."""
+    if closer == ";":
+        return stripped.endswith(";")
+    if closer == "head":
+        return stripped.endswith(";") or _HEAD_END.search(stripped) is not None
+    if closer == ":":
+        return stripped.endswith(":") or stripped.endswith(";")
+    if closer == "paren":
+        return depth <= 0
+    return True
+
+
+def _root(node) -> str | None:
+    """The data name an lvalue expression starts with (p1 in p1.trans.x, path in path{2})."""
+    if isinstance(node, Tree) and node.data == "lvalue":
+        return str(node.children[0])
+    return None
 
 
 def blank_comments(text: str) -> str:
@@ -134,7 +170,37 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
     for module in modules:
         module.bulk_moves()
     _bind_late_declarations(builder, data)
+    _runtime_changes(builder, data.facts)
     return builder.build()
+
+
+def _runtime_changes(builder: Builder, facts: RuntimeFacts) -> None:
+    """Targets whose robtarget, tool or work object the program changes while it runs
+    (``p1.trans.x := ...``, ``wobj1.oframe.trans := [...]``, SearchL's search point, an INOUT
+    argument), and every target once a program displacement (PDispOn, EOffsSet, ...) is in
+    the program, are not resolved: their declared values are not where the robot goes."""
+    check_calls(facts, builder.notes)
+    for where in facts.displaced:
+        builder.notes.append(f"{where} displaces every later target at run time: no target is resolved")
+    if not facts.changed and not facts.displaced:
+        return
+    changed_names = facts.changed.keys()
+    tool_hit = np.array([n.upper() in changed_names for n in builder.tool_names])
+    frame_hit = np.array([n.upper() in changed_names for n in builder.frame_names])
+    used = {n.upper() for n in builder.tool_names + builder.frame_names} & changed_names
+    for block in builder.blocks:
+        n_rows = len(block["order"])
+        changed = np.full(n_rows, bool(facts.displaced))
+        changed |= tool_hit[np.asarray(block["tool"], np.int64)] | frame_hit[np.asarray(block["frame"], np.int64)]
+        if block.get("name") is not None and n_rows:
+            texts, codes = np.unique(np.asarray(block["name"], dtype=object).astype(str), return_inverse=True)
+            refs = [set(_IDENT.findall(t.upper())) & changed_names for t in texts]  # one look per distinct target text
+            used.update(*refs)
+            changed |= np.array([bool(r) for r in refs])[codes]
+        if changed.any():
+            block["resolved"] = np.asarray(block["resolved"], bool) & ~changed
+    for name in sorted(used):
+        builder.notes.append(facts.changed[name] + " while the program runs: the targets that use it are not resolved")
 
 
 def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
@@ -154,6 +220,7 @@ class _Data:
         self.points: dict[str, tuple] = {}  # name -> (values, spans, conf)
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
+        self.facts = RuntimeFacts()
 
 
 class RapidParser:
@@ -168,7 +235,7 @@ class RapidParser:
         self.numbers = scan_numbers(self.code)
         self.builder = Builder("rapid", "quat", [doc]) if builder is None else builder
         data = _Data() if data is None else data
-        self.points, self.tools, self.wobjs = data.points, data.tools, data.wobjs
+        self.points, self.tools, self.wobjs, self.facts = data.points, data.tools, data.wobjs, data.facts
         self.rows: list[dict] = []
         self._shapes = None
 
@@ -202,6 +269,7 @@ class RapidParser:
         self.declarations()
         self.statements()
         self.bulk_moves()
+        _runtime_changes(self.builder, self.facts)
         return self.builder.build()
 
     def declarations(self) -> None:
@@ -220,6 +288,7 @@ class RapidParser:
         skip = np.zeros(len(self.lines.starts), bool)
         for matches in self._shapes.values():
             skip[matches.line] = True
+        self._skip = skip
         self._slow(skip)
 
     def bulk_moves(self) -> None:
@@ -276,36 +345,51 @@ class RapidParser:
 
     # ----------------------------------------------------------- slow path
     def _statements(self, skip: np.ndarray):
-        """(start offset, end offset) of each statement outside the bulk lines (``skip``, by line)."""
+        """(start offset, end offset) of each statement outside the bulk lines (``skip``, by line).
+
+        RAPID is free-form: a statement ends with ';', or is a block line. A block head
+        ends where its own syntax ends: IF/ELSEIF/WHILE/FOR at THEN/DO (an IF without THEN
+        is the one-statement form and ends at ';'), PROC/FUNC/ERROR when its parentheses
+        close, CASE/DEFAULT at ':'. A one-statement IF whose statement is a bulk line takes
+        that line in (the bulk path has read its move)."""
         code = self.code
-        pending = None
+        pending, closer, depth = None, ";", 0
         header = False  # the %%% ... %%% block of old .prg files
         starts = self.lines.starts
         previous = -1
         for li in np.nonzero(~skip)[0].tolist():
             start = int(starts[li])
             if pending is not None and not header and li > previous + 1:
-                raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")  # a bulk line came first
+                if closer != "head":
+                    raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")  # a bulk line came first
+                yield pending, self._line_end(previous + 1)  # IF cond <newline> bulk move;
+                pending = None
             previous = li
             if code.startswith("%%%", start):
                 header = not header
                 continue
             if header:
                 continue
-            end = code.find("\n", start)
-            end = len(code) if end < 0 else end
+            end = self._line_end(li)
             line = code[start:end]
             stripped = line.strip()
             if not stripped or stripped.startswith("%%%"):
                 continue
-            first = pending if pending is not None else start + (len(line) - len(line.lstrip()))
-            if stripped.endswith(";") or (pending is None and (_BLOCK_WORDS.match(line) or _LABEL.match(line))):
-                yield first, end
+            if pending is None:
+                first = start + (len(line) - len(line.lstrip()))
+                closer, depth = _closer(line), 0
+            depth += line.count("(") - line.count(")")
+            if _complete(stripped, closer, depth):
+                yield (pending if pending is not None else first), end
                 pending = None
             elif pending is None:
                 pending = first
         if pending is not None:
             raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
+
+    def _line_end(self, li: int) -> int:
+        end = self.code.find("\n", int(self.lines.starts[li]))
+        return len(self.code) if end < 0 else end
 
     def _slow(self, skip: np.ndarray) -> None:
         g = grammar("rapid")
@@ -323,6 +407,8 @@ class RapidParser:
         kind = node.data if isinstance(node, Tree) else None
         if kind in _OPEN:
             stack.append((_OPEN[kind], start))
+            if kind == "routine_open":
+                self._routine(node)
         elif kind in _CLOSE:
             if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
                 want, where = stack[-1]
@@ -341,6 +427,42 @@ class RapidParser:
             if not any(s[0] == "ENDROUTINE" for s in stack):
                 raise self.lines.error(self.doc.path, start, "motion instruction outside a routine")
             self._move(node, start)
+        elif kind == "assign":
+            self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
+        elif kind == "call":
+            self._call(node, start)
+        elif kind == "record_field" and not (stack and stack[-1][0] == "ENDRECORD"):
+            # `name arg;` outside a RECORD is a call with one argument (grammar: same shape as a field)
+            name, arg = node.children[0], node.children[1]
+            path, lines = self.doc.path, self.lines
+            self.facts.calls.append((str(name), [str(arg)], self._where(start), lambda message: lines.error(path, start, message)))
+        elif kind == "short_if":
+            inner = node.children[-1]
+            inner_start = self._span(inner, start)[0]
+            if isinstance(inner, Tree) and inner.data == "move" and self._skip[self.lines.line(inner_start) - 1]:
+                return  # IF cond <newline> a bulk move: the bulk path has read it
+            self._statement(inner, start, stack)
+
+    def _where(self, offset: int) -> str:
+        return f"{self.doc.path}:{self.lines.line(offset)}"
+
+    def _call(self, node: Tree, start: int) -> None:
+        """A procedure call: kept for the checks made once every module is read (its
+        arguments' data names, in case the procedure writes them)."""
+        name = str(node.children[0])
+        args = node.children[1].children if len(node.children) > 1 else []
+        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        path, lines = self.doc.path, self.lines
+        self.facts.calls.append((name, roots, self._where(start), lambda message: lines.error(path, start, message)))
+
+    def _routine(self, node: Tree) -> None:
+        """PROC/FUNC parameters that the routine may write (INOUT, VAR, PERS)."""
+        names = [c for c in node.children if isinstance(c, Token) and c.type == "NAME"]
+        params = next((c for c in node.children if isinstance(c, Tree) and c.data == "params"), None)
+        if not names:
+            return
+        writable = [any(isinstance(t, Token) and t.type in ("VAR", "PERS", "INOUT", "STORAGE") for t in p.children) for p in (params.children if params else [])]
+        self.facts.procs[str(names[-1]).upper()] = writable  # PROC name, FUNC type name, TRAP name
 
     def _span(self, node, start: int) -> tuple[int, int]:
         if isinstance(node, Token):
@@ -469,25 +591,30 @@ class RapidParser:
                 if isinstance(o, Tree) and o.data == "optarg":
                     key = str(o.children[0]).upper()
                     options[key] = o.children[1] if len(o.children) > 1 else None
-        n_targets = 2 if mv in _CIRC else 1
-        if len(positional) < n_targets + 3:
+        targets, at_speed, at_zone, at_tool = LAYOUTS.get(mv, CIRCULAR_LAYOUT if mv in _CIRC else LINEAR_LAYOUT)
+        if len(positional) <= max(at_tool or 0, at_speed, targets[-1]):
             raise self.lines.error(self.doc.path, start, f"{mv} needs target(s), speed, zone and tool")
         kinds = [Kind.CIRC_VIA, Kind.CIRC_END] if mv in _CIRC else [Kind.ABSJ if mv in ("MOVEABSJ", "MOVEEXTJ") else _MOVE_KIND.get(mv, Kind.LINEAR)]
-        speed_node, zone_node, tool_node = positional[n_targets : n_targets + 3]
+        if mv in SEARCH_POINT:  # the search point is written with where the signal came (SearchL, 'SearchPoint')
+            root = _root(positional[SEARCH_POINT[mv]].children[0])
+            if root:
+                self.facts.change(root, f"{self._where(start)}: {{name}} is written by {mv.title()}")
+        speed_node, tool_node = positional[at_speed], positional[at_tool] if at_tool is not None else None
+        zone_node = positional[at_zone] if at_zone is not None else None
         speed = _speed(self._text(speed_node, start))
         if "V" in options and options["V"] is not None:
             speed = literal_number(options["V"])
-        zone = _zone(self._text(zone_node, start))
+        zone = _zone(self._text(zone_node, start)) if zone_node is not None else np.nan
         if "Z" in options and options["Z"] is not None:
             zone = literal_number(options["Z"])
-        tool = self._text(tool_node.children[0], start)
+        tool = self._text(tool_node.children[0], start) if tool_node is not None else "tool0"  # MoveExtJ moves no robot tool
         wobj = self._text(options["WOBJ"], start) if options.get("WOBJ") is not None else "wobj0"
         tool_idx = self._frame_index(tool, self.tools, self.builder.tool_index)
         wobj_idx = self._frame_index(wobj, self.wobjs, self.builder.frame_index)
-        for k, tnode in zip(kinds, positional[:n_targets]):
+        for k, tnode in zip(kinds, [positional[i] for i in targets]):
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
-            self.rows.append(dict(order=start, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
+            self.rows.append(dict(order=self._span(node, start)[0], kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
                                   tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:

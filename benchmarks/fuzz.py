@@ -1,0 +1,108 @@
+"""Fuzzing the three parsers: 10^5 generated and mutated programs (issue 12, "Must show").
+
+Run: .venv/bin/python benchmarks/fuzz.py [--examples 100000] [--jobs 3] [--out benchmarks/results/fuzz.txt]
+The examples are split evenly over RAPID, KRL and G-code, in chunks of 1,000 with their own
+fixed seeds, run by --jobs processes; the report is rewritten after every chunk. Each
+is a program generated from the grammar's constructs or a real/own corpus file (a window of
+40 lines), then 0-4 mutations (tests/fuzzing.py). Counts: accepted (and round-tripped
+byte-identically), refused with file:line:column (ParseError), refused naming the file
+(InputError), crashed (any other exception, or an accepted text that does not come back
+identical) - must be 0. Each chunk has a fixed hypothesis seed: a rerun gives the same counts.
+The real corpus is read from $POSTPROC_SHARED/corpus/real (default ../shared).
+"""
+
+from __future__ import annotations
+
+import argparse
+import collections
+import json
+import multiprocessing
+import sys
+import time
+import traceback
+import zlib
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+
+
+def run_chunk(job: tuple[str, int, int]) -> dict:
+    """Child process: ``n`` hypothesis examples of ``dialect``; counts and the first crashes."""
+    from hypothesis import HealthCheck, Phase, given, seed, settings
+
+    import fuzzing
+
+    dialect, n, part = job
+    seeds = [p.read_bytes() for p in fuzzing.seed_files(dialect)]
+    counts: collections.Counter = collections.Counter()
+    crashes: list[dict] = []
+
+    @seed(zlib.crc32(f"fuzz-{dialect}-{part}".encode()))  # the same examples on every run
+    @settings(max_examples=n, deadline=None, database=None, phases=[Phase.generate], suppress_health_check=list(HealthCheck))
+    @given(fuzzing.programs(dialect, seeds))
+    def one(data: bytes) -> None:
+        try:
+            counts[fuzzing.judge(dialect, data)] += 1
+        except Exception as exc:  # noqa: BLE001 - every other exception is what we count
+            counts["crashed"] += 1
+            if len(crashes) < 20:
+                crashes.append({"error": "".join(traceback.format_exception_only(exc)).strip()[:400], "data": data.decode("latin-1")})
+
+    one()
+    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes}
+
+
+CHUNK = 1000  # examples per task: progress and partial results are written after each
+
+
+def report(results: list[dict], elapsed: float, jobs: int, wanted: int) -> str:
+    dialects = ("rapid", "krl", "gcode")
+    lines = [f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
+    total: collections.Counter = collections.Counter()
+    for d in dialects:
+        c: collections.Counter = collections.Counter()
+        for r in results:
+            if r["dialect"] == d:
+                c.update(r["counts"])
+        seeds = next((r["seeds"] for r in results if r["dialect"] == d), 0)
+        total.update(c)
+        lines.append(f"{d:<8}{sum(c.values()):>11,}{c['accepted']:>24,}{c['refused']:>19,}{c['refused-file']:>16,}{c['crashed']:>9,}   {seeds} files")
+    done = sum(total.values())
+    lines.append(f"{'all':<8}{done:>11,}{total['accepted']:>24,}{total['refused']:>19,}{total['refused-file']:>16,}{total['crashed']:>9,}")
+    lines.append(f"time {elapsed:.0f} s with {jobs} processes ({done / max(elapsed, 1e-9):,.1f} programs/s); {done:,} of {wanted:,} done; crashed must be 0")
+    crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
+    for c in crashes[:10]:
+        lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--examples", type=int, default=100_000)
+    parser.add_argument("--jobs", type=int, default=3)
+    parser.add_argument("--out", type=Path, help="also write the report here (after every chunk)")
+    parser.add_argument("--crashes", type=Path, help="write the crashing inputs (JSON) here; keep it out of the repository: "
+                        "an input may be a window of a third-party corpus file")
+    args = parser.parse_args()
+    dialects = ("rapid", "krl", "gcode")
+    per_dialect = args.examples // len(dialects)
+    # chunks interleaved over the dialects, so a run cut short has sampled all three alike
+    jobs = [(d, min(CHUNK, per_dialect - k * CHUNK), k) for k in range(-(-per_dialect // CHUNK)) for d in dialects]
+    results: list[dict] = []
+    t0 = time.perf_counter()
+    with multiprocessing.Pool(args.jobs) as pool:
+        for result in pool.imap_unordered(run_chunk, jobs):
+            results.append(result)
+            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects))
+            if args.out:
+                args.out.parent.mkdir(parents=True, exist_ok=True)
+                args.out.write_text(text + "\n", encoding="utf-8")
+            if args.crashes:
+                crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
+                args.crashes.write_text(json.dumps(crashes, indent=1), encoding="utf-8")
+    print(text)
+    sys.exit(1 if any(r["counts"].get("crashed") for r in results) else 0)
+
+
+if __name__ == "__main__":
+    main()
