@@ -24,7 +24,7 @@ from scipy import stats as sps
 from . import kinematics as kin
 from .effects import CATALOG, EffectSum, parse_effects
 from .errormodel import ErrorModel
-from .identify import Stats, cross_validation_errors, fit, free_mask, residuals
+from .identify import Stats, cross_validation_errors, fit, free_mask, refit_base, residuals
 from .measurements import MeasurementSet
 
 ALPHA = 0.05
@@ -360,13 +360,16 @@ def ladder(
     noise_mm: float = 0.02,
     validation: MeasurementSet | None = None,
     max_steps: int = 8,
+    reregister: bool = False,
     progress=lambda msg: None,
 ) -> list[dict]:
     """Fit a sequence of models, each adding the next effect; report the error per step.
 
     ``steps``: the effects in order; None lets diagnose choose the next one each time,
     starting from the nominal robot (with a base frame if the data are far from it), and
-    stops when no candidate is significant.
+    stops when no candidate is significant. ``reregister``: the validation set was measured
+    from another tracker position; its measurement frame is registered anew (6 DOF, every
+    other parameter kept) before each step's error is taken.
     """
     rows = []
     current = EffectSum()
@@ -375,7 +378,8 @@ def ladder(
     def record(label: str, model: ErrorModel, cv_rms: float):
         row = {"step": len(rows), "added": label, "effects": model.effects.spec(), "cv_rms_mm": cv_rms, "train_rms_mm": Stats.of(residuals(model, meas)).rms_mm}
         if validation is not None:
-            row["val_rms_mm"] = Stats.of(residuals(model, validation)).rms_mm
+            val_st = Stats.of(residuals(refit_base(model, validation) if reregister else model, validation))
+            row["val_rms_mm"], row["val_mean_mm"], row["val_max_mm"] = val_st.rms_mm, val_st.mean_mm, val_st.max_mm
         rows.append(row)
 
     nominal_err = residuals(model, meas)
