@@ -12,7 +12,7 @@ never fitted, only its tracker-to-base transform is re-registered (6 DOF) for ea
 2. The ladder: the effects added one by one, the error on Series B after each.
 3. The figure: examples/ur10_ladder.png (or the folder given).
 
-Run: .venv/bin/python examples/ur10_ladder.py [output folder, default out/] [path/to/ur10_ipa]
+Run: .venv/bin/python examples/ur10_ladder.py [output folder, default out/] [path/to/ur10_ipa] [--quick]
 """
 
 from __future__ import annotations
@@ -29,13 +29,15 @@ from postproc.effects import parse_effects
 from postproc.formats.ur10_ipa import read_series
 from postproc.identify import fit
 
-out_dir = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out")
-root = Path(sys.argv[2]) if len(sys.argv) > 2 else Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10_ipa"
+args = [a for a in sys.argv[1:] if a != "--quick"]
+EVERY = 20 if "--quick" in sys.argv else 3  # --quick (the test suite): every 20th pose of Series A
+out_dir = Path(args[0]) if args else Path("out")
+root = Path(args[1]) if len(args) > 1 else Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10_ipa"
 out_dir.mkdir(parents=True, exist_ok=True)
 robot = postproc.load_robot("ur10")
 full_a, tool = read_series(root / "Series_A")
 series_b, _ = read_series(root / "Series_B")
-series_a = full_a.subset(np.arange(len(full_a)) % 3 == 0)
+series_a = full_a.subset(np.arange(len(full_a)) % EVERY == 0)
 GEOMETRIC = "base_frame,geometric,tool_offset,joint_compliance"
 PHYSICS = ["link_bending", "nonlinear_stiffness[joints=2,3,4]", "base_tilt", "joint_harmonics"]
 FOLDS = 3
