@@ -328,7 +328,7 @@ def _findings(breakdowns, ranked, cv_rms, floor, files: Files, model) -> list[st
         spread = np.ptp(np.array(b.mean_mm)[:, axis])
         why = f"residual {'xyz'[axis]} varies with {b.label} (bin means span {spread:.3f} mm, {100 * b.eta2:.0f}% of residual variance, p = {b.p_adjusted:.1e})"
         if significant:
-            hint = f"; {significant[0].effect} is the effect that explains most of it."
+            hint = f"; of the catalog's effects, {significant[0].effect} explains the most of the residual."
         elif at_floor:
             hint = "; the model is within the noise floor all the same, nothing to add."
         else:
