@@ -17,6 +17,7 @@ Run: .venv/bin/python examples/ur10_ladder.py [output folder, default out/] [pat
 
 from __future__ import annotations
 
+import json
 import sys
 import time
 from pathlib import Path
@@ -64,6 +65,7 @@ print(f"({time.perf_counter() - t0:.0f} s)")
 
 def figure(rows, path: Path) -> None:
     import matplotlib
+    import matplotlib.ticker
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -76,8 +78,11 @@ def figure(rows, path: Path) -> None:
     ax.plot(x, [r["cv_rms_mm"] for r in shown], "o-", color="#1f77b4", lw=2, label=f"Series A RMS, {FOLDS}-fold cross-validated")
     ax.axhline(0.25, color="#2ca02c", ls=":", label="goal for physics alone: mean 0.25 mm")
     for xi, r in zip(x, shown):
-        ax.annotate(f"{r['val_mean_mm']:.3f}", (xi, r["val_mean_mm"]), textcoords="offset points", xytext=(0, 8), ha="center", fontsize=8)
+        ax.annotate(f"{r['val_mean_mm']:.3f}", (xi, r["val_mean_mm"]), textcoords="offset points", xytext=(0, -15), ha="center", fontsize=8, color="#ff7f0e")
     ax.set_yscale("log")
+    ax.set_ylim(0.2, 4.0)
+    ax.yaxis.set_major_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}"))
+    ax.yaxis.set_minor_formatter(matplotlib.ticker.FuncFormatter(lambda v, _: f"{v:g}" if round(v, 3) in (0.2, 0.3, 0.4, 0.6, 2.0, 3.0) else ""))
     ax.set_xticks(x)
     ax.set_xticklabels([("+ " if i else "") + r["added"] for i, r in enumerate(shown)], rotation=25, ha="right", fontsize=9)
     ax.set_ylabel("3-D position error (mm, log scale)")
@@ -88,5 +93,6 @@ def figure(rows, path: Path) -> None:
     plt.close(fig)
 
 
+(out_dir / "ur10_ladder.json").write_text(json.dumps(rows, indent=1))
 figure(rows, out_dir / "ur10_ladder.png")
 print(f"figure: {out_dir / 'ur10_ladder.png'}")
