@@ -375,7 +375,7 @@ def diagnose_cmd(
     """Where the model fails and which effect is missing."""
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
-    from .diagnose import diagnose
+    from .diagnose import Files, diagnose, split_command
     from .measurements import write_text_atomic
     from .model_io import load_model
 
@@ -386,7 +386,8 @@ def diagnose_cmd(
     data = _load_measurements(meas, error_model.robot, drop_invalid)
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
         task = bar.add_task("diagnosing", total=None)
-        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg))
+        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg),
+                          files=Files(str(model), str(meas)))
     if report is not None:
         from .report.html import diagnosis_report
 
@@ -413,7 +414,10 @@ def diagnose_cmd(
             table.add_row(c.effect, f"{100 * c.explained:.1f}%", f"{c.rms_if_added_mm:.4f}", f"{c.p_adjusted:.1e}", "yes" if c.significant else "no")
         out.print(table)
     for finding in result.findings:
-        out.print(f"- {finding}")
+        text, command = split_command(finding)
+        out.print(f"- {text}", highlight=False)
+        if command:
+            out.print(f"    run: {command}", highlight=False, soft_wrap=True)
     if report is not None:
         out.print(f"report written to {report}")
 
@@ -567,8 +571,13 @@ def simulate_cmd(
     write_measurements(output, data)
     if truth_out is not None:
         save_model(truth_out, truth)
-    err_mm = np.linalg.norm(data.measured_mm - data.nominal_mm, axis=1)
-    out.print(f"{n} poses written to {output}; nominal error RMS {np.sqrt(np.mean(err_mm**2)):.3f} mm, max {err_mm.max():.3f} mm", highlight=False)
+    from .identify import Stats, nominal_model, residuals
+
+    # The same nominal error as fit and diagnose print: registered onto the data when there is a base frame.
+    framed = bool(chosen.of_kind("base"))
+    st = Stats.of(residuals(nominal_model(robot_model, tool_mm, data, registered=framed), data))
+    out.print(f"{n} poses written to {output}; nominal error RMS {st.rms_mm:.4f} mm, max {st.max_mm:.4f} mm"
+              + (" (nominal robot registered onto the data, as fit reports it)" if framed else ""), highlight=False)
 
 
 def _named_frames(items: list[str] | None, option: str) -> dict:

@@ -15,6 +15,7 @@
 
 from __future__ import annotations
 
+import shlex
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,7 +24,7 @@ from scipy import stats as sps
 from . import kinematics as kin
 from .effects import CATALOG, EffectSum, parse_effects
 from .errormodel import ErrorModel
-from .identify import Stats, cross_validation_errors, fit, free_mask, residuals
+from .identify import Stats, cross_validation_errors, fit, free_mask, refit_base, residuals
 from .measurements import MeasurementSet
 
 ALPHA = 0.05
@@ -199,8 +200,12 @@ def diagnose(
     noise_mm: float = 0.02,
     candidates: list[str] | None = None,
     progress=lambda msg: None,
+    files: "Files | None" = None,
 ) -> Diagnosis:
-    """Compare the model with measurements, find structure, rank the missing effects."""
+    """Compare the model with measurements, find structure, rank the missing effects.
+
+    ``files``: the model and measurement paths the findings' commands name (placeholders
+    MODEL.json and MEAS.csv when not given)."""
     resid = residuals(model, meas)  # predicted - measured
     miss = -resid  # measured - predicted: what the model misses
     variables = explanatory_variables(model, meas)
@@ -220,12 +225,13 @@ def diagnose(
 
     floor = float(noise_mm * np.sqrt(3.0))
     cv_rms = float(np.sqrt(base_mse))
-    findings = _findings(breakdowns, ranked, cv_rms, floor)
+    files = files or Files()
+    findings = _findings(breakdowns, ranked, cv_rms, floor, files, model)
     if model.residual is not None:
-        findings.append(
+        findings.append(with_command(
             f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
-            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves)."
-        )
+            "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves).",
+            files.evaluate_command()))
     return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
 
 
@@ -252,29 +258,94 @@ def _rank_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], 
     ranked = []
     for (spec, explained, rms, p, chosen_how), p_adj in zip(raw, adjusted):
         significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
-        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained)) + chosen_how))
+        verdict = "" if significant else " (not beyond noise: leave it out)"
+        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained)) + chosen_how + verdict))
     ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
     return ranked
 
 
-def _findings(breakdowns, ranked, cv_rms, floor) -> list[str]:
+#: Between a finding's words and the command that acts on it (``split_command`` takes it apart).
+COMMAND_MARK = " Run: "
+
+
+@dataclass(frozen=True)
+class Files:
+    """The paths a finding's command names."""
+
+    model: str = "MODEL.json"
+    meas: str = "MEAS.csv"
+
+    def next_model(self) -> str:
+        stem = self.model[:-5] if self.model.endswith(".json") else self.model
+        return f"{stem}_next.json"
+
+    def fit_command(self, spec: str) -> str:
+        """Refit the model with one more effect (its terms as the diagnosis chose them)."""
+        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote('+' + spec)} --cv 0 -o {_quote(self.next_model())}"
+
+    def predictor_command(self, model) -> str:
+        """Keep the physics and learn what it leaves (a hybrid model)."""
+        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote(model.effects.spec())} --predictor gpr --cv 0 -o {_quote(self.next_model())}"
+
+    def evaluate_command(self) -> str:
+        return f"postproc evaluate {_quote(self.model)} {_quote(self.meas)}"
+
+    def use_command(self) -> str:
+        """The model is as good as the data allow: compensate a program with it."""
+        return f"postproc compensate PROGRAM --model {_quote(self.model)} -o PROGRAM_compensated"
+
+
+def _quote(text: str) -> str:
+    return shlex.quote(text)
+
+
+def with_command(text: str, command: str) -> str:
+    return f"{text.rstrip()}{COMMAND_MARK}{command}"
+
+
+def split_command(finding: str) -> tuple[str, str]:
+    """A finding's words and the command that acts on it."""
+    text, _, command = finding.rpartition(COMMAND_MARK)
+    return (text, command) if text else (finding, "")
+
+
+def _findings(breakdowns, ranked, cv_rms, floor, files: Files, model) -> list[str]:
+    """Plain-language findings, each ending with the command that acts on it. Only a
+    significant candidate is ever recommended; structure with no significant candidate
+    behind it points at a data-driven predictor, never at an effect."""
     out = []
+    significant = [c for c in ranked if c.significant]
+    at_floor = cv_rms < 1.25 * floor
+    if significant:
+        action = files.fit_command(significant[0].effect)
+    elif at_floor:
+        action = files.use_command()
+    else:
+        action = files.predictor_command(model)
     structured = [b for b in breakdowns if b.significant]
     for b in structured[:4]:
         axis = int(np.argmax(np.abs(np.array(b.mean_mm)).max(axis=0)))
         spread = np.ptp(np.array(b.mean_mm)[:, axis])
-        out.append(f"residual {'xyz'[axis]} varies with {b.label} (bin means span {spread:.3f} mm, {100 * b.eta2:.0f}% of residual variance, p = {b.p_adjusted:.1e})")
-    significant = [c for c in ranked if c.significant]
+        why = f"residual {'xyz'[axis]} varies with {b.label} (bin means span {spread:.3f} mm, {100 * b.eta2:.0f}% of residual variance, p = {b.p_adjusted:.1e})"
+        if significant:
+            hint = f"; of the catalog's effects, {significant[0].effect} explains the most of the residual."
+        elif at_floor:
+            hint = "; the model is within the noise floor all the same, nothing to add."
+        else:
+            hint = "; no catalog effect explains it beyond noise, a data-driven predictor may."
+        out.append(with_command(why + hint, action))
     if significant:
         best = significant[0]
-        out.append(best.message[0].upper() + best.message[1:] + f": add it (cross-validated RMS {cv_rms:.4f} -> {best.rms_if_added_mm:.4f} mm).")
+        out.append(with_command(best.message[0].upper() + best.message[1:] + f": add it (cross-validated RMS {cv_rms:.4f} -> {best.rms_if_added_mm:.4f} mm).", action))
     else:
-        out.append(
+        text = (
             f"No candidate explains the residual beyond noise. Cross-validated RMS {cv_rms:.4f} mm against a noise floor of "
-            f"{floor:.4f} mm ({cv_rms / floor:.2f} x)" + ("." if cv_rms < 1.25 * floor else ": what is left is not in the catalog (try a data-driven predictor).")
+            f"{floor:.4f} mm ({cv_rms / floor:.2f} x)"
         )
+        text += ": the model is as good as the data allow; use it." if at_floor else ": what is left is not in the catalog; learn it with a data-driven predictor."
+        out.append(with_command(text, action))
     if not structured:
-        out.append("No variable shows structure in the residual beyond chance.")
+        out.append(with_command("No variable shows structure in the residual beyond chance.", action))
     return out
 
 
@@ -289,13 +360,16 @@ def ladder(
     noise_mm: float = 0.02,
     validation: MeasurementSet | None = None,
     max_steps: int = 8,
+    reregister: bool = False,
     progress=lambda msg: None,
 ) -> list[dict]:
     """Fit a sequence of models, each adding the next effect; report the error per step.
 
     ``steps``: the effects in order; None lets diagnose choose the next one each time,
     starting from the nominal robot (with a base frame if the data are far from it), and
-    stops when no candidate is significant.
+    stops when no candidate is significant. ``reregister``: the validation set was measured
+    from another tracker position; its measurement frame is registered anew (6 DOF, every
+    other parameter kept) before each step's error is taken.
     """
     rows = []
     current = EffectSum()
@@ -304,7 +378,8 @@ def ladder(
     def record(label: str, model: ErrorModel, cv_rms: float):
         row = {"step": len(rows), "added": label, "effects": model.effects.spec(), "cv_rms_mm": cv_rms, "train_rms_mm": Stats.of(residuals(model, meas)).rms_mm}
         if validation is not None:
-            row["val_rms_mm"] = Stats.of(residuals(model, validation)).rms_mm
+            val_st = Stats.of(residuals(refit_base(model, validation) if reregister else model, validation))
+            row["val_rms_mm"], row["val_mean_mm"], row["val_max_mm"] = val_st.rms_mm, val_st.mean_mm, val_st.max_mm
         rows.append(row)
 
     nominal_err = residuals(model, meas)

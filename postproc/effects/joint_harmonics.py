@@ -2,6 +2,17 @@
 
 Without options the fit chooses the joints and orders the data support (see
 ``postproc.identify.select_terms``, best subset with a stability check) and records them in the model file.
+
+Source: a strain-wave (harmonic drive) gear's transmission error is periodic; besides the
+fast components tied to the wave generator, eccentric and tilted mounting of the circular
+spline and flexspline make it vary once and twice per output revolution, i.e. orders 1 and
+2 of the joint angle (Ghorbel, Gandhi & Alpeter, "On the kinematic error in harmonic drive
+gears", ASME J. Mechanical Design 123(1), 2001, 90-97; Tuttle & Seering, IEEE Trans.
+Robotics and Automation 12(3), 1996, 368-374). Orders 1 and 2 are separable from the
+geometry and the compliance only on a joint that turns over much of a revolution: over a
+range of less than about 90 degrees sin/cos of order 1 and 2 are nearly a constant, a slope
+and a curvature, which the joint offset, the DH errors and the gravity compliance already
+carry; the candidate search then finds no support for them, and says so.
 """
 
 from __future__ import annotations

@@ -24,6 +24,7 @@ def _quiver_views(axes, nominal_mm, layers, gain, title_suffix):
         ("side view", radius, nominal_mm[:, 2], "radius from axis 1 (mm)", "z (mm)"),
     )
     for v, (ax, (title, px, py, xl, yl)) in enumerate(zip(axes, views)):
+        xs, ys = [px], [py]
         for err, colour, label in layers:
             if v == 0:
                 ux, uy = err[:, 0], err[:, 1]
@@ -31,12 +32,26 @@ def _quiver_views(axes, nominal_mm, layers, gain, title_suffix):
                 ux = (err[:, 0] * nominal_mm[:, 0] + err[:, 1] * nominal_mm[:, 1]) / np.maximum(radius, 1e-9)
                 uy = err[:, 2]
             ax.quiver(px, py, ux * gain, uy * gain, angles="xy", scale_units="xy", scale=1, color=colour, width=0.003, alpha=0.8, label=label)
+            xs.append(px + ux * gain)
+            ys.append(py + uy * gain)
         ax.set_title(f"{title}: {title_suffix}", fontsize=10)
         ax.set_xlabel(xl)
         ax.set_ylabel(yl)
-        ax.set_aspect("equal", adjustable="datalim")
+        _limits_around(ax, np.concatenate(xs), np.concatenate(ys))
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper left", fontsize=8, framealpha=0.9)
+
+
+def _limits_around(ax, x, y, margin: float = 0.05):
+    """Equal-scale limits that hold every arrow's base and tip (quiver does not widen the
+    view for its arrows, so without this the arrows at the edge are cut off)."""
+    half_x, half_y = np.ptp(x) * (0.5 + margin), np.ptp(y) * (0.5 + margin)
+    least = max(0.3 * max(half_x, half_y), 0.5)  # no strip-thin panel
+    half_x, half_y = max(half_x, least), max(half_y, least)
+    cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
+    ax.set_xlim(cx - half_x, cx + half_x)
+    ax.set_ylim(cy - half_y, cy + half_y)
+    ax.set_aspect("equal", adjustable="box")
 
 
 def _gain(nominal_mm, err):

@@ -30,8 +30,26 @@ h1 { font-size: 1.6em; } h2 { margin-top: 1.6em; border-bottom: 1px solid #ddd; 
 table { border-collapse: collapse; margin: 0.8em 0; } td, th { border: 1px solid #ccc; padding: 4px 10px; text-align: right; }
 th { background: #f3f3f3; } td.l, th.l { text-align: left; }
 tr.sig td { background: #eaf7ea; } .finding { background: #fff8e1; padding: 0.6em 1em; border-left: 4px solid #f0b400; margin: 0.4em 0; }
+code.cmd { background: #f4f4f4; padding: 1px 4px; white-space: pre-wrap; word-break: break-all; }
 figure { margin: 1em 0; } img { max-width: 100%; } figcaption { color: #555; font-size: 0.9em; }
 """
+
+
+def _nominal_stats(model, meas):
+    """The nominal robot's error as ``postproc fit`` and ``postproc simulate`` print it:
+    rigidly registered onto the data when the model has a base frame."""
+    from ..identify import Stats, nominal_model, residuals
+
+    return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=bool(model.effects.of_kind("base"))), meas))
+
+
+def _finding(finding: str) -> str:
+    """A finding's words, then the command that acts on it, ready to copy."""
+    from ..diagnose import split_command
+
+    text, command = split_command(finding)
+    run = f"<br/>Run: <code class='cmd'>{html.escape(command)}</code>" if command else ""
+    return f"<div class='finding'>{html.escape(text)}{run}</div>"
 
 
 def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None = None) -> str:
@@ -51,8 +69,10 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
         # Each effect's own plain-language description (postproc.effects: Effect.summary).
         parts.append("<ul>" + "".join(f"<li><code>{html.escape(e.spec())}</code>: {html.escape(e.summary)}</li>" for e in model.effects) + "</ul>")
     parts.append("<h2>What to do</h2>")
-    parts.extend(f"<div class='finding'>{html.escape(f)}</div>" for f in diagnosis.findings)
+    parts.extend(_finding(f) for f in diagnosis.findings)
     parts.append("<h2>Compare</h2><table><tr><th class='l'></th><th>RMS (mm)</th><th>mean (mm)</th><th>max (mm)</th><th>RMS x</th><th>RMS y</th><th>RMS z</th></tr>")
+    nominal_st = _nominal_stats(model, meas)
+    parts.append(f"<tr><td class='l'>nominal robot{' (registered onto the data)' if model.effects.of_kind('base') else ''}</td><td>{nominal_st.rms_mm:.4f}</td><td>{nominal_st.mean_mm:.4f}</td><td>{nominal_st.max_mm:.4f}</td>" + "".join(f"<td>{v:.4f}</td>" for v in nominal_st.rms_axis_mm) + "</tr>")
     parts.append(f"<tr><td class='l'>model on this set</td><td>{st.rms_mm:.4f}</td><td>{st.mean_mm:.4f}</td><td>{st.max_mm:.4f}</td>" + "".join(f"<td>{v:.4f}</td>" for v in st.rms_axis_mm) + "</tr>")
     parts.append(f"<tr><td class='l'>cross-validated (model refitted)</td><td>{diagnosis.cv_rms_mm:.4f}</td><td colspan='5' class='l'>noise floor {diagnosis.noise_floor_mm:.4f} mm ({diagnosis.cv_rms_mm / diagnosis.noise_floor_mm:.2f} x)</td></tr></table>")
     parts.append(_img(figures.histograms(np.linalg.norm(measured_err, axis=1), np.linalg.norm(diagnosis.residual_mm, axis=1)), "3-D position error of the nominal robot and of the model on this set."))
