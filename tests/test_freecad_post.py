@@ -29,6 +29,7 @@ from postproc.cam.arcs import linearise_arc
 from postproc.cam.freecad import annotate, commands_to_gcode, planned_targets, run
 from postproc.cli import app
 from postproc.errors import InputError, JobError
+from postproc.program_check import ModelMismatchError
 from postproc.model_io import load_model
 from postproc.programs import emit_texts, parse_program
 
@@ -101,9 +102,14 @@ def test_post_is_convert_then_compensate(fitted, tmp_path):
     for to, suffix in (("krl", ".src"), ("rapid", ".mod")):
         conv, comp = tmp_path / f"conv{suffix}", tmp_path / f"comp{suffix}"
         assert runner.invoke(app, ["convert", str(ngc), "--to", to, "-o", str(conv)]).exit_code == 0
-        r = runner.invoke(app, ["compensate", str(conv), "--model", str(model), "-o", str(comp)])
+        # The program cuts with the flange (no tool), the model was fitted for a 200 mm tool: both
+        # refuse, and both go on with the same explicit override.
+        assert runner.invoke(app, ["compensate", str(conv), "--model", str(model), "-o", str(comp)]).exit_code == 2
+        with pytest.raises(ModelMismatchError, match="TCP"):
+            postproc.post(ngc.read_text(), model=model, to=to, output=tmp_path / f"lib{suffix}")
+        r = runner.invoke(app, ["compensate", str(conv), "--model", str(model), "-o", str(comp), "--allow-model-mismatch"])
         assert r.exit_code == 0, r.output
-        files = postproc.post(ngc.read_text(), model=model, to=to, output=tmp_path / f"lib{suffix}")
+        files = postproc.post(ngc.read_text(), model=model, to=to, output=tmp_path / f"lib{suffix}", allow_model_mismatch=True)
         assert files[str(tmp_path / f"lib{suffix}")] == comp.read_bytes().decode("latin-1").replace("conv", "lib")
         assert not (tmp_path / f"lib{suffix}").exists()  # post() writes nothing
     assert set(files) == {str(tmp_path / "lib.mod")}

@@ -41,6 +41,7 @@ def post(
     scheme: str = "broyden",
     temp_c: float | None = None,
     force_n=None,
+    allow_model_mismatch: bool = False,
 ) -> dict[str, str]:
     """Compensated robot program for ``program`` under ``model``: ``{path: text}`` (KRL: .src and .dat).
 
@@ -52,7 +53,8 @@ def post(
     but does not define (``G54``, ``H1``). Nothing is written; see ``write_programs``.
 
     Raises InputError (bad input, naming the line) or CompensationError (targets that
-    cannot be compensated, listed by line of ``program``).
+    cannot be compensated, listed by line of ``program``), ModelMismatchError where the
+    program's tool, payload or robot is not the model's (``allow_model_mismatch``: go on).
     """
     from ..compensate import CompensationError, compensate
     from ..programs import write_program
@@ -77,6 +79,9 @@ def post(
     converted = parse_program("-", to, texts[0].encode("latin-1"))  # "-": read nothing else from disk
     if len(converted) != len(tp):
         raise InputError(f"internal: the written program has {len(converted)} targets, the input {len(tp)}")
+    from ..program_check import check_model_fits
+
+    check_model_fits(converted, error_model, str(model) if not hasattr(model, "robot") else "the model", robot, allow_model_mismatch)
     new, report = compensate(converted, error_model, tol_mm=tol_mm, max_iter=max_iter, scheme=scheme, temp_c=temp_c, force_n=force_n)
     report = replace(report, line=tp.line.copy())  # failures name the lines of the input
     if report.failed.any():

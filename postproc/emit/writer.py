@@ -49,6 +49,7 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     from .. import dialects  # (not at the top: the dialects' writers import this module)
 
     per_second = dialects.of(tp).speed_to_mm_per_s
+    arcs = circular_moves(tp, poses)
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:
@@ -72,10 +73,48 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
             w.move_joints(tp.joints[i])
         elif kind in (Kind.JOINT, Kind.RAPID):
             w.move_joint(poses[i], tp.conf[i])
+        elif kind in (Kind.ARC_CW, Kind.ARC_CCW) and i in arcs:
+            for via, end in arcs[i]:  # a G2/G3 as circular moves through the points the controller's arc passes
+                w.move_circular(via, end, tp.conf[i])
         else:
-            # G2/G3 arcs become their end points (a chord); the source line is noted.
-            if kind in (Kind.ARC_CW, Kind.ARC_CCW):
-                w.raw(f"arc of line {tp.line[i]} written as a straight move to its end point")
             w.move_linear(poses[i], tp.conf[i])
         i += 1
     return w.end()
+
+
+ARC_RADIUS_TOL_MM = 2e-3  # start and end radius may differ this much (LinuxCNC accepts such arcs) for one circle
+
+
+def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.ndarray, np.ndarray]]]:
+    """Target row of each G2/G3 -> its (via, end) poses for circular moves (a full circle: two
+    halves), on the arc as the controller runs it, with the end target's orientation. An arc
+    no circle through three points can hold (a helix, a spiral) is refused with its line:
+    writing its chord would cut a different path."""
+    from ..arcs import arc_rows, geometry  # (not at the top: postproc.arcs imports the IR and frames only, but keep the writer light)
+
+    rows = arc_rows(tp)
+    if not len(rows):
+        return {}
+    geo = geometry(tp)  # in each end target's frame, like the poses written
+    if len(geo.rows) < len(rows):
+        first = int(np.setdiff1d(rows, geo.rows)[0])
+        raise EmitError(f"line {tp.line[first]}: an arc whose start or centre is not known here (the first move, or a program read "
+                        "with canned cycles / G92 / G10 / polar words) cannot be written as a circular move")
+    r0 = np.linalg.norm(geo.in_plane(geo.start) - geo.centre, axis=1)
+    r1 = np.linalg.norm(geo.in_plane(geo.end) - geo.centre, axis=1)
+    helix = np.abs(geo.normal(geo.end) - geo.normal(geo.start)) > 1e-6
+    spiral = np.abs(r1 - r0) > ARC_RADIUS_TOL_MM
+    if (helix | spiral).any():
+        bad = int(geo.rows[np.argmax(helix | spiral)])
+        raise EmitError(f"line {tp.line[bad]}: a {'helical' if helix[np.argmax(helix | spiral)] else 'spiral'} arc is no circle: "
+                        "the target language's circular move cannot write it (split it into plane arcs first)")
+    pts = geo.points(np.array([0.25, 0.5, 0.75]))
+    out = {}
+    for m, r in enumerate(geo.rows.tolist()):
+        def at(p):
+            pose = poses[r].copy()
+            pose[:3, 3] = p
+            return pose
+
+        out[r] = [(at(pts[m, 0]), at(pts[m, 1])), (at(pts[m, 2]), poses[r])] if geo.full[m] else [(at(pts[m, 1]), poses[r])]
+    return out
