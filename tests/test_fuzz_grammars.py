@@ -91,3 +91,15 @@ def test_krl_relative_move_to_a_declared_point_keeps_its_numbers():
             b"PTP {C 486.456979} C_PTP\r\nLIN {Z 2205.55002, S 6, T 27}\r\nLIN_REL XP1\r\nEND\r\n")
     tp = parse_program("fuzz.src", "krl", text)
     assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
+@pytest.mark.parametrize("text", [
+    b"G21 G90 G17\nG0 X0 Y0 Z0\nG92 X10\nG91\nG0 A5\nG1 X-20 F100\nM2\n",
+    b"G21 G90 G17\nG0 X0 Y0 Z0\nG91\no30 repeat [2]\nG92 X-7.5\no30 endrepeat\nG0 B7\nG2 X-20 Y0 I-10 J0 F100\nM2\n",
+])
+def test_gcode_increment_after_g92_keeps_its_number(text):
+    """Found by benchmarks/fuzz.py: after G92, an unchanged emit rewrote an incremental X
+    (-2168 -> -2922.199): the previous target was taken in the old offset. The increment is
+    the number in the text (LinuxCNC manual, "G91": relative to the current point)."""
+    tp = parse_program("fuzz.ngc", "gcode", text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text

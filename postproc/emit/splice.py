@@ -276,13 +276,16 @@ class _Splice:
         for r in np.nonzero(original.relative | missing.any(axis=1))[0].tolist():
             prev_written = np.nan_to_num(self.written[r - 1]) if r > 0 else np.zeros(3)
             prev_original = np.nan_to_num(original.position[r - 1]) if r > 0 else np.zeros(3)
+            # How far the previous target is written from where it was (0 where unknown).
+            prev_moved = np.nan_to_num(self.written[r - 1] - original.position[r - 1]) if r > 0 else np.zeros(3)
             for f in range(3):
                 if original.relative[r] and self.spans[r, f, 1] >= 0 and not np.isnan(self.modified.values[r, f]):
-                    self._increment(r, f, prev_written, prev_original)
+                    self._increment(r, f, prev_moved)
                 elif missing[r, f]:
                     self._insert(r, f, prev_written, insert_field, inserts)
                 elif original.relative[r] and np.isnan(original.values[r, f]):
-                    self.written[r, f] = prev_written[f]  # an axis an incremental move leaves alone
+                    # an axis an incremental move leaves alone: it stays where the previous one was written
+                    self.written[r, f] = original.position[r, f] + prev_moved[f]
         for (file, offset), pieces in inserts.items():
             self.edits[(file, offset)] = (offset, "".join(p for p, _ in pieces.values()), -1, -1)
 
@@ -302,13 +305,23 @@ class _Splice:
             end, before, _, _ = self.edits.get((file, offset), (offset, "", -1, -1))
             self.edits[(file, offset)] = (end, before + piece, -1, -1)
 
-    def _increment(self, r: int, f: int, prev_written, prev_original) -> None:
+    def _increment(self, r: int, f: int, prev_moved) -> None:
+        """An incremental word: the text's increment is the number written there; where the
+        previous target is written moved by d from where it was, the new increment is taken
+        from there. The previous target is seen from this target's frame through the text
+        itself (value - increment), so an offset change between them (G92, G54 -> G55) does
+        not enter the increment."""
         scale = self.original.scale[r, f]
-        inc = (self.modified.values[r, f] - prev_written[f]) / scale
-        old_inc = (self.original.values[r, f] - prev_original[f]) / scale
-        if inc != old_inc:
+        file, start, end = (int(v) for v in self.spans[r, f])
+        old_inc = float(self.original.sources[file].text[start:end])
+        prev_here = self.original.values[r, f] - old_inc * scale
+        moved = prev_moved[f]
+        inc = (self.modified.values[r, f] - (prev_here + moved)) / scale
+        if abs(inc - old_inc) <= 1e-12 * max(1.0, abs(old_inc)):
+            inc = old_inc  # unchanged (to rounding of the subtraction): the text stays as it is
+        else:
             inc = self.put(r, f, inc)
-        self.written[r, f] = prev_written[f] + inc * scale
+        self.written[r, f] = self.original.values[r, f] + (inc - old_inc) * scale + moved
 
     def _insert(self, r: int, f: int, prev_written, insert_field, inserts) -> None:
         original = self.original
