@@ -66,3 +66,17 @@ def test_without_main_the_module_text_order_is_kept(tmp_path):
             f"  PROC b()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
     applies, _ = _applies(tmp_path, text)
     assert applies == [False, False]
+
+
+@pytest.mark.parametrize("switch_block, where", [
+    ("    IF di1 = 1 THEN\n      ConfL\\Off;\n    ENDIF\n", "p.mod:4:7"),
+    ("    IF di1 = 1 ConfL\\Off;\n", "p.mod:3:16"),
+    ("    WHILE n < 3 DO\n      ConfL\\Off;\n      n := n + 1;\n    ENDWHILE\n", "p.mod:4:7"),
+])
+def test_a_switch_that_runs_only_under_a_condition_is_refused_with_its_column(tmp_path, switch_block, where):
+    """RAPID reference, ConfL: the switch holds from where it runs. Under an IF (or the
+    statement of a one-line IF) or in a loop it may or may not run, so the posture rule of
+    the MoveL after it is a run-time matter: refused, never taken as written."""
+    text = f"MODULE P\n  PROC main()\n{switch_block}    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n"
+    with pytest.raises(InputError, match=where + r": ConfL\\Off runs only under a condition"):
+        _applies(tmp_path, text)

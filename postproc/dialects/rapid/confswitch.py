@@ -10,8 +10,9 @@ with different states, before it sets the switch itself) cannot be given one pos
 rule: that is an error naming the motion and the calls. Routines not reached from
 ``main`` (or a program without ``main``) keep the text order of their module.
 
-Within a routine the statements are taken in text order (a switch inside an IF or a loop
-is taken as written before the motions after it).
+Within a routine the statements are taken in text order. A switch inside an IF, a loop or
+a TEST, or one written as the statement of a one-line ``IF``, makes the state after it a
+run-time matter: that is refused with its line (move the switch out of the block).
 """
 
 from __future__ import annotations
@@ -26,6 +27,9 @@ from ...errors import InputError
 _PROC = re.compile(r"^[ \t]*(?:LOCAL[ \t]+)?PROC[ \t]+(\w+)[ \t]*\(", re.IGNORECASE | re.MULTILINE)
 _ENDPROC = re.compile(r"^[ \t]*ENDPROC\b", re.IGNORECASE | re.MULTILINE)
 _SWITCH = re.compile(r"^[ \t]*(CONFL|CONFJ)[ \t]*\\(ON|OFF)[ \t]*;", re.IGNORECASE | re.MULTILINE)
+_ANY_SWITCH = re.compile(r"\b(?:CONFL|CONFJ)[ \t]*\\(?:ON|OFF)\b", re.IGNORECASE)
+_OPENS = re.compile(r"^[ \t]*(?:IF\b.*\bTHEN\b|WHILE\b|FOR\b|TEST\b)", re.IGNORECASE)
+_CLOSES = re.compile(r"^[ \t]*(?:ENDIF|ENDWHILE|ENDFOR|ENDTEST)\b", re.IGNORECASE)
 _STATEMENT = re.compile(r"^[ \t]*(\w+)[ \t]*(?:;|[ \t\\])", re.MULTILINE)
 
 
@@ -71,9 +75,27 @@ def routines(sources) -> dict[str, _Routine]:
     return found
 
 
+def refuse_conditional_switches(sources) -> None:
+    """InputError naming the first ConfL/ConfJ switch that runs only under a condition (inside
+    IF / WHILE / FOR / TEST, or as a one-line IF's statement): the posture rule after it is
+    decided at run time."""
+    for doc in sources:
+        depth = 0
+        for number, line in enumerate(re.sub(r"!.*", "", doc.text).split("\n"), start=1):
+            if _CLOSES.match(line):
+                depth = max(depth - 1, 0)
+            found = _ANY_SWITCH.search(line)
+            if found and (depth > 0 or not _SWITCH.match(line + "\n")):
+                raise InputError(f"{doc.path}:{number}:{found.start() + 1}: {found.group(0)} runs only under a condition (IF, loop or TEST): "
+                                 "the posture rule of the motions after it is decided at run time; set it outside the block")
+            if _OPENS.match(line):
+                depth += 1
+
+
 def switch_states(tp, text_order: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """(N,) True where ``ConfL`` / ``ConfJ`` is off at each target, by the call structure from
     ``main``; ``text_order`` (the module-text answer) where main does not reach a target."""
+    refuse_conditional_switches(tp.sources)
     table = routines(tp.sources)
     switched_off = any(kind == "switch" and value[1] for r in table.values() for _, kind, value in r.events)
     if "MAIN" not in table or not switched_off:
