@@ -103,3 +103,15 @@ def test_gcode_increment_after_g92_keeps_its_number(text):
     the number in the text (LinuxCNC manual, "G91": relative to the current point)."""
     tp = parse_program("fuzz.ngc", "gcode", text)
     assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
+@pytest.mark.parametrize("text", [
+    b'&ACCESS RVP\n&REL 1\nDEF fuzz( )\nDECL E6POS XP1 = {B 2375, Z 860.7986, C 1441.68, X 1058}\nCIRC {Z 2051.080, Y 0, B 87, X 00012, S 6, T 27}, {A 1125, Y 2762.0472, C 0.0, Z .5, X 1e308, B 2085.148005, S 6, T 27}\nLIN_REL {B 1311.250, X 419, Z -973.976250, Y -290} C_VEL\n$TOOL = TOOL_DATA[1]\nPTP {Z 802, B -2577, C -2371.5, X -761.990371, Y 1579.0, S 6, T 27} C_DIS\nEND\n',
+    b'DEF fuzz( )\nDECL E6POS XP1 = {B -1401.15, C 103, Y 1177.59817, A 2451.66, Z 1e308, X 0.0, S 6, T 27}\nDECL FRAME F1 = {Y -2658.23433, X -2251, Z 907, A .5, C 1478, B -766.749087, S 6, T 27}\nLOOP\nPTP_REL {B 1353.436060, X 2282, C -2013, A -0, Y -516.51437} C_VEL\n$OUT[3] = TRUE\n$TOOL = TOOL_DATA[1]\nEXIT\nENDLOOP\nXP1.X = XP1.X + -1624.1169\nREPEAT\nWAIT SEC 0.5\nXP1.X = XP1.X + 324.069615\nCIRC {A -1577, X 1275, C -1708, B 1264}, {Y 1128.151, X 1696, B -292.149624, C -2820.3, S 6, T 27} C_VEL\nUNTIL N > 3\n;FOLD moves\nLIN {C -2125, S 6, T 27}\nCIRC XP2, {Y -913, X 1695} C_ORI\nLIN {Y -2245, A -1770.89, B 2759.50584, Z 9E9, C -2773, S 6, T 27} C_PTP\nLIN_REL {Y 384, C 2010, X -695, Z -1155.970447, A 1554.9143} C_PTP\n;ENDFOLD\nEND\n',
+])
+def test_krl_relative_move_after_huge_coordinates_keeps_its_numbers(text):
+    """Found by benchmarks/fuzz.py: after a coordinate of 1e308 or 9E9 the absolute value
+    absorbs the increment (1e308 + 419 == 1e308), and an unchanged emit must still write
+    the text's increment back as it was, not the difference of two absolute values."""
+    tp = parse_program("fuzz.src", "krl", text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text

@@ -317,7 +317,8 @@ class _Splice:
         prev_here = self.original.values[r, f] - old_inc * scale
         moved = prev_moved[f]
         inc = (self.modified.values[r, f] - (prev_here + moved)) / scale
-        if abs(inc - old_inc) <= 1e-12 * max(1.0, abs(old_inc)):
+        unchanged = moved == 0.0 and self.modified.values[r, f] == self.original.values[r, f]
+        if unchanged or abs(inc - old_inc) <= 1e-12 * max(1.0, abs(old_inc)):
             inc = old_inc  # unchanged (to rounding of the subtraction): the text stays as it is
         else:
             inc = self.put(r, f, inc)
