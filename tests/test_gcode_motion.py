@@ -279,14 +279,3 @@ def test_a_u_v_w_axis_word_is_refused_with_its_column(tmp_path):
     prog.write_text("G21 G90\nG0 X0 Y0 Z0\nG1 W100 F100\n")
     with pytest.raises(ParseError, match=r"w\.ngc:3:4.*axis word W"):
         parse_program(prog)
-
-
-def test_inverse_time_feed_is_a_speed_of_length_times_f(tmp_path):
-    """LinuxCNC manual, "G93, G94, G95 Feed Rate Mode": in G93 each move takes 1/F minutes,
-    so a 100 mm move with F2 runs at 200 mm/min and a 50 mm move with F4 too (never F read
-    as mm/min); in G95 F is per spindle revolution: no speed in mm/min (noted)."""
-    prog = tmp_path / "g93.ngc"
-    prog.write_text("G21 G90 G17\nG0 X0 Y0 Z0\nG93\nG1 X100 F2\nG1 X100 Y50 F4\nG94\nG1 X0 F300\nG95\nG1 X10 F0.1\nM2\n")
-    tp = parse_program(prog)
-    np.testing.assert_allclose(tp.speed[1:4], [200.0, 200.0, 300.0])
-    assert np.isnan(tp.speed[4]) and any("G95" in n and "line 9" in n for n in tp.notes)

@@ -59,7 +59,6 @@ _STATE_OF_G = {
     # the program text does not determine (tool table), so targets under it are flagged.
     **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
     40.0: ("ccomp", 0.0),
-    **{g: ("feedmode", g) for g in (93.0, 94.0, 95.0)},  # inverse time, units per minute, units per revolution
 }
 
 
@@ -129,7 +128,7 @@ class GcodeParser:
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, ijk=nan, wcs=nan,
-                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan, retract=nan, setup=nan, ccomp=nan, feedmode=nan)
+                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan, retract=nan, setup=nan, ccomp=nan)
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
@@ -168,7 +167,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup", "ccomp", "feedmode", "more")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup", "ccomp", "more")}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist() if starts is None else starts:
@@ -192,7 +191,7 @@ class GcodeParser:
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
             "more": np.array(out["more"], dtype=float).reshape(n, len(MORE)),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode")},
+            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -246,7 +245,7 @@ class GcodeParser:
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
         more = np.full(len(MORE), np.nan)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode")}
+        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")}
         ok = True
         gcodes: list[float] = []
         assigns: list[tuple] = []
@@ -412,7 +411,6 @@ class GcodeParser:
         unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
         resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
         speed[np.isneginf(speed)] = np.nan
-        speed = self._feed_mode_speeds(t, rows, motion[rows], absolute[rows, :3], speed)
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
         g53 = t["g53"][rows]
@@ -447,27 +445,6 @@ class GcodeParser:
         )
         tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_motion[rows] & (tlo[rows] == 43.5))
-
-    def _feed_mode_speeds(self, t: dict, rows: np.ndarray, motion: np.ndarray, position: np.ndarray, speed: np.ndarray) -> np.ndarray:
-        """Speeds (mm/min) under G93 / G95. LinuxCNC manual, "G93, G94, G95 Feed Rate Mode":
-        in G93 the F word of each block is the inverse of the move's time in minutes (not
-        modal), so a straight move runs at its length x F; in G95 F is per spindle
-        revolution, which the program's motion does not fix. Arcs in G93 and moves in G95
-        get no speed (NaN, noted), never F read as mm/min."""
-        mode = _ffill(t["feedmode"], 94.0)[rows]
-        if (mode == 94.0).all():
-            return speed
-        f_word = t["values"][rows, _AX["F"]]
-        length = np.linalg.norm(np.diff(position, axis=0, prepend=position[:1]), axis=1)
-        straight = motion == 1.0
-        out = speed.copy()
-        out[mode == 93.0] = np.where(straight, length * f_word, np.nan)[mode == 93.0]
-        out[mode == 95.0] = np.nan
-        unknown = (mode != 94.0) & (motion != 0.0) & np.isnan(out)
-        if unknown.any():
-            first = int(self.lines.line(t["offset"][rows[np.argmax(unknown)]]))
-            self.notes.append(f"line {first}: feed in G93 (arcs) or G95 mode: {int(unknown.sum())} move(s) have no speed in mm/min")
-        return out
 
     def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
@@ -518,14 +495,13 @@ class GcodeParser:
         axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
-        speed = self._feed_mode_speeds(t, rows, moves.motion.astype(float), moves.position, _ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows])
         self.builder.notes.extend(self.notes)
         offsets = t["offset"][rows]
         insert_at = np.stack([np.where(own, 0, -1), np.where(own, t["code_end"][rows], -1)], axis=1)
         order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
-                               speed=speed, insert_at=insert_at)
+                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
         return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
 
     def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:
