@@ -275,7 +275,6 @@ class _Splice:
         inserts: dict[tuple[int, int], list[str]] = {}
         for r in np.nonzero(original.relative | missing.any(axis=1))[0].tolist():
             prev_written = np.nan_to_num(self.written[r - 1]) if r > 0 else np.zeros(3)
-            prev_original = np.nan_to_num(original.position[r - 1]) if r > 0 else np.zeros(3)
             # How far the previous target is written from where it was (0 where unknown).
             prev_moved = np.nan_to_num(self.written[r - 1] - original.position[r - 1]) if r > 0 else np.zeros(3)
             for f in range(3):

@@ -46,6 +46,9 @@ _MOTION_KIND_CODES = np.array([_MOTION_KIND[c] for c in range(4)], dtype=np.int8
 _NONMOTION = {4.0, 10.0, 28.0, 28.1, 30.0, 30.1, 52.0, 92.0, 92.1, 92.2, 92.3, 38.2, 38.3, 38.4, 38.5}
 _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 59.3: 9}
 # Modal G codes that set one state column: G code -> (column, value).
+# The modal-state columns of the block table: NaN where a block does not set them, then
+# forward-filled (one list, so a new column reaches the bulk and the grammar tables alike).
+_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")
 _STATE_OF_G = {
     **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
     80.0: ("canned", 0.0),
@@ -127,8 +130,9 @@ class GcodeParser:
             spans[row[keep], code[keep], 0] = starts[keep]
             spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
             nan = np.full(nb, np.nan)
-            block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, motion=motion, units=nan, dist=nan, plane=nan, ijk=nan, wcs=nan,
-                         nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool), canned=nan, tlo=nan, g53=np.zeros(nb, bool), h=nan, retract=nan, setup=nan, ccomp=nan)
+            block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool),
+                         g53=np.zeros(nb, bool), **{k: nan for k in _STATE_COLUMNS})
+            block["motion"] = motion
         else:
             block = None
         # ---- slow blocks, in order (parameters are evaluated in program order)
@@ -167,7 +171,7 @@ class GcodeParser:
     # ------------------------------------------------------------- slow path
     def _slow(self, skip: np.ndarray | None, starts=None) -> dict:
         g = grammar("gcode")
-        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "motion", "units", "dist", "plane", "ijk", "wcs", "nonmotion", "ok", "canned", "tlo", "g53", "h", "retract", "setup", "ccomp", "more")}
+        out: dict[str, list] = {k: [] for k in ("offset", "code_end", "values", "spans", "nonmotion", "ok", "g53", "more") + _STATE_COLUMNS}
         stack: list[tuple[str, int]] = []
         text = self.text
         for start in self.lines.starts[~skip].tolist() if starts is None else starts:
@@ -191,7 +195,7 @@ class GcodeParser:
             "values": np.array(out["values"]).reshape(n, len(AXES)),
             "spans": np.array(out["spans"], dtype=np.int64).reshape(n, len(AXES), 2),
             "more": np.array(out["more"], dtype=float).reshape(n, len(MORE)),
-            **{k: np.array(out[k], dtype=float) for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")},
+            **{k: np.array(out[k], dtype=float) for k in _STATE_COLUMNS},
             "nonmotion": np.array(out["nonmotion"], dtype=bool),
             "ok": np.array(out["ok"], dtype=bool),
             "g53": np.array(out["g53"], dtype=bool),
@@ -245,7 +249,7 @@ class GcodeParser:
         values = np.full(len(AXES), np.nan)
         spans = np.full((len(AXES), 2), -1, dtype=np.int64)
         more = np.full(len(MORE), np.nan)
-        state = {k: np.nan for k in ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")}
+        state = {k: np.nan for k in _STATE_COLUMNS}
         ok = True
         gcodes: list[float] = []
         assigns: list[tuple] = []
