@@ -108,13 +108,10 @@ def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.n
         bad = int(geo.rows[np.argmax(helix | spiral)])
         raise EmitError(f"line {tp.line[bad]}: a {'helical' if helix[np.argmax(helix | spiral)] else 'spiral'} arc is no circle: "
                         "the target language's circular move cannot write it (split it into plane arcs first)")
-    pts = geo.points(np.array([0.25, 0.5, 0.75]))
+    # The arcs' points at 1/4, 1/2, 3/4 of the sweep, as poses with the end target's orientation.
+    via = np.repeat(poses[geo.rows][:, None], 3, axis=1)
+    via[:, :, :3, 3] = geo.points(np.array([0.25, 0.5, 0.75]))
     out = {}
     for m, r in enumerate(geo.rows.tolist()):
-        def at(p):
-            pose = poses[r].copy()
-            pose[:3, 3] = p
-            return pose
-
-        out[r] = [(at(pts[m, 0]), at(pts[m, 1])), (at(pts[m, 2]), poses[r])] if geo.full[m] else [(at(pts[m, 1]), poses[r])]
+        out[r] = [(via[m, 0], via[m, 1]), (via[m, 2], poses[r])] if geo.full[m] else [(via[m, 1], poses[r])]
     return out
