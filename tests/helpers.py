@@ -13,6 +13,12 @@ from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 TOOL = np.array([0.0, 0.0, 200.0])
 FRAME = "geometric,base_frame,tool_offset"
 FRAME_AND_COMPLIANCE = FRAME + ",joint_compliance"
+# The five-axis G-code set-up of the compensation tests: work offset G54 and a 200 mm spindle H1.
+G54 = np.eye(4)
+G54[:3, :3] = np.diag([1.0, -1.0, -1.0])  # the part frame's z points down: tool axis (0, 0, 1) is straight down
+G54[:3, 3] = [900.0, -100.0, 350.0]
+H1 = np.eye(4)
+H1[:3, 3] = [0.0, 0.0, 200.0]
 
 
 def identifiable_truth(robot, effects_spec: str, seed: int, n: int = 300, noise: float = 0.02):

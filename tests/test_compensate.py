@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, kr160, truth_and_fit
 from typer.testing import CliRunner
 
 import postproc
@@ -104,11 +104,6 @@ def gcode_program(tmp_path):
     return path
 
 
-G54 = np.eye(4)
-G54[:3, :3] = np.diag([1.0, -1.0, -1.0])  # the part frame's z points down: tool axis (0, 0, 1) is straight down
-G54[:3, 3] = [900.0, -100.0, 350.0]
-H1 = np.eye(4)
-H1[:3, 3] = [0.0, 0.0, 200.0]
 
 
 @pytest.mark.parametrize("kind", ["krl", "krl_dat", "rapid", "gcode"])

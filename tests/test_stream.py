@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, TOOL
+from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL
 from typer.testing import CliRunner
 
 import postproc
@@ -54,11 +54,6 @@ def _gcode(path, n=700):
     return path
 
 
-G54 = np.eye(4)
-G54[:3, :3] = np.diag([1.0, -1.0, -1.0])  # the part frame's z points down: tool axis (0, 0, 1) is straight down
-G54[:3, 3] = [900.0, -100.0, 350.0]
-H1 = np.eye(4)
-H1[:3, 3] = [0.0, 0.0, 200.0]
 GCODE_SETUP = {"frames": {"G54": G54}, "tools": {"H1": H1}}
 
 
