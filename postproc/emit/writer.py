@@ -49,6 +49,8 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     from .. import dialects  # (not at the top: the dialects' writers import this module)
 
     per_second = dialects.of(tp).speed_to_mm_per_s
+    if dialects.of(tp).machine_program:
+        _refuse_inverse_time(tp)
     arcs = circular_moves(tp, poses)
     i = 0
     while i < len(tp):
@@ -80,6 +82,18 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
             w.move_linear(poses[i], tp.conf[i])
         i += 1
     return w.end()
+
+
+def _refuse_inverse_time(tp: Toolpath) -> None:
+    """G93 feed moves: F is 1/minutes of the move, not a speed; a robot program written from
+    it would run at the wrong feed, so the conversion is refused with the first such line."""
+    from ..fivex.program import inverse_time_rows  # G-code's G93/G94 modes, as the five-axis writer reads them
+
+    feed = inverse_time_rows(tp) & (tp.kind != Kind.RAPID)
+    if feed.any():
+        i = int(np.argmax(feed))
+        raise EmitError(f"line {tp.line[i]}: a feed move in G93 inverse-time mode (F = 1/minutes of the move) cannot be written "
+                        "as a robot speed; write the program in G94 (units per minute)")
 
 
 ARC_RADIUS_TOL_MM = 2e-3  # start and end radius may differ this much (LinuxCNC accepts such arcs) for one circle

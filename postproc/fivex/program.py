@@ -42,7 +42,7 @@ class FivePath:
     notes: tuple[str, ...] = ()
 
 
-def _feed_modes(tp: Toolpath) -> np.ndarray:
+def inverse_time_rows(tp: Toolpath) -> np.ndarray:
     """(N,) True where the target's block runs in G93 inverse-time mode (G-code only)."""
     text = tp.sources[0].text
     code = re.sub(r"\([^()\n]*\)|;[^\n]*", lambda m: " " * len(m.group(0)), text)  # comments out, offsets kept
@@ -100,7 +100,7 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     if foreign:
         i = int(np.nonzero(~np.isnan(tp.ext[:, ROTARY_FIELD[foreign[0]]]))[0][0])
         raise InputError(f"{path}:{int(tp.line[i])}: the program moves rotary axis {foreign[0]}; machine {machine.name} has {', '.join(names)}")
-    g93 = _feed_modes(tp)
+    g93 = inverse_time_rows(tp)
     notes = list(tp.notes)
     angles = None
     if tp.orientation_kind == "axis":
