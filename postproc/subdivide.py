@@ -25,10 +25,11 @@ from . import dialects
 from . import kinematics as kin
 from .compensate import Report, compensate
 from .emit.insert import NewPoint
-from .errors import OutputCheckError
+from .errors import EmitError, OutputCheckError
 from .frames import invert_transform, matrix_to_abc, matrix_to_quat_wxyz
 from .ir import F_EXT, Kind, Toolpath
 from .posture import interpolate_poses
+from .segments import arc_at
 
 DEFAULT_TOLERANCE_MM = 0.02
 MAX_ROUNDS = 4
@@ -52,12 +53,13 @@ def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOL
     added_rows: list[int] = []
     for round_ in range(MAX_ROUNDS + 1):
         new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, **options)
-        over = _segments_over(tp, report, tolerance_mm)
-        others = report.failed & ~np.isin(np.arange(len(tp)), over)
-        if not len(over) or others.any() or round_ == MAX_ROUNDS:
+        over, arcs_over = _segments_over(tp, report, tolerance_mm), _arcs_over(tp, report, tolerance_mm)
+        others = report.failed & ~np.isin(np.arange(len(tp)), np.r_[over, arcs_over])
+        if not (len(over) or len(arcs_over)) or others.any() or round_ == MAX_ROUNDS:
             break
         placed = tp.with_frames(options.get("frames"), options.get("tools")) if options.get("frames") or options.get("tools") else tp
-        points = new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm))
+        points = (new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm))
+                  + arc_points(placed, model.robot, arcs_over, pieces(report.path_mm[arcs_over], tolerance_mm)))
         sources, _ = lang.insert_points(tp, points)
         longer = lang.parse_sources(sources)
         new_index = check_inserted(tp, longer, placed, points, options)
@@ -75,16 +77,22 @@ def _options_for_longer(options: dict, tp: Toolpath, points: list[NewPoint], new
     if per_target is None:
         return options
     per_target = np.asarray(per_target)
-    out = np.zeros((len(tp) + len(points),) + per_target.shape[1:])
+    inserted = [points[i] for i in _inserted_order(points)]
+    out = np.zeros((len(tp) + len(inserted),) + per_target.shape[1:])
     out[new_index] = per_target
-    rows = sorted(p.row for p in points)
-    out[_inserted_rows(tp, points, new_index)] = per_target[rows]
+    out[_inserted_rows(tp, points, new_index)] = per_target[[p.row for p in inserted]]
     return {**options, "force_per_target": out}
 
 
 def _segments_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndarray:
     path = np.nan_to_num(report.path_mm, nan=0.0)
     return np.nonzero((path > tolerance_mm) & (tp.kind == Kind.LINEAR))[0]
+
+
+def _arcs_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndarray:
+    """End rows of the circular motions (CIRC / SCIRC / MoveC) whose predicted arc strays too far."""
+    path = np.nan_to_num(report.path_mm, nan=0.0)
+    return np.nonzero((path > tolerance_mm) & (tp.kind == Kind.CIRC_END))[0]
 
 
 def pieces(deviation_mm: np.ndarray, tolerance_mm: float) -> np.ndarray:
@@ -103,22 +111,56 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
     repeated = _runs_more_than_once(tp)
     for r, k in zip(rows.tolist(), count.tolist()):
         if repeated[r]:
-            from .errors import EmitError
-
             raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the block runs more than once (a loop or "
                             "subprogram body): a point inserted before it would run every time")
         t = np.arange(1, k) / k
         poses = interpolate_poses(base[r - 1 : r], base[r : r + 1], t)[0]
-        local = invert_transform(tp.frames[tp.frame[r]]) @ poses
-        values = np.repeat(tp.values[r][None], k - 1, axis=0)
-        values[:, 0:3] = np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
-        _require_inherited(tp, r, local)
-        values[:, 3:7] = _orientation_values(tp, r, local[:, :3, :3], values[:, 3:7])
-        ext_start, ext_end = tp.values[r - 1, F_EXT], tp.values[r, F_EXT]
-        both = ~np.isnan(ext_start) & ~np.isnan(ext_end)
-        values[:, F_EXT] = np.where(both, ext_start + t[:, None] * (ext_end - ext_start), values[:, F_EXT])
+        values = _values_at(tp, r, poses, t, r - 1)
         conf = _conf(lang, robot, tp, r, poses)
         points += [NewPoint(r, values[j], conf[j]) for j in range(k - 1)]
+    return points
+
+
+def _values_at(tp: Toolpath, r: int, poses: np.ndarray, t: np.ndarray, start: int) -> np.ndarray:
+    """Numbers (K, FIELDS) of copies of target ``r`` at ``poses`` (base frame), in its frame and
+    notation; external axes interpolated at fractions ``t`` from target ``start``. An
+    auxiliary point's orientation is left as written (the controller ignores it)."""
+    local = invert_transform(tp.frames[tp.frame[r]]) @ poses
+    values = np.repeat(tp.values[r][None], len(poses), axis=0)
+    values[:, 0:3] = np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
+    via = tp.kind[r] == Kind.CIRC_VIA
+    _require_inherited(tp, r, local, orientation=not via)
+    if not via or not np.isnan(tp.values[r, 3:6]).all():
+        values[:, 3:7] = _orientation_values(tp, r, local[:, :3, :3], values[:, 3:7])
+    ext_start, ext_end = tp.values[start, F_EXT], tp.values[r, F_EXT]
+    both = ~np.isnan(ext_start) & ~np.isnan(ext_end)
+    values[:, F_EXT] = np.where(both, ext_start + t[:, None] * (ext_end - ext_start), values[:, F_EXT])
+    return values
+
+
+def arc_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list[NewPoint]:
+    """A circular motion into each end row of ``rows`` split into ``count[i]`` arcs of the
+    same circle: copies of its statement (auxiliary point in the middle of each piece, end
+    point at its end) written before it, and its own auxiliary point moved to the middle of
+    the last piece (a named one declared anew). Orientation runs from start to end as the
+    controller interpolates it."""
+    lang = dialects.of(tp)
+    base = tp.base_poses()
+    repeated = _runs_more_than_once(tp)
+    points = []
+    for r, k in zip(rows.tolist(), count.tolist()):
+        via, start = r - 1, r - 2
+        if repeated[r]:
+            raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the block runs more than once (a loop or "
+                            "subprogram body): an arc inserted before it would run every time")
+        t_end, t_via = np.arange(1, k) / k, (np.arange(k) + 0.5) / k
+        ends = arc_at(base[start][None], base[via][None], base[r][None], t_end)[0]
+        vias = arc_at(base[start][None], base[via][None], base[r][None], t_via)[0]
+        end_values, via_values = _values_at(tp, r, ends, t_end, start), _values_at(tp, via, vias, t_via, start)
+        end_conf, via_conf = _conf(lang, robot, tp, r, ends), _conf(lang, robot, tp, via, vias)
+        for j in range(k - 1):
+            points += [NewPoint(via, via_values[j], via_conf[j], at=via), NewPoint(r, end_values[j], end_conf[j], at=via)]
+        points.append(NewPoint(via, via_values[k - 1], via_conf[k - 1], replaces=True))
     return points
 
 
@@ -131,14 +173,12 @@ def _runs_more_than_once(tp: Toolpath) -> np.ndarray:
     return counts[inverse.ravel()] > 1
 
 
-def _require_inherited(tp: Toolpath, r: int, local: np.ndarray) -> None:
+def _require_inherited(tp: Toolpath, r: int, local: np.ndarray, orientation: bool = True) -> None:
     """A coordinate or orientation the target leaves out (it keeps the previous value) must
     not change along the segment, or a copy that leaves it out too would be elsewhere."""
-    from .errors import EmitError
-
     missing = np.isnan(tp.values[r, 0:3])
     moves = np.abs(local[:, :3, 3][:, missing] - tp.position[r, missing]).max(initial=0.0) > 1e-6
-    turns = np.isnan(tp.values[r, 3:6]).all() and np.abs(local[:, :3, :3] - tp.target_poses()[r, :3, :3]).max() > 1e-9
+    turns = orientation and np.isnan(tp.values[r, 3:6]).all() and np.abs(local[:, :3, :3] - tp.target_poses()[r, :3, :3]).max() > 1e-9
     if moves or turns:
         raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the target leaves out a coordinate that changes "
                         "along the segment into it: a point before it cannot be written as a copy")
@@ -183,16 +223,22 @@ def _conf(lang, robot, tp: Toolpath, r: int, poses: np.ndarray) -> np.ndarray:
     return conf
 
 
+def _inserted_order(points: list[NewPoint]) -> list[int]:
+    """Indices of the points that become new rows, in the longer program's order."""
+    return sorted((i for i, p in enumerate(points) if not p.replaces), key=lambda i: points[i].before)
+
+
 def _new_index(tp: Toolpath, points: list[NewPoint]) -> np.ndarray:
     """Index in the longer program of every old row (new points go just before their row)."""
-    before = np.bincount([p.row for p in points], minlength=len(tp))
+    before = np.bincount([p.before for p in points if not p.replaces], minlength=len(tp))
     return np.arange(len(tp)) + np.cumsum(before)
 
 
 def _inserted_rows(tp: Toolpath, points: list[NewPoint], new_index: np.ndarray) -> list[int]:
     out = []
-    for r in sorted({p.row for p in points}):
-        k = sum(p.row == r for p in points)
+    inserted = [points[i] for i in _inserted_order(points)]
+    for r in sorted({p.before for p in inserted}):
+        k = sum(p.before == r for p in inserted)
         out += list(range(int(new_index[r]) - k, int(new_index[r])))
     return out
 
@@ -202,22 +248,25 @@ def check_inserted(tp: Toolpath, longer: Toolpath, placed: Toolpath, points: lis
     was meant (position 1e-3 mm, orientation 1e-6), of its segment's kind; else an OutputCheckError.
     Returns the new index of every old row."""
     where = tp.sources[0].path
-    if len(longer) != len(tp) + len(points):
-        raise OutputCheckError(f"{where}: with {len(points)} new targets the program reads back with {len(longer)} targets, not {len(tp) + len(points)}")
+    order = _inserted_order(points)
+    if len(longer) != len(tp) + len(order):
+        raise OutputCheckError(f"{where}: with {len(order)} new targets the program reads back with {len(longer)} targets, not {len(tp) + len(order)}")
     new_index = _new_index(tp, points)
     frames, tools = options.get("frames"), options.get("tools")
     longer_placed = longer.with_frames(frames, tools) if frames or tools else longer
-    got, want = longer_placed.base_poses(), placed.base_poses()
+    got, want = longer_placed.base_poses(), placed.base_poses().copy()
+    for p in points:
+        if p.replaces:  # a split arc's own auxiliary point, moved
+            want[p.row] = _pose_from_values(placed, p)
     inserted = np.array(_inserted_rows(tp, points, new_index), dtype=int)
-    order = np.argsort([p.row for p in points], kind="stable")
     intended = np.stack([_pose_from_values(placed, points[i]) for i in order])
-    checks = [(new_index, want, "a target"), (inserted, intended, "a new target")]
-    for rows, poses, what in checks:
+    checks = [(new_index, want, "a target", tp.kind), (inserted, intended, "a new target", tp.kind[[points[i].row for i in order]])]
+    for rows, poses, what, kinds in checks:
         same_unknown = np.isnan(got[rows]) & np.isnan(poses)  # an old target unknown before stays so
         diff = np.where(same_unknown, 0.0, np.abs(got[rows] - poses))
         bad = ~(diff[:, :3, 3].max(axis=1) <= 1e-3)  # NaN (unknown where it was known): bad
-        bad |= ~(diff[:, :3, :3].max(axis=(1, 2)) <= 1e-5)
-        bad |= longer.kind[rows] != (tp.kind if what == "a target" else tp.kind[[points[i].row for i in order]])
+        bad |= ~(diff[:, :3, :3].max(axis=(1, 2)) <= 1e-5) & (kinds != Kind.CIRC_VIA)  # an auxiliary point's orientation is not used
+        bad |= longer.kind[rows] != kinds
         if bad.any():
             i = int(rows[np.nonzero(bad)[0][0]])
             raise OutputCheckError(f"{longer.sources[int(longer.file[i])].path}, line {longer.line[i]}: {what} reads back wrong after subdividing; nothing was written")
