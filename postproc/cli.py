@@ -707,7 +707,7 @@ def compensate_cmd(
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
     _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
     if added:
-        log.print(f"{len(added)} new target(s) subdivide straight segments (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
+        log.print(f"{len(added)} new target(s) subdivide straight segments and arcs (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(

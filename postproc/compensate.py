@@ -83,7 +83,7 @@ class Report:
                 reasons.append("would change IK branch")
             if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
                 reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
-                               f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments)")
+                               f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments and splits CIRC / MoveC arcs)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
