@@ -27,12 +27,13 @@ from .compensate import Report, compensate
 from .emit.insert import NewPoint
 from .errors import EmitError, OutputCheckError
 from .frames import invert_transform, matrix_to_abc, matrix_to_quat_wxyz
-from .ir import F_EXT, Kind, Toolpath
+from .ir import F_ARC, F_EXT, Kind, Toolpath
 from .posture import interpolate_poses
 from .segments import arc_at
 
 DEFAULT_TOLERANCE_MM = 0.02
 MAX_ROUNDS = 4
+ARC_KINDS = (Kind.CIRC_END, Kind.ARC_CW, Kind.ARC_CCW)
 MAX_PIECES = 64  # per segment and round: more means the model, not the segment, is the problem
 
 
@@ -58,8 +59,11 @@ def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOL
         if not (len(over) or len(arcs_over)) or others.any() or round_ == MAX_ROUNDS:
             break
         placed = tp.with_frames(options.get("frames"), options.get("tools")) if options.get("frames") or options.get("tools") else tp
+        circ = arcs_over[tp.kind[arcs_over] == Kind.CIRC_END]
+        g2g3 = arcs_over[tp.kind[arcs_over] != Kind.CIRC_END]
         points = (new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm))
-                  + arc_points(placed, model.robot, arcs_over, pieces(report.path_mm[arcs_over], tolerance_mm)))
+                  + arc_points(placed, model.robot, circ, pieces(report.path_mm[circ], tolerance_mm))
+                  + gcode_arc_points(placed, g2g3, pieces(report.path_mm[g2g3], tolerance_mm)))
         sources, _ = lang.insert_points(tp, points)
         longer = lang.parse_sources(sources)
         new_index = check_inserted(tp, longer, placed, points, options)
@@ -92,7 +96,7 @@ def _segments_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndar
 def _arcs_over(tp: Toolpath, report: Report, tolerance_mm: float) -> np.ndarray:
     """End rows of the circular motions (CIRC / SCIRC / MoveC) whose predicted arc strays too far."""
     path = np.nan_to_num(report.path_mm, nan=0.0)
-    return np.nonzero((path > tolerance_mm) & (tp.kind == Kind.CIRC_END))[0]
+    return np.nonzero((path > tolerance_mm) & np.isin(tp.kind, ARC_KINDS))[0]
 
 
 def pieces(deviation_mm: np.ndarray, tolerance_mm: float) -> np.ndarray:
@@ -121,15 +125,49 @@ def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list
     return points
 
 
-def _values_at(tp: Toolpath, r: int, poses: np.ndarray, t: np.ndarray, start: int) -> np.ndarray:
+def gcode_arc_points(tp: Toolpath, rows: np.ndarray, count: np.ndarray) -> list[NewPoint]:
+    """A G2 / G3 into each row of ``rows`` split into ``count[i]`` arcs of the same circle (or
+    helix): copies of its block before it, each ending at the next piece's start with the
+    centre words (I J K or R, in the block's own form) of its piece, and the block itself
+    given the last piece's centre words (and end-point words where a full circle had none).
+    A planar arc cannot follow an error across its plane; each piece's ends are compensated,
+    so what is left shrinks with the square of the piece."""
+    from . import arcs
+
+    geometry = arcs.geometry(tp)
+    base = tp.base_poses()
+    repeated = _runs_more_than_once(tp)
+    points = []
+    for r, k in zip(rows.tolist(), count.tolist()):
+        if repeated[r]:
+            raise EmitError(f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}: the block runs more than once (a loop or "
+                            "subprogram body): an arc inserted before it would run every time")
+        one = geometry.take(np.nonzero(geometry.rows == r)[0][:1])
+        t = np.arange(k + 1) / k
+        local = one.points(t)[0]
+        piece = arcs.Arcs(np.full(k, r), np.repeat(one.axes, k, axis=0), local[:-1], local[1:], np.repeat(one.centre, k, axis=0),
+                          np.repeat(one.ccw, k), np.zeros(k, dtype=bool))
+        words = arcs.centre_words(tp, piece)
+        frame = tp.frames[tp.frame[r]]
+        poses = interpolate_poses(base[r - 1][None], base[r][None], t[1:])[0]
+        poses[:, :3, 3] = local[1:] @ frame[:3, :3].T + frame[:3, 3]
+        values = _values_at(tp, r, poses, t[1:], r - 1, every_axis=True)
+        values[:, F_ARC] = np.where(np.isnan(words), tp.values[r, F_ARC], words)
+        points += [NewPoint(r, values[j], np.full(4, np.nan)) for j in range(k - 1)]
+        points.append(NewPoint(r, values[k - 1], np.full(4, np.nan), replaces=True))
+    return points
+
+
+def _values_at(tp: Toolpath, r: int, poses: np.ndarray, t: np.ndarray, start: int, every_axis: bool = False) -> np.ndarray:
     """Numbers (K, FIELDS) of copies of target ``r`` at ``poses`` (base frame), in its frame and
     notation; external axes interpolated at fractions ``t`` from target ``start``. An
     auxiliary point's orientation is left as written (the controller ignores it)."""
     local = invert_transform(tp.frames[tp.frame[r]]) @ poses
     values = np.repeat(tp.values[r][None], len(poses), axis=0)
-    values[:, 0:3] = np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
+    values[:, 0:3] = local[:, :3, 3] if every_axis else np.where(np.isnan(values[:, 0:3]), np.nan, local[:, :3, 3])
     via = tp.kind[r] == Kind.CIRC_VIA
-    _require_inherited(tp, r, local, orientation=not via)
+    if not every_axis:  # (a G2 / G3 piece gets every axis word it needs written)
+        _require_inherited(tp, r, local, orientation=not via)
     if not via or not np.isnan(tp.values[r, 3:6]).all():
         values[:, 3:7] = _orientation_values(tp, r, local[:, :3, :3], values[:, 3:7])
     ext_start, ext_end = tp.values[start, F_EXT], tp.values[r, F_EXT]
@@ -270,7 +308,28 @@ def check_inserted(tp: Toolpath, longer: Toolpath, placed: Toolpath, points: lis
         if bad.any():
             i = int(rows[np.nonzero(bad)[0][0]])
             raise OutputCheckError(f"{longer.sources[int(longer.file[i])].path}, line {longer.line[i]}: {what} reads back wrong after subdividing; nothing was written")
+    _check_split_arcs(placed, longer_placed, points, new_index, inserted, order)
     return new_index
+
+
+def _check_split_arcs(placed: Toolpath, longer_placed: Toolpath, points: list[NewPoint], new_index, inserted, order) -> None:
+    """Every piece of a split G2 / G3, as its words read back, lies on the arc it came from
+    (its centre words are not targets, so the pose check above does not see them)."""
+    from . import arcs
+
+    split = sorted({p.row for p in points if p.replaces and placed.kind[p.row] in (Kind.ARC_CW, Kind.ARC_CCW)})
+    if not split:
+        return
+    before, after = arcs.geometry(placed), arcs.geometry(longer_placed)
+    for r in split:
+        rows = [int(inserted[i]) for i, k in enumerate(order) if points[k].row == r] + [int(new_index[r])]
+        one = before.take(np.nonzero(before.rows == r)[0][:1])
+        pieces = after.take(np.searchsorted(after.rows, rows))
+        off = one.distance(pieces.points(np.linspace(0.0, 1.0, 9)).reshape(1, -1, 3))
+        if not (off.max() <= 2e-3):
+            i = rows[int(np.argmax(off.reshape(len(rows), -1).max(axis=1)))]
+            raise OutputCheckError(f"{longer_placed.sources[int(longer_placed.file[i])].path}, line {longer_placed.line[i]}: a piece of the split arc "
+                                   f"reads back {off.max():.4f} mm off the arc; nothing was written")
 
 
 def _pose_from_values(placed: Toolpath, p: NewPoint) -> np.ndarray:

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from test_arcs_e2e import CELLS, _configurations, _distances, _krl, _rapid, _run_on_true_robot, _truth_and_model, _work_frame
+from test_arcs_e2e import CELLS, _configurations, _distances, _gcode, _krl, _rapid, _run_on_true_robot, _truth_and_model, _work_frame
 from postproc.cli import app
 from postproc.compensate import compensate
 from postproc.ir import Kind
@@ -38,7 +38,11 @@ def truth_and_model():
 
 
 def _program(tmp_path, dialect, named=False):
+    """The e2e path in one dialect, the start posture, and compensate's options for it."""
     q_start = _configurations(CELL)[ELBOW_DOWN]
+    if dialect == "gcode":
+        path, extra = _gcode(tmp_path, _work_frame(CELL), CELL)
+        return path, q_start, {**extra, "start_joints": q_start}
     path, _ = (_krl if dialect == "krl" else _rapid)(tmp_path, _work_frame(CELL), CELL, q_start)
     if named:  # the first MoveC's auxiliary and end points as declared robtargets
         text = path.read_text()
@@ -47,11 +51,14 @@ def _program(tmp_path, dialect, named=False):
         text = text.replace(line, "    MoveC pAux, pEnd, v100, z1, tSpindle;")
         text = text.replace("  PROC main()", f"  CONST robtarget pAux := {aux};\n  CONST robtarget pEnd := {end};\n  PROC main()")
         path.write_text(text)
-    return path, q_start
+    return path, q_start, {}
+
+
+ARCS = (Kind.CIRC_END, Kind.ARC_CW, Kind.ARC_CCW)
 
 
 def _arcs(tp):
-    return int((tp.kind == Kind.CIRC_END).sum())
+    return int(np.isin(tp.kind, ARCS).sum())
 
 
 def _written(tp_long, new, folder):
@@ -61,15 +68,15 @@ def _written(tp_long, new, folder):
     return parse_program(folder / tp_long.sources[0].path.split("/")[-1])
 
 
-@pytest.mark.parametrize("dialect, named", [("krl", False), ("rapid", False), ("rapid", True)])
+@pytest.mark.parametrize("dialect, named", [("krl", False), ("rapid", False), ("rapid", True), ("gcode", False)])
 def test_arcs_over_the_tolerance_are_split_and_followed_on_the_true_robot(truth_and_model, tmp_path, dialect, named):
     truth, model = truth_and_model
-    path, q_start = _program(tmp_path, dialect, named)
+    path, q_start, options = _program(tmp_path, dialect, named)
     tp = parse_program(path)
-    _, plain = compensate(tp, model, max_deviation_mm=TOLERANCE_MM)
-    arc_over = (tp.kind == Kind.CIRC_END) & plain.failed
+    _, plain = compensate(tp, model, max_deviation_mm=TOLERANCE_MM, **options)
+    arc_over = np.isin(tp.kind, ARCS) & plain.failed
     assert arc_over.any(), plain.path_mm  # an arc strays over the tolerance: refused as it stands
-    sub = compensate_subdivided(tp, model, TOLERANCE_MM)
+    sub = compensate_subdivided(tp, model, TOLERANCE_MM, **options)
     assert not sub.report.failed.any(), sub.report.failures()
     assert _arcs(sub.program) > _arcs(tp)  # the arc became several
     assert np.nanmax(sub.report.path_mm) <= TOLERANCE_MM
@@ -77,17 +84,31 @@ def test_arcs_over_the_tolerance_are_split_and_followed_on_the_true_robot(truth_
     assert _arcs(back) == _arcs(sub.program)
     # On the true robot: every motion, the split arcs included, within the tolerance and the
     # model's own error (about 0.004 mm here); as compensated without splitting, the arc was not.
-    before, _ = _run_on_true_robot(CELL.robot, truth, _written(tp, compensate(tp, model)[0], tmp_path / "plain"), q_start)
-    after, _ = _run_on_true_robot(CELL.robot, truth, back, q_start)
-    worst_before = _distances(tp, before).max(axis=1)
-    worst_after = _distances(sub.program, after).max(axis=1)
+    frames, tools = options.get("frames"), options.get("tools")
+    placed = (lambda t: t.with_frames(frames, tools)) if frames else (lambda t: t)
+    plain_back = _written(tp, compensate(tp, model, **options)[0], tmp_path / "plain")
+    before, _ = _run_on_true_robot(CELL.robot, truth, placed(plain_back), q_start)
+    after, _ = _run_on_true_robot(CELL.robot, truth, placed(back), q_start)
+    worst_before = _distances(placed(tp), before).max(axis=1)
+    worst_after = _distances(placed(sub.program), after).max(axis=1)
     assert worst_before.max() > 0.02
     assert worst_after.max() <= TOLERANCE_MM + 0.004, worst_after
 
 
+def test_gcode_pieces_keep_the_block_form_and_a_full_circle_gets_its_end_point(truth_and_model, tmp_path):
+    _, model = truth_and_model
+    path, _, options = _program(tmp_path, "gcode")
+    sub = compensate_subdivided(parse_program(path), model, TOLERANCE_MM, **options)
+    blocks = sub.program.sources[0].text.splitlines()
+    circle = [b for b in blocks if b.startswith("G2 I")]
+    assert len(circle) >= 3  # the full circle G2 I J became pieces, each with its end point
+    assert all(re.fullmatch(r"G2 I-?[\d.]+ J-?[\d.]+ X-?[\d.]+ Y-?[\d.]+", b) for b in circle), circle  # Z stays modal
+    assert circle[-1].endswith("X85.0000 Y-125.0000")  # the last piece closes the circle where it started
+
+
 def test_krl_split_arcs_declare_their_end_points_in_the_dat(truth_and_model, tmp_path):
     _, model = truth_and_model
-    path, _ = _program(tmp_path, "krl")
+    path, _, _ = _program(tmp_path, "krl")
     save_model(tmp_path / "m.json", model)
     out = tmp_path / "out" / "part.src"
     out.parent.mkdir()
@@ -103,7 +124,7 @@ def test_krl_split_arcs_declare_their_end_points_in_the_dat(truth_and_model, tmp
 
 def test_rapid_named_auxiliary_point_is_declared_anew(truth_and_model, tmp_path):
     _, model = truth_and_model
-    path, _ = _program(tmp_path, "rapid", named=True)
+    path, _, _ = _program(tmp_path, "rapid", named=True)
     sub = compensate_subdivided(parse_program(path), model, TOLERANCE_MM)
     text = sub.program.sources[0].text
     # the copies name new robtargets; the original statement keeps its end and names a moved auxiliary point
@@ -114,7 +135,7 @@ def test_rapid_named_auxiliary_point_is_declared_anew(truth_and_model, tmp_path)
 
 def test_without_subdivide_an_arc_over_the_tolerance_is_refused(truth_and_model, tmp_path):
     _, model = truth_and_model
-    path, _ = _program(tmp_path, "krl")
+    path, _, _ = _program(tmp_path, "krl")
     save_model(tmp_path / "m.json", model)
     out = tmp_path / "o.src"
     res = runner.invoke(app, ["compensate", str(path), "--model", str(tmp_path / "m.json"), "-o", str(out), "--max-deviation", str(TOLERANCE_MM)])

@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import EmitError
-from ..ir import F_EXT, F_ORI, F_POS, Kind, SourceDoc, Toolpath
+from ..ir import F_ARC, F_EXT, F_ORI, F_POS, FIELDS, Kind, SourceDoc, Toolpath
 from .splice import TOLERANCE, format_like
 
 _WRITTEN = np.r_[np.arange(F_POS.start, F_POS.stop), np.arange(F_ORI.start, F_ORI.stop), np.arange(F_EXT.start, F_EXT.stop)]
@@ -56,8 +56,8 @@ def insert_points(dialect, tp: Toolpath, points: list[NewPoint]) -> tuple[list[S
     i = 0
     while i < len(points):
         p = points[i]
-        if p.replaces or tp.kind[p.row] == Kind.CIRC_VIA:
-            group = [p] if p.replaces else _arc_pair(tp, points, i)
+        if p.replaces or tp.kind[p.row] in (Kind.CIRC_VIA, Kind.ARC_CW, Kind.ARC_CCW):
+            group = _arc_pair(tp, points, i) if tp.kind[p.row] == Kind.CIRC_VIA and not p.replaces else [p]
             motion, decls, new_names = _statement_with(dialect, tp, group, taken)
             start, end = _line_start(tp, p.row), _statement_end(dialect, tp.sources[int(tp.file[p.row])].text, _line_start(tp, p.row))
             if p.replaces:
@@ -124,16 +124,50 @@ def _statement_with(dialect, tp: Toolpath, group: list[NewPoint], taken: set[str
         names.append(new)
     # Inline literals from the back, so the offsets of those before stay valid.
     for p, fields in sorted(inline, key=lambda item: -int(tp.spans[item[0].row, item[1], 1].min())):
+        if tp.kind[p.row] in (Kind.ARC_CW, Kind.ARC_CCW):  # a G-code block: its words, and those it lacks added
+            return _block_with(dialect, tp, p, fields, text, start, start + len(region)), decls, names
         lit_start, lit_end = _literal_around(region, int(tp.spans[p.row, fields, 1].min()) - start)
         literal = _with_numbers(tp, p, fields, text, start + lit_start, start + lit_end)
         region = region[:lit_start] + _set_conf(dialect, literal, p, tp, p.row, 0) + region[lit_end:]
     return region, decls, names
 
 
+def _block_with(dialect, tp: Toolpath, p: NewPoint, fields: list[int], text: str, start: int, end: int) -> str:
+    """A G2 / G3 block text[start:end] with the point's axis and arc words; a word the block
+    leaves out but the point needs (an end point of a full circle, a J read as 0) is added
+    where the block's words end (``Toolpath.insert_at``)."""
+    lacking = [f for f in (*range(F_POS.start, F_POS.stop), *range(F_ARC.start, F_ARC.stop))
+               if f not in fields and not np.isnan(p.values[f]) and (f < F_ARC.start or p.values[f] != 0.0)]
+    # The axis normal to the plane, where the arc does not move it (Z of a planar G17 arc),
+    # stays modal, as in the block.
+    from ..arcs import PLANE_AXES
+
+    r = p.row
+    normal = PLANE_AXES[int(tp.arc[r, 0])][2] if tp.arc is not None and int(tp.arc[r, 0]) in PLANE_AXES else -1
+    lacking = [f for f in lacking if not (f == normal and r > 0 and abs(p.values[f] - tp.position[r, f]) <= 1e-9
+                                          and abs(tp.position[r - 1, f] - tp.position[r, f]) <= 1e-9)]
+    file, at = (int(v) for v in tp.insert_at[p.row]) if tp.insert_at is not None else (-1, -1)
+    if lacking and not (file == int(tp.file[p.row]) and start <= at <= end):
+        raise EmitError(f"{_where(tp, p.row)}: the block has no place to add the words {' '.join(FIELDS[f].upper() for f in lacking)} a piece of the arc needs")
+    offset = np.zeros(len(FIELDS)) if tp.offset is None else np.nan_to_num(tp.offset[p.row])
+    scale = np.where(tp.scale[p.row] != 0, tp.scale[p.row], 1.0)
+    added = "".join(dialect.insert_field(file, FIELDS[f], format_like("0.0000", float((p.values[f] - offset[f]) / scale[f]), float(TOLERANCE[f] / abs(scale[f]))))
+                    for f in lacking)
+    if not lacking:
+        return _with_numbers(tp, p, fields, text, start, end)
+    head = [f for f in fields if tp.spans[p.row, f, 1] < at]
+    tail = [f for f in fields if tp.spans[p.row, f, 1] >= at]
+    return _with_numbers(tp, p, head, text, start, at) + added + _with_numbers(tp, p, tail, text, at, end)
+
+
 def _fields(tp: Toolpath, r: int) -> list[int]:
-    """The written fields of target ``r``; an EmitError where its numbers cannot be copied."""
+    """The written fields of target ``r`` (a G2 / G3's arc words too); an EmitError where its
+    numbers cannot be copied."""
     spans = tp.spans[r]
-    fields = [f for f in _WRITTEN if spans[f, 0] >= 0]
+    written = np.r_[_WRITTEN, np.arange(F_ARC.start, F_ARC.stop)] if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW) else _WRITTEN
+    fields = [f for f in written if spans[f, 0] >= 0]
+    if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW) and spans[F_POS, 0].max() < 0:
+        return fields  # a full circle: its end-point words are added
     if not fields or spans[F_POS, 0].max() < 0:
         raise EmitError(f"{_where(tp, r)}: the target writes no coordinate: a point before it cannot be written as a copy")
     if tp.offset_span is not None and (tp.offset_span[r, :, 0] >= 0).any():
