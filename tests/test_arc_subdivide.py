@@ -141,3 +141,25 @@ def test_without_subdivide_an_arc_over_the_tolerance_is_refused(truth_and_model,
     res = runner.invoke(app, ["compensate", str(path), "--model", str(tmp_path / "m.json"), "-o", str(out), "--max-deviation", str(TOLERANCE_MM)])
     assert res.exit_code == 1 and "line 7:" in res.output and "splits CIRC / MoveC arcs" in " ".join(res.output.split())
     assert not out.exists() and not out.with_suffix(".dat").exists()
+
+
+if __name__ == "__main__":  # the numbers: .venv/bin/python tests/test_arc_subdivide.py
+    import tempfile
+    from pathlib import Path
+
+    truth, model = _truth_and_model(CELL)
+    print(f"KR160 elbow down, tolerance {TOLERANCE_MM} mm: compensated -> compensated with --subdivide; largest distance from the intended path over all motions, predicted on arcs and true (mm)")
+    for dialect, named in (("krl", False), ("rapid", False), ("gcode", False)):
+        with tempfile.TemporaryDirectory() as folder:
+            folder = Path(folder)
+            path, q_start, options = _program(folder, dialect, named)
+            tp = parse_program(path)
+            frames, tools = options.get("frames"), options.get("tools")
+            placed = (lambda t: t.with_frames(frames, tools)) if frames else (lambda t: t)
+            new, plain = compensate(tp, model, **options)
+            before, _ = _run_on_true_robot(CELL.robot, truth, placed(_written(tp, new, folder / "plain")), q_start)
+            sub = compensate_subdivided(tp, model, TOLERANCE_MM, **options)
+            after, _ = _run_on_true_robot(CELL.robot, truth, placed(_written(sub.program, sub.compensated, folder / "out")), q_start)
+            print(f"{dialect:6s} arcs {_arcs(tp)} -> {_arcs(sub.program)}, predicted worst arc {np.nanmax(plain.path_mm[np.isin(tp.kind, ARCS)]):.4f} -> "
+                  f"{np.nanmax(sub.report.path_mm[np.isin(sub.program.kind, ARCS)]):.4f}; true worst {_distances(placed(tp), before).max():.4f} -> "
+                  f"{_distances(placed(sub.program), after).max():.4f}")
