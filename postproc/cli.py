@@ -698,10 +698,10 @@ def compensate_cmd(
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if report is not None:
         _write_point_report(report, rep, summary)
-    failures = rep.failures()
+    failures = rep.failures_at(written)
     if failures:
-        for line, reason in failures[:50]:
-            err.print(f"line {line}: {reason}")
+        for where, reason in failures[:50]:
+            err.print(f"{where}: {reason}", highlight=False)
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)

@@ -57,6 +57,10 @@ def _program(tmp_path, dialect, named=False):
 ARCS = (Kind.CIRC_END, Kind.ARC_CW, Kind.ARC_CCW)
 
 
+def src_line(path, n):
+    return path.read_text().splitlines()[n - 1]
+
+
 def _arcs(tp):
     return int(np.isin(tp.kind, ARCS).sum())
 
@@ -139,7 +143,10 @@ def test_without_subdivide_an_arc_over_the_tolerance_is_refused(truth_and_model,
     save_model(tmp_path / "m.json", model)
     out = tmp_path / "o.src"
     res = runner.invoke(app, ["compensate", str(path), "--model", str(tmp_path / "m.json"), "-o", str(out), "--max-deviation", str(TOLERANCE_MM)])
-    assert res.exit_code == 1 and "line 7:" in res.output and "splits CIRC / MoveC arcs" in " ".join(res.output.split())
+    text = " ".join(res.output.split())
+    assert res.exit_code == 1 and "splits CIRC / MoveC arcs" in text, text
+    column = src_line(path, 7).index("XPHALF") + 1  # the arc's end point, by its name
+    assert f"part.src:7:{column}: on the segment into it the predicted path strays" in text
     assert not out.exists() and not out.with_suffix(".dat").exists()
 
 
