@@ -11,8 +11,13 @@ old targets are compensated together. The error's departure from its chord grows
 square of the segment's length, so k pieces bring a deviation d to about d / k^2; rounds
 repeat until every straight segment is within the tolerance (or refuse with the lines).
 
+Arcs over the tolerance are split into arcs of the same circle (``arc_points``: KRL CIRC /
+SCIRC, RAPID MoveC; ``gcode_arc_points``: G2 / G3, whose plane cannot follow an error across
+it): copies of the statement before it, the statement itself keeping its end point.
+
 The new text is re-parsed and every new point must read back where it was meant to be,
-every old one unchanged; the caller re-parses the compensated output as for any program.
+every old one unchanged (a split arc's own auxiliary point and centre words excepted: they
+must read back as the last piece's); the caller re-parses the compensated output as for any program.
 """
 
 from __future__ import annotations
