@@ -329,6 +329,11 @@ def _centre_through(arcs: Arcs, interior_local: np.ndarray) -> np.ndarray:
     return s + centre
 
 
+def centre_words(tp: Toolpath, arcs: Arcs) -> np.ndarray:
+    """I J K R (M, 4) of arcs (``rows`` naming the block whose form each follows), as ``_words``."""
+    return _words(tp, arcs)
+
+
 def _words(tp: Toolpath, arcs: Arcs) -> np.ndarray:
     """New I J K R (M, 4) of arcs with these commanded starts, ends and centres, in the words
     each arc uses; a radius-format arc whose written radius would not give the centre back

@@ -619,7 +619,7 @@ def compensate_cmd(
     robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program is for (a name from robots/ or a file): must be the model's."),
     allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Compensate although the program's robot, tool or payload differ from the model's (printed as notes)."),
     force_file: Optional[Path] = typer.Option(None, "--force-file", help="CSV line,fx,fy,fz[,file]: the process force (N, tool frame) of each motion block by its line (needs a model effect that uses it, e.g. external_load)."),
-    subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks)."),
+    subdivide: bool = typer.Option(False, "--subdivide", help="Straight segments whose predicted path strays more than --max-deviation (default 0.02 mm) get new compensated targets, declared the language's way (KRL .dat, RAPID robtarget, G1 blocks); such arcs (CIRC, MoveC, G2/G3) are split into compensated arcs of the same circle."),
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
     stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
@@ -698,16 +698,16 @@ def compensate_cmd(
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if report is not None:
         _write_point_report(report, rep, summary)
-    failures = rep.failures()
+    failures = rep.failures_at(written)
     if failures:
-        for line, reason in failures[:50]:
-            err.print(f"line {line}: {reason}")
+        for where, reason in failures[:50]:
+            err.print(f"{where}: {reason}", highlight=False)
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
     _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
     if added:
-        log.print(f"{len(added)} new target(s) subdivide straight segments (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
+        log.print(f"{len(added)} new target(s) subdivide straight segments and arcs (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(

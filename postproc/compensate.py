@@ -83,10 +83,26 @@ class Report:
                 reasons.append("would change IK branch")
             if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
                 reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
-                               f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments)")
+                               f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments and splits CIRC / MoveC arcs)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
+        return out
+
+    def failures_at(self, tp: Toolpath) -> list[tuple[str, str]]:
+        """``failures`` with each target's ``file:line:column`` in ``tp`` (the program compensated):
+        the column of its first number, or 1 where its numbers are elsewhere (a named point)."""
+        out = []
+        for i, (_, reason) in zip(np.nonzero(self.failed)[0].tolist(), self.failures()):
+            doc = tp.sources[int(tp.file[i])]
+            spans = tp.spans[i]
+            here = spans[(spans[:, 0] == tp.file[i]) & (spans[:, 1] >= 0), 1]
+            line_start = _line_offset(doc.text, int(tp.line[i]))
+            line_end = doc.text.find("\n", line_start) % (len(doc.text) + 1)
+            inside = here[(here >= line_start) & (here < line_end)]
+            named = doc.text.upper().find(tp.target_name[i].upper(), line_start, line_end) if tp.target_name[i] else -1
+            column = int(inside.min()) - line_start + 1 if len(inside) else (named - line_start + 1 if named >= 0 else 1)
+            out.append((f"{doc.path}:{tp.line[i]}:{column}", reason))
         return out
 
     def summary(self) -> dict:
@@ -551,6 +567,16 @@ def _force_rows(n: int, rows: np.ndarray, target: np.ndarray, force_tool_n) -> n
     out = np.zeros((n, 3))
     out[rows] = target[:, :3, :3] @ np.asarray(force_tool_n, dtype=float).reshape(3)
     return out
+
+
+def _line_offset(text: str, line: int) -> int:
+    """Offset of the first character of 1-based ``line`` of ``text``."""
+    at = 0
+    for _ in range(line - 1):
+        at = text.find("\n", at) + 1
+        if at == 0:
+            return len(text)
+    return at
 
 
 def _scatter(n, rows, fill, values, dtype):

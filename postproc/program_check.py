@@ -9,9 +9,13 @@ carrying another payload would be "compensated" with the wrong numbers and exit 
   with other ranges is for another robot);
 - tool: every tool the program's Cartesian targets use (its frame, ``$TOOL``/``TOOL_DATA``,
   RAPID tooldata) must put the TCP where the model's tool is (``TOOL_TOLERANCE_MM``);
-- payload: where both the program (KRL ``$LOAD``/``LOAD_DATA``, RAPID tooldata's tload)
-  and the model (an effect's payload option, ``payload_kg`` of the effect; a model fitted
-  without one states none) state one, they agree (``PAYLOAD_TOLERANCE_KG``).
+- payload: where the model has an effect that gravity drives (``payload_dependent``: joint
+  compliance, non-linear stiffness, link bending, base tilt) and the program states a load
+  (KRL ``$LOAD``/``LOAD_DATA``, RAPID tooldata's tload and ``GripLoad``), the model must
+  state the payload it was fitted at (``joint_compliance[payload=KG]``, 0 included) and the
+  two agree (``PAYLOAD_TOLERANCE_KG``); a model that states none is refused too, as its
+  compliances then hold whatever load was on the flange when it was measured. A model
+  without such an effect predicts the same under any load: nothing to compare.
 
 A mismatch is a ``ModelMismatchError`` naming both sides; ``allow`` (``--allow-model-mismatch``)
 turns the errors into notes for a user who knows why they differ.
@@ -74,17 +78,22 @@ def _tools(tp: Toolpath, model, model_path: str) -> list[str]:
 
 
 def _payload(tp: Toolpath, model, model_path: str) -> list[str]:
-    # A payload the model states: an effect's payload option (0 is the option left out: the
-    # fit then took the load as part of the arm, and there is nothing to compare).
-    stated = [float(getattr(e, "payload_kg", 0.0) or 0.0) for e in model.effects]
-    stated = [m for m in stated if m > 0]
-    if not stated:
-        return []
-    model_kg = stated[0]
+    """The payloads the program states against the one the model was fitted at. Only effects
+    that gravity drives (``payload_dependent``) change with the load; a model with one of them
+    must state its payload (``joint_compliance[payload=KG]``) to compensate a program that
+    states a load, or the numbers would be right only by luck."""
+    gravity = [e.name for e in model.effects if e.payload_dependent]
+    if not gravity:
+        return []  # the prediction does not change with the load: nothing to compare
+    stated = [e.stated_payload_kg for e in model.effects if e.stated_payload_kg is not None]
     out = []
     for mass, where in dialects.of(tp).payloads(tp):
-        if abs(mass - model_kg) > PAYLOAD_TOLERANCE_KG:
-            out.append(f"{where}: the program's payload is {mass:g} kg; the model {model_path} was fitted with {model_kg:g} kg")
+        if not stated:
+            out.append(f"{where}: the program's payload is {mass:g} kg; the model {model_path} has {', '.join(gravity)} "
+                       "(its prediction depends on the load) but does not state the payload it was fitted at: "
+                       "fit it with joint_compliance[payload=KG]")
+        elif abs(mass - stated[0]) > PAYLOAD_TOLERANCE_KG:
+            out.append(f"{where}: the program's payload is {mass:g} kg; the model {model_path} was fitted with {stated[0]:g} kg")
     return out
 
 

@@ -46,12 +46,17 @@ def arc_samples(start: np.ndarray, via: np.ndarray, end: np.ndarray, samples: in
     """Commanded TCP poses along circular segments (start, auxiliary, end poses (M, 4, 4)):
     positions on the circle through the three points from start to end (through via),
     orientation interpolated from start to end."""
+    return arc_at(start, via, end, fractions(samples))
+
+
+def arc_at(start: np.ndarray, via: np.ndarray, end: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """Commanded TCP poses (M, K, 4, 4) at fractions ``t`` (K,) of the sweep of circular
+    segments (start, auxiliary, end poses (M, 4, 4)), as ``arc_samples``."""
     p0, p1, p2 = start[:, :3, 3], via[:, :3, 3], end[:, :3, 3]
     centre, normal, _ = circle_through(p0, p1, p2)
     u = p0 - centre
     v = np.cross(normal, u)
     sweep = _angle_around(p2 - centre, u, v)
-    t = fractions(samples)
     angle = sweep[:, None] * t[None, :]
     pos = centre[:, None] + np.cos(angle)[..., None] * u[:, None] + np.sin(angle)[..., None] * v[:, None]
     poses = interpolate_poses(start, end, t)

@@ -48,7 +48,7 @@ def _krl(path):
 def batch_inputs(tmp_path_factory):
     root = tmp_path_factory.mktemp("batch")
     robot = postproc.load_robot("kr160_r1570")
-    model = random_truth(robot, TOOL, parse_effects(FRAME_AND_COMPLIANCE), np.random.default_rng(3))
+    model = random_truth(robot, TOOL, parse_effects(FRAME_AND_COMPLIANCE + "[payload=10]"), np.random.default_rng(3))  # the RAPID tool carries 10 kg
     save_model(root / "model.json", model)
     src = root / "in"
     src.mkdir()

@@ -128,3 +128,76 @@ def test_many_programs_each_checked(tmp_path):
     assert res.exit_code == 1, res.output
     assert "fitted for the tool at (0, 0, 200) mm" in " ".join(res.output.split())
     assert (tmp_path / "o" / "part.src").exists() and not (tmp_path / "o" / "other.src").exists()
+
+
+# ---------------------------------------------------------------- the payload a model was fitted at
+
+
+def test_a_gravity_model_that_states_no_payload_is_refused_for_a_program_with_a_load(tmp_path):
+    """joint_compliance without payload=: the load on the flange while measuring hides in the
+    compliances, so the model cannot say it fits a program carrying 50 kg: refused, naming both."""
+    program = _krl(tmp_path, extra=["$LOAD.M = 50"])
+    res, out = _run(tmp_path, program, _model(tmp_path, "geometric,joint_compliance"))
+    text = " ".join(res.output.split())
+    assert res.exit_code == 2, res.output
+    assert "part.src, line 4: the program's payload is 50 kg" in text and "model.json has joint_compliance" in text
+    assert "does not state the payload it was fitted at" in text and "joint_compliance[payload=KG]" in text
+    assert not out.exists()
+    res, out = _run(tmp_path, program, _model(tmp_path, "geometric,joint_compliance"), "--allow-model-mismatch")
+    assert res.exit_code == 0 and "note:" in res.output and out.exists()
+
+
+@pytest.mark.parametrize("effects", ["geometric,nonlinear_stiffness[joints=2,3]", "geometric,link_bending", "geometric,base_tilt"])
+def test_every_effect_gravity_drives_needs_the_payload(tmp_path, effects):
+    res, out = _run(tmp_path, _krl(tmp_path, extra=["$LOAD.M = 50"]), _model(tmp_path, effects))
+    assert res.exit_code == 2 and effects.split(",")[1].split("[")[0] in res.output, res.output
+    assert not out.exists()
+
+
+def test_a_payload_stated_as_zero_is_compared(tmp_path):
+    model = _model(tmp_path, "geometric,joint_compliance[payload=0]")
+    from postproc.model_io import load_model
+
+    assert load_model(model)[0].effects.spec() == "geometric,joint_compliance[payload=0.0;payload_com=0.0,0.0,0.0]"
+    res, out = _run(tmp_path, _krl(tmp_path, extra=["$LOAD.M = 50"]), model)
+    assert res.exit_code == 2 and "payload is 50 kg" in res.output and "fitted with 0 kg" in res.output
+    assert not out.exists()
+    res, out = _run(tmp_path, _krl(tmp_path, extra=["$LOAD.M = 0.3"]), model)
+    assert res.exit_code == 0, res.output
+
+
+def test_no_payload_to_compare_passes(tmp_path):
+    # A model that gravity does not drive predicts the same under any load; a program that
+    # states no load has nothing to compare.
+    res, out = _run(tmp_path, _krl(tmp_path, extra=["$LOAD.M = 50"]), _model(tmp_path, "geometric,base_frame"))
+    assert res.exit_code == 0, res.output
+    res, out = _run(tmp_path, _krl(tmp_path), _model(tmp_path, "geometric,joint_compliance"))
+    assert res.exit_code == 0, res.output
+
+
+GRIP = """MODULE part
+  PERS tooldata tGrip := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,100],[1,0,0,0],0,0,0]];
+  PERS loaddata box := [25,[0,0,150],[1,0,0,0],0,0,0];
+  PROC main()
+    MoveAbsJ [[0,-10,10,0,60,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tGrip;
+    GripLoad box;
+    MoveL [[1000,0,500],[0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tGrip;
+    MoveL [[1000,50,500],[0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tGrip\\TLoad:=box;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_rapid_gripload_and_tload_are_the_payload(tmp_path):
+    from postproc.model_io import load_model
+
+    (tmp_path / "part.mod").write_text(GRIP)
+    tp = parse_program(tmp_path / "part.mod")
+    model, _ = load_model(_model(tmp_path, "geometric,joint_compliance[payload=10]"))
+    problems = check_model_fits(tp, model, "m.json", allow=True)
+    text = "\n".join(problems)
+    assert "part.mod, line 6 (GripLoad box): the program's payload is 35 kg" in text  # the tool's 10 kg and the box's 25
+    assert "part.mod, line 8 (\\TLoad:=box): the program's payload is 25 kg" in text
+    assert "tooldata" not in text  # the tool alone carries the 10 kg the model was fitted with
+    with pytest.raises(ModelMismatchError, match="fitted with 10 kg"):
+        check_model_fits(tp, model, "m.json")

@@ -31,7 +31,7 @@ WRITE_TOL_MM = 5.01e-4  # the emitter's rounding of a position (postproc.emit.sp
 @pytest.fixture(scope="module")
 def model_path(tmp_path_factory):
     """A robot with millimetre-size errors (no fit needed: the true robot is the model)."""
-    model = random_truth(load_robot("kr160_r1570"), TOOL, parse_effects("geometric,tool_offset,joint_compliance"), np.random.default_rng(3))
+    model = random_truth(load_robot("kr160_r1570"), TOOL, parse_effects("geometric,tool_offset,joint_compliance[payload=10]"), np.random.default_rng(3))  # the RAPID tools carry 10 kg
     path = tmp_path_factory.mktemp("model") / "model.json"
     save_model(path, model)
     return path

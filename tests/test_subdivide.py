@@ -32,7 +32,7 @@ DOWN = "A 0, B 180, C 0"
 def truth_and_model():
     robot = kr160()
     rng = np.random.default_rng(3)
-    effects = parse_effects(FRAME_AND_COMPLIANCE)
+    effects = parse_effects(FRAME_AND_COMPLIANCE + "[payload=1]")  # measured with the 1 kg tool of the RAPID test
     truth = random_truth(robot, TOOL, effects, rng)
     data = simulate(truth, sample_poses(robot, TOOL, 300, Cylinder(), rng), rng)
     return truth, fit(robot, TOOL, effects, data, cv_folds=0).model

@@ -106,6 +106,14 @@ class Effect:
     first_step: bool = False
     #: geometry effects are applied in increasing stage (additive errors before scalings)
     stage: int = 0
+    #: the effect's prediction changes with the payload the flange carries (gravity): a
+    #: model with one is only right at the load it was measured with (program_check)
+    payload_dependent: bool = False
+
+    @property
+    def stated_payload_kg(self) -> float | None:
+        """The payload (kg) the model was fitted at, where this effect records one."""
+        return None
 
     # ------------------------------------------------------------ declaration
 

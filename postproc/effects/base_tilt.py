@@ -43,6 +43,7 @@ def gravity_torque_for(robot, q_deg: np.ndarray, gravity: np.ndarray) -> np.ndar
 
 class BaseTilt(Effect):
     name = "base_tilt"
+    payload_dependent = True  # the tilted gravity pulls a heavier load harder
     kind = "joint"
     summary = "the robot's base is not level: gravity pulls the joints sideways, so they give where a level robot's would not"
     finding = "residuals follow the torque a tilted gravity puts on the joints (joint 1 above all): the base is not level"

@@ -52,12 +52,20 @@ class JointCompliance(Effect):
     finding = "residuals follow the gravity torque on the joints"
     identifiability = COMPLIANCE_IDENTIFIABILITY
 
-    def __init__(self, payload_kg: float = 0.0, payload_com_mm=(0.0, 0.0, 0.0)):
-        self.payload_kg = float(payload_kg)
+    payload_dependent = True  # the deflection changes with the load the flange carries
+
+    def __init__(self, payload_kg: float | None = None, payload_com_mm=(0.0, 0.0, 0.0)):
+        # None: the fit was not told the load it was measured with (the load then hides in
+        # the compliances); a number, 0 included, is the payload the model was fitted at.
+        self.payload_kg = None if payload_kg is None else float(payload_kg)
         self.payload_com_mm = tuple(float(v) for v in payload_com_mm)
 
+    @property
+    def stated_payload_kg(self) -> float | None:
+        return self.payload_kg
+
     def options(self) -> dict:
-        if not self.payload_kg:
+        if self.payload_kg is None:
             return {}
         return {"payload": self.payload_kg, "payload_com": list(self.payload_com_mm)}
 
@@ -67,11 +75,11 @@ class JointCompliance(Effect):
         if unknown:
             raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: payload, payload_com)")
         try:
-            mass = float(opts.get("payload", 0.0))
+            mass = float(opts["payload"]) if "payload" in opts else None
             com = [float(v) for v in opts.get("payload_com", "0,0,0").split(",")]
         except ValueError:
             raise EffectSpecError(f"{cls.name}: payload is a mass in kg and payload_com three numbers in mm") from None
-        if len(com) != 3 or mass < 0:
+        if len(com) != 3 or (mass is not None and not mass >= 0):
             raise EffectSpecError(f"{cls.name}: payload_com needs x,y,z in mm (flange frame) and payload >= 0 kg")
         return cls(mass, com)
 
@@ -82,7 +90,7 @@ class JointCompliance(Effect):
         return compliance_params(robot)
 
     def prepare(self, ctx: Context, robot) -> np.ndarray:
-        return diagonal_basis(gravity_torque(robot, ctx.q_deg, self.payload_kg, self.payload_com_mm))
+        return diagonal_basis(gravity_torque(robot, ctx.q_deg, self.payload_kg or 0.0, self.payload_com_mm))
 
     def draw(self, param: Param, rng: np.random.Generator, magnitude: float) -> float:
         return draw_compliance(param, rng)

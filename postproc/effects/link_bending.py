@@ -69,6 +69,7 @@ def segment_deflection(o_base: np.ndarray, o_tip: np.ndarray, loads: list, tcp: 
 
 class LinkBending(Effect):
     name = "link_bending"
+    payload_dependent = True  # gravity bends the arm more under a heavier load
     kind = "cartesian"
     summary = "the upper arm and forearm bend like cantilever beams under the weight they carry (Euler-Bernoulli)"
     finding = "residuals grow with the load moment on the arm and with its reach (the long links bend)"

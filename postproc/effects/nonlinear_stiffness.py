@@ -42,6 +42,7 @@ def largest_gravity_torque(robot) -> np.ndarray:
 
 class NonlinearStiffness(Effect):
     name = "nonlinear_stiffness"
+    payload_dependent = True  # gravity bends the arm more under a heavier load
     kind = "joint"
     summary = "the joints' reducers are softer under small loads than under large ones (two-slope torsional stiffness)"
     finding = "residuals follow the gravity torque with a knee: the joints give more per N*m under light load than under heavy load"

@@ -45,7 +45,8 @@ class GcodeDialect(Dialect):
         body, _, comment = text.rstrip("\r\n").partition(";")
         body = re.sub(r"^\s*N\d+\s*", "", body, flags=re.IGNORECASE)
         words = re.findall(r"([A-Z])\s*([-+]?[\d.]+)", re.sub(r"\([^)]*\)", "", body).upper())
-        other = [w + v for w, v in words if w not in "XYZABCUVWIJKF" and not (w == "G" and float(v) in (0.0, 1.0))]
+        # G2 / G3 with I J K or R: a split arc's piece repeats its block's motion
+        other = [w + v for w, v in words if w not in "XYZABCUVWIJKFR" and not (w == "G" and float(v) in (0.0, 1.0, 2.0, 3.0))]
         if other:
             raise EmitError(f"{where}: the block also does {' '.join(other)}: a point before it cannot be written as a copy")
         return body + text[len(text.rstrip("\r\n")):]
