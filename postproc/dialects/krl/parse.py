@@ -23,6 +23,7 @@ from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statemen
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
+from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -208,6 +209,7 @@ class KrlParser:
         self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self._inline = _InlineFormState(self.docs)
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
@@ -355,6 +357,8 @@ class KrlParser:
 
     def _frame_value(self, d: _Doc, ev: Event, current) -> tuple[str, np.ndarray | None]:
         """(name, transform) of a frame expression; the transform is None when unknown."""
+        if ev.rhs == "$NULLFRAME":  # TOOL(0) of BAS.SRC
+            return "$NULLFRAME", np.eye(4)
         if isinstance(ev.rhs, str):  # BAS(#BASE, n): BASE_DATA[n]
             point = current(ev.rhs)
             known = point is not None and point.known and not np.isnan(point.values[:6]).all()
@@ -396,6 +400,8 @@ class KrlParser:
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
         self._change(d, node.children[0], rhs, start, where or self._where)
+        if lhs.split(".")[0] == "FDAT_ACT":
+            self._inline.assign_fdat_act(lhs, rhs, self._text(d, rhs, start), (where or self._where)[1])
         if lhs == "$VEL.CP":
             self.events.append((start, "vel", literal_number(rhs)))
         elif lhs == "$APO.CDIS":
@@ -424,12 +430,26 @@ class KrlParser:
         offset, exact, anytime = self._where
         line = int(d.lines.line(start))
         command, arg = m.group(1).upper(), (m.group(2) or "").strip()
+        if command == "INITMOV" and exact:
+            self._inline.initmov_ran = True
+        if command in FRAME_COMMANDS:
+            self._frames_from_fdat(d, start, line)
+            return
         number = re.fullmatch(r"\d+", arg)
         for key, table in (("$BASE", "BASE_DATA"), ("$TOOL", "TOOL_DATA")):
             if command == key[1:] and number and int(arg) > 0:
                 self.changes.append(Event(offset, start, key, exact, "", f"{table}[{int(arg)}]", f"{table}[{int(arg)}]", line, anytime))
             elif command not in ("BASE", "TOOL") or command == key[1:]:
                 self.changes.append(Event(offset, start, key, False, line=line, anytime=anytime))
+
+    def _frames_from_fdat(self, d: _Doc, start: int, line: int) -> None:
+        """BAS(#PTP_PARAMS / #CP_PARAMS / #FRAMES): $TOOL and $BASE from FDAT_ACT (inline_forms.py)."""
+        offset, exact, anytime = self._where
+        tool, base, why = self._inline.frames()
+        for key, rhs in (("$TOOL", tool), ("$BASE", base)):
+            self.changes.append(Event(offset, start, key, exact and rhs is not None, "", rhs, rhs or "", line, anytime))
+        if why and exact:
+            self.builder.notes.append(f"{d.doc.path}:{line}: BAS sets $TOOL and $BASE from FDAT_ACT, which cannot be followed here: {why}")
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
         move = str(node.children[0]).upper()
@@ -586,6 +606,42 @@ class KrlParser:
             else:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
+
+
+class _InlineFormState:
+    """FDAT_ACT as the main DEF's straight-line code sets it, and whether BAS.SRC's
+    corrections are known to be off (see inline_forms.py)."""
+
+    def __init__(self, docs: list[_Doc]):
+        src = docs[0].text
+        self.fdats = declared_fdats([d.text for d in docs])
+        for name in list(self.fdats):  # FP1.TOOL_NO = ...: that FDAT is not followed
+            if re.search(rf"^[ \t]*{re.escape(name)}[ \t]*\.[ \t]*\w+[ \t]*=", src, re.IGNORECASE | re.MULTILINE):
+                self.fdats[name] = None
+        config = next((d.text for d in docs if d.doc.role == "config"), None)
+        self.machines = MachineFrames(config)
+        defs = list(re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT)?[ \t]", src, re.IGNORECASE | re.MULTILINE))
+        tail = src[defs[1].start():] if len(defs) > 1 else ""
+        # FDAT_ACT set in a subprogram may be set before any line of the main DEF runs.
+        self.anytime = bool(re.search(r"^[ \t]*FDAT_ACT\b[^=\n]*=", tail, re.I | re.M))
+        self.corrections_touched = bool(re.search(rf"^[ \t]*(?:{'|'.join(CORRECTION_SWITCHES)})[ \t]*=", src, re.I | re.M))
+        self.initmov_ran = False
+        self.fdat_act = None
+
+    def assign_fdat_act(self, lhs: str, rhs, rhs_text: str, exact: bool) -> None:
+        if not exact:
+            self.fdat_act = None
+        elif lhs == "FDAT_ACT":
+            aggregate = isinstance(rhs, Tree) and rhs.data == "aggregate"
+            self.fdat_act = parse_fdat(rhs_text) if aggregate else self.fdats.get(rhs_text.upper().replace(" ", ""))
+        elif self.fdat_act is not None and lhs in ("FDAT_ACT.TOOL_NO", "FDAT_ACT.BASE_NO") and re.fullmatch(r"[+-]?\d+", rhs_text.strip()):
+            field = "tool_no" if lhs.endswith("TOOL_NO") else "base_no"
+            self.fdat_act = Fdat(**{**self.fdat_act.__dict__, field: int(rhs_text)})
+        else:
+            self.fdat_act = None
+
+    def frames(self):
+        return frames_from_fdat(None if self.anytime else self.fdat_act, self.machines, self.initmov_ran and not self.corrections_touched)
 
 
 def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
