@@ -126,3 +126,13 @@ def test_base_on_an_external_mechanism_is_not_guessed(tmp_path):
     tp = program(tmp_path, INI + fold("PTP", "P1", "FP1", "") + fold("LIN", "P2", "FP2", ""), config=config)
     assert tp.placed().tolist() == [False, True]
     np.testing.assert_allclose(tp.base_positions()[1], [1200, 50, 400], atol=1e-9)
+
+
+def test_real_config_and_system_file_shapes_are_read(tmp_path):
+    # Shapes every real KSS 8 $config.dat / BAS.SRC has: a row of a 2-D CHAR array
+    # (TOOL_NAME[1,]="..."), ON_ERROR_PROCEED, and editor folds that are not balanced or that
+    # cross DEF/END (folds are comments to the controller). The motion is still read exactly.
+    config = CONFIG.replace("ENDDAT", ';FOLD TOOLS\nTOOL_NAME[1,]="Spindle"\n;ENDFOLD\n;ENDFOLD\nENDDAT')
+    body = INI + ";FOLD MOVES\n" + fold("PTP", "P1", "FP1", "") + "ON_ERROR_PROCEED\nEND\n;ENDFOLD\nDEF sub( )\n"
+    tp = program(tmp_path, body, config=config)
+    np.testing.assert_allclose(placed(tp), [[0, 2100, 500]], atol=1e-9)

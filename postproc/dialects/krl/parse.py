@@ -5,7 +5,9 @@ Lines whose shape is plain bulk data — a move with an inline aggregate
 (``DECL E6POS XP1={...}``) or an array element (``path[12]={...}``) — are recognised by
 compiled regular expressions over the whole text and their numbers are read by the
 vectorised scanner. Every other line is parsed by the lark grammar ``krl.lark``; the
-block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack.
+block structure (DEF/END, IF/ENDIF, ...) is checked with a stack. ``;FOLD`` / ``;ENDFOLD`` are
+comments the smartPAD editor folds on; the controller ignores them, and real files cross
+them with DEF/END (BAS.SRC) or leave one unbalanced ($config.dat): they are not blocks.
 """
 
 from __future__ import annotations
@@ -253,13 +255,7 @@ class KrlParser:
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             raw_line = text[start:end]
-            code, comment = _split_comment(raw_line)
-            if comment is not None:
-                folded = comment.lstrip(";").lstrip().upper()
-                if folded.startswith("FOLD"):
-                    stack.append(("ENDFOLD", start))
-                elif folded.startswith("ENDFOLD"):
-                    self._close(d, stack, "ENDFOLD", start + raw_line.find(";"))
+            code, _ = _split_comment(raw_line)
             if not code.strip():
                 continue
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
