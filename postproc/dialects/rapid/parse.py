@@ -22,6 +22,7 @@ from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
+from .loops import Loop, element_key, evaluate, for_counter, loop_body_lines
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -238,6 +239,9 @@ class RapidParser:
         self.points, self.tools, self.wobjs, self.facts = data.points, data.tools, data.wobjs, data.facts
         self.rows: list[dict] = []
         self._shapes = None
+        self.env: dict[str, float] = {}  # FOR counters bound while a loop body is replayed
+        self._loops: list[Loop] = []  # FOR loops whose bodies are being read (loops.py)
+        self._loop_order: int | None = None  # program order of the rows of the loop being run
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
@@ -277,6 +281,10 @@ class RapidParser:
         raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
         shapes = LineShapes(self.code, raw, self.lines.starts)
         self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
+        if re.search(r"(?im)^[ \t]*FOR\b", self.code):  # a move in a FOR body runs once per pass: read by the grammar
+            in_loop = loop_body_lines(self.code)
+            for key in ("lits", "named"):
+                self._shapes[key] = self._shapes[key].subset(~in_loop[self._shapes[key].line])
         decls = self._shapes["decls"]
         if len(decls):
             values, spans, conf = self._bulk_literals(decls.span("lit")[0])
@@ -312,8 +320,8 @@ class RapidParser:
             self._bulk_rows(named, values, spans, conf, np.array(names, dtype=object)[codes])
         if self.rows:  # the grammar's targets, after the bulk ones (the builder sorts by order)
             cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
-            order = cols.pop("order")
-            self.builder.add_block(order + self.order_base, line=self.lines.line(order), file=np.full(len(order), self.index), **cols)
+            order, at = cols.pop("order"), cols.pop("at")
+            self.builder.add_block(order + self.order_base, line=self.lines.line(at), file=np.full(len(order), self.index), **cols)
 
     def _bulk_rows(self, matches, values, spans, conf, names):
         def per_row(group, convert, dtype=None):
@@ -405,6 +413,23 @@ class RapidParser:
 
     def _statement(self, node, start: int, stack) -> None:
         kind = node.data if isinstance(node, Tree) else None
+        if self._loops and kind not in ("for_open", "endfor"):
+            self._loops[-1].body.append((node, start))  # run when the outermost FOR closes
+            return
+        if kind == "for_open":
+            stack.append(("ENDFOR", start))
+            self._loops.append(Loop(node, start))
+            return
+        if kind == "endfor" and self._loops and stack and stack[-1][0] == "ENDFOR":
+            stack.pop()
+            loop = self._loops.pop()
+            if self._loops:
+                self._loops[-1].body.append(loop)
+            else:
+                self._loop_order = loop.start  # the passes' rows keep their execution order there
+                self._run_loop(loop, stack)
+                self._loop_order = None
+            return
         if kind in _OPEN:
             stack.append((_OPEN[kind], start))
             if kind == "routine_open":
@@ -442,6 +467,27 @@ class RapidParser:
             if isinstance(inner, Tree) and inner.data == "move" and self._skip[self.lines.line(inner_start) - 1]:
                 return  # IF cond <newline> a bulk move: the bulk path has read it
             self._statement(inner, start, stack)
+
+    def _run_loop(self, loop: Loop, stack) -> None:
+        """Every pass of a FOR body, its counter bound (loops.py); once, counter unknown,
+        when the count cannot be computed."""
+        name, values = for_counter(loop.node, self.env)
+        if values is None:
+            self.builder.notes.append(f"{self._where(loop.start)}: the FOR count is not known at post time: its body's moves are listed once, "
+                                      f"and those that use {name} are not resolved")
+            values = [float("nan")]
+        saved = self.env.get(name)
+        for value in values:
+            self.env[name] = value
+            for item in loop.body:
+                if isinstance(item, Loop):
+                    self._run_loop(item, stack)
+                else:
+                    self._statement(item[0], item[1], stack)
+        if saved is None:
+            self.env.pop(name, None)
+        else:
+            self.env[name] = saved
 
     def _where(self, offset: int) -> str:
         return f"{self.doc.path}:{self.lines.line(offset)}"
@@ -536,12 +582,18 @@ class RapidParser:
                 a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
                 sl = self.numbers.between(a_s, a_e)
                 literal = isinstance(arg, Tree) and arg.data in ("number", "neg") and sl.stop - sl.start == 1
+                computed = evaluate(arg, self.env) if arg is not None and not literal else float("nan")
                 if literal and not np.isnan(values[k]) and not np.isnan(self.numbers.value[sl][0]):
                     delta = float(self.numbers.value[sl][0])
                     offset[k] = values[k]
                     offset_span[k] = spans[k]
                     spans[k] = (self.index, self.numbers.start[sl][0], self.numbers.end[sl][0])
                     values[k] = values[k] + delta
+                elif not np.isnan(computed) and not np.isnan(values[k]):
+                    # Offs(p, i*10, ...) in an unrolled loop: p's own number is what the text
+                    # holds (IR = p.x + offset); passes that need different p.x are refused on write-back.
+                    offset[k] = computed
+                    values[k] = values[k] + computed
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
                     spans[k] = -1
@@ -549,7 +601,8 @@ class RapidParser:
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
             return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
-            found = self.points.get(text.upper())
+            key = element_key(node, self.env) if "{" in text else None
+            found = self.points.get(key or text.upper())
             if found is not None:
                 return (*found, np.zeros(NF), _no_spans()), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
@@ -614,7 +667,8 @@ class RapidParser:
         for k, tnode in zip(kinds, [positional[i] for i in targets]):
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
-            self.rows.append(dict(order=self._span(node, start)[0], kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
+            at = self._span(node, start)[0]
+            self.rows.append(dict(order=at if self._loop_order is None else self._loop_order, at=at, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
                                   tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:
