@@ -102,3 +102,11 @@ def test_write_back_one_number_for_every_pass_or_refuse_with_its_place():
     with pytest.raises(SharedNumberError) as exc:
         emit_texts(tp, tp.with_positions(new))
     assert (exc.value.path, exc.value.line, exc.value.column) == ("m.mod", 2, 27)  # the 500 of p1
+
+
+def test_loops_that_run_too_many_statements_are_refused_with_their_line():
+    from postproc.errors import ParseError
+
+    body = "    FOR i FROM 1 TO 2000 DO\n      FOR j FROM 1 TO 1000 DO\n        MoveL p1, v100, z10, tool0;\n      ENDFOR\n    ENDFOR\n"
+    with pytest.raises(ParseError, match=r"m.mod:7:5: the FOR loops here run more than 200,000 statements"):
+        parse_program("m.mod", "rapid", module(body))

@@ -26,7 +26,8 @@ from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
-from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text
+from .loops import ForLoop, for_values, unroll
+from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -212,6 +213,8 @@ class KrlParser:
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self._inline = _InlineFormState(self.docs)
+        self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
+        self.for_loops: list[ForLoop] = []
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
@@ -300,6 +303,8 @@ class KrlParser:
             return
         if kind in _BLOCK_OPEN:
             stack.append((_BLOCK_OPEN[kind], start))
+            if is_program:
+                self._loop_open(d, node, kind, start)
             return
         if kind in ("else_", "case", "default"):
             if not stack or stack[-1][0] not in ("ENDIF", "ENDSWITCH"):
@@ -307,6 +312,9 @@ class KrlParser:
             return
         if kind in _BLOCK_CLOSE:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
+            if kind == "endfor" and is_program and self._for_open:
+                line, counter, values = self._for_open.pop()
+                self.for_loops.append(ForLoop(line, int(d.lines.line(start)), counter, values))
             return
         if kind == "decl":
             self._decl(d, node, start)
@@ -325,6 +333,22 @@ class KrlParser:
             return
         if kind == "motion":
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    def _loop_open(self, d: _Doc, node: Tree, kind: str, start: int) -> None:
+        """A FOR of the program file is unrolled at the end when its count is literal (loops.py);
+        any other loop keeps its body once, noted."""
+        line = int(d.lines.line(start))
+        if kind == "for_open":
+            exprs = [c for c in node.children if isinstance(c, Tree)]
+            bounds = [number(e, lambda _: float("nan")) for e in exprs] + ([] if len(exprs) > 2 else [1.0])
+            counter = str(next(c for c in node.children if isinstance(c, Token) and c.type == "NAME")).upper()
+            values = for_values(*bounds[:3])
+            self._for_open.append((line, counter, values))
+            if values is not None:
+                return
+        if kind in ("for_open", "while_open", "loop_open", "repeat_open"):
+            self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this {kind.split('_')[0].upper()} is not known at post time: "
+                                      "the motions in its body are listed once")
 
     # ------------------------------------------------------------ semantics
     def _decl(self, d: _Doc, node: Tree, start: int) -> None:
@@ -550,8 +574,10 @@ class KrlParser:
         offsets, approx = offsets[perm], approx[perm]
         frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
+        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0))
+        tp = self._unroll(tp)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
-        orientation = np.full((len(offsets), 4), np.nan)
+        orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
             orientation[ok] = abc_to_quat_wxyz(pose[ok, 3:6])
@@ -563,12 +589,23 @@ class KrlParser:
             kind=np.where(joint_only, np.int8(Kind.ABSJ), tp.kind).astype(np.int8),
             position=pose[:, :3],
             orientation=orientation,
-            frame=frame,
-            tool=tool,
-            speed=speed,
-            zone=np.where(approx, cdis, 0.0),
             resolved=declared,
         )
+
+    def _unroll(self, tp: Toolpath) -> Toolpath:
+        """Every pass of the FOR loops with a literal count (loops.py)."""
+        tl = self.timeline
+        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+        try:
+            tp = unroll(tp, self.for_loops, self.symbols.get, changed)
+        except OverflowError as exc:
+            d = self.docs[0]
+            raise d.lines.error(d.doc.path, int(d.lines.starts[int(exc.args[0]) - 1]), "the FOR loops here run more than 1,000,000 motions: refused")
+        by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
+        now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
+        if now_known:  # NAME[I] read per pass: no longer 'not declared'
+            tp = replace(tp, notes=tuple(n for n in tp.notes if not any(f"point {k} is not declared" in n for k in now_known)))
+        return tp
 
     def _collect_slow_targets(self) -> None:
         """The targets the grammar read, as one block."""

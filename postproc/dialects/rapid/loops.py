@@ -24,6 +24,7 @@ import numpy as np
 from lark import Token, Tree
 
 MAX_ITERATIONS = 100_000  # per loop; more is read as a count not known at post time
+MAX_REPLAYED = 200_000  # statements run by the unrolled loops of one module (~30 s); more is refused
 
 _BLOCK_LINE = re.compile(r"^[ \t]*(FOR|ENDFOR)\b", re.IGNORECASE)
 
@@ -79,6 +80,16 @@ def for_counter(node: Tree, env: dict[str, float]) -> tuple[str, list[float] | N
     if count > MAX_ITERATIONS:
         return name, None
     return name, [start + k * step for k in range(max(count, 0))]
+
+
+def planned_statements(loop: Loop, env: dict[str, float]) -> int:
+    """How many statements running ``loop`` replays (inner loops counted with the outer
+    counters' first values; a count not known counts one pass)."""
+    name, values = for_counter(loop.node, env)
+    passes = len(values) if values is not None else 1
+    inner_env = {**env, name: values[0] if values else float("nan")}
+    per_pass = sum(planned_statements(item, inner_env) if isinstance(item, Loop) else 1 for item in loop.body)
+    return passes * per_pass
 
 
 def loop_body_lines(code: str) -> np.ndarray:

@@ -22,7 +22,7 @@ from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
-from .loops import Loop, element_key, evaluate, for_counter, loop_body_lines
+from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -242,6 +242,7 @@ class RapidParser:
         self.env: dict[str, float] = {}  # FOR counters bound while a loop body is replayed
         self._loops: list[Loop] = []  # FOR loops whose bodies are being read (loops.py)
         self._loop_order: int | None = None  # program order of the rows of the loop being run
+        self._replayed = 0  # statements run by unrolled loops (bounded: MAX_REPLAYED)
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
@@ -472,6 +473,8 @@ class RapidParser:
         """Every pass of a FOR body, its counter bound (loops.py); once, counter unknown,
         when the count cannot be computed."""
         name, values = for_counter(loop.node, self.env)
+        if self._replayed + planned_statements(loop, self.env) > MAX_REPLAYED:
+            raise self.lines.error(self.doc.path, loop.start, f"the FOR loops here run more than {MAX_REPLAYED:,} statements: refused (memory is bounded)")
         if values is None:
             self.builder.notes.append(f"{self._where(loop.start)}: the FOR count is not known at post time: its body's moves are listed once, "
                                       f"and those that use {name} are not resolved")
@@ -483,6 +486,7 @@ class RapidParser:
                 if isinstance(item, Loop):
                     self._run_loop(item, stack)
                 else:
+                    self._replayed += 1
                     self._statement(item[0], item[1], stack)
         if saved is None:
             self.env.pop(name, None)
