@@ -647,19 +647,23 @@ class _InlineFormState:
 
     def __init__(self, docs: list[_Doc]):
         src = docs[0].text
+        self.initmov_ran = False
+        self.fdat_act = None
+        self.anytime = self.corrections_touched = False
+        self.fdats: dict = {}
+        self.machines = MachineFrames(None)
+        if "fdat_act" not in src.lower():  # no inline form: nothing to follow (a 10^6-line CAM file skips the scans)
+            return
         self.fdats = declared_fdats([d.text for d in docs])
         for name in list(self.fdats):  # FP1.TOOL_NO = ...: that FDAT is not followed
             if re.search(rf"^[ \t]*{re.escape(name)}[ \t]*\.[ \t]*\w+[ \t]*=", src, re.IGNORECASE | re.MULTILINE):
                 self.fdats[name] = None
-        config = next((d.text for d in docs if d.doc.role == "config"), None)
-        self.machines = MachineFrames(config)
+        self.machines = MachineFrames(next((d.text for d in docs if d.doc.role == "config"), None))
         defs = list(re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT)?[ \t]", src, re.IGNORECASE | re.MULTILINE))
         tail = src[defs[1].start():] if len(defs) > 1 else ""
         # FDAT_ACT set in a subprogram may be set before any line of the main DEF runs.
         self.anytime = bool(re.search(r"^[ \t]*FDAT_ACT\b[^=\n]*=", tail, re.I | re.M))
         self.corrections_touched = bool(re.search(rf"^[ \t]*(?:{'|'.join(CORRECTION_SWITCHES)})[ \t]*=", src, re.I | re.M))
-        self.initmov_ran = False
-        self.fdat_act = None
 
     def assign_fdat_act(self, lhs: str, rhs, rhs_text: str, exact: bool) -> None:
         if not exact:

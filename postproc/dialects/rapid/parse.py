@@ -282,7 +282,7 @@ class RapidParser:
         raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
         shapes = LineShapes(self.code, raw, self.lines.starts)
         self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
-        if re.search(r"(?im)^[ \t]*FOR\b", self.code):  # a move in a FOR body runs once per pass: read by the grammar
+        if "for" in self.code.lower() and re.search(r"(?im)^[ \t]*FOR\b", self.code):  # a move in a FOR body runs once per pass: read by the grammar
             in_loop = loop_body_lines(self.code)
             for key in ("lits", "named"):
                 self._shapes[key] = self._shapes[key].subset(~in_loop[self._shapes[key].line])
