@@ -110,3 +110,36 @@ def test_loops_that_run_too_many_statements_are_refused_with_their_line():
     body = "    FOR i FROM 1 TO 2000 DO\n      FOR j FROM 1 TO 1000 DO\n        MoveL p1, v100, z10, tool0;\n      ENDFOR\n    ENDFOR\n"
     with pytest.raises(ParseError, match=r"m.mod:7:5: the FOR loops here run more than 200,000 statements"):
         parse_program("m.mod", "rapid", module(body))
+
+
+# WHILE (instruction WHILE: the condition is evaluated before each pass; Incr adds 1): a
+# routine's own VAR num (RAPID overview, "Scope of data": a routine's data is local to it) set
+# in straight-line code is followed exactly.
+def test_while_over_a_local_counter_runs_each_pass():
+    # i = 1, 2, 3 pass; Offs(p1, 10 i, 0, 0); after the loop i = 4; the one-line MoveL runs 3 times.
+    tp = read("    VAR num i;\n    i := 1;\n    WHILE i <= 3 DO\n      MoveL Offs(p1, i*10, 0, 0), v100, z10, tool0;\n"
+              "      MoveL p1, v100, z10, tool0;\n      Incr i;\n    ENDWHILE\n    MoveL Offs(p1, i, 0, 0), v100, z10, tool0;\n")
+    assert tp.line.tolist() == [10, 11] * 3 + [14] and tp.resolved.all()
+    np.testing.assert_array_equal(tp.position[::2, 0], [510, 520, 530, 504])
+
+
+@pytest.mark.parametrize("body, why", [
+    ("    VAR num n := 2;\n    WHILE n > 0 DO\n      MoveL Offs(p1, 0, n, 0), v100, z10, tool0;\n      IF n > 1 n := n - 1;\n      n := n - 1;\n    ENDWHILE\n",
+     "the counter also changes in a one-line IF"),
+    ("    VAR num n := 2;\n    TPReadNum n, \"how many?\";\n    WHILE n > 0 DO\n      MoveL Offs(p1, 0, n, 0), v100, z10, tool0;\n      n := n - 1;\n    ENDWHILE\n",
+     "the start value is read at run time"),
+    ("    VAR num n;\n    WHILE n > 0 DO\n      MoveL Offs(p1, 0, n, 0), v100, z10, tool0;\n      n := n - 1;\n    ENDWHILE\n",
+     "no start value in the text"),
+])
+def test_a_while_whose_count_the_text_does_not_give_is_listed_once(body, why):
+    tp = read(body)
+    assert len(tp) == 1 and not tp.resolved.any(), why
+    assert any("passes of this WHILE is not known" in n for n in tp.notes)
+
+
+def test_a_jump_in_the_module_stops_counter_tracking():
+    tp = read("    VAR num i := 1;\n  again:\n    WHILE i <= 2 DO\n      MoveL Offs(p1, i, 0, 0), v100, z10, tool0;\n      Incr i;\n    ENDWHILE\n"
+              "    IF i < 9 GOTO again;\n")
+    assert len(tp) == 1 and not tp.resolved.any()
+    tp = read("    VAR num i := 1;\n  again:\n    MoveL Offs(p1, i, 0, 0), v100, z10, tool0;\n    i := i + 1;\n    IF i < 3 GOTO again;\n")
+    assert not tp.resolved.any()  # the move runs with i = 1, then 2: no one value

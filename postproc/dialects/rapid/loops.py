@@ -26,7 +26,7 @@ from lark import Token, Tree
 MAX_ITERATIONS = 100_000  # per loop; more is read as a count not known at post time
 MAX_REPLAYED = 200_000  # statements run by the unrolled loops of one module (~30 s); more is refused
 
-_BLOCK_LINE = re.compile(r"^[ \t]*(FOR|ENDFOR)\b", re.IGNORECASE)
+_BLOCK_LINE = re.compile(r"^[ \t]*(FOR|ENDFOR|WHILE|ENDWHILE)\b", re.IGNORECASE)
 
 
 @dataclass
@@ -36,6 +36,8 @@ class Loop:
     node: Tree
     start: int
     body: list = field(default_factory=list)  # (node, start) or a nested Loop
+    kind: str = "for"  # or "while" (counters.py)
+    inner_whiles: int = 0  # WHILEs open inside a buffered WHILE (kept as plain statements)
 
 
 def evaluate(node, env: dict[str, float]) -> float:
@@ -93,17 +95,17 @@ def planned_statements(loop: Loop, env: dict[str, float]) -> int:
 
 
 def loop_body_lines(code: str) -> np.ndarray:
-    """(lines,) True for each line inside a FOR ... ENDFOR (comments already blanked): those
-    lines are read statement by statement, never as bulk one-liners."""
+    """(lines,) True for each line inside a FOR ... ENDFOR or WHILE ... ENDWHILE (comments
+    already blanked): those lines are read statement by statement, never as bulk one-liners."""
     lines = code.split("\n")
     inside = np.zeros(len(lines), bool)
     depth = 0
     for i, line in enumerate(lines):
         m = _BLOCK_LINE.match(line)
-        if m and m.group(1).upper() == "ENDFOR":
+        if m and m.group(1).upper() in ("ENDFOR", "ENDWHILE"):
             depth = max(depth - 1, 0)
         inside[i] = depth > 0
-        if m and m.group(1).upper() == "FOR":
+        if m and m.group(1).upper() in ("FOR", "WHILE"):
             depth += 1
     return inside
 
