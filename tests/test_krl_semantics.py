@@ -99,9 +99,10 @@ LIN XP1
 $BASE = BASE_DATA[1]
 LIN XP2
 """)
-    assert tp.placed().tolist() == [False, False, False, True]
-    np.testing.assert_allclose(tp.base_positions()[3], [1200, 50, 400], atol=1e-9)
-    assert np.isnan(tp.position[1:3]).all()  # XP1 itself is unknown there, whatever the frame
+    # FOR I = 1 TO 3 runs its body three times (KSS 8 SI "FOR ... TO ... ENDFOR"): three rows.
+    assert tp.placed().tolist() == [False, False, False, False, False, True]
+    np.testing.assert_allclose(tp.base_positions()[5], [1200, 50, 400], atol=1e-9)
+    assert np.isnan(tp.position[1:5]).all()  # XP1 itself is unknown there, whatever the frame
 
 
 def test_with_clause_frames_hold_for_their_motion(tmp_path):

@@ -91,27 +91,31 @@ def test_trap_routine_moves_are_read():
     np.testing.assert_array_equal(tp.position, [[100, 200, 300], [100, 200, 350]])
 
 
-def test_test_case_while_and_for_bodies_are_listed_once_each():
-    """TEST/CASE, WHILE, FOR (instructions TEST, WHILE, FOR): a constant target in a body is at
-    the same place on every pass, so it is read once, where it is written, and resolved."""
+def test_test_case_and_while_bodies_are_listed_once_and_a_for_once_per_pass():
+    """TEST/CASE, WHILE (instructions TEST, WHILE): a constant target in a body is at the same
+    place on every pass; with a count not known at post time (n is not set) it is read once,
+    where it is written, and resolved. FOR i FROM 1 TO 3 (instruction FOR) runs its body 3
+    times: one row per executed move, all at line 15."""
     tp = read(module("    TEST n", "    CASE 1, 2:", "      MoveL Offs(p1, 10, 0, 0), v100, z1, tool0;", "    DEFAULT:",
                      "      MoveL Offs(p1, 20, 0, 0), v100, z1, tool0;", "    ENDTEST",
                      "    WHILE n < 3 DO", "      MoveL p1, v100, z1, tool0;", "      n := n + 1;", "    ENDWHILE",
                      "    FOR i FROM 1 TO 3 DO", "      MoveJ Offs(p1, 0, 30, 0), v100, z1, tool0;", "    ENDFOR"))
-    assert tp.line.tolist() == [6, 8, 11, 15] and tp.resolved.all()
-    np.testing.assert_array_equal(tp.position, [[110, 200, 300], [120, 200, 300], [100, 200, 300], [100, 230, 300]])
-    assert tp.kind.tolist() == [Kind.LINEAR, Kind.LINEAR, Kind.LINEAR, Kind.JOINT]
+    assert tp.line.tolist() == [6, 8, 11, 15, 15, 15] and tp.resolved.all()
+    np.testing.assert_array_equal(tp.position, [[110, 200, 300], [120, 200, 300], [100, 200, 300]] + [[100, 230, 300]] * 3)
+    assert tp.kind.tolist() == [Kind.LINEAR, Kind.LINEAR, Kind.LINEAR] + [Kind.JOINT] * 3
 
 
 def test_robtarget_arrays_by_literal_index_and_loops_over_them():
     """An array element path{2} is the second element (RAPID overview, 'Arrays': indices start
-    at 1). A loop index (path{k}) is not evaluated: that target is listed once, flagged."""
+    at 1). FOR k FROM 1 TO 2 runs MoveL path{k} with k = 1, then 2 (instruction FOR); with an
+    index the program text cannot give (FOR k FROM 1 TO n) it is listed once, unresolved."""
     path = f"  CONST robtarget path{{2}} := [{P1},\n    [[400,500,600],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]];"
     tp = read(module("    MoveL path{2}, v100, z1, tool0;", "    MoveL Offs(path{1}, 0, 0, 5), v100, z1, tool0;",
-                     "    FOR k FROM 1 TO 2 DO", "      MoveL path{k}, v100, z1, tool0;", "    ENDFOR", data=(path,)))
-    np.testing.assert_array_equal(tp.position[:2], [[400, 500, 600], [100, 200, 305]])
-    assert tp.resolved.tolist() == [True, True, False]
-    assert any("path{k}" in n for n in tp.notes)
+                     "    FOR k FROM 1 TO 2 DO", "      MoveL path{k}, v100, z1, tool0;", "    ENDFOR",
+                     "    FOR k FROM 1 TO n DO", "      MoveL path{k}, v100, z1, tool0;", "    ENDFOR", data=(path,)))
+    np.testing.assert_array_equal(tp.position[:4], [[400, 500, 600], [100, 200, 305], [100, 200, 300], [400, 500, 600]])
+    assert tp.line.tolist() == [6, 7, 9, 9, 12] and tp.resolved.tolist() == [True, True, True, True, False]
+    assert any("path{k}" in n for n in tp.notes) and any("FOR count is not known" in n for n in tp.notes)
 
 
 def test_offs_and_reltool_nested_in_arguments():

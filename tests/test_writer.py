@@ -56,8 +56,9 @@ def test_event_protocol_directly():
 
 
 def test_unknown_positions_are_refused_and_cli_writes_nothing(tmp_path):
+    (tmp_path / "loop.src").write_text("DEF loop( )\nFOR I = 1 TO N\n  LIN PATH[I]\nENDFOR\nEND\n")
     with pytest.raises(EmitError, match="unknown"):
-        write_program(parse_program(CORPUS / "krl" / "big_dat_array.src"), "rapid")  # LIN PATH[I]: I is a loop variable
+        write_program(parse_program(tmp_path / "loop.src"), "rapid")  # LIN PATH[I]: I counts to N, not known at post time
     tp = parse_program(CORPUS / "gcode" / "face_mill.nc")  # Z is unknown before the first Z word
     with pytest.raises(EmitError, match="unknown"):
         write_program(tp, "rapid")

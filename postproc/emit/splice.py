@@ -391,10 +391,11 @@ def _check_shared(original: Toolpath, modified: Toolpath, edited: np.ndarray) ->
     for r, f in zip(rows.tolist(), fields.tolist()):
         by_key.setdefault((int(original.spans[r, f, 0]), int(original.spans[r, f, 1])), []).append((r, f))
     edited = set(edited[np.isin(edited, uniq)].tolist())
+    text_values = _text_values(modified, original)  # Offs(p, i*10, ..) in a loop: each pass's own offset is not in p's text
     for key, users in by_key.items():
         if key[0] * (1 << 40) + key[1] not in edited:
             continue
-        values = {float(modified.values[r, f]) for r, f in users}
+        values = {float(np.round(text_values[r, f], 9)) for r, f in users}
         if len(values) > 1:
             raise shared_number_error(original, key[0], key[1], users[0][1], [r for r, _ in users], tuple(f"{v:g}" for v in sorted(values)))
 

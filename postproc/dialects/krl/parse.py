@@ -5,7 +5,9 @@ Lines whose shape is plain bulk data — a move with an inline aggregate
 (``DECL E6POS XP1={...}``) or an array element (``path[12]={...}``) — are recognised by
 compiled regular expressions over the whole text and their numbers are read by the
 vectorised scanner. Every other line is parsed by the lark grammar ``krl.lark``; the
-block structure (DEF/END, IF/ENDIF, ;FOLD/;ENDFOLD, ...) is checked with a stack.
+block structure (DEF/END, IF/ENDIF, ...) is checked with a stack. ``;FOLD`` / ``;ENDFOLD`` are
+comments the smartPAD editor folds on; the controller ignores them, and real files cross
+them with DEF/END (BAS.SRC) or leave one unbalanced ($config.dat): they are not blocks.
 """
 
 from __future__ import annotations
@@ -23,7 +25,9 @@ from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statemen
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
-from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text
+from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
+from .loops import ForLoop, for_values, unroll
+from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 FLD = rf"[A-Za-z][A-Za-z0-9]?[ \t]+{NUM}"
@@ -208,6 +212,9 @@ class KrlParser:
         self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
+        self._inline = _InlineFormState(self.docs)
+        self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
+        self.for_loops: list[ForLoop] = []
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
@@ -251,13 +258,7 @@ class KrlParser:
             end = text.find("\n", start)
             end = len(text) if end < 0 else end
             raw_line = text[start:end]
-            code, comment = _split_comment(raw_line)
-            if comment is not None:
-                folded = comment.lstrip(";").lstrip().upper()
-                if folded.startswith("FOLD"):
-                    stack.append(("ENDFOLD", start))
-                elif folded.startswith("ENDFOLD"):
-                    self._close(d, stack, "ENDFOLD", start + raw_line.find(";"))
+            code, _ = _split_comment(raw_line)
             if not code.strip():
                 continue
             tree = parse_statement(g, code, d.lines, d.doc.path, start, "KRL statement")
@@ -302,6 +303,8 @@ class KrlParser:
             return
         if kind in _BLOCK_OPEN:
             stack.append((_BLOCK_OPEN[kind], start))
+            if is_program:
+                self._loop_open(d, node, kind, start)
             return
         if kind in ("else_", "case", "default"):
             if not stack or stack[-1][0] not in ("ENDIF", "ENDSWITCH"):
@@ -309,6 +312,9 @@ class KrlParser:
             return
         if kind in _BLOCK_CLOSE:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
+            if kind == "endfor" and is_program and self._for_open:
+                line, counter, values = self._for_open.pop()
+                self.for_loops.append(ForLoop(line, int(d.lines.line(start)), counter, values))
             return
         if kind == "decl":
             self._decl(d, node, start)
@@ -327,6 +333,22 @@ class KrlParser:
             return
         if kind == "motion":
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    def _loop_open(self, d: _Doc, node: Tree, kind: str, start: int) -> None:
+        """A FOR of the program file is unrolled at the end when its count is literal (loops.py);
+        any other loop keeps its body once, noted."""
+        line = int(d.lines.line(start))
+        if kind == "for_open":
+            exprs = [c for c in node.children if isinstance(c, Tree)]
+            bounds = [number(e, lambda _: float("nan")) for e in exprs] + ([] if len(exprs) > 2 else [1.0])
+            counter = str(next(c for c in node.children if isinstance(c, Token) and c.type == "NAME")).upper()
+            values = for_values(*bounds[:3])
+            self._for_open.append((line, counter, values))
+            if values is not None:
+                return
+        if kind in ("for_open", "while_open", "loop_open", "repeat_open"):
+            self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this {kind.split('_')[0].upper()} is not known at post time: "
+                                      "the motions in its body are listed once")
 
     # ------------------------------------------------------------ semantics
     def _decl(self, d: _Doc, node: Tree, start: int) -> None:
@@ -355,6 +377,8 @@ class KrlParser:
 
     def _frame_value(self, d: _Doc, ev: Event, current) -> tuple[str, np.ndarray | None]:
         """(name, transform) of a frame expression; the transform is None when unknown."""
+        if ev.rhs == "$NULLFRAME":  # TOOL(0) of BAS.SRC
+            return "$NULLFRAME", np.eye(4)
         if isinstance(ev.rhs, str):  # BAS(#BASE, n): BASE_DATA[n]
             point = current(ev.rhs)
             known = point is not None and point.known and not np.isnan(point.values[:6]).all()
@@ -396,6 +420,8 @@ class KrlParser:
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
         self._change(d, node.children[0], rhs, start, where or self._where)
+        if lhs.split(".")[0] == "FDAT_ACT":
+            self._inline.assign_fdat_act(lhs, rhs, self._text(d, rhs, start), (where or self._where)[1])
         if lhs == "$VEL.CP":
             self.events.append((start, "vel", literal_number(rhs)))
         elif lhs == "$APO.CDIS":
@@ -424,12 +450,26 @@ class KrlParser:
         offset, exact, anytime = self._where
         line = int(d.lines.line(start))
         command, arg = m.group(1).upper(), (m.group(2) or "").strip()
+        if command == "INITMOV" and exact:
+            self._inline.initmov_ran = True
+        if command in FRAME_COMMANDS:
+            self._frames_from_fdat(d, start, line)
+            return
         number = re.fullmatch(r"\d+", arg)
         for key, table in (("$BASE", "BASE_DATA"), ("$TOOL", "TOOL_DATA")):
             if command == key[1:] and number and int(arg) > 0:
                 self.changes.append(Event(offset, start, key, exact, "", f"{table}[{int(arg)}]", f"{table}[{int(arg)}]", line, anytime))
             elif command not in ("BASE", "TOOL") or command == key[1:]:
                 self.changes.append(Event(offset, start, key, False, line=line, anytime=anytime))
+
+    def _frames_from_fdat(self, d: _Doc, start: int, line: int) -> None:
+        """BAS(#PTP_PARAMS / #CP_PARAMS / #FRAMES): $TOOL and $BASE from FDAT_ACT (inline_forms.py)."""
+        offset, exact, anytime = self._where
+        tool, base, why = self._inline.frames()
+        for key, rhs in (("$TOOL", tool), ("$BASE", base)):
+            self.changes.append(Event(offset, start, key, exact and rhs is not None, "", rhs, rhs or "", line, anytime))
+        if why and exact:
+            self.builder.notes.append(f"{d.doc.path}:{line}: BAS sets $TOOL and $BASE from FDAT_ACT, which cannot be followed here: {why}")
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
         move = str(node.children[0]).upper()
@@ -534,8 +574,10 @@ class KrlParser:
         offsets, approx = offsets[perm], approx[perm]
         frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
+        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0))
+        tp = self._unroll(tp)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
-        orientation = np.full((len(offsets), 4), np.nan)
+        orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
             orientation[ok] = abc_to_quat_wxyz(pose[ok, 3:6])
@@ -547,12 +589,23 @@ class KrlParser:
             kind=np.where(joint_only, np.int8(Kind.ABSJ), tp.kind).astype(np.int8),
             position=pose[:, :3],
             orientation=orientation,
-            frame=frame,
-            tool=tool,
-            speed=speed,
-            zone=np.where(approx, cdis, 0.0),
             resolved=declared,
         )
+
+    def _unroll(self, tp: Toolpath) -> Toolpath:
+        """Every pass of the FOR loops with a literal count (loops.py)."""
+        tl = self.timeline
+        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+        try:
+            tp = unroll(tp, self.for_loops, self.symbols.get, changed)
+        except OverflowError as exc:
+            d = self.docs[0]
+            raise d.lines.error(d.doc.path, int(d.lines.starts[int(exc.args[0]) - 1]), "the FOR loops here run more than 1,000,000 motions: refused")
+        by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
+        now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
+        if now_known:  # NAME[I] read per pass: no longer 'not declared'
+            tp = replace(tp, notes=tuple(n for n in tp.notes if not any(f"point {k} is not declared" in n for k in now_known)))
+        return tp
 
     def _collect_slow_targets(self) -> None:
         """The targets the grammar read, as one block."""
@@ -586,6 +639,46 @@ class KrlParser:
             else:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
+
+
+class _InlineFormState:
+    """FDAT_ACT as the main DEF's straight-line code sets it, and whether BAS.SRC's
+    corrections are known to be off (see inline_forms.py)."""
+
+    def __init__(self, docs: list[_Doc]):
+        src = docs[0].text
+        self.initmov_ran = False
+        self.fdat_act = None
+        self.anytime = self.corrections_touched = False
+        self.fdats: dict = {}
+        self.machines = MachineFrames(None)
+        if "fdat_act" not in src.lower():  # no inline form: nothing to follow (a 10^6-line CAM file skips the scans)
+            return
+        self.fdats = declared_fdats([d.text for d in docs])
+        for name in list(self.fdats):  # FP1.TOOL_NO = ...: that FDAT is not followed
+            if re.search(rf"^[ \t]*{re.escape(name)}[ \t]*\.[ \t]*\w+[ \t]*=", src, re.IGNORECASE | re.MULTILINE):
+                self.fdats[name] = None
+        self.machines = MachineFrames(next((d.text for d in docs if d.doc.role == "config"), None))
+        defs = list(re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT)?[ \t]", src, re.IGNORECASE | re.MULTILINE))
+        tail = src[defs[1].start():] if len(defs) > 1 else ""
+        # FDAT_ACT set in a subprogram may be set before any line of the main DEF runs.
+        self.anytime = bool(re.search(r"^[ \t]*FDAT_ACT\b[^=\n]*=", tail, re.I | re.M))
+        self.corrections_touched = bool(re.search(rf"^[ \t]*(?:{'|'.join(CORRECTION_SWITCHES)})[ \t]*=", src, re.I | re.M))
+
+    def assign_fdat_act(self, lhs: str, rhs, rhs_text: str, exact: bool) -> None:
+        if not exact:
+            self.fdat_act = None
+        elif lhs == "FDAT_ACT":
+            aggregate = isinstance(rhs, Tree) and rhs.data == "aggregate"
+            self.fdat_act = parse_fdat(rhs_text) if aggregate else self.fdats.get(rhs_text.upper().replace(" ", ""))
+        elif self.fdat_act is not None and lhs in ("FDAT_ACT.TOOL_NO", "FDAT_ACT.BASE_NO") and re.fullmatch(r"[+-]?\d+", rhs_text.strip()):
+            field = "tool_no" if lhs.endswith("TOOL_NO") else "base_no"
+            self.fdat_act = Fdat(**{**self.fdat_act.__dict__, field: int(rhs_text)})
+        else:
+            self.fdat_act = None
+
+    def frames(self):
+        return frames_from_fdat(None if self.anytime else self.fdat_act, self.machines, self.initmov_ran and not self.corrections_touched)
 
 
 def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

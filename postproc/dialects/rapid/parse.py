@@ -22,6 +22,8 @@ from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
+from . import counters
+from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -238,6 +240,14 @@ class RapidParser:
         self.points, self.tools, self.wobjs, self.facts = data.points, data.tools, data.wobjs, data.facts
         self.rows: list[dict] = []
         self._shapes = None
+        self.env: dict[str, float] = {}  # FOR counters bound while a loop body is replayed
+        self._loops: list[Loop] = []  # FOR loops whose bodies are being read (loops.py)
+        self._loop_order: int | None = None  # program order of the rows of the loop being run
+        self._replayed = 0  # statements run by unrolled loops (bounded: MAX_REPLAYED)
+        self._locals: dict[str, float | None] = {}  # the routine's own VAR nums: value, None if unknown (counters.py)
+        self._in_routine = False
+        self._conditional = False  # inside a one-statement IF
+        self._track_locals = not re.search(r"(?i)\bGOTO\b", self.code)  # a jump may run any line again
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
@@ -277,6 +287,11 @@ class RapidParser:
         raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
         shapes = LineShapes(self.code, raw, self.lines.starts)
         self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
+        lower = self.code.lower()
+        if ("for" in lower or "while" in lower) and re.search(r"(?im)^[ \t]*(?:FOR|WHILE)\b", self.code):  # a loop body's moves run once per pass: read by the grammar
+            in_loop = loop_body_lines(self.code)
+            for key in ("lits", "named"):
+                self._shapes[key] = self._shapes[key].subset(~in_loop[self._shapes[key].line])
         decls = self._shapes["decls"]
         if len(decls):
             values, spans, conf = self._bulk_literals(decls.span("lit")[0])
@@ -312,8 +327,8 @@ class RapidParser:
             self._bulk_rows(named, values, spans, conf, np.array(names, dtype=object)[codes])
         if self.rows:  # the grammar's targets, after the bulk ones (the builder sorts by order)
             cols = {k: np.array([r[k] for r in self.rows], dtype=object if k == "name" else None) for k in self.rows[0]}
-            order = cols.pop("order")
-            self.builder.add_block(order + self.order_base, line=self.lines.line(order), file=np.full(len(order), self.index), **cols)
+            order, at = cols.pop("order"), cols.pop("at")
+            self.builder.add_block(order + self.order_base, line=self.lines.line(at), file=np.full(len(order), self.index), **cols)
 
     def _bulk_rows(self, matches, values, spans, conf, names):
         def per_row(group, convert, dtype=None):
@@ -405,10 +420,43 @@ class RapidParser:
 
     def _statement(self, node, start: int, stack) -> None:
         kind = node.data if isinstance(node, Tree) else None
+        if self._loops and self._loops[-1].kind == "while" and kind in ("while_open", "endwhile"):
+            top = self._loops[-1]
+            if kind == "while_open" or top.inner_whiles:
+                top.inner_whiles += 1 if kind == "while_open" else -1
+                top.body.append((node, start))
+                return
+            stack.pop()
+            self._run_while(self._loops.pop(), stack)
+            return
+        if self._loops and kind not in ("for_open", "endfor"):
+            self._loops[-1].body.append((node, start))  # run when the outermost FOR closes
+            return
+        if kind == "while_open" and self._straight(stack) and self._track_locals:
+            stack.append(("ENDWHILE", start))
+            self._loops.append(Loop(node, start, kind="while"))
+            return
+        if kind == "while_open":
+            self._forget_locals()  # a loop listed once: its body's changes hold from its first line on
+        if kind == "for_open":
+            stack.append(("ENDFOR", start))
+            self._loops.append(Loop(node, start))
+            return
+        if kind == "endfor" and self._loops and stack and stack[-1][0] == "ENDFOR":
+            stack.pop()
+            loop = self._loops.pop()
+            if self._loops:
+                self._loops[-1].body.append(loop)
+            else:
+                self._loop_order = loop.start  # the passes' rows keep their execution order there
+                self._run_loop(loop, stack)
+                self._loop_order = None
+            return
         if kind in _OPEN:
             stack.append((_OPEN[kind], start))
             if kind == "routine_open":
                 self._routine(node)
+                self._locals, self._in_routine = {}, True
         elif kind in _CLOSE:
             if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
                 want, where = stack[-1]
@@ -417,6 +465,8 @@ class RapidParser:
                 expected = stack[-1][0] if stack else "nothing open"
                 raise self.lines.error(self.doc.path, start, f"{self.code[start:start + 12].split()[0]} does not close the open block (expected {expected})")
             stack.pop()
+            if kind == "routine_close":
+                self._locals, self._in_routine = {}, False
         elif kind in ("elseif", "else_") and (not stack or stack[-1][0] != "ENDIF"):
             raise self.lines.error(self.doc.path, start, "ELSE outside IF")
         elif kind in ("case", "default") and (not stack or stack[-1][0] != "ENDTEST"):
@@ -427,11 +477,14 @@ class RapidParser:
             if not any(s[0] == "ENDROUTINE" for s in stack):
                 raise self.lines.error(self.doc.path, start, "motion instruction outside a routine")
             self._move(node, start)
+        elif kind == "assign" and self._local_update(node, stack):
+            return
         elif kind == "assign":
             self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
         elif kind == "call":
             self._call(node, start)
         elif kind == "record_field" and not (stack and stack[-1][0] == "ENDRECORD"):
+            self._local_update(node, stack)
             # `name arg;` outside a RECORD is a call with one argument (grammar: same shape as a field)
             name, arg = node.children[0], node.children[1]
             path, lines = self.doc.path, self.lines
@@ -441,7 +494,95 @@ class RapidParser:
             inner_start = self._span(inner, start)[0]
             if isinstance(inner, Tree) and inner.data == "move" and self._skip[self.lines.line(inner_start) - 1]:
                 return  # IF cond <newline> a bulk move: the bulk path has read it
-            self._statement(inner, start, stack)
+            self._conditional = True
+            try:
+                self._statement(inner, start, stack)
+            finally:
+                self._conditional = False
+
+    # ------------------------------------------------ routine-local counters
+    def _values(self) -> dict[str, float]:
+        """Known nums now: the routine's local counters and the FOR counters bound."""
+        if not self._track_locals:  # a GOTO may run a line again with other values
+            return dict(self.env)
+        return {**{k: v for k, v in self._locals.items() if v is not None}, **self.env}
+
+    def _straight(self, stack) -> bool:
+        """Straight-line code of a routine: no block open, no loop pass being run."""
+        return [w for w, _ in stack] == ["ENDMODULE", "ENDROUTINE"] and self._loop_order is None and not self._conditional
+
+    def _forget_locals(self) -> None:
+        self._locals = dict.fromkeys(self._locals)
+
+    def _local_update(self, node: Tree, stack) -> bool:
+        """``v := e`` / ``Incr v`` / ``Decr v`` of a local num: its value in straight-line code,
+        unknown elsewhere. True when the statement was such an update (no other effect)."""
+        found = counters.update_of(node, set(self._locals))
+        if found is None:
+            if node.data == "record_field":  # `Instr v;`: an instruction that may write its argument
+                written = {str(t).upper() for t in node.children[1:] if isinstance(t, Token)} | {str(t).upper() for c in node.children[1:] if isinstance(c, Tree) for t in c.scan_values(lambda v: isinstance(v, Token))}
+                for name in set(self._locals) & written:
+                    self._locals[name] = None
+            return False
+        name, how = found
+        value = counters.apply(name, how, self._values()) if self._straight(stack) else float("nan")
+        self._locals[name] = None if np.isnan(value) else value
+        return True
+
+    def _run_while(self, loop: Loop, stack) -> None:
+        """A WHILE of straight-line code: every pass when its count can be worked out (counters.py),
+        else its body once with the local nums unknown."""
+        known = {k: v for k, v in self._locals.items() if v is not None}
+        planned = counters.plan(loop, known, set(self._locals))
+        stack.append(("ENDWHILE", loop.start))
+        if planned is None:
+            self.builder.notes.append(f"{self._where(loop.start)}: the number of passes of this WHILE is not known at post time: its moves are listed once")
+            self._forget_locals()
+            self._run_body(loop, stack, {})
+        else:
+            (passes,), updates = planned
+            self._loop_order = loop.start
+            for _ in range(passes):
+                self._run_body(loop, stack, updates)
+            self._loop_order = None
+        stack.pop()
+
+    def _run_body(self, loop: Loop, stack, updates: dict) -> None:
+        for k, item in enumerate(loop.body):
+            if k in updates:
+                name, how = updates[k]
+                self._locals[name] = counters.apply(name, how, self._values())
+            elif isinstance(item, Loop):
+                self._run_loop(item, stack)
+            else:
+                self._replayed += 1
+                if self._replayed > MAX_REPLAYED:
+                    raise self.lines.error(self.doc.path, loop.start, f"the loops here run more than {MAX_REPLAYED:,} statements: refused (memory is bounded)")
+                self._statement(item[0], item[1], stack)
+
+    def _run_loop(self, loop: Loop, stack) -> None:
+        """Every pass of a FOR body, its counter bound (loops.py); once, counter unknown,
+        when the count cannot be computed."""
+        name, values = for_counter(loop.node, self._values())
+        if self._replayed + planned_statements(loop, self._values()) > MAX_REPLAYED:
+            raise self.lines.error(self.doc.path, loop.start, f"the FOR loops here run more than {MAX_REPLAYED:,} statements: refused (memory is bounded)")
+        if values is None:
+            self.builder.notes.append(f"{self._where(loop.start)}: the FOR count is not known at post time: its body's moves are listed once, "
+                                      f"and those that use {name} are not resolved")
+            values = [float("nan")]
+        saved = self.env.get(name)
+        for value in values:
+            self.env[name] = value
+            for item in loop.body:
+                if isinstance(item, Loop):
+                    self._run_loop(item, stack)
+                else:
+                    self._replayed += 1
+                    self._statement(item[0], item[1], stack)
+        if saved is None:
+            self.env.pop(name, None)
+        else:
+            self.env[name] = saved
 
     def _where(self, offset: int) -> str:
         return f"{self.doc.path}:{self.lines.line(offset)}"
@@ -452,6 +593,8 @@ class RapidParser:
         name = str(node.children[0])
         args = node.children[1].children if len(node.children) > 1 else []
         roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        for name in set(self._locals) & {str(t).upper() for t in node.scan_values(lambda v: isinstance(v, Token) and v.type == "NAME")}:
+            self._locals[name] = None  # an argument the instruction may write
         path, lines = self.doc.path, self.lines
         self.facts.calls.append((name, roots, self._where(start), lambda message: lines.error(path, start, message)))
 
@@ -476,6 +619,11 @@ class RapidParser:
             return
         dtype, name = str(names[0]).lower(), str(names[1])
         init = node.children[-1]
+        storage = next((str(t).upper() for t in tokens if t.type == "STORAGE"), "")
+        if self._in_routine and dtype == "num" and storage == "VAR" and not any(isinstance(c, Tree) and c.data == "dims" for c in node.children):
+            value = evaluate(init, self._values()) if isinstance(init, Tree) else float("nan")
+            self._locals[name.upper()] = None if np.isnan(value) else value  # no initial value: not assumed
+            return
         if not isinstance(init, Tree) or init.data != "aggregate":
             return
         s, e = self._span(init, start)
@@ -536,12 +684,18 @@ class RapidParser:
                 a_s, a_e = self._span(arg, start) if arg is not None else (0, 0)
                 sl = self.numbers.between(a_s, a_e)
                 literal = isinstance(arg, Tree) and arg.data in ("number", "neg") and sl.stop - sl.start == 1
+                computed = evaluate(arg, self._values()) if arg is not None and not literal else float("nan")
                 if literal and not np.isnan(values[k]) and not np.isnan(self.numbers.value[sl][0]):
                     delta = float(self.numbers.value[sl][0])
                     offset[k] = values[k]
                     offset_span[k] = spans[k]
                     spans[k] = (self.index, self.numbers.start[sl][0], self.numbers.end[sl][0])
                     values[k] = values[k] + delta
+                elif not np.isnan(computed) and not np.isnan(values[k]):
+                    # Offs(p, i*10, ...) in an unrolled loop: p's own number is what the text
+                    # holds (IR = p.x + offset); passes that need different p.x are refused on write-back.
+                    offset[k] = computed
+                    values[k] = values[k] + computed
                 else:
                     values[k] = np.nan  # an offset the parser cannot evaluate
                     spans[k] = -1
@@ -549,7 +703,8 @@ class RapidParser:
         if isinstance(node, Tree) and node.data == "funcall" and str(node.children[0]).upper() == "RELTOOL":
             return self._reltool(node, start, empty), text
         if isinstance(node, Tree) and node.data == "lvalue":
-            found = self.points.get(text.upper())
+            key = element_key(node, self._values()) if "{" in text else None
+            found = self.points.get(key or text.upper())
             if found is not None:
                 return (*found, np.zeros(NF), _no_spans()), text
         self.builder.notes.append(f"{self.doc.path}:{self.lines.line(s)}: target {text} cannot be evaluated from the program text")
@@ -614,7 +769,8 @@ class RapidParser:
         for k, tnode in zip(kinds, [positional[i] for i in targets]):
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
-            self.rows.append(dict(order=self._span(node, start)[0], kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
+            at = self._span(node, start)[0]
+            self.rows.append(dict(order=at if self._loop_order is None else self._loop_order, at=at, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
                                   tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
 
     def _text(self, node, start: int) -> str:

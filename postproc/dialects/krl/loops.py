@@ -1,0 +1,103 @@
+"""KRL FOR loops as the controller runs them: one IR row per executed motion.
+
+KUKA System Software 8.x, Operating and Programming Instructions for System Integrators,
+"FOR ... TO ... ENDFOR": ``FOR Counter = Start TO End [STEP Increment]``; the counter (INT)
+starts at Start, the body runs while it has not passed End, then the counter changes by
+Increment (an integer constant, +1 when STEP is left out; a loop whose Start is already past
+End runs no pass).
+
+The parser reads each motion once, in text order (state.py gives each its point and frames
+at its line). A FOR in the program file whose Start, End and Increment are literal
+(expressions of literals) is unrolled here: the rows of its body are repeated once per
+pass, in execution order, and share their text spans (a number that would need two values
+is refused on write-back: emit/splice.py). A target ``NAME[I]`` indexed by the counter takes
+the element of the pass when the program never changes that array. A loop whose count is
+not known at post time (LOOP, WHILE, REPEAT, a FOR over variables) keeps its body once; a
+note names it.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ...ir import Toolpath
+
+MAX_ROWS = 1_000_000  # executed motions after unrolling; more is refused (memory is bounded)
+
+
+@dataclass
+class ForLoop:
+    first_line: int  # the FOR line
+    last_line: int  # its ENDFOR
+    counter: str
+    values: list[int] | None  # None: count not known at post time
+
+
+def for_values(start: float, end: float, step: float) -> list[int] | None:
+    if np.isnan([start, end, step]).any() or step == 0 or any(v != int(v) for v in (start, end, step)):
+        return None
+    count = int((end - start) // step) + 1
+    if count > MAX_ROWS:
+        return None
+    return [int(start + k * step) for k in range(max(count, 0))]
+
+
+def _sequence(rows: np.ndarray, lines: np.ndarray, loops: list[ForLoop], env: dict, out: list, envs: list) -> None:
+    """Append, in execution order, the rows of ``rows`` (indices into lines) with the loops among them run."""
+    outer = [lp for lp in loops if not any(o is not lp and o.first_line < lp.first_line and lp.last_line < o.last_line for o in loops)]
+    position = 0
+    for lp in sorted(outer, key=lambda lp: lp.first_line):
+        before = rows[position:][lines[rows[position:]] < lp.first_line]
+        out.extend(before.tolist())
+        envs.extend([env] * len(before))
+        position += len(before)
+        body = rows[position:][lines[rows[position:]] < lp.last_line]
+        position += len(body)
+        inner = [o for o in loops if lp.first_line < o.first_line and o.last_line < lp.last_line]
+        for value in lp.values if lp.values is not None else [None]:
+            _sequence(body, lines, inner, {**env, lp.counter: value}, out, envs)
+            if len(out) > MAX_ROWS:
+                raise OverflowError(lp.first_line)
+    rest = rows[position:]
+    out.extend(rest.tolist())
+    envs.extend([env] * len(rest))
+
+
+def unroll(tp: Toolpath, loops: list[ForLoop], lookup, changed_arrays: set[str]) -> Toolpath:
+    """``tp`` with every known-count FOR of the program file run (see the module's docstring).
+    ``lookup(name)`` gives a declared point's (values, spans, conf, insert) or None."""
+    known = [lp for lp in loops if lp.values is not None]
+    if not known:
+        return tp
+    program = np.nonzero(tp.file == 0)[0]
+    others = np.nonzero(tp.file != 0)[0]
+    out: list[int] = []
+    envs: list[dict] = []
+    _sequence(program, tp.line, known, {}, out, envs)
+    rows = np.array(out + others.tolist(), dtype=np.int64)
+    envs = envs + [{}] * len(others)
+    tp = tp.take(rows)
+    return _indexed_by_counter(tp, envs, lookup, changed_arrays)
+
+
+def _indexed_by_counter(tp: Toolpath, envs: list[dict], lookup, changed_arrays: set[str]) -> Toolpath:
+    """Targets ``NAME[I]`` with I a counter of the pass: the element of that pass."""
+    index = re.compile(r"^([A-Za-z_$][\w$]*)\[\s*([A-Za-z_]\w*)\s*\]$")
+    hits = [(r, m) for r, name in enumerate(tp.target_name) if envs[r] and (m := index.match(name or ""))]
+    if not hits:
+        return tp
+    values, spans, conf = tp.values.copy(), tp.spans.copy(), tp.conf.copy()
+    insert = tp.insert_at.copy() if tp.insert_at is not None else None
+    for r, m in hits:
+        array, counter = m.group(1).upper(), m.group(2).upper()
+        value = envs[r].get(counter)
+        found = lookup(f"{array}[{value}]") if value is not None and array + "[" not in changed_arrays else None
+        if found is None or np.isnan(found[0][:6]).any():
+            continue  # an element not declared, or partial: stays unresolved (no values)
+        values[r], spans[r], conf[r] = found[0], found[1], found[2]
+        if insert is not None:
+            insert[r] = found[3]
+    return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert)  # poses and 'resolved' follow from the values
