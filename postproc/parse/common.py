@@ -24,14 +24,15 @@ class Numbers:
         return slice(int(np.searchsorted(self.start, lo)), int(np.searchsorted(self.start, hi)))
 
 
-def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
+def scan_numbers(text: str, letter_prefix: bool = False, raw: np.ndarray | None = None) -> Numbers:
     """Every decimal number in ``text`` that is not part of an identifier, with its sign.
 
     ``letter_prefix``: a number right after a letter counts (G-code words like X-10.5);
     otherwise digits glued to a letter belong to a name (p10, tool0, E1). A run that is
-    not a valid number ('1e5e3', '1.2.3') has the value NaN.
+    not a valid number ('1e5e3', '1.2.3') has the value NaN. ``raw``: the text's Latin-1
+    bytes where the caller has them already (a 100 MB text is not encoded twice).
     """
-    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8) if raw is None else raw
     starts, ends, values, status = scan_kernel.scan(raw, letter_prefix)
     for i in np.nonzero(status == scan_kernel.SLOW)[0].tolist():
         values[i] = float(text[starts[i] : ends[i]])  # beyond the exact fast path: Python rounds
