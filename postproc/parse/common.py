@@ -167,6 +167,8 @@ class Builder:
             offset=cols["offset"],
             offset_span=cols["offset_span"],
             arc=cols["arc"],
+            feed_mode=cols["feed_mode"],
+            spindle=cols["spindle"],
             notes=tuple(self.notes),
         )
 
@@ -178,7 +180,7 @@ class Builder:
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
-            if key in ("offset", "offset_span", "arc") and not any(key in b for b in self.blocks):
+            if key in ("offset", "offset_span", "arc", "feed_mode", "spindle") and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             shape = _COLUMN_SHAPES.get(key, ())
@@ -228,6 +230,8 @@ _COLUMN_DEFAULTS = {
     "offset": (float, 0.0),
     "offset_span": (np.int64, -1),
     "arc": (float, np.nan),
+    "feed_mode": (np.int8, 94),
+    "spindle": (float, np.nan),
 }
 _COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,)}
 
