@@ -146,6 +146,17 @@ def test_reader_refuses_what_linuxcnc_refuses_in_g93(tmp_path, body, line, why):
         parse_program(src)
 
 
+def test_five_axis_program_to_a_robot_keeps_the_tip_feed(tmp_path):
+    """convert --machine: F600 (G94) is 10 mm/s = $VEL.CP 0.01 m/s (it was written 60 times
+    too slow); the G93 move of the tip 60 mm with F2 takes 1/2 minute: 120 mm/min = 0.002 m/s."""
+    src = tmp_path / "five.ngc"
+    src.write_text("G21 G90 G17\nG0 X0 Y0 Z0 A0 C0\nG1 X60 F600\nG93\nG1 X120 A10 F2\nG94\nM2\n")
+    out = tmp_path / "five.src"
+    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "--machine", "xyzac-trt", "--input-axes", "tip", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert re.findall(r"\$VEL\.CP\s*=\s*([\d.]+)", out.read_text(encoding="latin-1")) == ["0.01", "0.002"]
+
+
 def test_inspect_reports_the_mode_and_no_mm_per_min_for_inverse_time(tmp_path):
     res = runner.invoke(app, ["inspect", "--json", str(PROGRAM)])
     assert res.exit_code == 0, res.output

@@ -154,11 +154,14 @@ def _filled_axis(tp: Toolpath) -> np.ndarray:
 def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     """The G-code program's IR with robot orientations: the TCP's z axis opposite to the tool
     axis (as the writer's tool-down default), the rotation about it from the base x axis;
-    speeds in mm/s. For writing a robot program from a five-axis one."""
+    speeds the tool tip's mm/min (G93 blocks' times already turned into feeds), so every
+    target is per minute (G94): the writer takes the G-code dialect's mm/min to mm/s.
+    For writing a robot program from a five-axis one."""
     from dataclasses import replace
 
     from ..frames import axis_to_quat_wxyz
 
     quat = axis_to_quat_wxyz(-path.axis)
-    speed = np.where(path.rapid, np.nan, path.feed / 60.0)
-    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed)
+    speed = np.where(path.rapid, np.nan, path.feed)
+    per_minute = np.full(len(tp), 94, np.int8)
+    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, feed_mode=per_minute)
