@@ -168,6 +168,61 @@ def test_inspect_reports_the_mode_and_no_mm_per_min_for_inverse_time(tmp_path):
     assert moves[8]["feed_mode"] == "G95" and moves[8]["f_unit"] == "mm/rev" and moves[8]["speed_derived_mm_per_min"] == 60.0
 
 
+_MOTION = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|USE_LENGTH_UNITS|SET_FEED_RATE|SET_FEED_MODE|SET_SPINDLE_SPEED)\(([^)]*)\)")
+
+
+def canonical_feeds(text: str) -> np.ndarray:
+    """(moves,) mm/min of each of rs274's motion calls (canonical_endpoints' order), NaN for a
+    traverse: SET_FEED_RATE (inverse time already turned into units/min by rs274), times
+    SET_SPINDLE_SPEED under SET_FEED_MODE(0, 1) (units per revolution), times 25.4 in inches."""
+    scale, rate, spindle, per_rev, out = 1.0, np.nan, np.nan, False, []
+    for call, args in _MOTION.findall(text):
+        if call == "USE_LENGTH_UNITS":
+            scale = 25.4 if "INCHES" in args else 1.0
+        elif call == "SET_FEED_RATE":
+            rate = float(args)
+        elif call == "SET_FEED_MODE":
+            per_rev = args.split(",")[1].strip() == "1"
+        elif call == "SET_SPINDLE_SPEED":
+            spindle = float(args.split(",")[1])
+        else:
+            out.append(np.nan if call == "STRAIGHT_TRAVERSE" else rate * scale * (spindle if per_rev else 1.0))
+    return np.array(out)
+
+
+def _corpus_cases():
+    from test_real_corpus import RECORDED, RS274_XFAIL
+
+    return [n for n in RECORDED if n not in RS274_XFAIL]
+
+
+@pytest.mark.parametrize("name", _corpus_cases())
+def test_corpus_feeds_equal_rs274s(name):
+    """Every feed move of the real G-code corpus that rs274 runs (its recordings, kept for
+    test_real_corpus.py; LinuxCNC's daisy.ngc is a G93 program): the speed convert writes
+    (mm/min) equals rs274's feed rate (printed to 4 decimals: 1e-4 of the program unit / min
+    plus the G93 length's rounding). A move convert refuses (no machine speed) is one rs274
+    gives no tool speed either: a rotary-only or zero-length G93 move."""
+    from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions, recording
+
+    from postproc.emit.feeds import _speeds
+
+    tp = parse_program(corpus_file(name))
+    text = recording(name).read_text(encoding="latin-1")
+    canon, tol, arc = canonical_endpoints(text)
+    theirs = canonical_feeds(text)[_moves(canon, tol, arc)]
+    rows = _moves(machine_positions(tp), np.full(len(tp), 1e-9), np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)))
+    assert len(rows) == len(theirs)
+    ours, why = _speeds(tp)
+    ours, why = ours[rows], why[rows]
+    feed = np.isfinite(theirs) & (tp.kind[rows] != Kind.RAPID) & np.isfinite(ours) & (why == "")
+    off = feed & ~(np.abs(ours - theirs) <= 1e-5 * np.abs(theirs) + 2e-3 * tp.scale[rows, 0])
+    if off.any():
+        i = int(np.nonzero(off)[0][0])
+        pytest.fail(f"{name}: line {tp.line[rows[i]]}: {ours[i]} mm/min, rs274 {theirs[i]}; {int(off.sum())} of {int(feed.sum())} feed moves differ")
+    assert all(("rotary" in w or "zero length" in w) for w in why[why != ""]), set(why[why != ""])
+
+
 if __name__ == "__main__" and "--record" in sys.argv:
     RECORDED.write_text(run_rs274(PROGRAM))
     print(f"recorded {RECORDED}")
