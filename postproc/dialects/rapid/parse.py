@@ -122,7 +122,7 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields, source, nf)
     (The IR width ``nf`` is an argument: numba's on-disk cache would keep a global's old value.)"""
     m = len(first)
     # Each cell is written once (not filled, then overwritten): at 10^6 targets these are
-    # 0.7 GB, and the second pass over them was a tenth of the parse.
+    # 0.7 GB, and a fill first would pass over all of it twice.
     values = np.empty((m, nf))
     spans = np.empty((m, nf, 3), np.int64)
     conf = np.empty((m, 4))
