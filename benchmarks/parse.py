@@ -1,9 +1,12 @@
-"""Parse throughput (lines/s) per dialect on 10^6-line programs (target: >= 10^5 lines/s).
+"""Parse throughput (lines/s) per dialect on 10^6-line programs (target: >= 1.5 x 10^5 lines/s, issue 12).
 
 Run: .venv/bin/python benchmarks/parse.py [--lines 1000000]
 Writes one program per dialect to a temporary folder (moves with literal targets, the bulk
 of real CAM output; a KRL .src whose points live in its .dat), then times parse and the
 unchanged emit (round trip), and reports the peak memory of each run in a fresh process.
+Wall time and the parse's CPU time are both printed, with the load average at the start; the
+target is judged on lines per CPU second (on a shared, loaded machine the wall time measures
+the other jobs; on an idle one the two agree).
 """
 
 from __future__ import annotations
@@ -61,15 +64,15 @@ def measure(path: str) -> None:
     from postproc.programs import emit_texts, parse_program
 
     lines = sum(Path(d).read_bytes().count(b"\n") for d in [path] + ([str(Path(path).with_suffix(".dat"))] if Path(path).with_suffix(".dat").exists() else []))
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     tp = parse_program(path)
-    t_parse = time.perf_counter() - t0
+    t_parse, cpu_parse = time.perf_counter() - t0, time.process_time() - c0
     t0 = time.perf_counter()
     texts = emit_texts(tp, tp)
     t_emit = time.perf_counter() - t0
     assert all(t.encode("latin-1") == d.encode() for t, d in zip(texts, tp.sources))
     peak_mb = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    print(json.dumps({"lines": lines, "targets": len(tp), "parse_s": t_parse, "emit_s": t_emit, "peak_mb": peak_mb}))
+    print(json.dumps({"lines": lines, "targets": len(tp), "parse_s": t_parse, "parse_cpu_s": cpu_parse, "emit_s": t_emit, "peak_mb": peak_mb}))
 
 
 def main():
@@ -83,7 +86,8 @@ def main():
     with tempfile.TemporaryDirectory() as tmp:
         programs = make_programs(Path(tmp), args.lines)
         os.sync()  # the programs' write-back would otherwise compete with the first measurement
-        print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'round trip s':>14}{'peak MB':>9}   target >= 1e5 lines/s")
+        print(f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())} (1, 5, 15 min)")
+        print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'CPU s':>8}{'lines/CPU s':>13}{'round trip s':>14}{'peak MB':>9}   target >= 1.5e5 lines per CPU s")
         for name, path in programs.items():
             proc = subprocess.run([sys.executable, __file__, "--measure", str(path)], capture_output=True, text=True, env=os.environ)
             if proc.returncode:
@@ -91,7 +95,9 @@ def main():
                 continue
             r = json.loads(proc.stdout)
             rate = r["lines"] / r["parse_s"]
-            print(f"{name:<20}{r['lines']:>10,}{r['targets']:>10,}{r['parse_s']:>9.2f}{rate:>12,.0f}{r['emit_s']:>14.2f}{r['peak_mb']:>9.0f}   {'met' if rate >= 1e5 else 'MISSED'}")
+            cpu_rate = r["lines"] / r["parse_cpu_s"]
+            print(f"{name:<20}{r['lines']:>10,}{r['targets']:>10,}{r['parse_s']:>9.2f}{rate:>12,.0f}{r['parse_cpu_s']:>8.2f}{cpu_rate:>13,.0f}"
+                  f"{r['emit_s']:>14.2f}{r['peak_mb']:>9.0f}   {'met' if cpu_rate >= 1.5e5 else 'MISSED'}")
 
 
 if __name__ == "__main__":

@@ -880,6 +880,9 @@ def inspect_cmd(
     from .arcs import describe
 
     arc_of = describe(tp)  # G2/G3: plane, direction, centre, radius
+    from .emit.feeds import describe as describe_feeds
+
+    feed_of = describe_feeds(tp)  # G-code: feed mode; G93 / G95: F, its unit and the derived mm/min
     moves = []
     for i in range(len(tp)):
         entry = {
@@ -903,6 +906,10 @@ def inspect_cmd(
         if i in arc_of:
             entry["arc"] = arc_of[i]
         entry["speed"] = num(tp.speed[i])
+        if i in feed_of:
+            entry.update(feed_of[i])
+            if "f_unit" in entry:
+                entry["speed"] = None  # F is not a speed under G93 / G95 (see f, f_unit, speed_derived_mm_per_min)
         entry["zone"] = num(tp.zone[i])
         moves.append(entry)
     if json_out:

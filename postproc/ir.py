@@ -101,9 +101,15 @@ class Toolpath:
     # incremental from the start (0: G91.1), full turns P (1 when absent); NaN on other rows.
     # None when the program has no G2/G3 (see postproc.arcs).
     arc: np.ndarray | None = field(repr=False, default=None)
+    # (N,) G-code feed mode in force at each target: 93 inverse time (F = 1/minutes of the
+    # move), 94 units per minute, 95 units per spindle revolution; ``speed`` keeps F as
+    # written whatever the mode (postproc.emit.feeds turns it into mm/min). ``spindle`` (N,)
+    # the S word in force (rev/min, NaN unknown). Both None for dialects without them.
+    feed_mode: np.ndarray | None = field(repr=False, default=None)
+    spindle: np.ndarray | None = field(repr=False, default=None)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

@@ -57,11 +57,3 @@ def test_a_helix_is_refused_with_its_line_not_written_as_a_chord(tmp_path):
     assert "line 3" in res.output and "helical" in res.output
     assert not out.exists() and not out.with_suffix(".dat").exists()
 
-
-def test_inverse_time_feed_is_refused_not_written_as_a_speed(tmp_path):
-    """LinuxCNC manual, "G93, G94, G95 Feed Rate Mode": in G93 F is the inverse of the move's
-    time in minutes. Written as a robot speed it would be a wrong feed with exit 0: refused
-    with its line, nothing written."""
-    res, out = _convert(tmp_path, "G21 G90 G17\nG0 X0 Y0 Z0\nG93\nG1 X100 F2\nG94\nM2\n", "krl", "g93.src")
-    assert res.exit_code == 2 and "line 4" in res.output and "G93" in res.output
-    assert not out.exists() and not out.with_suffix(".dat").exists()

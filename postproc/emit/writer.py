@@ -15,6 +15,7 @@ import numpy as np
 from ..errors import EmitError
 from ..frames import quat_wxyz_to_matrix
 from ..ir import Kind, Toolpath
+from .feeds import machine_speeds
 
 # A tool pointing straight down (180 degrees about y): the orientation given to targets
 # that come without one (3-axis G-code).
@@ -49,8 +50,8 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     from .. import dialects  # (not at the top: the dialects' writers import this module)
 
     per_second = dialects.of(tp).speed_to_mm_per_s
-    if dialects.of(tp).machine_program:
-        _refuse_inverse_time(tp)
+    # G93 / G95 feeds as the speed the machine moves at (F x length, F x S), or refused with the F word's place.
+    speeds = machine_speeds(tp) if dialects.of(tp).machine_program else tp.speed
     arcs = circular_moves(tp, poses)
     i = 0
     while i < len(tp):
@@ -60,8 +61,8 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
         if tp.tool[i] != tool:
             tool = int(tp.tool[i])
             w.tool(tp.tool_names[tool], tp.tools[tool])
-        if speed is None or not np.array_equal(tp.speed[i], speed, equal_nan=True):
-            speed = tp.speed[i]
+        if speed is None or not np.array_equal(speeds[i], speed, equal_nan=True):
+            speed = speeds[i]
             w.speed(float(speed) * per_second)
         if zone is None or not np.array_equal(tp.zone[i], zone, equal_nan=True):
             zone = tp.zone[i]
@@ -82,18 +83,6 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
             w.move_linear(poses[i], tp.conf[i])
         i += 1
     return w.end()
-
-
-def _refuse_inverse_time(tp: Toolpath) -> None:
-    """G93 feed moves: F is 1/minutes of the move, not a speed; a robot program written from
-    it would run at the wrong feed, so the conversion is refused with the first such line."""
-    from ..fivex.program import inverse_time_rows  # G-code's G93/G94 modes, as the five-axis writer reads them
-
-    feed = inverse_time_rows(tp) & (tp.kind != Kind.RAPID)
-    if feed.any():
-        i = int(np.argmax(feed))
-        raise EmitError(f"line {tp.line[i]}: a feed move in G93 inverse-time mode (F = 1/minutes of the move) cannot be written "
-                        "as a robot speed; write the program in G94 (units per minute)")
 
 
 ARC_RADIUS_TOL_MM = 2e-3  # start and end radius may differ this much (LinuxCNC accepts such arcs) for one circle

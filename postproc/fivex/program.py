@@ -43,17 +43,11 @@ class FivePath:
 
 
 def inverse_time_rows(tp: Toolpath) -> np.ndarray:
-    """(N,) True where the target's block runs in G93 inverse-time mode (G-code only)."""
-    text = tp.sources[0].text
-    code = re.sub(r"\([^()\n]*\)|;[^\n]*", lambda m: " " * len(m.group(0)), text)  # comments out, offsets kept
-    events = [(m.start(), m.group(1) == "3") for m in re.finditer(r"(?<![\d.])G0*9([34])(?![\d.])", code, re.IGNORECASE)]
-    if not events:
+    """(N,) True where the target's block runs in G93 inverse-time mode (the IR's feed_mode;
+    dialects without feed modes: none)."""
+    if tp.feed_mode is None:
         return np.zeros(len(tp), bool)
-    starts = np.r_[0, np.cumsum([len(line) + 1 for line in text.split("\n")])]
-    line_end = starts[tp.line]  # offset just past each target's line
-    at = np.searchsorted(np.array([o for o, _ in events]), line_end, side="left") - 1
-    modes = np.array([m for _, m in events])
-    return np.where(at >= 0, modes[np.maximum(at, 0)], False)
+    return tp.feed_mode == 93
 
 
 def _check_kinds(tp: Toolpath) -> None:
@@ -160,11 +154,14 @@ def _filled_axis(tp: Toolpath) -> np.ndarray:
 def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     """The G-code program's IR with robot orientations: the TCP's z axis opposite to the tool
     axis (as the writer's tool-down default), the rotation about it from the base x axis;
-    speeds in mm/s. For writing a robot program from a five-axis one."""
+    speeds the tool tip's mm/min (G93 blocks' times already turned into feeds), so every
+    target is per minute (G94): the writer takes the G-code dialect's mm/min to mm/s.
+    For writing a robot program from a five-axis one."""
     from dataclasses import replace
 
     from ..frames import axis_to_quat_wxyz
 
     quat = axis_to_quat_wxyz(-path.axis)
-    speed = np.where(path.rapid, np.nan, path.feed / 60.0)
-    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed)
+    speed = np.where(path.rapid, np.nan, path.feed)
+    per_minute = np.full(len(tp), 94, np.int8)
+    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, feed_mode=per_minute)

@@ -24,14 +24,15 @@ class Numbers:
         return slice(int(np.searchsorted(self.start, lo)), int(np.searchsorted(self.start, hi)))
 
 
-def scan_numbers(text: str, letter_prefix: bool = False) -> Numbers:
+def scan_numbers(text: str, letter_prefix: bool = False, raw: np.ndarray | None = None) -> Numbers:
     """Every decimal number in ``text`` that is not part of an identifier, with its sign.
 
     ``letter_prefix``: a number right after a letter counts (G-code words like X-10.5);
     otherwise digits glued to a letter belong to a name (p10, tool0, E1). A run that is
-    not a valid number ('1e5e3', '1.2.3') has the value NaN.
+    not a valid number ('1e5e3', '1.2.3') has the value NaN. ``raw``: the text's Latin-1
+    bytes where the caller has them already (a 100 MB text is not encoded twice).
     """
-    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8) if raw is None else raw
     starts, ends, values, status = scan_kernel.scan(raw, letter_prefix)
     for i in np.nonzero(status == scan_kernel.SLOW)[0].tolist():
         values[i] = float(text[starts[i] : ends[i]])  # beyond the exact fast path: Python rounds
@@ -166,6 +167,8 @@ class Builder:
             offset=cols["offset"],
             offset_span=cols["offset_span"],
             arc=cols["arc"],
+            feed_mode=cols["feed_mode"],
+            spindle=cols["spindle"],
             notes=tuple(self.notes),
         )
 
@@ -177,7 +180,7 @@ class Builder:
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
-            if key in ("offset", "offset_span", "arc") and not any(key in b for b in self.blocks):
+            if key in ("offset", "offset_span", "arc", "feed_mode", "spindle") and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             shape = _COLUMN_SHAPES.get(key, ())
@@ -227,6 +230,8 @@ _COLUMN_DEFAULTS = {
     "offset": (float, 0.0),
     "offset_span": (np.int64, -1),
     "arc": (float, np.nan),
+    "feed_mode": (np.int8, 94),
+    "spindle": (float, np.nan),
 }
 _COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,)}
 

@@ -100,6 +100,23 @@ def _verify(raw, line_start, line_end, rep_of_line):
     return ok
 
 
+@njit(cache=True)
+def _map_groups(line_start, extra, first_run, lines, shapes, runs, pos, present):
+    """(M, groups, 2) group spans of M lines from their shape's template: a boundary after
+    k digit runs of the shape lies at its shape offset plus what those runs lost in the shape
+    (one pass, without (M, groups, 2) temporaries for each step); -1 where a group is absent."""
+    m, ng = len(lines), runs.shape[1]
+    out = np.empty((m, ng, 2), np.int64)
+    for i in range(m):
+        li, s = lines[i], shapes[i]
+        f = first_run[li]
+        base = line_start[li] - extra[f]
+        for g in range(ng):
+            for side in range(2):
+                out[i, g, side] = base + pos[s, g, side] + extra[f + runs[s, g, side]] if present[s, g] else -1
+    return out
+
+
 class LineShapes:
     """The lines of one text (without their '\\n'), grouped by shape."""
 
@@ -114,12 +131,13 @@ class LineShapes:
             ends[-1] = n
         self.line_end = ends
         self.hashes, self.first_run, self.run_start, self.extra = _shapes(raw, self.line_start, self.line_end, _FNV_PRIME, _FNV_OFFSET)
-        _, first, self.shape_id = np.unique(self.hashes, return_index=True, return_inverse=True)
+        first, self.shape_id = unique_runs(self.hashes)
         self.rep = first  # representative line of each shape
         self.exact = _verify(raw, self.line_start, self.line_end, first[self.shape_id])
 
     def match(self, regex: re.Pattern, lines: np.ndarray | None = None) -> "LineMatches":
         """The lines (all, or those given) that ``regex`` matches as a whole line, with group spans."""
+        lines_given = lines
         lines = np.arange(len(self.line_start)) if lines is None else np.asarray(lines, dtype=np.int64)
         groups = list(regex.groupindex.items())
         ng = len(groups)
@@ -131,7 +149,8 @@ class LineShapes:
         runs = np.zeros((n_shapes, ng, 2), np.int64)
         pos = np.zeros((n_shapes, ng, 2), np.int64)
         present = np.zeros((n_shapes, ng), bool)
-        for s in np.unique(shape[exact]).tolist():
+        # Every shape's representative is exact (it is its own rep): all lines cover all shapes.
+        for s in (range(n_shapes) if lines_given is None else np.unique(shape[exact]).tolist()):
             template = self._template(regex, int(self.rep[s]), groups)
             if template is _UNMAPPABLE:
                 verdict[s] = 2
@@ -139,12 +158,7 @@ class LineShapes:
                 verdict[s] = 1
                 runs[s], pos[s], present[s] = template
         rows = np.nonzero(exact & (verdict[shape] == 1))[0]
-        sh = shape[rows]
-        ln = lines[rows]
-        first = self.first_run[ln]
-        base = (self.line_start[ln] - self.extra[first])[:, None, None]
-        mapped = base + pos[sh] + self.extra[first[:, None, None] + runs[sh]]
-        spans = np.where(present[sh][:, :, None], mapped, -1)
+        spans = _map_groups(self.line_start, self.extra, self.first_run, lines[rows], shape[rows], runs, pos, present)
         # Hash collisions and shapes a template cannot map: matched one by one.
         single = np.nonzero(~exact | (verdict[shape] == 2))[0]
         one_rows, one_spans = [], []
@@ -238,9 +252,26 @@ def _fold(c):
 
 
 @njit(cache=True)
+def _same_as_rep(raw, spans, rep):
+    """Whether span i equals span rep[i] up to case and blanks (both absent, -1, counts as equal)."""
+    ok = np.empty(len(spans), np.bool_)
+    for i in range(len(spans)):
+        r = rep[i]
+        if spans[i, 0] < 0 or spans[r, 0] < 0:
+            ok[i] = spans[i, 0] < 0 and spans[r, 0] < 0
+        else:
+            ok[i] = r == i or _same_folded(raw, spans[i, 0], spans[i, 1], raw, spans[r, 0], spans[r, 1])
+    return ok
+
+
+@njit(cache=True)
 def _span_hashes(raw, spans, prime, offset):
+    """FNV hash of each span up to case and blanks; 0 for an absent span (-1)."""
     out = np.empty(len(spans), np.uint64)
     for i in range(len(spans)):
+        if spans[i, 0] < 0:
+            out[i] = 0
+            continue
         h = offset
         for j in range(spans[i, 0], spans[i, 1]):
             c = _fold(raw[j])
@@ -255,23 +286,23 @@ def same_folded_pairs(raw_a, spans_a, raw_b, spans_b):
     """Whether span i of raw_a equals span i of raw_b up to case and blanks, for every i."""
     ok = np.empty(len(spans_a), np.bool_)
     for i in range(len(spans_a)):
-        a, ae, b, be = spans_a[i, 0], spans_a[i, 1], spans_b[i, 0], spans_b[i, 1]
-        same = True
-        while True:
-            while a < ae and _fold(raw_a[a]) == 0:
-                a += 1
-            while b < be and _fold(raw_b[b]) == 0:
-                b += 1
-            if a == ae or b == be:
-                same = a == ae and b == be
-                break
-            if _fold(raw_a[a]) != _fold(raw_b[b]):
-                same = False
-                break
-            a += 1
-            b += 1
-        ok[i] = same
+        ok[i] = _same_folded(raw_a, spans_a[i, 0], spans_a[i, 1], raw_b, spans_b[i, 0], spans_b[i, 1])
     return ok
+
+
+@njit(cache=True)
+def _same_folded(raw_a, a, ae, raw_b, b, be):
+    while True:
+        while a < ae and _fold(raw_a[a]) == 0:
+            a += 1
+        while b < be and _fold(raw_b[b]) == 0:
+            b += 1
+        if a == ae or b == be:
+            return a == ae and b == be
+        if _fold(raw_a[a]) != _fold(raw_b[b]):
+            return False
+        a += 1
+        b += 1
 
 
 def factorize_spans(text: str, raw: np.ndarray, spans: np.ndarray) -> tuple[np.ndarray, list]:
@@ -279,28 +310,36 @@ def factorize_spans(text: str, raw: np.ndarray, spans: np.ndarray) -> tuple[np.n
     names are case-insensitive). A span of -1 (a group that did not take part) gets the
     text None. Returns (codes (M,), texts): texts[codes[i]] is span i's text up to case
     and blanks (the first occurrence's spelling)."""
-    spans = np.ascontiguousarray(spans, dtype=np.int64).reshape(-1, 2)
+    spans = np.asarray(spans, dtype=np.int64).reshape(-1, 2)
     absent = spans[:, 0] < 0
-    hashes = _span_hashes(raw, np.where(absent[:, None], 0, spans), _FNV_PRIME, _FNV_OFFSET)
-    hashes[absent] = 0
-    # Absent rows form their own class: key on (absent, hash).
-    keys = np.stack([absent.astype(np.uint64), hashes], axis=1)
-    _, first, inverse = np.unique(keys, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.reshape(-1)
-    rep = first[inverse]
-    present_spans = np.where(absent[:, None], 0, spans)
-    ok = absent | same_folded_pairs(raw, present_spans[rep], raw, present_spans)
+    # Absent rows hash to 0 like any present span that hashes to 0; the check below
+    # sends such a row (and any other collision) to a class of its own.
+    first, inverse = unique_runs(_span_hashes(raw, spans, _FNV_PRIME, _FNV_OFFSET))
+    ok = _same_as_rep(raw, spans, first[inverse])
     texts = [None if absent[r] else text[spans[r, 0] : spans[r, 1]] for r in first.tolist()]
     codes = inverse.astype(np.int64)
     # A hash collision (never seen, but possible): those rows get classes of their own.
     for i in np.nonzero(~ok)[0].tolist():
-        own = text[spans[i, 0] : spans[i, 1]]
-        key = own.upper().replace(" ", "").replace("\t", "")
+        own = None if absent[i] else text[spans[i, 0] : spans[i, 1]]
+        key = None if own is None else own.upper().replace(" ", "").replace("\t", "")
         for k, t in enumerate(texts):
-            if t is not None and t.upper().replace(" ", "").replace("\t", "") == key:
+            if (t is None and key is None) or (t is not None and key is not None and t.upper().replace(" ", "").replace("\t", "") == key):
                 codes[i] = k
                 break
         else:
             codes[i] = len(texts)
             texts.append(own)
     return codes, texts
+
+
+def unique_runs(keys: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(first, inverse) of np.unique(keys, return_index=True, return_inverse=True), sorting
+    only the runs of equal consecutive keys: CAM output repeats one line shape or one tool
+    name over long runs, so a million keys often make a few runs and no sort of a million."""
+    keys = np.asarray(keys).reshape(-1)
+    if len(keys) == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    starts = np.flatnonzero(np.concatenate([[True], keys[1:] != keys[:-1]]))
+    _, first_run, run_inverse = np.unique(keys[starts], return_index=True, return_inverse=True)
+    lengths = np.diff(np.append(starts, len(keys)))
+    return starts[first_run], np.repeat(run_inverse.reshape(-1), lengths)

@@ -48,7 +48,7 @@ _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 
 # Modal G codes that set one state column: G code -> (column, value).
 # The modal-state columns of the block table: NaN where a block does not set them, then
 # forward-filled (one list, so a new column reaches the bulk and the grammar tables alike).
-_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp")
+_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle")
 _STATE_OF_G = {
     **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
     80.0: ("canned", 0.0),
@@ -62,6 +62,9 @@ _STATE_OF_G = {
     # the program text does not determine (tool table), so targets under it are flagged.
     **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
     40.0: ("ccomp", 0.0),
+    # Feed rate mode (LinuxCNC manual, "G93, G94, G95 Feed Rate Mode"): inverse time, units
+    # per minute, units per spindle revolution.
+    **{g: ("feedmode", g) for g in (93.0, 94.0, 95.0)},
 }
 
 
@@ -329,6 +332,8 @@ class GcodeParser:
             gcodes.append(round(value, 1))
         elif letter == "H":
             state["h"] = value
+        elif letter == "S":
+            state["spindle"] = value if known else -np.inf  # unknown from here on, never the old S
         elif letter in _MORE:
             more[_MORE[letter]] = value
         elif letter in _AX:
@@ -446,9 +451,28 @@ class GcodeParser:
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
             **({"arc": arc} if arc is not None else {}),
+            **self._feed_columns(t, rows, motion[rows]),
         )
         tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_motion[rows] & (tlo[rows] == 43.5))
+
+    def _feed_columns(self, t: dict, rows: np.ndarray, motion: np.ndarray) -> dict:
+        """The IR's feed_mode and spindle columns of the targets ``rows``. LinuxCNC manual,
+        "G93, G94, G95 Feed Rate Mode": in G93 "an F word must appear on every line that has a
+        G1, G2, or G3 motion", F is not modal; a feed move without its own F is refused as
+        LinuxCNC refuses it (the F of a block before would be a wrong time), and so is a canned
+        cycle in G93 (rs274: "Cannot feed with zero feed rate")."""
+        mode = _ffill(t["feedmode"], 94.0)[rows]
+        spindle = _ffill(t["spindle"], np.nan)[rows]
+        spindle[np.isinf(spindle)] = np.nan
+        g93 = mode == 93.0
+        cycle = g93 & (_ffill(t["canned"], 0.0)[rows] != 0.0)
+        missing = g93 & ~cycle & (motion != 0.0) & np.isnan(t["values"][rows, _AX["F"]])
+        for bad, why in ((cycle, "a canned cycle in G93 inverse-time mode (LinuxCNC refuses it: its moves have no time of their own)"),
+                         (missing, "feed move in G93 inverse-time mode without its own F word (F is not modal in G93)")):
+            if bad.any():
+                raise self._error_at(int(t["offset"][rows[np.argmax(bad)]]), why)
+        return {"feed_mode": mode.astype(np.int8), "spindle": spindle}
 
     def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
@@ -505,7 +529,8 @@ class GcodeParser:
         order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
-                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
+                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
+                               **self._feed_columns(t, rows, moves.motion.astype(float)))
         return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
 
     def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:

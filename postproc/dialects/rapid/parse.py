@@ -123,10 +123,22 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields, source, nf)
     ``source`` whose 17 numbers start at number index ``first``; an external axis of 9E9 is 'none'.
     (The IR width ``nf`` is an argument: numba's on-disk cache would keep a global's old value.)"""
     m = len(first)
-    values = np.full((m, nf), np.nan)
-    spans = np.full((m, nf, 3), -1, np.int64)
+    # Each cell is written once (not filled, then overwritten): at 10^6 targets these are
+    # 0.7 GB, and a fill first would pass over all of it twice.
+    values = np.empty((m, nf))
+    spans = np.empty((m, nf, 3), np.int64)
     conf = np.empty((m, 4))
+    taken = np.zeros(nf, np.bool_)
+    for k in range(len(fields)):
+        if fields[k] >= 0:
+            taken[fields[k]] = True
     for r in range(m):
+        for f in range(nf):
+            if not taken[f]:
+                values[r, f] = np.nan
+                spans[r, f, 0] = -1
+                spans[r, f, 1] = -1
+                spans[r, f, 2] = -1
         for k in range(len(fields)):
             i = first[r] + k
             f = fields[k]
@@ -138,6 +150,11 @@ def _gather_robtargets(first, num_start, num_end, num_value, fields, source, nf)
                 spans[r, f, 0] = source
                 spans[r, f, 1] = num_start[i]
                 spans[r, f, 2] = num_end[i]
+            else:
+                values[r, f] = np.nan
+                spans[r, f, 0] = -1
+                spans[r, f, 1] = -1
+                spans[r, f, 2] = -1
     return values, spans, conf
 
 
@@ -234,7 +251,8 @@ class RapidParser:
         self.order_base = index << 40  # program order: module, then offset
         self.code = blank_comments(doc.text)
         self.lines = LineIndex(doc.text)
-        self.numbers = scan_numbers(self.code)
+        self.raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
+        self.numbers = scan_numbers(self.code, raw=self.raw)
         self.builder = Builder("rapid", "quat", [doc]) if builder is None else builder
         data = _Data() if data is None else data
         self.points, self.tools, self.wobjs, self.facts = data.points, data.tools, data.wobjs, data.facts
@@ -284,8 +302,7 @@ class RapidParser:
 
     def declarations(self) -> None:
         """One-line robtarget declarations, read in bulk."""
-        raw = np.frombuffer(self.code.encode("latin-1"), dtype=np.uint8)
-        shapes = LineShapes(self.code, raw, self.lines.starts)
+        shapes = LineShapes(self.code, self.raw, self.lines.starts)
         self._shapes = {"decls": shapes.match(RE_DECL), "lits": shapes.match(RE_MOVE_LIT), "named": shapes.match(RE_MOVE_NAME)}
         lower = self.code.lower()
         if ("for" in lower or "while" in lower) and re.search(r"(?im)^[ \t]*(?:FOR|WHILE)\b", self.code):  # a loop body's moves run once per pass: read by the grammar
