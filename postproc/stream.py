@@ -445,6 +445,8 @@ def _pool(workers: int):
     if workers < 1:
         yield None
         return
+    import scipy.spatial.transform  # noqa: F401  (posture's lazy import, done once before the fork, not in every worker)
+
     methods = multiprocessing.get_all_start_methods()
     pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork" if "fork" in methods else "spawn"))
     try:

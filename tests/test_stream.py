@@ -65,15 +65,17 @@ def _whole(program, model, out, **options):
     return rep
 
 
+@pytest.mark.parametrize("workers", [0, 2])
 @pytest.mark.parametrize("make,options", [(_krl, {}), (_gcode, GCODE_SETUP)])
-def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model, make, options):
+def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model, make, options, workers):
+    """In one process and in the pipeline of worker processes alike."""
     program = make(tmp_path / ("p.src" if make is _krl else "p.ngc"))
     whole = tmp_path / "whole.src"
     rep = _whole(program, model, whole, **options)
     chunks = {}
     for chunk in (97, 10_000):
         out = tmp_path / f"stream{chunk}.src"
-        result = compensate_streamed(program, model, out, chunk_lines=chunk, **options)
+        result = compensate_streamed(program, model, out, chunk_lines=chunk, workers=workers, **options)
         chunks[chunk] = result.summary["chunks"]
         assert out.read_bytes() == whole.read_bytes(), chunk
         assert result.summary["targets"] == rep.summary()["targets"]
