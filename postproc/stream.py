@@ -36,7 +36,7 @@ import os
 from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from itertools import chain, islice
 from pathlib import Path
 
@@ -261,6 +261,36 @@ class _Task:
     reference: Reference  # the postures as written (computed here: the next chunk starts from its end)
     header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
     tail: str
+    packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+
+    def for_pipe(self) -> "_Task":
+        """This task with the toolpath's wide per-target arrays cut to their varying columns:
+        a long program's moves set few of the IR's fields, and the whole arrays would be
+        ~1.3 kB a target through the pipe. ``toolpath`` restores them bit for bit."""
+        packed = {}
+        for name in _WIDE:
+            a = getattr(self.tp, name)
+            if a is None or a.ndim < 2 or not len(a) or a.dtype.itemsize not in (1, 2, 4, 8):
+                continue
+            flat = a.reshape(len(a), -1)
+            bits = flat.view(f"u{a.dtype.itemsize}")  # bits, not values: NaN and -0.0 kept as they are
+            varies = (bits != bits[0]).any(axis=0)
+            packed[name] = (a.shape, a.dtype, flat[0].copy(), varies, flat[:, varies].copy())
+        return replace(self, tp=replace(self.tp, **{name: None for name in packed}), packed=packed)
+
+    def toolpath(self) -> Toolpath:
+        if not self.packed:
+            return self.tp
+        arrays = {}
+        for name, (shape, dtype, first, varies, columns) in self.packed.items():
+            flat = np.empty((shape[0], first.size), dtype)
+            flat[:] = first
+            flat[:, varies] = columns
+            arrays[name] = flat.reshape(shape)
+        return replace(self.tp, **arrays)
+
+
+_WIDE = ("spans", "scale", "values", "joints", "ext", "conf", "orientation", "insert_at")
 
 
 @dataclass
@@ -278,7 +308,7 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
     from .programs import check_texts
 
-    tp = task.tp
+    tp = task.toolpath()
     options = dict(options)
     if task.start_joints is not None:
         options["start_joints"] = task.start_joints
@@ -374,7 +404,7 @@ class _Job:
             own = first_own + own if carry is None else own
             task, meta, carry = self.prepare(own, is_last, first_line, carry)
             first_line += own.count("\n")
-            pending.append((meta, pool.submit(_finish, self.model, self.options, task) if pool else _finish(self.model, self.options, task)))
+            pending.append((meta, pool.submit(_finish, self.model, self.options, task.for_pipe()) if pool else _finish(self.model, self.options, task)))
             while len(pending) > depth:
                 meta, done = pending.popleft()
                 yield self.collect(meta, done.result() if pool else done)
