@@ -1,24 +1,29 @@
 """Long programs end to end, streamed in chunks against the whole-program path (issue 17).
 
-Run: .venv/bin/python benchmarks/stream.py [--sizes 100000,1000000] [--huge] [--dialect krl|gcode] [--whole-max 1000000]
+Run: .venv/bin/python benchmarks/stream.py [--sizes 100000,1000000] [--huge] [--dialect krl,gcode] [--whole-max 1000000]
 Each size and path runs in a fresh process (peak RSS is per process): a raster program of
 N moves (KRL ``LIN {X .., Y .., Z .., A 0, B 180, C 0} C_DIS`` or five-axis G-code with
-G43.5 tool axis vectors) is compensated with a physics model of the KR160 (geometric,
-base_frame, tool_offset, joint_compliance) by
-- ``stream``: ``postproc.stream.compensate_streamed`` (parse, compensate, emit, re-parse
-  check and write, chunk by chunk, one temporary file renamed at the end);
+G43.5 tool axis vectors, the stream tests' raster) is compensated with a physics model of
+the KR160 (geometric, base_frame, tool_offset, joint_compliance) by
+- ``stream``: ``postproc.stream.compensate_streamed`` with its default worker processes
+  (this process reads, parses and carries the posture; two workers compensate, emit,
+  re-parse check each chunk; one temporary file renamed at the end);
+- ``serial``: the same, all in one process (``workers=0``);
 - ``whole``: the whole-program path of ``postproc compensate`` (parse, compensate, emit,
   re-parse check, write), up to --whole-max moves (it needs ~2.6 GB per 10^6);
 - ``loop``: the same library calls on one target at a time, on 200 targets (points/s).
---huge adds 10^7 moves (streamed only). Prints the work's wall and CPU time, points/s and
-peak RSS; the two
-paths' outputs are compared byte for byte where both ran.
+--huge adds 10^7 moves (streamed only). Prints the work's wall time and the CPU time of
+all its processes (the workers' included), points per wall second and per CPU second, and
+the peak RSS of the main process and of the largest worker; the paths' outputs are compared
+byte for byte where they ran. ``main+workers`` splits the CPU: on two cores of its own the
+pipeline's wall time is bounded below by max(main, workers / 2).
 """
 
 from __future__ import annotations
 
 import argparse
 import hashlib
+import os
 import resource
 import subprocess
 import sys
@@ -47,7 +52,8 @@ def make_program(path: Path, n: int, dialect: str) -> None:
                 x, y = 850.0 + 300.0 * u, -250.0 + 500.0 * v
                 fh.writelines(f"LIN {{X {a:.3f}, Y {b:.3f}, Z 450.000, A 0, B 180, C 0}} C_DIS\n" for a, b in zip(x, y))
             else:
-                x, y, tilt = -150.0 + 300.0 * u, -250.0 + 500.0 * v, np.radians(10.0 * np.sin(i / 500.0))
+                # The stream tests' raster (tests/test_stream.py): 200 x 400 mm, tool axis tilted up to 10 deg.
+                x, y, tilt = 200.0 * u, -200.0 + 400.0 * v, np.radians(10.0 * np.sin(i / 500.0))
                 fh.writelines(f"G1 X{a:.3f} Y{b:.3f} Z0 I{np.sin(t):.6f} J0 K{np.cos(t):.6f} F3000\n" for a, b, t in zip(x, y, tilt))
         fh.write("END\n" if dialect == "krl" else "G49\nM30\n%\n")
 
@@ -65,10 +71,14 @@ def options(dialect: str) -> dict:
     return {} if dialect == "krl" else {"frames": {"G54": G54}, "tools": {"H1": H1}}
 
 
-def run_stream(src: Path, out: Path, dialect: str) -> None:
+def run_stream(src: Path, out: Path, dialect: str, workers: int | None = None) -> None:
     from postproc.stream import compensate_streamed
 
-    compensate_streamed(src, model(), out, **options(dialect))
+    compensate_streamed(src, model(), out, workers=workers, **options(dialect))
+
+
+def run_serial(src: Path, out: Path, dialect: str) -> None:
+    run_stream(src, out, dialect, workers=0)
 
 
 def run_whole(src: Path, out: Path, dialect: str) -> None:
@@ -102,10 +112,17 @@ def child(path: str, src: Path, out: Path, dialect: str) -> None:
     import postproc.compensate  # noqa: F401  (imports are start-up, not work)
     import postproc.stream  # noqa: F401
 
-    t0, c0 = time.perf_counter(), time.process_time()
-    {"stream": run_stream, "whole": run_whole, "loop": run_loop}[path](src, out, dialect)
-    print(f"WORK {time.perf_counter() - t0:.3f} {time.process_time() - c0:.3f}")
-    print(f"PEAK {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2:.3f}")
+    t0, (own0, workers0) = time.perf_counter(), cpu_seconds()
+    {"stream": run_stream, "serial": run_serial, "whole": run_whole, "loop": run_loop}[path](src, out, dialect)
+    own, workers = cpu_seconds()
+    print(f"WORK {time.perf_counter() - t0:.3f} {own - own0 + workers - workers0:.3f} {own - own0:.3f} {workers - workers0:.3f}")
+    print(f"PEAK {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2:.3f} {resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024**2:.3f}")
+
+
+def cpu_seconds() -> tuple[float, float]:
+    """User + system CPU of this process and of its finished workers (all threads)."""
+    own, workers = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(resource.RUSAGE_CHILDREN)
+    return own.ru_utime + own.ru_stime, workers.ru_utime + workers.ru_stime
 
 
 def measure(path: str, src: Path, out: Path, dialect: str) -> dict:
@@ -115,8 +132,9 @@ def measure(path: str, src: Path, out: Path, dialect: str) -> dict:
     if proc.returncode:
         return {"error": (proc.stderr or proc.stdout).strip().splitlines()[-1]}
     found = dict(line.split(" ", 1) for line in proc.stdout.splitlines() if line[:4] in ("PEAK", "RATE", "WORK"))
-    work, cpu = (float(v) for v in found["WORK"].split())
-    return {"wall": wall, "work": work, "cpu": cpu, "peak": float(found["PEAK"]), "rate": float(found.get("RATE", "nan"))}
+    work, cpu, main_cpu, workers_cpu = (float(v) for v in found["WORK"].split())
+    peak, worker_peak = (float(v) for v in found["PEAK"].split())
+    return {"wall": wall, "work": work, "cpu": cpu, "main_cpu": main_cpu, "workers_cpu": workers_cpu, "peak": peak, "worker_peak": worker_peak, "rate": float(found.get("RATE", "nan"))}
 
 
 def digest(path: Path) -> str:
@@ -131,7 +149,7 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sizes", default="100000,1000000")
     parser.add_argument("--huge", action="store_true", help="add 10^7 moves (streamed only; minutes)")
-    parser.add_argument("--dialect", default="krl", choices=("krl", "gcode"))
+    parser.add_argument("--dialect", default="krl,gcode", help="krl, gcode or both (comma-separated)")
     parser.add_argument("--whole-max", type=int, default=1_000_000)
     parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args()
@@ -139,28 +157,37 @@ def main() -> None:
         child(args.child[0], Path(args.child[1]), Path(args.child[2]), args.child[3])
         return
     sizes = [int(s) for s in args.sizes.split(",") if s] + ([10_000_000] if args.huge else [])
-    suffix = ".src" if args.dialect == "krl" else ".ngc"
-    print(f"{args.dialect} raster, KR160 physics model; each run in a fresh process (wall time includes start-up and the model)")
-    print("work: the job after start-up (imports); CPU: its CPU seconds, all threads (on a shared machine wall time is contention)")
-    print(f"{'moves':>11}  {'path':<7}{'work wall':>10}  {'points/s':>9}  {'work CPU':>9}  {'points/CPU s':>12}  {'peak RSS':>9}")
+    print(f"load average at start: {' '.join(f'{v:.2f}' for v in os.getloadavg())} (2 cores shared: CPU seconds are the figure to compare)")
+    print("each run in a fresh process; work: the job after start-up (imports); CPU: all its processes and threads")
+    for dialect in args.dialect.split(","):
+        bench_dialect(dialect, sizes, args.whole_max)
+    print(f"load average at end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
+
+
+def bench_dialect(dialect: str, sizes: list[int], whole_max: int) -> None:
+    suffix = ".src" if dialect == "krl" else ".ngc"
+    print(f"\n{dialect} raster, KR160 physics model")
+    print(f"{'moves':>11}  {'path':<7}{'work wall':>10}  {'points/s':>9}  {'work CPU':>9}  {'main+workers':>13}  {'points/CPU s':>12}  {'peak RSS':>9}  {'worker RSS':>10}")
     with tempfile.TemporaryDirectory() as tmp:
         tmp = Path(tmp)
-        loop = measure("loop", tmp / f"p{suffix}", tmp / f"l{suffix}", args.dialect)
+        loop = measure("loop", tmp / f"p{suffix}", tmp / f"l{suffix}", dialect)
         for n in sizes:
             src = tmp / f"p{suffix}"
-            make_program(src, n, args.dialect)
+            make_program(src, n, dialect)
             outs = {}
-            for path in ("stream", "whole") if n <= args.whole_max else ("stream",):
+            for path in ("stream", "serial", "whole") if n <= whole_max else ("stream", "serial"):
                 outs[path] = tmp / f"{path}{suffix}"
-                r = measure(path, src, outs[path], args.dialect)
+                r = measure(path, src, outs[path], dialect)
                 if "error" in r:
                     print(f"{n:>11,}  {path:<7}failed: {r['error']}")
                     outs.pop(path)
                     continue
-                print(f"{n:>11,}  {path:<7}{r['work']:9.1f}s  {n / r['work']:>9,.0f}  {r['cpu']:8.1f}s  {n / r['cpu']:>12,.0f}  {r['peak']:>7.2f} GB", flush=True)
-            if len(outs) == 2:
-                same = digest(outs["stream"]) == digest(outs["whole"])
-                print(f"{'':>11}  outputs byte-identical: {'yes' if same else 'NO'}")
+                worker = f"{r['worker_peak']:>8.2f} GB" if r["worker_peak"] else f"{'-':>10}"
+                split = f"{r['main_cpu']:5.1f}+{r['workers_cpu']:5.1f}s"
+                print(f"{n:>11,}  {path:<7}{r['work']:9.1f}s  {n / r['work']:>9,.0f}  {r['cpu']:8.1f}s  {split:>13}  {n / r['cpu']:>12,.0f}  {r['peak']:>7.2f} GB  {worker}", flush=True)
+            if len(outs) > 1:
+                digests = {digest(f) for f in outs.values()}
+                print(f"{'':>11}  outputs of {', '.join(outs)} byte-identical: {'yes' if len(digests) == 1 else 'NO'}")
             for f in list(outs.values()) + [src]:
                 f.unlink(missing_ok=True)
     if "rate" in loop:

@@ -226,8 +226,10 @@ def compensate(
     force_per_target=None,
     max_deviation_mm: float | None = None,
     progress=lambda msg: None,
+    reference: Reference | None = None,
 ) -> tuple[Toolpath, Report]:
-    """Compensated copy of a toolpath and the per-point report (see the module docstring)."""
+    """Compensated copy of a toolpath and the per-point report (see the module docstring).
+    ``reference``: ``reference_postures`` of the same program, frames, tools and start joints."""
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
@@ -239,7 +241,7 @@ def compensate(
     if frames or tools:
         tp = tp.with_frames(frames, tools)
     _refuse_unplaced(tp)
-    problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target)
+    problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target, reference)
     progress("predicting the program as written")
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
@@ -255,6 +257,37 @@ def compensate(
         out = replace(out, notes=out.notes + tuple(problem.notes))
     return out, report
 
+
+
+
+@dataclass
+class Reference:
+    """The joints and branch the controller takes at each Cartesian target as written, why it
+    could not where it cannot, and the notes (``_reference_joints``)."""
+
+    q: np.ndarray
+    branch: np.ndarray
+    posture_problem: np.ndarray
+    notes: list
+
+    @property
+    def end_joints(self) -> np.ndarray | None:
+        """``Report.end_joints``: the posture at the last Cartesian target as written."""
+        return self.q[-1].copy() if len(self.q) else None
+
+
+def reference_postures(tp: Toolpath, model: ErrorModel, *, frames: dict | None = None, tools: dict | None = None, start_joints=None,
+                       **_options) -> Reference:
+    """What ``compensate(tp, model, ...)`` computes first (the postures of the program as
+    written), without compensating; given back to it as ``reference`` it is not computed
+    again. It depends on the targets as written only, so postproc.stream carries its end
+    posture to the next chunk while this one is compensated in another process."""
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    _refuse_unplaced(tp)  # as compensate: an InputError, not a posture of NaN
+    rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
+    flange = tp.base_poses()[rows] @ np.linalg.inv(tp.tools)[tp.tool[rows]]  # as _Problem.of and _Plant
+    return Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints))
 
 def _require_usable_model(model: ErrorModel) -> None:
     """Compensation solves the nominal IK and needs the model in the robot's base frame."""
@@ -306,13 +339,16 @@ class _Problem:
         self.order_q[rows] = np.nan_to_num(q_ref)
 
     @classmethod
-    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None, force_per_target=None) -> "_Problem":
+    def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None, force_per_target=None,
+           reference: Reference | None = None) -> "_Problem":
         rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
         target = tp.base_poses()[rows]
         force_rows = _force_rows(len(tp), rows, target, force_n) if force_per_target is None else np.asarray(force_per_target, dtype=float)
         plant = _Plant(model, tp.tools, tp.tool, temp_c, force_rows)
         flange = target @ plant.inv_tools[tp.tool[rows]]
-        q_ref, branch_ref, posture_problem, notes = _reference_joints(tp, model.robot, flange, rows, start_joints)
+        if reference is None:
+            reference = Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints))
+        q_ref, branch_ref, posture_problem, notes = reference.q, reference.branch, reference.posture_problem, reference.notes
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
 
     def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
@@ -511,7 +547,9 @@ def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:
         actual = _predicted_samples(problem, sol, segments.linear_samples(commands[lin - 1], commands[lin]), lin)
         deviation[lin] = segments.distance_to_segments(actual, goal[lin - 1], goal[lin]).max(axis=1)
     arc = np.nonzero((kind == Kind.CIRC_END) & follows & np.roll(follows, 1) & (np.roll(kind, 1) == Kind.CIRC_VIA))[0]
-    arc = arc[(arc >= 2) & dialects.of(tp).arc_ends_at_target(tp)[rows[arc]]]
+    arc = arc[arc >= 2]
+    if arc.size:  # the dialect reads each arc's line (KRL's CA): only where there are arcs
+        arc = arc[dialects.of(tp).arc_ends_at_target(tp)[rows[arc]]]
     for arc in _chunks(arc):
         actual = _predicted_samples(problem, sol, segments.arc_samples(commands[arc - 2], commands[arc - 1], commands[arc]), arc)
         deviation[arc] = segments.distance_to_circles(actual, goal[arc - 2], goal[arc - 1], goal[arc]).max(axis=1)

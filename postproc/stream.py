@@ -19,6 +19,14 @@ how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.Str
   temporary file beside the output; the program's other files (KRL .dat) are staged with
   it and all are renamed at the end (``files.write_all``): all or nothing.
 
+The chunks go through a pipeline of processes (``workers``, default one per core up to
+WORKERS_MAX): this process reads, cuts and parses each chunk and computes its postures as
+written (``compensate.reference_postures``: the start posture of the next chunk depends on
+nothing else), then hands it to a worker that compensates (given those postures), emits
+and checks it while this one reads the next; results are taken in program order, at most
+``workers + 1`` chunks in flight. ``workers=0`` does every stage here; both write the same
+bytes.
+
 What is not streamed (``StreamFallback``; the caller reads the program whole, as before): a
 language without stream rules, a model with an effect that depends on the path's history
 (backlash's approach direction couples every target to the one before, across any cut),
@@ -31,14 +39,19 @@ Both paths give byte-identical output on a program both can take
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import multiprocessing
+import os
+from collections import deque
+from concurrent.futures import ProcessPoolExecutor
+from contextlib import contextmanager
+from dataclasses import dataclass, field, replace
 from itertools import chain, islice
 from pathlib import Path
 
 import numpy as np
 
 from . import dialects
-from .compensate import PATH_TOLERANCE_MM, CompensationError, Report, compensate
+from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report, compensate, reference_postures
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
@@ -223,12 +236,12 @@ class _Carry:
     joints: np.ndarray | None
 
 
-def _carry_of(tp: Toolpath, rep: Report) -> _Carry:
+def _carry_of(tp: Toolpath, end_joints: np.ndarray | None) -> _Carry:
     values = tp.values
     has = ~np.isnan(values)
     idx = np.where(has.any(axis=0), len(values) - 1 - np.argmax(has[::-1], axis=0), -1)
     carried = np.where(idx >= 0, values[np.maximum(idx, 0), np.arange(values.shape[1])], np.nan)
-    return _Carry(tp.take([len(tp) - 1]), carried, rep.end_joints)
+    return _Carry(tp.take([len(tp) - 1]), carried, end_joints)
 
 
 _SAME = ("kind", "position", "orientation", "ext", "relative", "resolved")
@@ -247,8 +260,89 @@ def _check_restated(tp: Toolpath, row: int, prev: _Carry, line: int) -> None:
         raise StreamFallback(f"the state at the cut before line {line} is not restated exactly (frame, tool, speed or mode changes)")
 
 
+@dataclass
+class _Task:
+    """One chunk as parsed, for ``_finish`` (in this process or a worker)."""
+
+    tp: Toolpath
+    start_joints: np.ndarray | None
+    reference: Reference  # the postures as written (computed here: the next chunk starts from its end)
+    header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
+    tail: str
+    packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+
+    def for_pipe(self) -> "_Task":
+        """This task with the toolpath's wide per-target arrays cut to their varying columns:
+        a long program's moves set few of the IR's fields, and the whole arrays would be
+        ~1.3 kB a target through the pipe. ``toolpath`` restores them bit for bit."""
+        packed = {}
+        for name in _WIDE:
+            a = getattr(self.tp, name)
+            if a is None or a.ndim < 2 or not len(a) or a.dtype.itemsize not in (1, 2, 4, 8):
+                continue
+            flat = a.reshape(len(a), -1)
+            bits = flat.view(f"u{a.dtype.itemsize}")  # bits, not values: NaN and -0.0 kept as they are
+            varies = (bits != bits[0]).any(axis=0)
+            packed[name] = (a.shape, a.dtype, flat[0].copy(), varies, flat[:, varies].copy())
+        return replace(self, tp=replace(self.tp, **{name: None for name in packed}), packed=packed)
+
+    def toolpath(self) -> Toolpath:
+        if not self.packed:
+            return self.tp
+        arrays = {}
+        for name, (shape, dtype, first, varies, columns) in self.packed.items():
+            flat = np.empty((shape[0], first.size), dtype)
+            flat[:] = first
+            flat[:, varies] = columns
+            arrays[name] = flat.reshape(shape)
+        return replace(self.tp, **arrays)
+
+
+_WIDE = ("spans", "scale", "values", "joints", "ext", "conf", "orientation", "insert_at")
+
+
+@dataclass
+class _Meta:
+    """What this process keeps of a chunk in flight, to fold its result in."""
+
+    keep: np.ndarray
+    shift: int
+    first_line: int
+    first: bool
+
+
+def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list[str] | None]:
+    """Compensate, emit and re-parse check one chunk: (its own new text, the report, the notes,
+    the other files' texts). No text (and no check) where a target failed: nothing will be written."""
+    from .programs import check_texts
+
+    tp = task.toolpath()
+    options = dict(options)
+    if task.start_joints is not None:
+        options["start_joints"] = task.start_joints
+    try:
+        new, rep = compensate(tp, model, reference=task.reference, **options)
+    except InputError as exc:
+        raise StreamFallback(f"input error in a chunk ({exc})") from None
+    if rep.failed.any():
+        return "", rep, new.notes, None
+    texts = dialects.of(tp).emit_texts(tp, new)
+    check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
+    main = texts[0]
+    if task.header_chars >= 0:
+        # The header has no target left (blanked), so only the restated line changed length.
+        main = main[main.find("\n", task.header_chars) + 1 :]
+    if task.tail:
+        if not main.endswith(task.tail):
+            raise StreamFallback("the chunk's closing text changed")
+        main = main[: len(main) - len(task.tail)]
+    return main, rep, new.notes, texts[1:]
+
+
 class _Job:
-    """One program compensated chunk by chunk: ``run`` yields the new text of the main file."""
+    """One program compensated chunk by chunk: this process reads and parses each chunk and
+    carries the state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
+    here or in a worker process; ``collect`` folds the results in, in program order."""
 
     def __init__(self, program: _Program, model, options: dict, progress):
         self.program, self.model, self.options, self.progress = program, model, options, progress
@@ -265,58 +359,68 @@ class _Job:
             raise StreamFallback("the last target before a cut has no complete position to restate")
         return "".join(self.blanked) + line + "\n"
 
-    def chunk(self, own: str, is_last: bool, first_line: int, carry: _Carry | None) -> tuple[str, _Carry]:
-        """The new text of one chunk's own lines (``own`` starts at program line ``first_line``)."""
+    def prepare(self, own: str, is_last: bool, first_line: int, carry: _Carry | None) -> tuple[_Task, _Meta, _Carry]:
+        """Parse one chunk's own lines (``own`` starts at program line ``first_line``) after the
+        restated state; the task for ``_finish`` and the state the next chunk starts from."""
         lang, rules = self.program.lang, self.program.rules
         prefix = "" if carry is None else self._prefix(carry)
         tail = "" if is_last else rules.tail
-        docs = self.program.docs(prefix + own + tail)
+        start = self.options.get("start_joints") if carry is None else carry.joints
         try:
-            tp = lang.parse_sources(docs)
-            shift = 0 if carry is None else first_line - 1 - self.prefix_lines
+            tp = lang.parse_sources(self.program.docs(prefix + own + tail))
             if carry is not None:
                 _check_restated(tp, 0, carry, self.prefix_lines)
-            options = dict(self.options)
-            if carry is not None:
-                options["start_joints"] = carry.joints
-            new, rep = compensate(tp, self.model, **options)
+            reference = reference_postures(tp, self.model, **{**self.options, "start_joints": start})
         except InputError as exc:
             raise StreamFallback(f"input error in a chunk ({exc})") from None
-        keep = np.ones(len(tp), dtype=bool) if carry is None else tp.line > self.prefix_lines
-        self.totals.add(rep, keep, shift, 1 if carry is None else self.prefix_lines + 1)
         if carry is None:
-            self._first(tp, new)
+            self._first(tp)
+            keep, shift, header_chars = np.ones(len(tp), dtype=bool), 0, -1
+        else:
+            keep, shift, header_chars = tp.line > self.prefix_lines, first_line - 1 - self.prefix_lines, sum(map(len, self.blanked))
+        meta = _Meta(keep, shift, 1 if carry is None else self.prefix_lines + 1, carry is None)
+        return _Task(tp, start, reference, header_chars, tail), meta, _carry_of(tp, reference.end_joints)
+
+    def collect(self, meta: _Meta, result) -> bytes:
+        """One chunk's result (in program order): its report counted, its new text."""
+        text, rep, notes, others = result
+        self.totals.add(rep, meta.keep, meta.shift, meta.first_line)
+        if meta.first:
+            self.notes = list(notes)
         self.progress(f"chunk {self.totals.chunks}: {self.totals.targets:,} targets")
         if self.totals.failed:
-            return "", _carry_of(tp, rep)  # nothing will be written; go on to report every failure
-        return self._text(tp, new, rep, prefix, tail), _carry_of(tp, rep)
+            return b""  # nothing will be written; go on to report every failure
+        if self.other_texts is None:
+            self.other_texts = others
+        elif others != self.other_texts:
+            raise StreamFallback("a later chunk changes the program's other files")
+        return text.encode("latin-1")
 
-    def _first(self, tp: Toolpath, new: Toolpath) -> None:
-        """The first chunk: its notes, and the header's target lines blanked for the later chunks."""
+    def _first(self, tp: Toolpath) -> None:
+        """The first chunk: the header's target lines blanked for the later chunks."""
         self.first_tp = tp
-        self.notes = list(new.notes)
         in_header = tp.line[(tp.line <= len(self.blanked)) & (tp.file == 0)]
         for line in np.unique(in_header):
             self.blanked[int(line) - 1] = "\n"
 
-    def _text(self, tp: Toolpath, new: Toolpath, rep: Report, prefix: str, tail: str) -> str:
-        from .programs import check_texts
-
-        texts = self.program.lang.emit_texts(tp, new)
-        check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
-        if self.other_texts is None:
-            self.other_texts = texts[1:]
-        elif texts[1:] != self.other_texts:
-            raise StreamFallback("a later chunk changes the program's other files")
-        main = texts[0]
-        if prefix:
-            # The header has no target left (blanked), so only the restated line changed length.
-            main = main[main.find("\n", sum(map(len, self.blanked))) + 1 :]
-        if tail:
-            if not main.endswith(tail):
-                raise StreamFallback("the chunk's closing text changed")
-            main = main[: len(main) - len(tail)]
-        return main
+    def results(self, batches, first_own: str, pool, depth: int):
+        """The new text of every chunk in order; with a pool, up to ``depth`` chunks are
+        compensated in its worker processes while this one reads and parses the next."""
+        pending: deque = deque()
+        carry, first_line = None, 1
+        for own, is_last in batches:
+            own = first_own + own if carry is None else own
+            task, meta, carry = self.prepare(own, is_last, first_line, carry)
+            first_line += own.count("\n")
+            pending.append((meta, pool.submit(_finish, self.model, self.options, task.for_pipe()) if pool else _finish(self.model, self.options, task)))
+            while len(pending) > depth:
+                meta, done = pending.popleft()
+                yield self.collect(meta, done.result() if pool else done)
+        while pending:
+            meta, done = pending.popleft()
+            yield self.collect(meta, done.result() if pool else done)
+        if self.totals.failed:
+            raise CompensationError(f"{self.totals.failed} target(s) cannot be compensated; nothing was written", None)
 
 
 @dataclass
@@ -327,9 +431,11 @@ class StreamResult:
 
 
 def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
-                        in_place: bool = False, progress=lambda msg: None, **options) -> StreamResult:
+                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, **options) -> StreamResult:
     """Compensate the program at ``path`` into ``output`` chunk by chunk (module docstring).
-    Raises StreamFallback (nothing written) when the program cannot be streamed; a
+    ``workers``: processes that compensate, emit and check chunks while this one reads the
+    next (None: one per core up to WORKERS_MAX; 0: all in this process). Raises
+    StreamFallback (nothing written) when the program cannot be streamed; a
     CompensationError (nothing written) whose ``failures`` list the targets that failed."""
     from .programs import refuse_overwrite
 
@@ -339,19 +445,22 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
         fh = open(path, encoding="latin-1", newline="")
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
-    with fh:
+    workers = default_workers() if workers is None else workers
+    with fh, _pool(workers) as pool:
         program, first = _open(path, lang, rules, fh)
         job = _Job(program, model, options, progress)
-        batches = _batches(fh, first, rules, chunk_lines)
-        own, is_last = next(batches)
-        text, carry = job.chunk("".join(program.header) + own, is_last, 1, None)
+        results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers)
+        try:
+            text = next(results)
+        except CompensationError as exc:
+            exc.failures = job.totals.failures
+            raise
         main = lang.output_paths(job.first_tp, output)[0]
         files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
         files[main] = ""
         refuse_overwrite(job.first_tp, files, in_place)
-        rest = _continue(job, batches, carry, len(program.header) + 1 + own.count("\n"))
         try:
-            write_all({main: chain([text.encode("latin-1")], rest),
+            write_all({main: chain([text], results),
                        **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
         except CompensationError as exc:
             exc.failures = job.totals.failures
@@ -359,11 +468,26 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     return StreamResult(job.totals.summary(), job.notes, list(files))
 
 
-def _continue(job: _Job, batches, carry: _Carry, first_line: int):
-    """The new text of every chunk after the first, then the failures if any."""
-    for own, is_last in batches:
-        text, carry = job.chunk(own, is_last, first_line, carry)
-        first_line += own.count("\n")
-        yield text.encode("latin-1")
-    if job.totals.failed:
-        raise CompensationError(f"{job.totals.failed} target(s) cannot be compensated; nothing was written", None)
+WORKERS_MAX = 2  # the pipeline is this process (read, parse, carry) and these (compensate, emit, check)
+
+
+def default_workers() -> int:
+    """One worker process per core up to WORKERS_MAX; none on one core."""
+    cores = os.cpu_count() or 1
+    return min(WORKERS_MAX, cores) if cores > 1 else 0
+
+
+@contextmanager
+def _pool(workers: int):
+    """Worker processes for ``_finish`` (forked where the system can: no re-import), or None."""
+    if workers < 1:
+        yield None
+        return
+    import scipy.spatial.transform  # noqa: F401  (posture's lazy import, done once before the fork, not in every worker)
+
+    methods = multiprocessing.get_all_start_methods()
+    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork" if "fork" in methods else "spawn"))
+    try:
+        yield pool
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)

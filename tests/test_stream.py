@@ -65,15 +65,17 @@ def _whole(program, model, out, **options):
     return rep
 
 
+@pytest.mark.parametrize("workers", [0, 2])
 @pytest.mark.parametrize("make,options", [(_krl, {}), (_gcode, GCODE_SETUP)])
-def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model, make, options):
+def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model, make, options, workers):
+    """In one process and in the pipeline of worker processes alike."""
     program = make(tmp_path / ("p.src" if make is _krl else "p.ngc"))
     whole = tmp_path / "whole.src"
     rep = _whole(program, model, whole, **options)
     chunks = {}
     for chunk in (97, 10_000):
         out = tmp_path / f"stream{chunk}.src"
-        result = compensate_streamed(program, model, out, chunk_lines=chunk, **options)
+        result = compensate_streamed(program, model, out, chunk_lines=chunk, workers=workers, **options)
         chunks[chunk] = result.summary["chunks"]
         assert out.read_bytes() == whole.read_bytes(), chunk
         assert result.summary["targets"] == rep.summary()["targets"]
@@ -155,3 +157,26 @@ def test_cli_streams_and_falls_back(tmp_path, model):
     assert outs["always"].read_bytes() == outs["never"].read_bytes()
     bad = runner.invoke(app, ["compensate", str(program), "--model", str(tmp_path / "m.json"), "-o", str(tmp_path / "x.src"), "--stream", "sometimes"])
     assert bad.exit_code == 2 and "--stream" in bad.output
+
+
+def test_a_chunk_sent_to_a_worker_is_restored_bit_for_bit(tmp_path, model):
+    """The pipe carries only the varying columns of the IR's wide arrays; -0.0, NaN and
+    every other value come back as they were."""
+    import dataclasses
+
+    from postproc.compensate import reference_postures
+    from postproc.stream import _Task
+
+    tp = parse_program(_krl(tmp_path / "p.src", n=60))
+    values = tp.values.copy()
+    values[:, -1] = 0.0
+    values[5, -1], values[7, 1] = -0.0, np.nan  # -0.0 in a column of 0.0: equal as a value, not as bits
+    tp = dataclasses.replace(tp, values=values)
+    task = _Task(tp, None, reference_postures(tp, model), -1, "")
+    piped = task.for_pipe()
+    assert piped.tp.values is None and piped.packed["values"][4].size < values.size
+    back = piped.toolpath()
+    for f in dataclasses.fields(tp):
+        a, b = getattr(tp, f.name), getattr(back, f.name)
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), f.name

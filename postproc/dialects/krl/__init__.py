@@ -77,10 +77,16 @@ class KrlDialect(Dialect):
         """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
         import re
 
+        from ...ir import Kind
+
         ca = re.compile(r"\bCA\b", re.IGNORECASE)
-        lines = [doc.text.split("\n") for doc in tp.sources]
-        return np.array([not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
-                         for f, n in zip(tp.file.tolist(), tp.line.tolist())], dtype=bool)
+        ends = np.ones(len(tp.kind), dtype=bool)
+        arcs = np.nonzero(tp.kind == Kind.CIRC_END)[0]  # only arcs' lines are read (a long program has few)
+        if arcs.size:
+            lines = [doc.text.split("\n") for doc in tp.sources]
+            ends[arcs] = [not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
+                          for f, n in zip(tp.file[arcs].tolist(), tp.line[arcs].tolist())]
+        return ends
 
     def stream_rules(self):
         from .stream import RULES
