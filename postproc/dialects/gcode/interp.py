@@ -128,7 +128,8 @@ class _Run:
         if setup in SETUP_CODES:
             self._setup(setup, words, known, line)
         mode = m["mode"][i]
-        moving = not t["nonmotion"][i] and not math.isnan(mode) and any(c in words for c in "XYZABC@^")
+        # A G2/G3 with centre words and no end point is a full circle (modal["circle"]): it ends where it starts.
+        moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
         if m["sets_mode"][i] and mode not in canned.CYCLES:
             self.cycle.end_run(mode)
         if not moving:
@@ -148,6 +149,8 @@ class _Run:
             return
         self.cycle.end_run(mode)
         if t["g53"][i]:
+            if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
+                raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
             program, machine = self.offsets.g53(words, self.cur)
             self._rotary(words, absolute=True)
             self.cur = program
@@ -237,7 +240,7 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
     """Every motion target of the block table ``t`` (program order). ``modal`` holds the
     forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
     motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
-    (the block names one)."""
+    (the block names one), and circle (a G2/G3 block that is a full circle: no end-point word)."""
     state = _Run(t, letters, modal)
     n = len(t["offset"])
     simple = simple_holes(t, letters, modal) if fast else np.zeros(n, bool)

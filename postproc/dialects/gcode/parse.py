@@ -473,8 +473,10 @@ class GcodeParser:
         scale = np.where(_ffill(t["units"], 21.0) == 20.0, 25.4, 1.0)
         dist = _ffill(t["dist"], 90.0)
         mode, sets_mode = interp.modal_mode(t["motion"], t["canned"])
-        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": _ffill(t["plane"], 17.0).tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
-                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist()}
+        plane = _ffill(t["plane"], 17.0)
+        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": plane.tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
+                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist(),
+                 "circle": self._block_circles(t, mode).tolist()}
         try:
             moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
@@ -496,7 +498,11 @@ class GcodeParser:
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
         tlo = _ffill(t["tlo"], 49.0)
         tool_idx = self._tool_lengths(t, rows, tlo)
-        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans) & own
+        # G2/G3 targets: their I J K / R words, plane, IJK mode and turns, as the vectorised reader gives them (arcwords).
+        arc_move = np.isin(moves.motion, (2, 3))
+        arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
+                                 self.text, self._error_at)
+        axis_rows = _tool_axes(t, rows, np.where(arc_move, 49.0, tlo[rows]), ir_values, ir_spans, per_row=True) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
         self.builder.notes.extend(self.notes)
@@ -505,8 +511,16 @@ class GcodeParser:
         order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
-                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at)
-        return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
+                               **({"arc": arc} if arc is not None else {}))
+        tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+        return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
+
+    def _block_circles(self, t: dict, mode: np.ndarray) -> np.ndarray:
+        """(n,) G2/G3 blocks with centre words and no end-point word: full circles back to
+        the start (as in the vectorised reader; a radius-format one is refused)."""
+        present = ~np.isnan(t["values"][:, :6]).all(axis=1) | ~np.isnan(t["more"][:, 3:5]).all(axis=1)  # X Y Z A B C, polar @ ^
+        return arcwords.full_circles(t, np.isin(mode, (2.0, 3.0)) & ~present & ~t["nonmotion"], self._error_at)
 
     def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:
         """Frame index of each target (``frame`` indexes the frame ``keys``, see interp.Offsets.key;
@@ -646,11 +660,12 @@ def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarr
     ir_spans[at[have], field, 1:] = spans[have]
 
 
-def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray:
+def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray, per_row: bool = False) -> np.ndarray:
     """G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre. Puts
-    them in IR fields o1..o3 (in place); returns the targets that have one."""
+    them in IR fields o1..o3 (in place); returns the targets that have one. ``tlo`` is per
+    block, or per target of ``rows`` with ``per_row``."""
     ijk = [_AX["I"], _AX["J"], _AX["K"]]
-    axis_rows = (tlo[rows] == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
+    axis_rows = ((tlo if per_row else tlo[rows]) == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
     axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
     for f_ir, k in zip((3, 4, 5), ijk):
         ir_values[axis_rows, f_ir] = t["values"][axis_at, k]
