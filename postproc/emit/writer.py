@@ -112,8 +112,8 @@ def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.n
     geo = geometry(tp)  # in each end target's frame, like the poses written
     if len(geo.rows) < len(rows):
         first = int(np.setdiff1d(rows, geo.rows)[0])
-        raise EmitError(f"line {tp.line[first]}: an arc whose start or centre is not known here (the first move, or a program read "
-                        "with canned cycles / G92 / G10 / polar words) cannot be written as a circular move")
+        raise EmitError(f"line {tp.line[first]}: an arc whose start is not known here (the program's first move) cannot be written "
+                        "as a circular move")
     r0 = np.linalg.norm(geo.in_plane(geo.start) - geo.centre, axis=1)
     r1 = np.linalg.norm(geo.in_plane(geo.end) - geo.centre, axis=1)
     helix = np.abs(geo.normal(geo.end) - geo.normal(geo.start)) > 1e-6
