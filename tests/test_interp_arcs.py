@@ -13,6 +13,7 @@ second_axis), rotation's sign is the direction (+1 G3) and its size the turns (P
 
 from __future__ import annotations
 
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -167,3 +168,59 @@ if __name__ == "__main__":
 
         with tempfile.TemporaryDirectory() as tmp:
             record(Path(tmp))
+
+
+# ------------------------------------------------------------------ compensate and convert accept them
+
+from test_arcs import BODY, H1, START, WORK, _robot_along, model  # noqa: E402,F401  (model: the fixture)
+
+from postproc.compensate import compensate  # noqa: E402
+from postproc.programs import emit_texts, write_program  # noqa: E402
+
+G92_HEAD = "G21 G90 G17 G54\nG43.5 H1\nG1 X0 Y0 Z0 I0 J0 K1 F500\nG92 X10 Y0\n"  # G92: read block by block
+
+
+def test_compensated_arcs_under_g92_pass_the_intended_ones(tmp_path, model):
+    """As tests/test_arcs.py's arcs, under G92 (the frame G54 + G92 offset): compensation
+    accepts them and the re-parsed output puts the robot on the intended arcs."""
+    prog = tmp_path / "g92arcs.ngc"
+    prog.write_text(G92_HEAD + BODY + "M30\n")
+    tp = parse_program(prog)
+    assert tp.arc is not None and tp.frame_names[tp.frame[-1]] == "G54+G92@line4"
+    new, report = compensate(tp, model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
+    assert not report.failed.any(), report.failures()
+    out = tmp_path / "out.ngc"
+    out.write_bytes(emit_texts(tp, new)[0].encode("latin-1"))
+    back = parse_program(out).with_frames({"G54": WORK}, {"H1": H1})
+    intended = tp.with_frames({"G54": WORK}, {"H1": H1})
+    want, got = arcs.geometry(intended), arcs.geometry(back)
+    assert len(got.rows) == 6 and got.full.tolist() == [False, False, True, False, False, False]
+    fractions = np.linspace(0, 1, 21)
+    before = want.distance(_robot_along(model, intended, want, fractions))
+    after = want.distance(_robot_along(model, back, got, fractions))
+    assert before.max() > 0.5 and after[~got.full].max() < 0.03, after.max(axis=1)
+
+
+def test_converted_arcs_pass_rs274s_circles(tmp_path):
+    """convert: each G2/G3 of a program read block by block becomes a KRL CIRC whose via and end
+    points lie on rs274's circle (centre and radius from its ARC_FEED), in the machine frame."""
+    from postproc.frames import abc_to_matrix
+
+    tp = parse_program(_program(tmp_path, "g53_arc"))  # G54 set by G10 L2; G53 moves; an R and an I J arc
+    src, _ = write_program(tp, "krl", "conv")
+    base, points = np.eye(4), []
+    for line in src.splitlines():
+        frames = [[float(v) for v in re.findall(r"[XYZABC] (-?[\d.]+)", f)] for f in re.findall(r"\{([^}]*)\}", line)]
+        if line.startswith("$BASE"):
+            base = np.eye(4)
+            base[:3, :3], base[:3, 3] = abc_to_matrix(np.array(frames[0][3:])[None])[0], frames[0][:3]
+        elif line.startswith("CIRC"):
+            points.append([(base @ np.r_[f[:3], 1.0])[:3] for f in frames])
+    text = (RECORDED / "g53_arc.canon").read_text(encoding="latin-1")
+    centres, _ = _rs274_arcs(text)
+    g54 = np.array([50.0, 60.0])  # SET_G5X_OFFSET(1, 50, 60, -5, ...) in the recording
+    assert len(points) == len(centres) == 2
+    for (via, end), centre in zip(points, centres + g54):
+        radius = np.linalg.norm(end[:2] - centre)
+        assert np.linalg.norm(via[:2] - centre) == pytest.approx(radius, abs=2e-4)
+        assert radius == pytest.approx(10.0, abs=2e-4)
