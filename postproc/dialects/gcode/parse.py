@@ -57,7 +57,7 @@ _STATE_OF_G = {
     **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
-    **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
+    **{g: ("tlo", g) for g in (43.0, 43.1, 43.2, 43.4, 43.5, 49.0)},
     # Cutter radius compensation: the controller offsets the path by the tool radius, which
     # the program text does not determine (tool table), so targets under it are flagged.
     **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
@@ -347,6 +347,7 @@ class GcodeParser:
             elif gc in _STATE_OF_G:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
+                nonmotion |= gc in (43.1, 43.2)  # their X Y Z words are tool length offsets, not a move
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
             elif gc in (98.0, 99.0):
@@ -413,7 +414,8 @@ class GcodeParser:
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
         unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
+        resolved = (t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
+                    & ~self._tool_axis_unknown(t, rows, moves & (dist == 90.0) & ~t["g53"]))
         speed[np.isneginf(speed)] = np.nan
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -492,7 +494,9 @@ class GcodeParser:
             if k < 3:
                 ir_scale[:, f] = scale[rows]
         frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
-        resolved = t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows)
+        plain_move = ~t["nonmotion"] & np.isin(mode, (0.0, 1.0, 2.0, 3.0)) & (dist == 90.0) & ~t["g53"]  # a cycle block never makes Z known again
+        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows)
+                    & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
@@ -584,15 +588,47 @@ class GcodeParser:
 
     def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
         """Tool index of each target: the H number of the active G43 (its length is in the
-        machine's tool table, not the program: an unknown tool)."""
+        machine's tool table, not the program: an unknown tool). G43 without H takes the
+        loaded tool's length (tool "G43"); G43.1 / G43.2 set or add lengths given in the
+        block (tool "G43.1@lineN"): unknown tools too, never the flange."""
         hnum = _ffill(t["h"], np.nan)
         tool_idx = np.zeros(len(rows), np.int32)
-        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
-        for h in np.unique(hnum[rows][active]):
-            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
-        if active.any():
-            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
+        code = tlo[rows]
+        dynamic = np.isin(code, (43.1, 43.2))
+        by_h = (code != 49.0) & ~dynamic & ~np.isnan(hnum[rows])
+        for h in np.unique(hnum[rows][by_h]):
+            tool_idx[by_h & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
+        for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h]):
+            tool_idx[(code == c) & ~by_h] = self.builder.tool_index(f"G{c:g}", None)
+        if dynamic.any():
+            set_at = np.where(np.isin(t["tlo"], (43.1, 43.2)), np.arange(len(t["tlo"])), -1)
+            np.maximum.accumulate(set_at, out=set_at)
+            for b in np.unique(set_at[rows][dynamic]):
+                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", None)
+        if (code != 49.0).any():
+            self.notes.append("tool lengths (G43 H, G43 without H, G43.1/G43.2) are in the machine's tool table or set in a block: "
+                              "flange poses need them (--tool NAME=...); TCP positions do not")
         return tool_idx
+
+    def _tool_axis_unknown(self, t: dict, rows: np.ndarray, resets: np.ndarray) -> np.ndarray:
+        """(len(rows),) True for targets whose Z the controller moves by a tool length change
+        the program does not give: after G43 / G43.1 / G43.2 / G49 changes the offset, the
+        current point is re-read for the new tool (LinuxCNC: Z = the old Z - the change of
+        length), so a target that leaves Z out before the next absolute Z word (``resets``:
+        a G90 move with Z, G92 Z) is unknown; so is a G53 target under an offset (its words
+        are for the spindle, not the tool tip). Noted with the first line."""
+        tlo, hnum = _ffill(t["tlo"], 49.0), _ffill(t["h"], np.nan)
+        state = np.where(tlo == 49.0, -1.0, tlo * 1e6 + np.nan_to_num(hnum, nan=-1.0))
+        change = (state != np.concatenate([[-1.0], state[:-1]])) | np.isin(t["tlo"], (43.1, 43.2))
+        has_z = ~np.isnan(t["values"][:, _AX["Z"]])
+        n = np.arange(len(tlo))
+        last_change = np.maximum.accumulate(np.where(change, n, -1))
+        last_reset = np.maximum.accumulate(np.where(resets & has_z, n, -1))
+        stale = (last_change[rows] > last_reset[rows]) | (t["g53"][rows] & (state[rows] != -1.0))
+        if stale.any():
+            self.notes.append(f"line {int(self.lines.line(t['offset'][rows[np.argmax(stale)]]))}: Z left out after a tool length change (or a G53 move "
+                              f"under one): the controller's tool-tip Z there depends on the length; {int(stale.sum())} target(s) flagged")
+        return stale
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
