@@ -134,6 +134,7 @@ HEAD = "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\n"
     (HEAD + "G0 X0 Y0 Z50\nT1 M6\nG43 Z40\n", [], ":5:6:", r"tool G43, which"),
     (HEAD + "G0 X0 Y0 Z50\nG43.1 Z2.5\nG1 X5 Z0\n", [], ":5:5:", r"tool G43.1@line4, which"),
     (HEAD + "G0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1], ":5:5:", r"position depends"),
+    ("G21 G90\nG0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1, "--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"position depends"),  # vectorised reader
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\nG49\nG1 X5\n", ["--tool", TOOL_H1], ":6:5:", r"position depends"),
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\nG53 G0 Z0\n", ["--tool", TOOL_H1], ":5:9:", r"position depends"),
     (HEAD + "G0 X0 Y0 Z50 A10\n", [], ":3:5:", r"rotary axis words"),
