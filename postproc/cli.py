@@ -944,8 +944,9 @@ def convert_cmd(
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
-        _refuse_unused("with --machine (five-axis)", {"--frame": bool(frame), "--tool": bool(tool)})
-        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation):
+        _refuse_unused("with --to gcode", {"--frame": bool(frame) and rtcp is not None, "--tool": bool(tool) and rtcp is not None})
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
+                                 frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
     _refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})

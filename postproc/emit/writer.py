@@ -98,7 +98,8 @@ def refuse_unplaced(tp: Toolpath) -> None:
     tool_ok = np.ones(len(tp), bool) if tp.tool_known is None else tp.tool_known[tp.tool]
     from .. import dialects
 
-    rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1) if dialects.of(tp).machine_program else np.zeros(len(tp), bool)
+    # (a five-axis program read with --machine has its rotary axes turned into orientations: carried)
+    rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1) & np.isnan(tp.orientation).any(axis=1) if dialects.of(tp).machine_program else np.zeros(len(tp), bool)
     for rows, why in ((cart & ~tp.resolved, lambda r: "the target's position depends on what the program text does not determine (see the notes "
                                                        "of `postproc inspect`); it cannot be written"),
                       (cart & ~frame_ok, lambda r: f"the target is in frame {tp.frame_names[tp.frame[r]]}, which the program does not define (a work offset "
