@@ -495,7 +495,11 @@ class GcodeParser:
                 ir_scale[:, f] = scale[rows]
         frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
         plain_move = ~t["nonmotion"] & np.isin(mode, (0.0, 1.0, 2.0, 3.0)) & (dist == 90.0) & ~t["g53"]  # a cycle block never makes Z known again
-        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows)
+        if not moves.exact.all():
+            first = int(self.lines.line(t["offset"][rows[np.argmin(moves.exact)]]))
+            self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
+                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there); {int((~moves.exact).sum())} target(s) flagged")
+        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
                     & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -534,15 +538,19 @@ class GcodeParser:
 
         ids, finite = np.zeros(len(keys) + 1, np.int32), np.ones(len(keys) + 1, bool)
         for k, key in enumerate(keys):
-            system, _, _, set_at, _, g92_at = key
+            system, set_at, g92_at, known = key[0], key[3], key[5], key[6]
             name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
             transform = Offsets.transform(key)
             finite[k] = bool(np.isfinite(transform).all())
-            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, set_at is not None and finite[k])
+            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, known and finite[k])
         ids[-1] = self.builder.frame_index("machine", np.eye(4), True)
         unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in keys if key[3] is None})
         if unknown:
             self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        touched = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}@line{key[3]}" for key in keys if key[3] is not None and not key[6]})
+        if touched:
+            self.notes.append(f"work offset(s) {', '.join(touched)} are set by G10 from a point (L20) or on some axes only (L2) where the "
+                              "machine position is not known from the program: their origins are not known")
         return ids[frame], finite[frame]
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
