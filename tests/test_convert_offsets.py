@@ -46,6 +46,8 @@ PROGRAMS = {
     # G92 (the current point reads X50 Y50), G52 on top, G92.1, a G53 move, back in G54
     "g92_g52_g53": "G21 G90 G17 F600\nG10 L2 P1 X200 Y0 Z0\nG54 G0 X0 Y0 Z10\nG92 X50 Y50\nG1 X60 Y50\nG52 X10 Z-5\nG1 X0 Y0 Z0\n"
                    "G92.1\nG53 G0 Z30\nG1 X10 Y10 Z0\nM2\n",
+    # G10 L20 at a point known in the machine frame (G53 words): G54's origin is that point
+    "g53_l20": "G21 G90 G17 F600\nG53 G0 X10 Y0 Z5\nG10 L20 P1 X0 Y0 Z0\nG54 G1 X5\nG1 Y5 Z-1\nM2\n",
     # a tool length by G43 H1 (Z given with it), G49 back to the spindle
     "tool_length": "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\nG0 X0 Y0 Z50\nT1 M6\nG43 H1 Z40\nG1 X10 Z5\nG49 G0 Z60\nG1 X0\nM2\n",
 }
@@ -101,6 +103,14 @@ def test_g92_and_g53_are_written_as_the_base(tmp_path):
                                                 [0, 0, 0, 0, 0, 0], [200, 0, 0, 0, 0, 0]]
 
 
+def test_g10_l20_at_a_machine_point_is_written_as_the_base(tmp_path):
+    """By hand: G53 puts the machine at (10, 0, 5); G10 L20 P1 X0 Y0 Z0 makes that point read 0:
+    G54's origin is (10, 0, 5) whatever G54 was before."""
+    out = tmp_path / "c.src"
+    assert _convert(_program(tmp_path, "g53_l20"), out).exit_code == 0
+    assert _frames(out.read_text(), "BASE") == [[0, 0, 0, 0, 0, 0], [10, 0, 5, 0, 0, 0]]
+
+
 def test_tool_length_is_written_as_the_tool(tmp_path):
     """G43 H1 with --tool H1=0,0,100: $TOOL {Z 100} from that block to G49, the flange before and after."""
     out = tmp_path / "c.src"
@@ -128,6 +138,14 @@ HEAD = "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\n"
     ("G21 G90 G17\nG0 X1 Y0 Z10\n", [], ":2:5:", r"frame G54, which the program does not define.*--frame G54="),
     ("G21 G90 G17\nG0 X0 Y0 Z10\nG92 X5\nG1 X1\n", [], ":2:5:", r"frame G54, which"),
     ("G21 G90 G17\nG92 X5\nG0 X1 Y0 Z10\n", [], ":3:5:", r"position depends"),  # G92 where the tool is not known yet
+    # G10 L20 where the machine position is not known (moves in an unset G54): the new G54 is not known either
+    ("G21 G90\nG0 X10 Y0 Z5\nG10 L20 P1 X0 Y0\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"frame G54@line3, which"),
+    # G53 Z0 in an unset G54: its X Y are where G54 X10 Y0 is in the machine, unknown (and the Z of
+    # the next move is machine 0 re-read through G54's unknown origin)
+    ("G21 G90\nG0 X10 Y0 Z5\nG53 G0 Z0\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":3:9:", r"position depends"),
+    ("G21 G90\nG53 G0 X0 Y0 Z0\nG53 G0 Z5\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"position depends"),
+    # a change to an unset G55: Y and Z of the next move re-read through it
+    (HEAD + "G0 X1 Y2 Z3\nG55\nG1 X5\n", ["--frame", "G55=0,0,0,0,0,0"], ":5:5:", r"position depends"),
     ("G21 G90 G17\nG0 X0 Y0 Z10\nG92 X5\nG1 X1\n", ["--frame", "G54=1,2,3,0,0,0"], None, None),
     (HEAD + "G10 L2 P2 X0\nG56 G0 X1 Y0 Z10\n", [], ":4:9:", r"frame G56, which"),
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\n", [], ":4:9:", r"tool H1, which.*--tool H1="),
