@@ -139,7 +139,7 @@ HEAD = "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\n"
     ("G21 G90 G17\nG0 X0 Y0 Z10\nG92 X5\nG1 X1\n", [], ":2:5:", r"frame G54, which"),
     ("G21 G90 G17\nG92 X5\nG0 X1 Y0 Z10\n", [], ":3:5:", r"position depends"),  # G92 where the tool is not known yet
     # G10 L20 where the machine position is not known (moves in an unset G54): the new G54 is not known either
-    ("G21 G90\nG0 X10 Y0 Z5\nG10 L20 P1 X0 Y0\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"frame G54@line3, which"),
+    ("G21 G90\nG0 X10 Y0 Z5\nG10 L20 P1 X0 Y0 Z0\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"frame G54@line3, which"),
     # G53 Z0 in an unset G54: its X Y are where G54 X10 Y0 is in the machine, unknown (and the Z of
     # the next move is machine 0 re-read through G54's unknown origin)
     ("G21 G90\nG0 X10 Y0 Z5\nG53 G0 Z0\nG1 X5\n", ["--frame", "G54=0,0,0,0,0,0"], ":3:9:", r"position depends"),
