@@ -173,9 +173,8 @@ def refuse_uncompensable(tp: Toolpath) -> None:
     rows = arc_rows(tp)
     if not len(rows):
         return
-    if tp.arc is None:  # the block-by-block reader (canned cycles, G92, G10, polar words) keeps end points only
-        raise InputError(_where(tp, int(rows[0]), I_) + "arcs in a program with canned cycles, G92, G10 or polar words are not "
-                         "compensated (their centres are not carried through that reader)")
+    if tp.arc is None:  # both G-code readers give every G2/G3 its words; a Toolpath built without them has no centres
+        raise InputError(_where(tp, int(rows[0]), I_) + "this arc has no centre words in the toolpath; it cannot be compensated")
     if rows[0] == 0:
         raise InputError(_where(tp, 0, I_) + "the program starts with an arc: its start is where the machine stands, unknown to the "
                          "post-processor (move to the start first)")

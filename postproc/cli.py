@@ -938,6 +938,8 @@ def convert_cmd(
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
+    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), written as the robot's base / work object. Repeatable."),
+    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length), written as the robot's tool. Repeatable."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
@@ -949,12 +951,16 @@ def convert_cmd(
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
-        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation):
+        _refuse_unused("with --to gcode", {"--frame": bool(frame) and rtcp is not None, "--tool": bool(tool) and rtcp is not None})
+        for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
+                                 frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
     _refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
     outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
+    if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
+        tp = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool"))
     texts = write_program(tp, to, output.stem)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")

@@ -477,6 +477,16 @@ def default_workers() -> int:
     return min(WORKERS_MAX, cores) if cores > 1 else 0
 
 
+def _one_thread_torch() -> None:
+    """Worker start: a forked child whose parent already ran torch's thread pool (a learned
+    predictor) hangs in its first parallel torch operation; one thread per worker avoids it
+    (the workers are the parallelism). Torch is not imported for a model without one."""
+    import sys
+
+    if "torch" in sys.modules:
+        sys.modules["torch"].set_num_threads(1)
+
+
 @contextmanager
 def _pool(workers: int):
     """Worker processes for ``_finish`` (forked where the system can: no re-import), or None."""
@@ -486,7 +496,8 @@ def _pool(workers: int):
     import scipy.spatial.transform  # noqa: F401  (posture's lazy import, done once before the fork, not in every worker)
 
     methods = multiprocessing.get_all_start_methods()
-    pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork" if "fork" in methods else "spawn"))
+    context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_one_thread_torch)
     try:
         yield pool
     finally:

@@ -87,6 +87,14 @@ def _with_config() -> dict[str, str]:
         return _krl_texts(parse_program(folder / "cell.src"), folder / "cell.src")
 
 
+def _undefined_as_identity(tp):
+    """``tp`` with the frames and tools it does not define (G54 without G10, H1) given as the
+    identity, as `convert --frame G54=0,0,0,0,0,0 --tool H1=0,0,0` gives them (convert refuses them otherwise)."""
+    frames = {n.split("+")[0]: np.eye(4) for n, known in zip(tp.frame_names, tp.frame_known) if not known}
+    tools = {n: np.eye(4) for n, known in zip(tp.tool_names, tp.tool_known) if not known}
+    return tp.with_frames(frames, tools) if frames or tools else tp
+
+
 def krl_outputs() -> dict[str, str]:
     """Relative output name -> KRL text, for every input and every way postproc writes KRL."""
     from postproc.errors import EmitError, InputError, ParseError
@@ -102,7 +110,7 @@ def krl_outputs() -> dict[str, str]:
             out.update(_krl_texts(tp, path))
             out.update(_placed(path))
         try:
-            src, dat = write_program(tp, "krl", path.stem)
+            src, dat = write_program(_undefined_as_identity(tp), "krl", path.stem)
         except (EmitError, InputError):
             continue
         stem = _out_name(path, path.stem)

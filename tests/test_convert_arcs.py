@@ -31,7 +31,7 @@ def _convert(tmp_path, text: str, to: str, out_name: str):
     src = tmp_path / "arcs.ngc"
     src.write_text(text)
     out = tmp_path / out_name
-    return runner.invoke(app, ["convert", str(src), "--to", to, "-o", str(out)]), out
+    return runner.invoke(app, ["convert", str(src), "--to", to, "-o", str(out), "--frame", "G54=0,0,0,0,0,0"]), out  # G54: the robot base
 
 
 @pytest.mark.parametrize("to, name", [("krl", "arcs.src"), ("rapid", "arcs.mod")])

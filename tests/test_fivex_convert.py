@@ -33,7 +33,7 @@ def test_robot_gcode_robot_round_trip(tmp_path, back):
     result = convert(TILTED, "--to", "gcode", "--machine", "xyzac-trt", "--rtcp", "linuxcnc", "-o", gcode)
     assert result.exit_code == 0, result.output
     robot = tmp_path / ("back.mod" if back == "rapid" else "back.src")
-    result = convert(gcode, "--to", back, "--machine", "xyzac-trt", "--input-axes", "tip", "-o", robot)
+    result = convert(gcode, "--to", back, "--machine", "xyzac-trt", "--input-axes", "tip", "-o", robot, "--frame", "G54=0,0,0,0,0,0")  # G54: the robot base
     assert result.exit_code == 0, result.output
     original, again = parse_program(TILTED), parse_program(robot)
     assert len(again) == len(original)

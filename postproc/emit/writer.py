@@ -40,6 +40,7 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     bad = np.nonzero(np.isnan(tp.position).any(axis=1) & (tp.kind != Kind.ABSJ))[0]
     if len(bad):
         raise EmitError(f"line {tp.line[bad[0]]}: target position unknown in the input; cannot write it")
+    refuse_unplaced(tp)
     poses = tp.target_poses()
     no_ori = np.isnan(tp.orientation).any(axis=1)
     if no_ori.any():
@@ -85,6 +86,53 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     return w.end()
 
 
+def refuse_unplaced(tp: Toolpath) -> None:
+    """A new program states every target in the robot's base: a target whose position the
+    input does not determine (flagged when read: an unknown parameter, a Z after a tool
+    length change, cutter compensation), or whose frame or tool the input does not define
+    (a work offset G54 never set by G10, a G43 H1 length in the tool table), would be
+    written with a stand-in (the identity). Refused with file:line:column of its block
+    (``frames``/``tools`` given by name, ``Toolpath.with_frames``, place them); so are
+    G-code rotary axis words, which a robot program has no place for."""
+    cart = tp.kind != Kind.ABSJ
+    frame_ok = np.ones(len(tp), bool) if tp.frame_known is None else tp.frame_known[tp.frame]
+    tool_ok = np.ones(len(tp), bool) if tp.tool_known is None else tp.tool_known[tp.tool]
+    from .. import dialects
+
+    # (a five-axis program read with --machine has its rotary axes turned into orientations: carried)
+    rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1) & np.isnan(tp.orientation).any(axis=1) if dialects.of(tp).machine_program else np.zeros(len(tp), bool)
+    for rows, why in ((cart & ~tp.resolved, lambda r: "the target's position depends on what the program text does not determine (see the notes "
+                                                       "of `postproc inspect`); it cannot be written"),
+                      (cart & ~frame_ok, lambda r: f"the target is in frame {tp.frame_names[tp.frame[r]]}, which the program does not define (a work offset "
+                                                   "is set on the controller, e.g. by G10 L2): give it with --frame "
+                                                   f"{_base_name(tp.frame_names[tp.frame[r]])}=X,Y,Z,A,B,C (the robot base -> the frame, mm, deg)"),
+                      (cart & ~tool_ok, lambda r: f"the target is for tool {tp.tool_names[tp.tool[r]]}, which the program does not define (a tool length is in "
+                                                  f"the controller's tool table): give it with --tool {tp.tool_names[tp.tool[r]]}=X,Y,Z[,A,B,C] "
+                                                  "(the flange -> the tool tip, mm, deg)"),
+                      (rotary, lambda r: "rotary axis words (A B C) move a five-axis machine, not a robot: convert with --machine "
+                                         "(a five-axis machine file) and --input-axes")):
+        if rows.any():
+            r = int(np.argmax(rows))
+            raise EmitError(f"{where(tp, r)}: {why(r)}")
+
+
+def _base_name(frame_name: str) -> str:
+    """The name --frame takes for a frame composed on an undefined one (G54+G92@line4 -> G54)."""
+    return frame_name.split("+")[0]
+
+
+def where(tp: Toolpath, row: int) -> str:
+    """``file:line:column`` of a target's block (the column of its first word read, else 1)."""
+    doc = tp.sources[int(tp.file[row])]
+    spans = tp.spans[row]
+    mine = (spans[:, 1] >= 0) & ((spans[:, 0] == int(tp.file[row])) | (spans[:, 0] < 0))
+    column = 1
+    if mine.any():
+        start = int(spans[mine, 1].min())
+        column = start - (doc.text.rfind("\n", 0, start) + 1) + 1
+    return f"{doc.path}:{tp.line[row]}:{column}"
+
+
 ARC_RADIUS_TOL_MM = 2e-3  # start and end radius may differ this much (LinuxCNC accepts such arcs) for one circle
 
 
@@ -101,8 +149,8 @@ def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.n
     geo = geometry(tp)  # in each end target's frame, like the poses written
     if len(geo.rows) < len(rows):
         first = int(np.setdiff1d(rows, geo.rows)[0])
-        raise EmitError(f"line {tp.line[first]}: an arc whose start or centre is not known here (the first move, or a program read "
-                        "with canned cycles / G92 / G10 / polar words) cannot be written as a circular move")
+        raise EmitError(f"line {tp.line[first]}: an arc whose start is not known here (the program's first move) cannot be written "
+                        "as a circular move")
     r0 = np.linalg.norm(geo.in_plane(geo.start) - geo.centre, axis=1)
     r1 = np.linalg.norm(geo.in_plane(geo.end) - geo.centre, axis=1)
     helix = np.abs(geo.normal(geo.end) - geo.normal(geo.start)) > 1e-6

@@ -63,7 +63,8 @@ def calibration_summary(doc: dict) -> list[str]:
 
 
 def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: str | None, dialect: str | None = None,
-                 input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01) -> list[str]:
+                 input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01, frames: dict | None = None,
+                 tools: dict | None = None) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
     from ..programs import write_program
@@ -92,6 +93,8 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if not dialects.of(tp).machine_program:
         raise InputError("--machine with --to rapid/krl converts a five-axis G-code program; this one is a robot program")
     robot = to_robot_toolpath(tp, path)
+    if frames or tools:  # the work offset / tool length a robot program needs (write_program refuses them undefined)
+        robot = robot.with_frames(frames, tools)
     texts = write_program(robot, to, Path(output).stem)
     outputs = target.new_program_paths(Path(output))
     write_all(dict(zip(outputs, texts)), encoding="latin-1")

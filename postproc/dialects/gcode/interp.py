@@ -61,6 +61,7 @@ class Moves:
     frame: np.ndarray  # index into frames, -1: the machine frame (G53)
     frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
+    exact: np.ndarray  # False: an axis of the target keeps a value re-read through a work offset the program does not set
 
 
 class _Run:
@@ -69,6 +70,11 @@ class _Run:
         self.col = {c: i for i, c in enumerate(letters)}
         self.offsets, self.cycle = Offsets(), CycleState()
         self.cur, self.abc = [math.nan] * 3, [math.nan] * 3
+        # Per axis: the current point's program coordinate does not depend on an origin the
+        # program leaves to the controller (an unset G54 is identity here): it came from an
+        # absolute word, not from a G53 move, a change of system or a G10 / G92 re-reading it there.
+        self.exact, self.g92_exact, self.params_exact = [False] * 3, [True] * 3, [True] * 3
+        self.m_exact = [False] * 3  # per axis: the machine position is known from the program (a G53 word, a word in a known system)
         self.last_was_cycle = False  # the last block ran a cycle (its levels are in self.cycle)
         self.out: dict[str, list] = {k: [] for k in _FIELDS}  # targets not yet in a chunk
         self.chunks: list[dict] = []  # the targets so far, as arrays
@@ -88,7 +94,7 @@ class _Run:
         self.flush()
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
-                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool)})
+                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
 
     def holes(self, i: int, j: int) -> None:
         """Blocks i..j-1 each give one more hole of the cycle in force and nothing else
@@ -106,6 +112,7 @@ class _Run:
         kinds = np.tile(np.array([kind for kind, _, _ in pattern]), j - i)
         self.extend(np.repeat(np.arange(i, j), len(pattern)), kinds, points.reshape(-1, 3))
         self.cur[a_i], self.cur[b_i], self.cur[c_i] = float(ab[0][-1]), float(ab[1][-1]), self.cycle.levels[1]
+        self._moved_to_words("XYZ"[a_i] + "XYZ"[b_i])  # G90 hole positions
 
     def words(self, i: int) -> dict:
         """The block's words (X Y Z ... as mm, A B C degrees, R as written) present in it."""
@@ -113,22 +120,32 @@ class _Run:
         row = self.t["values"][i].tolist() + self.t["more"][i].tolist()
         return {c: (v * scale if c in LENGTH_WORDS else v) for c, k in self.col.items() if not math.isnan(v := row[k])}
 
-    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False) -> None:
+    def _all_exact(self) -> bool:
+        return all(self.exact) and all(self.g92_exact)
+
+    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False, exact: bool | None = None) -> None:
         """One target of block i, in the frame in force (the machine frame for G53)."""
         frame = -1 if machine_frame else self.frame_id()
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated)):
+        exact = self._all_exact() if exact is None else exact
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated),
+                           ("exact", exact)):
             self.out[key].append(value)
 
     def block(self, i: int, line: int) -> None:
         m, t = self.modal, self.t
         self.last_was_cycle = False
         words = self.words(i)
+        before = self.offsets.index
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
+        if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
+            self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
+            self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
         if setup in SETUP_CODES:
             self._setup(setup, words, known, line)
         mode = m["mode"][i]
-        moving = not t["nonmotion"][i] and not math.isnan(mode) and any(c in words for c in "XYZABC@^")
+        # A G2/G3 with centre words and no end point is a full circle (modal["circle"]): it ends where it starts.
+        moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
         if m["sets_mode"][i] and mode not in canned.CYCLES:
             self.cycle.end_run(mode)
         if not moving:
@@ -148,10 +165,18 @@ class _Run:
             return
         self.cycle.end_run(mode)
         if t["g53"][i]:
+            if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
+                raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
             program, machine = self.offsets.g53(words, self.cur)
             self._rotary(words, absolute=True)
             self.cur = program
-            self.emit(i, int(mode), machine, False, machine_frame=True)
+            placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
+            left_out = [a not in words for a in "XYZ"]
+            # an axis left out stays where the machine is: known where the machine position is
+            exact = all(not out or m for out, m in zip(left_out, self.m_exact))
+            self.exact = [e if out else placed for out, e in zip(left_out, self.exact)]
+            self.m_exact = [m if out else True for out, m in zip(left_out, self.m_exact)]
+            self.emit(i, int(mode), machine, False, machine_frame=True, exact=exact)
         else:
             self.cur = self._straight_end(i, words)
             self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
@@ -159,29 +184,88 @@ class _Run:
     def _setup(self, code: float, words: dict, known: bool, line: int) -> None:
         """G10 L2 / L20 and the G92 family; one whose words are not all known leaves the
         offsets it sets unknown (NaN: every target in them is flagged)."""
+        given = [a in words for a in "XYZ"]
         if code == 10.0:
             lcode, p = words.get("L", math.nan), words.get("P", 0.0)
             if lcode not in (2.0, 20.0):
                 return  # G10 L1 / L10 / L11: the tool table
             if not (0 <= p <= 9 and p == int(p)):
                 raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
+            self._known_after_g10(int(lcode), int(p) or self.offsets.index, given)
             self.cur = self.offsets.g10(int(lcode), int(p), {k: v for k, v in words.items() if k in "XYZR"}, self.cur, line)
+            self._reread()
             if not known:
                 system = int(p) or self.offsets.index
                 self.offsets.origin[system] = [math.nan] * 3
                 self.cur = [math.nan] * 3
             return
+        self._exact_after_g92(code, given)
+        self._reread()
         self.cur = self.offsets.g92_family(code, words, self.cur, line)
         if not known:
             self.offsets.g92, self.offsets.g92_params, self.cur = [math.nan] * 3, [math.nan] * 3, [math.nan] * 3
 
+    def _known_after_g10(self, lcode: int, system: int, given: list) -> None:
+        """G10 L2 sets the origin from its words (known once every axis is given); L20 from the
+        current point (known where that point's machine position is). On the active system the
+        current point is re-read: exact under L20 on the given axes, inexact under L2 of a
+        system whose old origin was not known."""
+        offsets, active = self.offsets, system == self.offsets.index
+        was = offsets.known[system]
+        if lcode == 2:
+            offsets.known[system] = was or all(given)
+            if active and not was:
+                self.exact = [False] * 3
+            return
+        from_point = all(m for m, g in zip(self.m_exact, given) if g)  # the machine position the origin is taken from
+        offsets.known[system] = from_point and (was or all(given))
+        if active:
+            self.exact = [True if g else e for e, g in zip(self.exact, given)]
+
+    def _exact_after_g92(self, code: float, given: list) -> None:
+        """G92 (the current point reads as the words: the offset is as exact as the point was),
+        G52 (the offset is the words), G92.1 / G92.2 / G92.3 (the point re-read without / with
+        the stored offset)."""
+        if code == 92.0:
+            self.g92_exact = [e if g else x for e, g, x in zip(self.exact, given, self.g92_exact)]
+            self.exact = [True if g else e for e, g in zip(self.exact, given)]
+        elif code == 52.0:
+            self.exact = [e and x if g else e for e, g, x in zip(self.exact, given, self.g92_exact)]
+            self.g92_exact = [True if g else x for g, x in zip(given, self.g92_exact)]
+        elif code in (92.1, 92.2):
+            self.exact = [e and x for e, x in zip(self.exact, self.g92_exact)]
+            self.g92_exact = [True] * 3
+            self.params_exact = [True] * 3 if code == 92.1 else self.params_exact
+            return
+        elif code == 92.3:
+            self.exact = [e and x and q for e, x, q in zip(self.exact, self.g92_exact, self.params_exact)]
+            self.g92_exact = list(self.params_exact)
+            return
+        self.params_exact = list(self.g92_exact)
+
+    def _reread(self) -> None:
+        """The current point re-read in the frame now in force is exact where its machine position is known and the frame too."""
+        placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
+        self.exact = [e or (m and placed) for e, m in zip(self.exact, self.m_exact)]
+
+    def _moved_to_words(self, axes: str) -> None:
+        """Absolute words on ``axes`` in the frame in force: the program coordinate is exact, the machine one where the frame is known."""
+        placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
+        for k, a in enumerate("XYZ"):
+            if a in axes:
+                self.exact[k], self.m_exact[k] = True, placed
+
     def _straight_end(self, i: int, words: dict) -> list:
         incremental = self.modal["dist"][i] == 91.0
         end = [(c + words.get(a, 0.0)) if incremental else words.get(a, c) for a, c in zip("XYZ", self.cur)]
+        if not incremental:
+            self._moved_to_words("".join(a for a in "XYZ" if a in words))
         if "@" in words or "^" in words:
             if "X" in words or "Y" in words:
                 raise PolarError("cannot give X or Y words with polar coordinates")
             end[0], end[1] = polar_end(self.cur[0], self.cur[1], words.get("@"), words.get("^"), incremental)
+            if not incremental and "@" in words and "^" in words:
+                self._moved_to_words("XY")
         self._rotary(words, absolute=not incremental)
         return end
 
@@ -193,16 +277,18 @@ class _Run:
     def _cycle(self, i: int, mode: float, words: dict) -> None:
         cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
         block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
+        if self.modal["dist"][i] != 91.0:
+            self._moved_to_words("".join(a for k, a in enumerate("XYZ") if a in words and k != canned.PLANE_AXES[block.plane][2]))
         moves, self.cur = canned.expand(block, self.cycle, self.cur)
         for kind, point in moves:
             self.emit(i, kind, point, True)
 
 
-_FIELDS = ("row", "motion", "position", "abc", "frame", "generated")
+_FIELDS = ("row", "motion", "position", "abc", "frame", "generated", "exact")
 
 
 def _chunk(**lists) -> dict:
-    return {k: np.array(v, dtype=float if k in ("position", "abc") else np.int64 if k != "generated" else bool) for k, v in lists.items()}
+    return {k: np.array(v, dtype=float if k in ("position", "abc") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
 
 
 def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
@@ -237,7 +323,7 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
     """Every motion target of the block table ``t`` (program order). ``modal`` holds the
     forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
     motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
-    (the block names one)."""
+    (the block names one), and circle (a G2/G3 block that is a full circle: no end-point word)."""
     state = _Run(t, letters, modal)
     n = len(t["offset"])
     simple = simple_holes(t, letters, modal) if fast else np.zeros(n, bool)
@@ -257,7 +343,8 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
     state.flush()
     parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
     return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
-                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool))
+                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
+                 exact=parts["exact"].astype(bool))
 
 
 def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -36,6 +36,9 @@ class Offsets:
     origin: list = field(default_factory=lambda: [[0.0, 0.0, 0.0] for _ in range(10)])
     rotation: list = field(default_factory=lambda: [0.0] * 10)
     set_at: list = field(default_factory=lambda: [None] * 10)  # line of the G10 that last set each system
+    # the system's origin is known in the machine frame (set by G10 L2 on every axis, or by G10 L20 from a point
+    # known there); one the program does not set is on the controller: identity stands in, flagged (interp._Run)
+    known: list = field(default_factory=lambda: [False] * 10)
     index: int = 1
     g92: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
     g92_params: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
@@ -50,12 +53,13 @@ class Offsets:
 
     def key(self) -> tuple:
         """What identifies the frame program points are in now."""
-        return (self.index, tuple(self.origin[self.index]), self.rotation[self.index], self.set_at[self.index], tuple(self.g92), self.g92_at)
+        return (self.index, tuple(self.origin[self.index]), self.rotation[self.index], self.set_at[self.index], tuple(self.g92), self.g92_at,
+                self.known[self.index])
 
     @staticmethod
     def transform(key: tuple) -> np.ndarray:
         """machine_T_program of a frame ``key``: translate(origin) . rotZ(R) . translate(g92)."""
-        _, origin, rotation, _, g92, _ = key
+        origin, rotation, g92 = key[1], key[2], key[4]
         turn = make_transform(rot_z(math.radians(rotation)), np.asarray(origin, float))
         return turn @ make_transform(np.eye(3), np.asarray(g92, float))
 

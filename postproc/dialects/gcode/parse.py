@@ -57,7 +57,7 @@ _STATE_OF_G = {
     **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
-    **{g: ("tlo", g) for g in (43.0, 43.1, 43.4, 43.5, 49.0)},
+    **{g: ("tlo", g) for g in (43.0, 43.1, 43.2, 43.4, 43.5, 49.0)},
     # Cutter radius compensation: the controller offsets the path by the tool radius, which
     # the program text does not determine (tool table), so targets under it are flagged.
     **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
@@ -352,6 +352,7 @@ class GcodeParser:
             elif gc in _STATE_OF_G:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
+                nonmotion |= gc in (43.1, 43.2)  # their X Y Z words are tool length offsets, not a move
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
             elif gc in (98.0, 99.0):
@@ -418,7 +419,8 @@ class GcodeParser:
         ir_values, ir_spans, scale = _ir_numbers(t, rows, absolute, linear_scale)
         speed = _ffill(values[:, _AX["F"]] * linear_scale, np.nan)[rows]
         unknown_feed = np.isneginf(speed) & (motion[rows] != 0.0)  # feed moves at an F the program cannot know (G0 has none)
-        resolved = t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
+        resolved = (t["ok"][rows] & ~np.isnan(absolute[rows, :3]).any(axis=1) & ~unknown_feed & ~self._under_cutter_comp(t, rows)
+                    & ~self._tool_axis_unknown(t, rows, moves & (dist == 90.0) & ~t["g53"]))
         speed[np.isneginf(speed)] = np.nan
         frame_idx = self._work_offsets(t, rows, _ffill(t["wcs"], 1.0).astype(int))
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -497,8 +499,10 @@ class GcodeParser:
         scale = np.where(_ffill(t["units"], 21.0) == 20.0, 25.4, 1.0)
         dist = _ffill(t["dist"], 90.0)
         mode, sets_mode = interp.modal_mode(t["motion"], t["canned"])
-        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": _ffill(t["plane"], 17.0).tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
-                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist()}
+        plane = _ffill(t["plane"], 17.0)
+        modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": plane.tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
+                 "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist(),
+                 "circle": self._block_circles(t, mode).tolist()}
         try:
             moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
@@ -514,13 +518,23 @@ class GcodeParser:
             if k < 3:
                 ir_scale[:, f] = scale[rows]
         frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
-        resolved = t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows)
+        plain_move = ~t["nonmotion"] & np.isin(mode, (0.0, 1.0, 2.0, 3.0)) & (dist == 90.0) & ~t["g53"]  # a cycle block never makes Z known again
+        if not moves.exact.all():
+            first = int(self.lines.line(t["offset"][rows[np.argmin(moves.exact)]]))
+            self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
+                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there); {int((~moves.exact).sum())} target(s) flagged")
+        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
+                    & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
         tlo = _ffill(t["tlo"], 49.0)
         tool_idx = self._tool_lengths(t, rows, tlo)
-        axis_rows = _tool_axes(t, rows, tlo, ir_values, ir_spans) & own
+        # G2/G3 targets: their I J K / R words, plane, IJK mode and turns, as the vectorised reader gives them (arcwords).
+        arc_move = np.isin(moves.motion, (2, 3))
+        arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
+                                 self.text, self._error_at)
+        axis_rows = _tool_axes(t, rows, np.where(arc_move, 49.0, tlo[rows]), ir_values, ir_spans, per_row=True) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
         self.builder.notes.extend(self.notes)
@@ -530,8 +544,16 @@ class GcodeParser:
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
-                               **self._feed_columns(t, rows, moves.motion.astype(float)))
-        return _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+                               **self._feed_columns(t, rows, moves.motion.astype(float)),
+                               **({"arc": arc} if arc is not None else {}))
+        tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
+        return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
+
+    def _block_circles(self, t: dict, mode: np.ndarray) -> np.ndarray:
+        """(n,) G2/G3 blocks with centre words and no end-point word: full circles back to
+        the start (as in the vectorised reader; a radius-format one is refused)."""
+        present = ~np.isnan(t["values"][:, :6]).all(axis=1) | ~np.isnan(t["more"][:, 3:5]).all(axis=1)  # X Y Z A B C, polar @ ^
+        return arcwords.full_circles(t, np.isin(mode, (2.0, 3.0)) & ~present & ~t["nonmotion"], self._error_at)
 
     def _frames_of(self, frame: np.ndarray, keys: list) -> tuple[np.ndarray, np.ndarray]:
         """Frame index of each target (``frame`` indexes the frame ``keys``, see interp.Offsets.key;
@@ -541,15 +563,19 @@ class GcodeParser:
 
         ids, finite = np.zeros(len(keys) + 1, np.int32), np.ones(len(keys) + 1, bool)
         for k, key in enumerate(keys):
-            system, _, _, set_at, _, g92_at = key
+            system, set_at, g92_at, known = key[0], key[3], key[5], key[6]
             name = f"G{_WCS_NAMES[system - 1]:g}" + (f"@line{set_at}" if set_at is not None else "") + (f"+G92@line{g92_at}" if g92_at is not None else "")
             transform = Offsets.transform(key)
             finite[k] = bool(np.isfinite(transform).all())
-            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, set_at is not None and finite[k])
+            ids[k] = self.builder.frame_index(name, transform if finite[k] else None, known and finite[k])
         ids[-1] = self.builder.frame_index("machine", np.eye(4), True)
         unknown = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}" for key in keys if key[3] is None})
         if unknown:
             self.notes.append(f"work offset(s) {', '.join(unknown)} are not set in the program (no G10): positions are relative to them")
+        touched = sorted({f"G{_WCS_NAMES[key[0] - 1]:g}@line{key[3]}" for key in keys if key[3] is not None and not key[6]})
+        if touched:
+            self.notes.append(f"work offset(s) {', '.join(touched)} are set by G10 from a point (L20) or on some axes only (L2) where the "
+                              "machine position is not known from the program: their origins are not known")
         return ids[frame], finite[frame]
 
     def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
@@ -595,15 +621,47 @@ class GcodeParser:
 
     def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
         """Tool index of each target: the H number of the active G43 (its length is in the
-        machine's tool table, not the program: an unknown tool)."""
+        machine's tool table, not the program: an unknown tool). G43 without H takes the
+        loaded tool's length (tool "G43"); G43.1 / G43.2 set or add lengths given in the
+        block (tool "G43.1@lineN"): unknown tools too, never the flange."""
         hnum = _ffill(t["h"], np.nan)
         tool_idx = np.zeros(len(rows), np.int32)
-        active = (tlo[rows] != 49.0) & ~np.isnan(hnum[rows])
-        for h in np.unique(hnum[rows][active]):
-            tool_idx[active & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
-        if active.any():
-            self.notes.append("tool lengths (G43 H) are in the machine's tool table: flange poses need them; TCP positions do not")
+        code = tlo[rows]
+        dynamic = np.isin(code, (43.1, 43.2))
+        by_h = (code != 49.0) & ~dynamic & ~np.isnan(hnum[rows])
+        for h in np.unique(hnum[rows][by_h]):
+            tool_idx[by_h & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
+        for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h]):
+            tool_idx[(code == c) & ~by_h] = self.builder.tool_index(f"G{c:g}", None)
+        if dynamic.any():
+            set_at = np.where(np.isin(t["tlo"], (43.1, 43.2)), np.arange(len(t["tlo"])), -1)
+            np.maximum.accumulate(set_at, out=set_at)
+            for b in np.unique(set_at[rows][dynamic]):
+                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", None)
+        if (code != 49.0).any():
+            self.notes.append("tool lengths (G43 H, G43 without H, G43.1/G43.2) are in the machine's tool table or set in a block: "
+                              "flange poses need them (--tool NAME=...); TCP positions do not")
         return tool_idx
+
+    def _tool_axis_unknown(self, t: dict, rows: np.ndarray, resets: np.ndarray) -> np.ndarray:
+        """(len(rows),) True for targets whose Z the controller moves by a tool length change
+        the program does not give: after G43 / G43.1 / G43.2 / G49 changes the offset, the
+        current point is re-read for the new tool (LinuxCNC: Z = the old Z - the change of
+        length), so a target that leaves Z out before the next absolute Z word (``resets``:
+        a G90 move with Z, G92 Z) is unknown; so is a G53 target under an offset (its words
+        are for the spindle, not the tool tip). Noted with the first line."""
+        tlo, hnum = _ffill(t["tlo"], 49.0), _ffill(t["h"], np.nan)
+        state = np.where(tlo == 49.0, -1.0, tlo * 1e6 + np.nan_to_num(hnum, nan=-1.0))
+        change = (state != np.concatenate([[-1.0], state[:-1]])) | np.isin(t["tlo"], (43.1, 43.2))
+        has_z = ~np.isnan(t["values"][:, _AX["Z"]])
+        n = np.arange(len(tlo))
+        last_change = np.maximum.accumulate(np.where(change, n, -1))
+        last_reset = np.maximum.accumulate(np.where(resets & has_z, n, -1))
+        stale = (last_change[rows] > last_reset[rows]) | (t["g53"][rows] & (state[rows] != -1.0))
+        if stale.any():
+            self.notes.append(f"line {int(self.lines.line(t['offset'][rows[np.argmax(stale)]]))}: Z left out after a tool length change (or a G53 move "
+                              f"under one): the controller's tool-tip Z there depends on the length; {int(stale.sum())} target(s) flagged")
+        return stale
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
@@ -671,11 +729,12 @@ def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarr
     ir_spans[at[have], field, 1:] = spans[have]
 
 
-def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray:
+def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray, per_row: bool = False) -> np.ndarray:
     """G43.5 (TCP with tool axis vectors): I J K are the tool axis, not an arc centre. Puts
-    them in IR fields o1..o3 (in place); returns the targets that have one."""
+    them in IR fields o1..o3 (in place); returns the targets that have one. ``tlo`` is per
+    block, or per target of ``rows`` with ``per_row``."""
     ijk = [_AX["I"], _AX["J"], _AX["K"]]
-    axis_rows = (tlo[rows] == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
+    axis_rows = ((tlo if per_row else tlo[rows]) == 43.5) & ~np.isnan(t["values"][rows[:, None], ijk]).any(axis=1)
     axis_at = rows[axis_rows]  # only these blocks' words are read (not a copy of every block's)
     for f_ir, k in zip((3, 4, 5), ijk):
         ir_values[axis_rows, f_ir] = t["values"][axis_at, k]
