@@ -180,3 +180,27 @@ def test_a_chunk_sent_to_a_worker_is_restored_bit_for_bit(tmp_path, model):
         a, b = getattr(tp, f.name), getattr(back, f.name)
         if isinstance(a, np.ndarray):
             assert a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes(), f.name
+
+
+_TORCH_AFTER_FORK = """
+import torch
+from postproc import stream
+a = torch.randn(600, 600); (a @ a).sum()  # the parent's thread pool runs (as a learned predictor's would)
+def work(_):
+    b = torch.randn(600, 600)
+    return float((torch.tanh(b) @ b).sum() * 0)
+with stream._pool(2) as pool:
+    print(sum(pool.map(work, range(4))))
+"""
+
+
+def test_workers_forked_after_torch_ran_do_not_hang():
+    """A forked worker whose parent already used torch's thread pool hung in its first
+    parallel torch operation (a model with a pso-bp predictor, streamed): the pool's workers
+    run torch on one thread."""
+    import subprocess
+    import sys
+
+    done = subprocess.run([sys.executable, "-c", _TORCH_AFTER_FORK], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "0.0"
