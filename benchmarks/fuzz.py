@@ -15,8 +15,11 @@ from __future__ import annotations
 
 import argparse
 import collections
+import datetime
 import json
 import multiprocessing
+import os
+import subprocess
 import sys
 import time
 import traceback
@@ -33,6 +36,7 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
     import fuzzing
 
     dialect, n, part = job
+    cpu0 = time.process_time()
     seeds = [p.read_bytes() for p in fuzzing.seed_files(dialect)]
     counts: collections.Counter = collections.Counter()
     crashes: list[dict] = []
@@ -49,15 +53,27 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
                 crashes.append({"error": "".join(traceback.format_exception_only(exc)).strip()[:400], "data": data.decode("latin-1")})
 
     one()
-    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes}
+    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes, "cpu_s": time.process_time() - cpu0}
 
 
 CHUNK = 1000  # examples per task: progress and partial results are written after each
 
 
-def report(results: list[dict], elapsed: float, jobs: int, wanted: int) -> str:
+def header() -> list[str]:
+    """How the run was made: command, commit, start time and the machine's load (timings depend on it)."""
+    root = Path(__file__).resolve().parents[1]
+    git = lambda *a: subprocess.run(["git", *a], cwd=root, capture_output=True, text=True).stdout.strip()  # noqa: E731
+    dirty = " (with uncommitted changes)" if git("status", "--porcelain", "--untracked-files=no") else ""
+    shared = os.environ.get("POSTPROC_SHARED", "")
+    return [f"# {'POSTPROC_SHARED=' + shared + ' ' if shared else ''}{' '.join([Path(sys.executable).name, *sys.argv])}",
+            f"# commit {git('rev-parse', '--short', 'HEAD')}{dirty} on branch {git('rev-parse', '--abbrev-ref', 'HEAD')}; "
+            f"started {datetime.datetime.now(datetime.timezone.utc):%Y-%m-%d %H:%M} UTC on {os.cpu_count()} cores; "
+            f"load average at start {' '.join(f'{x:.1f}' for x in os.getloadavg())}"]
+
+
+def report(results: list[dict], elapsed: float, jobs: int, wanted: int, head: list[str] = ()) -> str:
     dialects = ("rapid", "krl", "gcode")
-    lines = [f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
+    lines = [*head, f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
     total: collections.Counter = collections.Counter()
     for d in dialects:
         c: collections.Counter = collections.Counter()
@@ -69,7 +85,10 @@ def report(results: list[dict], elapsed: float, jobs: int, wanted: int) -> str:
         lines.append(f"{d:<8}{sum(c.values()):>11,}{c['accepted']:>24,}{c['refused']:>19,}{c['refused-file']:>16,}{c['crashed']:>9,}   {seeds} files")
     done = sum(total.values())
     lines.append(f"{'all':<8}{done:>11,}{total['accepted']:>24,}{total['refused']:>19,}{total['refused-file']:>16,}{total['crashed']:>9,}")
+    cpu = sum(r.get("cpu_s", 0.0) for r in results)
     lines.append(f"time {elapsed:.0f} s with {jobs} processes ({done / max(elapsed, 1e-9):,.1f} programs/s); {done:,} of {wanted:,} done; crashed must be 0")
+    lines.append(f"CPU {cpu:.0f} s in the workers ({1000 * cpu / max(done, 1):.2f} ms a program); load average now "
+                 f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} (the wall time depends on it, the CPU time much less)")
     crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
     for c in crashes[:10]:
         lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}")
@@ -89,11 +108,12 @@ def main() -> None:
     # chunks interleaved over the dialects, so a run cut short has sampled all three alike
     jobs = [(d, min(CHUNK, per_dialect - k * CHUNK), k) for k in range(-(-per_dialect // CHUNK)) for d in dialects]
     results: list[dict] = []
+    head = header()
     t0 = time.perf_counter()
     with multiprocessing.Pool(args.jobs) as pool:
         for result in pool.imap_unordered(run_chunk, jobs):
             results.append(result)
-            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects))
+            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects), head)
             if args.out:
                 args.out.parent.mkdir(parents=True, exist_ok=True)
                 args.out.write_text(text + "\n", encoding="utf-8")
