@@ -1,6 +1,6 @@
 """Fuzzing the three parsers: 10^5 generated and mutated programs (issue 12, "Must show").
 
-Run: .venv/bin/python benchmarks/fuzz.py [--examples 100000] [--jobs 3] [--out benchmarks/results/fuzz.txt]
+Run: .venv/bin/python benchmarks/fuzz.py [--examples 100000] [--jobs 3] [--out benchmarks/results/fuzz.txt] [--dialects gcode]
 The examples are split evenly over RAPID, KRL and G-code, in chunks of 1,000 with their own
 fixed seeds, run by --jobs processes; the report is rewritten after every chunk. Each
 is a program generated from the grammar's constructs or a real/own corpus file (a window of
@@ -71,8 +71,7 @@ def header() -> list[str]:
             f"load average at start {' '.join(f'{x:.1f}' for x in os.getloadavg())}"]
 
 
-def report(results: list[dict], elapsed: float, jobs: int, wanted: int, head: list[str] = ()) -> str:
-    dialects = ("rapid", "krl", "gcode")
+def report(results: list[dict], elapsed: float, jobs: int, wanted: int, head: list[str] = (), dialects=("rapid", "krl", "gcode")) -> str:
     lines = [*head, f"{'dialect':<8}{'generated':>11}{'accepted+round-tripped':>24}{'refused with line':>19}{'refused (file)':>16}{'crashed':>9}   seeds"]
     total: collections.Counter = collections.Counter()
     for d in dialects:
@@ -102,8 +101,10 @@ def main() -> None:
     parser.add_argument("--out", type=Path, help="also write the report here (after every chunk)")
     parser.add_argument("--crashes", type=Path, help="write the crashing inputs (JSON) here; keep it out of the repository: "
                         "an input may be a window of a third-party corpus file")
+    parser.add_argument("--dialects", nargs="+", choices=("rapid", "krl", "gcode"), default=["rapid", "krl", "gcode"],
+                        help="only these (the examples are split over them; chunk k of a dialect is the same on every run)")
     args = parser.parse_args()
-    dialects = ("rapid", "krl", "gcode")
+    dialects = tuple(args.dialects)
     per_dialect = args.examples // len(dialects)
     # chunks interleaved over the dialects, so a run cut short has sampled all three alike
     jobs = [(d, min(CHUNK, per_dialect - k * CHUNK), k) for k in range(-(-per_dialect // CHUNK)) for d in dialects]
@@ -113,7 +114,7 @@ def main() -> None:
     with multiprocessing.Pool(args.jobs) as pool:
         for result in pool.imap_unordered(run_chunk, jobs):
             results.append(result)
-            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects), head)
+            text = report(results, time.perf_counter() - t0, args.jobs, per_dialect * len(dialects), head, dialects)
             if args.out:
                 args.out.parent.mkdir(parents=True, exist_ok=True)
                 args.out.write_text(text + "\n", encoding="utf-8")

@@ -137,8 +137,11 @@ class _Run:
             mode = m["motion"][i]
             if math.isnan(mode):
                 raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
+        if mode in canned.CYCLES and self.cycle.last == mode and self.cycle.unknown:
+            known = False  # R, bottom, P, Q kept from a cycle block that was not read: this hole is not known either
         if not known:  # a word the program text does not determine: the target and all after it are flagged
             self.cycle.end_run(mode)
+            self.cycle.unknown = mode in canned.CYCLES
             self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
             self.cur = [math.nan] * 3
             return
@@ -194,6 +197,7 @@ class _Run:
         cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
         block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
         moves, self.cur = canned.expand(block, self.cycle, self.cur)
+        self.cycle.unknown = False
         for kind, point in moves:
             self.emit(i, kind, point, True)
 
