@@ -40,23 +40,33 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
     seeds = [p.read_bytes() for p in fuzzing.seed_files(dialect)]
     counts: collections.Counter = collections.Counter()
     crashes: list[dict] = []
+    slow: list[float] = []  # CPU seconds of each program over SLOW_S (where the time of a run goes)
 
     @seed(zlib.crc32(f"fuzz-{dialect}-{part}".encode()))  # the same examples on every run
     @settings(max_examples=n, deadline=None, database=None, phases=[Phase.generate], suppress_health_check=list(HealthCheck))
     @given(fuzzing.programs(dialect, seeds))
     def one(data: bytes) -> None:
+        start = time.process_time()
         try:
             counts[fuzzing.judge(dialect, data)] += 1
         except Exception as exc:  # noqa: BLE001 - every other exception is what we count
             counts["crashed"] += 1
             if len(crashes) < 20:
                 crashes.append({"error": "".join(traceback.format_exception_only(exc)).strip()[:400], "data": data.decode("latin-1")})
+        finally:
+            if (spent := time.process_time() - start) > SLOW_S:
+                slow.append(spent)
 
+    try:  # loads the grammar and the compiled scanner, so that a first program is not counted slow for it
+        fuzzing.judge(dialect, b"")
+    except Exception:  # noqa: BLE001 - only a warm-up
+        pass
     one()
-    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes, "cpu_s": time.process_time() - cpu0}
+    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes, "cpu_s": time.process_time() - cpu0, "slow": slow}
 
 
 CHUNK = 1000  # examples per task: progress and partial results are written after each
+SLOW_S = 0.5  # a program taking more CPU seconds than this is counted apart in the report
 
 
 def header() -> list[str]:
@@ -88,6 +98,8 @@ def report(results: list[dict], elapsed: float, jobs: int, wanted: int, head: li
     lines.append(f"time {elapsed:.0f} s with {jobs} processes ({done / max(elapsed, 1e-9):,.1f} programs/s); {done:,} of {wanted:,} done; crashed must be 0")
     lines.append(f"CPU {cpu:.0f} s in the workers ({1000 * cpu / max(done, 1):.2f} ms a program); load average now "
                  f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} (the wall time depends on it, the CPU time much less)")
+    slow = [t for r in results for t in r.get("slow", [])]
+    lines.append(f"{len(slow)} programs over {SLOW_S} s CPU each, {sum(slow):.0f} s in all" + (f" (slowest {max(slow):.1f} s)" if slow else ""))
     crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
     for c in crashes[:10]:
         lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}")
