@@ -7,6 +7,7 @@ file 150 per dialect (about 30 s in all), from a fixed seed.
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, note, seed, settings
 
@@ -114,4 +115,19 @@ def test_krl_relative_move_after_huge_coordinates_keeps_its_numbers(text):
     absorbs the increment (1e308 + 419 == 1e308), and an unchanged emit must still write
     the text's increment back as it was, not the difference of two absolute values."""
     tp = parse_program("fuzz.src", "krl", text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
+@pytest.mark.parametrize("text", [
+    b"G83 R0.05 Z-0.7 Q0.15 X0 Y-6 F#102\nG83 R0.05 Z-0.7 X1\nM2\n",  # Q sticky from a block not read: was KeyError 'Q'
+    b"G83 R1 Z-5 Q1 X0 Y0 F10\nG83 R1 Z-5 Q2 X1 Y1 F#102\nG83 X2 Y2\nM2\n",  # was pecked with the stale Q1, flagged resolved
+])
+def test_gcode_cycle_after_a_cycle_block_not_read_is_flagged(text):
+    """Found by benchmarks/fuzz.py (a window of a real drilling program with F#102 unset):
+    a G83 block with a word unknown at post time is listed once, flagged; the next G83
+    blocks take its sticky R, bottom and Q (LinuxCNC manual, "Canned cycles", "Sticky
+    numbers"), so their holes are not known either, until a new cycle is read."""
+    tp = parse_program("fuzz.ngc", "gcode", text)
+    later = tp.line >= 2
+    assert not tp.resolved[later].any() and np.isnan(tp.position[later & (tp.line == tp.line.max())]).all()
     assert emit_texts(tp, tp)[0].encode("latin-1") == text

@@ -111,10 +111,32 @@ def test_unknown_condition_lists_each_target_once_flagged(tmp_path):
 def test_endless_loop_is_refused_with_its_line(tmp_path, monkeypatch):
     monkeypatch.setattr(flow, "MAX_EXECUTED_BLOCKS", 10_000)
     path = tmp_path / "forever.ngc"
-    path.write_text("G0 X0\no1 while [1]\nG1 X1 F10\nG1 X0\no1 endwhile\nM2\n")
-    with pytest.raises(ParseError, match="blocks executed") as exc:
+    path.write_text("#1 = 0\nG0 X0\no1 while [1]\n#1 = [#1 + 1]\nG1 X1 F10\nG1 X0\no1 endwhile\nM2\n")  # #1 grows: no state repeats
+    with pytest.raises(ParseError, match="more than 10,000 blocks executed") as exc:
         parse_program(path)
-    assert exc.value.path == str(path) and exc.value.line in (2, 3, 4, 5)
+    assert exc.value.path == str(path) and exc.value.line in (3, 4, 5, 6, 7)
+
+
+@pytest.mark.parametrize("text, loop_lines", [
+    ("G0 X0\no1 while [1]\nG1 X1 F10\nG1 X0\no1 endwhile\nM2\n", (2, 5)),
+    ("#2 = 0\no1 while [#2 LT 3]\no2 repeat [2]\nG1 X1 F10\no2 endrepeat\no1 endwhile\nM2\n", (2, 6)),  # the #2 increment forgotten
+    ("o5 sub\n#<_n> = 0\no5 endsub\no1 do\no5 call\nG1 X1 F10\no1 while [#<_n> LT 1]\nM2\n", (1, 7)),
+])
+def test_loop_back_in_the_same_state_is_refused_at_once(tmp_path, text, loop_lines):
+    """No parameter, counter or call changes from one pass to the next: refused after
+    ~CYCLE_CHECK_AFTER blocks, not after MAX_EXECUTED_BLOCKS (seconds and ~1 GB)."""
+    path = tmp_path / "forever.ngc"
+    path.write_text(text)
+    with pytest.raises(ParseError, match="same parameters, counters and calls") as exc:
+        parse_program(path)
+    assert exc.value.path == str(path) and loop_lines[0] <= exc.value.line <= loop_lines[1]
+
+
+def test_long_loop_whose_state_changes_is_run_to_its_end(tmp_path):
+    path = tmp_path / "long.ngc"
+    path.write_text("#1 = 0\no1 while [#1 LT 3000]\n#1 = [#1 + 1]\no2 repeat [1]\no2 endrepeat\no1 endwhile\nG1 X#1 F10\nM2\n")
+    tp = parse_program(path)
+    assert tp.position[:, 0].tolist() == [3000]
 
 
 def test_endless_recursion_is_refused(tmp_path):

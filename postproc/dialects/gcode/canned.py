@@ -36,6 +36,7 @@ class CycleState:
     last: float | None = None  # motion code of the last motion executed
     sticky: dict = field(default_factory=dict)  # R, the bottom word, P, Q, I, J, K
     levels: tuple = ()  # (R, clear, bottom) of the last cycle block, mm
+    unknown: bool = False  # the last cycle block was not read (a word unknown at post time): so are its sticky numbers
 
     def end_run(self, motion: float) -> None:
         """A motion that is not a cycle ends the run: the next cycle takes a new initial level."""

@@ -37,6 +37,10 @@ from . import siemens
 # `while [1]` (one IR row is ~1 kB while the block table is built).
 MAX_EXECUTED_BLOCKS = 1_000_000
 MAX_CALL_DEPTH = 100  # nested calls (LinuxCNC's own limit is lower); deeper is refused
+# After this many blocks, each O-word line compares the run's state with one saved earlier
+# (Brent's cycle detection): the same state twice is a loop that never ends, refused at once
+# instead of after MAX_EXECUTED_BLOCKS (seconds and ~1 GB of block table).
+CYCLE_CHECK_AFTER = 1_000
 
 # Searched in the lower-cased text, and only where a cheap substring test finds a keyword:
 # a plain CAM file of 10^6 lines never runs them.
@@ -173,6 +177,21 @@ class Frame:
     counters: dict = field(default_factory=dict)  # repeat line -> passes left
     passes_left: int = 0  # Fanuc M98 L: further passes of the sub
     entry: int = 0  # first line of the sub (Fanuc M98 repeats)
+
+
+class _Cycle:
+    """Brent's cycle detection over the states seen at O-word lines: a state is saved at the
+    1st, 2nd, 4th, 8th ... check, and a later state equal to the saved one is a cycle."""
+
+    def __init__(self):
+        self.saved, self.checks, self.next_save = None, 0, 1
+
+    def check(self, state: str, error) -> None:
+        if state == self.saved:
+            raise error()
+        self.checks += 1
+        if self.checks == self.next_save:
+            self.saved, self.next_save = state, 2 * self.next_save
 
 
 class Structure:
@@ -386,6 +405,7 @@ class Runner:
         """Generator of executed block offsets (the parser's clock is set before each)."""
         frames = [Frame(len(self.lines), "")]
         pc, executed = 0, 0
+        cycle = _Cycle()
         while True:
             if len(frames) > 1 and frames[-1].doc is not None and (pc >= len(self.lines) or self.lines[pc].doc != frames[-1].doc):
                 pc = self._return(frames)  # a Siemens subprogram ends with its file
@@ -397,6 +417,10 @@ class Runner:
                 raise self._error(self.lines[pc].start, f"more than {MAX_EXECUTED_BLOCKS:,} blocks executed: a loop that does not end at post time is refused")
             ln = self.lines[pc]
             if ln.keyword:
+                if executed > CYCLE_CHECK_AFTER:
+                    cycle.check(self._state(pc, frames), lambda: self._error(ln.start, (
+                        f"back at this line with the same parameters, counters and calls after {executed:,} blocks executed: "
+                        "a loop that does not end at post time is refused")))
                 pc = self._oword(pc, ln, frames)
                 if pc is None:  # RET of the main program
                     return
@@ -414,6 +438,13 @@ class Runner:
             if ln.m & {2.0, 30.0}:
                 return
             pc = self._m98_m99(pc, ln, frames)
+
+    def _state(self, pc: int, frames: list[Frame]) -> str:
+        """All that the rest of the run depends on (the block reader only reads parameters);
+        repr keeps -0.0 apart from 0.0, so equal states run alike."""
+        params = self.parser.params
+        calls = [(f.return_to, f.sub, f.doc, f.counters, f.passes_left, f.entry) for f in frames]
+        return repr((pc, self.tainted_from is None, sorted(self.ints), params.globals, params.frames, calls))
 
     def _set_params(self, ln: Line) -> None:
         """A block of parameter settings only: read all, then set (as the block reader does)."""

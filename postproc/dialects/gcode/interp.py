@@ -154,8 +154,11 @@ class _Run:
             mode = m["motion"][i]
             if math.isnan(mode):
                 raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
+        if mode in canned.CYCLES and self.cycle.last == mode and self.cycle.unknown:
+            known = False  # R, bottom, P, Q kept from a cycle block that was not read: this hole is not known either
         if not known:  # a word the program text does not determine: the target and all after it are flagged
             self.cycle.end_run(mode)
+            self.cycle.unknown = mode in canned.CYCLES
             self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
             self.cur = [math.nan] * 3
             return
@@ -280,6 +283,7 @@ class _Run:
         if self.modal["dist"][i] != 91.0:
             self._moved_to_words("".join(a for k, a in enumerate("XYZ") if a in words and k != canned.PLANE_AXES[block.plane][2]))
         moves, self.cur = canned.expand(block, self.cycle, self.cur)
+        self.cycle.unknown = False
         for kind, point in moves:
             self.emit(i, kind, point, True)
 
