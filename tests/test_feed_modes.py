@@ -104,7 +104,7 @@ def test_convert_writes_the_machine_speed(tmp_path, to, name):
     src = tmp_path / "in.ngc"
     src.write_text("G21 G90 G17\nG0 X0 Y0 Z0\nG93\nG1 X100 F2\nG94\nG1 X0 F300\nS1200 M3\nG95\nG1 X10 F0.05\nM2\n")
     out = tmp_path / name
-    res = runner.invoke(app, ["convert", str(src), "--to", to, "-o", str(out)])
+    res = runner.invoke(app, ["convert", str(src), "--to", to, "--frame", "G54=0,0,0,0,0,0", "-o", str(out)])
     assert res.exit_code == 0, res.output
     text = out.read_text(encoding="latin-1")
     if to == "krl":
@@ -114,7 +114,8 @@ def test_convert_writes_the_machine_speed(tmp_path, to, name):
 
 
 @pytest.mark.parametrize("body, where, why", [
-    ("G0 X0 Y0 Z0 A0\nG93\nG1 A90 F1\n", ":4:8:", "rotary axes only"),
+    # (a plain convert refuses A/B/C words first: the rotary-only G93 move is machine_speeds' own refusal below)
+    ("G0 X0 Y0 Z0 A0\nG93\nG1 A90 F1\n", ":2:5:", "rotary axis words"),
     ("G0 X0 Y0 Z0\nG93\nG1 X0 F1\n", ":4:7:", "zero length"),
     ("G93\nG1 X10 Y0 Z0 F1\n", ":3:14:", "start is not known"),
     ("G0 X0 Y0 Z0\nG95\nG1 X10 F0.1\n", ":4:8:", "no known spindle speed"),
@@ -126,7 +127,7 @@ def test_convert_refuses_a_move_without_a_machine_speed(tmp_path, body, where, w
     src = tmp_path / "bad.ngc"
     src.write_text("G21 G90 G17\n" + body + "M2\n")
     out = tmp_path / "bad.src"
-    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "-o", str(out)])
+    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "--frame", "G54=0,0,0,0,0,0", "-o", str(out)])
     assert res.exit_code == 2 and f"bad.ngc{where}" in res.output and why in res.output, res.output
     assert not out.exists() and not out.with_suffix(".dat").exists()
     with pytest.raises(EmitError):
@@ -152,7 +153,7 @@ def test_five_axis_program_to_a_robot_keeps_the_tip_feed(tmp_path):
     src = tmp_path / "five.ngc"
     src.write_text("G21 G90 G17\nG0 X0 Y0 Z0 A0 C0\nG1 X60 F600\nG93\nG1 X120 A10 F2\nG94\nM2\n")
     out = tmp_path / "five.src"
-    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "--machine", "xyzac-trt", "--input-axes", "tip", "-o", str(out)])
+    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "--machine", "xyzac-trt", "--input-axes", "tip", "--frame", "G54=0,0,0,0,0,0", "-o", str(out)])
     assert res.exit_code == 0, res.output
     assert re.findall(r"\$VEL\.CP\s*=\s*([\d.]+)", out.read_text(encoding="latin-1")) == ["0.01", "0.002"]
 
