@@ -206,7 +206,9 @@ def test_two_work_offsets_and_rapid(fitted, tmp_path):
     out = tmp_path / "part.mod"
     with pytest.raises(InputError, match="G55=X,Y,Z"):
         run({"argstring": f"--model {model} {ARGS} --to rapid", "filename": str(out), "objects": objects})
-    args = f"--model {model} {ARGS} --to rapid --frame G55=900,100,350,90,0,0"
+    # RAPID tooldata must carry a mass; convert writes 1 kg where the job gives none, and the
+    # model (fitted without a stated payload) cannot be checked against it: accepted knowingly.
+    args = f"--model {model} {ARGS} --to rapid --frame G55=900,100,350,90,0,0 --allow-model-mismatch"
     answer = run({"argstring": args, "filename": str(out), "objects": objects})
     assert answer["files"] == [str(out)] and "WObj:=G55;" in out.read_text()
     back = parse_program(out)

@@ -199,6 +199,25 @@ def test_an_unknown_g92_value_flags_what_follows(tmp_path):
     assert list(tp.resolved) == [True, False]  # the point after the unknown offset is flagged, not guessed
 
 
+def test_moves_to_a_stored_position_or_a_probe_contact_are_listed_and_flag_what_follows(tmp_path):
+    """LinuxCNC manual, G28/G30: "makes a rapid traverse move to the position specified by
+    axes including any offsets, then ... to the absolute position of the values in parameters
+    5161-5166 for all axes specified" (all axes without words); G38.2: a straight probe move
+    that stops at contact. rs274 (default parameters) moves line 5 to Z0 and the probe to
+    Z-9.746: neither is in the program, so those targets and the moves after them on those
+    axes are flagged until the axes get G90 words again; they were dropped, and line 6 was
+    reported at Z10."""
+    path = tmp_path / "home.ngc"
+    path.write_text("G21 G90 G17\nG10 L2 P1 X0 Y0 Z0\nG54\nG0 X10 Y10 Z10\nG91 G28 Z0\nG90 G1 X30 F100\n"
+                    "G1 X1 Y2 Z3\nG38.2 Z-10 F50\nG1 X5\nG1 Z4\nG28\nM2\n")
+    tp = parse_program(path)
+    assert list(tp.line) == [4, 5, 5, 6, 7, 8, 9, 10, 11]
+    assert list(tp.resolved) == [True, True, False, False, True, False, False, True, False]
+    assert np.allclose(tp.position[[0, 1, 4, 7], :3], [[10, 10, 10], [10, 10, 10], [1, 2, 3], [5, 2, 4]])
+    assert list(tp.kind[[1, 2, 5, 8]]) == [Kind.RAPID, Kind.RAPID, Kind.LINEAR, Kind.RAPID]
+    assert any("G28/G30" in n for n in tp.notes)
+
+
 # ------------------------------------------------------------------ rs274, the judge
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))

@@ -68,6 +68,10 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
         where = f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}"
         if not dialects.of(tp).machine_program:
             raise InputError(f"{where}: the target's frame or tool is not defined in the program")
+    if not tp.resolved.all():  # a target the text does not determine (G28 home, a probe, #<_hal[..]>, cutter compensation)
+        i = int(np.argmin(tp.resolved))
+        raise InputError(f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}: the target's position depends on what the program "
+                         "text does not determine (see the notes of `postproc inspect`): it cannot be read as a five-axis path")
     if dialects.of(tp).machine_program:
         return _from_gcode(tp, machine, input_axes)
     frames = np.unique(tp.frame)

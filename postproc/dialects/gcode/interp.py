@@ -27,6 +27,9 @@ from .polar import PolarError, polar_end
 
 LENGTH_WORDS = set("XYZIJKQ@")  # words in program length units (R: a length in a cycle, degrees in G10)
 SETUP_CODES = (10.0, 52.0, 92.0, 92.1, 92.2, 92.3)
+# Moves that end where the program text does not say: G28 / G30 go to a position stored on the
+# controller (#5161-#5163 / #5181-#5183), G38.2-G38.5 stop where the probe touches.
+UNKNOWN_END_CODES = (28.0, 30.0, 38.2, 38.3, 38.4, 38.5)
 
 
 class BlockError(ValueError):
@@ -40,7 +43,7 @@ class BlockError(ValueError):
 def needs_interpreter(t: dict) -> bool:
     """True where the block table has a construct only a block-by-block reading gets right
     (t["more"] holds the words L P Q @ ^)."""
-    if np.isin(t["setup"], SETUP_CODES).any() or t["g53"].any():
+    if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any():
         return True
     if np.isin(t["canned"], canned.CYCLES).any():
         return True
@@ -141,6 +144,9 @@ class _Run:
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
+        if setup in UNKNOWN_END_CODES:
+            self._to_unknown_end(i, setup, words, known)
+            return
         if setup in SETUP_CODES:
             self._setup(setup, words, known, line)
         mode = m["mode"][i]
@@ -183,6 +189,27 @@ class _Run:
         else:
             self.cur = self._straight_end(i, words)
             self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
+
+    def _to_unknown_end(self, i: int, code: float, words: dict, known: bool) -> None:
+        """G28 / G30 (LinuxCNC manual, G28-G28.1): a rapid to the axis words (in the system in
+        force, G90/G91), then the axes named (all, without words) to the stored position;
+        G38.2-G38.5: a feed toward the words that stops at the probe's contact. The end is
+        not in the program: it is a target with unknown coordinates, and those axes stay
+        unknown (every later target flagged) until they get an absolute word again."""
+        given = [a in words for a in "XYZ"]
+        homing = code in (28.0, 30.0)
+        if homing and any(given):
+            if known:
+                self.cur = self._straight_end(i, words)
+                self.emit(i, 0, self.cur, True)
+            else:
+                self.cur = [math.nan] * 3
+        moved = [True] * 3 if homing and not any(given) else given
+        if not any(moved):
+            return
+        self.cur = [math.nan if m else c for m, c in zip(moved, self.cur)]
+        self.m_exact = [e and not m for e, m in zip(self.m_exact, moved)]
+        self.emit(i, 0 if homing else 1, self.cur, True)
 
     def _setup(self, code: float, words: dict, known: bool, line: int) -> None:
         """G10 L2 / L20 and the G92 family; one whose words are not all known leaves the

@@ -519,6 +519,11 @@ class GcodeParser:
                 ir_scale[:, f] = scale[rows]
         frame_idx, frame_ok = self._frames_of(moves.frame, moves.frames)
         plain_move = ~t["nonmotion"] & np.isin(mode, (0.0, 1.0, 2.0, 3.0)) & (dist == 90.0) & ~t["g53"]  # a cycle block never makes Z known again
+        unknown_end = np.isin(t["setup"], interp.UNKNOWN_END_CODES)
+        if unknown_end.any():
+            self.notes.append(f"line {int(self.lines.line(t['offset'][np.argmax(unknown_end)]))}: G28/G30 end at the position stored on the "
+                              "controller, G38.x where the probe touches: not known at post time; the axes they move are unknown (their "
+                              "targets flagged) until the program gives them in G90 again")
         if not moves.exact.all():
             first = int(self.lines.line(t["offset"][rows[np.argmin(moves.exact)]]))
             self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
