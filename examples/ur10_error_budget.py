@@ -96,7 +96,24 @@ for s in np.unique(session):
     if rows.sum() >= 10:
         left[rows] = rigid_residual(pred_a[rows], resid_a[rows])
 print(f"   {session.max() + 1} sessions; Series A residual {stats(resid_a)} -> with a frame per session {stats(left)}")
-print(f"4. validation protocol on Series B (model fitted on every {EVERY}th pose of Series A)")
+day = np.floor(series_a.time_s / 86400 + 0.69).astype(int)  # calendar day (the series starts at 16:39)
+goal_a = np.round(np.array([[float(v.replace(",", ".")) for v in raw_column("Series_A", c)] for c in ("Goal x", "Goal y", "Goal z")]).T, 3)
+goal_a = goal_a[np.argsort(raw_column("Series_A", "Timestamp"), kind="stable")]  # read_series puts the rows in time order
+_, point = np.unique(goal_a, axis=0, return_inverse=True)
+point = point.ravel()
+across, within = [], []
+for g in range(point.max() + 1):
+    rows = np.nonzero(point == g)[0]
+    days = np.unique(day[rows])
+    if len(days) > 1:
+        across.append(np.linalg.norm(resid_a[rows[day[rows] == days[0]]].mean(0) - resid_a[rows[day[rows] == days[-1]]].mean(0)))
+    elif len(rows) >= 10:
+        half = len(rows) // 2
+        within.append(np.linalg.norm(resid_a[rows[:half]].mean(0) - resid_a[rows[half:]].mean(0)))
+print(f"   same grid point, mean residual of its orientations: {len(across)} points measured on two days differ by median {np.median(across):.3f} mm;")
+print(f"   {len(within)} points measured on one day, first against second half of their orientations: median {np.median(within):.3f} mm")
+print(f"   elbow configuration q3 > 0: {np.mean(series_a.q_deg[:, 2] > 0):.0%} of Series A, {np.mean(series_b.q_deg[:, 2] > 0):.0%} of Series B")
+print(f"4. validation protocol on Series B (model fitted on one pose in {EVERY} of Series A)")
 print(f"   re-registered on all rows (evaluate --reregister): {stats(resid_b)}")
 even, odd = series_b.subset(np.arange(len(series_b)) % 2 == 0), series_b.subset(np.arange(len(series_b)) % 2 == 1)
 print(f"   registered on the even rows, scored on the odd:    {stats(residuals(refit_base(model_a, even), odd))}")
