@@ -237,6 +237,9 @@ def compensate(
         raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
     _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
     arcs.refuse_uncompensable(tp)
+    inexact = dialects.of(tp).inexact_interpolation(tp)
+    if inexact and max_deviation_mm is not None:  # it promises the path between targets: not where the controller leaves the interpolation
+        raise InputError(f"{inexact} (--max-deviation)")
     written = tp
     if frames or tools:
         tp = tp.with_frames(frames, tools)
@@ -253,8 +256,9 @@ def compensate(
     report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
                      end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
     out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
-    if problem.notes:
-        out = replace(out, notes=out.notes + tuple(problem.notes))
+    notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
+    if notes:
+        out = replace(out, notes=out.notes + notes)
     return out, report
 
 

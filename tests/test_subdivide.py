@@ -302,3 +302,24 @@ def test_a_block_in_a_loop_body_is_not_subdivided(tmp_path):
     assert len(body) == 3
     with pytest.raises(EmitError, match=r"loop\.ngc, line 5: the block runs more than once"):
         new_points(tp, kr160(), body[1:2], np.array([2]))
+
+
+def test_singarea_wrist_refuses_max_deviation_and_notes_the_path(model, tmp_path):
+    """RAPID technical reference, SingArea: under `SingArea \\Wrist` the controller may turn the
+    wrist off the programmed orientation between targets, so no path between compensated
+    targets can be promised (--max-deviation: exit 2, its line, nothing written); without it
+    the reported distances are noted as assuming exact interpolation."""
+    text = RAPID.replace("  PROC main()\n", "  PROC main()\n    ! SingArea \\Wrist; (a comment: not in force)\n    SingArea \\Wrist;\n")
+    prog = tmp_path / "part.mod"
+    prog.write_text(text)
+    save_model(tmp_path / "m.json", model)
+    out = tmp_path / "o.mod"
+    res = runner.invoke(app, ["compensate", str(prog), "--model", str(tmp_path / "m.json"), "-o", str(out), "--max-deviation", "0.02",
+                              "--allow-model-mismatch"])  # (the program cuts with tool0)
+    assert res.exit_code == 2 and f"{prog}:7: SingArea \\Wrist" in res.output, res.output
+    assert not out.exists()
+    new, _ = compensate(parse_program(prog), model)
+    assert any("SingArea \\Wrist" in n and "assume exact interpolation" in n for n in new.notes)
+    prog.write_text(RAPID)
+    new, _ = compensate(parse_program(prog), model)
+    assert not any("SingArea" in n for n in new.notes)

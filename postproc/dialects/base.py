@@ -70,6 +70,11 @@ class Dialect:
         """(mass kg, 'FILE, line N') of every payload the program states (none by default)."""
         return []
 
+    def inexact_interpolation(self, tp: Toolpath) -> str | None:
+        """``file:line: why`` where the program lets the controller leave the exact straight or
+        circular interpolation between targets (the path prediction assumes it), else None."""
+        return None
+
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
         """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
         return np.ones(len(tp.kind), dtype=bool)

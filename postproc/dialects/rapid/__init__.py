@@ -70,6 +70,13 @@ class RapidDialect(Dialect):
 
         return tool_masses(tp)
 
+    def inexact_interpolation(self, tp):
+        """The first ``SingArea \\Wrist`` / ``\\LockAxis4``: from there MoveL/MoveC may move the wrist
+        off the programmed orientation between targets (RAPID technical reference, SingArea)."""
+        from .singarea import wrist_singularity_avoidance
+
+        return wrist_singularity_avoidance(tp)
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_work_object
 
