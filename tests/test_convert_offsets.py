@@ -119,6 +119,7 @@ def test_tool_length_is_written_as_the_tool(tmp_path):
     rapid = tmp_path / "c.mod"
     assert _convert(_program(tmp_path, "tool_length"), rapid, "--tool", TOOL_H1).exit_code == 0
     assert "PERS tooldata H1 := [TRUE,[[0,0,100]" in rapid.read_text()
+    assert "! H1: load 1 kg at [0,0,1] mm is a placeholder" in rapid.read_text()  # RAPID needs a load; the G-code gives none
 
 
 def test_an_undefined_work_offset_given_by_frame_is_the_base(tmp_path):
