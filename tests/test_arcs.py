@@ -228,7 +228,7 @@ def test_the_cli_reports_the_mid_arc_deviation_and_refuses_beyond_max_deviation(
     assert all(p["path_mm"] is not None for p in arc_points)
     refused = tmp_path / "refused.ngc"
     result = runner.invoke(app, args + ["-o", str(refused), "--max-deviation", "0.05"])
-    assert result.exit_code == 1 and "line 7" in result.output and "strays" in result.output and not refused.exists()
+    assert result.exit_code == 1 and "arcs.ngc:7:" in result.output and "strays" in result.output and not refused.exists()
 
 
 def test_inspect_json_gives_each_arc_its_plane_centre_and_radius(tmp_path):

@@ -205,7 +205,7 @@ def test_cli_compensate_files_filter_and_failures(truth_and_model, tmp_path):
     far.write_text("DEF far( )\n$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}\nLIN {X 900, Y 0, Z 400, A 0, B 180, C 0}\nLIN {X 3000, Y 0, Z 400, A 0, B 180, C 0}\nEND\n")
     far_out = tmp_path / "far_out.src"
     result = runner.invoke(app, ["compensate", str(far), "--model", str(model_path), "-o", str(far_out)])
-    assert result.exit_code == 1 and "line 4" in result.stderr and not far_out.exists()
+    assert result.exit_code == 1 and "far.src:4:" in result.stderr and not far_out.exists()
 
 
 def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
