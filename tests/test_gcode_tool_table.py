@@ -44,12 +44,15 @@ PROGRAMS = {
     "inches": HEAD + "G20\nG10 L1 P3 Z2\nG43 H3\nG0 Z1\nG49\nG10 L10 P4 Z0.5\nG43 H4\nG0 Z0.8\nG21\nG49\nM2\n",
     # G43 H1 latched at 100; the later G10 L1 P1 Z75 changes the table, not the offset, until G43 H1 again
     "relatch": HEAD + "G10 L1 P1 Z100\nG43 H1\nG0 Z40\nG10 L1 P1 Z75\nG1 X5\nG43 H1\nG1 Z30\nG49\nG0 Z60\nM2\n",
+    # G43 H1 (100) re-reads Z50 as Z-50; G92 Z0 there: the G92 offset is -50 (rs274 SET_G92_OFFSET(0, 0, -50))
+    "g92_after_g43": HEAD + "G10 L1 P1 Z100\nG43 H1\nG92 Z0\nG1 X10 Z-5\nM2\n",
 }
 # tool length (mm) in force at each motion target, worked by hand from the rules above
 BY_HAND = {
     "l1_l10": [0, 100, 100, 110, 0],
     "inches": [0, 50.8, 63.5],
     "relatch": [0, 100, 100, 75, 0],
+    "g92_after_g43": [0, 100],
 }
 USE_TLO = re.compile(r"^(USE_TOOL_LENGTH_OFFSET|STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|USE_LENGTH_UNITS)\((.*)\)$")
 
@@ -124,6 +127,27 @@ def test_convert_writes_the_programs_own_length_without_tool(tmp_path):
     assert res.exit_code == 0, res.output
     tools = [[float(v) for v in re.findall(r"[XYZABC] (-?[\d.]+)", m)] for m in re.findall(r"\$TOOL = \{([^}]*)\}", out.read_text())]
     assert [t[2] for t in tools if any(t)] == [100, 110]
+
+
+def test_g92_after_a_known_length_change(tmp_path):
+    """The current Z is re-read for the new length before G92 takes it: by hand, Z50 under no
+    length reads Z-50 under H1 = 100; G92 Z0 makes the offset -50, so G1 Z-5 is at machine Z
+    -55 for the tip (robot base: $BASE Z -50, LIN Z -5); rs274 prints SET_G92_OFFSET(.., -50).
+    Before, the stale Z50 made $BASE Z 50: 100 mm off with exit 0."""
+    canon = (RECORDED / "g92_after_g43.canon").read_text(encoding="latin-1")
+    assert "SET_G92_OFFSET(0.0000, 0.0000, -50.0000" in canon
+    out = tmp_path / "c.src"
+    res = runner.invoke(app, ["convert", str(_program(tmp_path, "g92_after_g43")), "--to", "krl", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    back = parse_program(out)
+    np.testing.assert_allclose(back.base_positions()[-1], [10, 0, -55], atol=1e-9)
+
+
+def test_g92_after_an_unknown_length_change_is_refused(tmp_path):
+    src = tmp_path / "p.ngc"
+    src.write_text(HEAD + "G43 H1\nG92 Z0\nG1 X10 Z-5\nG1 X20\nM2\n")
+    res = runner.invoke(app, ["convert", str(src), "--to", "krl", "--tool", "H1=0,0,100", "-o", str(tmp_path / "c.src")])
+    assert res.exit_code == 2 and "p.ngc:6:" in res.stderr
 
 
 def _record() -> None:

@@ -527,7 +527,8 @@ class GcodeParser:
         if not moves.exact.all():
             first = int(self.lines.line(t["offset"][rows[np.argmin(moves.exact)]]))
             self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
-                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there); {int((~moves.exact).sum())} target(s) flagged")
+                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there), or after a tool length change by a "
+                              f"length it does not give; {int((~moves.exact).sum())} target(s) flagged")
         resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
                     & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
