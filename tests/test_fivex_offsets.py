@@ -82,6 +82,7 @@ def test_the_work_offsets_turn_is_applied(tmp_path):
 @pytest.mark.parametrize("text, where", [
     ("G21 G90 G94\nG10 L2 P1 X0 Y0 Z0 A10\nG54 G0 X0 Y0 Z5 A0 C0\nM2\n", ":2:20:"),  # a rotary offset shifts the angles: not followed
     ("G21 G90 G94\nG10 L2 P1 X0 Y0 Z0\nG54 G0 X0 Y0 Z5 A0 C0\nG92 C5\nG1 X1 F100\nM2\n", ":4:5:"),
+    ("G21 G90 G94\nN10G10L2P1X0Y0Z0 (A0) C5\nG54 G0 X0 Y0 Z5 A0 C0\nM2\n", ":2:23:"),  # compact, after a comment naming A
 ])
 def test_rotary_work_offsets_are_refused(tmp_path, text, where):
     res, out = _convert(tmp_path, text)

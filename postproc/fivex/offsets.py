@@ -35,7 +35,7 @@ from ..errors import InputError
 from ..ir import Toolpath
 from .machine import Machine
 
-_ROTARY_OFFSET = re.compile(r"\bG0*(10|92|52)(?![\d.])[^\n]*?(?<![A-Z])([ABC])\s*[-+.\d#\[]", re.IGNORECASE)
+_ROTARY_OFFSET = re.compile(r"(?<![A-Z])G0*(10|92|52)(?![\d.])[^\n]*?(?<![A-Z])([ABC])\s*[-+.\d#\[]", re.IGNORECASE)
 
 
 def program_to_machine(tp: Toolpath) -> np.ndarray:
@@ -60,14 +60,16 @@ def program_to_machine(tp: Toolpath) -> np.ndarray:
 
 
 def _refuse_rotary_offsets(tp: Toolpath) -> None:
-    for k, doc in enumerate(tp.sources):
-        for lineno, text in enumerate(doc.text.split("\n"), 1):
-            code = re.sub(r"\([^)]*\)|;.*", lambda m: " " * len(m.group()), text)
-            found = _ROTARY_OFFSET.search(code)
-            if found:
-                raise InputError(f"{doc.path}:{lineno}:{found.start(2) + 1}: a work offset on rotary axis {found.group(2).upper()} (G{found.group(1)} "
-                                 f"with {found.group(2).upper()}) shifts the angles the machine turns to: not followed in five-axis programs; "
-                                 "write the angles without it")
+    """G10 / G92 / G52 with an A B C word (comments blanked, one search over the whole text)."""
+    for doc in tp.sources:
+        code = re.sub(r"\([^)\n]*\)|;[^\n]*", lambda m: " " * len(m.group()), doc.text)
+        found = _ROTARY_OFFSET.search(code)
+        if found:
+            start = code.rfind("\n", 0, found.start(2)) + 1
+            line, column = code.count("\n", 0, start) + 1, found.start(2) - start + 1
+            raise InputError(f"{doc.path}:{line}:{column}: a work offset on rotary axis {found.group(2).upper()} (G{found.group(1)} "
+                             f"with {found.group(2).upper()}) shifts the angles the machine turns to: not followed in five-axis programs; "
+                             "write the angles without it")
 
 
 def to_machine(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
