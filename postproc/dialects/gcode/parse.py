@@ -639,7 +639,10 @@ class GcodeParser:
         by_h = (code != 49.0) & ~dynamic & ~np.isnan(hnum[rows])
         set_by = np.where(~np.isnan(t["tlo"]), np.arange(len(t["tlo"])), -1)  # the block whose G43 / G49 is in force
         np.maximum.accumulate(set_by, out=set_by)
-        lengths = np.array([(latched or {}).get(int(b), np.nan) for b in set_by[rows]]) if latched else np.full(len(rows), np.nan)
+        by_block = np.full(len(t["tlo"]) + 1, np.nan)  # the length each G43 H block latched; the last slot: none (set_by -1)
+        if latched:
+            by_block[list(latched)] = list(latched.values())
+        lengths = by_block[set_by[rows]]
         from_program = by_h & (code == 43.0) & ~np.isnan(lengths)
         for b in np.unique(set_by[rows][from_program]):
             sel = from_program & (set_by[rows] == b)
