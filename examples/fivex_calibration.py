@@ -60,7 +60,8 @@ for path, label in doc["files"].items():
 # 3. A five-axis program (tool tip + tool-axis vectors, G43.5) written as machine axes for the calibrated machine.
 t = np.linspace(0.0, np.pi, 25)
 tilt = np.radians(np.linspace(5.0, 30.0, 25))
-lines = ["G21 G90 G94", "G43.5 H1", "G0 X40 Y0 Z30 I0 J0 K1"]
+# G54 set by the program: the part's frame is the machine frame with the rotary axes at zero
+lines = ["G21 G90 G94", "G10 L2 P1 X0 Y0 Z0", "G54", "G43.5 H1", "G0 X40 Y0 Z30 I0 J0 K1"]
 lines += [f"G1 X{40 * np.cos(a):.4f} Y{40 * np.sin(a):.4f} Z{-1 - 0.02 * i:.4f} I{np.sin(b) * np.cos(a):.6f} J{np.sin(b) * np.sin(a):.6f} K{np.cos(b):.6f} F600"
           for i, (a, b) in enumerate(zip(t, tilt))]
 program = out / "tilted_arc.ngc"

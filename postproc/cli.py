@@ -632,13 +632,14 @@ def compensate_cmd(
         _refuse_unused("by five-axis compensation (--model MACHINE.toml)", {
             "--out-dir": out_dir is not None, "--jobs": jobs is not None, "--scheduler": scheduler is not None, "--in-place": in_place,
             "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
-            "--force": force is not None, "--report": report is not None, "--frame": bool(frame), "--tool": bool(tool),
+            "--force": force is not None, "--report": report is not None,
             "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
             "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch})
 
         if len(programs) != 1 or output is None:
             raise InputError("five-axis compensation takes one program and -o OUT")
-        for line in compensate_five_program(Path(programs[0]), model, Path(output), grid, input_axes, dialect=dialect):
+        for line in compensate_five_program(Path(programs[0]), model, Path(output), grid, input_axes, dialect=dialect,
+                                            frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
     from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
@@ -951,7 +952,6 @@ def convert_cmd(
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
-        _refuse_unused("with --to gcode", {"--frame": bool(frame) and rtcp is not None, "--tool": bool(tool) and rtcp is not None})
         for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
                                  frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)

@@ -23,6 +23,9 @@ IMPELLER = HERE / "corpus" / "fivex" / "impeller-7bl-xyzac-head.ngc"
 TILTED = HERE / "corpus" / "fivex" / "tilted_pass.mod"
 TRUE = HERE / "data" / "fivex" / "xyzac-trt-true.toml"
 runner = CliRunner()
+# The impeller and our emitted programs never set G54: given as zero (the machine frame with the
+# rotary axes at zero, as they were written for); without it they are refused (fivex/offsets.py).
+AT_ZERO = ("--frame", "G54=0,0,0,0,0,0")
 
 
 def field(p):
@@ -79,7 +82,7 @@ def test_bad_grids(tmp_path, text, row, column):
 def test_tip_program_compensated_for_calibrated_axes_and_grid(tmp_path):
     grid_path = write_grid(tmp_path / "g.csv", np.linspace(-200, 200, 9), np.linspace(-100, 100, 9), np.linspace(-120, 120, 9))
     out = tmp_path / "out.ngc"
-    result = runner.invoke(app, ["compensate", str(IMPELLER), "--model", str(TRUE), "--grid", str(grid_path), "--input-axes", "tip", "-o", str(out)])
+    result = runner.invoke(app, ["compensate", str(IMPELLER), "--model", str(TRUE), "--grid", str(grid_path), "--input-axes", "tip", "-o", str(out), *AT_ZERO])
     assert result.exit_code == 0, result.output
     original = IMPELLER.read_text(encoding="latin-1")
     text = out.read_text(encoding="latin-1")
@@ -100,7 +103,7 @@ def test_machine_axes_program_compensated(tmp_path):
     prog = tmp_path / "nominal_axes.ngc"
     prog.write_text(emit(nominal, path, "none").text)
     out = tmp_path / "out.ngc"
-    result = runner.invoke(app, ["compensate", str(prog), "--model", str(TRUE), "--input-axes", "machine", "-o", str(out)])
+    result = runner.invoke(app, ["compensate", str(prog), "--model", str(TRUE), "--input-axes", "machine", "-o", str(out), *AT_ZERO])
     assert result.exit_code == 0, result.output
     tp, new = parse_program(prog), parse_program(out)
     intended = fk(nominal, np.c_[tp.position, tp.ext[:, [0, 2]]])[0]
@@ -114,6 +117,6 @@ def test_machine_axes_program_compensated(tmp_path):
 def test_outside_the_grid_exits_1_and_writes_nothing(tmp_path):
     grid_path = write_grid(tmp_path / "g.csv", np.linspace(-20, 20, 3), np.linspace(-20, 20, 3), np.linspace(-20, 20, 3))
     out = tmp_path / "out.ngc"
-    result = runner.invoke(app, ["compensate", str(IMPELLER), "--model", str(TRUE), "--grid", str(grid_path), "--input-axes", "tip", "-o", str(out)])
+    result = runner.invoke(app, ["compensate", str(IMPELLER), "--model", str(TRUE), "--grid", str(grid_path), "--input-axes", "tip", "-o", str(out), *AT_ZERO])
     assert result.exit_code == 1 and "outside the measured grid" in result.stderr
     assert not out.exists()

@@ -49,7 +49,10 @@ has_rs274 = shutil.which("rs274") is not None
 def build(name: str):
     program, machine_name, mode, input_axes = CASES[name]
     machine = load_machine(machine_name)
-    path = from_toolpath(parse_program(HERE / program), machine, input_axes)
+    tp = parse_program(HERE / program)
+    if tp.frame_known is not None and "G54" in tp.frame_names and not tp.frame_known[tp.frame_names.index("G54")]:
+        tp = tp.with_frames({"G54": np.eye(4)})  # the impeller never sets G54: zero, the frame it was written for (fivex/offsets.py)
+    path = from_toolpath(tp, machine, input_axes)
     return machine, emit(machine, path, mode)
 
 

@@ -80,11 +80,13 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if target.machine_program and rtcp not in MODES:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
     tp = parse_program(program, dialect)
+    if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
+        tp = tp.with_frames(frames, tools)
     path = from_toolpath(tp, machine, input_axes)
     if target.machine_program:
         if not max_deviation_mm > 0:
             raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation_mm}")
-        result = emit(machine, path, rtcp, tool=tool, max_deviation_mm=max_deviation_mm)
+        result = emit(machine, path, rtcp, tool=tool, tool_length=path.tool_length, max_deviation_mm=max_deviation_mm)
         write_all({Path(output): result.text}, encoding="latin-1")
         lines = [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"]
         if rtcp == "none":
@@ -92,9 +94,7 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
         return lines + [f"note: {n}" for n in result.notes]
     if not dialects.of(tp).machine_program:
         raise InputError("--machine with --to rapid/krl converts a five-axis G-code program; this one is a robot program")
-    robot = to_robot_toolpath(tp, path)
-    if frames or tools:  # the work offset / tool length a robot program needs (write_program refuses them undefined)
-        robot = robot.with_frames(frames, tools)
+    robot = to_robot_toolpath(tp, path)  # in the machine frame: the work offsets are in the positions
     texts = write_program(robot, to, Path(output).stem)
     outputs = target.new_program_paths(Path(output))
     write_all(dict(zip(outputs, texts)), encoding="latin-1")
@@ -102,7 +102,8 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
 
 
 def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
-                            controller_name: str | None = None, dialect: str | None = None) -> list[str]:
+                            controller_name: str | None = None, dialect: str | None = None, frames: dict | None = None,
+                            tools: dict | None = None) -> list[str]:
     """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
     for the real machine; the written text is read back and checked before it is kept."""
     import numpy as np
@@ -112,20 +113,24 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     from .compensate import actual_tip, compensate_five, controller_axes
     from .errormap import load_grid
     from .kinematics import fk
+    from .offsets import to_machine
     from .program import ROTARY_FIELD
 
     true = load_machine(machine_file)
     controller = load_machine(controller_name or true.name)
     grid = load_grid(grid_file) if grid_file is not None else None
     tp = parse_program(program, dialect)
+    if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
+        tp = tp.with_frames(frames, tools)
     new, report = compensate_five(tp, true, controller, grid, input_axes)
     text = emit_texts(tp, new)[0]
     # What the written numbers (rounded as the text has them) make the real machine do:
     again = parse_program(program, tp.dialect, data=text.encode("latin-1"))
     cols = [ROTARY_FIELD[n] for n in controller.rotary_names]
-    cmd = controller_axes(controller, again.position, again.ext[:, cols], input_axes)
-    intended, _ = fk(controller, controller_axes(controller, tp.position, tp.ext[:, cols], input_axes))
-    written = np.linalg.norm(actual_tip(true, grid, cmd) - intended, axis=1)
+    at, length = report.placement, report.tool_length
+    cmd = controller_axes(controller, to_machine(at, again.position), again.ext[:, cols], input_axes, length)
+    intended, _ = fk(controller, controller_axes(controller, to_machine(at, tp.position), tp.ext[:, cols], input_axes, length), length)
+    written = np.linalg.norm(actual_tip(true, grid, cmd, length) - intended, axis=1)
     if not np.isfinite(written).all() or written.max() > 0.005:
         i = int(np.nanargmax(np.where(np.isfinite(written), written, np.inf)))
         raise JobError(f"{program}:{int(tp.line[i])}: the compensated numbers, as written, leave {written[i]:.4f} mm; nothing was written")

@@ -23,6 +23,7 @@ from ..ir import F_EXT, Toolpath
 from .errormap import GridMap
 from .kinematics import _head_tip, fk, ik, table_to_machine
 from .machine import Machine
+from .offsets import program_to_machine, to_machine, to_program, tool_length
 from .program import ROTARY_FIELD
 
 
@@ -33,23 +34,26 @@ class FiveReport:
     after_mm: np.ndarray  # tip error of the compensated numbers (before rounding into the text)
     correction_mm: np.ndarray  # change of the linear axes
     notes: tuple[str, ...]
+    placement: np.ndarray | None = None  # (N, 4, 4) machine_T_program of each target (its work offset, offsets.py)
+    tool_length: float = 0.0  # mm, head machines (offsets.tool_length)
 
 
-def controller_axes(controller: Machine, program_xyz: np.ndarray, angles: np.ndarray, input_axes: str) -> np.ndarray:
-    """(N, 5) machine axes the controller commands for the program's numbers."""
+def controller_axes(controller: Machine, program_xyz: np.ndarray, angles: np.ndarray, input_axes: str, tool_length: float = 0.0) -> np.ndarray:
+    """(N, 5) machine axes the controller commands for the program's numbers (X Y Z in the
+    machine frame: the work offsets applied, offsets.to_machine)."""
     if input_axes == "machine":
         return np.c_[program_xyz, angles]
     theta = np.radians(angles)
-    offset, _ = _head_tip(controller, theta, 0.0)
+    offset, _ = _head_tip(controller, theta, tool_length)
     return np.c_[table_to_machine(controller, theta, program_xyz) - offset, angles]
 
 
-def actual_tip(true: Machine, grid: GridMap | None, axes: np.ndarray) -> np.ndarray:
+def actual_tip(true: Machine, grid: GridMap | None, axes: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
     """Tool tip the real machine reaches for commanded axes (N, 5)."""
     real = axes.copy()
     if grid is not None:
         real[:, :3] = real[:, :3] + grid.offset(axes[:, :3])
-    return fk(true, real)[0]
+    return fk(true, real, tool_length)[0]
 
 
 def _grid_inverse(grid: GridMap, want: np.ndarray, lines: np.ndarray, iterations: int = 50) -> np.ndarray:
@@ -84,23 +88,24 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if not known.all():
         i = int(np.nonzero(~known)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: tool tip or rotary position not known at this target")
-    cmd = controller_axes(controller, tp.position, angles, input_axes)
-    tip, axis = fk(controller, cmd)
-    before = np.linalg.norm(actual_tip(true, grid, cmd) - tip, axis=1)
-    sol = ik(true, tip, axis, start_deg=angles[0])
+    placement, length = program_to_machine(tp), tool_length(tp, controller)
+    cmd = controller_axes(controller, to_machine(placement, tp.position), angles, input_axes, length)
+    tip, axis = fk(controller, cmd, length)
+    before = np.linalg.norm(actual_tip(true, grid, cmd, length) - tip, axis=1)
+    sol = ik(true, tip, axis, start_deg=angles[0], tool_length=length)
     if not sol.reachable.all():
         i = int(np.nonzero(~sol.reachable)[0][0])
         raise JobError(f"{tp.sources[0].path}:{int(tp.line[i])}: target outside the machine's limits after compensation; nothing was written")
     axes = sol.axes.copy()
     if grid is not None:
         axes[:, :3] = _grid_inverse(grid, axes[:, :3], tp.line)
-    after = np.linalg.norm(actual_tip(true, grid, axes) - tip, axis=1)
-    program_xyz = axes[:, :3] if input_axes == "machine" else fk(controller, axes)[0]
-    new = _with_numbers(tp, program_xyz, axes[:, 3:5], cols)
+    after = np.linalg.norm(actual_tip(true, grid, axes, length) - tip, axis=1)
+    machine_xyz = axes[:, :3] if input_axes == "machine" else fk(controller, axes, length)[0]
+    new = _with_numbers(tp, to_program(placement, machine_xyz), axes[:, 3:5], cols)
     notes = tuple(grid.notes) if grid is not None else ()
     if sol.held.any():
         notes += (f"{int(sol.held.sum())} target(s) near the singular pole: a rotary angle was held",)
-    return new, FiveReport(tp.line.copy(), before, after, np.linalg.norm(axes[:, :3] - cmd[:, :3], axis=1), notes)
+    return new, FiveReport(tp.line.copy(), before, after, np.linalg.norm(axes[:, :3] - cmd[:, :3], axis=1), notes, placement, length)
 
 
 def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[int]) -> Toolpath:

@@ -94,7 +94,7 @@ def _split(path: FivePath, pieces: np.ndarray) -> FivePath:
     axis = path.axis[prev] + frac * (path.axis[owner] - path.axis[prev])
     axis /= np.linalg.norm(axis, axis=1, keepdims=True)
     return FivePath(tip, axis, path.rapid[owner], path.feed[owner], path.time_min[owner] / pieces[owner], path.line[owner],
-                    None if path.angles is None else path.angles[owner], path.source, path.notes)
+                    None if path.angles is None else path.angles[owner], path.source, path.notes, path.tool_length)
 
 
 def emit(machine: Machine, path: FivePath, mode: str, tool: int = 1, tool_length: float = 0.0, max_deviation_mm: float | None = 0.01) -> Emitted:
@@ -167,7 +167,7 @@ def _chord_error(machine: Machine, path: FivePath, axes: np.ndarray) -> float:
     if len(axes) < 2:
         return 0.0
     mid_axes = 0.5 * (axes[1:] + axes[:-1])
-    tip_mid, _ = fk(machine, mid_axes)
+    tip_mid, _ = fk(machine, mid_axes, path.tool_length)
     want = 0.5 * (path.tip[1:] + path.tip[:-1])
     feed = ~path.rapid[1:]
     return float(np.linalg.norm(tip_mid - want, axis=1)[feed].max()) if feed.any() else 0.0

@@ -24,6 +24,7 @@ from ..errors import InputError
 from ..ir import Kind, Toolpath
 from .kinematics import fk
 from .machine import Machine
+from .offsets import program_to_machine, to_machine, tool_length
 
 ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # IR ext columns of the G-code rotary words
 _RTCP_ON = re.compile(r"G43\.4|G43\.5|TRAORI", re.IGNORECASE)
@@ -40,6 +41,7 @@ class FivePath:
     angles: np.ndarray | None  # (N, 2) rotary angles the input gave (deg), else None
     source: str
     notes: tuple[str, ...] = ()
+    tool_length: float = 0.0  # mm the head machine's kinematics add to gauge_to_tip (offsets.tool_length)
 
 
 def inverse_time_rows(tp: Toolpath) -> np.ndarray:
@@ -91,7 +93,12 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
 
 
 def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FivePath:
+    """Tips and axes in the machine frame: each target read through its work offset, the
+    head machine's pivot with the program's tool length (offsets.py)."""
     path = tp.sources[0].path
+    placement = program_to_machine(tp)
+    length = tool_length(tp, machine)
+    position = to_machine(placement, tp.position)
     names = machine.rotary_names
     used = [k for k in "ABC" if not np.isnan(tp.ext[:, ROTARY_FIELD[k]]).all()]
     foreign = [k for k in used if k not in names]
@@ -102,8 +109,8 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     notes = list(tp.notes)
     angles = None
     if tp.orientation_kind == "axis":
-        axis = _filled_axis(tp)
-        tip = tp.position.copy()
+        axis = np.einsum("nij,nj->ni", placement[:, :3, :3], _filled_axis(tp))  # I J K are in the program's frame
+        tip = position
     elif used:
         angles = np.stack([tp.ext[:, ROTARY_FIELD[k]] for k in names], axis=1)
         unknown = np.isnan(angles).any(axis=1)
@@ -114,10 +121,10 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
         if mode not in ("tip", "machine"):
             raise InputError(f"{path}: the program has rotary words but no G43.4 / G43.5 / TRAORI: give --input-axes tip (tool tip + "
                              "rotary angles, RTCP on) or --input-axes machine (machine axes, RTCP off)")
-        tip_m, axis = fk(machine, np.c_[tp.position, angles])
-        tip = tp.position.copy() if mode == "tip" else tip_m
+        tip_m, axis = fk(machine, np.c_[position, angles], length)
+        tip = position if mode == "tip" else tip_m
     else:
-        tip = tp.position.copy()
+        tip = position
         axis = np.broadcast_to(machine.tool_axis, tip.shape).copy()
         notes.append("no rotary words and no tool-axis vectors: the tool is along the machine's tool axis (three-axis program)")
     if np.isnan(tip).any():
@@ -128,7 +135,9 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     dist = np.linalg.norm(np.diff(tip, axis=0, prepend=tip[:1]), axis=1)
     feed = np.where(rapid, np.nan, np.where(g93, dist * tp.speed, tp.speed))
     _require_feed(tp, rapid, feed)
-    return FivePath(tip, axis, rapid, feed, time_min, tp.line.copy(), angles, path, tuple(notes))
+    if (np.abs(placement - np.eye(4)) > 0).any():
+        notes.append("positions are in the machine frame (the program's work offsets applied): an output runs with a zero work offset")
+    return FivePath(tip, axis, rapid, feed, time_min, tp.line.copy(), angles, path, tuple(notes), length)
 
 
 def _require_feed(tp: Toolpath, rapid: np.ndarray, feed: np.ndarray) -> None:
@@ -158,6 +167,7 @@ def _filled_axis(tp: Toolpath) -> np.ndarray:
 def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     """The G-code program's IR with robot orientations: the TCP's z axis opposite to the tool
     axis (as the writer's tool-down default), the rotation about it from the base x axis;
+    positions the tips in the machine frame (the robot's base; the work offsets are in them);
     speeds the tool tip's mm/min (G93 blocks' times already turned into feeds), so every
     target is per minute (G94): the writer takes the G-code dialect's mm/min to mm/s.
     For writing a robot program from a five-axis one."""
@@ -168,4 +178,5 @@ def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     quat = axis_to_quat_wxyz(-path.axis)
     speed = np.where(path.rapid, np.nan, path.feed)
     per_minute = np.full(len(tp), 94, np.int8)
-    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, feed_mode=per_minute)
+    machine = dict(frames=np.eye(4)[None], frame_names=("machine",), frame_known=np.ones(1, bool), frame=np.zeros(len(tp), tp.frame.dtype))
+    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, feed_mode=per_minute, **machine)

@@ -65,6 +65,54 @@ class Moves:
     frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
     exact: np.ndarray  # False: an axis of the target keeps a value re-read through a work offset the program does not set
+    latched: dict  # row of a G43 H block -> the tool length (mm) it applied when the program set it (G10 L1 / L10), NaN unknown
+
+
+class ToolTable:
+    """Tool lengths (Z, mm) the program sets in the tool table and the one in force, as
+    rs274ngc keeps them (LinuxCNC manual: "G10 L1 Set Tool Table", "G10 L10 Set Tool Table,
+    Calculated, Workpiece"; "G43 Tool Length Offset"). An entry the program does not set is
+    on the controller: unknown (NaN), never zero. G43 H latches the entry's length at its
+    block (a later G10 changes the table, not the offset in force)."""
+
+    def __init__(self):
+        self.entry: dict[int, float] = {}  # tool number -> length set in the program (NaN: set from what the text does not determine)
+        self.in_force = 0.0  # the length applied now: 0 under G49 (the state at start), NaN when it is not known
+        self.latched: dict[int, float] = {}  # block row of each G43 H -> the length it applied
+
+    def g43(self, row: int, code: float, h: float, known: bool) -> float:
+        """The change of the length in force (mm; NaN where not known) a G43 / G49 makes."""
+        if math.isnan(code):
+            return 0.0
+        before = self.in_force
+        if code == 49.0:
+            self.in_force = 0.0
+        elif code == 43.0 and not math.isnan(h) and known:
+            self.in_force = self.entry.get(int(h), math.nan)
+            self.latched[row] = self.in_force
+        else:  # G43 without H (the loaded tool), G43.1 / G43.2 / G43.4 / G43.5: not followed here
+            self.in_force = math.nan
+        return self.in_force - before if not (before == self.in_force) else 0.0
+
+    def g10(self, lcode: int, words: dict, known: bool, current_z: float) -> None:
+        """G10 L1 P Z (the length is Z), L10 P Z (the length that makes the current point's Z
+        read as Z with the current offsets: current Z + the length in force - Z), L11 (as if
+        G59.3 were in force: not followed, the entry becomes unknown). Other axis words (X Y
+        offsets, A B C) set what the length alone does not describe: the entry becomes unknown."""
+        if "P" not in words:
+            raise CycleError(f"G10 L{lcode} needs a P word (the tool number)")
+        tool = int(words["P"])
+        if tool != words["P"] or tool < 0:
+            raise CycleError(f"G10 L{lcode} P{words['P']:g}: P must be a tool number (an integer >= 0)")
+        others = [a for a in "XYABCUVW" if a in words]
+        if "Z" not in words and not others:
+            return  # the entry's length is left as it was (R, I, J, Q: radius and lathe orientation)
+        if not known or others or lcode == 11:
+            self.entry[tool] = math.nan
+        elif lcode == 1:
+            self.entry[tool] = words["Z"]
+        else:
+            self.entry[tool] = current_z + self.in_force - words["Z"]
 
 
 class _Run:
@@ -82,6 +130,7 @@ class _Run:
         self.out: dict[str, list] = {k: [] for k in _FIELDS}  # targets not yet in a chunk
         self.chunks: list[dict] = []  # the targets so far, as arrays
         self.frames: dict = {}  # frame key -> its number in Moves.frames
+        self.tools = ToolTable()
 
     def frame_id(self) -> int | None:
         key = self.offsets.key()
@@ -144,6 +193,12 @@ class _Run:
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
+        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
+        if change:  # rs274ngc re-reads the current point for the new length: Z = the old Z - the change
+            if math.isnan(change):
+                self.exact[2] = False  # by a length the program does not give: the stale Z stands in, flagged
+            else:
+                self.cur[2] -= change
         if setup in UNKNOWN_END_CODES:
             self._to_unknown_end(i, setup, words, known)
             return
@@ -217,8 +272,11 @@ class _Run:
         given = [a in words for a in "XYZ"]
         if code == 10.0:
             lcode, p = words.get("L", math.nan), words.get("P", 0.0)
+            if lcode in (1.0, 10.0, 11.0):
+                self.tools.g10(int(lcode), words, known, self.cur[2] if self.exact[2] and self.g92_exact[2] else math.nan)
+                return
             if lcode not in (2.0, 20.0):
-                return  # G10 L1 / L10 / L11: the tool table
+                return
             if not (0 <= p <= 9 and p == int(p)):
                 raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
             self._known_after_g10(int(lcode), int(p) or self.offsets.index, given)
@@ -375,7 +433,7 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
     parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
     return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
                  abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
-                 exact=parts["exact"].astype(bool))
+                 exact=parts["exact"].astype(bool), latched=dict(state.tools.latched))
 
 
 def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -527,14 +527,15 @@ class GcodeParser:
         if not moves.exact.all():
             first = int(self.lines.line(t["offset"][rows[np.argmin(moves.exact)]]))
             self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
-                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there); {int((~moves.exact).sum())} target(s) flagged")
+                              f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there), or after a tool length change by a "
+                              f"length it does not give; {int((~moves.exact).sum())} target(s) flagged")
         resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
                     & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
         tlo = _ffill(t["tlo"], 49.0)
-        tool_idx = self._tool_lengths(t, rows, tlo)
+        tool_idx = self._tool_lengths(t, rows, tlo, moves.latched)
         # G2/G3 targets: their I J K / R words, plane, IJK mode and turns, as the vectorised reader gives them (arcwords).
         arc_move = np.isin(moves.motion, (2, 3))
         arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
@@ -624,26 +625,40 @@ class GcodeParser:
                 name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.event_offsets.get(self.tilts[k][0], self.tilts[k][0]))}"
                 frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
 
-    def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray) -> np.ndarray:
+    def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray, latched: dict | None = None) -> np.ndarray:
         """Tool index of each target: the H number of the active G43 (its length is in the
-        machine's tool table, not the program: an unknown tool). G43 without H takes the
-        loaded tool's length (tool "G43"); G43.1 / G43.2 set or add lengths given in the
-        block (tool "G43.1@lineN"): unknown tools too, never the flange."""
+        machine's tool table, not the program: an unknown tool), unless the program set that
+        entry before the G43 block (G10 L1 / L10, ``latched``: G43 row -> length): then the tool
+        "H1@line7 (length 100 set by G10)" (the G43's line), the tip that length along the tool's z, known. G43 without H
+        takes the loaded tool's length (tool "G43"); G43.1 / G43.2 set or add lengths given in
+        the block (tool "G43.1@lineN"): unknown tools too, never the flange."""
         hnum = _ffill(t["h"], np.nan)
         tool_idx = np.zeros(len(rows), np.int32)
         code = tlo[rows]
         dynamic = np.isin(code, (43.1, 43.2))
         by_h = (code != 49.0) & ~dynamic & ~np.isnan(hnum[rows])
+        set_by = np.where(~np.isnan(t["tlo"]), np.arange(len(t["tlo"])), -1)  # the block whose G43 / G49 is in force
+        np.maximum.accumulate(set_by, out=set_by)
+        by_block = np.full(len(t["tlo"]) + 1, np.nan)  # the length each G43 H block latched; the last slot: none (set_by -1)
+        if latched:
+            by_block[list(latched)] = list(latched.values())
+        lengths = by_block[set_by[rows]]
+        from_program = by_h & (code == 43.0) & ~np.isnan(lengths)
+        for b in np.unique(set_by[rows][from_program]):
+            sel = from_program & (set_by[rows] == b)
+            name = f"H{hnum[b]:g}@line{int(self.lines.line(t['offset'][b]))} (length {latched[int(b)]:.9g} set by G10)"
+            tool_idx[sel] = self.builder.tool_index(name, make_transform(np.eye(3), np.array([0.0, 0.0, latched[int(b)]])), True)
+        by_h &= ~from_program
         for h in np.unique(hnum[rows][by_h]):
             tool_idx[by_h & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
-        for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h]):
-            tool_idx[(code == c) & ~by_h] = self.builder.tool_index(f"G{c:g}", None)
+        for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h & ~from_program]):
+            tool_idx[(code == c) & ~by_h & ~from_program] = self.builder.tool_index(f"G{c:g}", None)
         if dynamic.any():
             set_at = np.where(np.isin(t["tlo"], (43.1, 43.2)), np.arange(len(t["tlo"])), -1)
             np.maximum.accumulate(set_at, out=set_at)
             for b in np.unique(set_at[rows][dynamic]):
                 tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", None)
-        if (code != 49.0).any():
+        if ((code != 49.0) & ~from_program).any():
             self.notes.append("tool lengths (G43 H, G43 without H, G43.1/G43.2) are in the machine's tool table or set in a block: "
                               "flange poses need them (--tool NAME=...); TCP positions do not")
         return tool_idx
