@@ -40,7 +40,7 @@ full_a, tool = read_series(root / "Series_A")
 series_b, _ = read_series(root / "Series_B")
 series_a = full_a.subset(np.arange(len(full_a)) % EVERY == 0)
 GEOMETRIC = "base_frame,geometric,tool_offset,joint_compliance"
-PHYSICS = ["axis_tilt", "link_bending", "nonlinear_stiffness[joints=2,3,4]", "base_tilt", "joint_harmonics"]
+PHYSICS = ["link_bending", "nonlinear_stiffness[joints=2,3,4]", "base_tilt", "joint_harmonics"]
 FOLDS = 3
 t0 = time.perf_counter()
 print(f"UR10, probe {tool.round(3).tolist()} mm; fit on Series A ({len(series_a)} of {len(full_a)} poses), validate on Series B ({len(series_b)} poses, re-registered)\n")
