@@ -26,6 +26,7 @@ from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
+from . import calls as call_walk
 from .loops import ForLoop, for_values, unroll
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
@@ -215,6 +216,9 @@ class KrlParser:
         self._inline = _InlineFormState(self.docs)
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
+        self.routines: list[call_walk.Routine] = []  # DEF ... END of the program file
+        self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
+        self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
@@ -245,6 +249,7 @@ class KrlParser:
         skip = src_decl.copy()
         skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
+        self._follow_calls(src)
         self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
         self._bulk_moves(src, inline, named)
         return self._finish()
@@ -271,13 +276,12 @@ class KrlParser:
             raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
 
     def _context(self, stack, start: int) -> tuple[int, bool, bool]:
-        """(offset from which a change made here may apply, straight-line?, at any time?) of a
-        statement: inside a block the controller may run it before or again after any line
-        of the outermost block; in a second DEF (a subprogram) at any time."""
-        if self._defs > 1:
-            return 0, False, True
+        """(offset from which a change made here may apply, straight-line in its routine?, in a
+        subprogram?) of a statement: inside a block the controller may run it before or again
+        after any line of the outermost block; a subprogram's changes run where it is called
+        (calls.py follows the frames; any other change there counts at any time)."""
         blocks = [where for want, where in stack if want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD")]
-        return (blocks[0], False, False) if blocks else (start, True, False)
+        return (blocks[0], False, self._defs > 1) if blocks else (start, True, self._defs > 1)
 
     def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
         if stack and stack[-1][0] == keyword:
@@ -298,8 +302,13 @@ class KrlParser:
             if word in ("DEF", "DEFFCT", "DEFDAT"):
                 self._defs += d.index == 0 and word != "DEFDAT"
                 stack.append(({"DEF": "END", "DEFFCT": "ENDFCT", "DEFDAT": "ENDDAT"}[word], start))
+                if d.index == 0 and word != "DEFDAT":
+                    self._routine_opens(d, start)
             else:
                 self._close(d, stack, word, start + kw.column - 1)
+                if d.index == 0 and word in ("END", "ENDFCT") and self.routines and self.routines[-1].end < 0:
+                    end = d.text.find("\n", start)
+                    self.routines[-1].end = len(d.text) if end < 0 else end + 1
             return
         if kind in _BLOCK_OPEN:
             stack.append((_BLOCK_OPEN[kind], start))
@@ -323,6 +332,10 @@ class KrlParser:
             self._has_goto |= d.index == 0 and self._defs == 1
             return
         if kind == "call" and is_program:
+            head = node.children[0] if node.children else None
+            if isinstance(head, Token) and head.type == "NAME" and str(head).upper() != "BAS":
+                name = str(head).upper()
+                self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
             self._bas(d, node, start)
             return
         if kind == "assignment":
@@ -333,6 +346,39 @@ class KrlParser:
             return
         if kind == "motion":
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    def _routine_opens(self, d: _Doc, start: int) -> None:
+        """A DEF / DEFFCT of the program file; a subprogram starts with FDAT_ACT not known
+        (it is set by whoever calls it)."""
+        m = re.match(r"[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", d.text[start:start + 300], re.IGNORECASE)
+        self.routines.append(call_walk.Routine(m.group(1) if m else "?", start, -1))
+        if self._defs > 1:
+            self._inline.fdat_act = None
+
+    def _follow_calls(self, src: _Doc) -> None:
+        """The program's events at their places in execution order (calls.py): a subprogram's
+        frame changes where it is called; after a call to a routine not in the file (or
+        recursive, or an INTERRUPT/TRIGGER handler) $BASE and $TOOL are unknown."""
+        if len(self.routines) < 2 and not self.calls:
+            return
+        for r in self.routines:
+            r.end = len(src.text) if r.end < 0 else r.end
+        handler_names = call_walk.handlers(src.text)
+        self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
+        reached = {v.routine for v in self._visits}
+        for call in call_walk.unknown_calls(self.routines, self.calls, recursive, handler_names):
+            offset, exact, anytime = call.where
+            for key in FRAME_KEYS:
+                self.changes.append(Event(offset, call.offset, key, False, line=call.line, anytime=anytime))
+            if call_walk.routine_of(self.routines, call.offset) in reached:
+                self.builder.notes.append(f"{src.doc.path}:{call.line}: {call.callee}() is not a subprogram of this file that is followed "
+                                          "(another module, a system routine, a recursive call or an INTERRUPT/TRIGGER handler): $BASE and $TOOL after it are unknown")
+        self.changes = call_walk.remap(self.changes, self._visits, self.routines, FRAME_KEYS, handler_names)
+
+    def _run_at(self, offset: int) -> list[int]:
+        """Where a statement of the program file runs (virtual offsets, calls.py), once per
+        executed copy of its routine; the offset itself when calls are not followed."""
+        return call_walk.virtual_offsets(self._visits, self.routines, offset) if self._visits else [offset]
 
     def _loop_open(self, d: _Doc, node: Tree, kind: str, start: int) -> None:
         """A FOR of the program file is unrolled at the end when its count is literal (loops.py);
@@ -450,7 +496,7 @@ class KrlParser:
         offset, exact, anytime = self._where
         line = int(d.lines.line(start))
         command, arg = m.group(1).upper(), (m.group(2) or "").strip()
-        if command == "INITMOV" and exact:
+        if command == "INITMOV" and exact and not anytime:
             self._inline.initmov_ran = True
         if command in FRAME_COMMANDS:
             self._frames_from_fdat(d, start, line)
@@ -468,7 +514,7 @@ class KrlParser:
         tool, base, why = self._inline.frames()
         for key, rhs in (("$TOOL", tool), ("$BASE", base)):
             self.changes.append(Event(offset, start, key, exact and rhs is not None, "", rhs, rhs or "", line, anytime))
-        if why and exact:
+        if why and exact and not anytime:
             self.builder.notes.append(f"{d.doc.path}:{line}: BAS sets $TOOL and $BASE from FDAT_ACT, which cannot be followed here: {why}")
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
@@ -561,7 +607,8 @@ class KrlParser:
         values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
         for k in np.nonzero(changed)[0].tolist():
             r = int(named[k])
-            point = tl.point_at(str(keys[k]), int(offsets[r]))
+            states = [tl.point_at(str(keys[k]), at) for at in self._run_at(int(offsets[r]))]
+            point = states[0] if states and all(p is states[0] for p in states) else Point.unknown()  # one state per call, or not known
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
         return values, spans, conf, insert
@@ -628,17 +675,47 @@ class KrlParser:
                 ev = [(o, v) for o, k, v in events if k == key]
             if not ev:
                 continue
-            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
-            has = at >= 0
             if key in FRAME_KEYS:
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
                 ids = np.array([register(f.name, None if f.pose is None else f.transform(), f.pose is not None) for _, f in ev])
-                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
-            elif key == "vel":
+                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, offsets, np.array([o for o, _ in ev]), ids, register)
+                continue
+            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
+            has = at >= 0
+            if key == "vel":
                 speed[has] = np.array([v for _, v in ev], dtype=float)[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
             else:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
+
+
+    def _frame_ids(self, key: str, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
+        """The frame (or tool) index in force at each target: the last change before the
+        place where it runs; a target of a subprogram run with different frames from
+        different calls, or run by no call from the first DEF, gets an unknown one."""
+        def at(virtual: np.ndarray) -> np.ndarray:
+            k = np.searchsorted(starts, virtual, side="right") - 1
+            return np.where(k >= 0, ids[np.maximum(k, 0)], 0)
+
+        if not self._visits:
+            return at(offsets)
+        main = self.routines[0]
+        first = (offsets >= main.start) & (offsets < main.end)
+        out = np.zeros(len(offsets), np.int64)
+        out[first] = at(offsets[first] * call_walk.SCALE)
+        for i in np.nonzero(~first)[0].tolist():
+            found = set(at(np.array(self._run_at(int(offsets[i])), dtype=np.int64)).tolist())
+            r = call_walk.routine_of(self.routines, int(offsets[i]))
+            name = self.routines[r].name if r is not None else "?"
+            if len(found) == 1:
+                out[i] = found.pop()
+            elif not found:
+                out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
+            else:
+                out[i] = register(f"{key} in {name}: its calls run it with different frames", None, False)
+                self.builder.notes.append(f"{self.docs[0].doc.path}: {name} is called where {key} differs, before it sets its own: "
+                                          f"the {key} of its motions is not known")
+        return out
 
 
 class _InlineFormState:

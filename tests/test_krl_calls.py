@@ -1,0 +1,162 @@
+"""KRL $BASE / $TOOL followed through calls to subprograms (postproc/dialects/krl/calls.py).
+
+Expected positions worked out by hand from "KUKA System Software 8.x, Operating and
+Programming Instructions for System Integrators" (KSS 8 SI):
+- "Subprograms and functions": a local subprogram (a further DEF ... END of the .src) runs
+  where it is called, then the caller continues after the call;
+- "System variables": $BASE and $TOOL are global: a subprogram runs with the frames in force
+  at its call, and the caller continues with the frames the subprogram leaves (BAS.SRC's
+  BAS(#BASE, n) works this way: its BASE(n) sets $BASE for the caller);
+- "Coordinate systems" / "BASE": a Cartesian target's position in the robot base is
+  $BASE : target ($BASE {X 1000}: XP1 (100, 0, 500) is at (1100, 0, 500));
+- "INTERRUPT" / "TRIGGER": ``DO NAME()`` runs NAME when the event occurs, at a time the
+  program text does not give.
+A routine reached from places with different frames, before it sets its own, cannot be
+given one frame: its targets are not placed (refused for compensation), with a note.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from postproc.programs import parse_program
+
+DAT = "DEFDAT p\nDECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}\nENDDAT\n"
+CONFIG = "DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nBASE_DATA[2]={X 0,Y 2000,Z 0,A 0,B 0,C 0}\nENDDAT\n"
+
+
+def program(tmp_path, text: str):
+    (tmp_path / "p.src").write_text(text.strip() + "\n")
+    (tmp_path / "p.dat").write_text(DAT)
+    (tmp_path / "$config.dat").write_text(CONFIG)
+    return parse_program(tmp_path / "p.src")
+
+
+def placed_positions(tp) -> np.ndarray:
+    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+
+
+def test_a_subprogram_runs_with_the_frame_of_its_call_and_leaves_its_own(tmp_path):
+    # sub written after the $BASE = BASE_DATA[2] of line 5, but called on line 3 under
+    # BASE_DATA[1]: its LIN XP1 is at (1100, 0, 500), not (100, 2000, 500).
+    # setb( ) sets BASE_DATA[2]: the caller's LIN on line 7 is at (100, 2000, 500).
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+LIN XP1
+$BASE = BASE_DATA[1]
+setb( )
+LIN XP1
+END
+DEF sub( )
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    order = np.argsort(tp.line)
+    assert tp.line[order].tolist() == [4, 7, 10]
+    np.testing.assert_allclose(placed_positions(tp)[order], [[1100, 0, 500], [100, 2000, 500], [1100, 0, 500]], atol=1e-9)
+
+
+def test_nested_calls_are_followed_in_execution_order(tmp_path):
+    # p -> a( ) -> b( ) sets BASE_DATA[2]; a's LIN after the call of b is in BASE_DATA[2];
+    # p's LIN after a( ) too: (100, 2000, 500) both; a's LIN before b( ) in BASE_DATA[1].
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+a( )
+LIN XP1
+END
+DEF a( )
+LIN XP1
+b( )
+LIN XP1
+END
+DEF b( )
+$BASE = BASE_DATA[2]
+END
+""")
+    by_line = dict(zip(tp.line.tolist(), placed_positions(tp).tolist()))
+    np.testing.assert_allclose([by_line[7], by_line[9], by_line[4]], [[1100, 0, 500], [100, 2000, 500], [100, 2000, 500]], atol=1e-9)
+
+
+def test_a_routine_called_with_different_frames_has_no_frame(tmp_path):
+    # sub( ) is called under BASE_DATA[1] and under BASE_DATA[2]; its LIN runs once in each:
+    # one IR row cannot hold both frames: not placed, and a note names the routine.
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+$BASE = BASE_DATA[2]
+sub( )
+LIN XP1
+END
+DEF sub( )
+LIN XP1
+END
+""")
+    by_line = dict(zip(tp.line.tolist(), tp.placed().tolist()))
+    assert by_line == {6: True, 9: False}
+    assert any("sub is called where $BASE differs" in n for n in tp.notes)
+
+
+def test_a_routine_that_sets_its_frame_first_has_it_from_any_call(tmp_path):
+    # Called under two bases, but $BASE = BASE_DATA[2] runs before its LIN: (100, 2000, 500).
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+$BASE = $WORLD
+sub( )
+END
+DEF sub( )
+$BASE = BASE_DATA[2]
+LIN XP1
+END
+""")
+    np.testing.assert_allclose(placed_positions(tp), [[100, 2000, 500]], atol=1e-9)
+
+
+def test_what_is_not_straight_line_stays_unknown(tmp_path):
+    # A call inside IF: the frame after ENDIF depends on the condition. A call of a routine of
+    # another module (not in this .src): it may set $BASE. A TRIGGER's DO routine runs at a
+    # time the text does not give. A routine no call reaches: the frame it runs with is unknown.
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+IF $IN[1] THEN
+setb( )
+ENDIF
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    assert not tp.placed().any()
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nOTHERMODULE( )\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+    assert any("p.src:4: OTHERMODULE() is not a subprogram of this file" in n for n in tp.notes)
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+TRIGGER WHEN DISTANCE=0 DELAY=0 DO setb( ) PRIO=-1
+LIN XP1
+setb( )
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    assert not tp.placed().any()
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nEND\nDEF never( )\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+
+
+def test_a_program_without_calls_is_unchanged(tmp_path):
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\n$BASE = BASE_DATA[2]\nLIN XP1\nEND\n")
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500], [100, 2000, 500]], atol=1e-9)
