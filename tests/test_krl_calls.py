@@ -160,3 +160,58 @@ END
 def test_a_program_without_calls_is_unchanged(tmp_path):
     tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\n$BASE = BASE_DATA[2]\nLIN XP1\nEND\n")
     np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500], [100, 2000, 500]], atol=1e-9)
+
+
+# ---------------------------------------------------------------- GOTO (jumps.py)
+# KSS 8 SI "GOTO": GOTO Marker continues at Marker: in the same routine. A forward jump
+# that skips only statements that neither move nor change a variable leaves the same points
+# and frames in force at every later target, whether it is taken or not.
+
+def test_a_forward_jump_over_nothing_that_changes_keeps_the_frame(tmp_path):
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+IF $IN[1] THEN
+GOTO SKIP
+ENDIF
+WAIT SEC 1
+SKIP:
+LIN XP1
+END
+""")
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500]], atol=1e-9)
+
+
+def test_a_jump_that_may_change_what_is_in_force_is_not_straight_line(tmp_path):
+    # Skips $BASE = BASE_DATA[2]: at LIN XP1 $BASE is BASE_DATA[1] or [2] by $IN[1].
+    skip_frame = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\n$BASE = BASE_DATA[2]\nSKIP:\nLIN XP1\nEND\n"
+    # Skips a motion: the motion may not run (conservative: the skipped part must not move).
+    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
+    # Inside a loop (even to a label in the same pass): left to run time, conservatively.
+    in_loop = "DEF p( )\n$BASE = BASE_DATA[1]\nFOR I = 1 TO 2\nIF $IN[1] THEN\nGOTO NEXT\nENDIF\nNEXT:\nLIN XP1\nENDFOR\nEND\n"
+    # Backwards: the lines after the label run again after later changes.
+    back = "DEF p( )\n$BASE = BASE_DATA[1]\nTOP:\nLIN XP1\n$BASE = BASE_DATA[2]\nGOTO TOP\nEND\n"
+    for text, line in ((skip_frame, 4), (skip_motion, 4), (in_loop, 5), (back, 6)):
+        tp = program(tmp_path, text)
+        assert not tp.placed().any(), text
+        assert any(f"p.src:{line}: GOTO" in n for n in tp.notes), tp.notes
+
+
+def test_a_jump_in_a_subprogram_makes_its_frame_changes_unknown(tmp_path):
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+LIN XP1
+sub( )
+LIN XP1
+END
+DEF sub( )
+TOP:
+$BASE = BASE_DATA[2]
+LIN XP1
+IF $IN[1] THEN
+GOTO TOP
+ENDIF
+END
+""")
+    assert dict(zip(tp.line.tolist(), tp.placed().tolist())) == {3: True, 5: False, 10: False}

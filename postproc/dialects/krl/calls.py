@@ -39,6 +39,7 @@ class Routine:
     name: str
     start: int  # offset of the DEF line
     end: int  # offset just after the END line
+    jumps: bool = False  # a GOTO that may change what is in force (jumps.py): its changes are not straight-line
 
 
 @dataclass
@@ -86,6 +87,8 @@ def walk(routines: list[Routine], calls: list[Call], handler_names: set[str]) ->
     def run(i: int, exact: bool, floor: int, base: int, stack: tuple[int, ...]) -> int:
         """Walks routine i (called code: one virtual offset a character); returns where it ends."""
         r, top = routines[i], not stack
+        if r.jumps and exact:  # its changes may apply from its start on, in any order
+            exact, floor = False, base
         visit = Visit(i, exact, floor, SCALE if top else 1)
         visits.append(visit)
         position, counter = r.start, base

@@ -27,6 +27,7 @@ from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from . import calls as call_walk
+from .jumps import Goto, why_not_straight
 from .loops import ForLoop, for_values, unroll
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
@@ -209,7 +210,9 @@ class KrlParser:
         self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value): speed and approximation
         self.changes: list[Event] = []  # points and frames the program changes (see state.py)
         self.timeline = Timeline()
-        self._has_goto = False
+        self._has_goto = False  # a GOTO of the first DEF that may change what is in force at a target (jumps.py)
+        self._gotos: list[Goto] = []
+        self._labels: dict[tuple[int | None, str], list[int]] = {}
         self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
@@ -249,6 +252,7 @@ class KrlParser:
         skip = src_decl.copy()
         skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
+        self._judge_jumps(src)
         self._follow_calls(src)
         self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
         self._bulk_moves(src, inline, named)
@@ -328,8 +332,14 @@ class KrlParser:
         if kind == "decl":
             self._decl(d, node, start)
             return
-        if kind == "goto":  # a jump in the main DEF; in a subprogram every change is unknown anyway
-            self._has_goto |= d.index == 0 and self._defs == 1
+        if kind in ("goto", "label") and d.index == 0:  # judged when the whole file is read (jumps.py)
+            name, line = str(node.children[-1] if kind == "goto" else node.children[0]).upper(), int(d.lines.line(start))
+            routine = len(self.routines) - 1 if self.routines else None
+            if kind == "goto":
+                in_loop = any(want in ("ENDFOR", "ENDWHILE", "ENDLOOP", "UNTIL") for want, _ in stack)
+                self._gotos.append(Goto(line, name, in_loop, routine))
+            else:
+                self._labels.setdefault((routine, name), []).append(line)
             return
         if kind == "call" and is_program:
             head = node.children[0] if node.children else None
@@ -354,6 +364,20 @@ class KrlParser:
         self.routines.append(call_walk.Routine(m.group(1) if m else "?", start, -1))
         if self._defs > 1:
             self._inline.fdat_act = None
+
+    def _judge_jumps(self, src: _Doc) -> None:
+        """A GOTO that may change what is in force at a target (jumps.py): in the first DEF no
+        change is straight-line code; in a subprogram, none of that routine's."""
+        code_lines = [_split_comment(line)[0] for line in src.text.split("\n")] if self._gotos else []
+        for goto in self._gotos:
+            why = why_not_straight(goto, self._labels, code_lines)
+            if why is None:
+                continue
+            if goto.routine in (None, 0):
+                self._has_goto = True
+            else:
+                self.routines[goto.routine].jumps = True
+            self.builder.notes.append(f"{src.doc.path}:{goto.line}: GOTO {goto.label}: {why}: the changes of points and frames in its routine are not taken as straight-line code")
 
     def _follow_calls(self, src: _Doc) -> None:
         """The program's events at their places in execution order (calls.py): a subprogram's
