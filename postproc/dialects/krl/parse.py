@@ -27,6 +27,8 @@ from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from . import calls as call_walk
+from .counters import Assign, CounterLoop, declared_ints
+from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
 from .loops import ForLoop, for_values, unroll
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
@@ -219,6 +221,10 @@ class KrlParser:
         self._inline = _InlineFormState(self.docs)
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
+        self._counter_open: list[CounterLoop] = []  # WHILE / REPEAT of the program file being read
+        self._counter_loops: list[CounterLoop] = []
+        self._assigns: list[Assign] = []  # assignments of the program file to plain names (counters.py)
+        self._depth = 0  # blocks open around the statement being read (the DEF not counted)
         self.routines: list[call_walk.Routine] = []  # DEF ... END of the program file
         self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
         self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
@@ -253,6 +259,7 @@ class KrlParser:
         skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
         self._judge_jumps(src)
+        self._plan_counter_loops(src)
         self._follow_calls(src)
         self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
         self._bulk_moves(src, inline, named)
@@ -274,6 +281,7 @@ class KrlParser:
             if not tree.children:
                 continue
             self._where = self._context(stack, start)
+            self._depth = sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in stack)
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
@@ -316,6 +324,7 @@ class KrlParser:
             return
         if kind in _BLOCK_OPEN:
             stack.append((_BLOCK_OPEN[kind], start))
+            self._stack_now = stack
             if is_program:
                 self._loop_open(d, node, kind, start)
             return
@@ -327,7 +336,17 @@ class KrlParser:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
             if kind == "endfor" and is_program and self._for_open:
                 line, counter, values = self._for_open.pop()
-                self.for_loops.append(ForLoop(line, int(d.lines.line(start)), counter, values))
+                end = int(d.lines.line(start))
+                if values is not None and _leaves_early(d.text, line, end):  # passes may not all run
+                    values = None
+                    self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this FOR is not known at post time "
+                                              "(its body has EXIT, RETURN or GOTO): the motions in its body are listed once")
+                self.for_loops.append(ForLoop(line, end, counter, values))
+            elif kind in ("endwhile", "until") and is_program and self._counter_open:
+                loop = self._counter_open.pop()
+                loop.last_line = int(d.lines.line(start))
+                loop.condition = loop.condition if kind == "endwhile" else next((c for c in node.children if isinstance(c, Tree)), None)
+                self._counter_loops.append(loop)
             return
         if kind == "decl":
             self._decl(d, node, start)
@@ -364,6 +383,23 @@ class KrlParser:
         self.routines.append(call_walk.Routine(m.group(1) if m else "?", start, -1))
         if self._defs > 1:
             self._inline.fdat_act = None
+
+    def _plan_counter_loops(self, src: _Doc) -> None:
+        """WHILE / REPEAT over a counter run pass by pass (counters.py); any other listed once, noted."""
+        if not self._counter_loops:
+            return
+        lines = src.text.split("\n")
+        main = self.routines[0] if self.routines else None
+        local_ints = declared_ints(src.text[main.start:main.end if main.end > 0 else len(src.text)]) if main else set()
+        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        for loop in self._counter_loops:
+            body = [_split_comment(code)[0] for code in lines[loop.first_line:loop.last_line - 1]]
+            planned, why = plan_counter_loop(loop, self._assigns, local_ints, body, calls_text) if not self._has_goto else (None, "the program has a GOTO that may jump")
+            if planned is not None:
+                self.for_loops.append(planned)
+                continue
+            self.builder.notes.append(f"{src.doc.path}:{loop.first_line}: the number of passes of this {loop.kind} is not known at post time "
+                                      f"({why}): the motions in its body are listed once")
 
     def _judge_jumps(self, src: _Doc) -> None:
         """A GOTO that may change what is in force at a target (jumps.py): in the first DEF no
@@ -416,7 +452,12 @@ class KrlParser:
             self._for_open.append((line, counter, values))
             if values is not None:
                 return
-        if kind in ("for_open", "while_open", "loop_open", "repeat_open"):
+        if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
+            condition = next((c for c in node.children if isinstance(c, Tree)), None) if kind == "while_open" else None
+            straight = self._defs == 1 and sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in self._stack_now) == 1
+            self._counter_open.append(CounterLoop(kind.split("_")[0].upper(), line, -1, condition, straight))
+            return
+        if kind in ("for_open", "loop_open"):
             self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this {kind.split('_')[0].upper()} is not known at post time: "
                                       "the motions in its body are listed once")
 
@@ -490,6 +531,9 @@ class KrlParser:
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
         self._change(d, node.children[0], rhs, start, where or self._where)
+        if where is None and re.fullmatch(r"[A-Z_]\w*", lhs):
+            offset, exact, anytime = self._where
+            self._assigns.append(Assign(lhs, int(d.lines.line(start)), self._text(d, rhs, start), exact and not anytime, self._depth, len(self.routines) - 1))
         if lhs.split(".")[0] == "FDAT_ACT":
             self._inline.assign_fdat_act(lhs, rhs, self._text(d, rhs, start), (where or self._where)[1])
         if lhs == "$VEL.CP":
@@ -803,6 +847,13 @@ def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarra
     values = values.copy()
     values[relative, :6] = np.where(np.isnan(values[relative, :6]), np.nan, pose[relative])
     return pose, values
+
+
+def _leaves_early(text: str, first: int, last: int) -> bool:
+    """Whether the lines between ``first`` and ``last`` (1-based, exclusive) hold an EXIT,
+    RETURN or GOTO (KSS 8 SI: EXIT leaves the loop, RETURN the routine): not every pass may run."""
+    body = text.split("\n")[first:last - 1]
+    return any(re.search(r"\b(?:EXIT|RETURN|GOTO)\b", _split_comment(code)[0], re.IGNORECASE) for code in body)
 
 
 def _split_comment(line: str) -> tuple[str, str | None]:
