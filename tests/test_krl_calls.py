@@ -215,3 +215,12 @@ ENDIF
 END
 """)
     assert dict(zip(tp.line.tolist(), tp.placed().tolist())) == {3: True, 5: False, 10: False}
+
+
+def test_a_call_tree_too_large_to_follow_falls_back_to_unknown(tmp_path):
+    # s0 calls s1 twice, s1 calls s2 twice, ...: 2^15 executed copies of s14 (more than
+    # calls.MAX_VISITS): not followed; frames changed in subprograms are unknown everywhere.
+    subs = "".join(f"DEF s{k}( )\ns{k + 1}( )\ns{k + 1}( )\nEND\n" for k in range(15)) + "DEF s15( )\n$BASE = BASE_DATA[2]\nEND\n"
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\ns0( )\nLIN XP1\nEND\n" + subs)
+    assert not tp.placed().any()
+    assert any("not followed" in n for n in tp.notes)

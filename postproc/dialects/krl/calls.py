@@ -32,6 +32,7 @@ import re
 from dataclasses import dataclass, field, replace
 
 SCALE = 1 << 24  # executed subprogram text per call of the first DEF (16 MiB) fits between two offsets
+MAX_VISITS = 10_000  # executed routine copies followed; a call tree that runs more is not followed (OverflowError)
 
 
 @dataclass
@@ -91,6 +92,8 @@ def walk(routines: list[Routine], calls: list[Call], handler_names: set[str]) ->
             exact, floor = False, base
         visit = Visit(i, exact, floor, SCALE if top else 1)
         visits.append(visit)
+        if len(visits) > MAX_VISITS or len(stack) > 200:  # bounded work, and Python's call depth
+            raise OverflowError(r.name)
         position, counter = r.start, base
         for call in sorted((c for c in calls if r.start <= c.offset < r.end), key=lambda c: c.offset):
             callee = index.get(call.callee)

@@ -424,7 +424,12 @@ class KrlParser:
         for r in self.routines:
             r.end = len(src.text) if r.end < 0 else r.end
         handler_names = call_walk.handlers(src.text)
-        self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
+        try:
+            self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
+        except OverflowError:  # too many executed copies: no call followed, the old rule (any time)
+            self.builder.notes.append(f"{src.doc.path}: the calls run more than {call_walk.MAX_VISITS:,} subprogram copies: frames changed in subprograms are not followed")
+            handler_names = {r.name.upper() for r in self.routines[1:]}
+            self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
         reached = {v.routine for v in self._visits}
         for call in call_walk.unknown_calls(self.routines, self.calls, recursive, handler_names):
             offset, exact, anytime = call.where
