@@ -224,3 +224,12 @@ def test_a_call_tree_too_large_to_follow_falls_back_to_unknown(tmp_path):
     tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\ns0( )\nLIN XP1\nEND\n" + subs)
     assert not tp.placed().any()
     assert any("not followed" in n for n in tp.notes)
+
+
+def test_a_handler_of_another_module_or_a_function_in_a_skipped_condition_is_not_followed(tmp_path):
+    # TRIGGER ... DO IR_OTHER( ): a routine of another module runs during the motion after it;
+    # it may set $BASE. A GOTO that skips IF f( ) THEN skips a function call that may change it.
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nTRIGGER WHEN DISTANCE=0 DELAY=0 DO IR_OTHER( ) PRIO=-1\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nIF f( ) THEN\nENDIF\nSKIP:\nLIN XP1\nEND\n")
+    assert not tp.placed().any()

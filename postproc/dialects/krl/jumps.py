@@ -8,7 +8,7 @@ A jump may run a line again (backwards) or skip lines (forwards). It changes not
 targets only where what it skips changes nothing: a forward jump, not inside a loop (a loop
 could run the jump's line again after a change), to a label of the same routine, and every
 statement between the jump and the label is one that neither moves nor changes a variable
-(block keywords, labels, other jumps, WAIT, HALT, CONTINUE). Then whether the controller jumps
+(block keywords, labels, other jumps, WAIT, HALT, CONTINUE; no function call in a condition). Then whether the controller jumps
 or not, the same points and frames are in force at every target after it. Any other GOTO
 makes the changes of its routine not straight-line code (state.py / calls.py).
 """
@@ -54,7 +54,7 @@ def why_not_straight(goto: Goto, labels: dict[tuple[int | None, str], list[int]]
         code = code_lines[number - 1]
         if not code.strip():
             continue
-        if not _HARMLESS.match(code):
+        if not _HARMLESS.match(code) or "(" in code:  # a function in a condition may change anything
             return f"it skips line {number}, which may move or change a variable"
         depth += bool(_OPENS.match(code)) - bool(_CLOSES.match(code))
     if depth > 0:

@@ -365,6 +365,9 @@ class KrlParser:
             if isinstance(head, Token) and head.type == "NAME" and str(head).upper() != "BAS":
                 name = str(head).upper()
                 self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
+            elif isinstance(head, Token) and (handler := re.search(r"\bDO[ \t]+([A-Za-z_$][\w$]*)[ \t]*\(", str(head), re.IGNORECASE)):
+                # INTERRUPT / TRIGGER ... DO NAME(): NAME runs at a time the text does not give (calls.py)
+                self.calls.append(call_walk.Call(start, handler.group(1).upper(), self._where, int(d.lines.line(start))))
             self._bas(d, node, start)
             return
         if kind == "assignment":
