@@ -219,6 +219,7 @@ class KrlParser:
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self._inline = _InlineFormState(self.docs)
+        self._file_routines = {m.group(1).upper() for m in re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", self.docs[0].text, re.IGNORECASE | re.MULTILINE)} if docs else set()
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
         self._counter_open: list[CounterLoop] = []  # WHILE / REPEAT of the program file being read
@@ -362,12 +363,15 @@ class KrlParser:
             return
         if kind == "call" and is_program:
             head = node.children[0] if node.children else None
+            name = None
             if isinstance(head, Token) and head.type == "NAME" and str(head).upper() != "BAS":
                 name = str(head).upper()
-                self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
             elif isinstance(head, Token) and (handler := re.search(r"\bDO[ \t]+([A-Za-z_$][\w$]*)[ \t]*\(", str(head), re.IGNORECASE)):
-                # INTERRUPT / TRIGGER ... DO NAME(): NAME runs at a time the text does not give (calls.py)
-                self.calls.append(call_walk.Call(start, handler.group(1).upper(), self._where, int(d.lines.line(start))))
+                name = handler.group(1).upper()  # INTERRUPT / TRIGGER ... DO NAME(): runs at a time the text does not give (calls.py)
+            if name is not None:
+                self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
+                if name not in self._file_routines:  # another module may set FDAT_ACT or switch BAS.SRC's corrections on
+                    self._inline.fdat_act, self._inline.initmov_ran = None, False
             self._bas(d, node, start)
             return
         if kind == "assignment":
@@ -796,7 +800,8 @@ class KrlParser:
 
 class _InlineFormState:
     """FDAT_ACT as the main DEF's straight-line code sets it, and whether BAS.SRC's
-    corrections are known to be off (see inline_forms.py)."""
+    corrections are known to be off (see inline_forms.py). A call of a routine of another
+    module makes both unknown (FDAT_ACT and the switches are globals it may set)."""
 
     def __init__(self, docs: list[_Doc]):
         src = docs[0].text
