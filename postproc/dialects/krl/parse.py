@@ -219,7 +219,7 @@ class KrlParser:
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self._inline = _InlineFormState(self.docs)
-        self._file_routines = {m.group(1).upper() for m in re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", self.docs[0].text, re.IGNORECASE | re.MULTILINE)} if docs else set()
+        self._routine_names: set[str] | None = None  # DEF names of the program file, read at the first call
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
         self._counter_open: list[CounterLoop] = []  # WHILE / REPEAT of the program file being read
@@ -370,7 +370,7 @@ class KrlParser:
                 name = handler.group(1).upper()  # INTERRUPT / TRIGGER ... DO NAME(): runs at a time the text does not give (calls.py)
             if name is not None:
                 self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
-                if name not in self._file_routines:  # another module may set FDAT_ACT or switch BAS.SRC's corrections on
+                if name not in self._file_routines():  # another module may set FDAT_ACT or switch BAS.SRC's corrections on
                     self._inline.fdat_act, self._inline.initmov_ran = None, False
             self._bas(d, node, start)
             return
@@ -382,6 +382,12 @@ class KrlParser:
             return
         if kind == "motion":
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    def _file_routines(self) -> set[str]:
+        if self._routine_names is None:
+            defs = re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", self.docs[0].text, re.IGNORECASE | re.MULTILINE)
+            self._routine_names = {m.group(1).upper() for m in defs}
+        return self._routine_names
 
     def _routine_opens(self, d: _Doc, start: int) -> None:
         """A DEF / DEFFCT of the program file; a subprogram starts with FDAT_ACT not known
