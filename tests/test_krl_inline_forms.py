@@ -93,6 +93,8 @@ def test_tool_zero_is_the_flange(tmp_path):
     (INI + "PDAT_ACT=PPDAT1\nBAS(#PTP_PARAMS,100)\nPTP XP1\n", "FDAT_ACT never set: a global from before"),
     (INI + "IF $IN[1] THEN\nFDAT_ACT=FP2\nENDIF\nBAS(#PTP_PARAMS,100)\nPTP XP1\n", "FDAT_ACT set in a branch"),
     (INI + "FP1.BASE_NO = N\n" + fold("PTP", "P1", "FP1", ""), "the FDAT itself changed at run time"),
+    (INI + "OTHERMODULE()\n" + fold("PTP", "P1", "FP1", ""), "a routine of another module may switch a correction on"),
+    (INI + "FDAT_ACT=FP2\nOTHERMODULE()\nBAS(#PTP_PARAMS,100)\nPTP XP1\n", "a routine of another module may set FDAT_ACT"),
 ])
 def test_frames_that_cannot_be_followed_are_refused_with_their_line(tmp_path, body, why):
     tp = program(tmp_path, body)

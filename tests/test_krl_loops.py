@@ -79,3 +79,65 @@ def test_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
     with pytest.raises(SharedNumberError) as exc:
         emit_texts(tp, tp.with_positions(new))
     assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.src", 5, 22)
+
+
+# ------------------------------------------------- WHILE / REPEAT over a counter (counters.py)
+# KSS 8 SI "WHILE ... ENDWHILE": the condition is checked before each pass, the body runs while
+# it is TRUE; "REPEAT ... UNTIL": the body runs, then the loop ends when the condition is TRUE;
+# a variable declared in the DEF is local to it (nothing else changes it).
+
+def counter_program(tmp_path: Path, decl: str, body: str):
+    (tmp_path / "p.src").write_text("DEF p( )\n" + decl + "$BASE = BASE_DATA[1]\n$TOOL = $NULLFRAME\n" + body + "END\n")
+    (tmp_path / "p.dat").write_text(DAT)
+    (tmp_path / "$config.dat").write_text(CONFIG)
+    return parse_program(tmp_path / "p.src")
+
+
+def test_while_over_a_counter_runs_each_pass_with_the_counter_of_its_place(tmp_path):
+    # I = 1: passes with I = 1, 2 (I <= 2); LIN XP[I] before the update reads XP[1] then XP[2],
+    # the PTP after it XP[2] then XP[3]; each in BASE_DATA[1] = {X 1000}.
+    tp = counter_program(tmp_path, "DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP[I]\n  I = I + 1\n  PTP XP[I]\nENDWHILE\n")
+    assert tp.line.tolist() == [7, 9] * 2
+    np.testing.assert_allclose(placed(tp), [[1001, 2, 3], [1004, 5, 6], [1004, 5, 6], [1007, 8, 9]])
+
+
+def test_repeat_runs_at_least_once_and_stops_when_the_condition_holds(tmp_path):
+    # J = 3: pass (J -> 1), 1 < 0 false: pass (J -> -1), -1 < 0: stop: two passes. K = 5 with
+    # UNTIL K > 0: one pass although the condition holds before it.
+    tp = counter_program(tmp_path, "DECL INT J, K\n", "J = 3\nREPEAT\n  LIN XP1\n  J = J - 2\nUNTIL J < 0\n"
+                                                    "K = 5\nREPEAT\n  LIN XP[1]\n  K = K + 1\nUNTIL K > 0\n")
+    assert tp.line.tolist() == [7, 7, 12]
+    np.testing.assert_allclose(placed(tp), [[1100, 0, 500], [1100, 0, 500], [1001, 2, 3]])
+
+
+@pytest.mark.parametrize("decl, body, why", [
+    ("", "I = 1\nWHILE I <= 2\n  LIN XP1\n  I = I + 1\nENDWHILE\n", "not an INT declared in this DEF"),
+    ("DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP1\n  IF $IN[1] THEN\n    I = I + 1\n  ENDIF\nENDWHILE\n", "not changed exactly once"),
+    ("DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP1\n  I = I * 2\nENDWHILE\n", "changed by something else"),
+    ("DECL INT I\n", "IF $IN[1] THEN\n  I = 5\nENDIF\nI = 1\nWHILE I <= 2\n  LIN XP1\n  I = I + 1\nENDWHILE\n", "not set by literal integers"),
+    ("DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP1\n  I = I + 1\n  IF $IN[1] THEN\n    EXIT\n  ENDIF\nENDWHILE\n", "EXIT"),
+    ("DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP1\n  I = I + 1\n  bump(I)\nENDWHILE\n", "passed to a call"),
+    ("DECL INT I\n", "I = 1\nWHILE I <= N\n  LIN XP1\n  I = I + 1\nENDWHILE\n", "not a comparison of a counter with a literal"),
+])
+def test_a_counter_loop_not_provable_from_the_text_is_listed_once(tmp_path, decl, body, why):
+    tp = counter_program(tmp_path, decl, body)
+    assert tp.line.tolist().count(tp.line[0]) == 1
+    assert any("the number of passes of this WHILE is not known" in n and why in n for n in tp.notes), tp.notes
+
+
+def test_counter_loop_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
+    tp = counter_program(tmp_path, "DECL INT I\n", "I = 0\nWHILE I < 2\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0}\n  I = I + 1\nENDWHILE\n")
+    assert tp.line.tolist() == [7, 7]
+    new = tp.position.copy()
+    new[:, 2] += 0.5
+    assert "LIN {X 10, Y 20, Z 30.5," in emit_texts(tp, tp.with_positions(new))[0]
+    new[1, 2] += 0.25  # the second pass would need Z 30.75
+    with pytest.raises(SharedNumberError) as exc:
+        emit_texts(tp, tp.with_positions(new))
+    assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.src", 7, 22)
+
+
+def test_a_for_that_may_exit_early_is_listed_once(tmp_path):
+    # KSS 8 SI "EXIT": EXIT leaves the loop: whether passes 2 and 3 run is decided at run time.
+    tp = program(tmp_path, "FOR I = 1 TO 3\n  LIN XP1\n  IF $IN[1] THEN\n    EXIT\n  ENDIF\nENDFOR\n")
+    assert tp.line.tolist() == [5] and any("p.src:4: the number of passes of this FOR" in n and "EXIT" in n for n in tp.notes)

@@ -145,11 +145,17 @@ def test_a_partial_aggregate_or_a_jump_is_not_guessed(tmp_path):
     assert not tp.placed().any()
 
 
-def test_a_subprogram_that_changes_a_frame_makes_it_unknown_everywhere(tmp_path):
+def test_a_subprogram_that_changes_a_frame_changes_it_where_it_is_called(tmp_path):
+    # KSS 8 SI "Subprograms": shift() runs at its call; $BASE is a global system variable, so
+    # the caller goes on with the $BASE it leaves: BASE_DATA[1] with X 5 (KSS 8 SI "Structures").
+    # XP1 (100, 0, 500) in $BASE {X 1000}: (1100, 0, 500); after shift( ): (105, 0, 500).
+    # (tests/test_krl_calls.py has the call-structure cases.)
     (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nshift( )\nLIN XP1\nEND\n\nDEF shift( )\n$BASE.X = 5\nEND\n")
     (tmp_path / "p.dat").write_text(DAT)
     (tmp_path / "$config.dat").write_text(CONFIG)
-    assert not parse_program(tmp_path / "p.src").placed().any()
+    tp = parse_program(tmp_path / "p.src")
+    assert tp.placed().all()
+    np.testing.assert_allclose(tp.base_positions(), [[1100, 0, 500], [105, 0, 500]], atol=1e-9)
 
 
 def test_a_compensation_cannot_silently_move_a_derived_point(tmp_path):

@@ -34,6 +34,7 @@ class ForLoop:
     last_line: int  # its ENDFOR
     counter: str
     values: list[int] | None  # None: count not known at post time
+    update: tuple[int, int] | None = None  # WHILE/REPEAT (counters.py): (line of I = I + k, k); later rows see the new value
 
 
 def for_values(start: float, end: float, step: float) -> list[int] | None:
@@ -58,7 +59,12 @@ def _sequence(rows: np.ndarray, lines: np.ndarray, loops: list[ForLoop], env: di
         position += len(body)
         inner = [o for o in loops if lp.first_line < o.first_line and o.last_line < lp.last_line]
         for value in lp.values if lp.values is not None else [None]:
+            first = len(out)
             _sequence(body, lines, inner, {**env, lp.counter: value}, out, envs)
+            if lp.update is not None:  # rows after the counter's update see its new value
+                for k in range(first, len(out)):
+                    if lines[out[k]] > lp.update[0]:
+                        envs[k] = {**envs[k], lp.counter: value + lp.update[1]}
             if len(out) > MAX_ROWS:
                 raise OverflowError(lp.first_line)
     rest = rows[position:]

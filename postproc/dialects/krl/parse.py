@@ -26,6 +26,10 @@ from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
+from . import calls as call_walk
+from .counters import Assign, CounterLoop, declared_ints
+from .counters import plan as plan_counter_loop
+from .jumps import Goto, why_not_straight
 from .loops import ForLoop, for_values, unroll
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
@@ -208,13 +212,23 @@ class KrlParser:
         self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value): speed and approximation
         self.changes: list[Event] = []  # points and frames the program changes (see state.py)
         self.timeline = Timeline()
-        self._has_goto = False
+        self._has_goto = False  # a GOTO of the first DEF that may change what is in force at a target (jumps.py)
+        self._gotos: list[Goto] = []
+        self._labels: dict[tuple[int | None, str], list[int]] = {}
         self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self._inline = _InlineFormState(self.docs)
+        self._routine_names: set[str] | None = None  # DEF names of the program file, read at the first call
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
+        self._counter_open: list[CounterLoop] = []  # WHILE / REPEAT of the program file being read
+        self._counter_loops: list[CounterLoop] = []
+        self._assigns: list[Assign] = []  # assignments of the program file to plain names (counters.py)
+        self._depth = 0  # blocks open around the statement being read (the DEF not counted)
+        self.routines: list[call_walk.Routine] = []  # DEF ... END of the program file
+        self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
+        self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
@@ -245,6 +259,9 @@ class KrlParser:
         skip = src_decl.copy()
         skip[moves.line] = True
         self._slow_lines(src, skip=skip, is_program=True)
+        self._judge_jumps(src)
+        self._plan_counter_loops(src)
+        self._follow_calls(src)
         self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
         self._bulk_moves(src, inline, named)
         return self._finish()
@@ -265,19 +282,19 @@ class KrlParser:
             if not tree.children:
                 continue
             self._where = self._context(stack, start)
+            self._depth = sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in stack)
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
             want, where = stack[-1]
             raise d.lines.error(d.doc.path, where, f"block opened here is never closed (missing {want})")
 
     def _context(self, stack, start: int) -> tuple[int, bool, bool]:
-        """(offset from which a change made here may apply, straight-line?, at any time?) of a
-        statement: inside a block the controller may run it before or again after any line
-        of the outermost block; in a second DEF (a subprogram) at any time."""
-        if self._defs > 1:
-            return 0, False, True
+        """(offset from which a change made here may apply, straight-line in its routine?, in a
+        subprogram?) of a statement: inside a block the controller may run it before or again
+        after any line of the outermost block; a subprogram's changes run where it is called
+        (calls.py follows the frames; any other change there counts at any time)."""
         blocks = [where for want, where in stack if want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD")]
-        return (blocks[0], False, False) if blocks else (start, True, False)
+        return (blocks[0], False, self._defs > 1) if blocks else (start, True, self._defs > 1)
 
     def _close(self, d: _Doc, stack, keyword: str, offset: int) -> None:
         if stack and stack[-1][0] == keyword:
@@ -298,11 +315,17 @@ class KrlParser:
             if word in ("DEF", "DEFFCT", "DEFDAT"):
                 self._defs += d.index == 0 and word != "DEFDAT"
                 stack.append(({"DEF": "END", "DEFFCT": "ENDFCT", "DEFDAT": "ENDDAT"}[word], start))
+                if d.index == 0 and word != "DEFDAT":
+                    self._routine_opens(d, start)
             else:
                 self._close(d, stack, word, start + kw.column - 1)
+                if d.index == 0 and word in ("END", "ENDFCT") and self.routines and self.routines[-1].end < 0:
+                    end = d.text.find("\n", start)
+                    self.routines[-1].end = len(d.text) if end < 0 else end + 1
             return
         if kind in _BLOCK_OPEN:
             stack.append((_BLOCK_OPEN[kind], start))
+            self._stack_now = stack
             if is_program:
                 self._loop_open(d, node, kind, start)
             return
@@ -314,15 +337,41 @@ class KrlParser:
             self._close(d, stack, _BLOCK_CLOSE[kind], start + _first_column(node) - 1)
             if kind == "endfor" and is_program and self._for_open:
                 line, counter, values = self._for_open.pop()
-                self.for_loops.append(ForLoop(line, int(d.lines.line(start)), counter, values))
+                end = int(d.lines.line(start))
+                if values is not None and _leaves_early(d.text, line, end):  # passes may not all run
+                    values = None
+                    self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this FOR is not known at post time "
+                                              "(its body has EXIT, RETURN or GOTO): the motions in its body are listed once")
+                self.for_loops.append(ForLoop(line, end, counter, values))
+            elif kind in ("endwhile", "until") and is_program and self._counter_open:
+                loop = self._counter_open.pop()
+                loop.last_line = int(d.lines.line(start))
+                loop.condition = loop.condition if kind == "endwhile" else next((c for c in node.children if isinstance(c, Tree)), None)
+                self._counter_loops.append(loop)
             return
         if kind == "decl":
             self._decl(d, node, start)
             return
-        if kind == "goto":  # a jump in the main DEF; in a subprogram every change is unknown anyway
-            self._has_goto |= d.index == 0 and self._defs == 1
+        if kind in ("goto", "label") and d.index == 0:  # judged when the whole file is read (jumps.py)
+            name, line = str(node.children[-1] if kind == "goto" else node.children[0]).upper(), int(d.lines.line(start))
+            routine = len(self.routines) - 1 if self.routines else None
+            if kind == "goto":
+                in_loop = any(want in ("ENDFOR", "ENDWHILE", "ENDLOOP", "UNTIL") for want, _ in stack)
+                self._gotos.append(Goto(line, name, in_loop, routine))
+            else:
+                self._labels.setdefault((routine, name), []).append(line)
             return
         if kind == "call" and is_program:
+            head = node.children[0] if node.children else None
+            name = None
+            if isinstance(head, Token) and head.type == "NAME" and str(head).upper() != "BAS":
+                name = str(head).upper()
+            elif isinstance(head, Token) and (handler := re.search(r"\bDO[ \t]+([A-Za-z_$][\w$]*)[ \t]*\(", str(head), re.IGNORECASE)):
+                name = handler.group(1).upper()  # INTERRUPT / TRIGGER ... DO NAME(): runs at a time the text does not give (calls.py)
+            if name is not None:
+                self.calls.append(call_walk.Call(start, name, self._where, int(d.lines.line(start))))
+                if name not in self._file_routines():  # another module may set FDAT_ACT or switch BAS.SRC's corrections on
+                    self._inline.fdat_act, self._inline.initmov_ran = None, False
             self._bas(d, node, start)
             return
         if kind == "assignment":
@@ -333,6 +382,81 @@ class KrlParser:
             return
         if kind == "motion":
             raise d.lines.error(d.doc.path, start, "motion statement in a data file")
+
+    def _file_routines(self) -> set[str]:
+        if self._routine_names is None:
+            defs = re.finditer(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", self.docs[0].text, re.IGNORECASE | re.MULTILINE)
+            self._routine_names = {m.group(1).upper() for m in defs}
+        return self._routine_names
+
+    def _routine_opens(self, d: _Doc, start: int) -> None:
+        """A DEF / DEFFCT of the program file; a subprogram starts with FDAT_ACT not known
+        (it is set by whoever calls it)."""
+        m = re.match(r"[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]+(\w+)", d.text[start:start + 300], re.IGNORECASE)
+        self.routines.append(call_walk.Routine(m.group(1) if m else "?", start, -1))
+        if self._defs > 1:
+            self._inline.fdat_act = None
+
+    def _plan_counter_loops(self, src: _Doc) -> None:
+        """WHILE / REPEAT over a counter run pass by pass (counters.py); any other listed once, noted."""
+        if not self._counter_loops:
+            return
+        lines = src.text.split("\n")
+        main = self.routines[0] if self.routines else None
+        local_ints = declared_ints(src.text[main.start:main.end if main.end > 0 else len(src.text)]) if main else set()
+        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        for loop in self._counter_loops:
+            body = [_split_comment(code)[0] for code in lines[loop.first_line:loop.last_line - 1]]
+            planned, why = plan_counter_loop(loop, self._assigns, local_ints, body, calls_text) if not self._has_goto else (None, "the program has a GOTO that may jump")
+            if planned is not None:
+                self.for_loops.append(planned)
+                continue
+            self.builder.notes.append(f"{src.doc.path}:{loop.first_line}: the number of passes of this {loop.kind} is not known at post time "
+                                      f"({why}): the motions in its body are listed once")
+
+    def _judge_jumps(self, src: _Doc) -> None:
+        """A GOTO that may change what is in force at a target (jumps.py): in the first DEF no
+        change is straight-line code; in a subprogram, none of that routine's."""
+        code_lines = [_split_comment(line)[0] for line in src.text.split("\n")] if self._gotos else []
+        for goto in self._gotos:
+            why = why_not_straight(goto, self._labels, code_lines)
+            if why is None:
+                continue
+            if goto.routine in (None, 0):
+                self._has_goto = True
+            else:
+                self.routines[goto.routine].jumps = True
+            self.builder.notes.append(f"{src.doc.path}:{goto.line}: GOTO {goto.label}: {why}: the changes of points and frames in its routine are not taken as straight-line code")
+
+    def _follow_calls(self, src: _Doc) -> None:
+        """The program's events at their places in execution order (calls.py): a subprogram's
+        frame changes where it is called; after a call to a routine not in the file (or
+        recursive, or an INTERRUPT/TRIGGER handler) $BASE and $TOOL are unknown."""
+        if len(self.routines) < 2 and not self.calls:
+            return
+        for r in self.routines:
+            r.end = len(src.text) if r.end < 0 else r.end
+        handler_names = call_walk.handlers(src.text)
+        try:
+            self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
+        except OverflowError:  # too many executed copies: no call followed, the old rule (any time)
+            self.builder.notes.append(f"{src.doc.path}: the calls run more than {call_walk.MAX_VISITS:,} subprogram copies: frames changed in subprograms are not followed")
+            handler_names = {r.name.upper() for r in self.routines[1:]}
+            self._visits, recursive = call_walk.walk(self.routines, self.calls, handler_names)
+        reached = {v.routine for v in self._visits}
+        for call in call_walk.unknown_calls(self.routines, self.calls, recursive, handler_names):
+            offset, exact, anytime = call.where
+            for key in FRAME_KEYS:
+                self.changes.append(Event(offset, call.offset, key, False, line=call.line, anytime=anytime))
+            if call_walk.routine_of(self.routines, call.offset) in reached:
+                self.builder.notes.append(f"{src.doc.path}:{call.line}: {call.callee}() is not a subprogram of this file that is followed "
+                                          "(another module, a system routine, a recursive call or an INTERRUPT/TRIGGER handler): $BASE and $TOOL after it are unknown")
+        self.changes = call_walk.remap(self.changes, self._visits, self.routines, FRAME_KEYS, handler_names)
+
+    def _run_at(self, offset: int) -> list[int]:
+        """Where a statement of the program file runs (virtual offsets, calls.py), once per
+        executed copy of its routine; the offset itself when calls are not followed."""
+        return call_walk.virtual_offsets(self._visits, self.routines, offset) if self._visits else [offset]
 
     def _loop_open(self, d: _Doc, node: Tree, kind: str, start: int) -> None:
         """A FOR of the program file is unrolled at the end when its count is literal (loops.py);
@@ -346,7 +470,12 @@ class KrlParser:
             self._for_open.append((line, counter, values))
             if values is not None:
                 return
-        if kind in ("for_open", "while_open", "loop_open", "repeat_open"):
+        if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
+            condition = next((c for c in node.children if isinstance(c, Tree)), None) if kind == "while_open" else None
+            straight = self._defs == 1 and sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in self._stack_now) == 1
+            self._counter_open.append(CounterLoop(kind.split("_")[0].upper(), line, -1, condition, straight))
+            return
+        if kind in ("for_open", "loop_open"):
             self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this {kind.split('_')[0].upper()} is not known at post time: "
                                       "the motions in its body are listed once")
 
@@ -420,6 +549,9 @@ class KrlParser:
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
         self._change(d, node.children[0], rhs, start, where or self._where)
+        if where is None and re.fullmatch(r"[A-Z_]\w*", lhs):
+            offset, exact, anytime = self._where
+            self._assigns.append(Assign(lhs, int(d.lines.line(start)), self._text(d, rhs, start), exact and not anytime, self._depth, len(self.routines) - 1))
         if lhs.split(".")[0] == "FDAT_ACT":
             self._inline.assign_fdat_act(lhs, rhs, self._text(d, rhs, start), (where or self._where)[1])
         if lhs == "$VEL.CP":
@@ -450,7 +582,7 @@ class KrlParser:
         offset, exact, anytime = self._where
         line = int(d.lines.line(start))
         command, arg = m.group(1).upper(), (m.group(2) or "").strip()
-        if command == "INITMOV" and exact:
+        if command == "INITMOV" and exact and not anytime:
             self._inline.initmov_ran = True
         if command in FRAME_COMMANDS:
             self._frames_from_fdat(d, start, line)
@@ -468,7 +600,7 @@ class KrlParser:
         tool, base, why = self._inline.frames()
         for key, rhs in (("$TOOL", tool), ("$BASE", base)):
             self.changes.append(Event(offset, start, key, exact and rhs is not None, "", rhs, rhs or "", line, anytime))
-        if why and exact:
+        if why and exact and not anytime:
             self.builder.notes.append(f"{d.doc.path}:{line}: BAS sets $TOOL and $BASE from FDAT_ACT, which cannot be followed here: {why}")
 
     def _motion(self, d: _Doc, node: Tree, start: int) -> None:
@@ -561,7 +693,8 @@ class KrlParser:
         values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
         for k in np.nonzero(changed)[0].tolist():
             r = int(named[k])
-            point = tl.point_at(str(keys[k]), int(offsets[r]))
+            states = [tl.point_at(str(keys[k]), at) for at in self._run_at(int(offsets[r]))]
+            point = states[0] if states and all(p is states[0] for p in states) else Point.unknown()  # one state per call, or not known
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
         return values, spans, conf, insert
@@ -628,22 +761,53 @@ class KrlParser:
                 ev = [(o, v) for o, k, v in events if k == key]
             if not ev:
                 continue
-            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
-            has = at >= 0
             if key in FRAME_KEYS:
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
                 ids = np.array([register(f.name, None if f.pose is None else f.transform(), f.pose is not None) for _, f in ev])
-                (frame if key == "$BASE" else tool)[has] = ids[at[has]]
-            elif key == "vel":
+                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, offsets, np.array([o for o, _ in ev]), ids, register)
+                continue
+            at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
+            has = at >= 0
+            if key == "vel":
                 speed[has] = np.array([v for _, v in ev], dtype=float)[at[has]] * 1000.0  # $VEL.CP is m/s; the IR keeps mm/s
             else:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
 
 
+    def _frame_ids(self, key: str, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
+        """The frame (or tool) index in force at each target: the last change before the
+        place where it runs; a target of a subprogram run with different frames from
+        different calls, or run by no call from the first DEF, gets an unknown one."""
+        def at(virtual: np.ndarray) -> np.ndarray:
+            k = np.searchsorted(starts, virtual, side="right") - 1
+            return np.where(k >= 0, ids[np.maximum(k, 0)], 0)
+
+        if not self._visits:
+            return at(offsets)
+        main = self.routines[0]
+        first = (offsets >= main.start) & (offsets < main.end)
+        out = np.zeros(len(offsets), np.int64)
+        out[first] = at(offsets[first] * call_walk.SCALE)
+        for i in np.nonzero(~first)[0].tolist():
+            found = set(at(np.array(self._run_at(int(offsets[i])), dtype=np.int64)).tolist())
+            r = call_walk.routine_of(self.routines, int(offsets[i]))
+            name = self.routines[r].name if r is not None else "?"
+            if len(found) == 1:
+                out[i] = found.pop()
+            elif not found:
+                out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
+            else:
+                out[i] = register(f"{key} in {name}: its calls run it with different frames", None, False)
+                self.builder.notes.append(f"{self.docs[0].doc.path}: {name} is called where {key} differs, before it sets its own: "
+                                          f"the {key} of its motions is not known")
+        return out
+
+
 class _InlineFormState:
     """FDAT_ACT as the main DEF's straight-line code sets it, and whether BAS.SRC's
-    corrections are known to be off (see inline_forms.py)."""
+    corrections are known to be off (see inline_forms.py). A call of a routine of another
+    module makes both unknown (FDAT_ACT and the switches are globals it may set)."""
 
     def __init__(self, docs: list[_Doc]):
         src = docs[0].text
@@ -702,6 +866,13 @@ def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarra
     values = values.copy()
     values[relative, :6] = np.where(np.isnan(values[relative, :6]), np.nan, pose[relative])
     return pose, values
+
+
+def _leaves_early(text: str, first: int, last: int) -> bool:
+    """Whether the lines between ``first`` and ``last`` (1-based, exclusive) hold an EXIT,
+    RETURN or GOTO (KSS 8 SI: EXIT leaves the loop, RETURN the routine): not every pass may run."""
+    body = text.split("\n")[first:last - 1]
+    return any(re.search(r"\b(?:EXIT|RETURN|GOTO)\b", _split_comment(code)[0], re.IGNORECASE) for code in body)
 
 
 def _split_comment(line: str) -> tuple[str, str | None]:

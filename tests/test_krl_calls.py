@@ -1,0 +1,235 @@
+"""KRL $BASE / $TOOL followed through calls to subprograms (postproc/dialects/krl/calls.py).
+
+Expected positions worked out by hand from "KUKA System Software 8.x, Operating and
+Programming Instructions for System Integrators" (KSS 8 SI):
+- "Subprograms and functions": a local subprogram (a further DEF ... END of the .src) runs
+  where it is called, then the caller continues after the call;
+- "System variables": $BASE and $TOOL are global: a subprogram runs with the frames in force
+  at its call, and the caller continues with the frames the subprogram leaves (BAS.SRC's
+  BAS(#BASE, n) works this way: its BASE(n) sets $BASE for the caller);
+- "Coordinate systems" / "BASE": a Cartesian target's position in the robot base is
+  $BASE : target ($BASE {X 1000}: XP1 (100, 0, 500) is at (1100, 0, 500));
+- "INTERRUPT" / "TRIGGER": ``DO NAME()`` runs NAME when the event occurs, at a time the
+  program text does not give.
+A routine reached from places with different frames, before it sets its own, cannot be
+given one frame: its targets are not placed (refused for compensation), with a note.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from postproc.programs import parse_program
+
+DAT = "DEFDAT p\nDECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}\nENDDAT\n"
+CONFIG = "DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nBASE_DATA[2]={X 0,Y 2000,Z 0,A 0,B 0,C 0}\nENDDAT\n"
+
+
+def program(tmp_path, text: str):
+    (tmp_path / "p.src").write_text(text.strip() + "\n")
+    (tmp_path / "p.dat").write_text(DAT)
+    (tmp_path / "$config.dat").write_text(CONFIG)
+    return parse_program(tmp_path / "p.src")
+
+
+def placed_positions(tp) -> np.ndarray:
+    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+
+
+def test_a_subprogram_runs_with_the_frame_of_its_call_and_leaves_its_own(tmp_path):
+    # sub written after the $BASE = BASE_DATA[2] of line 5, but called on line 3 under
+    # BASE_DATA[1]: its LIN XP1 is at (1100, 0, 500), not (100, 2000, 500).
+    # setb( ) sets BASE_DATA[2]: the caller's LIN on line 7 is at (100, 2000, 500).
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+LIN XP1
+$BASE = BASE_DATA[1]
+setb( )
+LIN XP1
+END
+DEF sub( )
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    order = np.argsort(tp.line)
+    assert tp.line[order].tolist() == [4, 7, 10]
+    np.testing.assert_allclose(placed_positions(tp)[order], [[1100, 0, 500], [100, 2000, 500], [1100, 0, 500]], atol=1e-9)
+
+
+def test_nested_calls_are_followed_in_execution_order(tmp_path):
+    # p -> a( ) -> b( ) sets BASE_DATA[2]; a's LIN after the call of b is in BASE_DATA[2];
+    # p's LIN after a( ) too: (100, 2000, 500) both; a's LIN before b( ) in BASE_DATA[1].
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+a( )
+LIN XP1
+END
+DEF a( )
+LIN XP1
+b( )
+LIN XP1
+END
+DEF b( )
+$BASE = BASE_DATA[2]
+END
+""")
+    by_line = dict(zip(tp.line.tolist(), placed_positions(tp).tolist()))
+    np.testing.assert_allclose([by_line[7], by_line[9], by_line[4]], [[1100, 0, 500], [100, 2000, 500], [100, 2000, 500]], atol=1e-9)
+
+
+def test_a_routine_called_with_different_frames_has_no_frame(tmp_path):
+    # sub( ) is called under BASE_DATA[1] and under BASE_DATA[2]; its LIN runs once in each:
+    # one IR row cannot hold both frames: not placed, and a note names the routine.
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+$BASE = BASE_DATA[2]
+sub( )
+LIN XP1
+END
+DEF sub( )
+LIN XP1
+END
+""")
+    by_line = dict(zip(tp.line.tolist(), tp.placed().tolist()))
+    assert by_line == {6: True, 9: False}
+    assert any("sub is called where $BASE differs" in n for n in tp.notes)
+
+
+def test_a_routine_that_sets_its_frame_first_has_it_from_any_call(tmp_path):
+    # Called under two bases, but $BASE = BASE_DATA[2] runs before its LIN: (100, 2000, 500).
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+sub( )
+$BASE = $WORLD
+sub( )
+END
+DEF sub( )
+$BASE = BASE_DATA[2]
+LIN XP1
+END
+""")
+    np.testing.assert_allclose(placed_positions(tp), [[100, 2000, 500]], atol=1e-9)
+
+
+def test_what_is_not_straight_line_stays_unknown(tmp_path):
+    # A call inside IF: the frame after ENDIF depends on the condition. A call of a routine of
+    # another module (not in this .src): it may set $BASE. A TRIGGER's DO routine runs at a
+    # time the text does not give. A routine no call reaches: the frame it runs with is unknown.
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+IF $IN[1] THEN
+setb( )
+ENDIF
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    assert not tp.placed().any()
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nOTHERMODULE( )\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+    assert any("p.src:4: OTHERMODULE() is not a subprogram of this file" in n for n in tp.notes)
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+TRIGGER WHEN DISTANCE=0 DELAY=0 DO setb( ) PRIO=-1
+LIN XP1
+setb( )
+LIN XP1
+END
+DEF setb( )
+$BASE = BASE_DATA[2]
+END
+""")
+    assert not tp.placed().any()
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nEND\nDEF never( )\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+
+
+def test_a_program_without_calls_is_unchanged(tmp_path):
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\n$BASE = BASE_DATA[2]\nLIN XP1\nEND\n")
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500], [100, 2000, 500]], atol=1e-9)
+
+
+# ---------------------------------------------------------------- GOTO (jumps.py)
+# KSS 8 SI "GOTO": GOTO Marker continues at Marker: in the same routine. A forward jump
+# that skips only statements that neither move nor change a variable leaves the same points
+# and frames in force at every later target, whether it is taken or not.
+
+def test_a_forward_jump_over_nothing_that_changes_keeps_the_frame(tmp_path):
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+IF $IN[1] THEN
+GOTO SKIP
+ENDIF
+WAIT SEC 1
+SKIP:
+LIN XP1
+END
+""")
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500]], atol=1e-9)
+
+
+def test_a_jump_that_may_change_what_is_in_force_is_not_straight_line(tmp_path):
+    # Skips $BASE = BASE_DATA[2]: at LIN XP1 $BASE is BASE_DATA[1] or [2] by $IN[1].
+    skip_frame = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\n$BASE = BASE_DATA[2]\nSKIP:\nLIN XP1\nEND\n"
+    # Skips a motion: the motion may not run (conservative: the skipped part must not move).
+    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
+    # Inside a loop (even to a label in the same pass): left to run time, conservatively.
+    in_loop = "DEF p( )\n$BASE = BASE_DATA[1]\nFOR I = 1 TO 2\nIF $IN[1] THEN\nGOTO NEXT\nENDIF\nNEXT:\nLIN XP1\nENDFOR\nEND\n"
+    # Backwards: the lines after the label run again after later changes.
+    back = "DEF p( )\n$BASE = BASE_DATA[1]\nTOP:\nLIN XP1\n$BASE = BASE_DATA[2]\nGOTO TOP\nEND\n"
+    for text, line in ((skip_frame, 4), (skip_motion, 4), (in_loop, 5), (back, 6)):
+        tp = program(tmp_path, text)
+        assert not tp.placed().any(), text
+        assert any(f"p.src:{line}: GOTO" in n for n in tp.notes), tp.notes
+
+
+def test_a_jump_in_a_subprogram_makes_its_frame_changes_unknown(tmp_path):
+    tp = program(tmp_path, """
+DEF p( )
+$BASE = BASE_DATA[1]
+LIN XP1
+sub( )
+LIN XP1
+END
+DEF sub( )
+TOP:
+$BASE = BASE_DATA[2]
+LIN XP1
+IF $IN[1] THEN
+GOTO TOP
+ENDIF
+END
+""")
+    assert dict(zip(tp.line.tolist(), tp.placed().tolist())) == {3: True, 5: False, 10: False}
+
+
+def test_a_call_tree_too_large_to_follow_falls_back_to_unknown(tmp_path):
+    # s0 calls s1 twice, s1 calls s2 twice, ...: 2^15 executed copies of s14 (more than
+    # calls.MAX_VISITS): not followed; frames changed in subprograms are unknown everywhere.
+    subs = "".join(f"DEF s{k}( )\ns{k + 1}( )\ns{k + 1}( )\nEND\n" for k in range(15)) + "DEF s15( )\n$BASE = BASE_DATA[2]\nEND\n"
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\ns0( )\nLIN XP1\nEND\n" + subs)
+    assert not tp.placed().any()
+    assert any("not followed" in n for n in tp.notes)
+
+
+def test_a_handler_of_another_module_or_a_function_in_a_skipped_condition_is_not_followed(tmp_path):
+    # TRIGGER ... DO IR_OTHER( ): a routine of another module runs during the motion after it;
+    # it may set $BASE. A GOTO that skips IF f( ) THEN skips a function call that may change it.
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nTRIGGER WHEN DISTANCE=0 DELAY=0 DO IR_OTHER( ) PRIO=-1\nLIN XP1\nEND\n")
+    assert tp.placed().tolist() == [True, False]
+    tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nIF f( ) THEN\nENDIF\nSKIP:\nLIN XP1\nEND\n")
+    assert not tp.placed().any()
