@@ -7,9 +7,9 @@ parse only in those numbers, so reading them back is the same check at a fractio
 cost. ``positions_read_back`` walks the original and the new bytes together (compiled, one
 pass) and asks of the new text:
 
-- every byte outside the program's number spans is the original's, in order, and the text
-  ends where the original does (so the statements, and the count of targets, are the same);
-- every number that is not a position number is the original's, byte for byte;
+- every byte outside the position numbers is the original's, in order, and the text ends
+  where the original does (so the statements, the count of targets and every other number
+  are the same);
 - every position number is one number token by the parser's own rules (``scan_kernel``'s
   run and its exact value path) and, times the field's scale, is within the writing
   tolerance of the compensated position, for every target that uses it.
@@ -26,14 +26,14 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..ir import F_POS, Kind, Toolpath
+from ..ir import F_ARC, F_POS, Kind, Toolpath
 from ..parse.scan_kernel import _POW10, _run_end, _value
 
 _REL = 1e-12  # the original's numbers must read back as the parser's values to rounding
 
 
 @njit(cache=True)
-def _walk(old, new, starts, ends, is_position, pow10):
+def _walk(old, new, starts, ends, pow10):
     """(ok, old values, new values) of the spans (sorted, disjoint) walked in both texts."""
     m = len(starts)
     old_values = np.full(m, np.nan)
@@ -49,15 +49,6 @@ def _walk(old, new, starts, ends, is_position, pow10):
             if new[n + i] != old[o + i]:
                 return False, old_values, new_values
         n += gap
-        if not is_position[k]:
-            if n + e - s > len(new):
-                return False, old_values, new_values
-            for i in range(e - s):
-                if new[n + i] != old[s + i]:
-                    return False, old_values, new_values
-            n += e - s
-            o = e
-            continue
         value, status = _value(old, s, e, pow10)
         if status != 0:
             return False, old_values, new_values
@@ -86,9 +77,9 @@ def _applies(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.
     checked position written in the main file, the other files unchanged."""
     if len(texts) != len(original.sources) or any(t != d.text for t, d in zip(texts[1:], original.sources[1:])):
         return False
-    if original.relative.any() or (original.offset_span is not None and (original.offset_span[:, :, 1] >= 0).any()):
+    if original.relative.any() or (original.offset_span is not None and (original.offset_span[:, F_POS, 1] >= 0).any()):
         return False
-    if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or modified.arc is not None and not np.isnan(modified.values[:, 19:]).all():
+    if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or modified.arc is not None and not np.isnan(modified.values[:, F_ARC]).all():
         return False
     pos = original.spans[rows][:, F_POS]
     return bool(((pos[:, :, 0] == 0) & (pos[:, :, 1] >= 0)).all())
@@ -96,35 +87,34 @@ def _applies(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.
 
 def positions_read_back(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.ndarray, tol) -> bool:
     """True: the new main text reads back, by the checks in the module docstring, with every
-    position of ``rows`` within ``tol`` (mm; one, or one per axis) of ``modified``'s. False: not shown this way
-    (the caller re-parses)."""
+    position of ``rows`` within ``tol`` (mm; one, or one per axis) of ``modified``'s. False:
+    not shown this way (the caller re-parses). Other numbers lie in the stretches that must
+    be the original's bytes (the re-parse does not compare them either)."""
     if not _applies(original, modified, texts, rows):
         return False
-    spans = original.spans
-    in_main = (spans[:, :, 0] == 0) & (spans[:, :, 1] >= 0)
-    r, f = np.nonzero(in_main)
+    spans = original.spans[:, F_POS]
+    r, f = np.nonzero((spans[:, :, 0] == 0) & (spans[:, :, 1] >= 0))
     starts, ends = spans[r, f, 1].astype(np.int64), spans[r, f, 2].astype(np.int64)
-    order = np.argsort(starts, kind="stable")
-    s, e, is_pos = starts[order], ends[order], f[order] < 3
-    same = s[1:] == s[:-1]
-    if (e[1:][same] != e[:-1][same]).any() or (is_pos[1:][same] != is_pos[:-1][same]).any():
-        return False  # one number read with two lengths, or as a position and as something else
-    uniq, first, inverse = np.unique(starts, return_index=True, return_inverse=True)
-    position = f[first] < 3
+    if len(starts) > 1 and (starts[1:] > starts[:-1]).all():
+        uniq, span_ends, k = starts, ends, np.arange(len(starts))  # each number read once, in order (no sort)
+    else:
+        uniq, first, k = np.unique(starts, return_index=True, return_inverse=True)
+        span_ends = ends[first]
+        if (ends != span_ends[k]).any():
+            return False  # one number read with two lengths
     old = np.frombuffer(original.sources[0].text.encode("latin-1"), dtype=np.uint8)
     new = np.frombuffer(texts[0].encode("latin-1"), dtype=np.uint8)
-    ok, old_values, new_values = _walk(old, new, uniq, ends[first], position, _POW10)
+    ok, old_values, new_values = _walk(old, new, uniq, span_ends, _POW10)
     if not ok:
         return False
-    p = f < 3
-    r, f, k = r[p], f[p], inverse[p]
-    offset = original.offset[r, f] if original.offset is not None else 0.0
-    as_read = old_values[k] * original.scale[r, f] + offset
-    parsed, placed = original.values[r, f], original.position[r, f]
+    offset = original.offset[:, F_POS][r, f] if original.offset is not None else 0.0
+    scale = original.scale[:, F_POS][r, f]
+    as_read = old_values[k] * scale + offset
+    parsed, placed = original.values[:, F_POS][r, f], original.position[r, f]
     near = _REL * np.maximum(1.0, np.abs(parsed))
     if not ((np.abs(as_read - parsed) <= near) & (np.abs(as_read - placed) <= near)).all():
         return False  # the parser reads these numbers otherwise than number x scale
-    got = new_values[k] * original.scale[r, f] + offset
+    got = new_values[k] * scale + offset
     checked = np.zeros(len(original), dtype=bool)
     checked[rows] = True
     c = checked[r]
