@@ -2,8 +2,9 @@
 
 Run: .venv/bin/python benchmarks/stream_stages.py [--dialect krl|gcode] [--moves 1000000]
 The raster of benchmarks/stream.py is compensated in one process (``workers=0``, so every
-stage runs here and is timed: CPU seconds of this process, all threads, per stage). The
-re-parse inside the output check is counted under parse and under check.
+stage runs here and is timed: CPU seconds of this process, all threads, per stage). Where
+the output check re-parses a chunk (only where ``emit.readback`` does not apply: increments,
+offsets, inherited axes, arcs), that re-parse is counted under parse and under check.
 """
 
 from __future__ import annotations

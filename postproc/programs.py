@@ -66,14 +66,20 @@ def refuse_overwrite(original: Toolpath, files: dict[Path, str], in_place: bool)
 
 def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.ndarray) -> None:
     """Re-parse the new ``texts`` (one per source) and confirm every target in ``rows``
-    reads back where ``modified`` puts it, within the writing tolerance; else an OutputCheckError."""
+    reads back where ``modified`` puts it, within the writing tolerance; else an OutputCheckError.
+    Where only absolute position numbers changed, they are read back on their own instead
+    (``emit.readback``: the same answer without the whole re-parse); anything else, or any
+    doubt, takes the whole re-parse."""
+    from .emit.readback import positions_read_back
     from .emit.splice import TOLERANCE
 
+    tol = TOLERANCE[F_POS] * (1 + 1e-6)
+    if positions_read_back(original, modified, texts, rows, tol):
+        return  # the same check without a whole re-parse (postproc.emit.readback)
     lang = dialects.of(original)
     back = lang.parse_sources([SourceDoc(doc.path, text, doc.role) for doc, text in zip(original.sources, texts)])
     if len(back) != len(modified):
         raise OutputCheckError(f"{original.sources[0].path}: the new text has {len(back)} targets, the compensated program {len(modified)}; nothing was written")
-    tol = TOLERANCE[F_POS] * (1 + 1e-6)
     want, got = modified.position[rows], back.position[rows]
     bad = ~(np.abs(got - want) <= tol).all(axis=1)
     if bad.any():

@@ -15,7 +15,8 @@ how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.Str
   chunk's last target (``Report.end_joints``), and the restated target gives the first
   segment of the chunk its start (straight-line reach, path between targets); its own
   result, the same as in the previous chunk, is dropped;
-- every chunk's new text is re-parsed (``programs.check_texts``) and appended to one
+- every chunk's new text is checked (``programs.check_texts``: its position numbers read
+  back where only those changed, ``emit.readback``, else a whole re-parse) and appended to one
   temporary file beside the output; the program's other files (KRL .dat) are staged with
   it and all are renamed at the end (``files.write_all``): all or nothing.
 

@@ -147,9 +147,16 @@ class GcodeParser:
         tables = [t for t in (block, slow) if t is not None and len(t["offset"])]
         if not tables:
             return self.builder.build()
-        table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0] if k != "more"}
-        order = np.argsort(table["offset"], kind="stable")
-        table = {k: v[order] for k, v in table.items()}
+        if len(tables) == 1:  # a CAM program's blocks all read in bulk (or none): already one table
+            table = {k: v for k, v in tables[0].items() if k != "more"}
+        else:
+            table = {k: np.concatenate([t[k] for t in tables]) for k in tables[0] if k != "more"}
+        offset = table["offset"]
+        if (offset[1:] >= offset[:-1]).all():
+            order = np.arange(len(offset))  # in program order already: the stable sort would not move a block
+        else:
+            order = np.argsort(offset, kind="stable")
+            table = {k: v[order] for k, v in table.items()}
         table["more"] = _more_words(order, len(table["offset"]) - len(slow["offset"]), slow["more"])
         return self._resolve(table)
 
