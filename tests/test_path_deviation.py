@@ -87,7 +87,7 @@ def test_max_deviation_refuses_a_path_that_strays(model, tmp_path):
     out = tmp_path / "out.src"
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out), "--max-deviation", "0.00001"])
     assert result.exit_code == 1, result.output
-    assert "line 7" in result.output and "strays" in result.output and "--max-deviation" in result.output
+    assert "part.src:7:" in result.output and "strays" in result.output and "--max-deviation" in result.output
     assert not out.exists()
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out)])
     assert result.exit_code == 0, result.output
