@@ -131,3 +131,12 @@ def test_gcode_cycle_after_a_cycle_block_not_read_is_flagged(text):
     later = tp.line >= 2
     assert not tp.resolved[later].any() and np.isnan(tp.position[later & (tp.line == tp.line.max())]).all()
     assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
+def test_rapid_offs_with_a_zero_term_round_trips():
+    """Found by benchmarks/fuzz.py (the 10^5 run after the RAPID loop work): `Offs(p, -2475.3-0, ...)`
+    raised ZeroDivisionError: the expression evaluator built every operation's result, a / b
+    included, for any operator."""
+    text = b"MODULE Fuzz\n  PROC main()\n    MoveL Offs(p1,-2475.29847-0,+1,-658.4), v500, fine, tool0;\n    MoveL Offs(p1,3*0,0,0), v500, fine, tool0;\n  ENDPROC\nENDMODULE\n"
+    tp = parse_program("fuzz.mod", "rapid", text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text

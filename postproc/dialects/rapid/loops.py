@@ -66,8 +66,18 @@ def _apply(op: str, a: float, b: float) -> float:
         return float("nan")  # a run-time error on the controller, not a value
     if op in ("DIV", "MOD") and (a != int(a) or b != int(b)):
         return float("nan")  # DIV and MOD take integers
-    return {"+": a + b, "-": a - b, "*": a * b, "/": a / b,
-            "DIV": float(int(a / b)), "MOD": float(int(a) - int(b) * int(a / b))}.get(op, float("nan"))
+    if op == "+":
+        return a + b
+    if op == "-":
+        return a - b
+    if op == "*":
+        return a * b
+    if op == "/":
+        return a / b
+    if op in ("DIV", "MOD"):  # (each operation computed alone: a dict of all of them divided by a zero b of "+")
+        quotient = int(a / b)
+        return float(quotient) if op == "DIV" else float(int(a) - int(b) * quotient)
+    return float("nan")
 
 
 def for_counter(node: Tree, env: dict[str, float]) -> tuple[str, list[float] | None]:
