@@ -232,6 +232,13 @@ def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
                 register(name, table[name.upper()])
 
 
+def _has_goto(code: str) -> bool:
+    """A GOTO statement anywhere in the (comment-blanked) module. A plain substring test first:
+    a case-insensitive regex with word boundaries scans a 10^6-line module ~20x slower."""
+    upper = code.upper()
+    return "GOTO" in upper and re.search(r"\bGOTO\b", upper) is not None
+
+
 class _Data:
     """The program's named data: robtargets, tools and work objects by upper-case name."""
 
@@ -265,7 +272,7 @@ class RapidParser:
         self._locals: dict[str, float | None] = {}  # the routine's own VAR nums: value, None if unknown (counters.py)
         self._in_routine = False
         self._conditional = False  # inside a one-statement IF
-        self._track_locals = not re.search(r"(?i)\bGOTO\b", self.code)  # a jump may run any line again
+        self._track_locals = not _has_goto(self.code)  # a jump may run any line again
 
     # ------------------------------------------------------------- numbers
     def _literal(self, start: int, end: int, fields: np.ndarray):
