@@ -23,13 +23,13 @@ installed); the $BASE values are worked by hand below.
 from __future__ import annotations
 
 import re
-import shutil
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from test_real_corpus import _moves, canonical_endpoints, run_rs274
+from rs274_recordings import assert_current, needs_rs274, record_all
+from test_real_corpus import _moves, canonical_endpoints
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -180,25 +180,12 @@ def test_without_the_rs274_move_check_the_tool_length_case_would_be_wrong(tmp_pa
     assert tp.resolved.tolist() == [True, False] and tp.tool_names[tp.tool[1]] == "H1"
 
 
-@pytest.mark.skipif(shutil.which("rs274") is None, reason="LinuxCNC's rs274 is not installed (apt-get install linuxcnc-uspace)")
+@needs_rs274
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_rs274_recordings_are_current(name, tmp_path):
-    accepted, out, err = run_rs274(_program(tmp_path, name))
-    assert accepted, err
-    assert out == (RECORDED / f"{name}.canon").read_text(encoding="latin-1")
-
-
-def record(folder: Path) -> None:
-    RECORDED.mkdir(parents=True, exist_ok=True)
-    for name in PROGRAMS:
-        accepted, out, err = run_rs274(_program(folder, name))
-        assert accepted, f"{name}: {err}"
-        (RECORDED / f"{name}.canon").write_bytes(out.encode("latin-1"))
+    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
 
 
 if __name__ == "__main__":
     if sys.argv[1:] == ["--record"]:
-        import tempfile
-
-        with tempfile.TemporaryDirectory() as tmp:
-            record(Path(tmp))
+        record_all(PROGRAMS, _program, RECORDED)

@@ -20,13 +20,12 @@ checked against a fresh run where rs274 is installed).
 from __future__ import annotations
 
 import re
-import shutil
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from test_real_corpus import run_rs274
+from rs274_recordings import assert_current, needs_rs274, record_all
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -94,12 +93,10 @@ def test_lengths_equal_the_hand_worked_ones_and_rs274s(name, tmp_path):
     np.testing.assert_allclose(got, recorded, atol=1e-3)  # rs274 prints 4 decimals of the program's unit
 
 
-@pytest.mark.skipif(shutil.which("rs274") is None, reason="LinuxCNC's rs274 is not installed")
+@needs_rs274
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_recordings_equal_a_fresh_rs274_run(name, tmp_path):
-    accepted, calls, err = run_rs274(_program(tmp_path, name))
-    assert accepted, err
-    assert calls == (RECORDED / f"{name}.canon").read_text(encoding="latin-1")
+    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
 
 
 @pytest.mark.parametrize("text, line", [
@@ -150,17 +147,5 @@ def test_g92_after_an_unknown_length_change_is_refused(tmp_path):
     assert res.exit_code == 2 and "p.ngc:6:" in res.stderr
 
 
-def _record() -> None:
-    RECORDED.mkdir(parents=True, exist_ok=True)
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as tmp:
-        for name in PROGRAMS:
-            accepted, calls, err = run_rs274(_program(Path(tmp), name))
-            assert accepted, (name, err)
-            (RECORDED / f"{name}.canon").write_text(calls, encoding="latin-1")
-
-
 if __name__ == "__main__" and "--record" in sys.argv:
-    sys.path.insert(0, str(Path(__file__).parent))
-    _record()
+    record_all(PROGRAMS, _program, RECORDED)

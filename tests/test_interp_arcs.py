@@ -14,7 +14,6 @@ second_axis), rotation's sign is the direction (+1 G3) and its size the turns (P
 from __future__ import annotations
 
 import re
-import shutil
 import sys
 from pathlib import Path
 from unittest import mock
@@ -22,7 +21,8 @@ from unittest import mock
 import numpy as np
 import pytest
 from test_arcs import _rs274_arcs
-from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions, run_rs274
+from rs274_recordings import assert_current, needs_rs274, record_all
+from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions
 
 from postproc import arcs
 from postproc.dialects.gcode import interp
@@ -146,28 +146,15 @@ def test_arcs_the_controller_refuses_are_refused_block_by_block_too(tmp_path, te
     assert (err.value.line, err.value.column) == (line, column)
 
 
-@pytest.mark.skipif(shutil.which("rs274") is None, reason="LinuxCNC's rs274 is not installed (apt-get install linuxcnc-uspace)")
+@needs_rs274
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_rs274_recordings_are_current(name, tmp_path):
-    accepted, out, err = run_rs274(_program(tmp_path, name))
-    assert accepted, err
-    assert out == (RECORDED / f"{name}.canon").read_text(encoding="latin-1")
-
-
-def record(folder: Path) -> None:
-    RECORDED.mkdir(parents=True, exist_ok=True)
-    for name in PROGRAMS:
-        accepted, out, err = run_rs274(_program(folder, name))
-        assert accepted, f"{name}: {err}"
-        (RECORDED / f"{name}.canon").write_bytes(out.encode("latin-1"))
+    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
 
 
 if __name__ == "__main__":
     if sys.argv[1:] == ["--record"]:
-        import tempfile
-
-        with tempfile.TemporaryDirectory() as tmp:
-            record(Path(tmp))
+        record_all(PROGRAMS, _program, RECORDED)
 
 
 # ------------------------------------------------------------------ compensate and convert accept them

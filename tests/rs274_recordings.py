@@ -1,0 +1,32 @@
+"""rs274's canonical calls for the tests' own G-code programs: recorded in the repository so
+CI compares without LinuxCNC, checked against a fresh run where rs274 is installed, and
+written again with ``python tests/test_x.py --record``."""
+
+from __future__ import annotations
+
+import shutil
+import tempfile
+from pathlib import Path
+from typing import Callable, Iterable
+
+import pytest
+from test_real_corpus import run_rs274
+
+needs_rs274 = pytest.mark.skipif(shutil.which("rs274") is None, reason="LinuxCNC's rs274 is not installed (apt-get install linuxcnc-uspace)")
+
+
+def assert_current(program: Path, recorded: Path) -> None:
+    """rs274 on ``program`` gives exactly the recorded calls."""
+    accepted, calls, err = run_rs274(program)
+    assert accepted, err
+    assert calls == recorded.read_text(encoding="latin-1")
+
+
+def record_all(names: Iterable[str], program_in: Callable[[Path, str], Path], folder: Path) -> None:
+    """Every program (``program_in(scratch folder, name)`` writes it) through rs274 into ``folder/NAME.canon``."""
+    folder.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as scratch:
+        for name in names:
+            accepted, calls, err = run_rs274(program_in(Path(scratch), name))
+            assert accepted, f"{name}: {err}"
+            (folder / f"{name}.canon").write_bytes(calls.encode("latin-1"))
