@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import re
 
+from .parse import blank_comments
+
 
 _SINGAREA = re.compile(r"^[ \t]*SingArea[ \t]*\\(Wrist|LockAxis4)\b", re.IGNORECASE | re.MULTILINE)
 
@@ -14,7 +16,7 @@ def wrist_singularity_avoidance(tp) -> str | None:
     singularities, and the orientation between targets is not the programmed interpolation:
     a predicted path between targets would not be the robot's."""
     for doc in tp.sources:
-        text = re.sub(r"!.*", "", doc.text)
+        text = blank_comments(doc.text)  # (strings kept: a "!" in a TPWrite text is no comment)
         found = _SINGAREA.search(text)
         if found:
             line = text.count("\n", 0, found.start()) + 1
