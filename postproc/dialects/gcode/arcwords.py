@@ -59,6 +59,9 @@ def arc_words(t: dict, rows: np.ndarray, arc_rows: np.ndarray, plane: np.ndarray
     at = np.nonzero(arc_rows)[0]
     blocks = rows[at]
     words = t["values"][blocks][:, cols]
+    uvw = ~np.isin(plane[at], list(_ALLOWED))
+    if uvw.any():  # rs274: "Cannot do an arc in planes G17.1, G18.1, or G19.1"
+        raise error_at(t["offset"][blocks[np.argmax(uvw)]], "an arc in the G17.1, G18.1 or G19.1 plane (LinuxCNC refuses it)")
     _refuse_mixed(t, blocks, words, plane[at], error_at)
     for n, col in enumerate(cols):
         f = F_ARC.start + n

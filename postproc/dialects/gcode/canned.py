@@ -20,7 +20,11 @@ RAPID, FEED = 0, 1  # move codes (G0, G1)
 # (first, second, perpendicular) axis of the cycle plane: G17 X Y Z, G18 Z X Y, G19 Y Z X
 PLANE_AXES = {17.0: (0, 1, 2), 18.0: (2, 0, 1), 19.0: (1, 2, 0)}
 PERPENDICULAR = {17.0: "Z", 18.0: "Y", 19.0: "X"}
-PECK_CLEARANCE_MM = 0.254  # rs274's G73/G83 back-off (0.010 in), when no D word
+# rs274's G73/G83 back-off: G83_RAPID_DELTA, 0.010 in, times 25.4 in G21 (interp_cycles.cc of
+# LinuxCNC 2.9, the Debian linuxcnc-uspace judge): the same 0.254 mm in G20 and G21, with no
+# parameter or INI setting. LinuxCNC 2.10 takes a D word (and [RS274NGC]G73/G83_PECK_CLEARANCE)
+# instead; 2.9 refuses a D word there, and so does ``expand``: the two controllers disagree.
+PECK_CLEARANCE_MM = 0.254
 CYCLES = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 87.0, 88.0, 89.0)
 
 
@@ -58,6 +62,7 @@ class Block:
 def expand(block: Block, state: CycleState, cur: list) -> tuple[list[tuple[int, list]], list]:
     """Moves [(RAPID|FEED, [x, y, z])] of one cycle block from the current point ``cur``,
     and the point the interpreter holds afterwards."""
+    _refuse(block)
     a_i, b_i, c_i = PLANE_AXES[block.plane]
     axis = "XYZ"
     words, same = block.words, state.last == block.code
@@ -75,7 +80,7 @@ def expand(block: Block, state: CycleState, cur: list) -> tuple[list[tuple[int, 
         bottom = r + sticky["bottom"]
     else:
         r, bottom = sticky["R"], sticky["bottom"]
-        if ("@" in words or "^" in words) and block.plane == 17.0:
+        if "@" in words or "^" in words:  # G17 only (_refuse)
             a, b = polar_end(a, b, words.get("@"), words.get("^"), incremental=False)
         else:
             a, b = words.get(axis[a_i], a), words.get(axis[b_i], b)
@@ -111,6 +116,26 @@ def expand(block: Block, state: CycleState, cur: list) -> tuple[list[tuple[int, 
     end = list(cur)
     end[a_i], end[b_i], end[c_i] = a, b, clear
     return moves, end
+
+
+def _refuse(block: Block) -> None:
+    """Cycle blocks LinuxCNC refuses, or runs off the hole's axis: a CycleError saying why."""
+    if block.plane not in PLANE_AXES:  # G17.1 / G18.1 / G19.1: rs274ngc drills with U V W there
+        raise CycleError(f"a canned cycle in the G{block.plane:g} plane drills with the U V W axes, which postproc does not model "
+                         f"(LinuxCNC refuses X Y Z words in it)")
+    if ("@" in block.words or "^" in block.words) and block.plane != 17.0:
+        raise CycleError("polar words (@ ^) outside the G17 plane: LinuxCNC refuses them (\"Cannot use polar coordinate except in G17 plane\")")
+    if "D" in block.words:
+        raise CycleError(f"D word in G{block.code:g}: LinuxCNC 2.9's rs274 refuses it (\"D word with no G41, G41.1, G42, G42.1, G71, G71.1, "
+                         f"G71.2 or G96 to use it\"), 2.10 takes it as the peck clearance: which one runs the program is not known")
+    if "L" in block.words and block.code == 74.0:  # interp_check.cc lets L through with G73 and G81-G89 only
+        raise CycleError("L word with G74: LinuxCNC refuses it (\"L word with no G10, cutter compensation, canned cycle, ...\")")
+    if block.code in (74.0, 84.0) and block.plane != 17.0:
+        # convert_cycle_g74_g84 passes the G18/G19 coordinates already permuted to cycle_feed,
+        # which permutes them again: LinuxCNC (2.9 and 2.10) feeds to a point off the hole's
+        # axis (G19 G84 Y5 Z5 X-2 feeds to X5 Y-2 Z5). Refused: neither the moves written nor those are safe to post.
+        raise CycleError(f"G{block.code:g} in the G{block.plane:g} plane: LinuxCNC's rs274 feeds the tap to a point off the hole's axis "
+                         f"(interp_cycles.cc permutes the axes twice); tap in G17 or write the moves out")
 
 
 REPEATABLE = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 89.0)  # every hole the same moves over its X Y
@@ -156,7 +181,7 @@ def _body(block: Block, sticky: dict, put, a: float, b: float, r: float, clear: 
     """The cycle proper, once the tool is over the hole at R (interp_cycles.cc)."""
     code = block.code
     if code in (73.0, 83.0):
-        _peck(code, sticky, put, a, b, r, bottom, block.words.get("D", PECK_CLEARANCE_MM))
+        _peck(code, sticky, put, a, b, r, bottom, PECK_CLEARANCE_MM)
         put(RAPID, a, b, clear)
     elif code in (81.0, 82.0, 86.0):
         put(FEED, a, b, bottom)
@@ -171,8 +196,6 @@ def _body(block: Block, sticky: dict, put, a: float, b: float, r: float, clear: 
     elif code == 88.0:
         put(FEED, a, b, bottom)  # then the program stops: the operator retracts by hand
     elif code == 87.0:
-        if block.plane != 17.0:
-            raise CycleError("G87 back boring is read in the G17 plane only")
         _back_bore(block, sticky, put, a, b, r, clear, bottom)
 
 
@@ -193,9 +216,14 @@ def _peck(code: float, sticky: dict, put, a: float, b: float, r: float, bottom: 
 
 
 def _back_bore(block: Block, sticky: dict, put, a: float, b: float, r: float, clear: float, bottom: float) -> None:
-    """G87: in beside the hole (I, J), down, over the hole, feed up to K and back, out."""
-    oa, ob = a + sticky["I"], b + sticky["J"]
-    top = bottom + sticky["K"] if block.incremental else sticky["K"]
+    """G87: in beside the hole, down, over the hole, feed up to the top of the bore and back,
+    out. Each axis takes its own word (I on X, J on Y, K on Z: interp_cycles.cc calls
+    convert_cycle_g87 with aa+i, bb+j, top k in G17; aa+k (Z), bb+i (X), top j in G18;
+    aa+j (Y), bb+k (Z), top i in G19): the offset in the plane is always an increment, the
+    top absolute in G90 and an increment from the bottom in G91."""
+    a_i, b_i, c_i = PLANE_AXES[block.plane]
+    oa, ob = a + sticky["IJK"[a_i]], b + sticky["IJK"[b_i]]
+    top = bottom + sticky["IJK"[c_i]] if block.incremental else sticky["IJK"[c_i]]
     put(RAPID, oa, ob, r)
     put(RAPID, oa, ob, bottom)
     put(RAPID, a, b, bottom)

@@ -42,7 +42,7 @@ class BlockError(ValueError):
 
 def needs_interpreter(t: dict) -> bool:
     """True where the block table has a construct only a block-by-block reading gets right
-    (t["more"] holds the words L P Q @ ^)."""
+    (t["more"] holds the words L P Q @ ^ D)."""
     if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any():
         return True
     if np.isin(t["canned"], canned.CYCLES).any():
@@ -349,6 +349,8 @@ class _Run:
         if not incremental:
             self._moved_to_words("".join(a for a in "XYZ" if a in words))
         if "@" in words or "^" in words:
+            if self.modal["plane"][i] != 17.0:  # rs274: "Cannot use polar coordinate except in G17 plane"
+                raise PolarError("polar words (@ ^) outside the G17 plane: LinuxCNC refuses them")
             if "X" in words or "Y" in words:
                 raise PolarError("cannot give X or Y words with polar coordinates")
             end[0], end[1] = polar_end(self.cur[0], self.cur[1], words.get("@"), words.get("^"), incremental)
@@ -365,9 +367,9 @@ class _Run:
     def _cycle(self, i: int, mode: float, words: dict) -> None:
         cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
         block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
+        moves, self.cur = canned.expand(block, self.cycle, self.cur)  # first: it refuses a plane it cannot read
         if self.modal["dist"][i] != 91.0:
             self._moved_to_words("".join(a for k, a in enumerate("XYZ") if a in words and k != canned.PLANE_AXES[block.plane][2]))
-        moves, self.cur = canned.expand(block, self.cycle, self.cur)
         self.cycle.unknown = False
         for kind, point in moves:
             self.emit(i, kind, point, True)

@@ -29,7 +29,7 @@ from . import arcwords, flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
-MORE = "LPQ@^"  # repeats, dwell / G10 P, peck, polar: words only the grammar reads (no spans)
+MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, D (refused in a cycle): words only the grammar reads (no spans)
 _MORE = {c: i for i, c in enumerate(MORE)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
@@ -55,6 +55,9 @@ _STATE_OF_G = {
     **{g: ("units", g) for g in (20.0, 21.0)},
     **{g: ("dist", g) for g in (90.0, 91.0)},
     **{g: ("plane", g) for g in (17.0, 18.0, 19.0)},
+    # G17.1 / G18.1 / G19.1: the U V W planes. Straight X Y Z moves run as ever; an arc or a
+    # canned cycle there is refused (rs274 refuses the arc; its cycle moves U V W).
+    **{g: ("plane", g) for g in (17.1, 18.1, 19.1)},
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
     **{g: ("tlo", g) for g in (43.0, 43.1, 43.2, 43.4, 43.5, 49.0)},
@@ -695,7 +698,7 @@ _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
 
 
 def _more_words(order: np.ndarray, n_bulk: int, slow_more: np.ndarray) -> np.ndarray:
-    """(n, len(MORE)) L P Q @ ^ of every block in program order: only grammar blocks have
+    """(n, len(MORE)) L P Q @ ^ D of every block in program order: only grammar blocks have
     them (a read-only NaN view where none has any, so that plain programs pay nothing)."""
     n = len(order)
     if not (~np.isnan(slow_more)).any():
