@@ -941,6 +941,7 @@ def convert_cmd(
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), written as the robot's base / work object. Repeatable."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length), written as the robot's tool. Repeatable."),
+    tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
@@ -952,16 +953,20 @@ def convert_cmd(
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
+        _refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None})
         for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
                                  frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
     _refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
+    from .emit.tool_load import parse_tool_load
+
+    load = None if tool_load is None else parse_tool_load(tool_load)
     outputs = get(to, "--to").new_program_paths(output)
     tp = parse_program(program, dialect)
     if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
         tp = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool"))
-    texts = write_program(tp, to, output.stem)
+    texts = write_program(tp, to, output.stem, tool_load=load)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

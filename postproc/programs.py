@@ -103,9 +103,10 @@ def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
     write_set(dict(zip(map(Path, outputs), texts)))
 
 
-def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[str]:
+def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None) -> list[str]:
     """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
-    ``Dialect.new_program_paths`` order)."""
+    ``Dialect.new_program_paths`` order); ``tool_load`` (emit.tool_load.ToolLoad) is the load
+    every tool of it carries."""
     from .emit.writer import drive
     from .errors import EmitError
 
@@ -114,4 +115,6 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted") -> list[s
     if writer is None:
         able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
         raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
+    if tool_load is not None:
+        writer.set_tool_load(tool_load)
     return drive(writer, tp, name)

@@ -13,6 +13,10 @@ class KrlWriter:
         self.name = legal_name(name, "prog").lower()
         self.body: list[str] = []
         self.approx = False
+        self.tool_load = None  # emit.tool_load.ToolLoad: convert --tool-load (else $LOAD is left as the controller has it)
+
+    def set_tool_load(self, load) -> None:
+        self.tool_load = load
 
     def start(self, name: str) -> None:
         pass
@@ -27,6 +31,11 @@ class KrlWriter:
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
         self.body.append(f"$TOOL = {self._frame(flange_T_tcp)}")
+        if self.tool_load is not None:  # KSS: LOAD = {M kg, CM frame (mm, deg) in the flange frame, J kg m^2}
+            load = self.tool_load
+            cm = ", ".join(f"{k} {short_number(v)}" for k, v in zip("XYZ", load.cog_mm))
+            j = ", ".join(f"{k} {short_number(v, 6)}" for k, v in zip("XYZ", load.inertia_kgm2))
+            self.body.append(f"$LOAD = {{M {short_number(load.mass_kg, 6)}, CM {{{cm}, A 0, B 0, C 0}}, J {{{j}}}}}")
 
     def speed(self, mm_s: float) -> None:
         if np.isfinite(mm_s):

@@ -26,6 +26,17 @@ class RapidWriter:
         self.v, self.z = 100.0, 0.0
         self.proc = "main"
         self.placeholder_conf = False  # a target was written without configuration data
+        self.tool_load = None  # emit.tool_load.ToolLoad: convert --tool-load
+        self.gripping = False  # a GripLoad of the tool load is in force (tool0)
+
+    def set_tool_load(self, load) -> None:
+        self.tool_load = load
+
+    def _load_literal(self) -> str:
+        """[mass,[cog],[aom],ix,iy,iz] of the given load (axes of moment along the tool0 frame)."""
+        load = self.tool_load
+        cog = ",".join(short_number(v) for v in load.cog_mm)
+        return f"[{short_number(load.mass_kg, 6)},[{cog}],[1,0,0,0],{','.join(short_number(v, 6) for v in load.inertia_kgm2)}]"
 
     def start(self, name: str) -> None:
         self.proc = legal_name(name, "main")
@@ -37,10 +48,25 @@ class RapidWriter:
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
         self.tool_name = legal_name(name, "tool")
-        if self.tool_name != "tool0":
+        if self.tool_name == "tool0":
+            self._grip(self.tool_load is not None)  # tool0 is the controller's (0 kg): the load is gripped instead
+        elif self.tool_load is not None:
+            self._grip(False)
+            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},{self._load_literal()}];")
+        else:
             # tooldata must carry a load (mass > 0); the input gives none, so the program says so where the robot programmer looks
-            self.decl.append(f"  ! {self.tool_name}: load 1 kg at [0,0,1] mm is a placeholder (the input program gives no tool load): set the real one")
+            self.decl.append(f"  ! {self.tool_name}: load 1 kg at [0,0,1] mm is a placeholder (the input program gives no tool load; "
+                             "convert --tool-load gives it): set the real one")
             self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},[1,[0,0,1],[1,0,0,0],0,0,0]];")
+
+    def _grip(self, on: bool) -> None:
+        """GripLoad of the tool load on (tool0 carries it) or off (a tooldata carries it)."""
+        if on and not self.gripping:
+            self.decl.append(f"  PERS loaddata tool_load := {self._load_literal()};")
+            self.body.append("    GripLoad tool_load;")
+        elif self.gripping and not on:
+            self.body.append("    GripLoad load0;")
+        self.gripping = on
 
     def speed(self, mm_s: float) -> None:
         self.v = mm_s
