@@ -56,7 +56,7 @@ class RapidWriter:
         else:
             # tooldata must carry a load (mass > 0); the input gives none, so the program says so where the robot programmer looks
             self.decl.append(f"  ! {self.tool_name}: load 1 kg at [0,0,1] mm is a placeholder (the input program gives no tool load; "
-                             "convert --tool-load gives it): set the real one")
+                             "give it with --tool-load): set the real one")
             self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},[1,[0,0,1],[1,0,0,0],0,0,0]];")
 
     def _grip(self, on: bool) -> None:
