@@ -859,11 +859,11 @@ _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4:
 @app.command("inspect")
 @handles_errors
 def inspect_cmd(
-    program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, KRL .src with its .dat, G-code)."),
+    program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, or a .pgf with its modules; KRL .src/.sub with its .dat, or a .dat alone; G-code .nc/.ngc/.gcode/.tap/.cnc/.mpf/.spf/.iso; other names by content)."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
 ):
-    """Motion targets of a program, resolved to the base frame."""
+    """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
     from .frames import matrix_to_quat_wxyz
     from .programs import parse_program
 
@@ -932,15 +932,15 @@ def inspect_cmd(
 @handles_errors
 def convert_cmd(
     program: Path = typer.Argument(..., help="Program in any supported dialect."),
-    to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program."),
+    to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program (gcode: a five-axis G-code program, with --machine and --rtcp)."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
-    dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input (default: from the extension or content)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input: rapid, krl or gcode (default: from the extension or content)."),
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
-    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), written as the robot's base / work object. Repeatable."),
-    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length), written as the robot's tool. Repeatable."),
+    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z[,A,B,C]: a frame the program uses but does not define (G54, BASE_DATA[1]): the robot base (five-axis: the machine) -> the frame (mm; KUKA A B C, deg), written as the robot's base / work object. Repeatable."),
+    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length): the flange -> the TCP (mm; KUKA A B C, deg), written as the robot's tool. Repeatable."),
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
