@@ -124,6 +124,18 @@ def test_tapping_outside_g17_is_refused(name, tmp_path):
 
 
 REFUSED = {
+    # interp_check.cc: "Q word with no G5, G10, G64, G73, G76, G83, ... that uses it"; a Fanuc repeat count K
+    "q_with_g81": ("G21 G90 F100\nG0 X0 Y0 Z5\nG81 X1 Y1 Z-3 R1 Q1\nM2\n", r":3:1: Q word with G81"),
+    "fanuc_k_repeats": ("G21 G90 F100\nG0 X0 Y0 Z5\nG81 X1 Y1 Z-3 R1 K3\nM2\n", r":3:1: K word with G81"),
+    "p_with_g83": ("G21 G90 F100\nG0 X0 Y0 Z5\nG83 X1 Y1 Z-3 R1 Q1 P1\nM2\n", r":3:1: P word with G83"),
+    "i_with_g85_held": ("G21 G90 F100\nG0 X0 Y0 Z5\nG85 X1 Y1 Z-3 R1\nX2 I1\nM2\n", r":4:1: I word with G85"),
+    # interp_cycles.cc: G84 taps with M3, G74 with M4, G86 G87 G88 need the spindle turning
+    "g84_m4": ("G21 G90 F100\nM4 S100\nG0 X0 Y0 Z5\nG84 X1 Y1 Z-3 R1\nM2\n", r":4:1: G84 with the spindle counterclockwise"),
+    "g74_stopped": ("G21 G90 F100\nG0 X0 Y0 Z5\nG74 X1 Y1 Z-3 R1\nM2\n", r":3:1: G74 with the spindle stopped"),
+    "g86_stopped": ("G21 G90 F100\nM3 S100\nG0 X0 Y0 Z5\nM5\nG86 X1 Y1 Z-3 R1 P1\nM2\n", r":5:1: G86 with the spindle stopped"),
+    "g87_stopped_in_a_run": ("G21 G90 F100\nM3 S100\nG0 X0 Y0 Z5\nG87 X1 Y1 Z-3 R1 I1 J0 K-1\nX2 M5\nM2\n", r":5:1: G87 with the spindle stopped"),
+    "g84_run_then_m4": ("G21 G90 F100\nM3 S100\nG0 X0 Y0 Z5\nG84 X1 Y1 Z-3 R1\nX2\nX3\nX4 M4\nM2\n", r":7:1: G84 with the spindle counterclockwise"),
+    "g88_run_then_stopped": ("G21 G90 F100\nM3 S100\nG0 X0 Y0 Z5\nG88 X1 Y1 Z-3 R1 P1\nX2\nX3 M5\nM2\n", r":6:1: G88 with the spindle stopped"),
     # rs274: "Cannot use polar coordinate except in G17 plane"
     "polar_cycle_g18": ("G21 G18 G90 F100\nG0 X10 Y5 Z0\nG91 G99 G81 R1 Y-3 ^90 L2\nM2\n", r":3:1: polar words \(@ \^\) outside the G17 plane"),
     "polar_move_g19": ("G21 G19 G90 F100\nG0 X10 Y5 Z0\nG1 @5 ^90\nM2\n", r":3:1: polar words \(@ \^\) outside the G17 plane"),

@@ -26,6 +26,9 @@ PERPENDICULAR = {17.0: "Z", 18.0: "Y", 19.0: "X"}
 # instead; 2.9 refuses a D word there, and so does ``expand``: the two controllers disagree.
 PECK_CLEARANCE_MM = 0.254
 CYCLES = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 87.0, 88.0, 89.0)
+# The cycles that use each of these words (rs274ngc's interp_check.cc; checked with rs274):
+# any other cycle refuses it, e.g. a Fanuc repeat count `G81 ... K3` (LinuxCNC repeats with L).
+WORD_USERS = {"P": (74.0, 82.0, 84.0, 86.0, 88.0, 89.0), "Q": (73.0, 83.0), "I": (87.0,), "J": (87.0,), "K": (87.0,)}
 
 
 class CycleError(ValueError):
@@ -128,6 +131,9 @@ def _refuse(block: Block) -> None:
     if "D" in block.words:
         raise CycleError(f"D word in G{block.code:g}: LinuxCNC 2.9's rs274 refuses it (\"D word with no G41, G41.1, G42, G42.1, G71, G71.1, "
                          f"G71.2 or G96 to use it\"), 2.10 takes it as the peck clearance: which one runs the program is not known")
+    for letter, users in WORD_USERS.items():  # interp_check.cc: a word no code of the block uses is an error
+        if letter in block.words and block.code not in users:
+            raise CycleError(f"{letter} word with G{block.code:g}: LinuxCNC refuses it (no G code of the block uses it)")
     if "L" in block.words and block.code == 74.0:  # interp_check.cc lets L through with G73 and G81-G89 only
         raise CycleError("L word with G74: LinuxCNC refuses it (\"L word with no G10, cutter compensation, canned cycle, ...\")")
     if block.code in (74.0, 84.0) and block.plane != 17.0:
@@ -136,6 +142,17 @@ def _refuse(block: Block) -> None:
         # axis (G19 G84 Y5 Z5 X-2 feeds to X5 Y-2 Z5). Refused: neither the moves written nor those are safe to post.
         raise CycleError(f"G{block.code:g} in the G{block.plane:g} plane: LinuxCNC's rs274 feeds the tap to a point off the hole's axis "
                          f"(interp_cycles.cc permutes the axes twice); tap in G17 or write the moves out")
+
+
+def check_spindle(code: float, turning: float) -> None:
+    """The spindle a cycle needs (interp_cycles.cc): G84 taps with it clockwise (M3), G74
+    counterclockwise (M4); G86, G87 and G88 stop and restart it, so it must turn."""
+    if code == 84.0 and turning != 3.0:
+        raise CycleError(f"G84 with the spindle {'counterclockwise (M4)' if turning == 4.0 else 'stopped'}: LinuxCNC refuses it (G84 taps with M3)")
+    if code == 74.0 and turning != 4.0:
+        raise CycleError(f"G74 with the spindle {'clockwise (M3)' if turning == 3.0 else 'stopped'}: LinuxCNC refuses it (G74 taps with M4)")
+    if code in (86.0, 87.0, 88.0) and turning not in (3.0, 4.0):
+        raise CycleError(f"G{code:g} with the spindle stopped: LinuxCNC refuses it (\"Spindle not turning in G{code:g}\")")
 
 
 REPEATABLE = (73.0, 74.0, 81.0, 82.0, 83.0, 84.0, 85.0, 86.0, 89.0)  # every hole the same moves over its X Y

@@ -366,6 +366,7 @@ class _Run:
 
     def _cycle(self, i: int, mode: float, words: dict) -> None:
         cycle_words = {**words, **({"R": words["R"] * self.modal["scale"][i]} if "R" in words else {})}
+        canned.check_spindle(mode, self.modal["turning"][i])
         block = canned.Block(mode, cycle_words, self.modal["plane"][i], self.modal["dist"][i] == 91.0, self.modal["retract"][i] == 99.0)
         moves, self.cur = canned.expand(block, self.cycle, self.cur)  # first: it refuses a plane it cannot read
         if self.modal["dist"][i] != 91.0:
@@ -407,14 +408,15 @@ def simple_holes(t: dict, letters: str, modal: dict) -> np.ndarray:
 
     return (xyz.any(axis=1) & ~xyz[np.arange(len(plane)), drilling_axis] & ~others & np.isin(mode, canned.REPEATABLE)
             & ~np.asarray(modal["sets_mode"]) & np.isnan(t["setup"]) & t["ok"] & ~t["g53"] & ~t["nonmotion"] & (np.asarray(modal["dist"]) == 90.0)
-            & same("wcs") & same("retract") & same("scale") & same("plane") & same("mode"))
+            & same("wcs") & same("retract") & same("scale") & same("plane") & same("mode") & same("turning"))
 
 
 def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True) -> Moves:
     """Every motion target of the block table ``t`` (program order). ``modal`` holds the
     forward-filled modal columns: scale (mm per program unit), dist, plane, wcs, retract,
     motion (the G0-G3 in force), mode (the motion or cycle code in force) and sets_mode
-    (the block names one), and circle (a G2/G3 block that is a full circle: no end-point word)."""
+    (the block names one), circle (a G2/G3 block that is a full circle: no end-point word)
+    and turning (the spindle: M3, M4 or M5 in force)."""
     state = _Run(t, letters, modal)
     n = len(t["offset"])
     simple = simple_holes(t, letters, modal) if fast else np.zeros(n, bool)

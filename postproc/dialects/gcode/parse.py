@@ -48,7 +48,7 @@ _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 
 # Modal G codes that set one state column: G code -> (column, value).
 # The modal-state columns of the block table: NaN where a block does not set them, then
 # forward-filled (one list, so a new column reaches the bulk and the grammar tables alike).
-_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle")
+_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle", "turning")
 _STATE_OF_G = {
     **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
     80.0: ("canned", 0.0),
@@ -344,6 +344,8 @@ class GcodeParser:
             state["h"] = value
         elif letter == "S":
             state["spindle"] = value if known else -np.inf  # unknown from here on, never the old S
+        elif letter == "M" and value in (3.0, 4.0, 5.0):
+            state["turning"] = value  # spindle clockwise / counterclockwise / stopped: G74 G84 G86 G87 G88 need it turning
         elif letter in _MORE:
             more[_MORE[letter]] = value
         elif letter in _AX:
@@ -512,7 +514,7 @@ class GcodeParser:
         plane = _ffill(t["plane"], 17.0)
         modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": plane.tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
                  "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist(),
-                 "circle": self._block_circles(t, mode).tolist()}
+                 "circle": self._block_circles(t, mode).tolist(), "turning": _ffill(t["turning"], 5.0).tolist()}
         try:
             moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
