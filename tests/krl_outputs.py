@@ -6,7 +6,8 @@ writes, for the programs of tests/corpus (KRL, RAPID, G-code) and examples/data:
   emit/<name>            a KRL program's files re-emitted unchanged (.src, .dat, $config.dat)
   moved/<name>           the same with every Cartesian target moved (the splice a compensation writes,
                          numbers changed and missing components inserted)
-  convert/<stem>.src/.dat  `convert --to krl` of every program (the new-program writer)
+  convert/<stem>.src/.dat  `convert --to krl` of every program (the new-program writer); the first
+                         one also with `--tool-load` (convert/<stem>__tool_load.src: $LOAD)
   place/<name>           `place -o`: a program's one $BASE literal replaced
 Inputs a step refuses (EmitError, InputError: nothing is written by postproc either) are skipped.
 This script only writes KRL texts; tests/test_antlr_krl.py compares their SHA-256 with the
@@ -24,6 +25,15 @@ REPO = Path(__file__).resolve().parents[1]
 INPUTS = sorted(p for folder in ("tests/corpus/krl", "tests/corpus/rapid", "tests/corpus/gcode", "examples/data")
                 for p in (REPO / folder).iterdir() if p.is_file() and p.suffix.lower() not in (".dat", ".md"))
 SHIFT = np.array([0.1234, -0.0567, 0.0089])  # mm: every number moves, some by a carry
+
+
+def _tool_load():
+    from postproc.emit.tool_load import ToolLoad
+
+    return ToolLoad(12.5, (1.0, -2.0, 80.0), (0.05, 0.04, 0.01))
+
+
+TOOL_LOAD = _tool_load()
 
 
 def _out_name(path: Path, name: str) -> str:
@@ -115,6 +125,9 @@ def krl_outputs() -> dict[str, str]:
             continue
         stem = _out_name(path, path.stem)
         out[f"convert/{stem}.src"], out[f"convert/{stem}.dat"] = src, dat
+        if not any(name.endswith("__tool_load.src") for name in out):  # `convert --tool-load` ($LOAD), once
+            src, dat = write_program(_undefined_as_identity(tp), "krl", path.stem, tool_load=TOOL_LOAD)
+            out[f"convert/{stem}__tool_load.src"], out[f"convert/{stem}__tool_load.dat"] = src, dat
     return out
 
 
