@@ -38,7 +38,7 @@ PLANES = {
 }
 # cycle: words it needs (G87: the offset words, then the top of the bore; plane dependent)
 EXTRA = {73: "Q1.5", 74: "P0.5", 81: "", 82: "P0.5", 83: "Q1.5", 84: "P0.5", 85: "", 86: "P0.5", 88: "P0.5", 89: "P0.5"}
-G87_ABS = {17: "I1 J-1 K0.5", 18: "I-1 J0.5 K1", 19: "I0.5 J1 K-1"}  # top at 0.5 above the bottom -2 ... absolute
+G87_ABS = {17: "I1 J-1 K0.5", 18: "I-1 J0.5 K1", 19: "I0.5 J1 K-1"}  # the top of the bore at 0.5 (absolute; the bottom is -2)
 G87_INC = {17: "I1 J-1 K2", 18: "I-1 J2 K1", 19: "I2 J1 K-1"}  # top 2 above the bottom
 
 
@@ -144,9 +144,9 @@ REFUSED = {
     # a cycle in the UV plane drills along W: rs274 refuses its X Y Z words, postproc has no W
     "uv_cycle": ("G21 G17.1 G90 F100\nG0 X0 Y0 Z5\nG81 X1 Y1 Z-3 R1\nM2\n", r":3:1: a canned cycle in the G17\.1 plane"),
     "uw_cycle": ("G21 G18.1 G90 F100\nG0 X0 Y0 Z5\nG81 X1 Y1 Z-3 R1\nM2\n", r":3:1: a canned cycle in the G18\.1 plane"),
-    # rs274: "Cannot do an arc in planes G17.1, G18.1, or G19.1"
     # interp_check.cc admits L with G73 and G81-G89, not G74
     "g74_l": ("G21 G90 F100\nM4 S100\nG0 X0 Y0 Z5\nG74 X1 Y1 Z-3 R1 L2\nM2\n", r":4:1: L word with G74"),
+    # rs274: "Cannot do an arc in planes G17.1, G18.1, or G19.1"
     "vw_arc": ("G21 G19.1 G90 F100\nG0 X0 Y0 Z0\nG2 Y2 Z0 R1\nM2\n", r":3:1: an arc in the G17\.1, G18\.1 or G19\.1 plane"),
 }
 
