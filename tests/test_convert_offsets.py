@@ -151,7 +151,9 @@ HEAD = "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\n"
     (HEAD + "G10 L2 P2 X0\nG56 G0 X1 Y0 Z10\n", [], ":4:9:", r"frame G56, which"),
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\n", [], ":4:9:", r"tool H1, which.*--tool H1="),
     (HEAD + "G0 X0 Y0 Z50\nT1 M6\nG43 Z40\n", [], ":5:6:", r"tool G43, which"),
-    (HEAD + "G0 X0 Y0 Z50\nG43.1 Z2.5\nG1 X5 Z0\n", [], ":5:5:", r"tool G43.1@line4, which"),
+    # G43.1 Z alone is followed (the length is in the block); with an X word the tool is off the spindle axis: not followed
+    (HEAD + "G0 X0 Y0 Z50\nG43.1 X1 Z2.5\nG1 X5 Z0\n", [], ":5:5:", r"tool G43.1@line4, which"),
+    (HEAD + "G0 X0 Y0 Z50\nG43.2 Z2.5\n", [], ":4:1:", r"G43.2 needs an H word"),  # as rs274 refuses it
     (HEAD + "G0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1], ":5:5:", r"position depends"),
     ("G21 G90\nG0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1, "--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"position depends"),  # vectorised reader
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\nG49\nG1 X5\n", ["--tool", TOOL_H1], ":6:5:", r"position depends"),

@@ -45,6 +45,8 @@ def needs_interpreter(t: dict) -> bool:
     (t["more"] holds the words L P Q @ ^)."""
     if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any():
         return True
+    if np.isin(t["tlo"], (43.1, 43.2)).any():  # lengths set in the block: the current Z re-read by the ToolTable
+        return True
     if np.isin(t["canned"], canned.CYCLES).any():
         return True
     return bool((~np.isnan(t["more"][:, 3:5])).any())
@@ -60,12 +62,13 @@ class Moves:
     row: np.ndarray
     motion: np.ndarray
     position: np.ndarray
-    abc: np.ndarray
+    abc: np.ndarray  # programmed A B C (deg), as rs274's canonical calls print them
+    rotary: np.ndarray  # A B C offsets in force (G5x + G92, deg): machine angle = abc + rotary (offsets.py)
     frame: np.ndarray  # index into frames, -1: the machine frame (G53)
     frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
     exact: np.ndarray  # False: an axis of the target keeps a value re-read through a work offset the program does not set
-    latched: dict  # row of a G43 H block -> the tool length (mm) it applied when the program set it (G10 L1 / L10), NaN unknown
+    latched: dict  # row of a G43 H / G43.1 / G43.2 block -> the tool length (mm) it applied where the program gives it (G10 L1 / L10, G43.1 Z), NaN unknown
 
 
 class ToolTable:
@@ -80,17 +83,32 @@ class ToolTable:
         self.in_force = 0.0  # the length applied now: 0 under G49 (the state at start), NaN when it is not known
         self.latched: dict[int, float] = {}  # block row of each G43 H -> the length it applied
 
-    def g43(self, row: int, code: float, h: float, known: bool) -> float:
-        """The change of the length in force (mm; NaN where not known) a G43 / G49 makes."""
+    def g43(self, row: int, code: float, h: float, known: bool, words: dict | None = None) -> float:
+        """The change of the length in force (mm; NaN where not known) a G43 / G43.1 / G43.2 /
+        G49 makes (LinuxCNC manual "G43.1 Dynamic Tool Length Offset", "G43.2 Apply additional
+        Tool Length Offset"): G43.1 Z.. replaces the offset by its words (an axis left out: 0),
+        G43.2 H.. adds entry H's length. G43.1 words off the spindle axis (X Y A B C) are not
+        followed (the length becomes unknown); G43.2 without H, or with H and axis words, is
+        refused as LinuxCNC 2.9's rs274 refuses it."""
         if math.isnan(code):
             return 0.0
-        before = self.in_force
+        before, words = self.in_force, words or {}
         if code == 49.0:
             self.in_force = 0.0
         elif code == 43.0 and not math.isnan(h) and known:
             self.in_force = self.entry.get(int(h), math.nan)
             self.latched[row] = self.in_force
-        else:  # G43 without H (the loaded tool), G43.1 / G43.2 / G43.4 / G43.5: not followed here
+        elif code == 43.1:
+            off_axis = any(words.get(a, 0.0) != 0.0 for a in "XYABC")
+            self.in_force = words.get("Z", 0.0) if known and not off_axis else math.nan
+            self.latched[row] = self.in_force
+        elif code == 43.2:
+            if math.isnan(h) or any(a in words for a in "XYZABC"):
+                raise CycleError("G43.2 needs an H word and no axis words (LinuxCNC 2.9's rs274: 'Requested tool -1 not found', "
+                                 "'Can not have both H and axis words')")
+            self.in_force = self.in_force + self.entry.get(int(h), math.nan) if known and h == int(h) else math.nan
+            self.latched[row] = self.in_force
+        else:  # G43 without H (the loaded tool), G43.4 / G43.5: not followed here
             self.in_force = math.nan
         return self.in_force - before if not (before == self.in_force) else 0.0
 
@@ -146,6 +164,7 @@ class _Run:
         self.flush()
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
+                            "rotary": np.tile(np.array(self.offsets.rotary(), float), (n, 1)),
                             "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
 
     def holes(self, i: int, j: int) -> None:
@@ -179,21 +198,22 @@ class _Run:
         """One target of block i, in the frame in force (the machine frame for G53)."""
         frame = -1 if machine_frame else self.frame_id()
         exact = self._all_exact() if exact is None else exact
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated),
-                           ("exact", exact)):
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self.offsets.rotary()),
+                           ("frame", frame), ("generated", generated), ("exact", exact)):
             self.out[key].append(value)
 
     def block(self, i: int, line: int) -> None:
         m, t = self.modal, self.t
         self.last_was_cycle = False
         words = self.words(i)
-        before = self.offsets.index
+        before, angles_at = self.offsets.index, self.offsets.rotary()
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
+        self._keep_machine_angles(angles_at)
         if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
-        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
+        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known, words)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
         if change:  # rs274ngc re-reads the current point for the new length: Z = the old Z - the change
             if math.isnan(change):
                 self.exact[2] = False  # by a length the program does not give: the stale Z stands in, flagged
@@ -203,7 +223,9 @@ class _Run:
             self._to_unknown_end(i, setup, words, known)
             return
         if setup in SETUP_CODES:
+            angles_at = self.offsets.rotary()
             self._setup(setup, words, known, line)
+            self._keep_machine_angles(angles_at)
         mode = m["mode"][i]
         # A G2/G3 with centre words and no end point is a full circle (modal["circle"]): it ends where it starts.
         moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
@@ -232,7 +254,8 @@ class _Run:
             if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
                 raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
             program, machine = self.offsets.g53(words, self.cur)
-            self._rotary(words, absolute=True)
+            # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
+            self._rotary({a: words[a] - o for a, o in zip("ABC", self.offsets.rotary()) if a in words}, absolute=True)
             self.cur = program
             placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
             left_out = [a not in words for a in "XYZ"]
@@ -280,18 +303,22 @@ class _Run:
             if not (0 <= p <= 9 and p == int(p)):
                 raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
             self._known_after_g10(int(lcode), int(p) or self.offsets.index, given)
+            self.offsets.g10_rotary(int(lcode), int(p), words, self.abc)
             self.cur = self.offsets.g10(int(lcode), int(p), {k: v for k, v in words.items() if k in "XYZR"}, self.cur, line)
             self._reread()
             if not known:
                 system = int(p) or self.offsets.index
                 self.offsets.origin[system] = [math.nan] * 3
+                self.offsets.origin_abc[system] = [math.nan] * 3  # its angles too: a rotary word may be the unknown one
                 self.cur = [math.nan] * 3
             return
         self._exact_after_g92(code, given)
         self._reread()
+        self.offsets.g92_rotary(code, words, self.abc)
         self.cur = self.offsets.g92_family(code, words, self.cur, line)
         if not known:
             self.offsets.g92, self.offsets.g92_params, self.cur = [math.nan] * 3, [math.nan] * 3, [math.nan] * 3
+            self.offsets.g92_abc, self.offsets.g92_abc_params = [math.nan] * 3, [math.nan] * 3
 
     def _known_after_g10(self, lcode: int, system: int, given: list) -> None:
         """G10 L2 sets the origin from its words (known once every axis is given); L20 from the
@@ -357,6 +384,14 @@ class _Run:
         self._rotary(words, absolute=not incremental)
         return end
 
+    def _keep_machine_angles(self, before: list) -> None:
+        """A change of the A B C offsets does not move the machine: the current programmed
+        angle becomes the machine angle minus the new offsets (rs274ngc convert_setup,
+        convert_axis_offsets, convert_coordinate_system)."""
+        after = self.offsets.rotary()
+        if after != before:
+            self.abc = [a + b - n for a, b, n in zip(self.abc, before, after)]
+
     def _rotary(self, words: dict, absolute: bool) -> None:
         for k, a in enumerate("ABC"):
             if a in words:
@@ -373,11 +408,11 @@ class _Run:
             self.emit(i, kind, point, True)
 
 
-_FIELDS = ("row", "motion", "position", "abc", "frame", "generated", "exact")
+_FIELDS = ("row", "motion", "position", "abc", "rotary", "frame", "generated", "exact")
 
 
 def _chunk(**lists) -> dict:
-    return {k: np.array(v, dtype=float if k in ("position", "abc") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
+    return {k: np.array(v, dtype=float if k in ("position", "abc", "rotary") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
 
 
 def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
@@ -430,9 +465,9 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
             state.holes(i, end)
             i = end
     state.flush()
-    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
+    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc", "rotary") else 0) for k in _FIELDS}
     return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
-                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
+                 abc=parts["abc"].reshape(-1, 3).astype(float), rotary=parts["rotary"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
                  exact=parts["exact"].astype(bool), latched=dict(state.tools.latched))
 
 

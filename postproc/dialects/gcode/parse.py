@@ -558,7 +558,8 @@ class GcodeParser:
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
                                **self._feed_columns(t, rows, moves.motion.astype(float)),
-                               **({"arc": arc} if arc is not None else {}))
+                               **({"arc": arc} if arc is not None else {}),
+                               **({"rotary_offset": moves.rotary} if (moves.rotary != 0).any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
 
@@ -660,11 +661,13 @@ class GcodeParser:
             tool_idx[by_h & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
         for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h & ~from_program]):
             tool_idx[(code == c) & ~by_h & ~from_program] = self.builder.tool_index(f"G{c:g}", None)
-        if dynamic.any():
+        if dynamic.any():  # the length each G43.1 / G43.2 block set (interp.ToolTable.g43), known where the program gives it
             set_at = np.where(np.isin(t["tlo"], (43.1, 43.2)), np.arange(len(t["tlo"])), -1)
             np.maximum.accumulate(set_at, out=set_at)
             for b in np.unique(set_at[rows][dynamic]):
-                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", None)
+                name, length = f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", (latched or {}).get(int(b), np.nan)
+                tool = None if np.isnan(length) else make_transform(np.eye(3), np.array([0.0, 0.0, length]))
+                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(name + ("" if tool is None else f" (length {length:.9g})"), tool)
         if ((code != 49.0) & ~from_program).any():
             self.notes.append("tool lengths (G43 H, G43 without H, G43.1/G43.2) are in the machine's tool table or set in a block: "
                               "flange poses need them (--tool NAME=...); TCP positions do not")
