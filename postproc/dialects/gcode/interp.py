@@ -80,37 +80,54 @@ class ToolTable:
 
     def __init__(self):
         self.entry: dict[int, float] = {}  # tool number -> length set in the program (NaN: set from what the text does not determine)
+        self.entry_off_axis: dict[int, bool] = {}  # tool number -> its entry was set with X Y A B C words too (their values not kept)
         self.in_force = 0.0  # the length applied now: 0 under G49 (the state at start), NaN when it is not known
-        self.latched: dict[int, float] = {}  # block row of each G43 H -> the length it applied
+        # X Y (mm) and A B C (deg) of the offset in force: set by G43.1 / G43.2 only; the controller's tool table entries are
+        # taken as lengths along the spindle (Z), as every tool length here is
+        self.xy, self.abc = [0.0, 0.0], [0.0, 0.0, 0.0]
+        self.latched: dict[int, float] = {}  # block row of each G43 H / G43.1 / G43.2 -> the length it applied (NaN: off the spindle axis)
 
-    def g43(self, row: int, code: float, h: float, known: bool, words: dict | None = None) -> float:
-        """The change of the length in force (mm; NaN where not known) a G43 / G43.1 / G43.2 /
-        G49 makes (LinuxCNC manual "G43.1 Dynamic Tool Length Offset", "G43.2 Apply additional
-        Tool Length Offset"): G43.1 Z.. replaces the offset by its words (an axis left out: 0),
-        G43.2 H.. adds entry H's length. G43.1 words off the spindle axis (X Y A B C) are not
-        followed (the length becomes unknown); G43.2 without H, or with H and axis words, is
-        refused as LinuxCNC 2.9's rs274 refuses it."""
+    def g43(self, row: int, code: float, h: float, known: bool, words: dict | None = None) -> list[float]:
+        """The change of the X Y Z offset in force (mm; NaN where not known) a G43 / G43.1 /
+        G43.2 / G49 makes, as rs274 (LinuxCNC 2.9) does it, checked in tests/test_fivex_offsets.py:
+        G43 H.. and G49 replace the whole offset; G43.1 replaces the axes it names (X Y Z A B C)
+        and keeps the others; G43.2 H.. adds tool H's entry. G43.2 without H, or with H and
+        axis words, is refused as rs274 refuses it. The length latched for the block is NaN
+        where the offset has an X or Y part (the tool is not along the spindle)."""
         if math.isnan(code):
-            return 0.0
-        before, words = self.in_force, words or {}
+            return [0.0, 0.0, 0.0]
+        before, words = [*self.xy, self.in_force], words or {}
         if code == 49.0:
-            self.in_force = 0.0
+            self.in_force, self.xy, self.abc = 0.0, [0.0, 0.0], [0.0, 0.0, 0.0]
         elif code == 43.0 and not math.isnan(h) and known:
-            self.in_force = self.entry.get(int(h), math.nan)
-            self.latched[row] = self.in_force
+            self.in_force, self.xy, self.abc = self.entry.get(int(h), math.nan), *self._entry_off_axis(int(h))
         elif code == 43.1:
-            off_axis = any(words.get(a, 0.0) != 0.0 for a in "XYABC")
-            self.in_force = words.get("Z", 0.0) if known and not off_axis else math.nan
-            self.latched[row] = self.in_force
+            if known:
+                self.in_force = words.get("Z", self.in_force)
+                self.xy = [words.get(a, v) for a, v in zip("XY", self.xy)]
+                self.abc = [words.get(a, v) for a, v in zip("ABC", self.abc)]
+            else:
+                self.in_force, self.xy, self.abc = math.nan, [math.nan] * 2, [math.nan] * 3
         elif code == 43.2:
             if math.isnan(h) or any(a in words for a in "XYZABC"):
                 raise CycleError("G43.2 needs an H word and no axis words (LinuxCNC 2.9's rs274: 'Requested tool -1 not found', "
                                  "'Can not have both H and axis words')")
-            self.in_force = self.in_force + self.entry.get(int(h), math.nan) if known and h == int(h) else math.nan
-            self.latched[row] = self.in_force
+            tool = int(h) if known and h == int(h) else -1
+            xy, abc = self._entry_off_axis(tool) if tool >= 0 else ([math.nan] * 2, [math.nan] * 3)
+            self.in_force += self.entry.get(tool, math.nan)
+            self.xy, self.abc = [a + b for a, b in zip(self.xy, xy)], [a + b for a, b in zip(self.abc, abc)]
         else:  # G43 without H (the loaded tool), G43.4 / G43.5: not followed here
             self.in_force = math.nan
-        return self.in_force - before if not (before == self.in_force) else 0.0
+            if code == 43.0:  # the whole offset replaced by a controller's entry: a length (see above)
+                self.xy, self.abc = [0.0, 0.0], [0.0, 0.0, 0.0]
+        if code in (43.0, 43.1, 43.2) and not math.isnan(h if code != 43.1 else 0.0):
+            self.latched[row] = self.in_force if self.xy == [0.0, 0.0] else math.nan
+        return [a - b if a != b else 0.0 for a, b in zip([*self.xy, self.in_force], before)]
+
+    def _entry_off_axis(self, tool: int) -> tuple[list, list]:
+        """X Y and A B C of a tool table entry: unknown where the program set them, else 0 (a length)."""
+        fill = math.nan if self.entry_off_axis.get(tool, False) else 0.0
+        return [fill] * 2, [fill] * 3
 
     def g10(self, lcode: int, words: dict, known: bool, current_z: float) -> None:
         """G10 L1 P Z (the length is Z), L10 P Z (the length that makes the current point's Z
@@ -125,6 +142,7 @@ class ToolTable:
         others = [a for a in "XYABCUVW" if a in words]
         if "Z" not in words and not others:
             return  # the entry's length is left as it was (R, I, J, Q: radius and lathe orientation)
+        self.entry_off_axis[tool] = bool(others) or not known
         if not known or others or lcode == 11:
             self.entry[tool] = math.nan
         elif lcode == 1:
@@ -164,7 +182,7 @@ class _Run:
         self.flush()
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
-                            "rotary": np.tile(np.array(self.offsets.rotary(), float), (n, 1)),
+                            "rotary": np.tile(np.array(self._rotary_total(), float), (n, 1)),
                             "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
 
     def holes(self, i: int, j: int) -> None:
@@ -198,7 +216,7 @@ class _Run:
         """One target of block i, in the frame in force (the machine frame for G53)."""
         frame = -1 if machine_frame else self.frame_id()
         exact = self._all_exact() if exact is None else exact
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self.offsets.rotary()),
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self._rotary_total()),
                            ("frame", frame), ("generated", generated), ("exact", exact)):
             self.out[key].append(value)
 
@@ -206,24 +224,26 @@ class _Run:
         m, t = self.modal, self.t
         self.last_was_cycle = False
         words = self.words(i)
-        before, angles_at = self.offsets.index, self.offsets.rotary()
+        before, angles_at = self.offsets.index, self._rotary_total()
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
         self._keep_machine_angles(angles_at)
         if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
+        angles_at = self._rotary_total()
         change = self.tools.g43(i, t["tlo"][i], t["h"][i], known, words)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
-        if change:  # rs274ngc re-reads the current point for the new length: Z = the old Z - the change
-            if math.isnan(change):
-                self.exact[2] = False  # by a length the program does not give: the stale Z stands in, flagged
-            else:
-                self.cur[2] -= change
+        self._keep_machine_angles(angles_at)
+        for k, moved in enumerate(change):  # rs274ngc re-reads the current point for the new offset: X Y Z = the old ones - the change
+            if math.isnan(moved):
+                self.exact[k] = False  # by a length the program does not give: the stale value stands in, flagged
+            elif moved:
+                self.cur[k] -= moved
         if setup in UNKNOWN_END_CODES:
             self._to_unknown_end(i, setup, words, known)
             return
         if setup in SETUP_CODES:
-            angles_at = self.offsets.rotary()
+            angles_at = self._rotary_total()
             self._setup(setup, words, known, line)
             self._keep_machine_angles(angles_at)
         mode = m["mode"][i]
@@ -254,8 +274,11 @@ class _Run:
             if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
                 raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
             program, machine = self.offsets.g53(words, self.cur)
+            tool = [*self.tools.xy, self.tools.in_force]
+            if any(tool[k] != 0.0 for k, a in enumerate("XYZ") if a in words):  # the words place the spindle: the tip is the tool offset off
+                program, _ = self.offsets.g53({**words, **{a: words[a] - tool[k] for k, a in enumerate("XYZ") if a in words}}, self.cur)
             # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
-            self._rotary({a: words[a] - o for a, o in zip("ABC", self.offsets.rotary()) if a in words}, absolute=True)
+            self._rotary({a: words[a] - o for a, o in zip("ABC", self._rotary_total()) if a in words}, absolute=True)
             self.cur = program
             placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
             left_out = [a not in words for a in "XYZ"]
@@ -384,11 +407,15 @@ class _Run:
         self._rotary(words, absolute=not incremental)
         return end
 
+    def _rotary_total(self) -> list[float]:
+        """A B C offsets in force (deg): G5x + G92 + the tool offset's (G43.1 A B C): machine angle = programmed + these."""
+        return [w + t for w, t in zip(self.offsets.rotary(), self.tools.abc)]
+
     def _keep_machine_angles(self, before: list) -> None:
         """A change of the A B C offsets does not move the machine: the current programmed
         angle becomes the machine angle minus the new offsets (rs274ngc convert_setup,
-        convert_axis_offsets, convert_coordinate_system)."""
-        after = self.offsets.rotary()
+        convert_axis_offsets, convert_coordinate_system, convert_tool_length_offset)."""
+        after = self._rotary_total()
         if after != before:
             self.abc = [a + b - n for a, b, n in zip(self.abc, before, after)]
 
