@@ -197,6 +197,12 @@ PROGRAMS = {
                          [[0, 30, -10], [10, 80, -10], [10, 20 + _rx(70, -20, -60)[0], 10 + _rx(70, -20, -60)[1]],
                           [0, 20 + _rx(70, -20, -10)[0], 10 + _rx(70, -20, -10)[1]]],
                          [[0, -1, 0], [0, -1, 0], [0, -S70, C70], [0, -S70, C70]]),
+    # the rest of the offsets' rules, machine axes against rs274 only: G52 A, G91 increments after an offset change
+    # (the machine moves by the increment), G92 C / G92.2 / G92.3, G43.1 C (the tool's C offset), G10 L2 P0 (the active
+    # system), G49 with G92.1
+    "rotary_g52_g91": ("G21 G90 G94\nG10 L2 P1 X0 Y0 Z0 A5 C10\nG54 G0 X0 Y0 Z10 A0 C0\nG52 A3\nG91 G1 A2 F100\nG90 G1 X1\nG92 C20\n"
+                       "G92.2\nG1 X2\nG92.3\nG1 X3 C5\nG43.1 C-4\nG91 G1 C1\nG90 G10 L2 P0 A-5\nG1 X4\nG49 G92.1\nG1 X5\nG1 A0 C0\nM2\n",
+                       None, None, None, None),
     # G53 Z0 under G43.1 Z50 in G54 Z5: the words place the spindle; the current tip Z reads 0 - 5 - 50 (rs274)
     "g53_under_g43_1": ("G21 G90 G94\nG10 L2 P1 X0 Y0 Z5\nG54 G0 X0 Y0 Z10\nG43.1 Z50\nG53 G0 Z0\nG1 X5 F100\nM2\n", None, None, None, None),
 }

@@ -12,10 +12,11 @@ file:line:column: reading it as the identity would put the part somewhere else r
 the rotary axes and every machine-axis number would be wrong.
 
 A G-code work offset moves X Y Z and turns about Z only (G10 L2 R); one given with a tilt is
-refused. Its rotary-axis components (G10 L2 / L20 P.. A B C, G92 / G52 A B C) are followed as
-LinuxCNC applies them: the machine's rotary axis turns to the programmed angle + the G92 +
-the G5x A B C (src/emc/task/emccanon.cc rotate_and_offset_pos: ``a += g92Offset.a ... a +=
-g5xOffset.a``; the interpreter keeps the programmed angle, dialects/gcode/offsets.py). This is
+refused. Its rotary-axis components (G10 L2 / L20 P.. A B C, G92 / G52 A B C, and a G43.1
+A B C tool offset) are followed as LinuxCNC applies them: the machine's rotary axis turns to
+the programmed angle + the G92 + the G5x + the tool offset's A B C (src/emc/task/emccanon.cc
+rotate_and_offset_pos: ``a += g92Offset.a ... a += g5xOffset.a ... a += toolOffset.a``; the
+interpreter keeps the programmed angle, dialects/gcode/offsets.py, interp.py). This is
 done before the kinematics, in both input modes: with RTCP off the kinematics get the
 machine axes; with RTCP on (LinuxCNC TCP kinematics, trtfuncs.c / 5axiskins.c) the
 kinematics get the offset world pose, whose X Y Z is the tool tip in the workpiece frame and

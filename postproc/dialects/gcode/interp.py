@@ -63,7 +63,7 @@ class Moves:
     motion: np.ndarray
     position: np.ndarray
     abc: np.ndarray  # programmed A B C (deg), as rs274's canonical calls print them
-    rotary: np.ndarray  # A B C offsets in force (G5x + G92, deg): machine angle = abc + rotary (offsets.py)
+    rotary: np.ndarray  # A B C offsets in force (G5x + G92 + the tool offset's, deg): machine angle = abc + rotary (offsets.py)
     frame: np.ndarray  # index into frames, -1: the machine frame (G53)
     frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
