@@ -167,6 +167,7 @@ class _Run:
         self.chunks: list[dict] = []  # the targets so far, as arrays
         self.frames: dict = {}  # frame key -> its number in Moves.frames
         self.tools = ToolTable()
+        self.rotary_now = [0.0, 0.0, 0.0]  # A B C offsets in force (deg): machine angle = programmed + these (_keep_machine_angles)
 
     def frame_id(self) -> int | None:
         key = self.offsets.key()
@@ -182,7 +183,7 @@ class _Run:
         self.flush()
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
-                            "rotary": np.tile(np.array(self._rotary_total(), float), (n, 1)),
+                            "rotary": np.tile(np.array(self.rotary_now, float), (n, 1)),
                             "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
 
     def holes(self, i: int, j: int) -> None:
@@ -216,7 +217,7 @@ class _Run:
         """One target of block i, in the frame in force (the machine frame for G53)."""
         frame = -1 if machine_frame else self.frame_id()
         exact = self._all_exact() if exact is None else exact
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self._rotary_total()),
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self.rotary_now),
                            ("frame", frame), ("generated", generated), ("exact", exact)):
             self.out[key].append(value)
 
@@ -224,16 +225,17 @@ class _Run:
         m, t = self.modal, self.t
         self.last_was_cycle = False
         words = self.words(i)
-        before, angles_at = self.offsets.index, self._rotary_total()
+        before = self.offsets.index
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
-        self._keep_machine_angles(angles_at)
+        if self.offsets.index != before:
+            self._keep_machine_angles()
         if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
-        angles_at = self._rotary_total()
         change = self.tools.g43(i, t["tlo"][i], t["h"][i], known, words)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
-        self._keep_machine_angles(angles_at)
+        if not math.isnan(t["tlo"][i]):
+            self._keep_machine_angles()
         for k, moved in enumerate(change):  # rs274ngc re-reads the current point for the new offset: X Y Z = the old ones - the change
             if math.isnan(moved):
                 self.exact[k] = False  # by a length the program does not give: the stale value stands in, flagged
@@ -243,9 +245,8 @@ class _Run:
             self._to_unknown_end(i, setup, words, known)
             return
         if setup in SETUP_CODES:
-            angles_at = self._rotary_total()
             self._setup(setup, words, known, line)
-            self._keep_machine_angles(angles_at)
+            self._keep_machine_angles()
         mode = m["mode"][i]
         # A G2/G3 with centre words and no end point is a full circle (modal["circle"]): it ends where it starts.
         moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
@@ -278,7 +279,7 @@ class _Run:
             if any(tool[k] != 0.0 for k, a in enumerate("XYZ") if a in words):  # the words place the spindle: the tip is the tool offset off
                 program, _ = self.offsets.g53({**words, **{a: words[a] - tool[k] for k, a in enumerate("XYZ") if a in words}}, self.cur)
             # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
-            self._rotary({a: words[a] - o for a, o in zip("ABC", self._rotary_total()) if a in words}, absolute=True)
+            self._rotary({a: words[a] - o for a, o in zip("ABC", self.rotary_now) if a in words}, absolute=True)
             self.cur = program
             placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
             left_out = [a not in words for a in "XYZ"]
@@ -407,17 +408,15 @@ class _Run:
         self._rotary(words, absolute=not incremental)
         return end
 
-    def _rotary_total(self) -> list[float]:
-        """A B C offsets in force (deg): G5x + G92 + the tool offset's (G43.1 A B C): machine angle = programmed + these."""
-        return [w + t for w, t in zip(self.offsets.rotary(), self.tools.abc)]
-
-    def _keep_machine_angles(self, before: list) -> None:
-        """A change of the A B C offsets does not move the machine: the current programmed
-        angle becomes the machine angle minus the new offsets (rs274ngc convert_setup,
+    def _keep_machine_angles(self) -> None:
+        """After a block that may change the A B C offsets (G5x + G92 + the tool offset's, G43.1
+        A B C; ``rotary_now``): the machine does not move, so the current programmed angle
+        becomes the machine angle minus the new offsets (rs274ngc convert_setup,
         convert_axis_offsets, convert_coordinate_system, convert_tool_length_offset)."""
-        after = self._rotary_total()
+        before, after = self.rotary_now, [w + t for w, t in zip(self.offsets.rotary(), self.tools.abc)]
         if after != before:
             self.abc = [a + b - n for a, b, n in zip(self.abc, before, after)]
+            self.rotary_now = after
 
     def _rotary(self, words: dict, absolute: bool) -> None:
         for k, a in enumerate("ABC"):
