@@ -118,6 +118,7 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
             i = int(np.nonzero(unknown)[0][0])
             raise InputError(f"{path}:{int(tp.line[i])}: rotary axis position not known yet (no {' or '.join(names)} word before this move)")
         angles = machine_angles(tp, angles, names)  # + the A B C work offsets: the angles the machine turns to
+        notes.append("rotary axes' work offsets (G5x / G92 A B C) that the program does not set are taken as zero, as rs274 starts")
         mode = input_axes or ("tip" if _RTCP_ON.search(tp.sources[0].text) else None)
         if mode not in ("tip", "machine"):
             raise InputError(f"{path}: the program has rotary words but no G43.4 / G43.5 / TRAORI: give --input-axes tip (tool tip + "
