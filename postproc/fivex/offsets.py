@@ -100,7 +100,7 @@ def tool_length(tp: Toolpath, machine: Machine) -> float:
     if bad.any():
         i = int(np.argmax(bad))
         name = tp.tool_names[tp.tool[i]]
-        why = ("which is not followed (G43.1 with words off the spindle axis, X Y A B C; or G43.2 adding a tool the program does not set, "
+        why = ("which is not followed (a G43.1 / G43.2 offset with an X or Y part: the tool is off the spindle axis; or G43.2 adding a tool the program does not set, "
                "or on a length it does not give)" if name.startswith(("G43.1", "G43.2")) else
                "which the program does not set (it is in the controller's tool table)")
         raise InputError(f"{where(tp, i)}: the target is under tool length {name}, {why}: machine {machine.name} turns the tool about a pivot "
