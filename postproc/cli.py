@@ -611,7 +611,7 @@ def compensate_cmd(
     temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal)."),
     force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
-    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable."),
+    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable. Five-axis G-code: A is the turn about Z, not a rotary-axis offset (those are the program's own G10/G92 A B C, else zero)."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
     cut: Optional[Path] = typer.Option(None, "--cut", help="Cut file (tool, material, engagement; see examples/cut_aluminium.toml): the mechanistic milling force of every cutting move, pre-compensated through the model's external_load effect."),
@@ -939,7 +939,7 @@ def convert_cmd(
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
     max_deviation: Optional[float] = typer.Option(None, "--max-deviation", help="--to gcode: split moves until the tip stays this close (mm) to the straight path (default 0.01)."),
-    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z[,A,B,C]: a frame the program uses but does not define (G54, BASE_DATA[1]): the robot base (five-axis: the machine) -> the frame (mm; KUKA A B C, deg), written as the robot's base / work object. Repeatable."),
+    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z[,A,B,C]: a frame the program uses but does not define (G54, BASE_DATA[1]): the robot base (five-axis: the machine) -> the frame (mm; KUKA A B C, deg), written as the robot's base / work object. Repeatable. Five-axis G-code (--machine): A is its turn about Z (B, C zero), not a rotary-axis offset; the rotary axes' offsets are the program's own (G10 L2/L20, G92/G52 A B C), else zero."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length): the flange -> the TCP (mm; KUKA A B C, deg), written as the robot's tool. Repeatable."),
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
 ):

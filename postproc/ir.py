@@ -107,9 +107,14 @@ class Toolpath:
     # the S word in force (rev/min, NaN unknown). Both None for dialects without them.
     feed_mode: np.ndarray | None = field(repr=False, default=None)
     spindle: np.ndarray | None = field(repr=False, default=None)
+    # (N, 3) G-code: the A B C offsets in force at each target (G5x origin + G92 + G43.1's, deg; NaN where
+    # the program sets one from what its text does not determine): the machine's rotary axis
+    # is at ext's A B C + these (LinuxCNC emccanon.cc rotate_and_offset_pos). None: no program
+    # sets one (all zero).
+    rotary_offset: np.ndarray | None = field(repr=False, default=None)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle", "rotary_offset")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

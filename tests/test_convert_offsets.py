@@ -50,6 +50,9 @@ PROGRAMS = {
     "g53_l20": "G21 G90 G17 F600\nG53 G0 X10 Y0 Z5\nG10 L20 P1 X0 Y0 Z0\nG54 G1 X5\nG1 Y5 Z-1\nM2\n",
     # a tool length by G43 H1 (Z given with it), G49 back to the spindle
     "tool_length": "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\nG0 X0 Y0 Z50\nT1 M6\nG43 H1 Z40\nG1 X10 Z5\nG49 G0 Z60\nG1 X0\nM2\n",
+    # G43.1: the length is in the block (LinuxCNC manual "G43.1 Dynamic Tool Length Offset"); G43.2 H2 adds tool 2's (G10 L1)
+    "dynamic_tool_length": "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\nG10 L1 P2 Z5\nG0 X0 Y0 Z50\nG43.1 Z2.5\nG1 X5 Z0\nG43.2 H2\nG1 X10 Z1\n"
+                           "G49 G0 Z60\nM2\n",
 }
 TOOL_H1 = "H1=0,0,100"  # the tool tip 100 mm along the flange's z
 
@@ -151,7 +154,9 @@ HEAD = "G21 G90 G17 F600\nG10 L2 P1 X0 Y0 Z0\n"
     (HEAD + "G10 L2 P2 X0\nG56 G0 X1 Y0 Z10\n", [], ":4:9:", r"frame G56, which"),
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\n", [], ":4:9:", r"tool H1, which.*--tool H1="),
     (HEAD + "G0 X0 Y0 Z50\nT1 M6\nG43 Z40\n", [], ":5:6:", r"tool G43, which"),
-    (HEAD + "G0 X0 Y0 Z50\nG43.1 Z2.5\nG1 X5 Z0\n", [], ":5:5:", r"tool G43.1@line4, which"),
+    # G43.1 Z alone is followed (the length is in the block); with an X word the tool is off the spindle axis: not followed
+    (HEAD + "G0 X0 Y0 Z50\nG43.1 X1 Z2.5\nG1 X5 Z0\n", [], ":5:5:", r"tool G43.1@line4, which"),
+    (HEAD + "G0 X0 Y0 Z50\nG43.2 Z2.5\n", [], ":4:1:", r"G43.2 needs an H word"),  # as rs274 refuses it
     (HEAD + "G0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1], ":5:5:", r"position depends"),
     ("G21 G90\nG0 X0 Y0 Z50\nG43 H1\nG1 X5\n", ["--tool", TOOL_H1, "--frame", "G54=0,0,0,0,0,0"], ":4:5:", r"position depends"),  # vectorised reader
     (HEAD + "G0 X0 Y0 Z50\nG43 H1 Z40\nG49\nG1 X5\n", ["--tool", TOOL_H1], ":6:5:", r"position depends"),
@@ -169,6 +174,15 @@ def test_what_cannot_be_carried_is_refused_with_file_line_column(tmp_path, text,
     assert res.exit_code == 2 and not out.exists() and not out.with_suffix(".dat").exists()
     flat = " ".join(res.output.split())
     assert f"p.ngc{where}" in flat and re.search(message, flat), flat
+
+
+def test_dynamic_tool_lengths_are_the_robots_tools(tmp_path):
+    """G43.1 Z2.5, then G43.2 H2 (+5, G10 L1): $TOOL Z 2.5 then Z 7.5, as rs274's USE_TOOL_LENGTH_OFFSET."""
+    out = tmp_path / "c.src"
+    assert _convert(_program(tmp_path, "dynamic_tool_length"), out).exit_code == 0
+    lengths = [float(z) for z in re.findall(r"\$TOOL = \{X 0, Y 0, Z ([-\d.]+)", out.read_text())]
+    canon = (RECORDED / "dynamic_tool_length.canon").read_text(encoding="latin-1")
+    assert lengths == [0.0, 2.5, 7.5, 0.0] and re.findall(r"USE_TOOL_LENGTH_OFFSET\(0.0000 0.0000 ([\d.]+)", canon) == ["2.5000", "7.5000", "0.0000"]
 
 
 def test_without_the_rs274_move_check_the_tool_length_case_would_be_wrong(tmp_path):

@@ -23,7 +23,7 @@ from ..ir import F_EXT, Toolpath
 from .errormap import GridMap
 from .kinematics import _head_tip, fk, ik, table_to_machine
 from .machine import Machine
-from .offsets import program_to_machine, to_machine, to_program, tool_length
+from .offsets import machine_angles, program_to_machine, to_machine, to_program, tool_length
 from .program import ROTARY_FIELD
 
 
@@ -89,6 +89,8 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
         i = int(np.nonzero(~known)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: tool tip or rotary position not known at this target")
     placement, length = program_to_machine(tp), tool_length(tp, controller)
+    programmed = angles
+    angles = machine_angles(tp, programmed, names)  # the angles the machine turns to (the A B C work offsets added)
     cmd = controller_axes(controller, to_machine(placement, tp.position), angles, input_axes, length)
     tip, axis = fk(controller, cmd, length)
     before = np.linalg.norm(actual_tip(true, grid, cmd, length) - tip, axis=1)
@@ -101,7 +103,7 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
         axes[:, :3] = _grid_inverse(grid, axes[:, :3], tp.line)
     after = np.linalg.norm(actual_tip(true, grid, axes, length) - tip, axis=1)
     machine_xyz = axes[:, :3] if input_axes == "machine" else fk(controller, axes, length)[0]
-    new = _with_numbers(tp, to_program(placement, machine_xyz), axes[:, 3:5], cols)
+    new = _with_numbers(tp, to_program(placement, machine_xyz), axes[:, 3:5] - (angles - programmed), cols)  # written in the program's offsets
     notes = tuple(grid.notes) if grid is not None else ()
     if sol.held.any():
         notes += (f"{int(sol.held.sum())} target(s) near the singular pole: a rotary angle was held",)

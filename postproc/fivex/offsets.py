@@ -12,21 +12,31 @@ file:line:column: reading it as the identity would put the part somewhere else r
 the rotary axes and every machine-axis number would be wrong.
 
 A G-code work offset moves X Y Z and turns about Z only (G10 L2 R); one given with a tilt is
-refused. Its rotary-axis offsets (G10 L2 A.., G92 A..) add to the A B C words: a program that
-sets one is refused (not followed here), and a ``--frame`` is taken as having none (said in
-the CLI help).
+refused. Its rotary-axis components (G10 L2 / L20 P.. A B C, G92 / G52 A B C, and a G43.1
+A B C tool offset) are followed as LinuxCNC applies them: the machine's rotary axis turns to
+the programmed angle + the G92 + the G5x + the tool offset's A B C (src/emc/task/emccanon.cc
+rotate_and_offset_pos: ``a += g92Offset.a ... a += g5xOffset.a ... a += toolOffset.a``; the
+interpreter keeps the programmed angle, dialects/gcode/offsets.py, interp.py). This is
+done before the kinematics, in both input modes: with RTCP off the kinematics get the
+machine axes; with RTCP on (LinuxCNC TCP kinematics, trtfuncs.c / 5axiskins.c) the
+kinematics get the offset world pose, whose X Y Z is the tool tip in the workpiece frame and
+whose A B C are the joint angles, so the offset turns the axis (and with it the tool axis
+relative to the part) while the tip stays at the programmed point. The angles of a
+FivePath are the machine's (an output runs with zero offsets). A rotary offset the program
+sets from what its text does not determine is refused; a ``--frame`` (and a G5x the program
+never sets) is taken as having none (said in the CLI help).
 
 Tool length: a head machine turns the tool about its pivot, ``gauge_to_tip`` (machine file)
 plus the tool length in force above the tip (LinuxCNC 5axiskins: pivot-length + the tool
-offset), so its machine axes depend on the G43 H length: taken from the program (G49: 0; G10
-L1 / L10 before the G43) or ``--tool H1=0,0,LENGTH``, one length per program, else refused. On
-table-table machines the tool tip is the controlled point under G43 and the length does not
-enter the kinematics.
+offset), so its machine axes depend on the length: taken from the program (G49: 0; G43 H
+after G10 L1 / L10 sets the entry; G43.1 Z.. the length in the block; G43.2 H.. adds entry
+H's length to the one in force: LinuxCNC manual "G43.1", "G43.2") or ``--tool
+H1=0,0,LENGTH`` (``--tool G43.1@line5=0,0,LENGTH`` for a G43.2 on a length the program does
+not give), one length per program, else refused. On table-table machines the tool tip is the
+controlled point under G43 and the length does not enter the kinematics.
 """
 
 from __future__ import annotations
-
-import re
 
 import numpy as np
 
@@ -34,9 +44,6 @@ from ..emit.writer import where
 from ..errors import InputError
 from ..ir import Toolpath
 from .machine import Machine
-
-_ROTARY_OFFSET = re.compile(r"(?<![A-Z])G0*(10|92|52)(?![\d.])[^\n]*?(?<![A-Z])([ABC])\s*[-+.\d#\[]", re.IGNORECASE)
-
 
 def program_to_machine(tp: Toolpath) -> np.ndarray:
     """(N, 4, 4) machine_T_program of every target (its work offset); refused where the program
@@ -55,21 +62,22 @@ def program_to_machine(tp: Toolpath) -> np.ndarray:
         i = int(np.argmax(tilted))
         raise InputError(f"{where(tp, i)}: work offset {tp.frame_names[tp.frame[i]]} is tilted (it turns about X or Y): a G-code work offset "
                          "turns about Z only; give --frame with B and C zero")
-    _refuse_rotary_offsets(tp)
     return tp.frames[tp.frame]
 
 
-def _refuse_rotary_offsets(tp: Toolpath) -> None:
-    """G10 / G92 / G52 with an A B C word (comments blanked, one search over the whole text)."""
-    for doc in tp.sources:
-        code = re.sub(r"\([^)\n]*\)|;[^\n]*", lambda m: " " * len(m.group()), doc.text)
-        found = _ROTARY_OFFSET.search(code)
-        if found:
-            start = code.rfind("\n", 0, found.start(2)) + 1
-            line, column = code.count("\n", 0, start) + 1, found.start(2) - start + 1
-            raise InputError(f"{doc.path}:{line}:{column}: a work offset on rotary axis {found.group(2).upper()} (G{found.group(1)} "
-                             f"with {found.group(2).upper()}) shifts the angles the machine turns to: not followed in five-axis programs; "
-                             "write the angles without it")
+def machine_angles(tp: Toolpath, angles: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """(N, 2) the machine's rotary axes ``names`` (deg): the programmed angles + the A B C work
+    offsets in force (tp.rotary_offset); refused with file:line:column where an offset the
+    program sets is not known."""
+    if tp.rotary_offset is None:
+        return angles
+    offset = tp.rotary_offset[:, ["ABC".index(k) for k in names]]
+    bad = np.isnan(offset).any(axis=1)
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise InputError(f"{where(tp, i)}: the rotary axes' work offset (G10 L2 / L20 A B C, G92 / G52 A B C) in force here is set from what the "
+                         "program text does not determine: the angle the machine turns to is not known")
+    return angles + offset
 
 
 def to_machine(transform: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -92,9 +100,11 @@ def tool_length(tp: Toolpath, machine: Machine) -> float:
     if bad.any():
         i = int(np.argmax(bad))
         name = tp.tool_names[tp.tool[i]]
-        raise InputError(f"{where(tp, i)}: the target is under tool length {name}, which the program does not set (it is in the controller's tool "
-                         f"table): machine {machine.name} turns the tool about a pivot {machine.gauge_to_tip:g} mm + the tool length above the "
-                         f"tip; give it with --tool {name}=0,0,LENGTH")
+        why = ("which is not followed (a G43.1 / G43.2 offset with an X or Y part: the tool is off the spindle axis; or G43.2 adding a tool the program does not set, "
+               "or on a length it does not give)" if name.startswith(("G43.1", "G43.2")) else
+               "which the program does not set (it is in the controller's tool table)")
+        raise InputError(f"{where(tp, i)}: the target is under tool length {name}, {why}: machine {machine.name} turns the tool about a pivot "
+                         f"{machine.gauge_to_tip:g} mm + the tool length above the tip; give it with --tool {name}=0,0,LENGTH")
     tools = tp.tools[tp.tool]
     odd = (np.abs(tools[:, :2, 3]) > 1e-9).any(axis=1) | (np.abs(tools[:, :3, :3] - np.eye(3)) > 1e-12).any(axis=(1, 2))
     if odd.any():

@@ -24,7 +24,7 @@ from ..errors import InputError
 from ..ir import Kind, Toolpath
 from .kinematics import fk
 from .machine import Machine
-from .offsets import program_to_machine, to_machine, tool_length
+from .offsets import machine_angles, program_to_machine, to_machine, tool_length
 
 ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # IR ext columns of the G-code rotary words
 _RTCP_ON = re.compile(r"G43\.4|G43\.5|TRAORI", re.IGNORECASE)
@@ -38,7 +38,7 @@ class FivePath:
     feed: np.ndarray  # (N,) mm/min of the tool tip (NaN for rapids)
     time_min: np.ndarray  # (N,) G93 block time in minutes (NaN where the feed is a rate)
     line: np.ndarray  # (N,) source line
-    angles: np.ndarray | None  # (N, 2) rotary angles the input gave (deg), else None
+    angles: np.ndarray | None  # (N, 2) the machine's rotary angles (deg): the input's + its A B C work offsets (offsets.machine_angles), else None
     source: str
     notes: tuple[str, ...] = ()
     tool_length: float = 0.0  # mm the head machine's kinematics add to gauge_to_tip (offsets.tool_length)
@@ -117,6 +117,8 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
         if unknown.any():
             i = int(np.nonzero(unknown)[0][0])
             raise InputError(f"{path}:{int(tp.line[i])}: rotary axis position not known yet (no {' or '.join(names)} word before this move)")
+        angles = machine_angles(tp, angles, names)  # + the A B C work offsets: the angles the machine turns to
+        notes.append("rotary axes' work offsets (G5x / G92 A B C) that the program does not set are taken as zero, as rs274 starts")
         mode = input_axes or ("tip" if _RTCP_ON.search(tp.sources[0].text) else None)
         if mode not in ("tip", "machine"):
             raise InputError(f"{path}: the program has rotary words but no G43.4 / G43.5 / TRAORI: give --input-axes tip (tool tip + "
@@ -135,7 +137,7 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     dist = np.linalg.norm(np.diff(tip, axis=0, prepend=tip[:1]), axis=1)
     feed = np.where(rapid, np.nan, np.where(g93, dist * tp.speed, tp.speed))
     _require_feed(tp, rapid, feed)
-    if (np.abs(placement - np.eye(4)) > 0).any():
+    if (np.abs(placement - np.eye(4)) > 0).any() or (tp.rotary_offset is not None and (tp.rotary_offset != 0).any()):
         notes.append("positions are in the machine frame (the program's work offsets applied): an output runs with a zero work offset")
     return FivePath(tip, axis, rapid, feed, time_min, tp.line.copy(), angles, path, tuple(notes), length)
 

@@ -45,6 +45,8 @@ def needs_interpreter(t: dict) -> bool:
     (t["more"] holds the words L P Q @ ^ D)."""
     if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any():
         return True
+    if np.isin(t["tlo"], (43.1, 43.2)).any():  # lengths set in the block: the current Z re-read by the ToolTable
+        return True
     if np.isin(t["canned"], canned.CYCLES).any():
         return True
     return bool((~np.isnan(t["more"][:, 3:5])).any())
@@ -60,12 +62,13 @@ class Moves:
     row: np.ndarray
     motion: np.ndarray
     position: np.ndarray
-    abc: np.ndarray
+    abc: np.ndarray  # programmed A B C (deg), as rs274's canonical calls print them
+    rotary: np.ndarray  # A B C offsets in force (G5x + G92 + the tool offset's, deg): machine angle = abc + rotary (offsets.py)
     frame: np.ndarray  # index into frames, -1: the machine frame (G53)
     frames: list  # frame keys (Offsets.key)
     generated: np.ndarray
     exact: np.ndarray  # False: an axis of the target keeps a value re-read through a work offset the program does not set
-    latched: dict  # row of a G43 H block -> the tool length (mm) it applied when the program set it (G10 L1 / L10), NaN unknown
+    latched: dict  # row of a G43 H / G43.1 / G43.2 block -> the tool length (mm) it applied where the program gives it (G10 L1 / L10, G43.1 Z), NaN unknown
 
 
 class ToolTable:
@@ -77,22 +80,54 @@ class ToolTable:
 
     def __init__(self):
         self.entry: dict[int, float] = {}  # tool number -> length set in the program (NaN: set from what the text does not determine)
+        self.entry_off_axis: dict[int, bool] = {}  # tool number -> its entry was set with X Y A B C words too (their values not kept)
         self.in_force = 0.0  # the length applied now: 0 under G49 (the state at start), NaN when it is not known
-        self.latched: dict[int, float] = {}  # block row of each G43 H -> the length it applied
+        # X Y (mm) and A B C (deg) of the offset in force: set by G43.1 / G43.2 only; the controller's tool table entries are
+        # taken as lengths along the spindle (Z), as every tool length here is
+        self.xy, self.abc = [0.0, 0.0], [0.0, 0.0, 0.0]
+        self.latched: dict[int, float] = {}  # block row of each G43 H / G43.1 / G43.2 -> the length it applied (NaN: off the spindle axis)
 
-    def g43(self, row: int, code: float, h: float, known: bool) -> float:
-        """The change of the length in force (mm; NaN where not known) a G43 / G49 makes."""
+    def g43(self, row: int, code: float, h: float, known: bool, words: dict | None = None) -> list[float]:
+        """The change of the X Y Z offset in force (mm; NaN where not known) a G43 / G43.1 /
+        G43.2 / G49 makes, as rs274 (LinuxCNC 2.9) does it, checked in tests/test_fivex_offsets.py:
+        G43 H.. and G49 replace the whole offset; G43.1 replaces the axes it names (X Y Z A B C)
+        and keeps the others; G43.2 H.. adds tool H's entry. G43.2 without H, or with H and
+        axis words, is refused as rs274 refuses it. The length latched for the block is NaN
+        where the offset has an X or Y part (the tool is not along the spindle)."""
         if math.isnan(code):
-            return 0.0
-        before = self.in_force
+            return [0.0, 0.0, 0.0]
+        before, words = [*self.xy, self.in_force], words or {}
         if code == 49.0:
-            self.in_force = 0.0
+            self.in_force, self.xy, self.abc = 0.0, [0.0, 0.0], [0.0, 0.0, 0.0]
         elif code == 43.0 and not math.isnan(h) and known:
-            self.in_force = self.entry.get(int(h), math.nan)
-            self.latched[row] = self.in_force
-        else:  # G43 without H (the loaded tool), G43.1 / G43.2 / G43.4 / G43.5: not followed here
+            self.in_force, self.xy, self.abc = self.entry.get(int(h), math.nan), *self._entry_off_axis(int(h))
+        elif code == 43.1:
+            if known:
+                self.in_force = words.get("Z", self.in_force)
+                self.xy = [words.get(a, v) for a, v in zip("XY", self.xy)]
+                self.abc = [words.get(a, v) for a, v in zip("ABC", self.abc)]
+            else:
+                self.in_force, self.xy, self.abc = math.nan, [math.nan] * 2, [math.nan] * 3
+        elif code == 43.2:
+            if math.isnan(h) or any(a in words for a in "XYZABC"):
+                raise CycleError("G43.2 needs an H word and no axis words (LinuxCNC 2.9's rs274: 'Requested tool -1 not found', "
+                                 "'Can not have both H and axis words')")
+            tool = int(h) if known and h == int(h) else -1
+            xy, abc = self._entry_off_axis(tool) if tool >= 0 else ([math.nan] * 2, [math.nan] * 3)
+            self.in_force += self.entry.get(tool, math.nan)
+            self.xy, self.abc = [a + b for a, b in zip(self.xy, xy)], [a + b for a, b in zip(self.abc, abc)]
+        else:  # G43 without H (the loaded tool), G43.4 / G43.5: not followed here
             self.in_force = math.nan
-        return self.in_force - before if not (before == self.in_force) else 0.0
+            if code == 43.0:  # the whole offset replaced by a controller's entry: a length (see above)
+                self.xy, self.abc = [0.0, 0.0], [0.0, 0.0, 0.0]
+        if code in (43.0, 43.1, 43.2) and not math.isnan(h if code != 43.1 else 0.0):
+            self.latched[row] = self.in_force if self.xy == [0.0, 0.0] else math.nan
+        return [a - b if a != b else 0.0 for a, b in zip([*self.xy, self.in_force], before)]
+
+    def _entry_off_axis(self, tool: int) -> tuple[list, list]:
+        """X Y and A B C of a tool table entry: unknown where the program set them, else 0 (a length)."""
+        fill = math.nan if self.entry_off_axis.get(tool, False) else 0.0
+        return [fill] * 2, [fill] * 3
 
     def g10(self, lcode: int, words: dict, known: bool, current_z: float) -> None:
         """G10 L1 P Z (the length is Z), L10 P Z (the length that makes the current point's Z
@@ -107,6 +142,7 @@ class ToolTable:
         others = [a for a in "XYABCUVW" if a in words]
         if "Z" not in words and not others:
             return  # the entry's length is left as it was (R, I, J, Q: radius and lathe orientation)
+        self.entry_off_axis[tool] = bool(others) or not known
         if not known or others or lcode == 11:
             self.entry[tool] = math.nan
         elif lcode == 1:
@@ -131,6 +167,7 @@ class _Run:
         self.chunks: list[dict] = []  # the targets so far, as arrays
         self.frames: dict = {}  # frame key -> its number in Moves.frames
         self.tools = ToolTable()
+        self.rotary_now = [0.0, 0.0, 0.0]  # A B C offsets in force (deg): machine angle = programmed + these (_keep_machine_angles)
 
     def frame_id(self) -> int | None:
         key = self.offsets.key()
@@ -146,6 +183,7 @@ class _Run:
         self.flush()
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
+                            "rotary": np.tile(np.array(self.rotary_now, float), (n, 1)),
                             "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
 
     def holes(self, i: int, j: int) -> None:
@@ -179,8 +217,8 @@ class _Run:
         """One target of block i, in the frame in force (the machine frame for G53)."""
         frame = -1 if machine_frame else self.frame_id()
         exact = self._all_exact() if exact is None else exact
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("frame", frame), ("generated", generated),
-                           ("exact", exact)):
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self.rotary_now),
+                           ("frame", frame), ("generated", generated), ("exact", exact)):
             self.out[key].append(value)
 
     def block(self, i: int, line: int) -> None:
@@ -189,21 +227,26 @@ class _Run:
         words = self.words(i)
         before = self.offsets.index
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
+        if self.offsets.index != before:
+            self._keep_machine_angles()
         if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
             self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
             self._reread()
         setup, known = t["setup"][i], bool(t["ok"][i])
-        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
-        if change:  # rs274ngc re-reads the current point for the new length: Z = the old Z - the change
-            if math.isnan(change):
-                self.exact[2] = False  # by a length the program does not give: the stale Z stands in, flagged
-            else:
-                self.cur[2] -= change
+        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known, words)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
+        if not math.isnan(t["tlo"][i]):
+            self._keep_machine_angles()
+        for k, moved in enumerate(change):  # rs274ngc re-reads the current point for the new offset: X Y Z = the old ones - the change
+            if math.isnan(moved):
+                self.exact[k] = False  # by a length the program does not give: the stale value stands in, flagged
+            elif moved:
+                self.cur[k] -= moved
         if setup in UNKNOWN_END_CODES:
             self._to_unknown_end(i, setup, words, known)
             return
         if setup in SETUP_CODES:
             self._setup(setup, words, known, line)
+            self._keep_machine_angles()
         mode = m["mode"][i]
         # A G2/G3 with centre words and no end point is a full circle (modal["circle"]): it ends where it starts.
         moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
@@ -232,7 +275,11 @@ class _Run:
             if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
                 raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
             program, machine = self.offsets.g53(words, self.cur)
-            self._rotary(words, absolute=True)
+            tool = [*self.tools.xy, self.tools.in_force]
+            if any(tool[k] != 0.0 for k, a in enumerate("XYZ") if a in words):  # the words place the spindle: the tip is the tool offset off
+                program, _ = self.offsets.g53({**words, **{a: words[a] - tool[k] for k, a in enumerate("XYZ") if a in words}}, self.cur)
+            # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
+            self._rotary({a: words[a] - o for a, o in zip("ABC", self.rotary_now) if a in words}, absolute=True)
             self.cur = program
             placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
             left_out = [a not in words for a in "XYZ"]
@@ -280,18 +327,22 @@ class _Run:
             if not (0 <= p <= 9 and p == int(p)):
                 raise CycleError(f"G10 L{lcode:g} P{p:g}: P must be 0 (the active system) to 9 (G59.3)")
             self._known_after_g10(int(lcode), int(p) or self.offsets.index, given)
+            self.offsets.g10_rotary(int(lcode), int(p), words, self.abc)
             self.cur = self.offsets.g10(int(lcode), int(p), {k: v for k, v in words.items() if k in "XYZR"}, self.cur, line)
             self._reread()
             if not known:
                 system = int(p) or self.offsets.index
                 self.offsets.origin[system] = [math.nan] * 3
+                self.offsets.origin_abc[system] = [math.nan] * 3  # its angles too: a rotary word may be the unknown one
                 self.cur = [math.nan] * 3
             return
         self._exact_after_g92(code, given)
         self._reread()
+        self.offsets.g92_rotary(code, words, self.abc)
         self.cur = self.offsets.g92_family(code, words, self.cur, line)
         if not known:
             self.offsets.g92, self.offsets.g92_params, self.cur = [math.nan] * 3, [math.nan] * 3, [math.nan] * 3
+            self.offsets.g92_abc, self.offsets.g92_abc_params = [math.nan] * 3, [math.nan] * 3
 
     def _known_after_g10(self, lcode: int, system: int, given: list) -> None:
         """G10 L2 sets the origin from its words (known once every axis is given); L20 from the
@@ -359,6 +410,16 @@ class _Run:
         self._rotary(words, absolute=not incremental)
         return end
 
+    def _keep_machine_angles(self) -> None:
+        """After a block that may change the A B C offsets (G5x + G92 + the tool offset's, G43.1
+        A B C; ``rotary_now``): the machine does not move, so the current programmed angle
+        becomes the machine angle minus the new offsets (rs274ngc convert_setup,
+        convert_axis_offsets, convert_coordinate_system, convert_tool_length_offset)."""
+        before, after = self.rotary_now, [w + t for w, t in zip(self.offsets.rotary(), self.tools.abc)]
+        if after != before:
+            self.abc = [a + b - n for a, b, n in zip(self.abc, before, after)]
+            self.rotary_now = after
+
     def _rotary(self, words: dict, absolute: bool) -> None:
         for k, a in enumerate("ABC"):
             if a in words:
@@ -376,11 +437,11 @@ class _Run:
             self.emit(i, kind, point, True)
 
 
-_FIELDS = ("row", "motion", "position", "abc", "frame", "generated", "exact")
+_FIELDS = ("row", "motion", "position", "abc", "rotary", "frame", "generated", "exact")
 
 
 def _chunk(**lists) -> dict:
-    return {k: np.array(v, dtype=float if k in ("position", "abc") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
+    return {k: np.array(v, dtype=float if k in ("position", "abc", "rotary") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
 
 
 def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
@@ -434,9 +495,9 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
             state.holes(i, end)
             i = end
     state.flush()
-    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc") else 0) for k in _FIELDS}
+    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc", "rotary") else 0) for k in _FIELDS}
     return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
-                 abc=parts["abc"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
+                 abc=parts["abc"].reshape(-1, 3).astype(float), rotary=parts["rotary"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
                  exact=parts["exact"].astype(bool), latched=dict(state.tools.latched))
 
 

@@ -8,6 +8,14 @@ point in program coordinates and, when a coordinate system, offset or rotation c
 the same update of the current point that the interpreter makes (interp_convert.cc
 convert_setup, convert_axis_offsets, convert_coordinate_system), so that a later block
 that leaves an axis out keeps the controller's value. All lengths are mm, angles degrees.
+
+Rotary axes A B C: each G5x origin and the G92 offset have A B C components too (G10 L2 /
+L20 P.. A.., G92 / G52 A..), added to the programmed angle with no rotation: machine angle =
+programmed + G92 + G5x (LinuxCNC src/emc/task/emccanon.cc rotate_and_offset_pos:
+``a += g92Offset.a; ... a += g5xOffset.a; ... a += toolOffset.a``). A change of offsets does
+not move the machine: the current programmed angle becomes machine - the new offsets
+(rs274's convert_setup / convert_axis_offsets / convert_coordinate_system, checked with
+rs274 in tests/test_fivex_offsets.py).
 """
 
 from __future__ import annotations
@@ -43,6 +51,9 @@ class Offsets:
     g92: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
     g92_params: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
     g92_at: int | None = None  # line of the G92 / G52 / G92.3 that set the offset now in force
+    origin_abc: list = field(default_factory=lambda: [[0.0, 0.0, 0.0] for _ in range(10)])  # A B C of each G5x origin, deg
+    g92_abc: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
+    g92_abc_params: list = field(default_factory=lambda: [0.0, 0.0, 0.0])
 
     # ------------------------------------------------------------ machine frame
     def machine(self, p) -> list[float]:
@@ -62,6 +73,34 @@ class Offsets:
         origin, rotation, g92 = key[1], key[2], key[4]
         turn = make_transform(rot_z(math.radians(rotation)), np.asarray(origin, float))
         return turn @ make_transform(np.eye(3), np.asarray(g92, float))
+
+    def rotary(self) -> list[float]:
+        """A B C offsets in force (G5x origin + G92), deg: machine angle = programmed + these."""
+        return [o + g for o, g in zip(self.origin_abc[self.index], self.g92_abc)]
+
+    def g10_rotary(self, lcode: int, p: int, words: dict, abc: list) -> None:
+        """A B C of G10 L2 (the origin's angles are the words) or L20 (the origin such that the
+        current angle ``abc`` (programmed, before this block) reads as the words) of system P."""
+        p = p or self.index
+        machine = [a + o for a, o in zip(abc, self.rotary())]
+        for k, axis in enumerate("ABC"):
+            if axis in words:
+                self.origin_abc[p][k] = words[axis] if lcode == 2 else machine[k] - self.g92_abc[k] - words[axis]
+
+    def g92_rotary(self, code: float, words: dict, abc: list) -> None:
+        """A B C of G92 (the current angle reads as the word), G52 (the offset is the word),
+        G92.1 / G92.2 (off; .1 clears the parameters) and G92.3 (from the parameters)."""
+        if code in (92.0, 52.0):
+            for k, axis in enumerate("ABC"):
+                if axis in words:
+                    self.g92_abc[k] = words[axis] if code == 52.0 else abc[k] + self.g92_abc[k] - words[axis]
+            self.g92_abc_params = list(self.g92_abc)
+        elif code in (92.1, 92.2):
+            self.g92_abc = [0.0, 0.0, 0.0]
+            if code == 92.1:
+                self.g92_abc_params = [0.0, 0.0, 0.0]
+        elif code == 92.3:
+            self.g92_abc = list(self.g92_abc_params)
 
     # ------------------------------------------------------------ G54..G59.3
     def select(self, index: int, cur: list) -> list:

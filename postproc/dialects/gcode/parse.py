@@ -542,7 +542,7 @@ class GcodeParser:
                               f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there), or after a tool length change by a "
                               f"length it does not give; {int((~moves.exact).sum())} target(s) flagged")
         resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
-                    & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
+                    & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0), interpreted=True))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
         frame_idx[machine] = self.builder.frame_index("machine", np.eye(4), True)
@@ -563,7 +563,8 @@ class GcodeParser:
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
                                **self._feed_columns(t, rows, moves.motion.astype(float)),
-                               **({"arc": arc} if arc is not None else {}))
+                               **({"arc": arc} if arc is not None else {}),
+                               **({"rotary_offset": moves.rotary} if (moves.rotary != 0).any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
 
@@ -665,23 +666,28 @@ class GcodeParser:
             tool_idx[by_h & (hnum[rows] == h)] = self.builder.tool_index(f"H{h:g}", None)
         for c in np.unique(code[(code != 49.0) & ~dynamic & ~by_h & ~from_program]):
             tool_idx[(code == c) & ~by_h & ~from_program] = self.builder.tool_index(f"G{c:g}", None)
-        if dynamic.any():
+        if dynamic.any():  # the length each G43.1 / G43.2 block set (interp.ToolTable.g43), known where the program gives it
             set_at = np.where(np.isin(t["tlo"], (43.1, 43.2)), np.arange(len(t["tlo"])), -1)
             np.maximum.accumulate(set_at, out=set_at)
             for b in np.unique(set_at[rows][dynamic]):
-                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", None)
+                name, length = f"G{t['tlo'][b]:g}@line{self.lines.line(t['offset'][b])}", (latched or {}).get(int(b), np.nan)
+                tool = None if np.isnan(length) else make_transform(np.eye(3), np.array([0.0, 0.0, length]))
+                tool_idx[dynamic & (set_at[rows] == b)] = self.builder.tool_index(name + ("" if tool is None else f" (length {length:.9g})"), tool)
         if ((code != 49.0) & ~from_program).any():
             self.notes.append("tool lengths (G43 H, G43 without H, G43.1/G43.2) are in the machine's tool table or set in a block: "
                               "flange poses need them (--tool NAME=...); TCP positions do not")
         return tool_idx
 
-    def _tool_axis_unknown(self, t: dict, rows: np.ndarray, resets: np.ndarray) -> np.ndarray:
+    def _tool_axis_unknown(self, t: dict, rows: np.ndarray, resets: np.ndarray, interpreted: bool = False) -> np.ndarray:
         """(len(rows),) True for targets whose Z the controller moves by a tool length change
         the program does not give: after G43 / G43.1 / G43.2 / G49 changes the offset, the
         current point is re-read for the new tool (LinuxCNC: Z = the old Z - the change of
         length), so a target that leaves Z out before the next absolute Z word (``resets``:
         a G90 move with Z, G92 Z) is unknown; so is a G53 target under an offset (its words
-        are for the spindle, not the tool tip). Noted with the first line."""
+        are for the spindle, not the tool tip). Noted with the first line. ``interpreted``: the
+        targets were read block by block (interp.py), whose ToolTable re-reads the current
+        point by the change as rs274 does (flagging it where the change is not known): only
+        the G53 case is left here."""
         tlo, hnum = _ffill(t["tlo"], 49.0), _ffill(t["h"], np.nan)
         state = np.where(tlo == 49.0, -1.0, tlo * 1e6 + np.nan_to_num(hnum, nan=-1.0))
         change = (state != np.concatenate([[-1.0], state[:-1]])) | np.isin(t["tlo"], (43.1, 43.2))
@@ -689,7 +695,7 @@ class GcodeParser:
         n = np.arange(len(tlo))
         last_change = np.maximum.accumulate(np.where(change, n, -1))
         last_reset = np.maximum.accumulate(np.where(resets & has_z, n, -1))
-        stale = (last_change[rows] > last_reset[rows]) | (t["g53"][rows] & (state[rows] != -1.0))
+        stale = (last_change[rows] > last_reset[rows]) & (not interpreted) | (t["g53"][rows] & (state[rows] != -1.0))
         if stale.any():
             self.notes.append(f"line {int(self.lines.line(t['offset'][rows[np.argmax(stale)]]))}: Z left out after a tool length change (or a G53 move "
                               f"under one): the controller's tool-tip Z there depends on the length; {int(stale.sum())} target(s) flagged")
