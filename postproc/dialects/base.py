@@ -50,8 +50,16 @@ class Dialect:
         """The IR of a program from its source files (as ``read_sources`` gives them)."""
         raise NotImplementedError
 
-    def parse(self, path: str | Path, data: bytes | None = None) -> Toolpath:
-        return self.parse_sources(self.read_sources(path, data))
+    def parse(self, path: str | Path, data: bytes | None = None, modules=()) -> Toolpath:
+        return self.parse_sources(self.read_sources(path, data) + self.module_sources(path, modules))
+
+    def module_sources(self, program: str | Path, paths) -> list[SourceDoc]:
+        """Other modules' files the program uses (``--data``): KRL only."""
+        if paths:
+            from ..errors import InputError
+
+            raise InputError(f"{program}: --data (other modules' data lists) is for KRL programs, not {self.name}")
+        return []
 
     # ------------------------------------------------------------- controller
     def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

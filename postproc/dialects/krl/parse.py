@@ -31,6 +31,7 @@ from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
 from .loops import ForLoop, for_values, unroll
+from .modules import base_name, visibility
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -229,14 +230,20 @@ class KrlParser:
         self.routines: list[call_walk.Routine] = []  # DEF ... END of the program file
         self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
         self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
+        self._visible: set[str] | None = None  # names another module's data list being read makes visible (modules.py)
+        self._hidden: dict[str, str] = {}  # NAME -> file:line of a declaration another module cannot see
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
         """Bulk point declarations and array elements of one file; returns the lines they fill.
-        In the program an element assignment runs in order: the grammar reads it (an Event)."""
+        In the program an element assignment runs in order: the grammar reads it (an Event).
+        Another module's data list gives only what it makes visible and no local name hides."""
         done = np.zeros(len(d.lines.starts), bool)
         for regex in (RE_DECL, RE_ELEM) if d.index else (RE_DECL,):
             matches = d.shapes().match(regex)
+            if len(matches) and self._visible is not None:
+                done[matches.line] = True
+                matches = matches.subset(self._visible_mask(d, matches))
             if not len(matches):
                 continue
             values, spans, conf, insert = d.aggregates(*matches.span("agg"))
@@ -245,14 +252,39 @@ class KrlParser:
         return done
 
     # ----------------------------------------------------------- statements
+    def _visible_mask(self, d: _Doc, matches) -> np.ndarray:
+        """Declarations of another module's data list another module sees, not hidden by a local name."""
+        names = matches.group("name")
+        seen = np.array([base_name(n) in self._visible for n in names], dtype=bool)
+        return seen & (self.symbols.rows_of_spans(d.raw, matches.spans["name"]) == self.symbols.count)
+
+    def _sees(self, name: str) -> bool:
+        """A name of the file being read may be declared: always in the program's own files;
+        in another module's data list when GLOBAL there and not declared locally."""
+        return self._visible is None or (base_name(name) in self._visible and self.symbols.get(name) is None)
+
+    def _module_data(self) -> None:
+        """Other modules' data lists (--data, modules.py): their GLOBAL points of PUBLIC lists,
+        after the program's own files (a local name hides a global one)."""
+        for d in self.docs[1:]:
+            if d.doc.role != "module":
+                continue
+            self._visible, hidden = visibility(d.text)
+            for name, line in hidden.items():
+                self._hidden.setdefault(name, f"{d.doc.path}:{line}")
+            self._slow_lines(d, skip=self._declarations(d), is_program=False)
+        self._visible = None
+
     def parse(self) -> Toolpath:
         src = self.docs[0]
+        own = [d for d in self.docs[1:] if not d.doc.role.startswith("module")]
         data_lines = {}
-        for d in self.docs[1:]:
+        for d in own:
             data_lines[d.index] = self._declarations(d)
         src_decl = self._declarations(src)
-        for d in self.docs[1:]:
+        for d in own:
             self._slow_lines(d, skip=data_lines[d.index], is_program=False)
+        self._module_data()
         moves = src.shapes().match(RE_MOVE)
         inline = moves.subset(moves.present("agg"))
         named = moves.subset(~moves.present("agg"))
@@ -484,7 +516,7 @@ class KrlParser:
         for decl in node.children:
             if isinstance(decl, Tree) and decl.data == "declarator" and len(decl.children) >= 2:
                 value = decl.children[-1]
-                if isinstance(value, Tree) and value.data == "aggregate":
+                if isinstance(value, Tree) and value.data == "aggregate" and self._sees(str(decl.children[0])):
                     v, sp, c, ins = self._agg(d, value, start)
                     self.symbols.add_many([str(decl.children[0])], [v], [sp], [c], [ins])
 
@@ -544,7 +576,7 @@ class KrlParser:
         lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
         if d.index != 0:
-            if isinstance(rhs, Tree) and rhs.data == "aggregate":
+            if isinstance(rhs, Tree) and rhs.data == "aggregate" and self._sees(lhs):
                 v, sp, c, ins = self._agg(d, rhs, start)
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
@@ -626,7 +658,7 @@ class KrlParser:
                 found = self.symbols.get(name)
                 if found is None:
                     v, sp, c, ins = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.array([-1, -1])
-                    self.builder.notes.append(f"{d.doc.path}:{d.lines.line(start)}: point {name} is not declared in the given files")
+                    self.builder.notes.append(f"{d.doc.path}:{d.lines.line(start)}: {self._undeclared(name)}")
                 else:
                     v, sp, c, ins = found
             self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
@@ -656,10 +688,17 @@ class KrlParser:
                 rows = self.symbols.rows_of_spans(src.raw, moves.spans["name"])
                 missing = rows == self.symbols.count
                 for text in sorted(set(moves.subset(missing).group("name"))):
-                    self.builder.notes.append(f"point {text} is not declared in the given files")
+                    self.builder.notes.append(self._undeclared(text))
                 values, spans, conf, insert = (column[rows] for column in self.symbols.table())
                 names = np.array(moves.group("name"), dtype=object)
             self._collect(moves.start, kinds, values, spans, conf, insert, names, approx, line=moves.line + 1)
+
+    def _undeclared(self, name: str) -> str:
+        where = self._hidden.get(base_name(name))
+        if where is None:
+            return f"point {name} is not declared in the given files"
+        return (f"point {name} is not declared in the given files: {where} declares it without GLOBAL or in a data list "
+                "that is not PUBLIC, which other modules do not see (KSS 8 'Data lists')")
 
     def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None, line=None):
         values, spans, conf, insert = self._changed_points(offsets, names, values, spans, conf, insert)
@@ -818,7 +857,10 @@ class _InlineFormState:
         self.machines = MachineFrames(None)
         if "fdat_act" not in src.lower():  # no inline form: nothing to follow (a 10^6-line CAM file skips the scans)
             return
-        self.fdats = declared_fdats([d.text for d in docs])
+        for d in (d for d in docs if d.doc.role == "module"):  # another module's: its GLOBAL FDATs only; local names win
+            seen, _ = visibility(d.text)
+            self.fdats.update({k: v for k, v in declared_fdats([d.text]).items() if k in seen})
+        self.fdats.update(declared_fdats([d.text for d in docs if not d.doc.role.startswith("module")]))
         for name in list(self.fdats):  # FP1.TOOL_NO = ...: that FDAT is not followed
             if re.search(rf"^[ \t]*{re.escape(name)}[ \t]*\.[ \t]*\w+[ \t]*=", src, re.IGNORECASE | re.MULTILINE):
                 self.fdats[name] = None

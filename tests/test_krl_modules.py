@@ -1,0 +1,101 @@
+"""KRL points of another module's data list (``--data``; postproc/dialects/krl/modules.py).
+
+The cell in tests/data/krl_modules/ has the layout of a real KUKA milling cell
+(KRC/R1/Program/KukaMiling/Dat/xPoints.dat with the stations' points, the motion modules in
+Moves/, $config.dat in System/). Expected positions by hand from "KUKA System Software 8.x,
+Operating and Programming Instructions for System Integrators" (KSS 8 SI):
+- "Data lists": a name declared ``DECL GLOBAL`` in a data list opened ``DEFDAT NAME PUBLIC``
+  is seen by every module; a declaration without GLOBAL, or in a data list without PUBLIC,
+  is seen only by its own module; $CONFIG.DAT's names are seen by all;
+- "Global declarations": a local name hides a global one of the same name;
+- "Coordinate systems" / "BASE": a target is at $BASE : target, $BASE = BASE_DATA[1] =
+  {X 1000} (System/$config.dat) puts XST1 {X 900, Y 960, Z 1190} at (1900, 960, 1190).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+from typer.testing import CliRunner
+
+from postproc.cli import app
+from postproc.errors import InputError
+from postproc.programs import emit_texts, files_for, parse_program, write_set
+
+CELL = Path(__file__).parent / "data" / "krl_modules"
+
+
+@pytest.fixture
+def cell(tmp_path: Path) -> Path:
+    shutil.copytree(CELL, tmp_path / "cell")
+    return tmp_path / "cell" / "KukaMiling"
+
+
+def read(cell: Path, name: str = "st1_st2"):
+    return parse_program(cell / "Moves" / f"{name}.src", modules=[cell / "Dat", cell.parent / "System" / "$config.dat"])
+
+
+def placed(tp) -> np.ndarray:
+    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+
+
+def test_global_points_of_a_public_data_list_are_read_from_it(cell):
+    tp = read(cell)
+    # XST1, XST2 of Dat/xPoints.dat under BASE_DATA[1] = {X 1000}; XSHARED is declared GLOBAL
+    # in xPoints.dat (X 500, Z 700) and locally in st1_st2.dat (X 400, Z 800): the local one.
+    np.testing.assert_allclose(placed(tp), [[1900, 960, 1190], [1160, -1116, 504], [1400, 0, 800]])
+    assert Path(tp.sources[int(tp.spans[0, 0, 0])].path).name == "xPoints.dat"
+    assert Path(tp.sources[int(tp.spans[2, 0, 0])].path).name == "st1_st2.dat"
+
+
+def test_without_the_other_module_the_point_is_not_declared(cell):
+    tp = parse_program(cell / "Moves" / "st1_st2.src")
+    assert not tp.placed()[:2].any()
+    assert any("point XST1 is not declared" in n for n in tp.notes)
+
+
+def test_a_point_another_module_does_not_make_global_is_not_seen(cell):
+    tp = read(cell, "hidden")
+    # XLOCAL: DECL without GLOBAL (xPoints.dat line 9); XPRIV: GLOBAL in 'DEFDAT PRIVATE' (not PUBLIC)
+    assert tp.placed().tolist() == [True, False, False]
+    np.testing.assert_allclose(tp.base_positions()[0], [1900, 960, 1190])
+    notes = " ".join(tp.notes)
+    assert "xPoints.dat:9 declares it without GLOBAL" in notes
+    assert "private.dat:2 declares it without GLOBAL or in a data list that is not PUBLIC" in notes
+
+
+def test_compensation_writes_the_point_into_the_data_list_that_declares_it(cell, tmp_path):
+    tp = read(cell)
+    new = tp.with_positions(tp.position + [[0.5, 0, 0], [0, 0, 0], [0, 0, 0]])
+    texts = emit_texts(tp, new)
+    out = tmp_path / "out" / "st1_st2.src"
+    out.parent.mkdir()
+    files = files_for(tp, texts, out)
+    written = {p.name for p in files}
+    assert written == {"st1_st2.src", "st1_st2.dat", "xPoints.dat"}  # all of one job, written together (write_set)
+    write_set(files)
+    assert "DECL GLOBAL E6POS XST1={X 900.5,Y 960.0" in (out.parent / "xPoints.dat").read_text()
+    again = parse_program(out, modules=[out.parent / "xPoints.dat", cell.parent / "System" / "$config.dat"])
+    np.testing.assert_allclose(again.base_positions()[0], [1900.5, 960, 1190])
+    in_place = files_for(tp, texts, cell / "Moves" / "st1_st2.src")  # --in-place: back into Dat/xPoints.dat
+    assert cell / "Dat" / "xPoints.dat" in in_place
+
+
+def test_inspect_takes_other_modules_with_data(cell):
+    src = cell / "Moves" / "st1_st2.src"
+    result = CliRunner().invoke(app, ["inspect", str(src), "--json", "--data", str(cell / "Dat"), "--data", str(cell.parent / "System" / "$config.dat")])
+    assert result.exit_code == 0, result.output
+    moves = json.loads(result.stdout)["moves"]
+    assert [m["xyz"] for m in moves] == [[1900, 960, 1190], [1160, -1116, 504], [1400, 0, 800]]
+    bad = CliRunner().invoke(app, ["inspect", str(src), "--json", "--data", str(cell / "missing.dat")])
+    assert bad.exit_code == 2 and "missing.dat" in bad.output
+
+
+def test_data_is_for_krl_only(tmp_path):
+    (tmp_path / "m.mod").write_text("MODULE m\nENDMODULE\n")
+    with pytest.raises(InputError, match="--data"):
+        parse_program(tmp_path / "m.mod", modules=[tmp_path])
