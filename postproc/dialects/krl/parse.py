@@ -30,7 +30,8 @@ from . import calls as call_walk
 from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
-from .loops import ForLoop, for_values, unroll
+from .executed import anchor_offsets, per_call
+from .loops import ForLoop, executed_rows, for_values, indexed_by_counter
 from .modules import base_name, visibility
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
@@ -701,7 +702,6 @@ class KrlParser:
                 "that is not PUBLIC, which other modules do not see (KSS 8 'Data lists')")
 
     def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None, line=None):
-        values, spans, conf, insert = self._changed_points(offsets, names, values, spans, conf, insert)
         self.builder.add_block(
             offsets,
             kind=kinds,
@@ -715,28 +715,27 @@ class KrlParser:
         )
         self._approx_blocks.append((offsets, approx))
 
-    def _changed_points(self, offsets, names, values, spans, conf, insert):
-        """Targets naming a point the program changes take its state at their line."""
+    def _changed_points(self, tp: Toolpath, virtual: np.ndarray) -> Toolpath:
+        """Targets naming a point the program changes take its state where they run (one
+        state per executed row; a row no call reaches: not known)."""
         tl = self.timeline
-        if not (tl.points or tl.arrays) or not len(offsets):
-            return values, spans, conf, insert
-        named = np.nonzero(np.asarray(names, dtype=object) != "")[0]  # inline aggregates have no name
+        names = np.asarray(tp.target_name, dtype=object)
+        named = np.nonzero(names != "")[0] if (tl.points or tl.arrays) and len(tp) else np.zeros(0, np.int64)
         if not len(named):
-            return values, spans, conf, insert
-        keys = np.char.upper(np.char.replace(np.char.replace(np.asarray(names, dtype=object)[named].astype(str), " ", ""), "\t", ""))
+            return tp
+        keys = np.char.upper(np.char.replace(np.char.replace(names[named].astype(str), " ", ""), "\t", ""))
         changed = np.isin(keys, list(tl.points))
         for prefix in tl.arrays:
             changed |= np.char.startswith(keys, prefix)
         if not changed.any():
-            return values, spans, conf, insert
-        values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
+            return tp
+        values, spans, conf, insert = tp.values.copy(), tp.spans.copy(), tp.conf.copy(), tp.insert_at.copy()
         for k in np.nonzero(changed)[0].tolist():
             r = int(named[k])
-            states = [tl.point_at(str(keys[k]), at) for at in self._run_at(int(offsets[r]))]
-            point = states[0] if states and all(p is states[0] for p in states) else Point.unknown()  # one state per call, or not known
+            point = tl.point_at(str(keys[k]), int(virtual[r])) if virtual[r] >= 0 else Point.unknown()
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
-        return values, spans, conf, insert
+        return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert)
 
     def _finish(self) -> Toolpath:
         self._collect_slow_targets()
@@ -744,10 +743,12 @@ class KrlParser:
         approx = np.concatenate([b[1] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, bool)
         perm = np.argsort(offsets, kind="stable")  # the builder orders targets the same way
         offsets, approx = offsets[perm], approx[perm]
-        frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
-        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0))
-        tp = self._unroll(tp)  # before the poses: partial aggregates and _REL increments follow execution order
+        tp, offsets, approx, virtual, envs = self._executed(tp, offsets, approx)
+        tp = self._changed_points(tp, virtual)
+        frame, tool, speed, cdis = self._program_state(offsets, virtual)
+        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
+        tp = self._unroll(tp, virtual, offsets, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
         orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
@@ -761,18 +762,62 @@ class KrlParser:
             kind=np.where(joint_only, np.int8(Kind.ABSJ), tp.kind).astype(np.int8),
             position=pose[:, :3],
             orientation=orientation,
+            joints=values[:, 7:13].copy(),
+            ext=values[:, 13:19].copy(),
             resolved=declared,
         )
 
-    def _unroll(self, tp: Toolpath) -> Toolpath:
-        """Every pass of the FOR loops with a literal count (loops.py)."""
-        tl = self.timeline
-        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+    def _tables(self) -> dict:
+        """The builder's frame and tool tables and notes as they are now (registered after build)."""
+        b = self.builder
+        return dict(tools=np.array(b.tools, dtype=float).reshape(-1, 4, 4), tool_names=tuple(b.tool_names),
+                    frames=np.array(b.frames, dtype=float).reshape(-1, 4, 4), frame_names=tuple(b.frame_names),
+                    frame_known=np.array(b.frame_known, dtype=bool), tool_known=np.array(b.tool_known, dtype=bool), notes=tuple(b.notes))
+
+    def _loop_split(self) -> tuple[list[ForLoop], list[ForLoop]]:
+        """FORs of subprograms (run first, by their own lines) and of the first DEF (run after
+        the calls are placed). A subprogram's FOR whose body calls a routine is listed once."""
+        if not self._visits:
+            return [], self.for_loops
+        main, src = self.routines[0], self.docs[0]
+        first = int(src.lines.line(main.start)), int(src.lines.line(max(main.end - 1, main.start)))
+        sub = [lp for lp in self.for_loops if not first[0] <= lp.first_line <= first[1]]
+        called = [lp for lp in sub if lp.values is not None and any(lp.first_line < c.line < lp.last_line for c in self.calls)]
+        for lp in called:
+            self.builder.notes.append(f"{src.doc.path}:{lp.first_line}: this FOR of a subprogram calls a routine in its body: "
+                                      "its motions are listed once (not run pass by pass)")
+        return [lp for lp in sub if lp not in called], [lp for lp in self.for_loops if lp not in sub]
+
+    def _executed(self, tp: Toolpath, offsets: np.ndarray, approx: np.ndarray):
+        """Rows once per executed copy of their routine (executed.py), subprograms' FORs run;
+        returns the rows' real and virtual offsets and their loop counters."""
+        if not self._visits:
+            return tp, offsets, approx, offsets.copy(), [{}] * len(tp)
+        sub_loops, _ = self._loop_split()
+        rows, envs = self._rows_or_refuse(tp, sub_loops, None)
+        src = self.docs[0]
+        spans = [(int(src.lines.starts[lp.first_line - 1]), int(src.lines.starts[lp.last_line - 1])) for lp in sub_loops if lp.values is not None]
+        picked, virtual = per_call(offsets[rows], self._visits, self.routines, spans)
+        rows = rows[picked]
+        return tp.take(rows), offsets[rows], approx[rows], virtual, [envs[i] for i in picked.tolist()]
+
+    def _rows_or_refuse(self, tp: Toolpath, loops: list[ForLoop], lines):
         try:
-            tp = unroll(tp, self.for_loops, self.symbols.get, changed)
+            return executed_rows(tp, loops, lines)
         except OverflowError as exc:
             d = self.docs[0]
             raise d.lines.error(d.doc.path, int(d.lines.starts[int(exc.args[0]) - 1]), "the FOR loops here run more than 1,000,000 motions: refused")
+
+    def _unroll(self, tp: Toolpath, virtual: np.ndarray, offsets: np.ndarray, envs: list[dict]) -> Toolpath:
+        """Every pass of the first DEF's FOR loops with a literal count (loops.py); a
+        subprogram's copy is placed by the line of the call that runs it."""
+        _, main_loops = self._loop_split() if self._visits else ([], self.for_loops)
+        lines = self.docs[0].lines.line(anchor_offsets(virtual, offsets)) if self._visits else None
+        rows, more = self._rows_or_refuse(tp, main_loops, lines)
+        envs = [{**envs[r], **m} for r, m in zip(rows.tolist(), more)]
+        tl = self.timeline
+        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+        tp = indexed_by_counter(tp.take(rows), envs, self.symbols.get, changed)
         by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
         now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
         if now_known:  # NAME[I] read per pass: no longer 'not declared'
@@ -786,9 +831,9 @@ class KrlParser:
         columns = list(zip(*self.slow_targets))  # offset, kind, values, spans, conf, insert, name, approx, relative
         self._collect(*(np.array(c) for c in columns[:6]), list(columns[6]), np.array(columns[7]), np.array(columns[8]))
 
-    def _program_state(self, offsets: np.ndarray):
+    def _program_state(self, offsets: np.ndarray, virtual: np.ndarray):
         """Frame and tool index, speed (mm/s) and approximation distance at each target: the
-        last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it."""
+        last $BASE / $TOOL (where the row runs: ``virtual``) / $VEL.CP / $APO.CDIS before it."""
         n = len(offsets)
         frame, tool = np.zeros(n, np.int32), np.zeros(n, np.int32)
         speed, cdis = np.full(n, np.nan), np.zeros(n)
@@ -803,7 +848,7 @@ class KrlParser:
             if key in FRAME_KEYS:
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
                 ids = np.array([register(f.name, None if f.pose is None else f.transform(), f.pose is not None) for _, f in ev])
-                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, offsets, np.array([o for o, _ in ev]), ids, register)
+                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, virtual, offsets, np.array([o for o, _ in ev]), ids, register)
                 continue
             at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
             has = at >= 0
@@ -813,33 +858,15 @@ class KrlParser:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
 
-
-    def _frame_ids(self, key: str, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
-        """The frame (or tool) index in force at each target: the last change before the
-        place where it runs; a target of a subprogram run with different frames from
-        different calls, or run by no call from the first DEF, gets an unknown one."""
-        def at(virtual: np.ndarray) -> np.ndarray:
-            k = np.searchsorted(starts, virtual, side="right") - 1
-            return np.where(k >= 0, ids[np.maximum(k, 0)], 0)
-
-        if not self._visits:
-            return at(offsets)
-        main = self.routines[0]
-        first = (offsets >= main.start) & (offsets < main.end)
-        out = np.zeros(len(offsets), np.int64)
-        out[first] = at(offsets[first] * call_walk.SCALE)
-        for i in np.nonzero(~first)[0].tolist():
-            found = set(at(np.array(self._run_at(int(offsets[i])), dtype=np.int64)).tolist())
+    def _frame_ids(self, key: str, virtual: np.ndarray, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
+        """The frame (or tool) index in force where each row runs: the last change before it;
+        a target of a subprogram run by no call from the first DEF gets an unknown one."""
+        k = np.searchsorted(starts, virtual, side="right") - 1
+        out = np.where(k >= 0, ids[np.maximum(k, 0)], 0)
+        for i in np.nonzero(virtual < 0)[0].tolist():
             r = call_walk.routine_of(self.routines, int(offsets[i]))
             name = self.routines[r].name if r is not None else "?"
-            if len(found) == 1:
-                out[i] = found.pop()
-            elif not found:
-                out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
-            else:
-                out[i] = register(f"{key} in {name}: its calls run it with different frames", None, False)
-                self.builder.notes.append(f"{self.docs[0].doc.path}: {name} is called where {key} differs, before it sets its own: "
-                                          f"the {key} of its motions is not known")
+            out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
         return out
 
 
