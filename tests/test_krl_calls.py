@@ -272,3 +272,15 @@ def test_a_handler_of_another_module_or_a_function_in_a_skipped_condition_is_not
     assert tp.placed().tolist() == [True, False]
     tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nIF f( ) THEN\nENDIF\nSKIP:\nLIN XP1\nEND\n")
     assert not tp.placed().any()
+
+
+def test_a_loop_of_a_subprogram_called_twice_runs_in_each_call(tmp_path):
+    # sub's FOR I = 1 TO 2 runs LIN XP[I] (p.dat: XP[1] = (1, 2, 3), XP[2] = (4, 5, 6)); sub is
+    # called under BASE_DATA[1] ({X 1000}) then BASE_DATA[2] ({Y 2000}): four executed motions
+    # (1001, 2, 3), (1004, 5, 6), (1, 2002, 3), (4, 2005, 6) (KSS 8 SI "FOR", "Subprograms").
+    (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\nsub( )\n$BASE = BASE_DATA[2]\nsub( )\nEND\n"
+                                    "DEF sub( )\nDECL INT I\nFOR I = 1 TO 2\nLIN XP[I]\nENDFOR\nEND\n")
+    (tmp_path / "p.dat").write_text("DEFDAT p\nDECL E6POS XP[2]\nXP[1]={X 1,Y 2,Z 3,A 0,B 90,C 0}\nXP[2]={X 4,Y 5,Z 6,A 0,B 90,C 0}\nENDDAT\n")
+    (tmp_path / "$config.dat").write_text(CONFIG)
+    tp = parse_program(tmp_path / "p.src")
+    np.testing.assert_allclose(placed_positions(tp), [[1001, 2, 3], [1004, 5, 6], [1, 2002, 3], [4, 2005, 6]], atol=1e-9)

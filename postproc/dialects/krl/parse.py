@@ -793,7 +793,7 @@ class KrlParser:
         returns the rows' real and virtual offsets and their loop counters."""
         if not self._visits:
             return tp, offsets, approx, offsets.copy(), [{}] * len(tp)
-        sub_loops, _ = self._loop_split()
+        sub_loops, self._main_loops = self._loop_split()
         rows, envs = self._rows_or_refuse(tp, sub_loops, None)
         src = self.docs[0]
         spans = [(int(src.lines.starts[lp.first_line - 1]), int(src.lines.starts[lp.last_line - 1])) for lp in sub_loops if lp.values is not None]
@@ -811,7 +811,7 @@ class KrlParser:
     def _unroll(self, tp: Toolpath, virtual: np.ndarray, offsets: np.ndarray, envs: list[dict]) -> Toolpath:
         """Every pass of the first DEF's FOR loops with a literal count (loops.py); a
         subprogram's copy is placed by the line of the call that runs it."""
-        _, main_loops = self._loop_split() if self._visits else ([], self.for_loops)
+        main_loops = self._main_loops if self._visits else self.for_loops
         lines = self.docs[0].lines.line(anchor_offsets(virtual, offsets)) if self._visits else None
         rows, more = self._rows_or_refuse(tp, main_loops, lines)
         envs = [{**envs[r], **m} for r, m in zip(rows.tolist(), more)]
