@@ -99,3 +99,30 @@ def test_data_is_for_krl_only(tmp_path):
     (tmp_path / "m.mod").write_text("MODULE m\nENDMODULE\n")
     with pytest.raises(InputError, match="--data"):
         parse_program(tmp_path / "m.mod", modules=[tmp_path])
+
+
+def test_functions_of_another_module_are_evaluated_when_straight_line(cell):
+    # Lib/offsets.src: GLOBAL DEFFCT REAL Offset(n:IN) with step = 10.0, RETURN n * step + 0.5
+    # (KSS 8 SI "Subprograms and functions": IN parameters by value, RETURN gives the value).
+    # XST1.X = Offset(3) = 30.5: PTP XST1 at BASE_DATA[1] {X 1000} : (30.5, 960, 1190) = (1030.5, 960, 1190).
+    # Measured( ) has an IF on $IN[n]: not straight-line; Hidden( ) is not GLOBAL (and not the
+    # module's main routine): other modules do not see it. Both targets stay unresolved,
+    # never at the declared values, with the call's line and the function's file:line.
+    modules = [cell / "Dat", cell / "Lib", cell.parent / "System" / "$config.dat"]
+    tp = parse_program(cell / "Moves" / "fct.src", modules=modules)
+    assert tp.placed().tolist() == [True, False, False]
+    np.testing.assert_allclose(tp.base_positions()[0], [1030.5, 960, 1190])
+    notes = "\n".join(tp.notes)
+    assert "fct.src:5: MEASURED(): " in notes and "offsets.src:12: its body is not straight-line" in notes
+    assert "fct.src:7: HIDDEN(): " in notes and "offsets.src:20: declared without GLOBAL" in notes
+    without = parse_program(cell / "Moves" / "fct.src", modules=modules[:1] + modules[2:])
+    assert without.placed().tolist() == [False, False, False]  # Offset( ) not given: not evaluated
+    assert "fct.src:3: OFFSET(): not a function of the given files" in "\n".join(without.notes)
+
+
+def test_builtin_arithmetic_functions(tmp_path):
+    # KSS 8 SI "Arithmetic functions": SIN/COS in degrees, SQRT, ABS.
+    (tmp_path / "p.src").write_text("DEF p( )\nXP1.X = 100 * COS(60) + SQRT(16) + ABS(-2)\nLIN XP1\nEND\n")
+    (tmp_path / "p.dat").write_text("DEFDAT p\nDECL E6POS XP1={X 0,Y 0,Z 500,A 0,B 90,C 0}\nENDDAT\n")
+    tp = parse_program(tmp_path / "p.src")
+    np.testing.assert_allclose(tp.base_positions()[0], [56, 0, 500])

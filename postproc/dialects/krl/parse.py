@@ -31,6 +31,7 @@ from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
 from .executed import anchor_offsets, per_call
+from .functions import Caller
 from .loops import ForLoop, executed_rows, for_values, indexed_by_counter
 from .modules import base_name, visibility
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
@@ -295,7 +296,9 @@ class KrlParser:
         self._judge_jumps(src)
         self._plan_counter_loops(src)
         self._follow_calls(src)
-        self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
+        caller = Caller([d.doc for d in self.docs])
+        self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current), caller).run(self.changes, not self._has_goto)
+        self.builder.notes.extend(dict.fromkeys(f"{src.doc.path}:{n}" for n in caller.notes))
         self._bulk_moves(src, inline, named)
         return self._finish()
 

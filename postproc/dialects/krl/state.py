@@ -88,26 +88,29 @@ class Timeline:
         return history[at][1] if at >= 0 else None
 
 
-def number(node, lookup) -> float:
+def number(node, lookup, call=None) -> float:
     """The value of a numeric expression of literals and known components; NaN otherwise.
-    ``lookup(text)`` gives a component such as ``XP1.X`` or ``$BASE.Z``."""
-    if isinstance(node, Token):
+    ``lookup(text)`` gives a component such as ``XP1.X`` or ``$BASE.Z``; ``call(node,
+    lookup)`` the value of a function call (functions.py), NaN without it."""
+    if isinstance(node, Token) or node is None:
         return float("nan")
     kind = node.data
     if kind == "number":
         return float(node.children[0])
     if kind == "neg":
-        return -number(node.children[0], lookup)
+        return -number(node.children[0], lookup, call)
     if kind in ("sum_expr", "prod_expr"):
-        total = number(node.children[0], lookup)
+        total = number(node.children[0], lookup, call)
         for op, operand in zip(node.children[1::2], node.children[2::2]):
-            v = number(operand, lookup)
+            v = number(operand, lookup, call)
             total = {"+": total + v, "-": total - v, "*": total * v, "/": total / v if v else float("nan")}.get(str(op), float("nan"))
         return total
     if kind == "lvalue":
         return lookup(_lvalue_text(node))
     if kind == "unary":  # unary plus keeps its tree when lark cannot inline it
-        return number(node.children[-1], lookup)
+        return number(node.children[-1], lookup, call)
+    if kind == "funcall" and call is not None:
+        return call(node, lookup)
     return float("nan")
 
 
@@ -137,8 +140,9 @@ class Replay:
     the Point an aggregate right-hand side gives, ``frame_value(event, current)`` the
     (name, transform or None) of any other frame expression."""
 
-    def __init__(self, declared, read_agg, frame_value):
+    def __init__(self, declared, read_agg, frame_value, call=None):
         self.declared, self.read_agg, self.frame_value = declared, read_agg, frame_value
+        self.call = call  # function calls in expressions (functions.Caller), or None: not evaluated
         self.points: dict[str, Point] = {}
         self.frames = {"$BASE": Frame("<base>", np.zeros(6)), "$TOOL": Frame("<flange>", np.zeros(6))}
         self._seen: dict[str, np.ndarray | None] = {"<base>": np.zeros(6), "<flange>": np.zeros(6)}
@@ -174,6 +178,8 @@ class Replay:
             if ev.key in anytime:
                 continue
             exact = ev.exact and ev.rhs is not None
+            if self.call is not None:
+                self.call.where = ev.line
             if ev.key in self.frames:
                 self.frames[ev.key] = self._unique(self._frame(ev, exact), ev)
                 tl.frames[ev.key].append((ev.offset, self.frames[ev.key]))
@@ -199,7 +205,7 @@ class Replay:
         if not now.known:
             return Point.unknown()
         if ev.field:
-            value, code = number(ev.rhs, self.lookup), FIELD_CODE.get(ev.field)
+            value, code = number(ev.rhs, self.lookup, self.call), FIELD_CODE.get(ev.field)
             if code is None or np.isnan(value):
                 return Point.unknown()
             now.values[code], now.spans[code] = value, -1  # no longer a number of the text
@@ -222,7 +228,7 @@ class Replay:
         if not exact:
             return unknown
         if ev.field:
-            value = number(ev.rhs, self.lookup)
+            value = number(ev.rhs, self.lookup, self.call)
             if pose is None or ev.field not in _XYZABC or np.isnan(value):
                 return unknown
             pose = pose.copy()
