@@ -32,6 +32,7 @@ from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
 from .executed import anchor_offsets, per_call
 from .functions import Caller
+from .passes import Passes, followable
 from .loops import ForLoop, executed_rows, for_values, indexed_by_counter
 from .modules import base_name, visibility
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
@@ -233,6 +234,8 @@ class KrlParser:
         self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
         self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
         self._visible: set[str] | None = None  # names another module's data list being read makes visible (modules.py)
+        self._for_depth: dict[int, int] = {}  # FOR line -> blocks open around it in its routine
+        self._passes = Passes([], 1)  # FORs whose changes are followed pass by pass (passes.py)
         self._hidden: dict[str, str] = {}  # NAME -> file:line of a declaration another module cannot see
 
     # ---------------------------------------------------------------- data
@@ -296,6 +299,7 @@ class KrlParser:
         self._judge_jumps(src)
         self._plan_counter_loops(src)
         self._follow_calls(src)
+        self._follow_passes(src)
         caller = Caller([d.doc for d in self.docs])
         self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current), caller).run(self.changes, not self._has_goto)
         self.builder.notes.extend(dict.fromkeys(f"{src.doc.path}:{n}" for n in caller.notes))
@@ -489,6 +493,16 @@ class KrlParser:
                                           "(another module, a system routine, a recursive call or an INTERRUPT/TRIGGER handler): $BASE and $TOOL after it are unknown")
         self.changes = call_walk.remap(self.changes, self._visits, self.routines, FRAME_KEYS, handler_names)
 
+    def _follow_passes(self, src: _Doc) -> None:
+        """The first DEF's FORs whose body changes are replayed pass by pass (passes.py)."""
+        if self._has_goto or not self.for_loops:
+            return
+        main = self.routines[0] if self.routines else None
+        first = (int(src.lines.line(main.start)), int(src.lines.line(max(main.end - 1, main.start)))) if main else (1, len(src.lines.starts))
+        loops = followable(src.text, self.for_loops, self.calls, self._for_depth, src.lines.starts, first)
+        self._passes = Passes(loops, call_walk.SCALE if self._visits else 1)
+        self.changes = self._passes.events(self.changes)
+
     def _run_at(self, offset: int) -> list[int]:
         """Where a statement of the program file runs (virtual offsets, calls.py), once per
         executed copy of its routine; the offset itself when calls are not followed."""
@@ -504,6 +518,7 @@ class KrlParser:
             counter = str(next(c for c in node.children if isinstance(c, Token) and c.type == "NAME")).upper()
             values = for_values(*bounds[:3])
             self._for_open.append((line, counter, values))
+            self._for_depth[line] = self._depth  # 0: not inside another block (passes.py)
             if values is not None:
                 return
         if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
@@ -550,23 +565,24 @@ class KrlParser:
             return ev.rhs, _frame_of(point.values) if known else None
         if isinstance(ev.rhs, Tree) and ev.rhs.data == "lvalue" and _lvalue_text(ev.rhs) == "$NULLFRAME":
             return "$NULLFRAME", np.eye(4)  # the system's zero frame {X 0, Y 0, Z 0, A 0, B 0, C 0}
-        transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current)
+        transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current, ev.env)
         return name, transform if ok else None
 
-    def _eval_frame(self, d: _Doc, node, start: int, current=None) -> tuple[np.ndarray, bool, str]:
-        """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
+    def _eval_frame(self, d: _Doc, node, start: int, current=None, env=None) -> tuple[np.ndarray, bool, str]:
+        """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name);
+        ``env``: the FOR counters of the pass (BASE_DATA[I])."""
         if isinstance(node, Tree) and node.data == "geo":
             total, ok, names = np.eye(4), True, []
             for part in node.children:
-                t, r, n = self._eval_frame(d, part, start, current)
+                t, r, n = self._eval_frame(d, part, start, current, env)
                 total, ok = total @ t, ok and r
                 names.append(n)
             return total, ok, ":".join(names)
         if isinstance(node, Tree) and node.data == "aggregate":
             v, _, _, _ = self._agg(d, node, start)
             return _frame_of(v), True, self._text(d, node, start)
-        name = self._text(d, node, start)
-        key = _lvalue_text(node) if isinstance(node, Tree) and node.data == "lvalue" else None
+        key = _lvalue_text(node, env) if isinstance(node, Tree) and node.data == "lvalue" else None
+        name = key if env and key else self._text(d, node, start)
         point = current(key) if current is not None and key else self._declared(name)
         if point is None or not point.known or np.isnan(point.values[:6]).all():
             return np.eye(4), False, name
@@ -751,7 +767,7 @@ class KrlParser:
         tp = self._changed_points(tp, virtual)
         frame, tool, speed, cdis = self._program_state(offsets, virtual)
         tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
-        tp = self._unroll(tp, virtual, offsets, envs)  # before the poses: partial aggregates and _REL increments follow execution order
+        tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
         orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
@@ -792,17 +808,25 @@ class KrlParser:
         return [lp for lp in sub if lp not in called], [lp for lp in self.for_loops if lp not in sub]
 
     def _executed(self, tp: Toolpath, offsets: np.ndarray, approx: np.ndarray):
-        """Rows once per executed copy of their routine (executed.py), subprograms' FORs run;
-        returns the rows' real and virtual offsets and their loop counters."""
-        if not self._visits:
-            return tp, offsets, approx, offsets.copy(), [{}] * len(tp)
+        """Rows in execution order: once per executed copy of their routine (executed.py),
+        every FOR pass run (loops.py); returns the rows' real and virtual offsets (where
+        they run, passes.py) and their loop counters."""
         sub_loops, self._main_loops = self._loop_split()
-        rows, envs = self._rows_or_refuse(tp, sub_loops, None)
-        src = self.docs[0]
-        spans = [(int(src.lines.starts[lp.first_line - 1]), int(src.lines.starts[lp.last_line - 1])) for lp in sub_loops if lp.values is not None]
-        picked, virtual = per_call(offsets[rows], self._visits, self.routines, spans)
-        rows = rows[picked]
-        return tp.take(rows), offsets[rows], approx[rows], virtual, [envs[i] for i in picked.tolist()]
+        rows, envs, virtual = np.arange(len(tp)), [{}] * len(tp), offsets.copy()
+        if self._visits:
+            rows, envs = self._rows_or_refuse(tp, sub_loops, None)
+            src = self.docs[0]
+            spans = [(int(src.lines.starts[lp.first_line - 1]), int(src.lines.starts[lp.last_line - 1])) for lp in sub_loops if lp.values is not None]
+            picked, virtual = per_call(offsets[rows], self._visits, self.routines, spans)
+            rows, envs = rows[picked], [envs[i] for i in picked.tolist()]
+            tp, offsets, approx = tp.take(rows), offsets[rows], approx[rows]
+        if not any(lp.values is not None for lp in self._main_loops):  # a long CAM file: no copy of its rows
+            return tp, offsets, approx, virtual, envs
+        lines = self.docs[0].lines.line(anchor_offsets(virtual, offsets)) if self._visits else None
+        more_rows, more = self._rows_or_refuse(tp, self._main_loops, lines)
+        envs = [{**envs[r], **m} for r, m in zip(more_rows.tolist(), more)]
+        virtual = self._passes.rows(virtual[more_rows], envs)
+        return tp.take(more_rows), offsets[more_rows], approx[more_rows], virtual, envs
 
     def _rows_or_refuse(self, tp: Toolpath, loops: list[ForLoop], lines):
         try:
@@ -811,16 +835,12 @@ class KrlParser:
             d = self.docs[0]
             raise d.lines.error(d.doc.path, int(d.lines.starts[int(exc.args[0]) - 1]), "the FOR loops here run more than 1,000,000 motions: refused")
 
-    def _unroll(self, tp: Toolpath, virtual: np.ndarray, offsets: np.ndarray, envs: list[dict]) -> Toolpath:
-        """Every pass of the first DEF's FOR loops with a literal count (loops.py); a
-        subprogram's copy is placed by the line of the call that runs it."""
-        main_loops = self._main_loops if self._visits else self.for_loops
-        lines = self.docs[0].lines.line(anchor_offsets(virtual, offsets)) if self._visits else None
-        rows, more = self._rows_or_refuse(tp, main_loops, lines)
-        envs = [{**envs[r], **m} for r, m in zip(rows.tolist(), more)]
+    def _unroll(self, tp: Toolpath, envs: list[dict]) -> Toolpath:
+        """Targets NAME[I] of a FOR pass read as the element of that pass (loops.py)."""
         tl = self.timeline
         changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
-        tp = indexed_by_counter(tp.take(rows), envs, self.symbols.get, changed)
+        if any(envs):  # some row runs in a FOR pass
+            tp = indexed_by_counter(tp, envs, self.symbols.get, changed)
         by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
         now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
         if now_known:  # NAME[I] read per pass: no longer 'not declared'
