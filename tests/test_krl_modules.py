@@ -126,3 +126,30 @@ def test_builtin_arithmetic_functions(tmp_path):
     (tmp_path / "p.dat").write_text("DEFDAT p\nDECL E6POS XP1={X 0,Y 0,Z 500,A 0,B 90,C 0}\nENDDAT\n")
     tp = parse_program(tmp_path / "p.src")
     np.testing.assert_allclose(tp.base_positions()[0], [56, 0, 500])
+
+
+def test_compensate_with_data_writes_the_module_data_list_with_the_program(tmp_path):
+    # The whole job through the CLI: the target's numbers live in Dat/xPoints.dat (GLOBAL, PUBLIC),
+    # so OUT's folder gets the .src and the changed xPoints.dat, written together (postproc.files.write_all).
+    from helpers import TOOL, kr160
+
+    from postproc.effects import parse_effects
+    from postproc.errormodel import ErrorModel
+    from postproc.model_io import save_model
+
+    (tmp_path / "Dat").mkdir()
+    (tmp_path / "Dat" / "xPoints.dat").write_text("DEFDAT XPOINTS PUBLIC\nDECL GLOBAL E6POS XCUT={X 1000.0,Y 0.0,Z 400.0,A 0.0,B 180.0,C 0.0}\nENDDAT\n")
+    (tmp_path / "part.src").write_text("DEF part( )\n$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}\n$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}\nLIN XCUT\nEND\n")
+    model = tmp_path / "thermal.json"
+    save_model(model, ErrorModel.create(kr160(), TOOL, parse_effects("thermal"), {"thermal.alpha": 1.2e-5}))
+    out = tmp_path / "out" / "part.src"
+    out.parent.mkdir()
+    args = ["compensate", str(tmp_path / "part.src"), "--model", str(model), "-o", str(out), "--temp", "40", "--allow-model-mismatch"]
+    refused = CliRunner().invoke(app, args)
+    assert refused.exit_code != 0 and not (out.parent / "part.src").exists()  # XCUT not declared without --data
+    result = CliRunner().invoke(app, args + ["--data", str(tmp_path / "Dat")])
+    assert result.exit_code == 0, result.output
+    assert sorted(p.name for p in out.parent.iterdir()) == ["part.src", "xPoints.dat"]
+    assert (out.parent / "part.src").read_text() == (tmp_path / "part.src").read_text()
+    written = (out.parent / "xPoints.dat").read_text()
+    assert written != (tmp_path / "Dat" / "xPoints.dat").read_text() and "DECL GLOBAL E6POS XCUT={X " in written
