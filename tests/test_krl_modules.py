@@ -153,3 +153,18 @@ def test_compensate_with_data_writes_the_module_data_list_with_the_program(tmp_p
     assert (out.parent / "part.src").read_text() == (tmp_path / "part.src").read_text()
     written = (out.parent / "xPoints.dat").read_text()
     assert written != (tmp_path / "Dat" / "xPoints.dat").read_text() and "DECL GLOBAL E6POS XCUT={X " in written
+
+
+def test_two_changed_data_lists_of_one_name_are_refused_not_merged(tmp_path):
+    # A/xPoints.dat and B/xPoints.dat both hold a corrected point: beside OUT they would be one
+    # file; the job is refused before anything is written.
+    from postproc.errors import EmitError
+
+    for folder, name in (("A", "XA"), ("B", "XB")):
+        (tmp_path / folder).mkdir()
+        (tmp_path / folder / "xPoints.dat").write_text(f"DEFDAT XPOINTS PUBLIC\nDECL GLOBAL E6POS {name}={{X 1000.0,Y 0.0,Z 400.0,A 0.0,B 180.0,C 0.0}}\nENDDAT\n")
+    (tmp_path / "p.src").write_text("DEF p( )\nLIN XA\nLIN XB\nEND\n")
+    tp = parse_program(tmp_path / "p.src", modules=[tmp_path / "A", tmp_path / "B"])
+    texts = emit_texts(tp, tp.with_positions(tp.position + 0.5))
+    with pytest.raises(EmitError, match="would be written to this one path"):
+        files_for(tp, texts, tmp_path / "out" / "p.src")
