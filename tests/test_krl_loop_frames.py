@@ -63,3 +63,16 @@ def test_loops_that_cannot_be_followed_leave_the_frame_unknown(tmp_path):
     for body in bodies:
         tp = program(tmp_path, "LIN XP1\n" + body)
         assert tp.placed()[0] and not tp.placed()[1:].any(), body
+
+
+def test_while_and_repeat_over_a_counter_follow_the_frame_per_pass(tmp_path):
+    # KSS 8 SI "WHILE ... ENDWHILE" / "REPEAT ... UNTIL": with I = 1 and I = I + 1 the bodies run
+    # for I = 1, 2, 3 (counters.py). WHILE: $BASE.Y = I * 100 before LIN XP1: Y 100, 200, 300.
+    # REPEAT: LIN XP1, then $BASE.X = $BASE.X + 50: X 1000, 1050, 1100 under the LINs, 1150 after.
+    tp = program(tmp_path, "I = 1\nWHILE I <= 3\n  $BASE.Y = I * 100\n  LIN XP1\n  I = I + 1\nENDWHILE\nLIN XP1\n")
+    np.testing.assert_allclose(placed(tp), [[1100, 100, 500], [1100, 200, 500], [1100, 300, 500], [1100, 300, 500]])
+    tp = program(tmp_path, "I = 1\nREPEAT\n  LIN XP1\n  $BASE.X = $BASE.X + 50\n  I = I + 1\nUNTIL I > 3\nLIN XP1\n")
+    np.testing.assert_allclose(placed(tp)[:, 0], [1100, 1150, 1200, 1250])
+    # After the update the counter is the new one: $BASE.Y = I * 100 below I = I + 1 gives Y 200, 300, 400.
+    tp = program(tmp_path, "I = 1\nWHILE I <= 3\n  I = I + 1\n  $BASE.Y = I * 100\n  LIN XP1\nENDWHILE\n")
+    np.testing.assert_allclose(placed(tp)[:, 1], [200, 300, 400])

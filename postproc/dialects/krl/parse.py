@@ -522,6 +522,7 @@ class KrlParser:
             if values is not None:
                 return
         if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
+            self._for_depth[line] = self._depth
             condition = next((c for c in node.children if isinstance(c, Tree)), None) if kind == "while_open" else None
             straight = self._defs == 1 and sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in self._stack_now) == 1
             self._counter_open.append(CounterLoop(kind.split("_")[0].upper(), line, -1, condition, straight))

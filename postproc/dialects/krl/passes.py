@@ -6,7 +6,8 @@ variables": $BASE / $TOOL keep what the last executed assignment gave them. So
 ``FOR I = 1 TO 3`` with ``$BASE.X = $BASE.X + 100`` and ``LIN XP1`` in its body runs
 XP1 under three bases, and the code after ENDFOR under the third.
 
-A FOR is followed here when its passes are known (a literal count, loops.py), it is not
+A FOR is followed here when its passes are known (a literal count, loops.py; a WHILE or
+REPEAT over a counter, counters.py, likewise), it is not
 inside another block of the first DEF, and its body has no other block and no call (its
 statements are then straight-line code, once per pass). Its body's changes are replayed
 once per pass at "stretched" offsets: pass p of a body [a, b) lies at
@@ -34,6 +35,15 @@ class Followed:
     end: int  # real offset of the ENDFOR line
     counter: str
     values: list[int]
+    update: tuple[int, int] | None = None  # WHILE/REPEAT over a counter: (real offset of I = I + k, k)
+
+    def value(self, real: int, pass_index: int) -> int:
+        """The counter where ``real`` runs in that pass (after the update: the new value)."""
+        after = self.update is not None and real > self.update[0]
+        return self.values[pass_index] + (self.update[1] if after else 0)
+
+    def pass_of(self, real: int, value: int) -> int:
+        return self.values.index(value - (self.update[1] if self.update is not None and real > self.update[0] else 0))
 
 
 class Passes:
@@ -76,9 +86,9 @@ class Passes:
                 out.append(replace(ev, offset=self.virtual(ev.offset)))
                 continue
             lp = self.loops[k]
-            for p, value in enumerate(lp.values):
+            for p in range(len(lp.values)):
                 at = self.place(ev.line_offset, p) * self.scale
-                out.append(replace(ev, offset=at, exact=ev.rhs is not None, env={lp.counter: value}))
+                out.append(replace(ev, offset=at, exact=ev.rhs is not None, env={lp.counter: lp.value(ev.line_offset, p)}))
         return out
 
     def rows(self, virtual: np.ndarray, envs: list[dict]) -> np.ndarray:
@@ -89,8 +99,9 @@ class Passes:
         for i, v in enumerate(virtual.tolist()):
             if v < 0:
                 continue
-            k = self.loop_of(v // self.scale)
-            p = self.loops[k].values.index(envs[i][self.loops[k].counter]) if k is not None else 0
+            real = v // self.scale
+            k = self.loop_of(real)
+            p = self.loops[k].pass_of(real, envs[i][self.loops[k].counter]) if k is not None else 0
             out[i] = self.virtual(v, p)
         return out
 
@@ -99,7 +110,7 @@ def followable(text: str, loops, calls, depth_of: dict[int, int], line_starts: n
     """The FORs of the first DEF whose changes are followed pass by pass (module docstring)."""
     out = []
     for lp in loops:
-        if lp.values is None or not lp.values or lp.update is not None or depth_of.get(lp.first_line) != 0:
+        if lp.values is None or not lp.values or depth_of.get(lp.first_line) != 0:
             continue
         if not first_def[0] <= lp.first_line <= first_def[1]:
             continue
@@ -107,5 +118,6 @@ def followable(text: str, loops, calls, depth_of: dict[int, int], line_starts: n
         body_start = int(line_starts[lp.first_line]) if lp.first_line < len(line_starts) else end
         if _BLOCK.search(text, body_start, end) or any(lp.first_line < c.line < lp.last_line for c in calls):
             continue
-        out.append(Followed(start, end, lp.counter, list(lp.values)))
+        update = (int(line_starts[lp.update[0] - 1]), lp.update[1]) if lp.update is not None else None
+        out.append(Followed(start, end, lp.counter, list(lp.values), update))
     return out
