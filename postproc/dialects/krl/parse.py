@@ -755,7 +755,7 @@ class KrlParser:
             point = tl.point_at(str(keys[k]), int(virtual[r])) if virtual[r] >= 0 else Point.unknown()
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
-        return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert)
+        return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert, joints=values[:, 7:13].copy(), ext=values[:, 13:19].copy())
 
     def _finish(self) -> Toolpath:
         self._collect_slow_targets()
@@ -782,8 +782,6 @@ class KrlParser:
             kind=np.where(joint_only, np.int8(Kind.ABSJ), tp.kind).astype(np.int8),
             position=pose[:, :3],
             orientation=orientation,
-            joints=values[:, 7:13].copy(),
-            ext=values[:, 13:19].copy(),
             resolved=declared,
         )
 
@@ -842,6 +840,7 @@ class KrlParser:
         changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
         if any(envs):  # some row runs in a FOR pass
             tp = indexed_by_counter(tp, envs, self.symbols.get, changed)
+            tp = replace(tp, joints=tp.values[:, 7:13].copy(), ext=tp.values[:, 13:19].copy())  # NAME[I] may be an E6AXIS
         by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
         now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
         if now_known:  # NAME[I] read per pass: no longer 'not declared'
