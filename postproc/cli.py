@@ -623,6 +623,7 @@ def compensate_cmd(
     grid: Optional[Path] = typer.Option(None, "--grid", help="Five-axis (--model MACHINE.toml): linear-axis error grid CSV x,y,z,dx,dy,dz (seed 004)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
     stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
+    data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
@@ -656,8 +657,8 @@ def compensate_cmd(
     error_model, _ = load_model(model)
     forces = None if force is None else _floats(force, 3, "--force")
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
-        if cut is not None or in_place or subdivide or force_file is not None:
-            raise InputError("--cut, --force-file, --in-place and --subdivide work on one program at a time (not with --out-dir)")
+        if cut is not None or in_place or subdivide or force_file is not None or data:
+            raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
         options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
                    "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
                    "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
@@ -669,9 +670,9 @@ def compensate_cmd(
     stream_options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces, "max_deviation_mm": max_deviation,
                       "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
                       "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
-    if cut is None and report is None and output != "-" and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
+    if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
-    tp = _read_program(program, dialect)
+    tp = _read_program(program, dialect, data)
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
@@ -776,12 +777,13 @@ def _write_point_report(report: Path, rep, summary: dict) -> None:
     write_text_atomic(report, json.dumps(doc, indent=1) + "\n")
 
 
-def _read_program(program: str, dialect: str | None):
-    """The program at ``program``, or - for standard input (then ``dialect`` is needed)."""
+def _read_program(program: str, dialect: str | None, modules=None):
+    """The program at ``program``, or - for standard input (then ``dialect`` is needed);
+    ``modules``: other modules' files it uses (--data, KRL)."""
     from .programs import parse_program
 
     if program != "-":
-        return parse_program(Path(program), dialect)
+        return parse_program(Path(program), dialect, modules=modules or ())
     if dialect is None:
         raise InputError("reading a program from standard input needs --dialect")
     return parse_program("-", dialect, sys.stdin.buffer.read())
@@ -862,12 +864,13 @@ def inspect_cmd(
     program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, or a .pgf with its modules; KRL .src/.sub with its .dat, or a .dat alone; G-code .nc/.ngc/.gcode/.tap/.cnc/.mpf/.spf/.iso; other names by content)."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
     from .frames import matrix_to_quat_wxyz
     from .programs import parse_program
 
-    tp = parse_program(program, dialect)
+    tp = parse_program(program, dialect, modules=data or ())
     poses = tp.base_poses()
     has_ori = ~np.isnan(tp.orientation).any(axis=1)
     quats = np.full((len(tp), 4), np.nan)

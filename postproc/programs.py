@@ -23,10 +23,11 @@ def sniff(path: str | Path, data: bytes | None = None) -> str:
     return dialects.sniff(path, data).name
 
 
-def parse_program(path: str | Path, dialect: str | None = None, data: bytes | None = None) -> Toolpath:
-    """Parse a program file (or ``data`` read from it, e.g. standard input) into a Toolpath."""
+def parse_program(path: str | Path, dialect: str | None = None, data: bytes | None = None, modules=()) -> Toolpath:
+    """Parse a program file (or ``data`` read from it, e.g. standard input) into a Toolpath;
+    ``modules``: other modules' files (or folders of them) whose global data it uses (KRL)."""
     lang = dialects.get(dialect) if dialect else dialects.sniff(path, data)
-    return lang.parse(path, data)
+    return lang.parse(path, data, modules) if modules else lang.parse(path, data)
 
 
 def emit_texts(original: Toolpath, modified: Toolpath) -> list[str]:

@@ -17,7 +17,10 @@ given one frame: its targets are not placed (refused for compensation), with a n
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from postproc.programs import parse_program
 
@@ -83,9 +86,10 @@ END
     np.testing.assert_allclose([by_line[7], by_line[9], by_line[4]], [[1100, 0, 500], [100, 2000, 500], [100, 2000, 500]], atol=1e-9)
 
 
-def test_a_routine_called_with_different_frames_has_no_frame(tmp_path):
-    # sub( ) is called under BASE_DATA[1] and under BASE_DATA[2]; its LIN runs once in each:
-    # one IR row cannot hold both frames: not placed, and a note names the routine.
+def test_a_subprogram_called_twice_gives_a_row_per_call_with_the_frame_of_that_call(tmp_path):
+    # KSS 8 SI "Subprograms and functions": sub( ) runs each time it is called. Called under
+    # BASE_DATA[1] ({X 1000}) and then under BASE_DATA[2] ({Y 2000}): its LIN XP1 (100, 0, 500)
+    # is executed at (1100, 0, 500), then at (100, 2000, 500), then p's own LIN at (100, 2000, 500).
     tp = program(tmp_path, """
 DEF p( )
 $BASE = BASE_DATA[1]
@@ -98,13 +102,48 @@ DEF sub( )
 LIN XP1
 END
 """)
-    by_line = dict(zip(tp.line.tolist(), tp.placed().tolist()))
-    assert by_line == {6: True, 9: False}
-    assert any("sub is called where $BASE differs" in n for n in tp.notes)
+    assert tp.line.tolist() == [9, 9, 6]
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500], [100, 2000, 500], [100, 2000, 500]], atol=1e-9)
+
+
+def test_a_number_a_subprogram_runs_with_two_values_is_refused_on_write_back(tmp_path):
+    # Both executed copies of sub's LIN XP1 read the one declaration of XP1 (p.dat line 2):
+    # the same correction for both is written once; two different ones cannot be, and are
+    # refused with the number's file, line and column.
+    from postproc.errors import SharedNumberError
+    from postproc.programs import emit_texts
+
+    tp = program(tmp_path, "DEF p( )\nsub( )\nsub( )\nEND\nDEF sub( )\nLIN XP1\nEND\n")
+    assert tp.line.tolist() == [6, 6]
+    texts = emit_texts(tp, tp.with_positions(tp.position + [0.5, 0, 0]))
+    assert "XP1={X 100.5," in texts[1]
+    with pytest.raises(SharedNumberError) as exc:
+        emit_texts(tp, tp.with_positions(tp.position + [[0.5, 0, 0], [0.25, 0, 0]]))
+    assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.dat", 2, 19)
+
+
+def test_a_subprogram_called_in_a_loop_runs_once_per_pass(tmp_path):
+    # FOR I = 1 TO 2 with sub( ) inside, then sub( ) once more: three executed LIN XP1, each in
+    # BASE_DATA[1]: (1100, 0, 500) three times.
+    tp = program(tmp_path, """
+DEF p( )
+DECL INT I
+$BASE = BASE_DATA[1]
+FOR I = 1 TO 2
+sub( )
+ENDFOR
+sub( )
+END
+DEF sub( )
+LIN XP1
+END
+""")
+    assert tp.line.tolist() == [10, 10, 10]
+    np.testing.assert_allclose(tp.base_positions(), [[1100, 0, 500]] * 3, atol=1e-9)
 
 
 def test_a_routine_that_sets_its_frame_first_has_it_from_any_call(tmp_path):
-    # Called under two bases, but $BASE = BASE_DATA[2] runs before its LIN: (100, 2000, 500).
+    # Called under two bases, but $BASE = BASE_DATA[2] runs before its LIN: (100, 2000, 500) twice.
     tp = program(tmp_path, """
 DEF p( )
 $BASE = BASE_DATA[1]
@@ -117,7 +156,7 @@ $BASE = BASE_DATA[2]
 LIN XP1
 END
 """)
-    np.testing.assert_allclose(placed_positions(tp), [[100, 2000, 500]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[100, 2000, 500]] * 2, atol=1e-9)
 
 
 def test_what_is_not_straight_line_stays_unknown(tmp_path):
@@ -233,3 +272,15 @@ def test_a_handler_of_another_module_or_a_function_in_a_skipped_condition_is_not
     assert tp.placed().tolist() == [True, False]
     tp = program(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nIF f( ) THEN\nENDIF\nSKIP:\nLIN XP1\nEND\n")
     assert not tp.placed().any()
+
+
+def test_a_loop_of_a_subprogram_called_twice_runs_in_each_call(tmp_path):
+    # sub's FOR I = 1 TO 2 runs LIN XP[I] (p.dat: XP[1] = (1, 2, 3), XP[2] = (4, 5, 6)); sub is
+    # called under BASE_DATA[1] ({X 1000}) then BASE_DATA[2] ({Y 2000}): four executed motions
+    # (1001, 2, 3), (1004, 5, 6), (1, 2002, 3), (4, 2005, 6) (KSS 8 SI "FOR", "Subprograms").
+    (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\nsub( )\n$BASE = BASE_DATA[2]\nsub( )\nEND\n"
+                                    "DEF sub( )\nDECL INT I\nFOR I = 1 TO 2\nLIN XP[I]\nENDFOR\nEND\n")
+    (tmp_path / "p.dat").write_text("DEFDAT p\nDECL E6POS XP[2]\nXP[1]={X 1,Y 2,Z 3,A 0,B 90,C 0}\nXP[2]={X 4,Y 5,Z 6,A 0,B 90,C 0}\nENDDAT\n")
+    (tmp_path / "$config.dat").write_text(CONFIG)
+    tp = parse_program(tmp_path / "p.src")
+    np.testing.assert_allclose(placed_positions(tp), [[1001, 2, 3], [1004, 5, 6], [1, 2002, 3], [4, 2005, 6]], atol=1e-9)

@@ -99,10 +99,16 @@ LIN XP1
 $BASE = BASE_DATA[1]
 LIN XP2
 """)
-    # FOR I = 1 TO 3 runs its body three times (KSS 8 SI "FOR ... TO ... ENDFOR"): three rows.
+    # FOR I = 1 TO 3 runs its body three times (KSS 8 SI "FOR ... TO ... ENDFOR"): three rows,
+    # XP1.X = 100, 400, 700 in passes 1-3 and 1000 after ENDFOR (the body's change is followed
+    # pass by pass, passes.py); their frame stays unknown (the IF).
     assert tp.placed().tolist() == [False, False, False, False, False, True]
     np.testing.assert_allclose(tp.base_positions()[5], [1200, 50, 400], atol=1e-9)
-    assert np.isnan(tp.position[1:5]).all()  # XP1 itself is unknown there, whatever the frame
+    np.testing.assert_allclose(tp.position[1:5, 0], [100, 400, 700, 1000])
+    # A WHILE whose passes are not known: XP1 inside and after it is unknown.
+    tp = program(tmp_path, "$BASE = BASE_DATA[1]\nWHILE $IN[2]\n  LIN XP1\n  XP1.X = XP1.X + 300\nENDWHILE\nLIN XP1\nLIN XP2\n")
+    assert tp.placed().tolist() == [False, False, True]
+    assert np.isnan(tp.position[:2]).all()  # XP1 itself is unknown there, whatever the frame
 
 
 def test_with_clause_frames_hold_for_their_motion(tmp_path):

@@ -50,8 +50,14 @@ class Dialect:
         """The IR of a program from its source files (as ``read_sources`` gives them)."""
         raise NotImplementedError
 
-    def parse(self, path: str | Path, data: bytes | None = None) -> Toolpath:
-        return self.parse_sources(self.read_sources(path, data))
+    def parse(self, path: str | Path, data: bytes | None = None, modules=()) -> Toolpath:
+        return self.parse_sources(self.read_sources(path, data) + self.module_sources(path, modules))
+
+    def module_sources(self, program: str | Path, paths) -> list[SourceDoc]:
+        """Other modules' files the program uses (``--data``): KRL only."""
+        if paths:
+            raise InputError(f"{program}: --data (other modules' data lists) is for KRL programs, not {self.name}")
+        return []
 
     # ------------------------------------------------------------- controller
     def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -107,7 +113,11 @@ class Dialect:
         paths = self.output_paths(original, output)
         if len(paths) != len(original.sources) or len(texts) != len(original.sources):
             raise EmitError(f"{self.name}: {len(original.sources)} source files, {len(texts)} texts and {len(paths)} output paths: no file may be left out")
-        return {path: text for path, text, doc in zip(paths, texts, original.sources) if text != doc.text or self.travels_with_program(doc)}
+        written = [(path, text, doc) for path, text, doc in zip(paths, texts, original.sources) if text != doc.text or self.travels_with_program(doc)]
+        clash = {p for p in (w[0] for w in written) if sum(Path(q).resolve() == Path(p).resolve() for q, _, _ in written) > 1}
+        if clash:  # two changed files of one job (KRL: two modules' xPoints.dat) would land on one path
+            raise EmitError(f"{', '.join(map(str, sorted(clash)))}: two changed input files ({', '.join(d.path for q, _, d in written if q in clash)}) would be written to this one path; nothing was written")
+        return {path: text for path, text, _ in written}
 
     def emit(self, original: Toolpath, modified: Toolpath, output: Path) -> dict[Path, str]:
         """{path: text} of every file to write for ``modified`` at ``output`` (see ``files``)."""

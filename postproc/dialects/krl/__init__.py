@@ -38,6 +38,13 @@ class KrlDialect(Dialect):
             docs.append(SourceDoc.read(config, "config"))
         return docs
 
+    def module_sources(self, program, paths) -> list[SourceDoc]:
+        """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
+        functions), or folders of them (modules.py)."""
+        from .modules import module_docs
+
+        return module_docs(program, paths) if paths else []
+
     def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import KrlParser
 
@@ -100,7 +107,13 @@ class KrlDialect(Dialect):
         """The .src at ``output``, its .dat beside it (same name), $config.dat in that folder."""
         output = Path(output)
         where = {"src": output, "dat": output.with_suffix(".dat"), "config": output.parent / CONFIG_DAT}
-        return [where.get(doc.role, output.parent / Path(doc.path).name) for doc in original.sources]
+        in_place = str(original.sources[0].path) != "-" and output.resolve() == Path(original.sources[0].path).resolve()
+
+        def other(doc):  # another module's file (--data): its own place when in place, else beside OUT
+            return Path(doc.path) if in_place else output.parent / Path(doc.path).name
+
+        kept = {"src", "dat"} | ({"config"} if not in_place else set())
+        return [where[doc.role] if doc.role in kept else other(doc) for doc in original.sources]
 
     def travels_with_program(self, doc: SourceDoc) -> bool:
         return doc.role in ("src", "dat")  # a module is its .src and its .dat

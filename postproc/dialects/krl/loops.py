@@ -72,24 +72,29 @@ def _sequence(rows: np.ndarray, lines: np.ndarray, loops: list[ForLoop], env: di
     envs.extend([env] * len(rest))
 
 
-def unroll(tp: Toolpath, loops: list[ForLoop], lookup, changed_arrays: set[str]) -> Toolpath:
-    """``tp`` with every known-count FOR of the program file run (see the module's docstring).
-    ``lookup(name)`` gives a declared point's (values, spans, conf, insert) or None."""
+def executed_rows(tp: Toolpath, loops: list[ForLoop], lines: np.ndarray | None = None) -> tuple[np.ndarray, list[dict]]:
+    """Rows of ``tp`` in execution order with every known-count FOR run, and the counters'
+    values of each; ``lines``: the line that places each row against the loops (default
+    its own: a subprogram's copy is placed by the line of its call, calls.py)."""
     known = [lp for lp in loops if lp.values is not None]
     if not known:
-        return tp
+        return np.arange(len(tp)), [{}] * len(tp)
     program = np.nonzero(tp.file == 0)[0]
     others = np.nonzero(tp.file != 0)[0]
     out: list[int] = []
     envs: list[dict] = []
-    _sequence(program, tp.line, known, {}, out, envs)
-    rows = np.array(out + others.tolist(), dtype=np.int64)
-    envs = envs + [{}] * len(others)
-    tp = tp.take(rows)
-    return _indexed_by_counter(tp, envs, lookup, changed_arrays)
+    _sequence(program, tp.line if lines is None else lines, known, {}, out, envs)
+    return np.array(out + others.tolist(), dtype=np.int64), envs + [{}] * len(others)
 
 
-def _indexed_by_counter(tp: Toolpath, envs: list[dict], lookup, changed_arrays: set[str]) -> Toolpath:
+def unroll(tp: Toolpath, loops: list[ForLoop], lookup, changed_arrays: set[str]) -> Toolpath:
+    """``tp`` with every known-count FOR of the program file run (see the module's docstring).
+    ``lookup(name)`` gives a declared point's (values, spans, conf, insert) or None."""
+    rows, envs = executed_rows(tp, loops)
+    return indexed_by_counter(tp.take(rows), envs, lookup, changed_arrays)
+
+
+def indexed_by_counter(tp: Toolpath, envs: list[dict], lookup, changed_arrays: set[str]) -> Toolpath:
     """Targets ``NAME[I]`` with I a counter of the pass: the element of that pass."""
     index = re.compile(r"^([A-Za-z_$][\w$]*)\[\s*([A-Za-z_]\w*)\s*\]$")
     hits = [(r, m) for r, name in enumerate(tp.target_name) if envs[r] and (m := index.match(name or ""))]

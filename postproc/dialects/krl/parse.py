@@ -30,7 +30,11 @@ from . import calls as call_walk
 from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
 from .jumps import Goto, why_not_straight
-from .loops import ForLoop, for_values, unroll
+from .executed import anchor_offsets, per_call
+from .functions import Caller
+from .passes import Passes, followable
+from .loops import ForLoop, executed_rows, for_values, indexed_by_counter
+from .modules import base_name, visibility
 from .state import BAS_KEEPS_FRAMES, FRAME_KEYS, Event, Point, Replay, Timeline, _lvalue_text, number
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -229,14 +233,22 @@ class KrlParser:
         self.routines: list[call_walk.Routine] = []  # DEF ... END of the program file
         self.calls: list[call_walk.Call] = []  # calls of the program file (other than BAS)
         self._visits: list[call_walk.Visit] = []  # executed copies of the routines (calls.py)
+        self._visible: set[str] | None = None  # names another module's data list being read makes visible (modules.py)
+        self._for_depth: dict[int, int] = {}  # FOR line -> blocks open around it in its routine
+        self._passes = Passes([], 1)  # FORs whose changes are followed pass by pass (passes.py)
+        self._hidden: dict[str, str] = {}  # NAME -> file:line of a declaration another module cannot see
 
     # ---------------------------------------------------------------- data
     def _declarations(self, d: _Doc) -> np.ndarray:
         """Bulk point declarations and array elements of one file; returns the lines they fill.
-        In the program an element assignment runs in order: the grammar reads it (an Event)."""
+        In the program an element assignment runs in order: the grammar reads it (an Event).
+        Another module's data list gives only what it makes visible and no local name hides."""
         done = np.zeros(len(d.lines.starts), bool)
         for regex in (RE_DECL, RE_ELEM) if d.index else (RE_DECL,):
             matches = d.shapes().match(regex)
+            if len(matches) and self._visible is not None:
+                done[matches.line] = True
+                matches = matches.subset(self._visible_mask(d, matches))
             if not len(matches):
                 continue
             values, spans, conf, insert = d.aggregates(*matches.span("agg"))
@@ -245,14 +257,39 @@ class KrlParser:
         return done
 
     # ----------------------------------------------------------- statements
+    def _visible_mask(self, d: _Doc, matches) -> np.ndarray:
+        """Declarations of another module's data list another module sees, not hidden by a local name."""
+        names = matches.group("name")
+        seen = np.array([base_name(n) in self._visible for n in names], dtype=bool)
+        return seen & (self.symbols.rows_of_spans(d.raw, matches.spans["name"]) == self.symbols.count)
+
+    def _sees(self, name: str) -> bool:
+        """A name of the file being read may be declared: always in the program's own files;
+        in another module's data list when GLOBAL there and not declared locally."""
+        return self._visible is None or (base_name(name) in self._visible and self.symbols.get(name) is None)
+
+    def _module_data(self) -> None:
+        """Other modules' data lists (--data, modules.py): their GLOBAL points of PUBLIC lists,
+        after the program's own files (a local name hides a global one)."""
+        for d in self.docs[1:]:
+            if d.doc.role != "module":
+                continue
+            self._visible, hidden = visibility(d.text)
+            for name, line in hidden.items():
+                self._hidden.setdefault(name, f"{d.doc.path}:{line}")
+            self._slow_lines(d, skip=self._declarations(d), is_program=False)
+        self._visible = None
+
     def parse(self) -> Toolpath:
         src = self.docs[0]
+        own = [d for d in self.docs[1:] if not d.doc.role.startswith("module")]
         data_lines = {}
-        for d in self.docs[1:]:
+        for d in own:
             data_lines[d.index] = self._declarations(d)
         src_decl = self._declarations(src)
-        for d in self.docs[1:]:
+        for d in own:
             self._slow_lines(d, skip=data_lines[d.index], is_program=False)
+        self._module_data()
         moves = src.shapes().match(RE_MOVE)
         inline = moves.subset(moves.present("agg"))
         named = moves.subset(~moves.present("agg"))
@@ -262,7 +299,10 @@ class KrlParser:
         self._judge_jumps(src)
         self._plan_counter_loops(src)
         self._follow_calls(src)
-        self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current)).run(self.changes, not self._has_goto)
+        self._follow_passes(src)
+        caller = Caller([d.doc for d in self.docs])
+        self.timeline = Replay(self._declared, lambda ev: self._read_agg(src, ev), lambda ev, current: self._frame_value(src, ev, current), caller).run(self.changes, not self._has_goto)
+        self.builder.notes.extend(dict.fromkeys(f"{src.doc.path}:{n}" for n in caller.notes))
         self._bulk_moves(src, inline, named)
         return self._finish()
 
@@ -453,6 +493,16 @@ class KrlParser:
                                           "(another module, a system routine, a recursive call or an INTERRUPT/TRIGGER handler): $BASE and $TOOL after it are unknown")
         self.changes = call_walk.remap(self.changes, self._visits, self.routines, FRAME_KEYS, handler_names)
 
+    def _follow_passes(self, src: _Doc) -> None:
+        """The first DEF's FORs whose body changes are replayed pass by pass (passes.py)."""
+        if self._has_goto or not self.for_loops:
+            return
+        main = self.routines[0] if self.routines else None
+        first = (int(src.lines.line(main.start)), int(src.lines.line(max(main.end - 1, main.start)))) if main else (1, len(src.lines.starts))
+        loops = followable(src.text, self.for_loops, self.calls, self._for_depth, src.lines.starts, first)
+        self._passes = Passes(loops, call_walk.SCALE if self._visits else 1)
+        self.changes = self._passes.events(self.changes)
+
     def _run_at(self, offset: int) -> list[int]:
         """Where a statement of the program file runs (virtual offsets, calls.py), once per
         executed copy of its routine; the offset itself when calls are not followed."""
@@ -468,9 +518,11 @@ class KrlParser:
             counter = str(next(c for c in node.children if isinstance(c, Token) and c.type == "NAME")).upper()
             values = for_values(*bounds[:3])
             self._for_open.append((line, counter, values))
+            self._for_depth[line] = self._depth  # 0: not inside another block (passes.py)
             if values is not None:
                 return
         if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
+            self._for_depth[line] = self._depth
             condition = next((c for c in node.children if isinstance(c, Tree)), None) if kind == "while_open" else None
             straight = self._defs == 1 and sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in self._stack_now) == 1
             self._counter_open.append(CounterLoop(kind.split("_")[0].upper(), line, -1, condition, straight))
@@ -484,7 +536,7 @@ class KrlParser:
         for decl in node.children:
             if isinstance(decl, Tree) and decl.data == "declarator" and len(decl.children) >= 2:
                 value = decl.children[-1]
-                if isinstance(value, Tree) and value.data == "aggregate":
+                if isinstance(value, Tree) and value.data == "aggregate" and self._sees(str(decl.children[0])):
                     v, sp, c, ins = self._agg(d, value, start)
                     self.symbols.add_many([str(decl.children[0])], [v], [sp], [c], [ins])
 
@@ -514,23 +566,24 @@ class KrlParser:
             return ev.rhs, _frame_of(point.values) if known else None
         if isinstance(ev.rhs, Tree) and ev.rhs.data == "lvalue" and _lvalue_text(ev.rhs) == "$NULLFRAME":
             return "$NULLFRAME", np.eye(4)  # the system's zero frame {X 0, Y 0, Z 0, A 0, B 0, C 0}
-        transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current)
+        transform, ok, name = self._eval_frame(d, ev.rhs, ev.line_offset, current, ev.env)
         return name, transform if ok else None
 
-    def _eval_frame(self, d: _Doc, node, start: int, current=None) -> tuple[np.ndarray, bool, str]:
-        """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name)."""
+    def _eval_frame(self, d: _Doc, node, start: int, current=None, env=None) -> tuple[np.ndarray, bool, str]:
+        """A frame expression (aggregate, named frame, a:b) -> (transform, resolved, name);
+        ``env``: the FOR counters of the pass (BASE_DATA[I])."""
         if isinstance(node, Tree) and node.data == "geo":
             total, ok, names = np.eye(4), True, []
             for part in node.children:
-                t, r, n = self._eval_frame(d, part, start, current)
+                t, r, n = self._eval_frame(d, part, start, current, env)
                 total, ok = total @ t, ok and r
                 names.append(n)
             return total, ok, ":".join(names)
         if isinstance(node, Tree) and node.data == "aggregate":
             v, _, _, _ = self._agg(d, node, start)
             return _frame_of(v), True, self._text(d, node, start)
-        name = self._text(d, node, start)
-        key = _lvalue_text(node) if isinstance(node, Tree) and node.data == "lvalue" else None
+        key = _lvalue_text(node, env) if isinstance(node, Tree) and node.data == "lvalue" else None
+        name = key if env and key else self._text(d, node, start)
         point = current(key) if current is not None and key else self._declared(name)
         if point is None or not point.known or np.isnan(point.values[:6]).all():
             return np.eye(4), False, name
@@ -544,7 +597,7 @@ class KrlParser:
         lhs = self._text(d, node.children[0], start).upper().replace(" ", "")
         rhs = node.children[1]
         if d.index != 0:
-            if isinstance(rhs, Tree) and rhs.data == "aggregate":
+            if isinstance(rhs, Tree) and rhs.data == "aggregate" and self._sees(lhs):
                 v, sp, c, ins = self._agg(d, rhs, start)
                 self.symbols.add_many([lhs], [v], [sp], [c], [ins])
             return
@@ -626,7 +679,7 @@ class KrlParser:
                 found = self.symbols.get(name)
                 if found is None:
                     v, sp, c, ins = np.full(NF, np.nan), np.full((NF, 3), -1, np.int64), np.full(4, np.nan), np.array([-1, -1])
-                    self.builder.notes.append(f"{d.doc.path}:{d.lines.line(start)}: point {name} is not declared in the given files")
+                    self.builder.notes.append(f"{d.doc.path}:{d.lines.line(start)}: {self._undeclared(name)}")
                 else:
                     v, sp, c, ins = found
             self.slow_targets.append((start, int(k), v, sp, c, ins, name, approx, relative))
@@ -656,13 +709,19 @@ class KrlParser:
                 rows = self.symbols.rows_of_spans(src.raw, moves.spans["name"])
                 missing = rows == self.symbols.count
                 for text in sorted(set(moves.subset(missing).group("name"))):
-                    self.builder.notes.append(f"point {text} is not declared in the given files")
+                    self.builder.notes.append(self._undeclared(text))
                 values, spans, conf, insert = (column[rows] for column in self.symbols.table())
                 names = np.array(moves.group("name"), dtype=object)
             self._collect(moves.start, kinds, values, spans, conf, insert, names, approx, line=moves.line + 1)
 
+    def _undeclared(self, name: str) -> str:
+        where = self._hidden.get(base_name(name))
+        if where is None:
+            return f"point {name} is not declared in the given files"
+        return (f"point {name} is not declared in the given files: {where} declares it without GLOBAL or in a data list "
+                "that is not PUBLIC, which other modules do not see (KSS 8 'Data lists')")
+
     def _collect(self, offsets, kinds, values, spans, conf, insert, names, approx, relative=None, line=None):
-        values, spans, conf, insert = self._changed_points(offsets, names, values, spans, conf, insert)
         self.builder.add_block(
             offsets,
             kind=kinds,
@@ -676,28 +735,27 @@ class KrlParser:
         )
         self._approx_blocks.append((offsets, approx))
 
-    def _changed_points(self, offsets, names, values, spans, conf, insert):
-        """Targets naming a point the program changes take its state at their line."""
+    def _changed_points(self, tp: Toolpath, virtual: np.ndarray) -> Toolpath:
+        """Targets naming a point the program changes take its state where they run (one
+        state per executed row; a row no call reaches: not known)."""
         tl = self.timeline
-        if not (tl.points or tl.arrays) or not len(offsets):
-            return values, spans, conf, insert
-        named = np.nonzero(np.asarray(names, dtype=object) != "")[0]  # inline aggregates have no name
+        names = np.asarray(tp.target_name, dtype=object)
+        named = np.nonzero(names != "")[0] if (tl.points or tl.arrays) and len(tp) else np.zeros(0, np.int64)
         if not len(named):
-            return values, spans, conf, insert
-        keys = np.char.upper(np.char.replace(np.char.replace(np.asarray(names, dtype=object)[named].astype(str), " ", ""), "\t", ""))
+            return tp
+        keys = np.char.upper(np.char.replace(np.char.replace(names[named].astype(str), " ", ""), "\t", ""))
         changed = np.isin(keys, list(tl.points))
         for prefix in tl.arrays:
             changed |= np.char.startswith(keys, prefix)
         if not changed.any():
-            return values, spans, conf, insert
-        values, spans, conf, insert = values.copy(), spans.copy(), conf.copy(), insert.copy()
+            return tp
+        values, spans, conf, insert = tp.values.copy(), tp.spans.copy(), tp.conf.copy(), tp.insert_at.copy()
         for k in np.nonzero(changed)[0].tolist():
             r = int(named[k])
-            states = [tl.point_at(str(keys[k]), at) for at in self._run_at(int(offsets[r]))]
-            point = states[0] if states and all(p is states[0] for p in states) else Point.unknown()  # one state per call, or not known
+            point = tl.point_at(str(keys[k]), int(virtual[r])) if virtual[r] >= 0 else Point.unknown()
             if point is not None:
                 values[r], spans[r], conf[r], insert[r] = point.values, point.spans, point.conf, point.insert
-        return values, spans, conf, insert
+        return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert, joints=values[:, 7:13].copy(), ext=values[:, 13:19].copy())
 
     def _finish(self) -> Toolpath:
         self._collect_slow_targets()
@@ -705,10 +763,12 @@ class KrlParser:
         approx = np.concatenate([b[1] for b in self._approx_blocks]) if self._approx_blocks else np.zeros(0, bool)
         perm = np.argsort(offsets, kind="stable")  # the builder orders targets the same way
         offsets, approx = offsets[perm], approx[perm]
-        frame, tool, speed, cdis = self._program_state(offsets)
         tp = self.builder.build(orientation=False)
-        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0))
-        tp = self._unroll(tp)  # before the poses: partial aggregates and _REL increments follow execution order
+        tp, offsets, approx, virtual, envs = self._executed(tp, offsets, approx)
+        tp = self._changed_points(tp, virtual)
+        frame, tool, speed, cdis = self._program_state(offsets, virtual)
+        tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
+        tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
         orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
@@ -725,15 +785,62 @@ class KrlParser:
             resolved=declared,
         )
 
-    def _unroll(self, tp: Toolpath) -> Toolpath:
-        """Every pass of the FOR loops with a literal count (loops.py)."""
-        tl = self.timeline
-        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+    def _tables(self) -> dict:
+        """The builder's frame and tool tables and notes as they are now (registered after build)."""
+        b = self.builder
+        return dict(tools=np.array(b.tools, dtype=float).reshape(-1, 4, 4), tool_names=tuple(b.tool_names),
+                    frames=np.array(b.frames, dtype=float).reshape(-1, 4, 4), frame_names=tuple(b.frame_names),
+                    frame_known=np.array(b.frame_known, dtype=bool), tool_known=np.array(b.tool_known, dtype=bool), notes=tuple(b.notes))
+
+    def _loop_split(self) -> tuple[list[ForLoop], list[ForLoop]]:
+        """FORs of subprograms (run first, by their own lines) and of the first DEF (run after
+        the calls are placed). A subprogram's FOR whose body calls a routine is listed once."""
+        if not self._visits:
+            return [], self.for_loops
+        main, src = self.routines[0], self.docs[0]
+        first = int(src.lines.line(main.start)), int(src.lines.line(max(main.end - 1, main.start)))
+        sub = [lp for lp in self.for_loops if not first[0] <= lp.first_line <= first[1]]
+        called = [lp for lp in sub if lp.values is not None and any(lp.first_line < c.line < lp.last_line for c in self.calls)]
+        for lp in called:
+            self.builder.notes.append(f"{src.doc.path}:{lp.first_line}: this FOR of a subprogram calls a routine in its body: "
+                                      "its motions are listed once (not run pass by pass)")
+        return [lp for lp in sub if lp not in called], [lp for lp in self.for_loops if lp not in sub]
+
+    def _executed(self, tp: Toolpath, offsets: np.ndarray, approx: np.ndarray):
+        """Rows in execution order: once per executed copy of their routine (executed.py),
+        every FOR pass run (loops.py); returns the rows' real and virtual offsets (where
+        they run, passes.py) and their loop counters."""
+        sub_loops, self._main_loops = self._loop_split()
+        rows, envs, virtual = np.arange(len(tp)), [{}] * len(tp), offsets.copy()
+        if self._visits:
+            rows, envs = self._rows_or_refuse(tp, sub_loops, None)
+            src = self.docs[0]
+            spans = [(int(src.lines.starts[lp.first_line - 1]), int(src.lines.starts[lp.last_line - 1])) for lp in sub_loops if lp.values is not None]
+            picked, virtual = per_call(offsets[rows], self._visits, self.routines, spans)
+            rows, envs = rows[picked], [envs[i] for i in picked.tolist()]
+            tp, offsets, approx = tp.take(rows), offsets[rows], approx[rows]
+        if not any(lp.values is not None for lp in self._main_loops):  # a long CAM file: no copy of its rows
+            return tp, offsets, approx, virtual, envs
+        lines = self.docs[0].lines.line(anchor_offsets(virtual, offsets)) if self._visits else None
+        more_rows, more = self._rows_or_refuse(tp, self._main_loops, lines)
+        envs = [{**envs[r], **m} for r, m in zip(more_rows.tolist(), more)]
+        virtual = self._passes.rows(virtual[more_rows], envs)
+        return tp.take(more_rows), offsets[more_rows], approx[more_rows], virtual, envs
+
+    def _rows_or_refuse(self, tp: Toolpath, loops: list[ForLoop], lines):
         try:
-            tp = unroll(tp, self.for_loops, self.symbols.get, changed)
+            return executed_rows(tp, loops, lines)
         except OverflowError as exc:
             d = self.docs[0]
             raise d.lines.error(d.doc.path, int(d.lines.starts[int(exc.args[0]) - 1]), "the FOR loops here run more than 1,000,000 motions: refused")
+
+    def _unroll(self, tp: Toolpath, envs: list[dict]) -> Toolpath:
+        """Targets NAME[I] of a FOR pass read as the element of that pass (loops.py)."""
+        tl = self.timeline
+        changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
+        if any(envs):  # some row runs in a FOR pass
+            tp = indexed_by_counter(tp, envs, self.symbols.get, changed)
+            tp = replace(tp, joints=tp.values[:, 7:13].copy(), ext=tp.values[:, 13:19].copy())  # NAME[I] may be an E6AXIS
         by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
         now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
         if now_known:  # NAME[I] read per pass: no longer 'not declared'
@@ -747,9 +854,9 @@ class KrlParser:
         columns = list(zip(*self.slow_targets))  # offset, kind, values, spans, conf, insert, name, approx, relative
         self._collect(*(np.array(c) for c in columns[:6]), list(columns[6]), np.array(columns[7]), np.array(columns[8]))
 
-    def _program_state(self, offsets: np.ndarray):
+    def _program_state(self, offsets: np.ndarray, virtual: np.ndarray):
         """Frame and tool index, speed (mm/s) and approximation distance at each target: the
-        last $BASE / $TOOL / $VEL.CP / $APO.CDIS before it."""
+        last $BASE / $TOOL (where the row runs: ``virtual``) / $VEL.CP / $APO.CDIS before it."""
         n = len(offsets)
         frame, tool = np.zeros(n, np.int32), np.zeros(n, np.int32)
         speed, cdis = np.full(n, np.nan), np.zeros(n)
@@ -764,7 +871,7 @@ class KrlParser:
             if key in FRAME_KEYS:
                 register = self.builder.frame_index if key == "$BASE" else self.builder.tool_index
                 ids = np.array([register(f.name, None if f.pose is None else f.transform(), f.pose is not None) for _, f in ev])
-                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, offsets, np.array([o for o, _ in ev]), ids, register)
+                (frame if key == "$BASE" else tool)[:] = self._frame_ids(key, virtual, offsets, np.array([o for o, _ in ev]), ids, register)
                 continue
             at = np.searchsorted(np.array([o for o, _ in ev]), offsets, side="right") - 1
             has = at >= 0
@@ -774,33 +881,15 @@ class KrlParser:
                 cdis[has] = np.array([v for _, v in ev], dtype=float)[at[has]]
         return frame, tool, speed, cdis
 
-
-    def _frame_ids(self, key: str, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
-        """The frame (or tool) index in force at each target: the last change before the
-        place where it runs; a target of a subprogram run with different frames from
-        different calls, or run by no call from the first DEF, gets an unknown one."""
-        def at(virtual: np.ndarray) -> np.ndarray:
-            k = np.searchsorted(starts, virtual, side="right") - 1
-            return np.where(k >= 0, ids[np.maximum(k, 0)], 0)
-
-        if not self._visits:
-            return at(offsets)
-        main = self.routines[0]
-        first = (offsets >= main.start) & (offsets < main.end)
-        out = np.zeros(len(offsets), np.int64)
-        out[first] = at(offsets[first] * call_walk.SCALE)
-        for i in np.nonzero(~first)[0].tolist():
-            found = set(at(np.array(self._run_at(int(offsets[i])), dtype=np.int64)).tolist())
+    def _frame_ids(self, key: str, virtual: np.ndarray, offsets: np.ndarray, starts: np.ndarray, ids: np.ndarray, register) -> np.ndarray:
+        """The frame (or tool) index in force where each row runs: the last change before it;
+        a target of a subprogram run by no call from the first DEF gets an unknown one."""
+        k = np.searchsorted(starts, virtual, side="right") - 1
+        out = np.where(k >= 0, ids[np.maximum(k, 0)], 0)
+        for i in np.nonzero(virtual < 0)[0].tolist():
             r = call_walk.routine_of(self.routines, int(offsets[i]))
             name = self.routines[r].name if r is not None else "?"
-            if len(found) == 1:
-                out[i] = found.pop()
-            elif not found:
-                out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
-            else:
-                out[i] = register(f"{key} in {name}: its calls run it with different frames", None, False)
-                self.builder.notes.append(f"{self.docs[0].doc.path}: {name} is called where {key} differs, before it sets its own: "
-                                          f"the {key} of its motions is not known")
+            out[i] = register(f"{key} in {name}, which no call from the first DEF reaches (or an INTERRUPT/TRIGGER handler): not known", None, False)
         return out
 
 
@@ -818,7 +907,10 @@ class _InlineFormState:
         self.machines = MachineFrames(None)
         if "fdat_act" not in src.lower():  # no inline form: nothing to follow (a 10^6-line CAM file skips the scans)
             return
-        self.fdats = declared_fdats([d.text for d in docs])
+        for d in (d for d in docs if d.doc.role == "module"):  # another module's: its GLOBAL FDATs only; local names win
+            seen, _ = visibility(d.text)
+            self.fdats.update({k: v for k, v in declared_fdats([d.text]).items() if k in seen})
+        self.fdats.update(declared_fdats([d.text for d in docs if not d.doc.role.startswith("module")]))
         for name in list(self.fdats):  # FP1.TOOL_NO = ...: that FDAT is not followed
             if re.search(rf"^[ \t]*{re.escape(name)}[ \t]*\.[ \t]*\w+[ \t]*=", src, re.IGNORECASE | re.MULTILINE):
                 self.fdats[name] = None

@@ -14,6 +14,7 @@ after the program may have changed it.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from itertools import chain, count
 
 import numpy as np
 from lark import Token, Tree
@@ -36,6 +37,7 @@ class Event:
     text: str = ""  # the statement's text (names the frame)
     line: int = 0
     anytime: bool = False  # in a subprogram or in a program with GOTO: may run before any line
+    env: dict | None = None  # the FOR counter's value in the pass it is replayed for (passes.py)
 
 
 @dataclass
@@ -88,37 +90,44 @@ class Timeline:
         return history[at][1] if at >= 0 else None
 
 
-def number(node, lookup) -> float:
+def number(node, lookup, call=None) -> float:
     """The value of a numeric expression of literals and known components; NaN otherwise.
-    ``lookup(text)`` gives a component such as ``XP1.X`` or ``$BASE.Z``."""
-    if isinstance(node, Token):
+    ``lookup(text)`` gives a component such as ``XP1.X`` or ``$BASE.Z``; ``call(node,
+    lookup)`` the value of a function call (functions.py), NaN without it."""
+    if isinstance(node, Token) or node is None:
         return float("nan")
     kind = node.data
     if kind == "number":
         return float(node.children[0])
     if kind == "neg":
-        return -number(node.children[0], lookup)
+        return -number(node.children[0], lookup, call)
     if kind in ("sum_expr", "prod_expr"):
-        total = number(node.children[0], lookup)
+        total = number(node.children[0], lookup, call)
         for op, operand in zip(node.children[1::2], node.children[2::2]):
-            v = number(operand, lookup)
+            v = number(operand, lookup, call)
             total = {"+": total + v, "-": total - v, "*": total * v, "/": total / v if v else float("nan")}.get(str(op), float("nan"))
         return total
     if kind == "lvalue":
         return lookup(_lvalue_text(node))
     if kind == "unary":  # unary plus keeps its tree when lark cannot inline it
-        return number(node.children[-1], lookup)
+        return number(node.children[-1], lookup, call)
+    if kind == "funcall" and call is not None:
+        return call(node, lookup)
     return float("nan")
 
 
-def _lvalue_text(node: Tree) -> str | None:
-    """NAME.FIELD or NAME[3].FIELD of an lvalue tree, upper case; None for other shapes."""
+def _lvalue_text(node: Tree, env: dict | None = None) -> str | None:
+    """NAME.FIELD or NAME[3].FIELD of an lvalue tree, upper case; None for other shapes.
+    ``env``: FOR counters' values (NAME[I] in a pass with I = 3 is NAME[3])."""
     parts = [str(node.children[0]).upper()]
     for acc in node.children[1:]:
-        if len(acc.children) == 1 and isinstance(acc.children[0], Token) and acc.children[0].type == "NAME":
-            parts.append("." + str(acc.children[0]).upper())
-        elif len(acc.children) == 1 and isinstance(acc.children[0], Tree) and acc.children[0].data == "number":
-            parts.append(f"[{int(float(acc.children[0].children[0]))}]")
+        child = acc.children[0] if len(acc.children) == 1 else None
+        if isinstance(child, Token) and child.type == "NAME":
+            parts.append("." + str(child).upper())
+        elif isinstance(child, Tree) and child.data == "number":
+            parts.append(f"[{int(float(child.children[0]))}]")
+        elif env and isinstance(child, Tree) and child.data == "lvalue" and len(child.children) == 1 and str(child.children[0]).upper() in env:
+            parts.append(f"[{env[str(child.children[0]).upper()]}]")
         else:
             return None
     return "".join(parts)
@@ -137,8 +146,10 @@ class Replay:
     the Point an aggregate right-hand side gives, ``frame_value(event, current)`` the
     (name, transform or None) of any other frame expression."""
 
-    def __init__(self, declared, read_agg, frame_value):
+    def __init__(self, declared, read_agg, frame_value, call=None):
         self.declared, self.read_agg, self.frame_value = declared, read_agg, frame_value
+        self.call = call  # function calls in expressions (functions.Caller), or None: not evaluated
+        self.env: dict | None = None  # the counter of the FOR pass being replayed
         self.points: dict[str, Point] = {}
         self.frames = {"$BASE": Frame("<base>", np.zeros(6)), "$TOOL": Frame("<flange>", np.zeros(6))}
         self._seen: dict[str, np.ndarray | None] = {"<base>": np.zeros(6), "<flange>": np.zeros(6)}
@@ -151,6 +162,8 @@ class Replay:
 
     def lookup(self, text: str | None) -> float:
         """A component (XP1.X, $BASE.Z) as it is now; NaN if unknown."""
+        if text and self.env and text in self.env:  # the FOR counter of the pass (passes.py)
+            return float(self.env[text])
         if not text or "." not in text:
             return float("nan")
         root, comp = text.rsplit(".", 1)
@@ -174,6 +187,9 @@ class Replay:
             if ev.key in anytime:
                 continue
             exact = ev.exact and ev.rhs is not None
+            if self.call is not None:
+                self.call.where = ev.line
+            self.env = ev.env
             if ev.key in self.frames:
                 self.frames[ev.key] = self._unique(self._frame(ev, exact), ev)
                 tl.frames[ev.key].append((ev.offset, self.frames[ev.key]))
@@ -187,9 +203,13 @@ class Replay:
     def _unique(self, frame: Frame, ev: Event) -> Frame:
         """One name, one value: a name met again with another value (BASE_DATA[1] changed
         in between) gets the line, so the IR's frame table keeps both."""
-        seen = self._seen.setdefault(frame.name, frame.pose)
-        same = (seen is None and frame.pose is None) or (seen is not None and frame.pose is not None and np.allclose(seen, frame.pose, rtol=0, atol=0))
-        return frame if same else Frame(f"{frame.name} as on line {ev.line}", frame.pose)
+        suffix = "".join(f", {k} = {v}" for k, v in (ev.env or {}).items())  # a FOR pass (passes.py)
+        names = [frame.name, f"{frame.name} as on line {ev.line}{suffix}"]
+        for name in chain(names, (f"{names[1]} ({k})" for k in count(2))):  # the first name free or holding this value
+            seen = self._seen.setdefault(name, frame.pose)
+            if (seen is None and frame.pose is None) or (seen is not None and frame.pose is not None and np.allclose(seen, frame.pose, rtol=0, atol=0)):
+                return frame if name == frame.name else Frame(name, frame.pose)
+        raise AssertionError("unreachable: count() does not end")
 
     def _point(self, ev: Event, exact: bool) -> Point:
         if not exact:
@@ -199,7 +219,7 @@ class Replay:
         if not now.known:
             return Point.unknown()
         if ev.field:
-            value, code = number(ev.rhs, self.lookup), FIELD_CODE.get(ev.field)
+            value, code = number(ev.rhs, self.lookup, self.call), FIELD_CODE.get(ev.field)
             if code is None or np.isnan(value):
                 return Point.unknown()
             now.values[code], now.spans[code] = value, -1  # no longer a number of the text
@@ -213,7 +233,7 @@ class Replay:
             now.conf = np.where(np.isnan(agg.conf), now.conf, agg.conf)
             now.insert = agg.insert
             return now
-        other = self.current(_lvalue_text(ev.rhs) or "") if isinstance(ev.rhs, Tree) and ev.rhs.data == "lvalue" else None
+        other = self.current(_lvalue_text(ev.rhs, ev.env) or "") if isinstance(ev.rhs, Tree) and ev.rhs.data == "lvalue" else None
         return other.copy() if other is not None else Point.unknown()
 
     def _frame(self, ev: Event, exact: bool) -> Frame:
@@ -222,7 +242,7 @@ class Replay:
         if not exact:
             return unknown
         if ev.field:
-            value = number(ev.rhs, self.lookup)
+            value = number(ev.rhs, self.lookup, self.call)
             if pose is None or ev.field not in _XYZABC or np.isnan(value):
                 return unknown
             pose = pose.copy()
