@@ -20,7 +20,7 @@ import numpy as np
 from lark import Token, Tree
 
 from ...frames import make_transform
-from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...ir import F_ARC, NF, Kind, SourceDoc, Toolpath
 from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
@@ -29,7 +29,7 @@ from . import arcwords, flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
-MORE = "LPQ@^"  # repeats, dwell / G10 P, peck, polar: words only the grammar reads (no spans)
+MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, cutter compensation D: words only the grammar reads (no spans)
 _MORE = {c: i for i, c in enumerate(MORE)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
@@ -58,10 +58,9 @@ _STATE_OF_G = {
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
     **{g: ("tlo", g) for g in (43.0, 43.1, 43.2, 43.4, 43.5, 49.0)},
-    # Cutter radius compensation: the controller offsets the path by the tool radius, which
-    # the program text does not determine (tool table), so targets under it are flagged.
-    **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
-    40.0: ("ccomp", 0.0),
+    # Cutter radius compensation (G41 / G42 tool table, G41.1 / G42.1 D diameter, G40 off):
+    # run by interp.py with cutter_comp.py, the code itself kept.
+    **{g: ("ccomp", g) for g in (40.0, 41.0, 41.1, 42.0, 42.1)},
     # Feed rate mode (LinuxCNC manual, "G93, G94, G95 Feed Rate Mode"): inverse time, units
     # per minute, units per spindle revolution.
     **{g: ("feedmode", g) for g in (93.0, 94.0, 95.0)},
@@ -486,7 +485,7 @@ class GcodeParser:
     def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
         runs is offset from these targets by a radius the IR does not model (noted once)."""
-        active = _ffill(t["ccomp"], 0.0)[rows] == 1.0
+        active = _ffill(t["ccomp"], 40.0)[rows] != 40.0
         if active.any():
             first = int(self.lines.line(t["offset"][rows[np.argmax(active)]]))
             self.builder.notes.append(f"line {first}: cutter radius compensation (G41/G42) is active: the controller offsets the path by the "
@@ -509,7 +508,7 @@ class GcodeParser:
         plane = _ffill(t["plane"], 17.0)
         modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": plane.tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
                  "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist(),
-                 "circle": self._block_circles(t, mode).tolist()}
+                 "circle": self._block_circles(t, mode).tolist(), "ijk": _ffill(t["ijk"], 91.1).tolist()}
         try:
             moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
@@ -518,9 +517,10 @@ class GcodeParser:
         m = len(rows)
         ir_values, ir_spans, ir_scale = np.full((m, NF), np.nan), np.full((m, NF, 3), -1, dtype=np.int64), np.ones((m, NF))
         point = np.hstack([moves.position, moves.abc])
+        written = np.hstack([moves.programmed, moves.abc])  # the text's numbers: under G41/G42 the path (position) is offset from them
         for k, f in _IR_FIELD_OF_AXIS.items():
             word = own & ~np.isnan(t["values"][rows, k])
-            ir_values[:, f] = np.where(word, point[:, k], np.nan)
+            ir_values[:, f] = np.where(word, written[:, k], np.nan)
             _put_spans(ir_spans, np.nonzero(own)[0], f, t["spans"][rows[own], k])
             if k < 3:
                 ir_scale[:, f] = scale[rows]
@@ -536,7 +536,8 @@ class GcodeParser:
             self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
                               f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there), or after a tool length change by a "
                               f"length it does not give; {int((~moves.exact).sum())} target(s) flagged")
-        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
+        self.notes.extend(moves.notes)
+        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & (moves.ccomp != 2) & moves.exact
                     & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0)))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -547,6 +548,7 @@ class GcodeParser:
         arc_move = np.isin(moves.motion, (2, 3))
         arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
                                  self.text, self._error_at)
+        arc = _offset_arcs(arc, moves, ir_values, ir_spans)
         axis_rows = _tool_axes(t, rows, np.where(arc_move, 49.0, tlo[rows]), ir_values, ir_spans, per_row=True) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
@@ -558,7 +560,7 @@ class GcodeParser:
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
                                **self._feed_columns(t, rows, moves.motion.astype(float)),
-                               **({"arc": arc} if arc is not None else {}))
+                               **({"arc": arc} if arc is not None else {}), **({"ccomp": moves.ccomp} if moves.ccomp.any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
 
@@ -692,6 +694,25 @@ class GcodeParser:
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _offset_arcs(arc: np.ndarray | None, moves, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray | None:
+    """Arcs of the compensated path (G41/G42: the programmed arcs at the offset radius and the
+    corner arcs the controller adds): their centre as absolute I J (G90.1 form) in the IR, so
+    that postproc.arcs reads the arc the machine cuts from the offset start; a corner arc has
+    no words of its own (no spans). ``arc`` is changed in place."""
+    at = np.nonzero(~np.isnan(moves.centre[:, 0]))[0]
+    if not len(at):
+        return arc
+    if arc is None:
+        arc = np.full((len(moves.row), 3), np.nan)
+    arc[at, 0], arc[at, 1] = 17.0, 1.0
+    arc[at, 2] = np.where(np.isnan(arc[at, 2]), 1.0, arc[at, 2])
+    ir_values[at, F_ARC.start : F_ARC.start + 2] = moves.centre[at]
+    ir_values[at, F_ARC.start + 2 :F_ARC.stop] = np.nan
+    generated = at[moves.generated[at]]
+    ir_spans[generated, F_ARC] = -1
+    return arc
 
 
 def _more_words(order: np.ndarray, n_bulk: int, slow_more: np.ndarray) -> np.ndarray:
