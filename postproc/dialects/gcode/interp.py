@@ -31,7 +31,8 @@ SETUP_CODES = (10.0, 52.0, 92.0, 92.1, 92.2, 92.3)
 # Moves that end where the program text does not say: G28 / G30 go to a position stored on the
 # controller (#5161-#5163 / #5181-#5183), G38.2-G38.5 stop where the probe touches.
 UNKNOWN_END_CODES = (28.0, 30.0, 38.2, 38.3, 38.4, 38.5)
-COMP_ON = (41.0, 41.1, 42.0, 42.1)  # cutter radius compensation left / right (G40: off)
+COMP_ON = (41.0, 41.1, 42.0, 42.1)
+RIGID_TAP = 33.1  # LinuxCNC manual, "G33.1 Rigid Tapping": to the words and back, "G33.1 moves end at the original coordinate"  # cutter radius compensation left / right (G40: off)
 
 
 class BlockError(ValueError):
@@ -45,7 +46,7 @@ class BlockError(ValueError):
 def needs_interpreter(t: dict) -> bool:
     """True where the block table has a construct only a block-by-block reading gets right
     (t["more"] holds the words L P Q @ ^)."""
-    if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any() or np.isin(t["ccomp"], COMP_ON).any():
+    if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES + (33.0, RIGID_TAP)).any() or t["g53"].any() or np.isin(t["ccomp"], COMP_ON).any():
         return True
     if np.isin(t["canned"], canned.CYCLES).any():
         return True
@@ -142,6 +143,7 @@ class _Run:
         self.tools = ToolTable()
         self.scale = 1.0  # mm per program unit of the block being read
         self.comp: _CompState | None = None  # G41/G42 in force
+        self.tapping = False  # G33.1 is the motion mode in force
         self.arc_not_allowed = False  # the move after a G40 that ended a compensated path must be straight
         self.notes: list[str] = []
 
@@ -230,6 +232,8 @@ class _Run:
         moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
         if m["sets_mode"][i] and mode not in canned.CYCLES:
             self.cycle.end_run(mode)
+        if m["sets_mode"][i]:
+            self.tapping = setup == RIGID_TAP
         if not moving:
             return
         if mode == 80.0:  # axis words after G80: Fanuc moves in the G0-G3 mode in force (rs274 refuses them)
@@ -268,7 +272,13 @@ class _Run:
             self.arc_not_allowed = False
             start = list(self.cur)
             self.cur = self._straight_end(i, words)
-            if self.comp is not None:
+            if self.tapping:  # in to the words, out again to the start (a move the text has no words for)
+                if self.comp is not None:
+                    raise CycleError("G33.1 rigid tapping under cutter radius compensation is not followed")
+                self.emit(i, 1, self.cur, False)
+                self.emit(i, 1, start, True)
+                self.cur = start
+            elif self.comp is not None:
                 self._comp_move(i, int(mode), start, words, line)
             else:
                 self.emit(i, int(mode), self.cur, "@" in words or "^" in words)

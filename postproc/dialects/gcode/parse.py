@@ -359,6 +359,9 @@ class GcodeParser:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
                 nonmotion |= gc in (43.1, 43.2)  # their X Y Z words are tool length offsets, not a move
+            elif gc in (33.0, 33.1):  # spindle-synchronized feed (motion group 1); G33.1 rigid tap: back to its start (interp.py)
+                state["motion"] = 1.0
+                state["setup"] = gc
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
             elif gc in (98.0, 99.0):
@@ -558,11 +561,32 @@ class GcodeParser:
         order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
-                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
-                               **self._feed_columns(t, rows, moves.motion.astype(float)),
+                               speed=self._speeds_of(t, rows, scale), insert_at=insert_at,
+                               **self._synced_feed_mode(t, rows, self._feed_columns(t, rows, moves.motion.astype(float))),
                                **({"arc": arc} if arc is not None else {}), **({"ccomp": moves.ccomp} if moves.ccomp.any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
+
+    def _speeds_of(self, t: dict, rows: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        """The speed column (mm/min as F is written) of targets read block by block; a G33 /
+        G33.1 move (LinuxCNC manual, "G33 Spindle Synchronized Motion", "G33.1 Rigid Tapping")
+        runs at K (distance per revolution) times the spindle speed S (NaN where S is not known)."""
+        speed = _ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows]
+        synced = np.isin(t["setup"][rows], (33.0, 33.1))
+        if synced.any():
+            spindle = _ffill(t["spindle"], np.nan)[rows]
+            spindle[np.isinf(spindle)] = np.nan
+            speed[synced] = (t["values"][rows, _AX["K"]] * scale[rows] * spindle)[synced]
+        return speed
+
+    @staticmethod
+    def _synced_feed_mode(t: dict, rows: np.ndarray, columns: dict) -> dict:
+        """G33 / G33.1 moves run at K x S whatever G93 / G94 / G95 is in force: their speed
+        column is that in mm/min already (feed mode 94)."""
+        synced = np.isin(t["setup"][rows], (33.0, 33.1))
+        if synced.any():
+            columns["feed_mode"] = np.where(synced, 94, columns["feed_mode"]).astype(np.int8)
+        return columns
 
     def _block_circles(self, t: dict, mode: np.ndarray) -> np.ndarray:
         """(n,) G2/G3 blocks with centre words and no end-point word: full circles back to
