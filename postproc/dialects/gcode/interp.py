@@ -243,6 +243,8 @@ class _Run:
         if mode in canned.CYCLES and self.cycle.last == mode and self.cycle.unknown:
             known = False  # R, bottom, P, Q kept from a cycle block that was not read: this hole is not known either
         if not known:  # a word the program text does not determine: the target and all after it are flagged
+            if self.comp is not None:
+                self._comp_lost(line, "a move whose words cannot be evaluated")
             self.cycle.end_run(mode)
             self.cycle.unknown = mode in canned.CYCLES
             self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
@@ -359,10 +361,19 @@ class _Run:
                 self._emit_comp(c.path.take(), 1)
                 return
             except Unfollowed as exc:
-                c.why = f"{exc} (rs274ngc's offset path is not followed from here)"
-                self.notes.append(f"line {line}: cutter radius compensation: {c.why}; the targets up to G40 are flagged (positions as programmed)")
-                self._emit_comp(c.path.off(), 2)
+                self._comp_lost(line, str(exc))
         self.emit(i, mode, self.cur, polar, ccomp=2)
+
+    def _comp_lost(self, line: int, why: str) -> None:
+        """From here to G40 the offset path is not followed: its pending moves and the targets after
+        them are flagged (positions as computed so far / as programmed), with the line and why."""
+        c = self.comp
+        if c.why is not None or c.radius == 0.0:
+            return
+        c.why = f"{why} (rs274ngc's offset path is not followed from here)"
+        self.notes.append(f"line {line}: cutter radius compensation: {c.why}; the targets up to G40 are flagged (positions as programmed)")
+        if c.path is not None:
+            self._emit_comp(c.path.off(), 2)
 
     def _emit_comp(self, outs: list, code: int) -> None:
         for o in outs:
@@ -601,7 +612,7 @@ def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray,
     return np.where(idx >= 0, named[np.maximum(idx, 0)], np.nan), has
 
 
-_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9])(?![\d.])|[@^]")
+_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9]|4[12](?:\.1)?)(?![\d.])|[@^]")
 
 
 def refuse_unwritable(original, modified) -> None:
@@ -614,7 +625,12 @@ def refuse_unwritable(original, modified) -> None:
     new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
     moved_before = np.concatenate([[False], moved[:-1]])  # a cycle starts from where the tool is: its moves follow
     after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
-    for rows, why in (((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
+    comp = (original.ccomp != 0) if original.ccomp is not None else np.zeros(len(original), bool)
+    for rows, why in (((moved | np.concatenate([moved[1:], [False]])) & comp,
+                       "it runs under cutter radius compensation (G41/G42): the controller offsets the programmed path by the tool radius "
+                       "and decides each end point from the next move, so a compensated position cannot be written back as the block's words "
+                       "(they would be offset again); post the tool-centre path without G41/G42 (CAM output with compensation 'in computer') first"),
+                      ((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
                        "compensated moves cannot be put in place; expand the cycle / polar moves to G0/G1 X Y Z blocks first"),
                       (after, "a G91 increment after an offset change or a canned cycle cannot be rewritten exactly; write the program in G90 first")):
         if rows.any():
