@@ -360,7 +360,7 @@ class _Run:
                     c.path.arc(i, mode, list(self.cur), centre, extra)
                 self._emit_comp(c.path.take(), 1)
                 return
-            except Unfollowed as exc:
+            except (ValueError, ZeroDivisionError, OverflowError) as exc:  # Unfollowed; a degenerate corner (math domain)
                 self._comp_lost(line, str(exc))
         self.emit(i, mode, self.cur, polar, ccomp=2)
 
