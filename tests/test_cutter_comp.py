@@ -171,3 +171,39 @@ def test_recordings_are_current(tmp_path, name):
 if __name__ == "__main__" and "--record" in sys.argv:
     record_all(PROGRAMS, _program, RECORDED)
     print(f"recorded {len(PROGRAMS)} programs in {RECORDED}")
+
+
+def test_inspect_and_convert_give_the_path_the_machine_cuts(tmp_path):
+    """`inspect --json` marks each compensated target (`cutter_comp`: offset / corner);
+    `convert --to rapid` writes the offset path, a corner arc as a MoveC through its middle."""
+    import json
+
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    path = _program(tmp_path, "outside_square")
+    res = CliRunner().invoke(app, ["inspect", str(path), "--json"])
+    assert res.exit_code == 0, res.output
+    marks = [m.get("cutter_comp") for m in json.loads(res.output)["moves"]]
+    assert marks == [None, None, "offset", "offset", "corner", "offset", "corner", "offset", "corner", "offset", None, None]
+    out = tmp_path / "out.mod"
+    res = CliRunner().invoke(app, ["convert", str(path), "--to", "rapid", "--frame", "G54=0,0,0,0,0,0", "-o", str(out)])
+    assert res.exit_code == 0, res.output
+    assert "MoveC [[31.4142,-1.4142,-1]" in out.read_text() and "MoveL [[32,20,-1]" in out.read_text()
+
+
+@pytest.mark.parametrize("body, why", [
+    ("G18\nG41.1 D2\nG1 X0 Z0\nX10\n", "G18 (XZ) plane is not followed"),  # LinuxCNC's lathe compensation: not modelled
+    ("G17\nG41.1 D8\nG1 X0 Y0\nX10\nG3 X10 Y6 I0 J3\n", "Tool radius not less than arc radius"),  # rs274ngc refuses the arc
+    ("G17\nG41.1 D2\nG3 X0 Y0 I5 J5\nG1 X10\n", "an arc as the first move"),  # an entry arc: not followed here
+])
+def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
+    """Never a guessed number: the targets under a compensation not followed are flagged
+    (resolved False, ccomp 2) and a note gives the line and the reason."""
+    prog = tmp_path / "nf.ngc"
+    prog.write_text("G21 G90\nG0 X-10 Y-10 Z1\nG1 F100\n" + body + "G40\nG1 X-10 Y-10\nM2\n")
+    tp = parse_program(prog)
+    under = tp.ccomp == 2
+    assert under.any() and not tp.resolved[under].any() and tp.resolved[~under].all()
+    assert any(why in n for n in tp.notes), tp.notes
