@@ -289,7 +289,13 @@ class CutterComp:
         return prev.centre[0] + old * math.cos(angle), prev.centre[1] + old * math.sin(angle)
 
     def off(self) -> list:
-        """G40 (or the end of the program): the pending moves go out where they end now."""
+        """G40 (or the end of the program, M2): the pending moves go out where they end now,
+        with rs274ngc's checks of a moved end (Unfollowed where it refuses them)."""
+        self._move_end_and_flush(self.cur[0], self.cur[1])
+        return self.take()
+
+    def drop(self) -> list:
+        """The pending and decided moves as they stand (the path is given up: flagged)."""
         self._dequeue()
         return self.take()
 

@@ -289,7 +289,7 @@ class _Run:
     def _comp_code(self, i: int, code: float, words: dict, known: bool, line: int) -> None:
         """G40 / G41 / G42 / G41.1 / G42.1 (LinuxCNC manual, "Cutter Compensation")."""
         if code == 40.0:
-            self._comp_off()
+            self._comp_off(line)
             return
         if self.comp is not None:
             raise CycleError("Cannot turn cutter radius comp on when on")
@@ -373,7 +373,7 @@ class _Run:
         c.why = f"{why} (rs274ngc's offset path is not followed from here)"
         self.notes.append(f"line {line}: cutter radius compensation: {c.why}; the targets up to G40 are flagged (positions as programmed)")
         if c.path is not None:
-            self._emit_comp(c.path.off(), 2)
+            self._emit_comp(c.path.drop(), 2)
 
     def _emit_comp(self, outs: list, code: int) -> None:
         for o in outs:
@@ -382,12 +382,15 @@ class _Run:
                       centre=o.centre if o.centre is not None else (math.nan, math.nan), programmed=o.end if o.generated else e["prog"],
                       abc=e["abc"], frame=e["frame"])
 
-    def _comp_off(self) -> None:
+    def _comp_off(self, line: int | None = None) -> None:
         """G40 (or the end of the program): the pending offset moves go out; the next move goes
         from where the tool is to its programmed end and must be straight."""
         c = self.comp
         if c is not None and c.path is not None:
-            self._emit_comp(c.path.off(), 1 if c.why is None else 2)
+            try:
+                self._emit_comp(c.path.off(), 1 if c.why is None else 2)
+            except Unfollowed as exc:  # LinuxCNC refuses where G40 / M2 leaves the last moves
+                self._comp_lost(c.line if line is None else line, f"{exc} (at G40 or the program's end)")
             self.arc_not_allowed = not c.path.first
         self.comp = None
 
