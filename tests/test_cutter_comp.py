@@ -55,6 +55,9 @@ PROGRAMS = {
     # a lens-shaped pocket (two circles' intersection): arc into arc at inside corners, the tool inside both
     "lens_arc_arc": "G21 G17 G90 G40\nG0 X6 Y-20 Z1\nG41.1 D4\nG1 X6 Y-8 F100\nG3 X6 Y8 I-6 J8\nG3 X6 Y-8 I6 J-8\n"
     "G3 X6 Y8 I-6 J8\nG40\nG1 X6 Y20\nM2\n",
+    # an arc as the entry move (tool outside, then inside after G40), R and I J
+    "entry_arc": "G21 G17 G90 G40\nG0 X0 Y-20 Z1\nG42.1 D4\nG2 X20 Y0 I0 J20 F100\nG1 X30\nG40\nG1 X40 Y-10\nG41.1 D3\n"
+    "G3 X60 Y10 R20\nG1 Y20\nG40\nG0 X40\nM2\n",
     # G41 D3 with tool 3's radius set in the program (G10 L1 P3 R1.5), an incremental run, Z-only moves
     "tool_table": "G21 G17 G90 G40\nG10 L1 P3 R1.5\nG0 X-10 Y-10 Z5\nG41 D3\nG1 X0 Y0 F200\nG91 X25\nZ-2\nY15\nG90 X0\nZ1\nY0\nG40\nG0 X-10 Y-10\nM2\n",
     # rapids under compensation (a convex corner: a straight traverse, no arc), a radius from a parameter
@@ -196,7 +199,7 @@ def test_inspect_and_convert_give_the_path_the_machine_cuts(tmp_path):
 @pytest.mark.parametrize("body, why", [
     ("G18\nG41.1 D2\nG1 X0 Z0\nX10\n", "G18 (XZ) plane is not followed"),  # LinuxCNC's lathe compensation: not modelled
     ("G17\nG41.1 D8\nG1 X0 Y0\nX10\nG3 X10 Y6 I0 J3\n", "Tool radius not less than arc radius"),  # rs274ngc refuses the arc
-    ("G17\nG41.1 D2\nG3 X0 Y0 I5 J5\nG1 X10\n", "an arc as the first move"),  # an entry arc: not followed here
+    ("G17\nG41.1 D6\nG1 X0 Y0\nG1 X1 Y0\nG1 X1 Y5\n", "Straight move in concave corner cannot be reached by the tool without gouging"),  # rs274ngc refuses
 ])
 def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
     """Never a guessed number: the targets under a compensation not followed are flagged
@@ -207,3 +210,60 @@ def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
     under = tp.ccomp == 2
     assert under.any() and not tp.resolved[under].any() and tp.resolved[~under].all()
     assert any(why in n for n in tp.notes), tp.notes
+
+
+def _random_program(rng: np.random.Generator) -> str:
+    """A G17 program of straight moves, Z moves and consistent arcs (I J or R) in G90, with
+    G41.1 / G42.1 / G40 (radius 0 to 3 mm, negative diameters too) at random places."""
+    x, y = rng.uniform(-20, 20, 2).round(4)
+    lines = ["G21 G17 G90 G40", f"G0 X{x} Y{y} Z1", "G1 F100"]
+    for _ in range(int(rng.integers(1, 11))):
+        r = rng.random()
+        if r < 0.12:
+            lines.append(["G40", f"G41.1 D{rng.uniform(-4, 6):.2f}", f"G42.1 D{rng.uniform(0, 6):.2f}"][int(rng.integers(3))])
+        elif r < 0.6:
+            x, y = rng.uniform(-20, 20, 2).round(4)
+            lines.append(f"G{[0, 1, 1, 1][int(rng.integers(4))]} X{x} Y{y}" + (f" Z{rng.uniform(-2, 1):.2f}" if rng.random() < 0.2 else ""))
+        elif r < 0.67:
+            lines.append(f"G1 Z{rng.uniform(-2, 1):.2f}")
+        else:
+            i, j = rng.uniform(-15, 15, 2)
+            a = rng.uniform(0, 2 * np.pi)
+            ex, ey = round(x + i + np.hypot(i, j) * np.cos(a), 4), round(y + j + np.hypot(i, j) * np.sin(a), 4)
+            g = 2 + int(rng.integers(2))
+            if rng.random() < 0.5 and np.hypot(ex - x, ey - y) > 1e-3:
+                radius = max(np.hypot(i, j), np.hypot(ex - x, ey - y) / 2 + 1e-3) * (1 if rng.random() < 0.5 else -1)
+                lines.append(f"G{g} X{ex} Y{ey} R{radius:.4f}")
+            else:
+                lines.append(f"G{g} X{ex} Y{ey} I{i:.4f} J{j:.4f}")
+            x, y = ex, ey
+    return "\n".join(lines + ["M2"]) + "\n"
+
+
+@needs_rs274
+def test_random_programs_equal_rs274s(tmp_path):
+    """Differential check (rs274 installed): 120 random compensated programs; where rs274 runs
+    one, the IR's every end point equals rs274's and nothing is flagged; where rs274 refuses
+    one (a gouge, a too short entry), the IR flags the targets or refuses the block."""
+    from postproc.errors import ParseError
+
+    rng = np.random.default_rng(20261123)
+    agree = 0
+    for n in range(120):
+        path = tmp_path / f"r{n}.ngc"
+        path.write_text(_random_program(rng))
+        accepted, calls, err = run_rs274(path)
+        try:
+            tp = parse_program(path)
+        except ParseError:
+            assert not accepted, f"{path.read_text()}: the IR refuses what rs274 runs"
+            continue
+        flagged = tp.ccomp is not None and bool((tp.ccomp == 2).any())
+        assert flagged != accepted, f"{path.read_text()}: rs274 {'runs' if accepted else 'refuses'} it ({err.strip()[-120:]}), the IR {'flags' if flagged else 'follows'} it"
+        if accepted:
+            canon, tol, arc = canonical_endpoints(calls)
+            keep = _moves(canon, tol, arc)
+            rows = _moves(machine_positions(tp), np.full(len(tp), 1e-9), np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)))
+            assert len(rows) == len(keep) and (np.abs(machine_positions(tp)[rows] - canon[keep]) <= tol[keep, None]).all(), path.read_text()
+            agree += 1
+    assert agree >= 90

@@ -98,7 +98,7 @@ class CutterComp:
     first: bool = True
     queue: list = field(default_factory=list)
     emitted: list = field(default_factory=list)
-    endpoint: tuple | None = None  # start of the pending moves, where rs274 checks a moved end against
+    endpoint: tuple | None = None  # start of the pending moves, where rs274 checks a moved end against (kept from the compensation before)
 
     def __post_init__(self):
         self.cur = list(self.prog)
@@ -220,7 +220,8 @@ class CutterComp:
 
     def arc(self, row: int, motion: int, end: list, centre: tuple, extra: dict) -> None:
         if self.first:
-            raise Unfollowed("an arc as the first move after G41/G42 (the entry move) is not followed here")
+            self._entry_arc(row, motion, end, centre, extra)
+            return
         r, (kx, ky) = self.radius, centre
         ox, oy = self.prog[0], self.prog[1]
         cx, cy, cz = self.cur
@@ -259,6 +260,31 @@ class CutterComp:
             self.endpoint = (cx, cy)
         self.queue.append(Out(row, motion, new_end, extra, centre=(kx, ky), turn=turn, sweep=sweep))
         self.prog, self.cur = list(end), new_end
+
+    def _entry_arc(self, row, motion, end, centre, extra) -> None:
+        """An arc as the entry move: from where the tool is to one radius off the programmed
+        end (toward the centre with the tool inside the arc, away from it outside), about the
+        point of the line from that end to the programmed centre as far from both ends."""
+        r, (kx, ky) = self.radius, centre
+        cx, cy = self.cur[0], self.cur[1]
+        px, py, pz = end
+        turn = 1 if motion == 3 else -1
+        inside = self._inside(turn)
+        if inside and math.hypot(kx - cx, ky - cy) <= r:
+            raise Unfollowed("Tool radius not less than arc radius with comp")
+        if math.hypot(px - cx, py - cy) <= r:
+            raise Unfollowed("Radius of cutter compensation entry arc is not greater than the tool radius")
+        gamma = math.atan2(ky - py, kx - px) if inside else math.atan2(py - ky, px - kx)
+        ex, ey = px + r * math.cos(gamma), py + r * math.sin(gamma)
+        toward = math.atan2(ky - ey, kx - ex)
+        cos_a = math.cos(math.atan2(cy - ey, cx - ex) - toward)
+        if abs(cos_a) < 1e-6:
+            raise Unfollowed("Tool radius not less than arc radius with comp")
+        reach = math.hypot(cy - ey, cx - ex) / 2.0 / cos_a
+        new_centre = (ex + reach * math.cos(toward), ey + reach * math.sin(toward))
+        sweep = find_turn(cx, cy, new_centre[0], new_centre[1], turn, ex, ey)
+        self.queue.append(Out(row, motion, [ex, ey, pz], extra, centre=new_centre, turn=turn, sweep=sweep))
+        self.prog, self.cur, self.first = list(end), [ex, ey, pz], False
 
     def _line_arc(self, theta, beta, arc_radius, inside, turn, centre) -> tuple[float, float]:
         r = self.radius

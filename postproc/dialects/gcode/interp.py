@@ -144,6 +144,7 @@ class _Run:
         self.scale = 1.0  # mm per program unit of the block being read
         self.comp: _CompState | None = None  # G41/G42 in force
         self.tapping = False  # G33.1 is the motion mode in force
+        self.comp_endpoint = None  # rs274ngc's check point for moved ends, where the last compensation left it
         self.arc_not_allowed = False  # the move after a G40 that ended a compensated path must be straight
         self.notes: list[str] = []
 
@@ -347,8 +348,8 @@ class _Run:
             self.emit(i, mode, self.cur, polar)
             return
         if c.why is None:
-            if c.path is None:
-                c.path = CutterComp(c.side, c.radius, c.scale, prog=start)
+            if c.path is None:  # rs274ngc's check point outlives a compensation (an entry arc is checked against it)
+                c.path = CutterComp(c.side, c.radius, c.scale, prog=start, endpoint=self.comp_endpoint)
             extra = {"abc": list(self.abc), "frame": self.frame_id(), "exact": self._all_exact(), "prog": list(self.cur), "polar": polar}
             try:
                 if mode in (0, 1):
@@ -392,6 +393,7 @@ class _Run:
             except Unfollowed as exc:  # LinuxCNC refuses where G40 / M2 leaves the last moves
                 self._comp_lost(c.line if line is None else line, f"{exc} (at G40 or the program's end)")
             self.arc_not_allowed = not c.path.first
+            self.comp_endpoint = c.path.endpoint
         self.comp = None
 
     def _to_unknown_end(self, i: int, code: float, words: dict, known: bool) -> None:
