@@ -200,6 +200,9 @@ def test_inspect_and_convert_give_the_path_the_machine_cuts(tmp_path):
     ("G18\nG41.1 D2\nG1 X0 Z0\nX10\n", "G18 (XZ) plane is not followed"),  # LinuxCNC's lathe compensation: not modelled
     ("G17\nG41.1 D8\nG1 X0 Y0\nX10\nG3 X10 Y6 I0 J3\n", "Tool radius not less than arc radius"),  # rs274ngc refuses the arc
     ("G17\nG41.1 D6\nG1 X0 Y0\nG1 X1 Y0\nG1 X1 Y5\n", "Straight move in concave corner cannot be reached by the tool without gouging"),  # rs274ngc refuses
+    # G40 leaves the last arc where it ends: rs274ngc checks that end against the arc's programmed sweep and refuses it
+    ("G17\nG1 X-19.132 Y-16.6157\nG42.1 D3.98\nG1 X15.5137 Y-4.7755\nG1 Z-0.61\nG0 X-5.4021 Y8.9472\nG1 X13.399 Y5.4067\n"
+     "G2 X29.4492 Y-5.7146 R11.1254\nG3 X28.7518 Y-4.7309 I-12.4760 J-8.1057\nG1 Z0.03\n", "(at G40 or the program's end)"),
 ])
 def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
     """Never a guessed number: the targets under a compensation not followed are flagged
