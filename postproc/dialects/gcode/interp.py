@@ -5,9 +5,11 @@ sums). A block whose end point depends on where the machine is and on offsets se
 the program runs cannot be: canned cycles (their initial level, R in G91, L repeats), G92 /
 G52 (the current point reads as the words), G10 L20 and G10 L2 ... R (work offsets set,
 rotated, from the current point), G53 (machine coordinates in the middle of a program) and
-polar ``@`` ``^`` words. Programs that have one are run here, one block after another,
-with the state rs274ngc keeps (offsets.py, canned.py, polar.py); each motion target comes
-out in program coordinates of the frame it is in (machine coordinates for G53).
+polar ``@`` ``^`` words, G33.1 rigid taps (in and back out) and G41/G42 cutter radius
+compensation (the offset path, cutter_comp.py: each move's end is decided by the next one, and
+the controller adds corner arcs). Programs that have one are run here, one block after another,
+with the state rs274ngc keeps (offsets.py, canned.py, polar.py, cutter_comp.py); each motion
+target comes out in program coordinates of the frame it is in (machine coordinates for G53).
 """
 
 from __future__ import annotations

@@ -7,8 +7,9 @@ parameters evaluated in program order (a value that cannot be evaluated is flagg
 guessed). Modal state — motion mode, units, absolute/incremental, work offset, tool
 length — is then resolved over the whole block table at once: forward fills and
 cumulative sums, no per-target Python loop. Programs whose end points depend on the
-running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^) are run block by block
-by interp.py instead, as LinuxCNC's interpreter runs them.
+running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^, G33.1, G41/G42 cutter
+radius compensation) are run block by block by interp.py instead, as LinuxCNC's interpreter
+runs them.
 """
 
 from __future__ import annotations
