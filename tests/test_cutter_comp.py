@@ -158,7 +158,8 @@ def test_what_linuxcnc_refuses_under_compensation_is_refused(tmp_path):
     arc right after G40 ("must be straight"): ParseError at the line."""
     from postproc.errors import ParseError
 
-    for body, line, why in (("G55\n", 5, "coordinate systems"), ("G40\nG2 X0 Y0 I-5\n", 6, "must be straight")):
+    for body, line, why in (("G55\n", 5, "coordinate systems"), ("G40\nG2 X0 Y0 I-5\n", 6, "must be straight"),
+                            ("G10 L2 P1 X5\n", 5, "active coordinate system"), ("G92 X0\n", 5, "axis offsets"), ("G43 H1\n", 5, "tool offset")):
         prog = tmp_path / "bad.ngc"
         prog.write_text("G21 G90 G17\nG0 X-10 Y0 Z1\nG41.1 D2\nG1 X0 Y0 F100\n" + body + "M2\n")
         with pytest.raises(ParseError, match=rf"bad\.ngc:{line}:.*{why}"):

@@ -332,6 +332,8 @@ class _Run:
         setup = t["setup"][i]
         for bad, why in ((int(m["wcs"][i]) != self.offsets.index, "Cannot change coordinate systems with cutter radius compensation on"),
                          (setup in (52.0, 92.0, 92.1, 92.2, 92.3), "Cannot change axis offsets with cutter radius comp"),
+                         (setup == 10.0 and words.get("L") in (2.0, 20.0) and words.get("P", 0.0) in (0.0, float(self.offsets.index)),
+                          "Cannot change the active coordinate system with cutter radius compensation on"),
                          (setup in (28.0, 30.0), "Cannot use g28 or g30 with cutter radius comp"),
                          (setup in (38.2, 38.3, 38.4, 38.5), "Cannot probe with cutter radius comp on"),
                          (bool(t["g53"][i]) and c.radius != 0.0, "Cannot use g53 with cutter radius comp"),
