@@ -217,10 +217,10 @@ def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
 
 
 def _random_program(rng: np.random.Generator) -> str:
-    """A G17 program of straight moves, Z moves and consistent arcs (I J or R) in G90, with
-    G41.1 / G42.1 / G40 (radius 0 to 3 mm, negative diameters too) at random places."""
+    """A G17 program (G21 or G20) of straight moves, Z moves and consistent arcs (I J or R) in
+    G90, with G41.1 / G42.1 / G40 (radius 0 to 3 units, negative diameters too) at random places."""
     x, y = rng.uniform(-20, 20, 2).round(4)
-    lines = ["G21 G17 G90 G40", f"G0 X{x} Y{y} Z1", "G1 F100"]
+    lines = [("G20" if rng.random() < 0.3 else "G21") + " G17 G90 G40", f"G0 X{x} Y{y} Z1", "G1 F100"]
     for _ in range(int(rng.integers(1, 11))):
         r = rng.random()
         if r < 0.12:

@@ -124,7 +124,7 @@ class CutterComp:
                     raise Unfollowed("the compensated arc's end cannot be moved onto the next move")
                 if q.sweep != 0.0 and self.endpoint is not None:
                     new = find_turn(self.endpoint[0], self.endpoint[1], q.centre[0], q.centre[1], q.turn, x, y)
-                    if abs(new) > abs(q.sweep) + 0.0254:
+                    if abs(new) > abs(q.sweep) + (0.0254 if self.scale == 1.0 else 0.001):  # rs274ngc's allowance (rad) in G21 / G20
                         raise Unfollowed("Arc move in concave corner cannot be reached by the tool without gouging")
             elif self.endpoint is not None:
                 dot = q.direction[0] * (x - self.endpoint[0]) + q.direction[1] * (y - self.endpoint[1])
