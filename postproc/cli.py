@@ -909,6 +909,8 @@ def inspect_cmd(
             entry["conf"] = [num(v) for v in tp.conf[i]]
         if i in arc_of:
             entry["arc"] = arc_of[i]
+        if tp.ccomp is not None and tp.ccomp[i]:  # G41/G42: the offset path (a corner arc: no block words of its own), or not followed
+            entry["cutter_comp"] = ("corner" if tp.insert_at is not None and tp.insert_at[i, 1] < 0 else "offset") if tp.ccomp[i] == 1 else "not_followed"
         entry["speed"] = num(tp.speed[i])
         if i in feed_of:
             entry.update(feed_of[i])

@@ -113,8 +113,14 @@ class Toolpath:
     # sets one (all zero).
     rotary_offset: np.ndarray | None = field(repr=False, default=None)
 
+    # (N,) G-code cutter radius compensation (G41/G42) at each target: 0 none, 1 the position is
+    # the offset path the controller cuts (the text's numbers are in ``values``; a corner arc the
+    # controller adds has none), 2 under a compensation the program text does not determine
+    # (position as programmed, not resolved). None when the program has no G41/G42.
+    ccomp: np.ndarray | None = field(repr=False, default=None)
+
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle", "rotary_offset")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

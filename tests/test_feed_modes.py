@@ -169,14 +169,16 @@ def test_inspect_reports_the_mode_and_no_mm_per_min_for_inverse_time(tmp_path):
     assert moves[8]["feed_mode"] == "G95" and moves[8]["f_unit"] == "mm/rev" and moves[8]["speed_derived_mm_per_min"] == 60.0
 
 
-_MOTION = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|USE_LENGTH_UNITS|SET_FEED_RATE|SET_FEED_MODE|SET_SPINDLE_SPEED)\(([^)]*)\)")
+_MOTION = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|RIGID_TAP|START_SPEED_FEED_SYNC|USE_LENGTH_UNITS|SET_FEED_RATE|SET_FEED_MODE|SET_SPINDLE_SPEED)\(([^)]*)\)")
 
 
 def canonical_feeds(text: str) -> np.ndarray:
     """(moves,) mm/min of each of rs274's motion calls (canonical_endpoints' order), NaN for a
     traverse: SET_FEED_RATE (inverse time already turned into units/min by rs274), times
-    SET_SPINDLE_SPEED under SET_FEED_MODE(0, 1) (units per revolution), times 25.4 in inches."""
-    scale, rate, spindle, per_rev, out = 1.0, np.nan, np.nan, False, []
+    SET_SPINDLE_SPEED under SET_FEED_MODE(0, 1) (units per revolution), times 25.4 in inches.
+    RIGID_TAP (G33.1: in and back out, two moves) runs at START_SPEED_FEED_SYNC's units per
+    revolution times the spindle speed."""
+    scale, rate, spindle, per_rev, out, sync = 1.0, np.nan, np.nan, False, [], np.nan
     for call, args in _MOTION.findall(text):
         if call == "USE_LENGTH_UNITS":
             scale = 25.4 if "INCHES" in args else 1.0
@@ -186,6 +188,10 @@ def canonical_feeds(text: str) -> np.ndarray:
             per_rev = args.split(",")[1].strip() == "1"
         elif call == "SET_SPINDLE_SPEED":
             spindle = float(args.split(",")[1])
+        elif call == "START_SPEED_FEED_SYNC":
+            sync = float(args.split(",")[0])
+        elif call == "RIGID_TAP":
+            out += [sync * spindle * scale] * 2
         else:
             out.append(np.nan if call == "STRAIGHT_TRAVERSE" else rate * scale * (spindle if per_rev else 1.0))
     return np.array(out)

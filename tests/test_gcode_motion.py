@@ -266,14 +266,19 @@ def test_runs_of_holes_read_at_once_equal_the_block_by_block_reading(tmp_path, m
 def test_targets_under_cutter_radius_compensation_are_flagged(tmp_path):
     """LinuxCNC manual, G-codes, "G41, G42 Cutter Compensation": with G41/G42 active the
     controller runs the path offset by the tool radius (from the tool table, or the D
-    diameter of G41.1/G42.1), which the text alone does not fix: the targets between G41 and
-    G40 are flagged (never reported as the programmed contour), the others stay resolved."""
+    diameter of G41.1/G42.1). G41 D1 takes tool 1's diameter from the machine's tool table,
+    which the program does not set (no G10 L1 P1 R): the targets between G41 and G40 are
+    flagged (never reported as the programmed contour). G42.1 D2 gives the diameter: the
+    entry move ends one radius (1 mm) right of its end point, perpendicular to it
+    (tests/test_cutter_comp.py compares such paths with rs274)."""
     prog = tmp_path / "ccomp.ngc"
     prog.write_text("G21 G90 G17\nG0 X0 Y0 Z1\nG41 D1\nG1 X10 Y0 F100\nG1 X10 Y10\nG40\nG0 X0 Y0\nG42.1 D2\nG1 X5 Y5\nG40\nM2\n")
     tp = parse_program(prog)
     assert tp.line.tolist() == [2, 4, 5, 7, 9]
-    assert tp.resolved.tolist() == [True, False, False, True, False]
-    assert any("cutter radius compensation" in n and "line 4" in n for n in tp.notes)
+    assert tp.resolved.tolist() == [True, False, False, True, True]
+    assert tp.ccomp.tolist() == [0, 2, 2, 0, 1]
+    np.testing.assert_allclose(tp.position[4], [5 + 0.5**0.5, 5 - 0.5**0.5, 1.0], atol=1e-12)
+    assert any("cutter radius compensation" in n and "line 3" in n and "tool table" in n for n in tp.notes)
 
 
 def test_a_u_v_w_axis_word_is_refused_with_its_column(tmp_path):

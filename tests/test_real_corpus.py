@@ -67,10 +67,7 @@ RS274_REFUSED = {
 }
 
 # file -> why the IR's motion differs from rs274's today
-RS274_XFAIL = {
-    "gcode/LinuxCNC_linuxcnc__mmount.ngc": "the 15 `o100 call [..]` (and the `o101 while` inside) are unrolled, but `G81` stays modal after a G0/G1/G2/G3 (canned cycles, mmount.ngc:66-) and G41 cutter compensation in the sub (mmount.ngc:41) is not modelled; rs274 546 moves, IR 1",
-    "gcode/LinuxCNC_linuxcnc__interp_inverse-time-with-comp.ngc": "the 3 `o100 call` are unrolled (33 targets, the D0 call equal to rs274's), but G42.1 cutter compensation with #100 = 0.4 / -0.4 (inverse-time-with-comp.ngc:4) is not modelled: rs274's offset path has corner arcs, 40 moves, IR 32",
-}
+RS274_XFAIL: dict[str, str] = {}  # none: every recorded program's motion equals rs274's (cutter compensation: cutter_comp.py)
 
 
 # ------------------------------------------------------------------ corpus files
@@ -158,7 +155,7 @@ def test_round_trips_byte_identically(name):
 
 # ------------------------------------------------------------------ rs274, the judge
 
-CANON = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|USE_LENGTH_UNITS|SELECT_PLANE|SET_G5X_OFFSET|SET_G92_OFFSET|SET_XY_ROTATION)\(([^)]*)\)")
+CANON = re.compile(r"(STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|RIGID_TAP|USE_LENGTH_UNITS|SELECT_PLANE|SET_G5X_OFFSET|SET_G92_OFFSET|SET_XY_ROTATION)\(([^)]*)\)")
 BENIGN_END = "File ended with no percent sign or program end"  # rs274 has run every block; only M2/M30/% is missing
 
 
@@ -183,7 +180,9 @@ def canonical_endpoints(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """End points (N, 3) of rs274's moves in the machine frame, mm; each one's print tolerance, mm;
     which are arcs. rs274's motion calls are in program coordinates; the offsets it announces
     (SET_G5X_OFFSET, SET_G92_OFFSET, SET_XY_ROTATION) are applied as LinuxCNC's canon does:
-    machine = rotate(program + G92) + G5x (tool length offsets are 0: every tool in tools.tbl has Z0)."""
+    machine = rotate(program + G92) + G5x (tool length offsets are 0: every tool in tools.tbl has Z0).
+    RIGID_TAP(x, y, z) (G33.1) is two moves: in to (x, y, z) and back to where it started
+    (LinuxCNC manual, "G33.1 Rigid Tapping": "G33.1 moves end at the original coordinate")."""
     scale, plane, points, tol, arc = 1.0, "XY", [], [], []
     g5x, g92, turn = np.zeros(3), np.zeros(3), 0.0
     for call, args in CANON.findall(text):
@@ -205,10 +204,15 @@ def canonical_endpoints(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
                 xyz = v[:3]
             p = np.array(xyz) * scale + g92
             c, s_ = np.cos(turn), np.sin(turn)
+            start = points[-1] if points else np.zeros(3)
             points.append(np.array([c * p[0] - s_ * p[1], s_ * p[0] + c * p[1], p[2]]) + g5x)
             offset = bool(g5x.any() or g92.any() or turn)  # the offsets are printed to 4 decimals too
             tol.append(5e-5 * scale * (2 if offset else 1) + 1e-6)
             arc.append(call == "ARC_FEED")
+            if call == "RIGID_TAP":
+                points.append(start)
+                tol.append(tol[-1])
+                arc.append(False)
     return np.array(points).reshape(-1, 3), np.array(tol), np.array(arc, bool)
 
 

@@ -68,6 +68,7 @@ def _speeds(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
     inverse = feed & (tp.feed_mode == 93)
     if inverse.any():
         length, rotary_only = move_lengths(tp)
+        length = _programmed_lengths(tp, length)
         per_min = _f_word(tp, np.arange(len(tp)))
         speeds[inverse] = (length * per_min)[inverse]
         no_start = inverse & np.isnan(length)
@@ -108,6 +109,40 @@ def move_lengths(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
             rise = geo.normal(geo.end) - geo.normal(geo.start)
             length[geo.rows] = np.hypot(radius * np.abs(sweep), rise)  # a helix: along the helix, as LinuxCNC
     return length, rotary_only
+
+
+def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
+    """Under cutter radius compensation (G41/G42, ``Toolpath.ccomp`` 1) LinuxCNC times a G93
+    move by its programmed length (rs274ngc: the move from the programmed point, not the offset
+    one), and the corner arc it adds runs at the rate of the move it belongs to: the lengths
+    of those moves, so that length x F is the feed rate the machine runs them at. The
+    programmed points are the text's numbers (``values``; a word left out keeps the programmed
+    value before it), the arcs' centres their absolute I J."""
+    if tp.ccomp is None or not (tp.ccomp == 1).any():
+        return length
+    own = tp.insert_at[:, 1] >= 0 if tp.insert_at is not None else np.ones(len(tp), bool)
+    prog = tp.position.copy()
+    out = length.copy()
+    for r in np.nonzero(tp.ccomp == 1)[0].tolist():  # compensated moves only (a few per program)
+        prev = prog[r - 1] if r > 0 else np.full(3, np.nan)
+        if not own[r]:
+            prog[r] = prev  # a corner arc: the programmed point stays at the corner
+            continue
+        prog[r] = np.where(np.isnan(tp.values[r, :3]), prev, tp.values[r, :3])
+        if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW):
+            centre = tp.values[r, 19:21]  # I J: absolute under compensation (G17)
+            a0 = np.arctan2(prev[1] - centre[1], prev[0] - centre[0])
+            a1 = np.arctan2(prog[r, 1] - centre[1], prog[r, 0] - centre[0])
+            turn = a1 - a0 if tp.kind[r] == Kind.ARC_CCW else a0 - a1
+            sweep = np.mod(turn, 2 * np.pi) or 2 * np.pi  # the end on the start: a full circle
+            out[r] = np.hypot(np.linalg.norm(prog[r, :2] - centre) * sweep, prog[r, 2] - prev[2])
+        else:
+            out[r] = np.linalg.norm(prog[r] - prev)
+    generated = np.nonzero((tp.ccomp == 1) & ~own)[0]
+    for r in generated[::-1].tolist():  # a corner arc: the rate of the next move of its block
+        if r + 1 < len(tp) and tp.line[r + 1] == tp.line[r]:
+            out[r] = out[r + 1] * (tp.speed[r + 1] / tp.speed[r]) if tp.speed[r] else np.nan
+    return out
 
 
 def _f_word(tp: Toolpath, rows) -> np.ndarray:

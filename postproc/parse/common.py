@@ -170,6 +170,7 @@ class Builder:
             feed_mode=cols["feed_mode"],
             spindle=cols["spindle"],
             rotary_offset=cols["rotary_offset"],
+            ccomp=cols["ccomp"],
             notes=tuple(self.notes),
         )
 
@@ -181,7 +182,7 @@ class Builder:
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
         for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
-            if key in ("offset", "offset_span", "arc", "feed_mode", "spindle", "rotary_offset") and not any(key in b for b in self.blocks):
+            if key in ("offset", "offset_span", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp") and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             shape = _COLUMN_SHAPES.get(key, ())
@@ -234,6 +235,7 @@ _COLUMN_DEFAULTS = {
     "feed_mode": (np.int8, 94),
     "spindle": (float, np.nan),
     "rotary_offset": (float, 0.0),
+    "ccomp": (np.int8, 0),
 }
 _COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,), "rotary_offset": (3,)}
 

@@ -5,9 +5,11 @@ sums). A block whose end point depends on where the machine is and on offsets se
 the program runs cannot be: canned cycles (their initial level, R in G91, L repeats), G92 /
 G52 (the current point reads as the words), G10 L20 and G10 L2 ... R (work offsets set,
 rotated, from the current point), G53 (machine coordinates in the middle of a program) and
-polar ``@`` ``^`` words. Programs that have one are run here, one block after another,
-with the state rs274ngc keeps (offsets.py, canned.py, polar.py); each motion target comes
-out in program coordinates of the frame it is in (machine coordinates for G53).
+polar ``@`` ``^`` words, G33.1 rigid taps (in and back out) and G41/G42 cutter radius
+compensation (the offset path, cutter_comp.py: each move's end is decided by the next one, and
+the controller adds corner arcs). Programs that have one are run here, one block after another,
+with the state rs274ngc keeps (offsets.py, canned.py, polar.py, cutter_comp.py); each motion
+target comes out in program coordinates of the frame it is in (machine coordinates for G53).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from ...errors import EmitError
 
 from . import canned
 from .canned import CycleError, CycleState
+from .cutter_comp import CutterComp, Unfollowed, arc_centre
 from .offsets import Offsets
 from .polar import PolarError, polar_end
 
@@ -30,6 +33,8 @@ SETUP_CODES = (10.0, 52.0, 92.0, 92.1, 92.2, 92.3)
 # Moves that end where the program text does not say: G28 / G30 go to a position stored on the
 # controller (#5161-#5163 / #5181-#5183), G38.2-G38.5 stop where the probe touches.
 UNKNOWN_END_CODES = (28.0, 30.0, 38.2, 38.3, 38.4, 38.5)
+COMP_ON = (41.0, 41.1, 42.0, 42.1)
+RIGID_TAP = 33.1  # LinuxCNC manual, "G33.1 Rigid Tapping": to the words and back, "G33.1 moves end at the original coordinate"  # cutter radius compensation left / right (G40: off)
 
 
 class BlockError(ValueError):
@@ -43,7 +48,7 @@ class BlockError(ValueError):
 def needs_interpreter(t: dict) -> bool:
     """True where the block table has a construct only a block-by-block reading gets right
     (t["more"] holds the words L P Q @ ^ D)."""
-    if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES).any() or t["g53"].any():
+    if np.isin(t["setup"], SETUP_CODES + UNKNOWN_END_CODES + (33.0, RIGID_TAP)).any() or t["g53"].any() or np.isin(t["ccomp"], COMP_ON).any():
         return True
     if np.isin(t["tlo"], (43.1, 43.2)).any():  # lengths set in the block: the current Z re-read by the ToolTable
         return True
@@ -69,6 +74,10 @@ class Moves:
     generated: np.ndarray
     exact: np.ndarray  # False: an axis of the target keeps a value re-read through a work offset the program does not set
     latched: dict  # row of a G43 H / G43.1 / G43.2 block -> the tool length (mm) it applied where the program gives it (G10 L1 / L10, G43.1 Z), NaN unknown
+    centre: np.ndarray  # (n, 2) centre x y of an arc of a compensated path (G41/G42), NaN elsewhere
+    ccomp: np.ndarray  # (n,) 0 no cutter compensation, 1 offset path (position), 2 under a compensation not followed (flagged)
+    programmed: np.ndarray  # (n, 3) the programmed end point (the position, except under cutter compensation)
+    notes: list  # why compensated targets are flagged, with their lines
 
 
 class ToolTable:
@@ -86,6 +95,7 @@ class ToolTable:
         # taken as lengths along the spindle (Z), as every tool length here is
         self.xy, self.abc = [0.0, 0.0], [0.0, 0.0, 0.0]
         self.latched: dict[int, float] = {}  # block row of each G43 H / G43.1 / G43.2 -> the length it applied (NaN: off the spindle axis)
+        self.radius: dict[int, float] = {}  # tool number -> radius (mm) set in the program (G10 L1 / L10 / L11 R), NaN unknown
 
     def g43(self, row: int, code: float, h: float, known: bool, words: dict | None = None) -> list[float]:
         """The change of the X Y Z offset in force (mm; NaN where not known) a G43 / G43.1 /
@@ -129,7 +139,7 @@ class ToolTable:
         fill = math.nan if self.entry_off_axis.get(tool, False) else 0.0
         return [fill] * 2, [fill] * 3
 
-    def g10(self, lcode: int, words: dict, known: bool, current_z: float) -> None:
+    def g10(self, lcode: int, words: dict, known: bool, current_z: float, scale: float = 1.0) -> None:
         """G10 L1 P Z (the length is Z), L10 P Z (the length that makes the current point's Z
         read as Z with the current offsets: current Z + the length in force - Z), L11 (as if
         G59.3 were in force: not followed, the entry becomes unknown). Other axis words (X Y
@@ -140,6 +150,8 @@ class ToolTable:
         if tool != words["P"] or tool < 0:
             raise CycleError(f"G10 L{lcode} P{words['P']:g}: P must be a tool number (an integer >= 0)")
         others = [a for a in "XYABCUVW" if a in words]
+        if "R" in words:  # the radius (program units; LinuxCNC manual, "G10 L1 Set Tool Table": R radius of tool)
+            self.radius[tool] = words["R"] * scale if known else math.nan
         if "Z" not in words and not others:
             return  # the entry's length is left as it was (R, I, J, Q: radius and lathe orientation)
         self.entry_off_axis[tool] = bool(others) or not known
@@ -168,6 +180,12 @@ class _Run:
         self.frames: dict = {}  # frame key -> its number in Moves.frames
         self.tools = ToolTable()
         self.rotary_now = [0.0, 0.0, 0.0]  # A B C offsets in force (deg): machine angle = programmed + these (_keep_machine_angles)
+        self.scale = 1.0  # mm per program unit of the block being read
+        self.comp: _CompState | None = None  # G41/G42 in force
+        self.tapping = False  # G33.1 is the motion mode in force
+        self.comp_endpoint = None  # rs274ngc's check point for moved ends, where the last compensation left it
+        self.arc_not_allowed = False  # the move after a G40 that ended a compensated path must be straight
+        self.notes: list[str] = []
 
     def frame_id(self) -> int | None:
         key = self.offsets.key()
@@ -184,7 +202,8 @@ class _Run:
         n = len(rows)
         self.chunks.append({"row": rows, "motion": motion, "position": points, "abc": np.tile(np.array(self.abc, float), (n, 1)),
                             "rotary": np.tile(np.array(self.rotary_now, float), (n, 1)),
-                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact())})
+                            "frame": np.full(n, self.frame_id()), "generated": np.ones(n, bool), "exact": np.full(n, self._all_exact()),
+                            "centre": np.full((n, 2), np.nan), "ccomp": np.zeros(n, np.int8), "programmed": points})
 
     def holes(self, i: int, j: int) -> None:
         """Blocks i..j-1 each give one more hole of the cycle in force and nothing else
@@ -213,18 +232,25 @@ class _Run:
     def _all_exact(self) -> bool:
         return all(self.exact) and all(self.g92_exact)
 
-    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False, exact: bool | None = None) -> None:
+    def emit(self, i: int, motion: int, position: list, generated: bool, machine_frame: bool = False, exact: bool | None = None,
+             ccomp: int = 0, centre=(math.nan, math.nan), programmed: list | None = None, abc: list | None = None, frame: int | None = None) -> None:
         """One target of block i, in the frame in force (the machine frame for G53)."""
-        frame = -1 if machine_frame else self.frame_id()
+        frame = (-1 if machine_frame else self.frame_id()) if frame is None else frame
         exact = self._all_exact() if exact is None else exact
-        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc)), ("rotary", self.rotary_now),
-                           ("frame", frame), ("generated", generated), ("exact", exact)):
+        for key, value in (("row", i), ("motion", motion), ("position", list(position)), ("abc", list(self.abc if abc is None else abc)), ("rotary", self.rotary_now), ("frame", frame),
+                           ("generated", generated), ("exact", exact), ("centre", list(centre)), ("ccomp", ccomp),
+                           ("programmed", list(position if programmed is None else programmed))):
             self.out[key].append(value)
 
     def block(self, i: int, line: int) -> None:
         m, t = self.modal, self.t
         self.last_was_cycle = False
+        self.scale = m["scale"][i]
         words = self.words(i)
+        if not math.isnan(t["ccomp"][i]):  # group 7 runs before the coordinate system, offsets and motion (LinuxCNC "Order of Execution")
+            self._comp_code(i, t["ccomp"][i], words, bool(t["ok"][i]), line)
+        if self.comp is not None:
+            self._comp_refusals(i, words)
         before = self.offsets.index
         self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
         if self.offsets.index != before:
@@ -252,6 +278,8 @@ class _Run:
         moving = not t["nonmotion"][i] and not math.isnan(mode) and (any(c in words for c in "XYZABC@^") or m["circle"][i])
         if m["sets_mode"][i] and mode not in canned.CYCLES:
             self.cycle.end_run(mode)
+        if m["sets_mode"][i]:
+            self.tapping = setup == RIGID_TAP
         if not moving:
             return
         if mode == 80.0:  # axis words after G80: Fanuc moves in the G0-G3 mode in force (rs274 refuses them)
@@ -261,6 +289,8 @@ class _Run:
         if mode in canned.CYCLES and self.cycle.last == mode and self.cycle.unknown:
             known = False  # R, bottom, P, Q kept from a cycle block that was not read: this hole is not known either
         if not known:  # a word the program text does not determine: the target and all after it are flagged
+            if self.comp is not None:
+                self._comp_lost(line, "a move whose words cannot be evaluated")
             self.cycle.end_run(mode)
             self.cycle.unknown = mode in canned.CYCLES
             self.emit(i, 0 if mode in canned.CYCLES else int(mode), [math.nan] * 3, mode in canned.CYCLES)
@@ -289,8 +319,133 @@ class _Run:
             self.m_exact = [m if out else True for out, m in zip(left_out, self.m_exact)]
             self.emit(i, int(mode), machine, False, machine_frame=True, exact=exact)
         else:
+            if mode in (2.0, 3.0) and self.arc_not_allowed:
+                raise CycleError("The move just after exiting cutter compensation mode must be straight, not an arc")
+            self.arc_not_allowed = False
+            start = list(self.cur)
             self.cur = self._straight_end(i, words)
-            self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
+            if self.tapping:  # in to the words, out again to the start (a move the text has no words for)
+                if self.comp is not None:
+                    raise CycleError("G33.1 rigid tapping under cutter radius compensation is not followed")
+                self.emit(i, 1, self.cur, False)
+                self.emit(i, 1, start, True)
+                self.cur = start
+            elif self.comp is not None:
+                self._comp_move(i, int(mode), start, words, line)
+            else:
+                self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
+
+    # ------------------------------------------------------------ cutter radius compensation
+    def _comp_code(self, i: int, code: float, words: dict, known: bool, line: int) -> None:
+        """G40 / G41 / G42 / G41.1 / G42.1 (LinuxCNC manual, "Cutter Compensation")."""
+        if code == 40.0:
+            self._comp_off(line)
+            return
+        if self.comp is not None:
+            raise CycleError("Cannot turn cutter radius comp on when on")
+        plane = self.modal["plane"][i]
+        if plane not in (17.0, 18.0):
+            raise CycleError("Cutter radius compensation allowed only in XY, XZ planes")
+        side = 1 if code in (41.0, 41.1) else -1
+        radius, why = self._comp_radius(code, words, known)
+        if radius < 0:  # a negative radius swaps the side
+            radius, side = -radius, -side
+        if why is None and plane != 17.0:
+            why = "compensation in the G18 (XZ) plane is not followed"
+        self.comp = _CompState(side, radius, line, plane, self.scale, why)
+        if why is not None:
+            self.notes.append(f"line {line}: G{code:g} cutter radius compensation: {why}; the targets under it are flagged (positions as programmed)")
+
+    def _comp_radius(self, code: float, words: dict, known: bool) -> tuple[float, str | None]:
+        """The radius (mm; NaN where the program text does not give it) and why it is not known."""
+        d = words.get("D")
+        if code in (41.1, 42.1):
+            if d is None:
+                raise CycleError(f"G{code:g} with no D word")
+            return (d * self.scale / 2.0, None) if known and math.isfinite(d) else (math.nan, "the D word cannot be evaluated")
+        if d is None:
+            return math.nan, "the radius is the loaded tool's diameter in the machine's tool table (G41/G42 without D), not in the program"
+        if not known or not math.isfinite(d):
+            return math.nan, "the D word cannot be evaluated"
+        if abs(d - round(d)) > 1e-4 or d < 0:
+            raise CycleError(f"G{code:g} requires D word to be a whole number")
+        radius = self.tools.radius.get(int(round(d)), math.nan)
+        why = None if math.isfinite(radius) else f"tool {int(round(d))}'s diameter is in the machine's tool table (the program sets no G10 L1 P{int(round(d))} R)"
+        return radius, why
+
+    def _comp_refusals(self, i: int, words: dict) -> None:
+        """What LinuxCNC refuses while G41/G42 is in force (rs274ngc's messages)."""
+        t, m, c = self.t, self.modal, self.comp
+        setup = t["setup"][i]
+        for bad, why in ((int(m["wcs"][i]) != self.offsets.index, "Cannot change coordinate systems with cutter radius compensation on"),
+                         (setup in (52.0, 92.0, 92.1, 92.2, 92.3), "Cannot change axis offsets with cutter radius comp"),
+                         (setup == 10.0 and words.get("L") in (2.0, 20.0) and words.get("P", 0.0) in (0.0, float(self.offsets.index)),
+                          "Cannot change the active coordinate system with cutter radius compensation on"),
+                         (setup in (28.0, 30.0), "Cannot use g28 or g30 with cutter radius comp"),
+                         (setup in (38.2, 38.3, 38.4, 38.5), "Cannot probe with cutter radius comp on"),
+                         (bool(t["g53"][i]) and c.radius != 0.0, "Cannot use g53 with cutter radius comp"),
+                         (m["mode"][i] in canned.CYCLES and bool(m["sets_mode"][i]), "Cannot use canned cycles with cutter compensation on"),
+                         (not math.isnan(t["tlo"][i]), "Cannot change tool offset with cutter radius compensation on"),
+                         (m["plane"][i] != c.plane, "Cannot change planes with cutter radius compensation on"),
+                         (m["scale"][i] != c.scale, "Cannot change units with cutter radius comp")):
+            if bad:
+                raise CycleError(why)
+
+    def _comp_move(self, i: int, mode: int, start: list, words: dict, line: int) -> None:
+        """A move under G41/G42: through the offset path (cutter_comp.py), or flagged where the
+        radius is not known or the case is not followed."""
+        c, polar = self.comp, "@" in words or "^" in words
+        if c.radius == 0.0:  # no offset (rs274ngc runs the move as if compensation were off)
+            self.emit(i, mode, self.cur, polar)
+            return
+        if c.why is None:
+            if c.path is None:  # rs274ngc's check point outlives a compensation (an entry arc is checked against it)
+                c.path = CutterComp(c.side, c.radius, c.scale, prog=start, endpoint=self.comp_endpoint)
+            extra = {"abc": list(self.abc), "frame": self.frame_id(), "exact": self._all_exact(), "prog": list(self.cur), "polar": polar}
+            try:
+                if mode in (0, 1):
+                    c.path.straight(i, mode, list(self.cur), extra)
+                else:
+                    if words.get("P", 1.0) != 1.0:
+                        raise Unfollowed("an arc of several turns (P)")
+                    centre = arc_centre(start, self.cur, words, self.modal["ijk"][i] == 90.1, mode == 3, self.scale)
+                    c.path.arc(i, mode, list(self.cur), centre, extra)
+                self._emit_comp(c.path.take(), 1)
+                return
+            except (ValueError, ZeroDivisionError, OverflowError) as exc:  # Unfollowed; a degenerate corner (math domain)
+                self._comp_lost(line, str(exc))
+        self.emit(i, mode, self.cur, polar, ccomp=2)
+
+    def _comp_lost(self, line: int, why: str) -> None:
+        """From here to G40 the offset path is not followed: its pending moves and the targets after
+        them are flagged (positions as computed so far / as programmed), with the line and why."""
+        c = self.comp
+        if c.why is not None or c.radius == 0.0:
+            return
+        c.why = f"{why} (rs274ngc's offset path is not followed from here)"
+        self.notes.append(f"line {line}: cutter radius compensation: {c.why}; the targets up to G40 are flagged (positions as programmed)")
+        if c.path is not None:
+            self._emit_comp(c.path.drop(), 2)
+
+    def _emit_comp(self, outs: list, code: int) -> None:
+        for o in outs:
+            e = o.extra
+            self.emit(o.row, o.motion, o.end, o.generated or e["polar"], exact=e["exact"], ccomp=code,
+                      centre=o.centre if o.centre is not None else (math.nan, math.nan), programmed=o.end if o.generated else e["prog"],
+                      abc=e["abc"], frame=e["frame"])
+
+    def _comp_off(self, line: int | None = None) -> None:
+        """G40 (or the end of the program): the pending offset moves go out; the next move goes
+        from where the tool is to its programmed end and must be straight."""
+        c = self.comp
+        if c is not None and c.path is not None:
+            try:
+                self._emit_comp(c.path.off(), 1 if c.why is None else 2)
+            except Unfollowed as exc:  # LinuxCNC refuses where G40 / M2 leaves the last moves
+                self._comp_lost(c.line if line is None else line, f"{exc} (at G40 or the program's end)")
+            self.arc_not_allowed = not c.path.first
+            self.comp_endpoint = c.path.endpoint
+        self.comp = None
 
     def _to_unknown_end(self, i: int, code: float, words: dict, known: bool) -> None:
         """G28 / G30 (LinuxCNC manual, G28-G28.1): a rapid to the axis words (in the system in
@@ -320,7 +475,7 @@ class _Run:
         if code == 10.0:
             lcode, p = words.get("L", math.nan), words.get("P", 0.0)
             if lcode in (1.0, 10.0, 11.0):
-                self.tools.g10(int(lcode), words, known, self.cur[2] if self.exact[2] and self.g92_exact[2] else math.nan)
+                self.tools.g10(int(lcode), words, known, self.cur[2] if self.exact[2] and self.g92_exact[2] else math.nan, self.scale)
                 return
             if lcode not in (2.0, 20.0):
                 return
@@ -437,11 +592,27 @@ class _Run:
             self.emit(i, kind, point, True)
 
 
-_FIELDS = ("row", "motion", "position", "abc", "rotary", "frame", "generated", "exact")
+@dataclass
+class _CompState:
+    """G41/G42 in force: side (+1 left), radius (mm, NaN unknown), where and how it was turned on,
+    why its path is not followed (None: followed), and the offset path once a move has started it."""
+
+    side: int
+    radius: float
+    line: int
+    plane: float
+    scale: float
+    why: str | None
+    path: CutterComp | None = None
+
+
+_FIELDS = ("row", "motion", "position", "abc", "rotary", "frame", "generated", "exact", "centre", "ccomp", "programmed")
+_FLOAT_FIELDS = ("position", "abc", "rotary", "centre", "programmed")
 
 
 def _chunk(**lists) -> dict:
-    return {k: np.array(v, dtype=float if k in ("position", "abc", "rotary") else bool if k in ("generated", "exact") else np.int64) for k, v in lists.items()}
+    return {k: np.array(v, dtype=float if k in _FLOAT_FIELDS else bool if k in ("generated", "exact") else np.int8 if k == "ccomp" else np.int64)
+            for k, v in lists.items()}
 
 
 def _ffill_from(col: np.ndarray, start: float) -> np.ndarray:
@@ -494,11 +665,14 @@ def run(t: dict, letters: str, modal: dict, lines: np.ndarray, fast: bool = True
             end = int(run_end[i])
             state.holes(i, end)
             i = end
+    state._comp_off()  # the program ends under G41/G42: its last offset moves as they stand
     state.flush()
-    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros((0, 3) if k in ("position", "abc", "rotary") else 0) for k in _FIELDS}
+    empty = {"position": (0, 3), "abc": (0, 3), "rotary": (0, 3), "programmed": (0, 3), "centre": (0, 2)}
+    parts = {k: np.concatenate([c[k] for c in state.chunks]) if state.chunks else np.zeros(empty.get(k, 0)) for k in _FIELDS}
     return Moves(row=parts["row"].astype(np.int64), motion=parts["motion"].astype(np.int64), position=parts["position"].reshape(-1, 3).astype(float),
                  abc=parts["abc"].reshape(-1, 3).astype(float), rotary=parts["rotary"].reshape(-1, 3).astype(float), frame=parts["frame"].astype(np.int64), frames=list(state.frames), generated=parts["generated"].astype(bool),
-                 exact=parts["exact"].astype(bool), latched=dict(state.tools.latched))
+                 exact=parts["exact"].astype(bool), latched=dict(state.tools.latched), centre=parts["centre"].reshape(-1, 2).astype(float),
+                 ccomp=parts["ccomp"].astype(np.int8), programmed=parts["programmed"].reshape(-1, 3).astype(float), notes=state.notes)
 
 
 def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -512,7 +686,7 @@ def modal_mode(motion: np.ndarray, cycle_codes: np.ndarray) -> tuple[np.ndarray,
     return np.where(idx >= 0, named[np.maximum(idx, 0)], np.nan), has
 
 
-_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9])(?![\d.])|[@^]")
+_GENERATOR = re.compile(r"[Gg][ \t]*0*(7[34]|8[1-9]|4[12](?:\.1)?)(?![\d.])|[@^]")
 
 
 def refuse_unwritable(original, modified) -> None:
@@ -525,7 +699,12 @@ def refuse_unwritable(original, modified) -> None:
     new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
     moved_before = np.concatenate([[False], moved[:-1]])  # a cycle starts from where the tool is: its moves follow
     after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
-    for rows, why in (((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
+    comp = (original.ccomp != 0) if original.ccomp is not None else np.zeros(len(original), bool)
+    for rows, why in (((moved | np.concatenate([moved[1:], [False]])) & comp,
+                       "it runs under cutter radius compensation (G41/G42): the controller offsets the programmed path by the tool radius "
+                       "and decides each end point from the next move, so a compensated position cannot be written back as the block's words "
+                       "(they would be offset again); post the tool-centre path without G41/G42 (CAM output with compensation 'in computer') first"),
+                      ((moved | moved_before) & generated, "its moves are made by the controller (canned cycle or polar @ ^ words), not written as axis words: "
                        "compensated moves cannot be put in place; expand the cycle / polar moves to G0/G1 X Y Z blocks first"),
                       (after, "a G91 increment after an offset change or a canned cycle cannot be rewritten exactly; write the program in G90 first")):
         if rows.any():

@@ -7,8 +7,9 @@ parameters evaluated in program order (a value that cannot be evaluated is flagg
 guessed). Modal state — motion mode, units, absolute/incremental, work offset, tool
 length — is then resolved over the whole block table at once: forward fills and
 cumulative sums, no per-target Python loop. Programs whose end points depend on the
-running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^) are run block by block
-by interp.py instead, as LinuxCNC's interpreter runs them.
+running state (canned cycles, G92, G10 L20 / R, G53, polar @ ^, G33.1, G41/G42 cutter
+radius compensation) are run block by block by interp.py instead, as LinuxCNC's interpreter
+runs them.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ import numpy as np
 from lark import Token, Tree
 
 from ...frames import make_transform
-from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...ir import F_ARC, NF, Kind, SourceDoc, Toolpath
 from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
@@ -29,7 +30,7 @@ from . import arcwords, flow
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
-MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, D (refused in a cycle): words only the grammar reads (no spans)
+MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, D (cutter compensation diameter; refused in a cycle): words only the grammar reads (no spans)
 _MORE = {c: i for i, c in enumerate(MORE)}
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
 RE_BULK = re.compile(
@@ -61,10 +62,9 @@ _STATE_OF_G = {
     **{g: ("ijk", g) for g in (90.1, 91.1)},  # arc centre words absolute / incremental
     **{g: ("wcs", float(w)) for g, w in _WCS.items()},
     **{g: ("tlo", g) for g in (43.0, 43.1, 43.2, 43.4, 43.5, 49.0)},
-    # Cutter radius compensation: the controller offsets the path by the tool radius, which
-    # the program text does not determine (tool table), so targets under it are flagged.
-    **{g: ("ccomp", 1.0) for g in (41.0, 41.1, 42.0, 42.1)},
-    40.0: ("ccomp", 0.0),
+    # Cutter radius compensation (G41 / G42 tool table, G41.1 / G42.1 D diameter, G40 off):
+    # run by interp.py with cutter_comp.py, the code itself kept.
+    **{g: ("ccomp", g) for g in (40.0, 41.0, 41.1, 42.0, 42.1)},
     # Feed rate mode (LinuxCNC manual, "G93, G94, G95 Feed Rate Mode"): inverse time, units
     # per minute, units per spindle revolution.
     **{g: ("feedmode", g) for g in (93.0, 94.0, 95.0)},
@@ -365,6 +365,9 @@ class GcodeParser:
                 key, value = _STATE_OF_G[gc]
                 state[key] = value
                 nonmotion |= gc in (43.1, 43.2)  # their X Y Z words are tool length offsets, not a move
+            elif gc in (33.0, 33.1):  # spindle-synchronized feed (motion group 1); G33.1 rigid tap: back to its start (interp.py)
+                state["motion"] = 1.0
+                state["setup"] = gc
             elif 73.0 <= gc <= 89.0:
                 state["canned"] = gc
             elif gc in (98.0, 99.0):
@@ -491,7 +494,7 @@ class GcodeParser:
     def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
         runs is offset from these targets by a radius the IR does not model (noted once)."""
-        active = _ffill(t["ccomp"], 0.0)[rows] == 1.0
+        active = _ffill(t["ccomp"], 40.0)[rows] != 40.0
         if active.any():
             first = int(self.lines.line(t["offset"][rows[np.argmax(active)]]))
             self.builder.notes.append(f"line {first}: cutter radius compensation (G41/G42) is active: the controller offsets the path by the "
@@ -514,7 +517,8 @@ class GcodeParser:
         plane = _ffill(t["plane"], 17.0)
         modal = {"scale": scale.tolist(), "dist": dist.tolist(), "plane": plane.tolist(), "wcs": _ffill(t["wcs"], 1.0).astype(int).tolist(),
                  "retract": _ffill(t["retract"], 99.0).tolist(), "motion": _ffill(t["motion"], np.nan).tolist(), "mode": mode.tolist(), "sets_mode": sets_mode.tolist(),
-                 "circle": self._block_circles(t, mode).tolist(), "turning": _ffill(t["turning"], 5.0).tolist()}
+                 "circle": self._block_circles(t, mode).tolist(), "ijk": _ffill(t["ijk"], 91.1).tolist(),
+                 "turning": _ffill(t["turning"], 5.0).tolist()}
         try:
             moves = interp.run(t, AXES + MORE, modal, self.lines.line(t["offset"]))
         except interp.BlockError as exc:
@@ -523,9 +527,10 @@ class GcodeParser:
         m = len(rows)
         ir_values, ir_spans, ir_scale = np.full((m, NF), np.nan), np.full((m, NF, 3), -1, dtype=np.int64), np.ones((m, NF))
         point = np.hstack([moves.position, moves.abc])
+        written = np.hstack([moves.programmed, moves.abc])  # the text's numbers: under G41/G42 the path (position) is offset from them
         for k, f in _IR_FIELD_OF_AXIS.items():
             word = own & ~np.isnan(t["values"][rows, k])
-            ir_values[:, f] = np.where(word, point[:, k], np.nan)
+            ir_values[:, f] = np.where(word, written[:, k], np.nan)
             _put_spans(ir_spans, np.nonzero(own)[0], f, t["spans"][rows[own], k])
             if k < 3:
                 ir_scale[:, f] = scale[rows]
@@ -541,7 +546,8 @@ class GcodeParser:
             self.notes.append(f"line {first}: an axis left out here keeps a value the controller re-read through a work offset the "
                               f"program does not set (a G53 move, a change of G54-G59.3, G10, G92/G52 there), or after a tool length change by a "
                               f"length it does not give; {int((~moves.exact).sum())} target(s) flagged")
-        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & ~self._under_cutter_comp(t, rows) & moves.exact
+        self.notes.extend(moves.notes)
+        resolved = (t["ok"][rows] & ~np.isnan(moves.position).any(axis=1) & frame_ok & (moves.ccomp != 2) & moves.exact
                     & ~self._tool_axis_unknown(t, rows, plain_move | (t["setup"] == 92.0), interpreted=True))
         machine = moves.frame < 0
         self._tilted_planes(t, rows, frame_idx, resolved)
@@ -552,6 +558,7 @@ class GcodeParser:
         arc_move = np.isin(moves.motion, (2, 3))
         arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
                                  self.text, self._error_at)
+        arc = _offset_arcs(arc, moves, ir_values, ir_spans)
         axis_rows = _tool_axes(t, rows, np.where(arc_move, 49.0, tlo[rows]), ir_values, ir_spans, per_row=True) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
@@ -561,12 +568,33 @@ class GcodeParser:
         order = t["seq"][rows] if "seq" in t else offsets  # flow.py: execution order (a loop body's text runs several times)
         self.builder.add_block(order, kind=_MOTION_KIND_CODES[moves.motion], line=self.lines.line(offsets), values=ir_values, spans=ir_spans, scale=ir_scale,
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
-                               speed=_ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows], insert_at=insert_at,
-                               **self._feed_columns(t, rows, moves.motion.astype(float)),
-                               **({"arc": arc} if arc is not None else {}),
+                               speed=self._speeds_of(t, rows, scale), insert_at=insert_at,
+                               **self._synced_feed_mode(t, rows, self._feed_columns(t, rows, moves.motion.astype(float))),
+                               **({"arc": arc} if arc is not None else {}), **({"ccomp": moves.ccomp} if moves.ccomp.any() else {}),
                                **({"rotary_offset": moves.rotary} if (moves.rotary != 0).any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
+
+    def _speeds_of(self, t: dict, rows: np.ndarray, scale: np.ndarray) -> np.ndarray:
+        """The speed column (mm/min as F is written) of targets read block by block; a G33 /
+        G33.1 move (LinuxCNC manual, "G33 Spindle Synchronized Motion", "G33.1 Rigid Tapping")
+        runs at K (distance per revolution) times the spindle speed S (NaN where S is not known)."""
+        speed = _ffill(t["values"][:, _AX["F"]] * scale, np.nan)[rows]
+        synced = np.isin(t["setup"][rows], (33.0, 33.1))
+        if synced.any():
+            spindle = _ffill(t["spindle"], np.nan)[rows]
+            spindle[np.isinf(spindle)] = np.nan
+            speed[synced] = (t["values"][rows, _AX["K"]] * scale[rows] * spindle)[synced]
+        return speed
+
+    @staticmethod
+    def _synced_feed_mode(t: dict, rows: np.ndarray, columns: dict) -> dict:
+        """G33 / G33.1 moves run at K x S whatever G93 / G94 / G95 is in force: their speed
+        column is that in mm/min already (feed mode 94)."""
+        synced = np.isin(t["setup"][rows], (33.0, 33.1))
+        if synced.any():
+            columns["feed_mode"] = np.where(synced, 94, columns["feed_mode"]).astype(np.int8)
+        return columns
 
     def _block_circles(self, t: dict, mode: np.ndarray) -> np.ndarray:
         """(n,) G2/G3 blocks with centre words and no end-point word: full circles back to
@@ -703,6 +731,25 @@ class GcodeParser:
 
 
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
+
+
+def _offset_arcs(arc: np.ndarray | None, moves, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray | None:
+    """Arcs of the compensated path (G41/G42: the programmed arcs at the offset radius and the
+    corner arcs the controller adds): their centre as absolute I J (G90.1 form) in the IR, so
+    that postproc.arcs reads the arc the machine cuts from the offset start; a corner arc has
+    no words of its own (no spans). ``arc`` is changed in place."""
+    at = np.nonzero(~np.isnan(moves.centre[:, 0]))[0]
+    if not len(at):
+        return arc
+    if arc is None:
+        arc = np.full((len(moves.row), 3), np.nan)
+    arc[at, 0], arc[at, 1] = 17.0, 1.0
+    arc[at, 2] = np.where(np.isnan(arc[at, 2]), 1.0, arc[at, 2])
+    ir_values[at, F_ARC.start : F_ARC.start + 2] = moves.centre[at]
+    ir_values[at, F_ARC.start + 2 :F_ARC.stop] = np.nan
+    generated = at[moves.generated[at]]
+    ir_spans[generated, F_ARC] = -1
+    return arc
 
 
 def _more_words(order: np.ndarray, n_bulk: int, slow_more: np.ndarray) -> np.ndarray:

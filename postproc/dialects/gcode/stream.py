@@ -28,8 +28,8 @@ BODY = re.compile(r"(?:(?:[ \t\d.+\-XYZABCFIJKMSTNxyzabcfijkmstn]+|[Gg]0?[01](?!
 def restate(last: Toolpath, carried: np.ndarray) -> str | None:
     """One absolute block to the target ``last`` (its motion mode, X Y Z, rotary axes, feed),
     or None where it has no complete position."""
-    if np.isnan(last.position[0]).any():
-        return None
+    if np.isnan(last.position[0]).any() or (last.ccomp is not None and last.ccomp[0]):
+        return None  # no position, or one under G41/G42: the offset path does not restart at a cut
     words = ["G0" if last.kind[0] == Kind.RAPID else "G1"]
     words += [f"{axis}{plain_number(v)}" for axis, v in zip("XYZ", last.position[0])]
     words += [f"{axis}{plain_number(v)}" for axis, v in zip("ABC", last.ext[0, :3]) if not np.isnan(v)]
