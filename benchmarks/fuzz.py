@@ -41,6 +41,7 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
     counts: collections.Counter = collections.Counter()
     crashes: list[dict] = []
     slow: list[float] = []  # CPU seconds of each program over SLOW_S (where the time of a run goes)
+    slow_inputs: list[dict] = []  # the first few of them, to reproduce
 
     @seed(zlib.crc32(f"fuzz-{dialect}-{part}".encode()))  # the same examples on every run
     @settings(max_examples=n, deadline=None, database=None, phases=[Phase.generate], suppress_health_check=list(HealthCheck))
@@ -56,13 +57,16 @@ def run_chunk(job: tuple[str, int, int]) -> dict:
         finally:
             if (spent := time.process_time() - start) > SLOW_S:
                 slow.append(spent)
+                if len(slow_inputs) < 5:
+                    slow_inputs.append({"cpu_s": round(spent, 2), "chunk": part, "data": data.decode("latin-1")})
 
     try:  # loads the grammar and the compiled scanner, so that a first program is not counted slow for it
         fuzzing.judge(dialect, b"")
     except Exception:  # noqa: BLE001 - only a warm-up
         pass
     one()
-    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes, "cpu_s": time.process_time() - cpu0, "slow": slow}
+    return {"dialect": dialect, "seeds": len(seeds), "counts": dict(counts), "crashes": crashes, "cpu_s": time.process_time() - cpu0, "slow": slow,
+            "slow_inputs": slow_inputs}
 
 
 CHUNK = 1000  # examples per task: progress and partial results are written after each
@@ -100,6 +104,10 @@ def report(results: list[dict], elapsed: float, jobs: int, wanted: int, head: li
                  f"{' '.join(f'{x:.1f}' for x in os.getloadavg())} (the wall time depends on it, the CPU time much less)")
     slow = [t for r in results for t in r.get("slow", [])]
     lines.append(f"{len(slow)} programs over {SLOW_S} s CPU each, {sum(slow):.0f} s in all" + (f" (slowest {max(slow):.1f} s)" if slow else ""))
+    for d in dialects:
+        mine = [t for r in results if r["dialect"] == d for t in r.get("slow", [])]
+        if mine:
+            lines.append(f"  {d}: {len(mine)} over {SLOW_S} s, slowest {max(mine):.1f} s")
     crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
     for c in crashes[:10]:
         lines.append(f"crash ({c['dialect']}): {c['error'].splitlines()[0]}")
@@ -133,6 +141,8 @@ def main() -> None:
             if args.crashes:
                 crashes = [dict(dialect=r["dialect"], **c) for r in results for c in r["crashes"]]
                 args.crashes.write_text(json.dumps(crashes, indent=1), encoding="utf-8")
+                slow = [dict(dialect=r["dialect"], **c) for r in results for c in r.get("slow_inputs", [])]
+                args.crashes.with_suffix(".slow.json").write_text(json.dumps(slow, indent=1), encoding="utf-8")
     print(text)
     sys.exit(1 if any(r["counts"].get("crashed") for r in results) else 0)
 
