@@ -148,8 +148,7 @@ class _Plant:
 
     def joints(self, tcp_poses: np.ndarray, rows: np.ndarray, q_ref: np.ndarray, branch_ref: np.ndarray):
         flange = tcp_poses @ self.inv_tools[self.tool_index[rows]]
-        sols = kin.ik(self.robot, flange)
-        return kin.select_branch(self.robot, sols, branch_ref, q_ref)
+        return kin.branch_joints(self.robot, flange, branch_ref, q_ref)
 
     def actual(self, q: np.ndarray, rows: np.ndarray, order_q: np.ndarray | None = None) -> np.ndarray:
         """Predicted TCP (N, 3) of the program's tools at joints q (rows index the program)."""
@@ -443,25 +442,28 @@ def _solve_broyden(problem: _Problem, before: np.ndarray, tol_mm: float, max_ite
             break
         progress(f"iteration {it + 1}: {int(active.sum())} points")
         idx = np.nonzero(active)[0]
-        step = -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
+        # The first step is the error itself (the estimate starts at identity: no solve).
+        step = -sol.err[idx] if it == 0 else -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
         new_cmd = sol.cmd[idx] + step
         new_err, q, b = problem.evaluate(new_cmd, active)
         sol.iterations[idx] += 1
         keep = ~np.isnan(new_err).any(axis=1)
         ss = np.einsum("ij,ij->i", step, step)
-        _broyden_update(jac, idx, step, new_err - sol.err[idx], ss, keep & (ss > 0))
+        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
+        go_on = keep & ~done & (ss > 0)  # only the points that iterate again need their estimate updated
+        if go_on.any():
+            _broyden_update(jac, idx[go_on], step[go_on], (new_err - sol.err[idx])[go_on], ss[go_on])
         sol.cmd[idx[keep]] = new_cmd[keep]
         sol.accept(idx, keep, new_err, q, b)
-        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
         sol.converged[idx[done]] = True
         active[idx[done | ~keep]] = False
     return sol
 
 
-def _broyden_update(jac, idx, step, y, ss, upd) -> None:
-    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx[upd]``."""
+def _broyden_update(jac, idx, step, y, ss) -> None:
+    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx``."""
     bs = np.einsum("nij,nj->ni", jac[idx], step)
-    jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
+    jac[idx] += np.einsum("ni,nj->nij", y - bs, step) / ss[:, None, None]
 
 
 def _solve_seed000(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
@@ -575,8 +577,7 @@ def _predicted_samples(problem: _Problem, sol: _Solution, commanded: np.ndarray,
     m, k = commanded.shape[:2]
     rows = np.repeat(problem.rows[idx], k)
     flange = commanded.reshape(-1, 4, 4) @ problem.plant.inv_tools[problem.tp.tool[rows]]
-    sols = kin.ik(problem.plant.robot, flange)
-    q, _ = kin.select_branch(problem.plant.robot, sols, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
+    q, _ = kin.branch_joints(problem.plant.robot, flange, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
     return problem.plant.actual(q, rows, problem.order_q).reshape(m, k, 3)
 
 
