@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from . import arcs, dialects, posture, segments
+from . import arcs, dialects, fast_model, posture, segments
 from . import kinematics as kin
 from .effects import consumers_of
 from .errormodel import ErrorModel
@@ -159,6 +159,11 @@ class _Plant:
             if not sel.any():
                 continue
             m = replace(self.model, tool_mm=self.tools[t][:3, 3])
+            if self.temp_c is None and self.force_rows is None:
+                fast = fast_model.compiled_positions(m, q[sel])  # the common physics model, compiled (bit for bit the same)
+                if fast is not None:
+                    out[sel] = fast
+                    continue
             columns = {"temp": None if self.temp_c is None else np.full(int(sel.sum()), self.temp_c),
                        "force": None if self.force_rows is None else self.force_rows[rows][sel], "approach": None}
             if order_q is not None:
