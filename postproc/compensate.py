@@ -22,8 +22,10 @@ branch are reported with their program lines; the caller must not write such a p
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
 from . import arcs, dialects, fast_model, posture, segments
 from . import kinematics as kin
@@ -33,6 +35,19 @@ from .errors import InputError, JobError
 from .frames import invert_transform
 from .ir import Kind, Toolpath
 
+
+
+@lru_cache(maxsize=1)
+def _blas_threads() -> ThreadpoolController:
+    return ThreadpoolController()  # finding the BLAS libraries takes ~1 ms: once per process
+
+
+def _one_blas_thread():
+    """One BLAS thread while compensating: the products are of thin matrices, where
+    OpenBLAS's second thread costs more CPU (spinning) than it saves (~1.7 us a point on the
+    stream benchmark), and the stream's worker processes are the parallelism. Threaded or
+    not, OpenBLAS splits a product by rows: the numbers are the same."""
+    return _blas_threads().limit(limits=1, user_api="blas")
 
 
 class CompensationError(JobError):
@@ -234,36 +249,37 @@ def compensate(
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring).
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints."""
-    if scheme not in _SCHEMES:
-        raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
-    _require_usable_model(model)
-    if force_n is not None and force_per_target is not None:
-        raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
-    _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
-    arcs.refuse_uncompensable(tp)
-    inexact = dialects.of(tp).inexact_interpolation(tp)
-    if inexact and max_deviation_mm is not None:  # it promises the path between targets: not where the controller leaves the interpolation
-        raise InputError(f"{inexact} (--max-deviation)")
-    written = tp
-    if frames or tools:
-        tp = tp.with_frames(frames, tools)
-    _refuse_unplaced(tp)
-    problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target, reference)
-    progress("predicting the program as written")
-    before = problem.predicted_error_as_written()
-    solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
-    arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
-    report = _report(problem, before, solution)
-    progress("predicting the path between targets")
-    path = _path_deviation(problem, solution)
-    arc_fit.put_deviation(path, problem.rows)
-    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
-                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
-    out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
-    notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
-    if notes:
-        out = replace(out, notes=out.notes + notes)
-    return out, report
+    with _one_blas_thread():  # the BLAS products here are thin ((N, 3) @ (3, 3)): a second thread only spins
+        if scheme not in _SCHEMES:
+            raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
+        _require_usable_model(model)
+        if force_n is not None and force_per_target is not None:
+            raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
+        _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
+        arcs.refuse_uncompensable(tp)
+        inexact = dialects.of(tp).inexact_interpolation(tp)
+        if inexact and max_deviation_mm is not None:  # it promises the path between targets: not where the controller leaves the interpolation
+            raise InputError(f"{inexact} (--max-deviation)")
+        written = tp
+        if frames or tools:
+            tp = tp.with_frames(frames, tools)
+        _refuse_unplaced(tp)
+        problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target, reference)
+        progress("predicting the program as written")
+        before = problem.predicted_error_as_written()
+        solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
+        arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
+        report = _report(problem, before, solution)
+        progress("predicting the path between targets")
+        path = _path_deviation(problem, solution)
+        arc_fit.put_deviation(path, problem.rows)
+        report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
+                         end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
+        out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
+        notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
+        if notes:
+            out = replace(out, notes=out.notes + notes)
+        return out, report
 
 
 
@@ -359,32 +375,51 @@ class _Problem:
         q_ref, branch_ref, posture_problem, notes = reference.q, reference.branch, reference.posture_problem, reference.notes
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
 
-    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
+    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray, margins=None) -> np.ndarray:
         """(Cartesian targets,) True where the nominal controller's straight line from the
         previous target (compensated, or a joint target as written) to this compensated one
-        cannot be driven on the carried posture."""
+        cannot be driven on the carried posture. ``margins``: ``posture.singularity_margins``
+        of q where the caller has them (the report does)."""
         tp, rows, robot = self.tp, self.rows, self.plant.robot
         n = len(tp)
-        # Flange pose and joints of every program row where the robot will be.
-        flange_all = np.full((n, 4, 4), np.nan)
+        # Joints (and their singularity margins) of every program row where the robot will be.
         q_all = np.full((n, 6), np.nan)
-        poses = self.target.copy()
-        poses[:, :3, 3] = cmd
-        flange_all[rows] = poses @ self.plant.inv_tools[tp.tool[rows]]
         q_all[rows] = q
+        margins = posture.singularity_margins(robot, q) if margins is None else margins
+        margins_all = [np.full(n, np.nan) for _ in margins]
+        for whole, part in zip(margins_all, margins):
+            whole[rows] = part
         joint_rows = np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1))[0]
         if joint_rows.size:
-            flange_all[joint_rows] = kin.fk(robot, tp.joints[joint_rows])
             q_all[joint_rows] = tp.joints[joint_rows]
+            for whole, part in zip(margins_all, posture.singularity_margins(robot, tp.joints[joint_rows])):
+                whole[joint_rows] = part
         prev = rows - 1
         check = (tp.kind[rows] == Kind.LINEAR) & (prev >= 0) & ~np.isnan(q).any(axis=1)
         check[check] &= ~np.isnan(q_all[prev[check]]).any(axis=1)
-        check[check] &= ~posture.clearly_regular(robot, q_all[prev[check]], q[check])
+        sub = np.nonzero(check)[0]
+        check[sub] &= ~posture.clearly_regular(robot, q_all[prev[sub]], q[sub], [m[prev[sub]] for m in margins_all], [m[rows[sub]] for m in margins_all])
         blocked = np.zeros(len(rows), dtype=bool)
         for idx in _chunks(np.nonzero(check)[0]):
-            reason = posture.check_linear_segments(robot, flange_all[prev[idx]], flange_all[rows[idx]], branch[idx], q_all[prev[idx]])
+            start, end = self._flange_at(prev[idx], cmd), self._flange_at(rows[idx], cmd)
+            reason = posture.check_linear_segments(robot, start, end, branch[idx], q_all[prev[idx]])
             blocked[idx] = reason != 0
         return blocked
+
+    def _flange_at(self, program_rows: np.ndarray, cmd: np.ndarray) -> np.ndarray:
+        """Flange poses (M, 4, 4) where the robot will be at these program rows: a Cartesian
+        target at its command ``cmd``, a joint target at its joints (NaN where it has none)."""
+        tp = self.tp
+        out = np.full((len(program_rows), 4, 4), np.nan)
+        at = np.searchsorted(self.rows, program_rows)
+        cartesian = (at < len(self.rows)) & (self.rows[np.minimum(at, len(self.rows) - 1)] == program_rows)
+        poses = self.target[at[cartesian]].copy()
+        poses[:, :3, 3] = cmd[at[cartesian]]
+        out[cartesian] = poses @ self.plant.inv_tools[tp.tool[program_rows[cartesian]]]
+        joint = ~cartesian & (tp.kind[program_rows] == Kind.ABSJ) & ~np.isnan(tp.joints[program_rows]).any(axis=1)
+        if joint.any():
+            out[joint] = kin.fk(self.plant.robot, tp.joints[program_rows[joint]])
+        return out
 
     def predicted_error_as_written(self) -> np.ndarray:
         return self.plant.actual(self.q_ref, self.rows, self.order_q) - self.goal
@@ -513,12 +548,11 @@ _SCHEMES = {"broyden": _solve_broyden, "seed000": _solve_seed000}
 
 def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
     robot, rows, n = problem.plant.robot, problem.rows, len(problem.tp)
-    singular = np.zeros(len(rows), dtype=bool)
-    ok_q = ~np.isnan(sol.q).any(axis=1)
-    singular[ok_q] = posture.near_singular(robot, sol.q[ok_q])
+    margins = posture.singularity_margins(robot, sol.q)  # once, for the targets and the segments into them
+    singular = posture.near_singular_margins(*margins) & ~np.isnan(sol.q).any(axis=1)
     changed = sol.within & (sol.branch != problem.branch_ref)
     posture_problem = problem.posture_problem.copy()
-    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch)
+    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch, margins)
     posture_problem[(posture_problem == 0) & blocked] = POSTURE_PATH
     full = lambda fill, values, dtype=float: _scatter(n, rows, fill, values, dtype)  # noqa: E731
     return Report(
