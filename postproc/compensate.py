@@ -369,8 +369,8 @@ class _Problem:
         target = tp.base_poses()[rows]
         force_rows = _force_rows(len(tp), rows, target, force_n) if force_per_target is None else np.asarray(force_per_target, dtype=float)
         plant = _Plant(model, tp.tools, tp.tool, temp_c, force_rows)
-        flange = target @ plant.inv_tools[tp.tool[rows]]
         if reference is None:
+            flange = target @ plant.inv_tools[tp.tool[rows]]
             reference = Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints))
         q_ref, branch_ref, posture_problem, notes = reference.q, reference.branch, reference.posture_problem, reference.notes
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
@@ -437,7 +437,7 @@ class _Problem:
         """Target positions (all rows, each in its own frame) for base-frame commands ``cmd``."""
         new_base = self.target.copy()
         new_base[:, :3, 3] = cmd
-        local = invert_transform(self.tp.frames[self.tp.frame[self.rows]]) @ new_base
+        local = invert_transform(self.tp.frames)[self.tp.frame[self.rows]] @ new_base  # each frame inverted once
         position = self.tp.position.copy()
         position[self.rows] = local[:, :3, 3]
         return position

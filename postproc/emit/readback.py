@@ -81,7 +81,7 @@ def _applies(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.
         return False
     if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or modified.arc is not None and not np.isnan(modified.values[:, F_ARC]).all():
         return False
-    pos = original.spans[rows][:, F_POS]
+    pos = original.spans[:, F_POS][rows]  # the position columns only (spans has every field's)
     return bool(((pos[:, :, 0] == 0) & (pos[:, :, 1] >= 0)).all())
 
 
