@@ -22,7 +22,7 @@ branch are reported with their program lines; the caller must not write such a p
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import lru_cache
+from functools import lru_cache, wraps
 
 import numpy as np
 from threadpoolctl import ThreadpoolController
@@ -42,12 +42,18 @@ def _blas_threads() -> ThreadpoolController:
     return ThreadpoolController()  # finding the BLAS libraries takes ~1 ms: once per process
 
 
-def _one_blas_thread():
-    """One BLAS thread while compensating: the products are of thin matrices, where
-    OpenBLAS's second thread costs more CPU (spinning) than it saves (~1.7 us a point on the
-    stream benchmark), and the stream's worker processes are the parallelism. Threaded or
-    not, OpenBLAS splits a product by rows: the numbers are the same."""
-    return _blas_threads().limit(limits=1, user_api="blas")
+def _one_blas_thread(fn):
+    """``fn`` run with one BLAS thread: compensation's products are of thin matrices
+    ((N, 3) @ (3, 3)), where OpenBLAS's second thread costs more CPU (spinning) than it
+    saves (~1.7 us a point on the stream benchmark), and the stream's worker processes are
+    the parallelism. Threaded or not, OpenBLAS splits a product by rows: the same numbers."""
+
+    @wraps(fn)
+    def one_thread(*args, **kwargs):
+        with _blas_threads().limit(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+
+    return one_thread
 
 
 class CompensationError(JobError):
@@ -230,6 +236,7 @@ _POSTURE_TEXT = {
 }
 
 
+@_one_blas_thread
 def compensate(
     tp: Toolpath,
     model: ErrorModel,
@@ -249,37 +256,36 @@ def compensate(
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring).
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints."""
-    with _one_blas_thread():  # the BLAS products here are thin ((N, 3) @ (3, 3)): a second thread only spins
-        if scheme not in _SCHEMES:
-            raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
-        _require_usable_model(model)
-        if force_n is not None and force_per_target is not None:
-            raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
-        _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
-        arcs.refuse_uncompensable(tp)
-        inexact = dialects.of(tp).inexact_interpolation(tp)
-        if inexact and max_deviation_mm is not None:  # it promises the path between targets: not where the controller leaves the interpolation
-            raise InputError(f"{inexact} (--max-deviation)")
-        written = tp
-        if frames or tools:
-            tp = tp.with_frames(frames, tools)
-        _refuse_unplaced(tp)
-        problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target, reference)
-        progress("predicting the program as written")
-        before = problem.predicted_error_as_written()
-        solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
-        arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
-        report = _report(problem, before, solution)
-        progress("predicting the path between targets")
-        path = _path_deviation(problem, solution)
-        arc_fit.put_deviation(path, problem.rows)
-        report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
-                         end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
-        out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
-        notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
-        if notes:
-            out = replace(out, notes=out.notes + notes)
-        return out, report
+    if scheme not in _SCHEMES:
+        raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
+    _require_usable_model(model)
+    if force_n is not None and force_per_target is not None:
+        raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
+    _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
+    arcs.refuse_uncompensable(tp)
+    inexact = dialects.of(tp).inexact_interpolation(tp)
+    if inexact and max_deviation_mm is not None:  # it promises the path between targets: not where the controller leaves the interpolation
+        raise InputError(f"{inexact} (--max-deviation)")
+    written = tp
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    _refuse_unplaced(tp)
+    problem = _Problem.of(tp, model, temp_c, force_n, start_joints, force_per_target, reference)
+    progress("predicting the program as written")
+    before = problem.predicted_error_as_written()
+    solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
+    arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
+    report = _report(problem, before, solution)
+    progress("predicting the path between targets")
+    path = _path_deviation(problem, solution)
+    arc_fit.put_deviation(path, problem.rows)
+    report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
+                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
+    out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
+    notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
+    if notes:
+        out = replace(out, notes=out.notes + notes)
+    return out, report
 
 
 
