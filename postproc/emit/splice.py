@@ -356,6 +356,11 @@ class _Splice:
             return text
         if literal and len(numbers):
             numbers = self._drop_agreeing_duplicates(file, literal, numbers)
+        if not literal and not bulk.literal:  # the bulk edits alone, already in text order (for_file)
+            starts = bulk.start[numbers]
+            if len(starts) < 2 or (starts[1:] > starts[:-1]).all():
+                cols = {k: getattr(bulk, k)[numbers] for k in _BulkEdits.COLUMNS}
+                return number_kernel.splice_bytes(text.encode("latin-1"), starts, bulk.end[numbers], cols, {}).decode("latin-1")
         starts = np.concatenate([bulk.start[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([st for st, _, _ in literal], dtype=np.int64)])
         ends = np.concatenate([bulk.end[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([e for _, e, _ in literal], dtype=np.int64)])
         cols = {k: np.concatenate([getattr(bulk, k)[numbers] if bulk is not None else np.zeros(0), np.zeros(len(literal))]) for k in _BulkEdits.COLUMNS}
