@@ -22,10 +22,12 @@ branch are reported with their program lines; the caller must not write such a p
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache, wraps
 
 import numpy as np
+from threadpoolctl import ThreadpoolController
 
-from . import arcs, dialects, posture, segments
+from . import arcs, dialects, fast_model, posture, segments
 from . import kinematics as kin
 from .effects import consumers_of
 from .errormodel import ErrorModel
@@ -33,6 +35,25 @@ from .errors import InputError, JobError
 from .frames import invert_transform
 from .ir import Kind, Toolpath
 
+
+
+@lru_cache(maxsize=1)
+def _blas_threads() -> ThreadpoolController:
+    return ThreadpoolController()  # finding the BLAS libraries takes ~1 ms: once per process
+
+
+def _one_blas_thread(fn):
+    """``fn`` run with one BLAS thread: compensation's products are of thin matrices
+    ((N, 3) @ (3, 3)), where OpenBLAS's second thread costs more CPU (spinning) than it
+    saves (~1.7 us a point on the stream benchmark), and the stream's worker processes are
+    the parallelism. Threaded or not, OpenBLAS splits a product by rows: the same numbers."""
+
+    @wraps(fn)
+    def one_thread(*args, **kwargs):
+        with _blas_threads().limit(limits=1, user_api="blas"):
+            return fn(*args, **kwargs)
+
+    return one_thread
 
 
 class CompensationError(JobError):
@@ -148,8 +169,7 @@ class _Plant:
 
     def joints(self, tcp_poses: np.ndarray, rows: np.ndarray, q_ref: np.ndarray, branch_ref: np.ndarray):
         flange = tcp_poses @ self.inv_tools[self.tool_index[rows]]
-        sols = kin.ik(self.robot, flange)
-        return kin.select_branch(self.robot, sols, branch_ref, q_ref)
+        return kin.branch_joints(self.robot, flange, branch_ref, q_ref)
 
     def actual(self, q: np.ndarray, rows: np.ndarray, order_q: np.ndarray | None = None) -> np.ndarray:
         """Predicted TCP (N, 3) of the program's tools at joints q (rows index the program)."""
@@ -160,6 +180,11 @@ class _Plant:
             if not sel.any():
                 continue
             m = replace(self.model, tool_mm=self.tools[t][:3, 3])
+            if self.temp_c is None and self.force_rows is None:
+                fast = fast_model.compiled_positions(m, q[sel])  # the common physics model, compiled (bit for bit the same)
+                if fast is not None:
+                    out[sel] = fast
+                    continue
             columns = {"temp": None if self.temp_c is None else np.full(int(sel.sum()), self.temp_c),
                        "force": None if self.force_rows is None else self.force_rows[rows][sel], "approach": None}
             if order_q is not None:
@@ -211,6 +236,7 @@ _POSTURE_TEXT = {
 }
 
 
+@_one_blas_thread
 def compensate(
     tp: Toolpath,
     model: ErrorModel,
@@ -349,38 +375,57 @@ class _Problem:
         target = tp.base_poses()[rows]
         force_rows = _force_rows(len(tp), rows, target, force_n) if force_per_target is None else np.asarray(force_per_target, dtype=float)
         plant = _Plant(model, tp.tools, tp.tool, temp_c, force_rows)
-        flange = target @ plant.inv_tools[tp.tool[rows]]
         if reference is None:
+            flange = target @ plant.inv_tools[tp.tool[rows]]
             reference = Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints))
         q_ref, branch_ref, posture_problem, notes = reference.q, reference.branch, reference.posture_problem, reference.notes
         return cls(tp, plant, rows, target, q_ref, branch_ref, posture_problem, notes)
 
-    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray) -> np.ndarray:
+    def straight_segments_blocked(self, cmd: np.ndarray, q: np.ndarray, branch: np.ndarray, margins=None) -> np.ndarray:
         """(Cartesian targets,) True where the nominal controller's straight line from the
         previous target (compensated, or a joint target as written) to this compensated one
-        cannot be driven on the carried posture."""
+        cannot be driven on the carried posture. ``margins``: ``posture.singularity_margins``
+        of q where the caller has them (the report does)."""
         tp, rows, robot = self.tp, self.rows, self.plant.robot
         n = len(tp)
-        # Flange pose and joints of every program row where the robot will be.
-        flange_all = np.full((n, 4, 4), np.nan)
+        # Joints (and their singularity margins) of every program row where the robot will be.
         q_all = np.full((n, 6), np.nan)
-        poses = self.target.copy()
-        poses[:, :3, 3] = cmd
-        flange_all[rows] = poses @ self.plant.inv_tools[tp.tool[rows]]
         q_all[rows] = q
+        margins = posture.singularity_margins(robot, q) if margins is None else margins
+        margins_all = [np.full(n, np.nan) for _ in margins]
+        for whole, part in zip(margins_all, margins):
+            whole[rows] = part
         joint_rows = np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1))[0]
         if joint_rows.size:
-            flange_all[joint_rows] = kin.fk(robot, tp.joints[joint_rows])
             q_all[joint_rows] = tp.joints[joint_rows]
+            for whole, part in zip(margins_all, posture.singularity_margins(robot, tp.joints[joint_rows])):
+                whole[joint_rows] = part
         prev = rows - 1
         check = (tp.kind[rows] == Kind.LINEAR) & (prev >= 0) & ~np.isnan(q).any(axis=1)
         check[check] &= ~np.isnan(q_all[prev[check]]).any(axis=1)
-        check[check] &= ~posture.clearly_regular(robot, q_all[prev[check]], q[check])
+        sub = np.nonzero(check)[0]
+        check[sub] &= ~posture.clearly_regular(robot, q_all[prev[sub]], q[sub], [m[prev[sub]] for m in margins_all], [m[rows[sub]] for m in margins_all])
         blocked = np.zeros(len(rows), dtype=bool)
         for idx in _chunks(np.nonzero(check)[0]):
-            reason = posture.check_linear_segments(robot, flange_all[prev[idx]], flange_all[rows[idx]], branch[idx], q_all[prev[idx]])
+            start, end = self._flange_at(prev[idx], cmd), self._flange_at(rows[idx], cmd)
+            reason = posture.check_linear_segments(robot, start, end, branch[idx], q_all[prev[idx]])
             blocked[idx] = reason != 0
         return blocked
+
+    def _flange_at(self, program_rows: np.ndarray, cmd: np.ndarray) -> np.ndarray:
+        """Flange poses (M, 4, 4) where the robot will be at these program rows: a Cartesian
+        target at its command ``cmd``, a joint target at its joints (NaN where it has none)."""
+        tp = self.tp
+        out = np.full((len(program_rows), 4, 4), np.nan)
+        at = np.searchsorted(self.rows, program_rows)
+        cartesian = (at < len(self.rows)) & (self.rows[np.minimum(at, len(self.rows) - 1)] == program_rows)
+        poses = self.target[at[cartesian]].copy()
+        poses[:, :3, 3] = cmd[at[cartesian]]
+        out[cartesian] = poses @ self.plant.inv_tools[tp.tool[program_rows[cartesian]]]
+        joint = ~cartesian & (tp.kind[program_rows] == Kind.ABSJ) & ~np.isnan(tp.joints[program_rows]).any(axis=1)
+        if joint.any():
+            out[joint] = kin.fk(self.plant.robot, tp.joints[program_rows[joint]])
+        return out
 
     def predicted_error_as_written(self) -> np.ndarray:
         return self.plant.actual(self.q_ref, self.rows, self.order_q) - self.goal
@@ -398,7 +443,7 @@ class _Problem:
         """Target positions (all rows, each in its own frame) for base-frame commands ``cmd``."""
         new_base = self.target.copy()
         new_base[:, :3, 3] = cmd
-        local = invert_transform(self.tp.frames[self.tp.frame[self.rows]]) @ new_base
+        local = invert_transform(self.tp.frames)[self.tp.frame[self.rows]] @ new_base  # each frame inverted once
         position = self.tp.position.copy()
         position[self.rows] = local[:, :3, 3]
         return position
@@ -443,25 +488,28 @@ def _solve_broyden(problem: _Problem, before: np.ndarray, tol_mm: float, max_ite
             break
         progress(f"iteration {it + 1}: {int(active.sum())} points")
         idx = np.nonzero(active)[0]
-        step = -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
+        # The first step is the error itself (the estimate starts at identity: no solve).
+        step = -sol.err[idx] if it == 0 else -np.linalg.solve(jac[idx], sol.err[idx][..., None])[..., 0]
         new_cmd = sol.cmd[idx] + step
         new_err, q, b = problem.evaluate(new_cmd, active)
         sol.iterations[idx] += 1
         keep = ~np.isnan(new_err).any(axis=1)
         ss = np.einsum("ij,ij->i", step, step)
-        _broyden_update(jac, idx, step, new_err - sol.err[idx], ss, keep & (ss > 0))
+        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
+        go_on = keep & ~done & (ss > 0)  # only the points that iterate again need their estimate updated
+        if go_on.any():
+            _broyden_update(jac, idx[go_on], step[go_on], (new_err - sol.err[idx])[go_on], ss[go_on])
         sol.cmd[idx[keep]] = new_cmd[keep]
         sol.accept(idx, keep, new_err, q, b)
-        done = keep & ((np.sqrt(ss) < tol_mm) | (np.linalg.norm(np.nan_to_num(new_err), axis=1) < tol_mm))
         sol.converged[idx[done]] = True
         active[idx[done | ~keep]] = False
     return sol
 
 
-def _broyden_update(jac, idx, step, y, ss, upd) -> None:
-    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx[upd]``."""
+def _broyden_update(jac, idx, step, y, ss) -> None:
+    """Broyden's rank-one update B += ((y - B s) s^T) / (s^T s) of the points ``idx``."""
     bs = np.einsum("nij,nj->ni", jac[idx], step)
-    jac[idx[upd]] += np.einsum("ni,nj->nij", (y - bs)[upd], step[upd]) / ss[upd, None, None]
+    jac[idx] += np.einsum("ni,nj->nij", y - bs, step) / ss[:, None, None]
 
 
 def _solve_seed000(problem: _Problem, before: np.ndarray, tol_mm: float, max_iter: int, progress) -> _Solution:
@@ -506,12 +554,11 @@ _SCHEMES = {"broyden": _solve_broyden, "seed000": _solve_seed000}
 
 def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
     robot, rows, n = problem.plant.robot, problem.rows, len(problem.tp)
-    singular = np.zeros(len(rows), dtype=bool)
-    ok_q = ~np.isnan(sol.q).any(axis=1)
-    singular[ok_q] = posture.near_singular(robot, sol.q[ok_q])
+    margins = posture.singularity_margins(robot, sol.q)  # once, for the targets and the segments into them
+    singular = posture.near_singular_margins(*margins) & ~np.isnan(sol.q).any(axis=1)
     changed = sol.within & (sol.branch != problem.branch_ref)
     posture_problem = problem.posture_problem.copy()
-    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch)
+    blocked = problem.straight_segments_blocked(sol.cmd, sol.q, sol.branch, margins)
     posture_problem[(posture_problem == 0) & blocked] = POSTURE_PATH
     full = lambda fill, values, dtype=float: _scatter(n, rows, fill, values, dtype)  # noqa: E731
     return Report(
@@ -575,8 +622,7 @@ def _predicted_samples(problem: _Problem, sol: _Solution, commanded: np.ndarray,
     m, k = commanded.shape[:2]
     rows = np.repeat(problem.rows[idx], k)
     flange = commanded.reshape(-1, 4, 4) @ problem.plant.inv_tools[problem.tp.tool[rows]]
-    sols = kin.ik(problem.plant.robot, flange)
-    q, _ = kin.select_branch(problem.plant.robot, sols, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
+    q, _ = kin.branch_joints(problem.plant.robot, flange, np.repeat(sol.branch[idx], k), np.repeat(sol.q[idx], k, axis=0))
     return problem.plant.actual(q, rows, problem.order_q).reshape(m, k, 3)
 
 

@@ -130,7 +130,11 @@ SHOULDER_MM = 20.0  # wrist centre closer than this to axis 1
 def near_singular(robot, q_deg: np.ndarray) -> np.ndarray:
     """True where joints q (N, 6) are within SINGULAR_DEG of the wrist or elbow singularity,
     or the wrist centre within SHOULDER_MM of axis 1 (the shoulder singularity)."""
-    wrist, elbow, shoulder = singularity_margins(robot, q_deg)
+    return near_singular_margins(*singularity_margins(robot, q_deg))
+
+
+def near_singular_margins(wrist, elbow, shoulder) -> np.ndarray:
+    """``near_singular`` of the margins ``singularity_margins`` gave (False where they are NaN)."""
     return (wrist < SINGULAR_DEG) | (elbow < SINGULAR_DEG) | (shoulder < SHOULDER_MM)
 
 
@@ -139,14 +143,15 @@ SCREEN_MARGIN_MM = 200.0  # ... and the shoulder one ...
 SCREEN_STEP_DEG = 5.0  # ... and no joint moving more than this: the segment needs no sampling
 
 
-def clearly_regular(robot, q_start: np.ndarray, q_end: np.ndarray) -> np.ndarray:
+def clearly_regular(robot, q_start: np.ndarray, q_end: np.ndarray, margins_start=None, margins_end=None) -> np.ndarray:
     """(M,) True for straight segments that cannot come near a singularity: both ends
     SCREEN_MARGIN_DEG / _MM away from every singularity and no joint moving more than
     SCREEN_STEP_DEG between them. Along such a short move the joints stay within a few
     tenths of a degree of their straight interpolation, far from the 2 deg zone, so
-    sampling it would find nothing (a long program's many small steps skip the IK)."""
+    sampling it would find nothing (a long program's many small steps skip the IK).
+    ``margins_start`` / ``margins_end``: their ``singularity_margins`` where the caller has them."""
     steps = np.abs((q_end - q_start + 180.0) % 360.0 - 180.0).max(axis=1)
-    margins = [singularity_margins(robot, q) for q in (q_start, q_end)]
+    margins = [singularity_margins(robot, q) if given is None else given for q, given in ((q_start, margins_start), (q_end, margins_end))]
     far = np.all([(w >= SCREEN_MARGIN_DEG) & (e >= SCREEN_MARGIN_DEG) & (s >= SCREEN_MARGIN_MM) for w, e, s in margins], axis=0)
     return far & (steps <= SCREEN_STEP_DEG)
 

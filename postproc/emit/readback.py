@@ -81,7 +81,7 @@ def _applies(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.
         return False
     if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or modified.arc is not None and not np.isnan(modified.values[:, F_ARC]).all():
         return False
-    pos = original.spans[rows][:, F_POS]
+    pos = original.spans[:, F_POS][rows]  # the position columns only (spans has every field's)
     return bool(((pos[:, :, 0] == 0) & (pos[:, :, 1] >= 0)).all())
 
 
@@ -93,8 +93,17 @@ def positions_read_back(original: Toolpath, modified: Toolpath, texts: list[str]
     if not _applies(original, modified, texts, rows):
         return False
     spans = original.spans[:, F_POS]
-    r, f = np.nonzero((spans[:, :, 0] == 0) & (spans[:, :, 1] >= 0))
-    starts, ends = spans[r, f, 1].astype(np.int64), spans[r, f, 2].astype(np.int64)
+    written = (spans[:, :, 0] == 0) & (spans[:, :, 1] >= 0)
+    r, f = np.nonzero(written)
+    if len(r) == written.size:  # every position number in the main file (a CAM program): the flat arrays, in nonzero's order
+
+        def at(a):
+            return np.ascontiguousarray(a).reshape(-1)
+    else:
+
+        def at(a):
+            return a[r, f]
+    starts, ends = at(spans[:, :, 1]).astype(np.int64), at(spans[:, :, 2]).astype(np.int64)
     if len(starts) > 1 and (starts[1:] > starts[:-1]).all():
         uniq, span_ends, k = starts, ends, np.arange(len(starts))  # each number read once, in order (no sort)
     else:
@@ -107,10 +116,10 @@ def positions_read_back(original: Toolpath, modified: Toolpath, texts: list[str]
     ok, old_values, new_values = _walk(old, new, uniq, span_ends, _POW10)
     if not ok:
         return False
-    offset = original.offset[:, F_POS][r, f] if original.offset is not None else 0.0
-    scale = original.scale[:, F_POS][r, f]
+    offset = at(original.offset[:, F_POS]) if original.offset is not None else 0.0
+    scale = at(original.scale[:, F_POS])
     as_read = old_values[k] * scale + offset
-    parsed, placed = original.values[:, F_POS][r, f], original.position[r, f]
+    parsed, placed = at(original.values[:, F_POS]), at(original.position)
     near = _REL * np.maximum(1.0, np.abs(parsed))
     if not ((np.abs(as_read - parsed) <= near) & (np.abs(as_read - placed) <= near)).all():
         return False  # the parser reads these numbers otherwise than number x scale

@@ -11,6 +11,7 @@ is the original byte for byte.
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from ..errors import EmitError, SharedNumberError
 from ..ir import F_ARC, F_POS, FIELDS, Toolpath
@@ -41,12 +42,13 @@ def format_like(old: str, value: float, tol: float) -> str:
 def choose_decimals(values: np.ndarray, tol: np.ndarray, old_decimals: np.ndarray) -> np.ndarray:
     """Fewest decimals, at least the old number's, that write each value within its tolerance."""
     decimals = np.full(len(values), MAX_DECIMALS)
-    undecided = np.ones(len(values), dtype=bool)
+    open_ = np.arange(len(values))  # the values still undecided (each pass rounds only those)
     for d in range(0, MAX_DECIMALS + 1):
-        ok = undecided & (d >= old_decimals) & (np.abs(np.round(values, d) - values) <= tol)
-        decimals[ok] = d
-        undecided &= ~ok
-        if not undecided.any():
+        v = values[open_]
+        ok = (d >= old_decimals[open_]) & (np.abs(np.round(v, d) - v) <= tol[open_])
+        decimals[open_[ok]] = d
+        open_ = open_[~ok]
+        if not len(open_):
             break
     return decimals
 
@@ -244,7 +246,7 @@ class _Splice:
         """A number written as an expression (G-code X[#1*2]) is there but cannot be rewritten."""
         original = self.original
         fixed = ~np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
-        moved = ~np.isclose(self.modified.position, original.position, rtol=0, atol=0, equal_nan=True)
+        moved = ~_same(self.modified.position, original.position)
         if (fixed & moved).any():
             r, f = (int(v[0]) for v in np.nonzero(fixed & moved))
             raise EmitError(f"{original.sources[int(original.file[r])].path}, line {original.line[r]}: {FIELDS[f]} is not a plain number in the text and cannot be changed")
@@ -258,7 +260,7 @@ class _Splice:
         differs = ~np.isclose(modified.position, inherited, rtol=0, atol=TOLERANCE[F_POS] * 1e-3)
         # A word is needed where the target or the one before it moves, never where neither
         # does (the text already says where it is).
-        moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True)
+        moved = ~_same(modified.position, original.position)
         moved = moved | np.vstack([np.zeros((1, 3), bool), moved[:-1]])
         differs &= moved
         missing = differs & ~np.isnan(modified.position) & np.isnan(original.values[:, F_POS]) & (self.spans[:, F_POS, 1] < 0)
@@ -354,6 +356,11 @@ class _Splice:
             return text
         if literal and len(numbers):
             numbers = self._drop_agreeing_duplicates(file, literal, numbers)
+        if not literal and not bulk.literal:  # the bulk edits alone, already in text order (for_file)
+            starts = bulk.start[numbers]
+            if len(starts) < 2 or (starts[1:] > starts[:-1]).all():
+                cols = {k: getattr(bulk, k)[numbers] for k in _BulkEdits.COLUMNS}
+                return number_kernel.splice_bytes(text.encode("latin-1"), starts, bulk.end[numbers], cols, {}).decode("latin-1")
         starts = np.concatenate([bulk.start[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([st for st, _, _ in literal], dtype=np.int64)])
         ends = np.concatenate([bulk.end[numbers] if bulk is not None else np.zeros(0, np.int64), np.array([e for _, e, _ in literal], dtype=np.int64)])
         cols = {k: np.concatenate([getattr(bulk, k)[numbers] if bulk is not None else np.zeros(0), np.zeros(len(literal))]) for k in _BulkEdits.COLUMNS}
@@ -376,13 +383,33 @@ class _Splice:
         return numbers[~clash]
 
 
+def _same(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a == b elementwise, NaN equal to NaN (``np.isclose(a, b, rtol=0, atol=0, equal_nan=True)``)."""
+    return (a == b) | (np.isnan(a) & np.isnan(b))
+
+
+@njit(cache=True)
+def _in_text_order(spans) -> bool:
+    """Every number of spans (N, F, 3) after the one before it in (file, offset) order: each read once."""
+    last_file, last_start = -1, -1
+    for r in range(spans.shape[0]):
+        for f in range(spans.shape[1]):
+            file, start = spans[r, f, 0], spans[r, f, 1]
+            if start < 0:
+                continue
+            if file < last_file or (file == last_file and start <= last_start):
+                return False
+            last_file, last_start = file, start
+    return True
+
+
 def _check_shared(original: Toolpath, modified: Toolpath, edited: np.ndarray) -> None:
     """A number used by several targets (a named point) may only change if all of them agree."""
+    if _in_text_order(original.spans):
+        return  # every number in text order, each read once (a long CAM program): no sort needed to know
     sp = original.spans.reshape(-1, 3)
     have = sp[:, 1] >= 0
     keys = sp[have, 0] * (1 << 40) + sp[have, 1]
-    if len(keys) < 2 or (keys[1:] > keys[:-1]).all():
-        return  # every number in text order, each read once (a long CAM program): no sort needed to know
     uniq, inverse, counts = np.unique(keys, return_inverse=True, return_counts=True)
     shared = counts[inverse] > 1
     if not shared.any():
