@@ -166,6 +166,49 @@ def test_what_linuxcnc_refuses_under_compensation_is_refused(tmp_path):
             parse_program(prog)
 
 
+# M6 under G41 / G42: rs274's refusal (stderr: its message, then the block it stopped at), the
+# block's line. M6 runs before group 7 (LinuxCNC "Order of Execution"): "G40 M6" is refused,
+# "G41.1 M6" changes the tool first and is run.
+M6_HEAD = "G21 G90 G17\nT2\nG0 X-10 Y0 Z1\nG41.1 D2\nG1 X0 Y0 F100\n"
+M6_CASES = {  # body after M6_HEAD -> (line of the refused block, rs274's stderr after "executing")
+    "T3 M6\nG1 X10\nG40\nM2\n": (6, "Cannot change tools with cutter radius compensation on\nT3 M6\n"),
+    "G1 X10 M6\nG40\nM2\n": (6, "Cannot change tools with cutter radius compensation on\nG1 X10 M6\n"),
+    "G1 X10\nG40 M6\nG1 X20\nM2\n": (7, "Cannot change tools with cutter radius compensation on\nG40 M6\n"),
+}
+M6_RUNS = "G21 G90 G17\nG0 X-10 Y0 Z1\nG41.1 D2 T2 M6\nG1 X0 Y0 F100\nX10\nG40\nT3 M6\nG1 X20 Y-5\nM2\n"
+
+
+@pytest.mark.parametrize("body", sorted(M6_CASES))
+def test_a_tool_change_under_compensation_is_refused_as_rs274_does(tmp_path, body):
+    from postproc.errors import ParseError
+
+    prog = tmp_path / "m6.ngc"
+    prog.write_text(M6_HEAD + body)
+    line, rs274_says = M6_CASES[body]
+    with pytest.raises(ParseError, match=rf"m6\.ngc:{line}:1: {rs274_says.splitlines()[0]}"):
+        parse_program(prog)
+    assert prog.read_text().splitlines()[line - 1] == rs274_says.splitlines()[1]  # the block rs274 names
+
+
+def test_a_tool_change_before_compensation_in_its_block_is_run(tmp_path):
+    prog = tmp_path / "m6.ngc"
+    prog.write_text(M6_RUNS)
+    tp = parse_program(prog)
+    assert tp.resolved.all() and tp.line.tolist() == [2, 4, 5, 8]
+
+
+@needs_rs274
+def test_rs274_refuses_the_tool_changes_and_runs_the_other(tmp_path):
+    for body, (_, rs274_says) in M6_CASES.items():
+        prog = tmp_path / "m6.ngc"
+        prog.write_text(M6_HEAD + body)
+        accepted, _, err = run_rs274(prog)
+        assert not accepted and err.endswith(rs274_says), err
+    prog.write_text(M6_RUNS)
+    accepted, _, err = run_rs274(prog)
+    assert accepted, err
+
+
 @needs_rs274
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_recordings_are_current(tmp_path, name):

@@ -247,6 +247,8 @@ class _Run:
         self.last_was_cycle = False
         self.scale = m["scale"][i]
         words = self.words(i)
+        if self.comp is not None and t["toolchange"][i] == 6.0:  # M6 runs before group 7: "G41 M6" changes first, "G40 M6" is refused
+            raise CycleError("Cannot change tools with cutter radius compensation on")
         if not math.isnan(t["ccomp"][i]):  # group 7 runs before the coordinate system, offsets and motion (LinuxCNC "Order of Execution")
             self._comp_code(i, t["ccomp"][i], words, bool(t["ok"][i]), line)
         if self.comp is not None:

@@ -49,7 +49,7 @@ _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 
 # Modal G codes that set one state column: G code -> (column, value).
 # The modal-state columns of the block table: NaN where a block does not set them, then
 # forward-filled (one list, so a new column reaches the bulk and the grammar tables alike).
-_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle", "turning")
+_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle", "turning", "toolchange")
 _STATE_OF_G = {
     **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
     80.0: ("canned", 0.0),
@@ -346,6 +346,8 @@ class GcodeParser:
             state["spindle"] = value if known else -np.inf  # unknown from here on, never the old S
         elif letter == "M" and value in (3.0, 4.0, 5.0):
             state["turning"] = value  # spindle clockwise / counterclockwise / stopped: G74 G84 G86 G87 G88 need it turning
+        elif letter == "M" and value == 6.0:
+            state["toolchange"] = value  # M6: refused under G41 / G42 (interp.py)
         elif letter in _MORE:
             more[_MORE[letter]] = value
         elif letter in _AX:
