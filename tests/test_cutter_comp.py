@@ -39,6 +39,8 @@ from postproc.programs import emit_texts, parse_program  # noqa: E402
 RECORDED = Path(__file__).parent / "data" / "rs274" / "cutter_comp"
 HEAD = "G21 G17 G90 G40 G94\nG0 X-10 Y-10 Z5\nG1 Z-1 F300\n"
 SQUARE = "G1 X0 Y0\nX30\nY20\nX0\nY0\nG40\nG1 X-10 Y-10\nG0 Z5\nM2\n"
+HEAD18 = "G21 G18 G90 G40 G94\nG0 X-10 Z-10 Y5\nG1 Y-1 F300\n"
+SQUARE18 = "G1 X0 Z0\nX30\nZ20\nX0\nZ0\nG40\nG1 X-10 Z-10\nG0 Y5\nM2\n"
 
 PROGRAMS = {
     # G42 around a counter-clockwise square: the tool outside, an arc about each (convex) corner
@@ -64,6 +66,14 @@ PROGRAMS = {
     "rapids_param": "G21 G17 G90 G40\n#1 = 2.5\nG0 X-10 Y-10 Z5\nG42.1 D[#1 * 2]\nG0 X0 Y0\nX20\nY20\nG1 X0 F100\nG40\nG0 X-10 Y-10\nM2\n",
     # a negative diameter swaps the side; inches
     "negative_inch": "G20 G17 G90 G40\nG0 X-0.5 Y-0.5 Z0.2\nG41.1 D-0.25\nG1 X0 Y0 F10\nX1\nY1\nX0\nY0\nG40\nG1 X-0.5 Y-0.5\nM2\n",
+    # G18 (XZ, LinuxCNC's lathe plane): rs274ngc compensates in (first, second) = (Z, X), left / right and G2 / G3 as
+    # seen there; arcs' centre words K I. The same square, lines and arcs, an arc entry, G40 exits.
+    "g18_outside_square": HEAD18 + "G42.1 D4\n" + SQUARE18,
+    "g18_inside_square": HEAD18 + "G41.1 D4\n" + SQUARE18,
+    "g18_line_arc": HEAD18 + "G41.1 D3\nG1 X0 Z0\nX20\nG3 X30 Z10 R10\nG1 Z30\nG2 X20 Z40 I-10 K0\nG1 X10\nG3 X0 Z30 I0 K-10\n"
+    "G1 Z20\nG2 X0 Z10 K-5\nG1 Z0\nG40\nG1 X-10 Z-10\nM2\n",
+    "g18_entry_arc": "G21 G18 G90 G40\nG0 X0 Z-20 Y1\nG42.1 D4\nG2 X20 Z0 I0 K20 F100\nG1 X30\nG40\nG1 X40 Z-10\nG41.1 D3\n"
+    "G3 X60 Z10 R20\nG1 Z20\nG40\nG0 X40\nM2\n",
 }
 
 
@@ -73,10 +83,20 @@ def _program(folder: Path, name: str) -> Path:
     return path
 
 
-def _arc_centres(text: str) -> np.ndarray:
-    """(arcs, 2) centres x y (mm) of rs274's ARC_FEED calls in the G17 plane."""
+def _arc_centres(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """rs274's ARC_FEED calls: (arcs, 3) centres x y z (mm; the plane's normal axis NaN) and
+    (arcs,) turn signs (+1 counter-clockwise, G3). ARC_FEED(first_end, second_end, first_centre,
+    second_centre, rotation, ...): first, second = X Y in the XY plane, Z X in XZ (G18)."""
     scale = 25.4 if "CANON_UNITS_INCHES" in text else 1.0
-    return np.array([[float(v) for v in args.split(",")[2:4]] for args in re.findall(r"ARC_FEED\(([^)]*)\)", text)]).reshape(-1, 2) * scale
+    plane, centres, turns = "XY", [], []
+    for call, args in re.findall(r"(SELECT_PLANE|ARC_FEED)\(([^)]*)\)", text):
+        if call == "SELECT_PLANE":
+            plane = args.split("_")[-1]
+            continue
+        v = [float(a) for a in args.split(",")]
+        centres.append({"XY": (v[2], v[3], np.nan), "XZ": (v[3], np.nan, v[2])}[plane])
+        turns.append(np.sign(v[4]))
+    return np.array(centres).reshape(-1, 3) * scale, np.array(turns)
 
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
@@ -92,8 +112,12 @@ def test_offset_path_equals_rs274s(tmp_path, name):
     bad = (err > tol[keep, None]).any(axis=1)
     assert not bad.any(), f"line {tp.line[rows[np.argmax(bad)]]}: IR {machine_positions(tp)[rows[np.argmax(bad)]]}, rs274 {canon[keep][np.argmax(bad)]}"
     assert (ir_arc[rows] == arc[keep]).all()
-    centres = np.array([describe(tp)[int(r)]["centre"][:2] for r in np.nonzero(ir_arc)[0]]).reshape(-1, 2)
-    np.testing.assert_allclose(centres, _arc_centres(text), atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
+    rs274_centres, rs274_turns = _arc_centres(text)
+    centres = np.array([describe(tp)[int(r)]["centre"] for r in np.nonzero(ir_arc)[0]]).reshape(-1, 3)
+    in_plane = ~np.isnan(rs274_centres)
+    assert in_plane.sum() == 2 * len(rs274_centres)
+    np.testing.assert_allclose(centres[in_plane], rs274_centres[in_plane], atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
+    np.testing.assert_array_equal(np.where(tp.kind[ir_arc] == Kind.ARC_CCW, 1, -1), rs274_turns)  # G2 / G3 as rs274 turns
     assert tp.resolved.all() and (tp.ccomp != 2).all()
 
 
@@ -241,7 +265,6 @@ def test_inspect_and_convert_give_the_path_the_machine_cuts(tmp_path):
 
 
 @pytest.mark.parametrize("body, why", [
-    ("G18\nG41.1 D2\nG1 X0 Z0\nX10\n", "G18 (XZ) plane is not followed"),  # LinuxCNC's lathe compensation: not modelled
     ("G17\nG41.1 D8\nG1 X0 Y0\nX10\nG3 X10 Y6 I0 J3\n", "Tool radius not less than arc radius"),  # rs274ngc refuses the arc
     ("G17\nG41.1 D6\nG1 X0 Y0\nG1 X1 Y0\nG1 X1 Y5\n", "Straight move in concave corner cannot be reached by the tool without gouging"),  # rs274ngc refuses
     # G40 leaves the last arc where it ends: rs274ngc checks that end against the arc's programmed sweep and refuses it
@@ -288,8 +311,10 @@ def _random_program(rng: np.random.Generator) -> str:
 
 
 @needs_rs274
-def test_random_programs_equal_rs274s(tmp_path):
-    """Differential check (rs274 installed): 120 random compensated programs; where rs274 runs
+@pytest.mark.parametrize("plane", ["G17", "G18"])
+def test_random_programs_equal_rs274s(tmp_path, plane):
+    """Differential check (rs274 installed): 120 random compensated programs (in G18: the same
+    programs with X Y Z I J read as Z X Y K I, LinuxCNC's lathe plane); where rs274 runs
     one, the IR's every end point equals rs274's and nothing is flagged; where rs274 refuses
     one (a gouge, a too short entry), the IR flags the targets or refuses the block."""
     from postproc.errors import ParseError
@@ -298,7 +323,8 @@ def test_random_programs_equal_rs274s(tmp_path):
     agree = 0
     for n in range(120):
         path = tmp_path / f"r{n}.ngc"
-        path.write_text(_random_program(rng))
+        text = _random_program(rng)
+        path.write_text(text if plane == "G17" else text.replace("G17", "G18").translate(str.maketrans("XYZIJ", "ZXYKI")))
         accepted, calls, err = run_rs274(path)
         try:
             tp = parse_program(path)
@@ -314,3 +340,21 @@ def test_random_programs_equal_rs274s(tmp_path):
             assert len(rows) == len(keep) and (np.abs(machine_positions(tp)[rows] - canon[keep]) <= tol[keep, None]).all(), path.read_text()
             agree += 1
     assert agree >= 90
+
+
+def test_compensation_in_the_g19_plane_is_refused_as_rs274_does(tmp_path):
+    """rs274ngc: "Cutter radius compensation allowed only in XY, XZ planes" (at the G41 block)."""
+    from postproc.errors import ParseError
+
+    prog = tmp_path / "g19.ngc"
+    prog.write_text("G21 G90 G19\nG0 Y-10 Z-10 X1\nG41.1 D4\nG1 Y0 Z0 F100\nG40\nM2\n")
+    with pytest.raises(ParseError, match=r"g19\.ngc:3:1: Cutter radius compensation allowed only in XY, XZ planes"):
+        parse_program(prog)
+
+
+@needs_rs274
+def test_rs274_refuses_compensation_in_the_g19_plane(tmp_path):
+    prog = tmp_path / "g19.ngc"
+    prog.write_text("G21 G90 G19\nG0 Y-10 Z-10 X1\nG41.1 D4\nG1 Y0 Z0 F100\nG40\nM2\n")
+    accepted, _, err = run_rs274(prog)
+    assert not accepted and err.endswith("Cutter radius compensation allowed only in XY, XZ planes\nG41.1 D4\n"), err
