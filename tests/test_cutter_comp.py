@@ -74,6 +74,10 @@ PROGRAMS = {
     "G1 Z20\nG2 X0 Z10 K-5\nG1 Z0\nG40\nG1 X-10 Z-10\nM2\n",
     "g18_entry_arc": "G21 G18 G90 G40\nG0 X0 Z-20 Y1\nG42.1 D4\nG2 X20 Z0 I0 K20 F100\nG1 X30\nG40\nG1 X40 Z-10\nG41.1 D3\n"
     "G3 X60 Z10 R20\nG1 Z20\nG40\nG0 X40\nM2\n",
+    # G93 (inverse time): rs274 times each compensated move, and the move after G40, by its programmed length (x F)
+    "inverse_time_exit": "G21 G17 G90 G40\nG0 X-10 Y-10 Z1\nG41.1 D3\nG93\nG1 X0 Y0 F2\nX20 F3\nG3 X30 Y10 R10 F4\nG40\nG1 X40 Y-10 F2\nM2\n",
+    "g18_inverse_time": "G21 G18 G90 G40 G94\nG0 X-10 Z-10 Y1\nG41.1 D3\nG93\nG1 X0 Z0 F2\nX20 F3\nG3 X30 Z10 R10 F4\nG1 Z30 Y0 F2\n"
+    "G2 X20 Z40 I-10 K0 F5\nG1 X10 F6\nG3 X0 Z30 I0 K-10 Y-1 F4\nG1 Z0 F3\nG40\nG1 X-10 Z-10 F2\nM2\n",
 }
 
 
@@ -119,6 +123,25 @@ def test_offset_path_equals_rs274s(tmp_path, name):
     np.testing.assert_allclose(centres[in_plane], rs274_centres[in_plane], atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
     np.testing.assert_array_equal(np.where(tp.kind[ir_arc] == Kind.ARC_CCW, 1, -1), rs274_turns)  # G2 / G3 as rs274 turns
     assert tp.resolved.all() and (tp.ccomp != 2).all()
+
+
+@pytest.mark.parametrize("name", ["inverse_time_exit", "g18_inverse_time"])
+def test_inverse_time_speeds_equal_rs274s(tmp_path, name):
+    """G93 under G41/G42 (G17 and G18): every feed move's speed (length x F, mm/min) equals
+    the feed rate rs274 sets for it (printed to 4 decimals), the move after G40 included."""
+    from test_feed_modes import canonical_feeds
+
+    from postproc.emit.feeds import _speeds
+
+    tp = parse_program(_program(tmp_path, name))
+    text = (RECORDED / f"{name}.canon").read_text(encoding="latin-1")
+    canon, tol, arc = canonical_endpoints(text)
+    theirs = canonical_feeds(text)[_moves(canon, tol, arc)]
+    rows = _moves(machine_positions(tp), np.full(len(tp), 1e-9), np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)))
+    ours, why = _speeds(tp)
+    feed = tp.kind[rows] != Kind.RAPID
+    assert len(rows) == len(theirs) and feed.sum() >= 4 and (why[rows][feed] == "").all()
+    np.testing.assert_allclose(ours[rows][feed], theirs[feed], atol=1e-4)
 
 
 def test_corner_arcs_are_generated_rows_and_the_text_comes_back_unchanged(tmp_path):
