@@ -39,6 +39,8 @@ from postproc.programs import emit_texts, parse_program  # noqa: E402
 RECORDED = Path(__file__).parent / "data" / "rs274" / "cutter_comp"
 HEAD = "G21 G17 G90 G40 G94\nG0 X-10 Y-10 Z5\nG1 Z-1 F300\n"
 SQUARE = "G1 X0 Y0\nX30\nY20\nX0\nY0\nG40\nG1 X-10 Y-10\nG0 Z5\nM2\n"
+HEAD18 = "G21 G18 G90 G40 G94\nG0 X-10 Z-10 Y5\nG1 Y-1 F300\n"
+SQUARE18 = "G1 X0 Z0\nX30\nZ20\nX0\nZ0\nG40\nG1 X-10 Z-10\nG0 Y5\nM2\n"
 
 PROGRAMS = {
     # G42 around a counter-clockwise square: the tool outside, an arc about each (convex) corner
@@ -64,6 +66,18 @@ PROGRAMS = {
     "rapids_param": "G21 G17 G90 G40\n#1 = 2.5\nG0 X-10 Y-10 Z5\nG42.1 D[#1 * 2]\nG0 X0 Y0\nX20\nY20\nG1 X0 F100\nG40\nG0 X-10 Y-10\nM2\n",
     # a negative diameter swaps the side; inches
     "negative_inch": "G20 G17 G90 G40\nG0 X-0.5 Y-0.5 Z0.2\nG41.1 D-0.25\nG1 X0 Y0 F10\nX1\nY1\nX0\nY0\nG40\nG1 X-0.5 Y-0.5\nM2\n",
+    # G18 (XZ, LinuxCNC's lathe plane): rs274ngc compensates in (first, second) = (Z, X), left / right and G2 / G3 as
+    # seen there; arcs' centre words K I. The same square, lines and arcs, an arc entry, G40 exits.
+    "g18_outside_square": HEAD18 + "G42.1 D4\n" + SQUARE18,
+    "g18_inside_square": HEAD18 + "G41.1 D4\n" + SQUARE18,
+    "g18_line_arc": HEAD18 + "G41.1 D3\nG1 X0 Z0\nX20\nG3 X30 Z10 R10\nG1 Z30\nG2 X20 Z40 I-10 K0\nG1 X10\nG3 X0 Z30 I0 K-10\n"
+    "G1 Z20\nG2 X0 Z10 K-5\nG1 Z0\nG40\nG1 X-10 Z-10\nM2\n",
+    "g18_entry_arc": "G21 G18 G90 G40\nG0 X0 Z-20 Y1\nG42.1 D4\nG2 X20 Z0 I0 K20 F100\nG1 X30\nG40\nG1 X40 Z-10\nG41.1 D3\n"
+    "G3 X60 Z10 R20\nG1 Z20\nG40\nG0 X40\nM2\n",
+    # G93 (inverse time): rs274 times each compensated move, and the move after G40, by its programmed length (x F)
+    "inverse_time_exit": "G21 G17 G90 G40\nG0 X-10 Y-10 Z1\nG41.1 D3\nG93\nG1 X0 Y0 F2\nX20 F3\nG3 X30 Y10 R10 F4\nG40\nG1 X40 Y-10 F2\nM2\n",
+    "g18_inverse_time": "G21 G18 G90 G40 G94\nG0 X-10 Z-10 Y1\nG41.1 D3\nG93\nG1 X0 Z0 F2\nX20 F3\nG3 X30 Z10 R10 F4\nG1 Z30 Y0 F2\n"
+    "G2 X20 Z40 I-10 K0 F5\nG1 X10 F6\nG3 X0 Z30 I0 K-10 Y-1 F4\nG1 Z0 F3\nG40\nG1 X-10 Z-10 F2\nM2\n",
 }
 
 
@@ -73,10 +87,20 @@ def _program(folder: Path, name: str) -> Path:
     return path
 
 
-def _arc_centres(text: str) -> np.ndarray:
-    """(arcs, 2) centres x y (mm) of rs274's ARC_FEED calls in the G17 plane."""
+def _arc_centres(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """rs274's ARC_FEED calls: (arcs, 3) centres x y z (mm; the plane's normal axis NaN) and
+    (arcs,) turn signs (+1 counter-clockwise, G3). ARC_FEED(first_end, second_end, first_centre,
+    second_centre, rotation, ...): first, second = X Y in the XY plane, Z X in XZ (G18)."""
     scale = 25.4 if "CANON_UNITS_INCHES" in text else 1.0
-    return np.array([[float(v) for v in args.split(",")[2:4]] for args in re.findall(r"ARC_FEED\(([^)]*)\)", text)]).reshape(-1, 2) * scale
+    plane, centres, turns = "XY", [], []
+    for call, args in re.findall(r"(SELECT_PLANE|ARC_FEED)\(([^)]*)\)", text):
+        if call == "SELECT_PLANE":
+            plane = args.split("_")[-1]
+            continue
+        v = [float(a) for a in args.split(",")]
+        centres.append({"XY": (v[2], v[3], np.nan), "XZ": (v[3], np.nan, v[2])}[plane])
+        turns.append(np.sign(v[4]))
+    return np.array(centres).reshape(-1, 3) * scale, np.array(turns)
 
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
@@ -92,9 +116,32 @@ def test_offset_path_equals_rs274s(tmp_path, name):
     bad = (err > tol[keep, None]).any(axis=1)
     assert not bad.any(), f"line {tp.line[rows[np.argmax(bad)]]}: IR {machine_positions(tp)[rows[np.argmax(bad)]]}, rs274 {canon[keep][np.argmax(bad)]}"
     assert (ir_arc[rows] == arc[keep]).all()
-    centres = np.array([describe(tp)[int(r)]["centre"][:2] for r in np.nonzero(ir_arc)[0]]).reshape(-1, 2)
-    np.testing.assert_allclose(centres, _arc_centres(text), atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
+    rs274_centres, rs274_turns = _arc_centres(text)
+    centres = np.array([describe(tp)[int(r)]["centre"] for r in np.nonzero(ir_arc)[0]]).reshape(-1, 3)
+    in_plane = ~np.isnan(rs274_centres)
+    assert in_plane.sum() == 2 * len(rs274_centres)
+    np.testing.assert_allclose(centres[in_plane], rs274_centres[in_plane], atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
+    np.testing.assert_array_equal(np.where(tp.kind[ir_arc] == Kind.ARC_CCW, 1, -1), rs274_turns)  # G2 / G3 as rs274 turns
     assert tp.resolved.all() and (tp.ccomp != 2).all()
+
+
+@pytest.mark.parametrize("name", ["inverse_time_exit", "g18_inverse_time"])
+def test_inverse_time_speeds_equal_rs274s(tmp_path, name):
+    """G93 under G41/G42 (G17 and G18): every feed move's speed (length x F, mm/min) equals
+    the feed rate rs274 sets for it (printed to 4 decimals), the move after G40 included."""
+    from test_feed_modes import canonical_feeds
+
+    from postproc.emit.feeds import _speeds
+
+    tp = parse_program(_program(tmp_path, name))
+    text = (RECORDED / f"{name}.canon").read_text(encoding="latin-1")
+    canon, tol, arc = canonical_endpoints(text)
+    theirs = canonical_feeds(text)[_moves(canon, tol, arc)]
+    rows = _moves(machine_positions(tp), np.full(len(tp), 1e-9), np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)))
+    ours, why = _speeds(tp)
+    feed = tp.kind[rows] != Kind.RAPID
+    assert len(rows) == len(theirs) and feed.sum() >= 4 and (why[rows][feed] == "").all()
+    np.testing.assert_allclose(ours[rows][feed], theirs[feed], atol=1e-4)
 
 
 def test_corner_arcs_are_generated_rows_and_the_text_comes_back_unchanged(tmp_path):
@@ -166,6 +213,49 @@ def test_what_linuxcnc_refuses_under_compensation_is_refused(tmp_path):
             parse_program(prog)
 
 
+# M6 under G41 / G42: rs274's refusal (stderr: its message, then the block it stopped at), the
+# block's line. M6 runs before group 7 (LinuxCNC "Order of Execution"): "G40 M6" is refused,
+# "G41.1 M6" changes the tool first and is run.
+M6_HEAD = "G21 G90 G17\nT2\nG0 X-10 Y0 Z1\nG41.1 D2\nG1 X0 Y0 F100\n"
+M6_CASES = {  # body after M6_HEAD -> (line of the refused block, rs274's stderr after "executing")
+    "T3 M6\nG1 X10\nG40\nM2\n": (6, "Cannot change tools with cutter radius compensation on\nT3 M6\n"),
+    "G1 X10 M6\nG40\nM2\n": (6, "Cannot change tools with cutter radius compensation on\nG1 X10 M6\n"),
+    "G1 X10\nG40 M6\nG1 X20\nM2\n": (7, "Cannot change tools with cutter radius compensation on\nG40 M6\n"),
+}
+M6_RUNS = "G21 G90 G17\nG0 X-10 Y0 Z1\nG41.1 D2 T2 M6\nG1 X0 Y0 F100\nX10\nG40\nT3 M6\nG1 X20 Y-5\nM2\n"
+
+
+@pytest.mark.parametrize("body", sorted(M6_CASES))
+def test_a_tool_change_under_compensation_is_refused_as_rs274_does(tmp_path, body):
+    from postproc.errors import ParseError
+
+    prog = tmp_path / "m6.ngc"
+    prog.write_text(M6_HEAD + body)
+    line, rs274_says = M6_CASES[body]
+    with pytest.raises(ParseError, match=rf"m6\.ngc:{line}:1: {rs274_says.splitlines()[0]}"):
+        parse_program(prog)
+    assert prog.read_text().splitlines()[line - 1] == rs274_says.splitlines()[1]  # the block rs274 names
+
+
+def test_a_tool_change_before_compensation_in_its_block_is_run(tmp_path):
+    prog = tmp_path / "m6.ngc"
+    prog.write_text(M6_RUNS)
+    tp = parse_program(prog)
+    assert tp.resolved.all() and tp.line.tolist() == [2, 4, 5, 8]
+
+
+@needs_rs274
+def test_rs274_refuses_the_tool_changes_and_runs_the_other(tmp_path):
+    for body, (_, rs274_says) in M6_CASES.items():
+        prog = tmp_path / "m6.ngc"
+        prog.write_text(M6_HEAD + body)
+        accepted, _, err = run_rs274(prog)
+        assert not accepted and err.endswith(rs274_says), err
+    prog.write_text(M6_RUNS)
+    accepted, _, err = run_rs274(prog)
+    assert accepted, err
+
+
 @needs_rs274
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_recordings_are_current(tmp_path, name):
@@ -198,7 +288,6 @@ def test_inspect_and_convert_give_the_path_the_machine_cuts(tmp_path):
 
 
 @pytest.mark.parametrize("body, why", [
-    ("G18\nG41.1 D2\nG1 X0 Z0\nX10\n", "G18 (XZ) plane is not followed"),  # LinuxCNC's lathe compensation: not modelled
     ("G17\nG41.1 D8\nG1 X0 Y0\nX10\nG3 X10 Y6 I0 J3\n", "Tool radius not less than arc radius"),  # rs274ngc refuses the arc
     ("G17\nG41.1 D6\nG1 X0 Y0\nG1 X1 Y0\nG1 X1 Y5\n", "Straight move in concave corner cannot be reached by the tool without gouging"),  # rs274ngc refuses
     # G40 leaves the last arc where it ends: rs274ngc checks that end against the arc's programmed sweep and refuses it
@@ -245,8 +334,10 @@ def _random_program(rng: np.random.Generator) -> str:
 
 
 @needs_rs274
-def test_random_programs_equal_rs274s(tmp_path):
-    """Differential check (rs274 installed): 120 random compensated programs; where rs274 runs
+@pytest.mark.parametrize("plane", ["G17", "G18"])
+def test_random_programs_equal_rs274s(tmp_path, plane):
+    """Differential check (rs274 installed): 120 random compensated programs (in G18: the same
+    programs with X Y Z I J read as Z X Y K I, LinuxCNC's lathe plane); where rs274 runs
     one, the IR's every end point equals rs274's and nothing is flagged; where rs274 refuses
     one (a gouge, a too short entry), the IR flags the targets or refuses the block."""
     from postproc.errors import ParseError
@@ -255,7 +346,8 @@ def test_random_programs_equal_rs274s(tmp_path):
     agree = 0
     for n in range(120):
         path = tmp_path / f"r{n}.ngc"
-        path.write_text(_random_program(rng))
+        text = _random_program(rng)
+        path.write_text(text if plane == "G17" else text.replace("G17", "G18").translate(str.maketrans("XYZIJ", "ZXYKI")))
         accepted, calls, err = run_rs274(path)
         try:
             tp = parse_program(path)
@@ -271,3 +363,21 @@ def test_random_programs_equal_rs274s(tmp_path):
             assert len(rows) == len(keep) and (np.abs(machine_positions(tp)[rows] - canon[keep]) <= tol[keep, None]).all(), path.read_text()
             agree += 1
     assert agree >= 90
+
+
+def test_compensation_in_the_g19_plane_is_refused_as_rs274_does(tmp_path):
+    """rs274ngc: "Cutter radius compensation allowed only in XY, XZ planes" (at the G41 block)."""
+    from postproc.errors import ParseError
+
+    prog = tmp_path / "g19.ngc"
+    prog.write_text("G21 G90 G19\nG0 Y-10 Z-10 X1\nG41.1 D4\nG1 Y0 Z0 F100\nG40\nM2\n")
+    with pytest.raises(ParseError, match=r"g19\.ngc:3:1: Cutter radius compensation allowed only in XY, XZ planes"):
+        parse_program(prog)
+
+
+@needs_rs274
+def test_rs274_refuses_compensation_in_the_g19_plane(tmp_path):
+    prog = tmp_path / "g19.ngc"
+    prog.write_text("G21 G90 G19\nG0 Y-10 Z-10 X1\nG41.1 D4\nG1 Y0 Z0 F100\nG40\nM2\n")
+    accepted, _, err = run_rs274(prog)
+    assert not accepted and err.endswith("Cutter radius compensation allowed only in XY, XZ planes\nG41.1 D4\n"), err

@@ -117,9 +117,12 @@ def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
     one), and the corner arc it adds runs at the rate of the move it belongs to: the lengths
     of those moves, so that length x F is the feed rate the machine runs them at. The
     programmed points are the text's numbers (``values``; a word left out keeps the programmed
-    value before it), the arcs' centres their absolute I J."""
+    value before it), the arcs' centres their absolute I J (G18: K I). The move after G40
+    runs from the programmed point too (rs274: its length from there, times F)."""
     if tp.ccomp is None or not (tp.ccomp == 1).any():
         return length
+    from ..arcs import PLANE_AXES
+
     own = tp.insert_at[:, 1] >= 0 if tp.insert_at is not None else np.ones(len(tp), bool)
     prog = tp.position.copy()
     out = length.copy()
@@ -130,14 +133,18 @@ def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
             continue
         prog[r] = np.where(np.isnan(tp.values[r, :3]), prev, tp.values[r, :3])
         if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW):
-            centre = tp.values[r, 19:21]  # I J: absolute under compensation (G17)
-            a0 = np.arctan2(prev[1] - centre[1], prev[0] - centre[0])
-            a1 = np.arctan2(prog[r, 1] - centre[1], prog[r, 0] - centre[0])
+            first, second, normal = PLANE_AXES[int(tp.arc[r, 0])]  # G17: X Y Z; G18: Z X Y
+            centre = tp.values[r, [19 + first, 19 + second]]  # I J (G18: K I): absolute under compensation
+            a0 = np.arctan2(prev[second] - centre[1], prev[first] - centre[0])
+            a1 = np.arctan2(prog[r, second] - centre[1], prog[r, first] - centre[0])
             turn = a1 - a0 if tp.kind[r] == Kind.ARC_CCW else a0 - a1
             sweep = np.mod(turn, 2 * np.pi) or 2 * np.pi  # the end on the start: a full circle
-            out[r] = np.hypot(np.linalg.norm(prog[r, :2] - centre) * sweep, prog[r, 2] - prev[2])
+            out[r] = np.hypot(np.linalg.norm(prog[r, [first, second]] - centre) * sweep, prog[r, normal] - prev[normal])
         else:
             out[r] = np.linalg.norm(prog[r] - prev)
+    after = np.nonzero((tp.ccomp[1:] == 0) & (tp.ccomp[:-1] == 1))[0] + 1
+    for r in after.tolist():  # the move after G40: from the programmed point too (its start is the offset one)
+        out[r] = np.linalg.norm(tp.position[r] - prog[r - 1])
     generated = np.nonzero((tp.ccomp == 1) & ~own)[0]
     for r in generated[::-1].tolist():  # a corner arc: the rate of the next move of its block
         if r + 1 < len(tp) and tp.line[r + 1] == tp.line[r]:

@@ -1,4 +1,4 @@
-"""Cutter radius compensation (G41 / G42, G41.1 / G42.1, G40) in the G17 plane, as LinuxCNC's
+"""Cutter radius compensation (G41 / G42, G41.1 / G42.1, G40) in the G17 and G18 planes, as LinuxCNC's
 interpreter applies it to the path it sends to the machine.
 
 LinuxCNC manual, "Cutter Radius Compensation": G41 keeps the tool on the left of the programmed
@@ -16,9 +16,11 @@ goes from the compensated point to its programmed end, and must be straight.
 The geometry below follows the rules of rs274ngc's convert_straight_comp1/comp2 and
 convert_arc_comp2 (corner angle tolerance 0.05 rad, one pending move whose end the next move
 decides), written from their description; the tests compare it with rs274's own output.
-Everything is in program coordinates of the G17 plane, mm.
+Everything is in program coordinates, mm, as the plane's (first, second, normal) axes: G17
+X Y Z; G18 Z X Y, as rs274ngc (left / right and G2 / G3 as seen in Z X; centre words K I);
+the caller (interp.py) maps them (G19 LinuxCNC refuses).
 
-A case this module does not follow (an arc as the entry move, another plane, a corner LinuxCNC
+A case this module does not follow (an arc of several turns, a corner LinuxCNC
 refuses as a gouge) raises ``Unfollowed``: the caller flags the targets under that compensation
 as unresolved, with the line and the reason, never a guessed number.
 """

@@ -247,6 +247,8 @@ class _Run:
         self.last_was_cycle = False
         self.scale = m["scale"][i]
         words = self.words(i)
+        if self.comp is not None and t["toolchange"][i] == 6.0:  # M6 runs before group 7: "G41 M6" changes first, "G40 M6" is refused
+            raise CycleError("Cannot change tools with cutter radius compensation on")
         if not math.isnan(t["ccomp"][i]):  # group 7 runs before the coordinate system, offsets and motion (LinuxCNC "Order of Execution")
             self._comp_code(i, t["ccomp"][i], words, bool(t["ok"][i]), line)
         if self.comp is not None:
@@ -350,8 +352,6 @@ class _Run:
         radius, why = self._comp_radius(code, words, known)
         if radius < 0:  # a negative radius swaps the side
             radius, side = -radius, -side
-        if why is None and plane != 17.0:
-            why = "compensation in the G18 (XZ) plane is not followed"
         self.comp = _CompState(side, radius, line, plane, self.scale, why)
         if why is not None:
             self.notes.append(f"line {line}: G{code:g} cutter radius compensation: {why}; the targets under it are flagged (positions as programmed)")
@@ -399,17 +399,21 @@ class _Run:
             self.emit(i, mode, self.cur, polar)
             return
         if c.why is None:
+            # The offset path is computed in the plane's first, second, normal axes (G17: X Y Z, G18: Z X Y, as
+            # rs274ngc: left / right and G2 / G3 are as seen in (first, second), G18 arcs' centre words K I).
+            ax = canned.PLANE_AXES[c.plane]
             if c.path is None:  # rs274ngc's check point outlives a compensation (an entry arc is checked against it)
-                c.path = CutterComp(c.side, c.radius, c.scale, prog=start, endpoint=self.comp_endpoint)
+                c.path = CutterComp(c.side, c.radius, c.scale, prog=[start[a] for a in ax], endpoint=self.comp_endpoint)
             extra = {"abc": list(self.abc), "frame": self.frame_id(), "exact": self._all_exact(), "prog": list(self.cur), "polar": polar}
             try:
                 if mode in (0, 1):
-                    c.path.straight(i, mode, list(self.cur), extra)
+                    c.path.straight(i, mode, [self.cur[a] for a in ax], extra)
                 else:
                     if words.get("P", 1.0) != 1.0:
                         raise Unfollowed("an arc of several turns (P)")
-                    centre = arc_centre(start, self.cur, words, self.modal["ijk"][i] == 90.1, mode == 3, self.scale)
-                    c.path.arc(i, mode, list(self.cur), centre, extra)
+                    in_plane = {k: words[w] for k, w in (("I", "IJK"[ax[0]]), ("J", "IJK"[ax[1]]), ("R", "R")) if w in words}
+                    centre = arc_centre([start[a] for a in ax], [self.cur[a] for a in ax], in_plane, self.modal["ijk"][i] == 90.1, mode == 3, self.scale)
+                    c.path.arc(i, mode, [self.cur[a] for a in ax], centre, extra)
                 self._emit_comp(c.path.take(), 1)
                 return
             except (ValueError, ZeroDivisionError, OverflowError) as exc:  # Unfollowed; a degenerate corner (math domain)
@@ -428,10 +432,15 @@ class _Run:
             self._emit_comp(c.path.drop(), 2)
 
     def _emit_comp(self, outs: list, code: int) -> None:
+        """The offset path's moves (in the plane's first, second, normal axes) as targets in X Y Z;
+        an arc's centre stays (first, second), as postproc.arcs reads a plane's centre."""
+        ax = canned.PLANE_AXES[self.comp.plane]
         for o in outs:
-            e = o.extra
-            self.emit(o.row, o.motion, o.end, o.generated or e["polar"], exact=e["exact"], ccomp=code,
-                      centre=o.centre if o.centre is not None else (math.nan, math.nan), programmed=o.end if o.generated else e["prog"],
+            e, end = o.extra, [math.nan] * 3
+            for k, a in enumerate(ax):
+                end[a] = o.end[k]
+            self.emit(o.row, o.motion, end, o.generated or e["polar"], exact=e["exact"], ccomp=code,
+                      centre=o.centre if o.centre is not None else (math.nan, math.nan), programmed=end if o.generated else e["prog"],
                       abc=e["abc"], frame=e["frame"])
 
     def _comp_off(self, line: int | None = None) -> None:

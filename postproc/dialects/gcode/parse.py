@@ -27,6 +27,7 @@ from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
 from . import arcwords, flow
+from .canned import PLANE_AXES
 
 AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
@@ -49,7 +50,7 @@ _WCS = {54.0: 1, 55.0: 2, 56.0: 3, 57.0: 4, 58.0: 5, 59.0: 6, 59.1: 7, 59.2: 8, 
 # Modal G codes that set one state column: G code -> (column, value).
 # The modal-state columns of the block table: NaN where a block does not set them, then
 # forward-filled (one list, so a new column reaches the bulk and the grammar tables alike).
-_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle", "turning")
+_STATE_COLUMNS = ("motion", "units", "dist", "plane", "ijk", "wcs", "canned", "tlo", "h", "retract", "setup", "ccomp", "feedmode", "spindle", "turning", "toolchange")
 _STATE_OF_G = {
     **{g: ("motion", g) for g in (0.0, 1.0, 2.0, 3.0)},
     80.0: ("canned", 0.0),
@@ -346,6 +347,8 @@ class GcodeParser:
             state["spindle"] = value if known else -np.inf  # unknown from here on, never the old S
         elif letter == "M" and value in (3.0, 4.0, 5.0):
             state["turning"] = value  # spindle clockwise / counterclockwise / stopped: G74 G84 G86 G87 G88 need it turning
+        elif letter == "M" and value == 6.0:
+            state["toolchange"] = value  # M6: refused under G41 / G42 (interp.py)
         elif letter in _MORE:
             more[_MORE[letter]] = value
         elif letter in _AX:
@@ -558,7 +561,7 @@ class GcodeParser:
         arc_move = np.isin(moves.motion, (2, 3))
         arc = arcwords.arc_words(t, rows, arc_move, plane[rows], _ffill(t["ijk"], 91.1)[rows], scale[rows], ir_values, ir_spans, ir_scale,
                                  self.text, self._error_at)
-        arc = _offset_arcs(arc, moves, ir_values, ir_spans)
+        arc = _offset_arcs(arc, moves, plane[rows], ir_values, ir_spans)
         axis_rows = _tool_axes(t, rows, np.where(arc_move, 49.0, tlo[rows]), ir_values, ir_spans, per_row=True) & own
         if axis_rows.any():
             self.builder.orientation_kind = "axis"
@@ -733,20 +736,23 @@ class GcodeParser:
 _WCS_NAMES = [54, 55, 56, 57, 58, 59, 59.1, 59.2, 59.3]
 
 
-def _offset_arcs(arc: np.ndarray | None, moves, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray | None:
+def _offset_arcs(arc: np.ndarray | None, moves, plane: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray) -> np.ndarray | None:
     """Arcs of the compensated path (G41/G42: the programmed arcs at the offset radius and the
     corner arcs the controller adds): their centre as absolute I J (G90.1 form) in the IR, so
     that postproc.arcs reads the arc the machine cuts from the offset start; a corner arc has
-    no words of its own (no spans). ``arc`` is changed in place."""
+    no words of its own (no spans). ``moves.centre`` is (first, second) of the move's plane
+    (``plane``, G17 or G18). ``arc`` is changed in place."""
     at = np.nonzero(~np.isnan(moves.centre[:, 0]))[0]
     if not len(at):
         return arc
     if arc is None:
         arc = np.full((len(moves.row), 3), np.nan)
-    arc[at, 0], arc[at, 1] = 17.0, 1.0
+    arc[at, 0], arc[at, 1] = plane[at], 1.0
     arc[at, 2] = np.where(np.isnan(arc[at, 2]), 1.0, arc[at, 2])
-    ir_values[at, F_ARC.start : F_ARC.start + 2] = moves.centre[at]
-    ir_values[at, F_ARC.start + 2 :F_ARC.stop] = np.nan
+    ir_values[at, F_ARC] = np.nan
+    for p, (first, second, _) in PLANE_AXES.items():
+        on = at[plane[at] == p]
+        ir_values[on, F_ARC.start + first], ir_values[on, F_ARC.start + second] = moves.centre[on, 0], moves.centre[on, 1]
     generated = at[moves.generated[at]]
     ir_spans[generated, F_ARC] = -1
     return arc
