@@ -1,0 +1,147 @@
+"""The tool load a converted program states where the input stated it (``convert``).
+
+A program that states its load (RAPID tooldata's tload and ``GripLoad``, KRL ``$LOAD`` /
+``LOAD_DATA[n]`` / ``BAS(#TOOL, n)``) gets the same load in the new program, at the same
+targets: each dialect reads its statements (``Dialect.stated_loads``) into a ``LoadPlan``,
+one ``LoadState`` per target. ``--tool-load`` may be given as well only where it is the
+load the program states (otherwise one of the two is wrong, and which is not ours to guess).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from ..errors import InputError
+from .tool_load import ToolLoad, combined
+
+
+@dataclass(frozen=True)
+class LoadState:
+    """The load on the flange at a target: ``tool`` (RAPID: the tooldata's tload, KUKA: the
+    whole $LOAD) and ``grip`` (RAPID GripLoad's payload on top of it), each with the
+    ``file:line:column`` of the statement that set it (None: nothing in the program set it,
+    e.g. tool0's empty load). A load with a NaN component (KRL ``$LOAD.M = 5``: the rest is the
+    controller's) is ``partial``."""
+
+    tool: ToolLoad | None
+    grip: ToolLoad | None = None
+    tool_at: str | None = None
+    grip_at: str | None = None
+
+    @property
+    def total(self) -> ToolLoad | None:
+        return None if self.tool is None else combined(self.tool, self.grip)
+
+    @property
+    def stated_at(self) -> str | None:
+        return self.grip_at or self.tool_at
+
+    @property
+    def partial(self) -> bool:
+        return any(part is not None and not np.isfinite([part.mass_kg, *part.cog_mm, *part.inertia_kgm2, *part.aom_wxyz]).all()
+                   for part in (self.tool, self.grip))
+
+
+@dataclass(frozen=True)
+class LoadPlan:
+    states: list[LoadState]
+    index: np.ndarray  # (N,) int: the state of each target, -1 where no load is known
+
+
+@dataclass(frozen=True)
+class Statement:
+    """A statement that changes the load from where it stands on (KRL $LOAD =, RAPID GripLoad)."""
+
+    file: int
+    line: int
+    at: str  # file:line:column
+    load: ToolLoad | None  # None: back to none (GripLoad load0)
+
+
+def in_force(tp, statements: list[Statement]) -> list[Statement | None]:
+    """The statement in force at each target: the last one above it in its file. Only sound
+    where the targets run in the order they are written: a program whose targets go back up
+    (a loop, a called routine) while statements change the load is refused, and so is a
+    statement in a file without targets (a routine elsewhere whose calls cannot be placed)."""
+    if not statements:
+        return [None] * len(tp)
+    with_rows = set(np.unique(tp.file).tolist())
+    for s in statements:
+        if s.file not in with_rows:
+            raise InputError(f"{s.at}: the load is set in a file without motions (a routine called from elsewhere): where it applies is not "
+                             "carried into the new program; give the load with --tool-load and move the statement next to the motions")
+    order = np.lexsort((tp.line, tp.file))
+    if len(tp) and not (np.diff(order) > 0).all():
+        row = int(np.nonzero(np.diff(order) <= 0)[0][0])
+        from .writer import where
+
+        raise InputError(f"{where(tp, int(order[row + 1]))}: the targets do not run in the order they are written (a loop or a routine "
+                         f"called twice) and the program changes its load ({statements[0].at}): which load each target carries is not carried")
+    out: list[Statement | None] = [None] * len(tp)
+    for f in with_rows:
+        mine = sorted((s for s in statements if s.file == f), key=lambda s: s.line)
+        rows = np.nonzero(tp.file == f)[0]
+        at = np.searchsorted([s.line for s in mine], tp.line[rows], side="left") - 1
+        for r, k in zip(rows.tolist(), at.tolist()):
+            out[r] = mine[k] if k >= 0 else None
+    return out
+
+
+def plan_from_rows(states_per_row: list[LoadState | None]) -> LoadPlan | None:
+    """A LoadPlan from one (possibly shared) state per target; None where nothing is stated anywhere."""
+    if not any(s is not None and s.stated_at for s in states_per_row):
+        return None
+    states = list(dict.fromkeys(s for s in states_per_row if s is not None))
+    lookup = {s: k for k, s in enumerate(states)}
+    return LoadPlan(states, np.array([-1 if s is None else lookup[s] for s in states_per_row], dtype=int))
+
+
+def _agrees(given: ToolLoad, stated: ToolLoad) -> bool:
+    """``stated`` is ``given`` in every component the program states (a partial one: its mass)."""
+    if not np.isfinite([*stated.cog_mm, *stated.inertia_kgm2, *stated.aom_wxyz]).all():
+        return abs(given.mass_kg - stated.mass_kg) <= 1e-6 if np.isfinite(stated.mass_kg) else True
+    return given.same_as(stated)
+
+
+def carried_loads(tp, given: ToolLoad | None) -> LoadPlan | None:
+    """The load of each target of the new program: the program's own (``Dialect.stated_loads``)
+    or ``given`` (``--tool-load``) on every tool; both: they must be the same load (else an
+    InputError naming both); a partial load the program states needs ``given``."""
+    from .. import dialects
+
+    plan = dialects.of(tp).stated_loads(tp)
+    if plan is not None:
+        for state in plan.states:
+            if not state.stated_at:
+                continue
+            if state.partial and given is None:
+                raise InputError(f"{state.stated_at}: the program sets only part of the load ({_text(state)}; the rest is the controller's): "
+                                 "give the whole load with --tool-load MASS,CX,CY,CZ[,IX,IY,IZ]")
+            if given is not None and not (_agrees(given, _partial_part(state)) if state.partial else given.same_as(state.total)):
+                raise InputError(f"{state.stated_at}: the program states the tool load {_text(state)}; --tool-load gives {given.text()}: "
+                                 "they differ; drop --tool-load to carry the program's load, or correct the program")
+        if given is None:
+            return plan
+    if given is None:
+        return None
+    return LoadPlan([LoadState(given, None, "--tool-load")], np.zeros(len(tp), dtype=int))
+
+
+def _partial_part(state: LoadState) -> ToolLoad:
+    return next(p for p in (state.tool, state.grip) if p is not None and not np.isfinite([p.mass_kg, *p.cog_mm, *p.inertia_kgm2]).all())
+
+
+def _text(state: LoadState) -> str:
+    if state.partial:
+        part = _partial_part(state)
+        return f"{part.mass_kg:g} kg" if np.isfinite(part.mass_kg) else "of unknown mass"
+    total = state.total
+    if state.tool is not None and state.grip is not None and state.tool.mass_kg and state.grip.mass_kg:
+        return f"{total.text()} (tool {state.tool.mass_kg:g} kg + gripped {state.grip.mass_kg:g} kg)"
+    return total.text()
+
+
+def with_grip(state: LoadState, grip: Statement | None) -> LoadState:
+    return state if grip is None or grip.load is None else replace(state, grip=grip.load, grip_at=grip.at)
