@@ -34,7 +34,8 @@ def _declared(tp, kind: str, first: int) -> dict[str, tuple[ToolLoad, str]]:
     for f, doc in enumerate(tp.sources):
         for m in re.finditer(rf"\b{kind}\s+(\w+)\s*:=\s*\[", doc.text, re.IGNORECASE):
             nums = [float(v) for v in re.findall(NUMBER, doc.text[m.end() : doc.text.find(";", m.end())])]
-            if len(nums) >= first + 11 and not _commented(doc.text, m.start()) and m.group(1).upper() not in out:
+            stationary = kind == "tooldata" and not doc.text[m.end() :].lstrip().upper().startswith("TRUE")  # robhold FALSE: not on the flange
+            if len(nums) >= first + 11 and not stationary and not _commented(doc.text, m.start()) and m.group(1).upper() not in out:
                 v = nums[first : first + 11]
                 out[m.group(1).upper()] = (ToolLoad(v[0], tuple(v[1:4]), tuple(v[8:11]), tuple(v[4:8])), _place(tp, f, m.start())[1])
     return out
