@@ -185,3 +185,10 @@ def test_gcode_input_is_unchanged(tmp_path):
     res, out = _convert(tmp_path, "G21 G90 F600\nG1 X0 Y0 Z0\nG1 X0 Y50 Z0\nM2\n", "part.ngc", "krl", "--frame", "G54=1000,0,500,0,0,0")
     assert res.exit_code == 0, res.output
     assert "$LOAD" not in out.read_text()
+
+
+def test_a_gripload_in_a_routine_without_motions_is_refused(tmp_path):
+    """Where a routine's GripLoad applies depends on where it is called: not carried, refused at its place."""
+    text = GRIP.replace("    GripLoad piece;\n", "    pick;\n").replace("  PROC main()", "  PROC pick()\n    GripLoad piece;\n  ENDPROC\n  PROC main()")
+    res, out = _convert(tmp_path, text, "part.mod", "krl")
+    assert res.exit_code == 2 and "part.mod:6:5" in res.output and "routine" in res.output and not out.exists()

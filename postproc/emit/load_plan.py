@@ -9,6 +9,7 @@ load the program states (otherwise one of the two is wrong, and which is not our
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -72,6 +73,11 @@ def in_force(tp, statements: list[Statement]) -> list[Statement | None]:
         if s.file not in with_rows:
             raise InputError(f"{s.at}: the load is set in a file without motions (a routine called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
+    for s in statements:
+        lo, hi = _routine(tp.sources[s.file].text, s.line)
+        if not ((tp.file == s.file) & (tp.line > lo) & (tp.line < hi)).any():
+            raise InputError(f"{s.at}: the load is set in a routine without motions (called from elsewhere): where it applies is not "
+                             "carried into the new program; give the load with --tool-load and move the statement next to the motions")
     order = np.lexsort((tp.line, tp.file))
     if len(tp) and not (np.diff(order) > 0).all():
         row = int(np.nonzero(np.diff(order) <= 0)[0][0])
@@ -87,6 +93,18 @@ def in_force(tp, statements: list[Statement]) -> list[Statement | None]:
         for r, k in zip(rows.tolist(), at.tolist()):
             out[r] = mine[k] if k >= 0 else None
     return out
+
+
+_START = re.compile(r"^[ \t]*(?:(?:LOCAL|GLOBAL)[ \t]+)?(?:PROC|TRAP|FUNC|DEF|DEFFCT)\b", re.IGNORECASE)
+_END = re.compile(r"^[ \t]*(?:ENDPROC|ENDTRAP|ENDFUNC|END|ENDFCT)\b", re.IGNORECASE)
+
+
+def _routine(text: str, line: int) -> tuple[int, int]:
+    """(first, last) line of the routine (RAPID PROC/TRAP/FUNC, KRL DEF/DEFFCT) around ``line``."""
+    lines = text.splitlines()
+    first = next((k + 1 for k in range(line - 1, -1, -1) if _START.match(lines[k])), 0)
+    last = next((k + 1 for k in range(line - 1, len(lines)) if _END.match(lines[k])), len(lines) + 1)
+    return first, last
 
 
 def plan_from_rows(states_per_row: list[LoadState | None]) -> LoadPlan | None:
