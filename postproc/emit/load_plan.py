@@ -61,13 +61,15 @@ class Statement:
     load: ToolLoad | None  # None: back to none (GripLoad load0)
 
 
-def in_force(tp, statements: list[Statement]) -> list[Statement | None]:
-    """The statement in force at each target: the last one above it in its file. Only sound
+def in_force(tp, statements: list[Statement]) -> np.ndarray:
+    """(N,) the index in ``statements`` of the one in force at each target (-1: none): the last
+    one above it in its file. Only sound
     where the targets run in the order they are written: a program whose targets go back up
     (a loop, a called routine) while statements change the load is refused, and so is a
     statement in a file without targets (a routine elsewhere whose calls cannot be placed)."""
+    out = np.full(len(tp), -1, dtype=int)
     if not statements:
-        return [None] * len(tp)
+        return out
     with_rows = set(np.unique(tp.file).tolist())
     for s in statements:
         if s.file not in with_rows:
@@ -85,13 +87,11 @@ def in_force(tp, statements: list[Statement]) -> list[Statement | None]:
 
         raise InputError(f"{where(tp, int(order[row + 1]))}: the targets do not run in the order they are written (a loop or a routine "
                          f"called twice) and the program changes its load ({statements[0].at}): which load each target carries is not carried")
-    out: list[Statement | None] = [None] * len(tp)
     for f in with_rows:
-        mine = sorted((s for s in statements if s.file == f), key=lambda s: s.line)
+        mine = np.array(sorted((k for k, s in enumerate(statements) if s.file == f), key=lambda k: statements[k].line) + [-1], dtype=int)
         rows = np.nonzero(tp.file == f)[0]
-        at = np.searchsorted([s.line for s in mine], tp.line[rows], side="left") - 1
-        for r, k in zip(rows.tolist(), at.tolist()):
-            out[r] = mine[k] if k >= 0 else None
+        at = np.searchsorted([statements[k].line for k in mine[:-1]], tp.line[rows], side="left") - 1
+        out[rows] = mine[at]  # (at = -1 picks the trailing -1: none)
     return out
 
 
@@ -107,13 +107,15 @@ def _routine(text: str, line: int) -> tuple[int, int]:
     return first, last
 
 
-def plan_from_rows(states_per_row: list[LoadState | None]) -> LoadPlan | None:
-    """A LoadPlan from one (possibly shared) state per target; None where nothing is stated anywhere."""
-    if not any(s is not None and s.stated_at for s in states_per_row):
-        return None
-    states = list(dict.fromkeys(s for s in states_per_row if s is not None))
+def plan_from_index(candidates: list[LoadState | None], index: np.ndarray) -> LoadPlan | None:
+    """A LoadPlan from each target's index in ``candidates`` (-1 or a None candidate: no load
+    known); None where no target's load is stated in the program."""
+    states = list(dict.fromkeys(s for s in candidates if s is not None))
     lookup = {s: k for k, s in enumerate(states)}
-    return LoadPlan(states, np.array([-1 if s is None else lookup[s] for s in states_per_row], dtype=int))
+    remap = np.array([-1 if s is None else lookup[s] for s in candidates] + [-1], dtype=int)
+    plan = LoadPlan(states, remap[index])
+    used = np.unique(plan.index[plan.index >= 0])
+    return plan if any(states[k].stated_at for k in used) else None
 
 
 def _agrees(given: ToolLoad, stated: ToolLoad) -> bool:

@@ -73,7 +73,7 @@ def _load_of(agg: str):
 def stated_loads(tp):
     """LoadPlan of the program: the $LOAD in force at each target ($LOAD = {...}, $LOAD.M = m,
     $LOAD = LOAD_DATA[n] and BAS(#TOOL, n) with LOAD_DATA[n] declared, e.g. in $config.dat)."""
-    from ...emit.load_plan import LoadState, Statement, in_force, plan_from_rows
+    from ...emit.load_plan import LoadState, Statement, in_force, plan_from_index
     from ...emit.tool_load import ToolLoad
     from ...errors import InputError
 
@@ -99,4 +99,4 @@ def stated_loads(tp):
                     raise InputError(f"{at}: LOAD_DATA[{n}] is not in the program's files (give $config.dat with --data, or --tool-load)")
                 load = table[n]
             statements.append(Statement(f, line, at, load))
-    return plan_from_rows([None if s is None or s.load is None else LoadState(s.load, None, s.at) for s in in_force(tp, statements)])
+    return plan_from_index([None if s.load is None else LoadState(s.load, None, s.at) for s in statements], in_force(tp, statements))

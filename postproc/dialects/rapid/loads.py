@@ -12,7 +12,7 @@ import re
 
 import numpy as np
 
-from ...emit.load_plan import LoadState, Statement, in_force, plan_from_rows, with_grip
+from ...emit.load_plan import LoadState, Statement, in_force, plan_from_index, with_grip
 from ...emit.tool_load import NO_LOAD, ToolLoad
 from ...errors import InputError
 from ..base import NUMBER
@@ -59,13 +59,12 @@ def stated_loads(tp):
             if name != "LOAD0" and name not in loads:
                 raise InputError(f"{at}: GripLoad {m.group(1)}: no loaddata {m.group(1)} with its values in the program; it cannot be carried")
             grips.append(Statement(f, line, at, None if name == "LOAD0" else loads[name][0]))
-    grip_at = in_force(tp, grips)
-    rows: list[LoadState | None] = []
-    states: dict[tuple, LoadState] = {}
-    for r, t in enumerate(tp.tool.tolist()):
+    grip_at = in_force(tp, grips)  # (N,) the GripLoad in force, -1: none
+    # one state per (tool, GripLoad) pair the targets use
+    pairs, index = np.unique(np.stack([tp.tool.astype(int), grip_at]), axis=1, return_inverse=True)
+    candidates = []
+    for t, g in pairs.T.tolist():
         name = tp.tool_names[t].upper()
         state = LoadState(NO_LOAD) if name == "TOOL0" else (LoadState(tools[name][0], None, tools[name][1]) if name in tools else LoadState(None))
-        state = with_grip(state, grip_at[r])
-        state = states.setdefault((state.tool, state.grip, state.tool_at, state.grip_at), state)
-        rows.append(state)
-    return plan_from_rows(rows)
+        candidates.append(with_grip(state, grips[g] if g >= 0 else None))
+    return plan_from_index(candidates, index.ravel())
