@@ -192,3 +192,13 @@ def test_a_gripload_in_a_routine_without_motions_is_refused(tmp_path):
     text = GRIP.replace("    GripLoad piece;\n", "    pick;\n").replace("  PROC main()", "  PROC pick()\n    GripLoad piece;\n  ENDPROC\n  PROC main()")
     res, out = _convert(tmp_path, text, "part.mod", "krl")
     assert res.exit_code == 2 and "part.mod:6:5" in res.output and "routine" in res.output and not out.exists()
+
+
+def test_krl_load_data_reference_to_rapid(tmp_path):
+    """$LOAD = LOAD_DATA[3], declared in the program's .dat: its whole value is carried."""
+    text = KRL.replace("$LOAD = {M 12.5, CM {X 0, Y -5, Z 120, A 0, B 90, C 0}, J {X 0.2, Y 0.1, Z 0.05}}", "$LOAD = LOAD_DATA[3]").replace(
+        "$LOAD = {M 4, CM {X 0, Y 0, Z 50, A 0, B 0, C 0}, J {X 0, Y 0, Z 0}}\n", "")
+    (tmp_path / "part.dat").write_text("DEFDAT part\nDECL LOAD LOAD_DATA[3]={M 7.5,CM {X 1,Y 2,Z 60,A 0,B 0,C 0},J {X 0.1,Y 0.1,Z 0.02}}\nENDDAT\n")
+    res, out = _convert(tmp_path, text, "part.src", "rapid")
+    assert res.exit_code == 0, res.output
+    assert _lines(out, "PERS tooldata")[0].endswith(",[7.5,[1,2,60],[1,0,0,0],0.1,0.1,0.02]];")
