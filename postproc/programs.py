@@ -107,7 +107,7 @@ def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
 def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None) -> list[str]:
     """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
     ``Dialect.new_program_paths`` order); ``tool_load`` (emit.tool_load.ToolLoad) is the load
-    every tool of it carries."""
+    every tool of it carries; without it, the load the input states is carried where it applies."""
     from .emit.writer import drive
     from .errors import EmitError
 
@@ -116,6 +116,6 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
     if writer is None:
         able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
         raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
-    if tool_load is not None:
-        writer.set_tool_load(tool_load)
-    return drive(writer, tp, name)
+    from .emit.load_plan import carried_loads
+
+    return drive(writer, tp, name, loads=carried_loads(tp, tool_load))  # the program's own load, or --tool-load's

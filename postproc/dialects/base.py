@@ -76,6 +76,11 @@ class Dialect:
         """(mass kg, 'FILE, line N') of every payload the program states (none by default)."""
         return []
 
+    def stated_loads(self, tp: Toolpath):
+        """emit.load_plan.LoadPlan: the whole load each target carries where the program states
+        one, for ``convert`` to carry (None: the program states none, e.g. G-code)."""
+        return None
+
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         """``file:line: why`` where the program lets the controller leave the exact straight or
         circular interpolation between targets (the path prediction assumes it), else None."""

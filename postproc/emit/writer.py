@@ -34,8 +34,10 @@ def short_number(v: float, decimals: int = 4) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
-    """Texts of a new program (the writer's files, e.g. KRL [src, dat]) with every target of tp."""
+def drive(w, tp: Toolpath, name: str = "converted", loads=None) -> list[str]:
+    """Texts of a new program (the writer's files, e.g. KRL [src, dat]) with every target of tp;
+    ``loads`` (emit.load_plan.LoadPlan): the load of each target, given to ``w.load`` after its
+    tool and wherever it changes."""
     w.start(name)
     bad = np.nonzero(np.isnan(tp.position).any(axis=1) & (tp.kind != Kind.ABSJ))[0]
     if len(bad):
@@ -45,7 +47,7 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
     no_ori = np.isnan(tp.orientation).any(axis=1)
     if no_ori.any():
         poses[no_ori, :3, :3] = quat_wxyz_to_matrix(TOOL_DOWN[None])[0]
-    frame = tool = -1
+    frame = tool = load = -1
     speed = zone = None
     # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
     from .. import dialects  # (not at the top: the dialects' writers import this module)
@@ -62,6 +64,10 @@ def drive(w, tp: Toolpath, name: str = "converted") -> list[str]:
         if tp.tool[i] != tool:
             tool = int(tp.tool[i])
             w.tool(tp.tool_names[tool], tp.tools[tool])
+            load = -2
+        if hasattr(w, "load") and (-1 if loads is None else int(loads.index[i])) != load:
+            load = -1 if loads is None else int(loads.index[i])
+            w.load(None if load < 0 else loads.states[load])
         if speed is None or not np.array_equal(speeds[i], speed, equal_nan=True):
             speed = speeds[i]
             w.speed(float(speed) * per_second)

@@ -68,6 +68,11 @@ class KrlDialect(Dialect):
 
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
 
+    def stated_loads(self, tp: Toolpath):
+        from .loads import stated_loads
+
+        return stated_loads(tp)
+
     def payloads(self, tp: Toolpath):
         """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
         with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""

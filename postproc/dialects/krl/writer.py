@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...emit.writer import legal_name, short_number
-from ...frames import matrix_to_abc
+from ...frames import matrix_to_abc, quat_wxyz_to_matrix
 
 
 class KrlWriter:
@@ -13,10 +13,8 @@ class KrlWriter:
         self.name = legal_name(name, "prog").lower()
         self.body: list[str] = []
         self.approx = False
-        self.tool_load = None  # emit.tool_load.ToolLoad: convert --tool-load (else $LOAD is left as the controller has it)
-
-    def set_tool_load(self, load) -> None:
-        self.tool_load = load
+        self.written_load = None  # the last $LOAD written (None: as the controller has it)
+        self.tool_written = False
 
     def start(self, name: str) -> None:
         pass
@@ -31,11 +29,23 @@ class KrlWriter:
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
         self.body.append(f"$TOOL = {self._frame(flange_T_tcp)}")
-        if self.tool_load is not None:  # KSS: LOAD = {M kg, CM frame (mm, deg) in the flange frame, J kg m^2}
-            load = self.tool_load
+        self.tool_written = True
+
+    def load(self, state) -> None:
+        """$LOAD with the tool and wherever the load changes (emit.load_plan.LoadState: KUKA's $LOAD is
+        the whole load, a RAPID GripLoad payload included). Nothing while the program states none."""
+        load = None if state is None else state.total
+        if load is None or (not state.stated_at and self.written_load is None):
+            return  # as the controller has it (e.g. RAPID tool0's empty load before any stated one)
+        if load != self.written_load or self.tool_written:
+            # KSS: $LOAD = {M kg, CM frame (mm, deg: the principal axes) relative to the flange, J kg m^2 about them}
             cm = ", ".join(f"{k} {short_number(v)}" for k, v in zip("XYZ", load.cog_mm))
+            abc = matrix_to_abc(quat_wxyz_to_matrix(np.array(load.aom_wxyz))[None])[0]
             j = ", ".join(f"{k} {short_number(v, 6)}" for k, v in zip("XYZ", load.inertia_kgm2))
-            self.body.append(f"$LOAD = {{M {short_number(load.mass_kg, 6)}, CM {{{cm}, A 0, B 0, C 0}}, J {{{j}}}}}")
+            abc_text = ", ".join(f"{k} {short_number(v)}" for k, v in zip("ABC", abc))
+            self.body.append(f"$LOAD = {{M {short_number(load.mass_kg, 6)}, CM {{{cm}, {abc_text}}}, J {{{j}}}}}")
+            self.written_load = load
+        self.tool_written = False
 
     def speed(self, mm_s: float) -> None:
         if np.isfinite(mm_s):

@@ -64,6 +64,11 @@ class RapidDialect(Dialect):
         joint = tp.kind == Kind.JOINT
         return has & np.where(joint, ~joint_off, ~lin_off)
 
+    def stated_loads(self, tp: Toolpath):
+        from .loads import stated_loads
+
+        return stated_loads(tp)
+
     def payloads(self, tp: Toolpath):
         """The load (tload mass) of every tooldata the program's Cartesian targets use."""
         from .targets import tool_masses

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...emit.tool_load import NO_LOAD, combined
 from ...emit.writer import legal_name, short_number
 from ...frames import matrix_to_quat_wxyz
 from .parse import NO_AXIS_TEXT
@@ -26,17 +27,17 @@ class RapidWriter:
         self.v, self.z = 100.0, 0.0
         self.proc = "main"
         self.placeholder_conf = False  # a target was written without configuration data
-        self.tool_load = None  # emit.tool_load.ToolLoad: convert --tool-load
-        self.gripping = False  # a GripLoad of the tool load is in force (tool0)
+        self.tool_frame = np.eye(4)
+        self.tooldata: dict[tuple, str] = {}  # (tool, its load) -> the tooldata declared for it
+        self.loaddata: dict = {}  # a gripped load -> the loaddata declared for it
+        self.gripping = None  # the load of the GripLoad in force (None: load0)
 
-    def set_tool_load(self, load) -> None:
-        self.tool_load = load
-
-    def _load_literal(self) -> str:
-        """[mass,[cog],[aom],ix,iy,iz] of the given load (axes of moment along the tool0 frame)."""
-        load = self.tool_load
+    @staticmethod
+    def _load_literal(load) -> str:
+        """[mass,[cog],[aom],ix,iy,iz]: cog in the tool0 frame, moments about the aom axes."""
         cog = ",".join(short_number(v) for v in load.cog_mm)
-        return f"[{short_number(load.mass_kg, 6)},[{cog}],[1,0,0,0],{','.join(short_number(v, 6) for v in load.inertia_kgm2)}]"
+        aom = ",".join(short_number(v, 7) for v in load.aom_wxyz)
+        return f"[{short_number(load.mass_kg, 6)},[{cog}],[{aom}],{','.join(short_number(v, 6) for v in load.inertia_kgm2)}]"
 
     def start(self, name: str) -> None:
         self.proc = legal_name(name, "main")
@@ -47,26 +48,43 @@ class RapidWriter:
             self.decl.append(f"  TASK PERS wobjdata {self.wobj_name} := [FALSE,TRUE,\"\",{_pose_literal(base_T_frame)},[[0,0,0],[1,0,0,0]]];")
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
-        self.tool_name = legal_name(name, "tool")
-        if self.tool_name == "tool0":
-            self._grip(self.tool_load is not None)  # tool0 is the controller's (0 kg): the load is gripped instead
-        elif self.tool_load is not None:
-            self._grip(False)
-            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},{self._load_literal()}];")
-        else:
-            # tooldata must carry a load (mass > 0); the input gives none, so the program says so where the robot programmer looks
-            self.decl.append(f"  ! {self.tool_name}: load 1 kg at [0,0,1] mm is a placeholder (the input program gives no tool load; "
-                             "give it with --tool-load): set the real one")
-            self.decl.append(f"  PERS tooldata {self.tool_name} := [TRUE,{_pose_literal(flange_T_tcp)},[1,[0,0,1],[1,0,0,0],0,0,0]];")
+        self.tool_base, self.tool_frame = legal_name(name, "tool"), flange_T_tcp
+        self.tool_name = None  # declared by load(), or at the first motion without one
 
-    def _grip(self, on: bool) -> None:
-        """GripLoad of the tool load on (tool0 carries it) or off (a tooldata carries it)."""
-        if on and not self.gripping:
-            self.decl.append(f"  PERS loaddata tool_load := {self._load_literal()};")
-            self.body.append("    GripLoad tool_load;")
-        elif self.gripping and not on:
+    def load(self, state) -> None:
+        """The tool's tooldata with the tool load (one tooldata per tool and load: NAME, NAME_2, ...;
+        tool0 is the controller's, 0 kg: its load is gripped) and the GripLoad in force."""
+        tool_load, grip = (None, None) if state is None else (state.tool, state.grip)
+        if self.tool_base == "tool0":
+            self.tool_name = "tool0"
+            self._grip(combined(tool_load or NO_LOAD, grip))
+            return
+        key = (self.tool_base, tool_load, tuple(np.round(self.tool_frame, 9).ravel()))
+        if key not in self.tooldata:
+            n = sum(k[0] == self.tool_base for k in self.tooldata)
+            self.tooldata[key] = name = self.tool_base if n == 0 else f"{self.tool_base}_{n + 1}"
+            if tool_load is None:
+                # tooldata must carry a load (mass > 0); the input gives none, so the program says so where the robot programmer looks
+                self.decl.append(f"  ! {name}: load 1 kg at [0,0,1] mm is a placeholder (the input program gives no tool load; "
+                                 "give it with --tool-load): set the real one")
+            self.decl.append(f"  PERS tooldata {name} := [TRUE,{_pose_literal(self.tool_frame)},"
+                             f"{'[1,[0,0,1],[1,0,0,0],0,0,0]' if tool_load is None else self._load_literal(tool_load)}];")
+        self.tool_name = self.tooldata[key]
+        self._grip(grip)
+
+    def _grip(self, load) -> None:
+        """GripLoad of ``load`` (a loaddata declared for it) where it changes; GripLoad load0 to drop it."""
+        load = None if load is None or load.mass_kg == 0 else load
+        if load == self.gripping:
+            return
+        if load is None:
             self.body.append("    GripLoad load0;")
-        self.gripping = on
+        else:
+            if load not in self.loaddata:
+                self.loaddata[load] = name = "tool_load" if not self.loaddata else f"tool_load_{len(self.loaddata) + 1}"
+                self.decl.append(f"  PERS loaddata {name} := {self._load_literal(load)};")
+            self.body.append(f"    GripLoad {self.loaddata[load]};")
+        self.gripping = load
 
     def speed(self, mm_s: float) -> None:
         self.v = mm_s
@@ -75,6 +93,8 @@ class RapidWriter:
         self.z = mm
 
     def _args(self) -> str:
+        if self.tool_name is None:
+            self.load(None)
         speed = f"v1000\\V:={short_number(self.v, 3)}" if np.isfinite(self.v) else "v100"
         zone = "fine" if not np.isfinite(self.z) or self.z <= 0 else f"z10\\Z:={short_number(self.z, 3)}"
         wobj = "" if self.wobj_name == "wobj0" else f"\\WObj:={self.wobj_name}"
