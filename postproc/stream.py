@@ -207,7 +207,27 @@ def _open(path: Path, lang, rules, fh) -> tuple[_Program, str]:
 def _is_body(rules, text: str) -> int:
     """Length of the run of body lines at the start of ``text``."""
     probe = text if text.endswith("\n") else text + "\n"
+    if _all_body_by_shape(rules, probe):
+        return len(text)
     return min(rules.body.match(probe).end(), len(text))
+
+
+_ZEROS = bytes.maketrans(b"123456789", b"000000000")
+
+
+def _all_body_by_shape(rules, probe: str) -> bool:
+    """True where every line of ``probe`` (it ends in '\n') is a body line by its shape
+    (``StreamRules.body_shape``): the body pattern runs once per distinct shape, not over
+    every character (~2 us a line). False where it is not, or shapes cannot tell."""
+    if rules.body_shape is None:
+        return False
+    raw = probe.encode("latin-1")
+    pattern = rules.body_shape(raw)
+    if pattern is None:
+        return False
+    shapes = raw.translate(_ZEROS).split(b"\n")
+    shapes.pop()  # after the last '\n': not a line
+    return all(pattern.fullmatch(shape.decode("latin-1") + "\n") for shape in set(shapes))
 
 
 def _batches(fh, first: str, rules, chunk_lines: int):
@@ -266,11 +286,12 @@ class _Task:
     """One chunk as parsed, for ``_finish`` (in this process or a worker)."""
 
     tp: Toolpath
-    start_joints: np.ndarray | None
-    reference: Reference  # the postures as written (computed here: the next chunk starts from its end)
+    start_joints: np.ndarray | None  # the posture the chunk starts from (later chunks in a worker: from the baton)
+    reference: Reference | None  # the postures as written; None: the worker computes them (``_postures``)
     header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
     tail: str
     packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+    chunk: int = 0  # its place in the program (0: the first)
 
     def for_pipe(self) -> "_Task":
         """This task with the toolpath's wide per-target arrays cut to their varying columns:
@@ -319,10 +340,13 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
 
     tp = task.toolpath()
     options = dict(options)
-    if task.start_joints is not None:
-        options["start_joints"] = task.start_joints
+    reference, start = task.reference, task.start_joints
+    if reference is None:
+        reference, start = _postures(tp, model, options, task, _WORKER_BATON)
+    if start is not None:
+        options["start_joints"] = start
     try:
-        new, rep = compensate(tp, model, reference=task.reference, **options)
+        new, rep = compensate(tp, model, reference=reference, **options)
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     if rep.failed.any():
@@ -338,6 +362,64 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
             raise StreamFallback("the chunk's closing text changed")
         main = main[: len(main) - len(task.tail)]
     return main, rep, new.notes, texts[1:]
+
+
+def _postures(tp: Toolpath, model, options: dict, task: _Task, baton: "_Baton") -> tuple[Reference, np.ndarray | None]:
+    """A chunk's postures as written in a worker (its reference and start posture): they
+    start where the previous chunk's end, which the worker that computed them hands on
+    (``_Baton``); this one hands on its own end before it compensates. The chain only waits
+    for postures (~3 us a target), not for the compensation of the chunk before."""
+    ended = False
+    try:
+        start = task.start_joints if task.chunk == 0 else baton.take(task.chunk)
+        reference = reference_postures(tp, model, **{**options, "start_joints": start})
+        baton.give(task.chunk, reference.end_joints)
+        ended = True
+        return reference, start
+    except InputError as exc:
+        raise StreamFallback(f"input error in a chunk ({exc})") from None
+    finally:
+        if not ended:
+            baton.give(task.chunk, None, failed=True)  # the next chunk stops too, and does not wait
+
+
+BATON_WAIT_S = 3600.0  # a chunk's postures take well under a second; this only guards against a hang
+
+
+class _Baton:
+    """The posture at the end of the last chunk whose postures are computed, handed from
+    worker to worker in shared memory (inherited by the workers at their start). Chunks are
+    taken by the workers in program order, so the chunk before the one waiting is running or
+    done: one slot suffices, and no wait can be for a chunk that will not run."""
+
+    def __init__(self, context):
+        self._posted = context.Condition()
+        self._chunk = context.RawValue("q", -1)  # the last chunk whose end is posted
+        self._state = context.RawValue("i", 0)  # 0: joints; 1: no Cartesian target (None); 2: it failed
+        self._joints = context.RawArray("d", 6)
+
+    def take(self, chunk: int) -> np.ndarray | None:
+        """The posture at the end of chunk ``chunk - 1`` (waits until it is posted)."""
+        with self._posted:
+            if not self._posted.wait_for(lambda: self._chunk.value >= chunk - 1, timeout=BATON_WAIT_S):
+                raise StreamFallback(f"chunk {chunk}: the posture at the end of the chunk before was never handed on")
+            if self._chunk.value != chunk - 1:
+                raise RuntimeError(f"chunk {chunk} took the posture of chunk {self._chunk.value}")
+            state, joints = self._state.value, np.array(self._joints[:], dtype=float)
+        if state == 2:
+            raise StreamFallback(f"chunk {chunk}: the chunk before failed")
+        return None if state == 1 else joints
+
+    def give(self, chunk: int, joints: np.ndarray | None, failed: bool = False) -> None:
+        with self._posted:
+            self._state.value = 2 if failed else 1 if joints is None else 0
+            if joints is not None and not failed:
+                self._joints[:] = np.asarray(joints, dtype=float).tolist()
+            self._chunk.value = chunk
+            self._posted.notify_all()
+
+
+_WORKER_BATON: _Baton | None = None  # set in each worker process by ``_worker_start``, its only per-process state
 
 
 class _Job:
@@ -360,18 +442,21 @@ class _Job:
             raise StreamFallback("the last target before a cut has no complete position to restate")
         return "".join(self.blanked) + line + "\n"
 
-    def prepare(self, own: str, is_last: bool, first_line: int, carry: _Carry | None) -> tuple[_Task, _Meta, _Carry]:
+    def prepare(self, own: str, is_last: bool, first_line: int, carry: _Carry | None, chunk: int, here: bool) -> tuple[_Task, _Meta, _Carry]:
         """Parse one chunk's own lines (``own`` starts at program line ``first_line``) after the
-        restated state; the task for ``_finish`` and the state the next chunk starts from."""
+        restated state; the task for ``_finish`` and the state the next chunk starts from.
+        ``here``: its postures are computed here (else by the worker, ``_postures``)."""
         lang, rules = self.program.lang, self.program.rules
         prefix = "" if carry is None else self._prefix(carry)
         tail = "" if is_last else rules.tail
         start = self.options.get("start_joints") if carry is None else carry.joints
+        reference = None
         try:
             tp = lang.parse_sources(self.program.docs(prefix + own + tail))
             if carry is not None:
                 _check_restated(tp, 0, carry, self.prefix_lines)
-            reference = reference_postures(tp, self.model, **{**self.options, "start_joints": start})
+            if here:
+                reference = reference_postures(tp, self.model, **{**self.options, "start_joints": start})
         except InputError as exc:
             raise StreamFallback(f"input error in a chunk ({exc})") from None
         if carry is None:
@@ -380,7 +465,8 @@ class _Job:
         else:
             keep, shift, header_chars = tp.line > self.prefix_lines, first_line - 1 - self.prefix_lines, sum(map(len, self.blanked))
         meta = _Meta(keep, shift, 1 if carry is None else self.prefix_lines + 1, carry is None)
-        return _Task(tp, start, reference, header_chars, tail), meta, _carry_of(tp, reference.end_joints)
+        task = _Task(tp, start, reference, header_chars, tail, chunk=chunk)
+        return task, meta, _carry_of(tp, None if reference is None else reference.end_joints)
 
     def collect(self, meta: _Meta, result) -> bytes:
         """One chunk's result (in program order): its report counted, its new text."""
@@ -409,9 +495,9 @@ class _Job:
         compensated in its worker processes while this one reads and parses the next."""
         pending: deque = deque()
         carry, first_line = None, 1
-        for own, is_last in batches:
+        for chunk, (own, is_last) in enumerate(batches):
             own = first_own + own if carry is None else own
-            task, meta, carry = self.prepare(own, is_last, first_line, carry)
+            task, meta, carry = self.prepare(own, is_last, first_line, carry, chunk, here=pool is None)
             first_line += own.count("\n")
             pending.append((meta, pool.submit(_finish, self.model, self.options, task.for_pipe()) if pool else _finish(self.model, self.options, task)))
             while len(pending) > depth:
@@ -478,12 +564,15 @@ def default_workers() -> int:
     return min(WORKERS_MAX, cores) if cores > 1 else 0
 
 
-def _one_thread_torch() -> None:
-    """Worker start: a forked child whose parent already ran torch's thread pool (a learned
-    predictor) hangs in its first parallel torch operation; one thread per worker avoids it
-    (the workers are the parallelism). Torch is not imported for a model without one."""
+def _worker_start(baton: _Baton) -> None:
+    """Worker start: the job's baton (``_postures``); one torch thread (a forked child whose
+    parent already ran torch's thread pool, a learned predictor, hangs in its first parallel
+    torch operation; the workers are the parallelism). Torch is not imported for a model
+    without one."""
     import sys
 
+    global _WORKER_BATON
+    _WORKER_BATON = baton
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
 
@@ -498,7 +587,7 @@ def _pool(workers: int):
 
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_one_thread_torch)
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context),))
     try:
         yield pool
     finally:

@@ -22,7 +22,12 @@ _WORD = rf"(?:[XYZABCFIJKxyzabcfijk][ \t]*{_NUM}|[MmTtNn][ \t]*\d+|[Ss][ \t]*{_N
 MOVE = re.compile(rf"[ \t]*(?:{_WORD}[ \t]*)*[XYZxyz][ \t]*{_NUM}[ \t]*(?:{_WORD}[ \t]*)*(?:{_COMMENT}[ \t]*)*\r?$")
 # Checked on every line of a long program, so without backtracking (about 1.5 us a line):
 # only these letters and G0/G1, the parser reads the words.
-BODY = re.compile(r"(?:(?:[ \t\d.+\-XYZABCFIJKMSTNxyzabcfijkmstn]+|[Gg]0?[01](?![\d.])|\([^()\n]*\)|;[^\n]*)*\r?\n)*")
+_G01 = r"[Gg]0?[01](?![\d.])"
+BODY = re.compile(rf"(?:(?:[ \t\d.+\-XYZABCFIJKMSTNxyzabcfijkmstn]+|{_G01}|\([^()\n]*\)|;[^\n]*)*\r?\n)*")
+# BODY reads digits only as \d, but for the G0 / G1 of its motion words: where every G of a
+# chunk is one of those, the G word's shape (digits written 0) says as much.
+_SHAPE_BODY = re.compile(BODY.pattern.replace(_G01, r"[Gg]0?0(?![\d.])"))
+_G_WORDS = re.compile(_G01.encode())
 
 
 def restate(last: Toolpath, carried: np.ndarray) -> str | None:
@@ -39,4 +44,11 @@ def restate(last: Toolpath, carried: np.ndarray) -> str | None:
     return " ".join(words)
 
 
-RULES = StreamRules(move=MOVE, body=BODY, restate=restate)
+def body_shape(raw: bytes) -> re.Pattern | None:
+    """The body as it reads on line shapes, where every G of ``raw`` is a G0 / G1 word; else None."""
+    if raw.count(b"G") + raw.count(b"g") != len(_G_WORDS.findall(raw)):
+        return None
+    return _SHAPE_BODY
+
+
+RULES = StreamRules(move=MOVE, body=BODY, restate=restate, body_shape=body_shape)
