@@ -46,7 +46,7 @@ from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from itertools import chain, islice
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -232,20 +232,53 @@ def _all_body_by_shape(rules, probe: str) -> bool:
 
 def _batches(fh, first: str, rules, chunk_lines: int):
     """(text, is_last) of each chunk's own lines; cuts only inside the run of body lines."""
-    pending = [first] + list(islice(fh, chunk_lines - 1))
+    reader = _LineReader(fh, first)
+    text = reader.take(chunk_lines)
     while True:
-        text = "".join(pending)
         if _is_body(rules, text) < len(text):
-            rest = list(islice(fh, TRAILER_MAX_LINES + 1))
-            if len(rest) > TRAILER_MAX_LINES:
+            rest = reader.take(TRAILER_MAX_LINES + 1)
+            if _count_lines(rest) > TRAILER_MAX_LINES:
                 raise StreamFallback(f"more than {TRAILER_MAX_LINES} lines after the last plain moves")
-            yield text + "".join(rest), True
+            yield text + rest, True
             return
-        following = list(islice(fh, chunk_lines))
+        following = reader.take(chunk_lines)
         yield text, not following
         if not following:
             return
-        pending = following
+        text = following
+
+
+def _count_lines(text: str) -> int:
+    return text.count("\n") + (not text.endswith("\n") and bool(text))
+
+
+class _LineReader:
+    """Whole lines of a text file ('\n' ends a line), read in blocks of READ_CHARS characters:
+    a chunk of 10^5 lines is a few reads and one join, not 10^5 line objects."""
+
+    READ_CHARS = 1 << 22
+
+    def __init__(self, fh, first: str):
+        self.fh, self.rest = fh, first  # read, not yet handed out
+
+    def take(self, n: int) -> str:
+        """The next ``n`` lines (fewer at the end of the file, the last one maybe without '\n')."""
+        parts, got = [], 0
+        while got < n:
+            if not self.rest:
+                self.rest = self.fh.read(self.READ_CHARS)
+                if not self.rest:
+                    break
+            count = self.rest.count("\n")
+            if got + count < n:
+                parts.append(self.rest)
+                got, self.rest = got + count, ""
+                continue
+            # the (n - got)-th '\n' of the block (latin-1: one byte a character)
+            cut = int(np.flatnonzero(np.frombuffer(self.rest.encode("latin-1"), np.uint8) == 10)[n - got - 1]) + 1
+            parts.append(self.rest[:cut])
+            got, self.rest = n, self.rest[cut:]
+        return "".join(parts)
 
 
 @dataclass

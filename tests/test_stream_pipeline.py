@@ -90,3 +90,28 @@ def test_anchors_in_later_chunks_are_carried_by_the_workers(tmp_path, model):
         result = compensate_streamed(program, model, out, chunk_lines=50, workers=workers)
         assert result.summary["chunks"] > 5
         assert out.read_bytes() == (tmp_path / "whole.src").read_bytes(), workers
+
+
+@pytest.mark.parametrize("read_chars", [1, 7, 64, 1 << 22])
+@pytest.mark.parametrize("ending", ["\n", ""])
+def test_line_reader_hands_out_whole_lines_in_order(tmp_path, monkeypatch, read_chars, ending):
+    """Blocks of any size: each take(n) is the next n lines ('\\n' ends a line), the last
+    one without its '\\n' where the file has none."""
+    import io
+
+    from postproc.stream import _LineReader
+
+    lines = [f"LIN {{X {i}.5}} ; é {i * i}\r\n" if i % 3 else f"{'x' * (i % 11)}\n" for i in range(200)]
+    text = "first line\n" + "".join(lines)
+    text = text if ending else text[:-1]
+    monkeypatch.setattr(_LineReader, "READ_CHARS", read_chars)
+    fh = io.StringIO(text[len("first line\n"):])
+    reader = _LineReader(fh, "first line\n")
+    want = text.splitlines(keepends=True)
+    got, at = [], 0
+    for n in (1, 5, 50, 3, 1000, 10):
+        part = reader.take(n)
+        assert part == "".join(want[at : at + n])
+        got.append(part)
+        at += n
+    assert "".join(got) == text
