@@ -21,12 +21,14 @@ how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.Str
   it and all are renamed at the end (``files.write_all``): all or nothing.
 
 The chunks go through a pipeline of processes (``workers``, default one per core up to
-WORKERS_MAX): this process reads, cuts and parses each chunk and computes its postures as
-written (``compensate.reference_postures``: the start posture of the next chunk depends on
-nothing else), then hands it to a worker that compensates (given those postures), emits
-and checks it while this one reads the next; results are taken in program order, at most
-``workers + 1`` chunks in flight. ``workers=0`` does every stage here; both write the same
-bytes.
+WORKERS_MAX): this process reads the program in blocks, cuts it (body lines told by their
+shape, ``StreamRules.body_shape``), parses each chunk and hands it to a worker (the IR's
+varying columns only, ``_Task.for_pipe``) while it reads the next; results are taken in
+program order, at most ``workers + 1`` chunks in flight. The worker computes the chunk's
+postures as written (``compensate.reference_postures``) from the posture at the previous
+chunk's end, which the worker of that chunk hands on through shared memory (``_Baton``: the
+chain waits only for postures, not for compensation), then compensates, emits and checks it.
+``workers=0`` does every stage here; both write the same bytes.
 
 What is not streamed (``StreamFallback``; the caller reads the program whole, as before): a
 language without stream rules, a model with an effect that depends on the path's history
