@@ -218,7 +218,7 @@ _ZEROS = bytes.maketrans(b"123456789", b"000000000")
 
 
 def _all_body_by_shape(rules, probe: str) -> bool:
-    """True where every line of ``probe`` (it ends in '\n') is a body line by its shape
+    """True where every line of ``probe`` (it ends in a newline) is a body line by its shape
     (``StreamRules.body_shape``): the body pattern runs once per distinct shape, not over
     every character (~2 us a line). False where it is not, or shapes cannot tell."""
     if rules.body_shape is None:
@@ -228,7 +228,7 @@ def _all_body_by_shape(rules, probe: str) -> bool:
     if pattern is None:
         return False
     shapes = raw.translate(_ZEROS).split(b"\n")
-    shapes.pop()  # after the last '\n': not a line
+    shapes.pop()  # after the last newline: not a line
     return all(pattern.fullmatch(shape.decode("latin-1") + "\n") for shape in set(shapes))
 
 
@@ -255,7 +255,7 @@ def _count_lines(text: str) -> int:
 
 
 class _LineReader:
-    """Whole lines of a text file ('\n' ends a line), read in blocks of READ_CHARS characters:
+    """Whole lines of a text file (a newline ends a line), read in blocks of READ_CHARS characters:
     a chunk of 10^5 lines is a few reads and one join, not 10^5 line objects."""
 
     READ_CHARS = 1 << 22
@@ -264,7 +264,7 @@ class _LineReader:
         self.fh, self.rest = fh, first  # read, not yet handed out
 
     def take(self, n: int) -> str:
-        """The next ``n`` lines (fewer at the end of the file, the last one maybe without '\n')."""
+        """The next ``n`` lines (fewer at the end of the file, the last one maybe without its newline)."""
         parts, got = [], 0
         while got < n:
             if not self.rest:
@@ -276,7 +276,7 @@ class _LineReader:
                 parts.append(self.rest)
                 got, self.rest = got + count, ""
                 continue
-            # the (n - got)-th '\n' of the block (latin-1: one byte a character)
+            # the (n - got)-th newline of the block (latin-1: one byte a character)
             cut = int(np.flatnonzero(np.frombuffer(self.rest.encode("latin-1"), np.uint8) == 10)[n - got - 1]) + 1
             parts.append(self.rest[:cut])
             got, self.rest = n, self.rest[cut:]
@@ -373,11 +373,11 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
     from .programs import check_texts
 
-    tp = task.toolpath()
     options = dict(options)
-    reference, start = task.reference, task.start_joints
-    if reference is None:
-        reference, start = _postures(tp, model, options, task, _WORKER_BATON)
+    if task.reference is None:
+        tp, reference, start = _postures(model, options, task, _WORKER_BATON)
+    else:
+        tp, reference, start = task.toolpath(), task.reference, task.start_joints
     if start is not None:
         options["start_joints"] = start
     try:
@@ -399,18 +399,19 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     return main, rep, new.notes, texts[1:]
 
 
-def _postures(tp: Toolpath, model, options: dict, task: _Task, baton: "_Baton") -> tuple[Reference, np.ndarray | None]:
-    """A chunk's postures as written in a worker (its reference and start posture): they
-    start where the previous chunk's end, which the worker that computed them hands on
-    (``_Baton``); this one hands on its own end before it compensates. The chain only waits
-    for postures (~3 us a target), not for the compensation of the chunk before."""
+def _postures(model, options: dict, task: _Task, baton: "_Baton") -> tuple[Toolpath, Reference, np.ndarray | None]:
+    """A chunk in a worker: its toolpath, its postures as written and its start posture.
+    They start where the previous chunk ends, as the worker that computed that hands on
+    (``_Baton``); this one hands on its own end before it compensates, or that it failed.
+    The chain only waits for postures (~3 us a target), not for the compensation before."""
     ended = False
     try:
+        tp = task.toolpath()
         start = task.start_joints if task.chunk == 0 else baton.take(task.chunk)
         reference = reference_postures(tp, model, **{**options, "start_joints": start})
         baton.give(task.chunk, reference.end_joints)
         ended = True
-        return reference, start
+        return tp, reference, start
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     finally:
@@ -459,7 +460,7 @@ _WORKER_BATON: _Baton | None = None  # set in each worker process by ``_worker_s
 
 class _Job:
     """One program compensated chunk by chunk: this process reads and parses each chunk and
-    carries the state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
+    carries the restated state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
     here or in a worker process; ``collect`` folds the results in, in program order."""
 
     def __init__(self, program: _Program, model, options: dict, progress):
@@ -613,7 +614,7 @@ def _keep_freed_memory() -> None:
     mallopt(m_trim_threshold, HEAP_KEEP)
 
 
-WORKERS_MAX = 2  # the pipeline is this process (read, parse, carry) and these (compensate, emit, check)
+WORKERS_MAX = 2  # the pipeline is this process (read, cut, parse) and these (postures, compensate, emit, check)
 
 
 def default_workers() -> int:
