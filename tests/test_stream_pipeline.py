@@ -115,3 +115,18 @@ def test_line_reader_hands_out_whole_lines_in_order(tmp_path, monkeypatch, read_
         got.append(part)
         at += n
     assert "".join(got) == text
+
+
+def test_a_chunk_that_fails_in_a_worker_hands_the_failure_on(monkeypatch):
+    """A chunk whose postures cannot be computed (here: no toolpath at all) posts that it
+    failed, so the next chunk stops at once instead of waiting for a posture."""
+    from postproc import stream
+    from postproc.stream import _postures, _Task
+
+    monkeypatch.setattr(stream, "BATON_WAIT_S", 2.0)
+    baton = _Baton(multiprocessing.get_context("fork"))
+    baton.give(2, np.zeros(6))
+    with pytest.raises(AttributeError):
+        _postures(None, {}, _Task(None, None, None, -1, "", chunk=3), baton)
+    with pytest.raises(StreamFallback, match="chunk before failed"):
+        baton.take(4)
