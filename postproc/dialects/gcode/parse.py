@@ -752,8 +752,10 @@ def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: n
 def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarray) -> None:
     """Spans (start, end) of the one source, -1 where none, into IR field ``field`` of rows ``at``."""
     have = spans[:, 0] >= 0
-    ir_spans[at[have], field, 0] = 0
-    ir_spans[at[have], field, 1:] = spans[have]
+    if not have.all():  # a CAM program writes most axes on every block: no copies then
+        at, spans = at[have], spans[have]
+    ir_spans[at, field, 0] = 0
+    ir_spans[at, field, 1:] = spans
 
 
 def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray, per_row: bool = False) -> np.ndarray:
