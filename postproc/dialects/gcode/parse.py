@@ -129,9 +129,11 @@ class GcodeParser:
             values = np.full((nb, len(AXES)), np.nan)
             spans = np.full((nb, len(AXES), 2), -1, dtype=np.int64)
             keep = code >= 0
-            values[row[keep], code[keep]] = numbers.value[idx[keep]]
-            spans[row[keep], code[keep], 0] = starts[keep]
-            spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
+            # One flat index (block, axis) per word, one scatter per array: a word written
+            # twice in a block keeps its last number, as element-wise fancy assignment does.
+            at, num = row[keep] * len(AXES) + code[keep], idx[keep]
+            values.reshape(-1)[at] = numbers.value[num]
+            spans.reshape(-1, 2)[at] = np.stack([starts[keep], numbers.end[num]], axis=1)
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool),
                          g53=np.zeros(nb, bool), **{k: nan for k in _STATE_COLUMNS})
