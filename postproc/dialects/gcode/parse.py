@@ -734,20 +734,20 @@ def _absolute_positions(values: np.ndarray, counted: np.ndarray, dist: np.ndarra
     return absolute
 
 
-_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
+_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3 (axes 0..5 in order: _ir_numbers)
 
 
 def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: np.ndarray):
     """IR values (m, NF), spans (m, NF, 3) and scale (m, NF) of the axis words of the blocks ``rows``."""
     m = len(rows)
+    fields = list(_IR_FIELD_OF_AXIS.values())  # of the axes 0..5, in order
     ir_values = np.full((m, NF), np.nan)
     ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
     scale = np.ones((m, NF))
-    for k, f in _IR_FIELD_OF_AXIS.items():
-        ir_values[:, f] = np.where(~np.isnan(t["values"][rows, k]), absolute[rows, k], np.nan)
-        _put_spans(ir_spans, np.arange(m), f, t["spans"][rows, k])
-        if k < 3:
-            scale[:, f] = linear_scale[rows]
+    words = t["spans"][:, :6][rows]  # (m, 6, 2): all six axes at once, not one column at a time
+    ir_values[:, fields] = np.where(~np.isnan(t["values"][:, :6][rows]), absolute[rows, :6], np.nan)
+    ir_spans[:, fields] = np.where(words[..., :1] >= 0, np.concatenate([np.zeros_like(words[..., :1]), words], axis=-1), -1)
+    scale[:, fields[:3]] = linear_scale[rows][:, None]
     return ir_values, ir_spans, scale
 
 
