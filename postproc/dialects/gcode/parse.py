@@ -746,7 +746,9 @@ def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: n
     scale = np.ones((m, NF))
     words = t["spans"][:, :6][rows]  # (m, 6, 2): all six axes at once, not one column at a time
     ir_values[:, fields] = np.where(~np.isnan(t["values"][:, :6][rows]), absolute[rows, :6], np.nan)
-    ir_spans[:, fields] = np.where(words[..., :1] >= 0, np.concatenate([np.zeros_like(words[..., :1]), words], axis=-1), -1)
+    have = words[..., :1] >= 0
+    ir_spans[:, fields, :1] = np.where(have, 0, -1)
+    ir_spans[:, fields, 1:] = np.where(have, words, -1)
     scale[:, fields[:3]] = linear_scale[rows][:, None]
     return ir_values, ir_spans, scale
 
