@@ -1,13 +1,15 @@
 """Long programs end to end, streamed in chunks against the whole-program path (issue 17).
 
 Run: .venv/bin/python benchmarks/stream.py [--sizes 100000,1000000] [--huge] [--dialect krl,gcode] [--whole-max 1000000]
+     [--paths stream,serial,whole]
 Each size and path runs in a fresh process (peak RSS is per process): a raster program of
 N moves (KRL ``LIN {X .., Y .., Z .., A 0, B 180, C 0} C_DIS`` or five-axis G-code with
 G43.5 tool axis vectors, the stream tests' raster) is compensated with a physics model of
 the KR160 (geometric, base_frame, tool_offset, joint_compliance) by
 - ``stream``: ``postproc.stream.compensate_streamed`` with its default worker processes
-  (this process reads, parses and carries the posture; two workers compensate, emit,
-  re-parse check each chunk; one temporary file renamed at the end);
+  (this process reads, cuts and parses; two workers compute each chunk's postures as
+  written, handing the end posture on, then compensate, emit, re-parse check it; one
+  temporary file renamed at the end);
 - ``serial``: the same, all in one process (``workers=0``);
 - ``whole``: the whole-program path of ``postproc compensate`` (parse, compensate, emit,
   re-parse check, write), up to --whole-max moves (it needs ~2.6 GB per 10^6);
@@ -16,7 +18,7 @@ the KR160 (geometric, base_frame, tool_offset, joint_compliance) by
 all its processes (the workers' included), points per wall second and per CPU second, and
 the peak RSS of the main process and of the largest worker; the paths' outputs are compared
 byte for byte where they ran. ``main+workers`` splits the CPU: on two cores of its own the
-pipeline's wall time is bounded below by max(main, workers / 2).
+pipeline's wall time is bounded below by max(main, (main + workers) / 2).
 """
 
 from __future__ import annotations
@@ -151,6 +153,7 @@ def main() -> None:
     parser.add_argument("--huge", action="store_true", help="add 10^7 moves (streamed only; minutes)")
     parser.add_argument("--dialect", default="krl,gcode", help="krl, gcode or both (comma-separated)")
     parser.add_argument("--whole-max", type=int, default=1_000_000)
+    parser.add_argument("--paths", default="stream,serial,whole", help="which of stream, serial, whole to run (comma-separated)")
     parser.add_argument("--child", nargs=4, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -160,11 +163,11 @@ def main() -> None:
     print(f"load average at start: {' '.join(f'{v:.2f}' for v in os.getloadavg())} (2 cores shared: CPU seconds are the figure to compare)")
     print("each run in a fresh process; work: the job after start-up (imports); CPU: all its processes and threads")
     for dialect in args.dialect.split(","):
-        bench_dialect(dialect, sizes, args.whole_max)
+        bench_dialect(dialect, sizes, args.whole_max, args.paths.split(","))
     print(f"load average at end: {' '.join(f'{v:.2f}' for v in os.getloadavg())}")
 
 
-def bench_dialect(dialect: str, sizes: list[int], whole_max: int) -> None:
+def bench_dialect(dialect: str, sizes: list[int], whole_max: int, paths: list[str]) -> None:
     suffix = ".src" if dialect == "krl" else ".ngc"
     print(f"\n{dialect} raster, KR160 physics model")
     print(f"{'moves':>11}  {'path':<7}{'work wall':>10}  {'points/s':>9}  {'work CPU':>9}  {'main+workers':>13}  {'points/CPU s':>12}  {'peak RSS':>9}  {'worker RSS':>10}")
@@ -175,7 +178,7 @@ def bench_dialect(dialect: str, sizes: list[int], whole_max: int) -> None:
             src = tmp / f"p{suffix}"
             make_program(src, n, dialect)
             outs = {}
-            for path in ("stream", "serial", "whole") if n <= whole_max else ("stream", "serial"):
+            for path in [p for p in paths if p != "whole" or n <= whole_max]:
                 outs[path] = tmp / f"{path}{suffix}"
                 r = measure(path, src, outs[path], dialect)
                 if "error" in r:

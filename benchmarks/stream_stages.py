@@ -4,7 +4,8 @@ Run: .venv/bin/python benchmarks/stream_stages.py [--dialect krl|gcode] [--moves
 The raster of benchmarks/stream.py is compensated in one process (``workers=0``, so every
 stage runs here and is timed: CPU seconds of this process, all threads, per stage). Where
 the output check re-parses a chunk (only where ``emit.readback`` does not apply: increments,
-offsets, inherited axes, arcs), that re-parse is counted under parse and under check.
+offsets, inherited axes, arcs), that re-parse is counted under parse and under check. In the pipeline (benchmarks/stream.py)
+the main process reads, cuts and parses; the postures and everything after run in the workers.
 """
 
 from __future__ import annotations

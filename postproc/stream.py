@@ -21,12 +21,14 @@ how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.Str
   it and all are renamed at the end (``files.write_all``): all or nothing.
 
 The chunks go through a pipeline of processes (``workers``, default one per core up to
-WORKERS_MAX): this process reads, cuts and parses each chunk and computes its postures as
-written (``compensate.reference_postures``: the start posture of the next chunk depends on
-nothing else), then hands it to a worker that compensates (given those postures), emits
-and checks it while this one reads the next; results are taken in program order, at most
-``workers + 1`` chunks in flight. ``workers=0`` does every stage here; both write the same
-bytes.
+WORKERS_MAX): this process reads the program in blocks, cuts it (body lines told by their
+shape, ``StreamRules.body_shape``), parses each chunk and hands it to a worker (the IR's
+varying columns only, ``_Task.for_pipe``) while it reads the next; results are taken in
+program order, at most ``workers + 1`` chunks in flight. The worker computes the chunk's
+postures as written (``compensate.reference_postures``) from the posture at the previous
+chunk's end, which the worker of that chunk hands on through shared memory (``_Baton``: the
+chain waits only for postures, not for compensation), then compensates, emits and checks it.
+``workers=0`` does every stage here; both write the same bytes.
 
 What is not streamed (``StreamFallback``; the caller reads the program whole, as before): a
 language without stream rules, a model with an effect that depends on the path's history
@@ -46,7 +48,7 @@ from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass, field, replace
-from itertools import chain, islice
+from itertools import chain
 from pathlib import Path
 
 import numpy as np
@@ -207,25 +209,78 @@ def _open(path: Path, lang, rules, fh) -> tuple[_Program, str]:
 def _is_body(rules, text: str) -> int:
     """Length of the run of body lines at the start of ``text``."""
     probe = text if text.endswith("\n") else text + "\n"
+    if _all_body_by_shape(rules, probe):
+        return len(text)
     return min(rules.body.match(probe).end(), len(text))
+
+
+_ZEROS = bytes.maketrans(b"123456789", b"000000000")
+
+
+def _all_body_by_shape(rules, probe: str) -> bool:
+    """True where every line of ``probe`` (it ends in a newline) is a body line by its shape
+    (``StreamRules.body_shape``): the body pattern runs once per distinct shape, not over
+    every character (~2 us a line). False where it is not, or shapes cannot tell."""
+    if rules.body_shape is None:
+        return False
+    raw = probe.encode("latin-1")
+    pattern = rules.body_shape(raw)
+    if pattern is None:
+        return False
+    shapes = raw.translate(_ZEROS).split(b"\n")
+    shapes.pop()  # after the last newline: not a line
+    return all(pattern.fullmatch(shape.decode("latin-1") + "\n") for shape in set(shapes))
 
 
 def _batches(fh, first: str, rules, chunk_lines: int):
     """(text, is_last) of each chunk's own lines; cuts only inside the run of body lines."""
-    pending = [first] + list(islice(fh, chunk_lines - 1))
+    reader = _LineReader(fh, first)
+    text = reader.take(chunk_lines)
     while True:
-        text = "".join(pending)
         if _is_body(rules, text) < len(text):
-            rest = list(islice(fh, TRAILER_MAX_LINES + 1))
-            if len(rest) > TRAILER_MAX_LINES:
+            rest = reader.take(TRAILER_MAX_LINES + 1)
+            if _count_lines(rest) > TRAILER_MAX_LINES:
                 raise StreamFallback(f"more than {TRAILER_MAX_LINES} lines after the last plain moves")
-            yield text + "".join(rest), True
+            yield text + rest, True
             return
-        following = list(islice(fh, chunk_lines))
+        following = reader.take(chunk_lines)
         yield text, not following
         if not following:
             return
-        pending = following
+        text = following
+
+
+def _count_lines(text: str) -> int:
+    return text.count("\n") + (not text.endswith("\n") and bool(text))
+
+
+class _LineReader:
+    """Whole lines of a text file (a newline ends a line), read in blocks of READ_CHARS characters:
+    a chunk of 10^5 lines is a few reads and one join, not 10^5 line objects."""
+
+    READ_CHARS = 1 << 22
+
+    def __init__(self, fh, first: str):
+        self.fh, self.rest = fh, first  # read, not yet handed out
+
+    def take(self, n: int) -> str:
+        """The next ``n`` lines (fewer at the end of the file, the last one maybe without its newline)."""
+        parts, got = [], 0
+        while got < n:
+            if not self.rest:
+                self.rest = self.fh.read(self.READ_CHARS)
+                if not self.rest:
+                    break
+            count = self.rest.count("\n")
+            if got + count < n:
+                parts.append(self.rest)
+                got, self.rest = got + count, ""
+                continue
+            # the (n - got)-th newline of the block (latin-1: one byte a character)
+            cut = int(np.flatnonzero(np.frombuffer(self.rest.encode("latin-1"), np.uint8) == 10)[n - got - 1]) + 1
+            parts.append(self.rest[:cut])
+            got, self.rest = n, self.rest[cut:]
+        return "".join(parts)
 
 
 @dataclass
@@ -266,11 +321,12 @@ class _Task:
     """One chunk as parsed, for ``_finish`` (in this process or a worker)."""
 
     tp: Toolpath
-    start_joints: np.ndarray | None
-    reference: Reference  # the postures as written (computed here: the next chunk starts from its end)
+    start_joints: np.ndarray | None  # the posture the chunk starts from (later chunks in a worker: from the baton)
+    reference: Reference | None  # the postures as written; None: the worker computes them (``_postures``)
     header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
     tail: str
     packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+    chunk: int = 0  # its place in the program (0: the first)
 
     def for_pipe(self) -> "_Task":
         """This task with the toolpath's wide per-target arrays cut to their varying columns:
@@ -317,12 +373,15 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
     from .programs import check_texts
 
-    tp = task.toolpath()
     options = dict(options)
-    if task.start_joints is not None:
-        options["start_joints"] = task.start_joints
+    if task.reference is None:
+        tp, reference, start = _postures(model, options, task, _WORKER_BATON)
+    else:
+        tp, reference, start = task.toolpath(), task.reference, task.start_joints
+    if start is not None:
+        options["start_joints"] = start
     try:
-        new, rep = compensate(tp, model, reference=task.reference, **options)
+        new, rep = compensate(tp, model, reference=reference, **options)
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     if rep.failed.any():
@@ -340,9 +399,68 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     return main, rep, new.notes, texts[1:]
 
 
+def _postures(model, options: dict, task: _Task, baton: "_Baton") -> tuple[Toolpath, Reference, np.ndarray | None]:
+    """A chunk in a worker: its toolpath, its postures as written and its start posture.
+    They start where the previous chunk ends, as the worker that computed that hands on
+    (``_Baton``); this one hands on its own end before it compensates, or that it failed.
+    The chain only waits for postures (~3 us a target), not for the compensation before."""
+    ended = False
+    try:
+        tp = task.toolpath()
+        start = task.start_joints if task.chunk == 0 else baton.take(task.chunk)
+        reference = reference_postures(tp, model, **{**options, "start_joints": start})
+        baton.give(task.chunk, reference.end_joints)
+        ended = True
+        return tp, reference, start
+    except InputError as exc:
+        raise StreamFallback(f"input error in a chunk ({exc})") from None
+    finally:
+        if not ended:
+            baton.give(task.chunk, None, failed=True)  # the next chunk stops too, and does not wait
+
+
+BATON_WAIT_S = 3600.0  # a chunk's postures take well under a second; this only guards against a hang
+
+
+class _Baton:
+    """The posture at the end of the last chunk whose postures are computed, handed from
+    worker to worker in shared memory (inherited by the workers at their start). Chunks are
+    taken by the workers in program order, so the chunk before the one waiting is running or
+    done: one slot suffices, and no wait can be for a chunk that will not run."""
+
+    def __init__(self, context):
+        self._posted = context.Condition()
+        self._chunk = context.RawValue("q", -1)  # the last chunk whose end is posted
+        self._state = context.RawValue("i", 0)  # 0: joints; 1: no Cartesian target (None); 2: it failed
+        self._joints = context.RawArray("d", 6)
+
+    def take(self, chunk: int) -> np.ndarray | None:
+        """The posture at the end of chunk ``chunk - 1`` (waits until it is posted)."""
+        with self._posted:
+            if not self._posted.wait_for(lambda: self._chunk.value >= chunk - 1, timeout=BATON_WAIT_S):
+                raise StreamFallback(f"chunk {chunk}: the posture at the end of the chunk before was never handed on")
+            if self._chunk.value != chunk - 1:
+                raise RuntimeError(f"chunk {chunk} took the posture of chunk {self._chunk.value}")
+            state, joints = self._state.value, np.array(self._joints[:], dtype=float)
+        if state == 2:
+            raise StreamFallback(f"chunk {chunk}: the chunk before failed")
+        return None if state == 1 else joints
+
+    def give(self, chunk: int, joints: np.ndarray | None, failed: bool = False) -> None:
+        with self._posted:
+            self._state.value = 2 if failed else 1 if joints is None else 0
+            if joints is not None and not failed:
+                self._joints[:] = np.asarray(joints, dtype=float).tolist()
+            self._chunk.value = chunk
+            self._posted.notify_all()
+
+
+_WORKER_BATON: _Baton | None = None  # set in each worker process by ``_worker_start``, its only per-process state
+
+
 class _Job:
     """One program compensated chunk by chunk: this process reads and parses each chunk and
-    carries the state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
+    carries the restated state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
     here or in a worker process; ``collect`` folds the results in, in program order."""
 
     def __init__(self, program: _Program, model, options: dict, progress):
@@ -360,18 +478,21 @@ class _Job:
             raise StreamFallback("the last target before a cut has no complete position to restate")
         return "".join(self.blanked) + line + "\n"
 
-    def prepare(self, own: str, is_last: bool, first_line: int, carry: _Carry | None) -> tuple[_Task, _Meta, _Carry]:
+    def prepare(self, own: str, is_last: bool, first_line: int, carry: _Carry | None, chunk: int, here: bool) -> tuple[_Task, _Meta, _Carry]:
         """Parse one chunk's own lines (``own`` starts at program line ``first_line``) after the
-        restated state; the task for ``_finish`` and the state the next chunk starts from."""
+        restated state; the task for ``_finish`` and the state the next chunk starts from.
+        ``here``: its postures are computed here (else by the worker, ``_postures``)."""
         lang, rules = self.program.lang, self.program.rules
         prefix = "" if carry is None else self._prefix(carry)
         tail = "" if is_last else rules.tail
         start = self.options.get("start_joints") if carry is None else carry.joints
+        reference = None
         try:
             tp = lang.parse_sources(self.program.docs(prefix + own + tail))
             if carry is not None:
                 _check_restated(tp, 0, carry, self.prefix_lines)
-            reference = reference_postures(tp, self.model, **{**self.options, "start_joints": start})
+            if here:
+                reference = reference_postures(tp, self.model, **{**self.options, "start_joints": start})
         except InputError as exc:
             raise StreamFallback(f"input error in a chunk ({exc})") from None
         if carry is None:
@@ -380,7 +501,8 @@ class _Job:
         else:
             keep, shift, header_chars = tp.line > self.prefix_lines, first_line - 1 - self.prefix_lines, sum(map(len, self.blanked))
         meta = _Meta(keep, shift, 1 if carry is None else self.prefix_lines + 1, carry is None)
-        return _Task(tp, start, reference, header_chars, tail), meta, _carry_of(tp, reference.end_joints)
+        task = _Task(tp, start, reference, header_chars, tail, chunk=chunk)
+        return task, meta, _carry_of(tp, None if reference is None else reference.end_joints)
 
     def collect(self, meta: _Meta, result) -> bytes:
         """One chunk's result (in program order): its report counted, its new text."""
@@ -409,9 +531,9 @@ class _Job:
         compensated in its worker processes while this one reads and parses the next."""
         pending: deque = deque()
         carry, first_line = None, 1
-        for own, is_last in batches:
+        for chunk, (own, is_last) in enumerate(batches):
             own = first_own + own if carry is None else own
-            task, meta, carry = self.prepare(own, is_last, first_line, carry)
+            task, meta, carry = self.prepare(own, is_last, first_line, carry, chunk, here=pool is None)
             first_line += own.count("\n")
             pending.append((meta, pool.submit(_finish, self.model, self.options, task.for_pipe()) if pool else _finish(self.model, self.options, task)))
             while len(pending) > depth:
@@ -442,6 +564,7 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
 
     path, output = Path(path), Path(output)
     lang, rules = stream_rules_for(path, dialect, model)
+    _keep_freed_memory()
     try:
         fh = open(path, encoding="latin-1", newline="")
     except OSError as exc:
@@ -469,7 +592,29 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     return StreamResult(job.totals.summary(), job.notes, list(files))
 
 
-WORKERS_MAX = 2  # the pipeline is this process (read, parse, carry) and these (compensate, emit, check)
+HEAP_BLOCK_MAX = 256 * 2**20  # arrays up to this size come from the heap, not from their own mapping
+HEAP_KEEP = 512 * 2**20  # freed heap memory up to this size is kept for the next chunk
+
+
+def _keep_freed_memory() -> None:
+    """Each chunk allocates and frees arrays of tens of MB (a chunk's IR, its reports). glibc
+    maps each such array fresh and unmaps it when freed, so every chunk page-faults its
+    memory in again (~1 CPU s per 10^6 points in this process, as much in the workers).
+    Taken from the heap and kept when freed (up to HEAP_KEEP), the next chunk reuses it;
+    the peak stays that of the chunks in flight. A process-wide malloc setting (mallopt),
+    made here and in each worker; nothing where the C library has none."""
+    import ctypes
+
+    try:
+        mallopt = ctypes.CDLL(None).mallopt
+    except (OSError, AttributeError):
+        return
+    m_trim_threshold, m_mmap_threshold = -1, -3
+    mallopt(m_mmap_threshold, HEAP_BLOCK_MAX)
+    mallopt(m_trim_threshold, HEAP_KEEP)
+
+
+WORKERS_MAX = 2  # the pipeline is this process (read, cut, parse) and these (postures, compensate, emit, check)
 
 
 def default_workers() -> int:
@@ -478,12 +623,16 @@ def default_workers() -> int:
     return min(WORKERS_MAX, cores) if cores > 1 else 0
 
 
-def _one_thread_torch() -> None:
-    """Worker start: a forked child whose parent already ran torch's thread pool (a learned
-    predictor) hangs in its first parallel torch operation; one thread per worker avoids it
-    (the workers are the parallelism). Torch is not imported for a model without one."""
+def _worker_start(baton: _Baton) -> None:
+    """Worker start: the job's baton (``_postures``); one torch thread (a forked child whose
+    parent already ran torch's thread pool, a learned predictor, hangs in its first parallel
+    torch operation; the workers are the parallelism). Torch is not imported for a model
+    without one."""
     import sys
 
+    global _WORKER_BATON
+    _WORKER_BATON = baton
+    _keep_freed_memory()
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
 
@@ -498,7 +647,7 @@ def _pool(workers: int):
 
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_one_thread_torch)
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context),))
     try:
         yield pool
     finally:

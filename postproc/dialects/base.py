@@ -192,6 +192,10 @@ class StreamRules:
     body: re.Pattern  # (?:LINE\n)*: a run of lines the chunks may be cut between
     restate: Callable[[Toolpath, np.ndarray], str]  # (last target as a 1-row Toolpath, its carried field values (NF,)) -> a line
     tail: str = ""
+    # (a chunk's bytes) -> a bytes pattern that tells one body line ('\n' included) from its
+    # shape, the line with every digit written 0, or None where shapes do not tell for this
+    # chunk: a long program repeats a few shapes, so ``body`` then runs once per shape.
+    body_shape: Callable[[bytes], "re.Pattern | None"] | None = None
 
 
 def plain_number(value: float) -> str:

@@ -133,9 +133,11 @@ class GcodeParser:
             values = np.full((nb, len(AXES)), np.nan)
             spans = np.full((nb, len(AXES), 2), -1, dtype=np.int64)
             keep = code >= 0
-            values[row[keep], code[keep]] = numbers.value[idx[keep]]
-            spans[row[keep], code[keep], 0] = starts[keep]
-            spans[row[keep], code[keep], 1] = numbers.end[idx[keep]]
+            # One flat index (block, axis) per word, one scatter per array: a word written
+            # twice in a block keeps its last number, as element-wise fancy assignment does.
+            at, num = row[keep] * len(AXES) + code[keep], idx[keep]
+            values.reshape(-1)[at] = numbers.value[num]
+            spans.reshape(-1, 2)[at] = np.stack([starts[keep], numbers.end[num]], axis=1)
             nan = np.full(nb, np.nan)
             block = dict(offset=bulk_starts, code_end=code_end, values=values, spans=spans, nonmotion=np.zeros(nb, bool), ok=np.ones(nb, bool),
                          g53=np.zeros(nb, bool), **{k: nan for k in _STATE_COLUMNS})
@@ -796,28 +798,32 @@ def _absolute_positions(values: np.ndarray, counted: np.ndarray, dist: np.ndarra
     return absolute
 
 
-_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3
+_IR_FIELD_OF_AXIS = {0: 0, 1: 1, 2: 2, 3: 13, 4: 14, 5: 15}  # X Y Z -> x y z; A B C -> e1 e2 e3 (axes 0..5 in order: _ir_numbers)
 
 
 def _ir_numbers(t: dict, rows: np.ndarray, absolute: np.ndarray, linear_scale: np.ndarray):
     """IR values (m, NF), spans (m, NF, 3) and scale (m, NF) of the axis words of the blocks ``rows``."""
     m = len(rows)
+    fields = list(_IR_FIELD_OF_AXIS.values())  # of the axes 0..5, in order
     ir_values = np.full((m, NF), np.nan)
     ir_spans = np.full((m, NF, 3), -1, dtype=np.int64)
     scale = np.ones((m, NF))
-    for k, f in _IR_FIELD_OF_AXIS.items():
-        ir_values[:, f] = np.where(~np.isnan(t["values"][rows, k]), absolute[rows, k], np.nan)
-        _put_spans(ir_spans, np.arange(m), f, t["spans"][rows, k])
-        if k < 3:
-            scale[:, f] = linear_scale[rows]
+    words = t["spans"][:, :6][rows]  # (m, 6, 2): all six axes at once, not one column at a time
+    ir_values[:, fields] = np.where(~np.isnan(t["values"][:, :6][rows]), absolute[rows, :6], np.nan)
+    have = words[..., :1] >= 0
+    ir_spans[:, fields, :1] = np.where(have, 0, -1)
+    ir_spans[:, fields, 1:] = np.where(have, words, -1)
+    scale[:, fields[:3]] = linear_scale[rows][:, None]
     return ir_values, ir_spans, scale
 
 
 def _put_spans(ir_spans: np.ndarray, at: np.ndarray, field: int, spans: np.ndarray) -> None:
     """Spans (start, end) of the one source, -1 where none, into IR field ``field`` of rows ``at``."""
     have = spans[:, 0] >= 0
-    ir_spans[at[have], field, 0] = 0
-    ir_spans[at[have], field, 1:] = spans[have]
+    if not have.all():  # a CAM program writes most axes on every block: no copies then
+        at, spans = at[have], spans[have]
+    ir_spans[at, field, 0] = 0
+    ir_spans[at, field, 1:] = spans
 
 
 def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray, ir_spans: np.ndarray, per_row: bool = False) -> np.ndarray:

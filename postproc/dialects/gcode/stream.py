@@ -22,7 +22,11 @@ _WORD = rf"(?:[XYZABCFIJKxyzabcfijk][ \t]*{_NUM}|[MmTtNn][ \t]*\d+|[Ss][ \t]*{_N
 MOVE = re.compile(rf"[ \t]*(?:{_WORD}[ \t]*)*[XYZxyz][ \t]*{_NUM}[ \t]*(?:{_WORD}[ \t]*)*(?:{_COMMENT}[ \t]*)*\r?$")
 # Checked on every line of a long program, so without backtracking (about 1.5 us a line):
 # only these letters and G0/G1, the parser reads the words.
-BODY = re.compile(r"(?:(?:[ \t\d.+\-XYZABCFIJKMSTNxyzabcfijkmstn]+|[Gg]0?[01](?![\d.])|\([^()\n]*\)|;[^\n]*)*\r?\n)*")
+_G01 = r"[Gg]0?[01](?![\d.])"
+BODY = re.compile(rf"(?:(?:[ \t\d.+\-XYZABCFIJKMSTNxyzabcfijkmstn]+|{_G01}|\([^()\n]*\)|;[^\n]*)*\r?\n)*")
+# BODY reads digits only as \d, but for the G0 / G1 of its motion words: where every G of a
+# chunk is one of those, the G word's shape (digits written 0) says as much.
+_SHAPE_BODY = re.compile(BODY.pattern.replace(_G01, r"[Gg]0?0(?![\d.])"))
 
 
 def restate(last: Toolpath, carried: np.ndarray) -> str | None:
@@ -39,4 +43,21 @@ def restate(last: Toolpath, carried: np.ndarray) -> str | None:
     return " ".join(words)
 
 
-RULES = StreamRules(move=MOVE, body=BODY, restate=restate)
+def body_shape(raw: bytes) -> re.Pattern | None:
+    """The body as it reads on line shapes, where every G of ``raw`` is a G0 / G1 word; else None."""
+    return _SHAPE_BODY if _only_g0_g1(raw) else None
+
+
+def _only_g0_g1(raw: bytes) -> bool:
+    """Whether every G or g of ``raw`` starts a G0 / G1 word (``_G01``), vectorised over the G's."""
+    a = np.frombuffer(raw + b"   ", dtype=np.uint8)
+    at = np.flatnonzero((a[:-3] | 32) == ord("g"))
+    if not len(at):
+        return True
+    n1, n2, n3 = a[at + 1], a[at + 2], a[at + 3]
+    ends = lambda c: ~(((c >= 48) & (c <= 57)) | (c == 46))  # noqa: E731  (no digit or '.' follows)
+    zero_one = lambda c: (c == 48) | (c == 49)  # noqa: E731
+    return bool(np.all((zero_one(n1) & ends(n2)) | ((n1 == 48) & zero_one(n2) & ends(n3))))
+
+
+RULES = StreamRules(move=MOVE, body=BODY, restate=restate, body_shape=body_shape)

@@ -185,18 +185,17 @@ class _Doc:
         nums = self.numbers
         lo = np.searchsorted(nums.start, agg_start)
         hi = np.searchsorted(nums.start, agg_end)
-        counts = hi - lo
-        rows = np.repeat(np.arange(m), counts)
+        rows = np.repeat(np.arange(m), hi - lo)
         idx = _ranges(lo, hi)
         code = self.codes[idx]
-        f = code < 100
-        f &= code >= 0
-        values[rows[f], code[f]] = nums.value[idx[f]]
-        spans[rows[f], code[f], 0] = self.index
-        spans[rows[f], code[f], 1] = nums.start[idx[f]]
-        spans[rows[f], code[f], 2] = nums.end[idx[f]]
+        # One flat index per number (row, field) and one scatter per array: a field written
+        # twice in one aggregate keeps its last number, as element-wise fancy assignment does.
+        f = (code >= 0) & (code < 100)
+        at, num = rows[f] * NF + code[f], idx[f]
+        values.reshape(-1)[at] = nums.value[num]
+        spans.reshape(-1, 3)[at] = np.stack([np.full(len(num), self.index, np.int64), nums.start[num], nums.end[num]], axis=1)
         c = code >= 100
-        conf[rows[c], code[c] - 100] = nums.value[idx[c]]
+        conf.reshape(-1)[rows[c] * 4 + code[c] - 100] = nums.value[idx[c]]
         return values, spans, conf, insert
 
 

@@ -42,4 +42,9 @@ def restate(last: Toolpath, carried: np.ndarray) -> str | None:
     return f"{keyword} {{{', '.join(fields)}}}"
 
 
-RULES = StreamRules(move=MOVE, body=BODY, restate=restate, tail="END\n")
+def body_shape(raw: bytes) -> re.Pattern:
+    """BODY tells a body line by its shape (digits written 0): it reads digits only as ``\\d``."""
+    return BODY
+
+
+RULES = StreamRules(move=MOVE, body=BODY, restate=restate, tail="END\n", body_shape=body_shape)
