@@ -76,7 +76,7 @@ def options(dialect: str) -> dict:
 def run_stream(src: Path, out: Path, dialect: str, workers: int | None = None) -> None:
     from postproc.stream import compensate_streamed
 
-    compensate_streamed(src, model(), out, workers=workers, **options(dialect))
+    compensate_streamed(src, model(), out, workers=workers, tune_malloc=True, **options(dialect))
 
 
 def run_serial(src: Path, out: Path, dialect: str) -> None:

@@ -58,7 +58,7 @@ def main() -> None:
         bench.make_program(src, args.moves, args.dialect)
         model = bench.model()
         c0 = time.process_time()
-        stream.compensate_streamed(src, model, Path(tmp) / f"out{suffix}", workers=0, **bench.options(args.dialect))
+        stream.compensate_streamed(src, model, Path(tmp) / f"out{suffix}", workers=0, tune_malloc=True, **bench.options(args.dialect))
         cpu = time.process_time() - c0
     print(f"{args.dialect} raster, {args.moves:,} moves, one process: {cpu:.1f} CPU s, {args.moves / cpu:,.0f} points per CPU s, "
           f"peak RSS {resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024**2:.2f} GB")

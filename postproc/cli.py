@@ -1220,7 +1220,7 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
     try:
         with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
             task = bar.add_task("compensating in chunks", total=None)
-            result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place,
+            result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place, tune_malloc=True,
                                          progress=lambda m: bar.update(task, description=m), **options)
     except StreamFallback as exc:
         err.print(f"note: the program is read whole, not in chunks: {exc}")

@@ -554,17 +554,21 @@ class StreamResult:
 
 
 def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
-                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, **options) -> StreamResult:
+                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, tune_malloc: bool = False,
+                        **options) -> StreamResult:
     """Compensate the program at ``path`` into ``output`` chunk by chunk (module docstring).
     ``workers``: processes that compensate, emit and check chunks while this one reads the
     next (None: one per core up to WORKERS_MAX; 0: all in this process). Raises
     StreamFallback (nothing written) when the program cannot be streamed; a
-    CompensationError (nothing written) whose ``failures`` list the targets that failed."""
+    CompensationError (nothing written) whose ``failures`` list the targets that failed.
+    ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
+    CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
     from .programs import refuse_overwrite
 
     path, output = Path(path), Path(output)
     lang, rules = stream_rules_for(path, dialect, model)
-    _keep_freed_memory()
+    if tune_malloc:
+        _keep_freed_memory()
     try:
         fh = open(path, encoding="latin-1", newline="")
     except OSError as exc:
@@ -601,8 +605,9 @@ def _keep_freed_memory() -> None:
     maps each such array fresh and unmaps it when freed, so every chunk page-faults its
     memory in again (~1 CPU s per 10^6 points in this process, as much in the workers).
     Taken from the heap and kept when freed (up to HEAP_KEEP), the next chunk reuses it;
-    the peak stays that of the chunks in flight. A process-wide malloc setting (mallopt),
-    made here and in each worker; nothing where the C library has none."""
+    the peak stays that of the chunks in flight. A process-wide malloc setting (mallopt):
+    made in each worker (our own processes) and, when asked, in the calling process; nothing
+    where the C library has none."""
     import ctypes
 
     try:
