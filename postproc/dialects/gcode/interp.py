@@ -247,28 +247,8 @@ class _Run:
         self.last_was_cycle = False
         self.scale = m["scale"][i]
         words = self.words(i)
-        if self.comp is not None and t["toolchange"][i] == 6.0:  # M6 runs before group 7: "G41 M6" changes first, "G40 M6" is refused
-            raise CycleError("Cannot change tools with cutter radius compensation on")
-        if not math.isnan(t["ccomp"][i]):  # group 7 runs before the coordinate system, offsets and motion (LinuxCNC "Order of Execution")
-            self._comp_code(i, t["ccomp"][i], words, bool(t["ok"][i]), line)
-        if self.comp is not None:
-            self._comp_refusals(i, words)
-        before = self.offsets.index
-        self.cur = self.offsets.select(int(m["wcs"][i]), self.cur)
-        if self.offsets.index != before:
-            self._keep_machine_angles()
-        if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
-            self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
-            self._reread()
+        self._modes(i, words, line)
         setup, known = t["setup"][i], bool(t["ok"][i])
-        change = self.tools.g43(i, t["tlo"][i], t["h"][i], known, words)  # group 8 runs before G10 in a block (LinuxCNC "Order of Execution")
-        if not math.isnan(t["tlo"][i]):
-            self._keep_machine_angles()
-        for k, moved in enumerate(change):  # rs274ngc re-reads the current point for the new offset: X Y Z = the old ones - the change
-            if math.isnan(moved):
-                self.exact[k] = False  # by a length the program does not give: the stale value stands in, flagged
-            elif moved:
-                self.cur[k] -= moved
         if setup in UNKNOWN_END_CODES:
             self._to_unknown_end(i, setup, words, known)
             return
@@ -282,10 +262,40 @@ class _Run:
             self.cycle.end_run(mode)
         if m["sets_mode"][i]:
             self.tapping = setup == RIGID_TAP
-        if not moving:
-            return
+        if moving:
+            self._move(i, mode, words, known, line)
+
+    def _modes(self, i: int, words: dict, line: int) -> None:
+        """The block's non-motion groups in LinuxCNC's "Order of Execution": M6, cutter
+        compensation (group 7), the coordinate system, then the tool length (group 8)."""
+        t = self.t
+        if self.comp is not None and t["toolchange"][i] == 6.0:  # M6 runs before group 7: "G41 M6" changes first, "G40 M6" is refused
+            raise CycleError("Cannot change tools with cutter radius compensation on")
+        if not math.isnan(t["ccomp"][i]):  # group 7 runs before the coordinate system, offsets and motion
+            self._comp_code(i, t["ccomp"][i], words, bool(t["ok"][i]), line)
+        if self.comp is not None:
+            self._comp_refusals(i, words)
+        before = self.offsets.index
+        self.cur = self.offsets.select(int(self.modal["wcs"][i]), self.cur)
+        if self.offsets.index != before:
+            self._keep_machine_angles()
+        if self.offsets.index != before and not (self.offsets.known[before] and self.offsets.known[self.offsets.index]):
+            self.exact = [False] * 3  # the current point re-read in the new system through an origin the program does not give
+            self._reread()
+        change = self.tools.g43(i, t["tlo"][i], t["h"][i], bool(t["ok"][i]), words)  # group 8 runs before G10 in a block
+        if not math.isnan(t["tlo"][i]):
+            self._keep_machine_angles()
+        for k, moved in enumerate(change):  # rs274ngc re-reads the current point for the new offset: X Y Z = the old ones - the change
+            if math.isnan(moved):
+                self.exact[k] = False  # by a length the program does not give: the stale value stands in, flagged
+            elif moved:
+                self.cur[k] -= moved
+
+    def _move(self, i: int, mode: float, words: dict, known: bool, line: int) -> None:
+        """The motion of block i in the mode in force: a cycle's holes, a G53 move or a G0-G3 /
+        G33.1 move (the offset path under cutter compensation)."""
         if mode == 80.0:  # axis words after G80: Fanuc moves in the G0-G3 mode in force (rs274 refuses them)
-            mode = m["motion"][i]
+            mode = self.modal["motion"][i]
             if math.isnan(mode):
                 raise CycleError("axis words after G80 with no G0/G1/G2/G3 in force")
         if mode in canned.CYCLES and self.cycle.last == mode and self.cycle.unknown:
@@ -303,39 +313,47 @@ class _Run:
             self.last_was_cycle = True
             return
         self.cycle.end_run(mode)
-        if t["g53"][i]:
-            if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
-                raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
-            program, machine = self.offsets.g53(words, self.cur)
-            tool = [*self.tools.xy, self.tools.in_force]
-            if any(tool[k] != 0.0 for k, a in enumerate("XYZ") if a in words):  # the words place the spindle: the tip is the tool offset off
-                program, _ = self.offsets.g53({**words, **{a: words[a] - tool[k] for k, a in enumerate("XYZ") if a in words}}, self.cur)
-            # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
-            self._rotary({a: words[a] - o for a, o in zip("ABC", self.rotary_now) if a in words}, absolute=True)
-            self.cur = program
-            placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
-            left_out = [a not in words for a in "XYZ"]
-            # an axis left out stays where the machine is: known where the machine position is
-            exact = all(not out or m for out, m in zip(left_out, self.m_exact))
-            self.exact = [e if out else placed for out, e in zip(left_out, self.exact)]
-            self.m_exact = [m if out else True for out, m in zip(left_out, self.m_exact)]
-            self.emit(i, int(mode), machine, False, machine_frame=True, exact=exact)
+        if self.t["g53"][i]:
+            self._g53_move(i, mode, words)
         else:
-            if mode in (2.0, 3.0) and self.arc_not_allowed:
-                raise CycleError("The move just after exiting cutter compensation mode must be straight, not an arc")
-            self.arc_not_allowed = False
-            start = list(self.cur)
-            self.cur = self._straight_end(i, words)
-            if self.tapping:  # in to the words, out again to the start (a move the text has no words for)
-                if self.comp is not None:
-                    raise CycleError("G33.1 rigid tapping under cutter radius compensation is not followed")
-                self.emit(i, 1, self.cur, False)
-                self.emit(i, 1, start, True)
-                self.cur = start
-            elif self.comp is not None:
-                self._comp_move(i, int(mode), start, words, line)
-            else:
-                self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
+            self._program_move(i, mode, words, line)
+
+    def _g53_move(self, i: int, mode: float, words: dict) -> None:
+        """G53: the words are machine coordinates (the tool offset off where they place the spindle)."""
+        if mode not in (0.0, 1.0):  # rs274: "Must use G0 or G1 with G53"
+            raise CycleError(f"G53 moves in machine coordinates with G0 or G1 only, not G{mode:g} (LinuxCNC refuses it)")
+        program, machine = self.offsets.g53(words, self.cur)
+        tool = [*self.tools.xy, self.tools.in_force]
+        if any(tool[k] != 0.0 for k, a in enumerate("XYZ") if a in words):  # the words place the spindle: the tip is the tool offset off
+            program, _ = self.offsets.g53({**words, **{a: words[a] - tool[k] for k, a in enumerate("XYZ") if a in words}}, self.cur)
+        # G53 A B C words are machine angles too: programmed = the word - the rotary offsets in force
+        self._rotary({a: words[a] - o for a, o in zip("ABC", self.rotary_now) if a in words}, absolute=True)
+        self.cur = program
+        placed = self.offsets.known[self.offsets.index] and all(self.g92_exact)
+        left_out = [a not in words for a in "XYZ"]
+        # an axis left out stays where the machine is: known where the machine position is
+        exact = all(not out or m for out, m in zip(left_out, self.m_exact))
+        self.exact = [e if out else placed for out, e in zip(left_out, self.exact)]
+        self.m_exact = [m if out else True for out, m in zip(left_out, self.m_exact)]
+        self.emit(i, int(mode), machine, False, machine_frame=True, exact=exact)
+
+    def _program_move(self, i: int, mode: float, words: dict, line: int) -> None:
+        """A G0-G3 or G33.1 move in the program's coordinates."""
+        if mode in (2.0, 3.0) and self.arc_not_allowed:
+            raise CycleError("The move just after exiting cutter compensation mode must be straight, not an arc")
+        self.arc_not_allowed = False
+        start = list(self.cur)
+        self.cur = self._straight_end(i, words)
+        if self.tapping:  # in to the words, out again to the start (a move the text has no words for)
+            if self.comp is not None:
+                raise CycleError("G33.1 rigid tapping under cutter radius compensation is not followed")
+            self.emit(i, 1, self.cur, False)
+            self.emit(i, 1, start, True)
+            self.cur = start
+        elif self.comp is not None:
+            self._comp_move(i, int(mode), start, words, line)
+        else:
+            self.emit(i, int(mode), self.cur, "@" in words or "^" in words)
 
     # ------------------------------------------------------------ cutter radius compensation
     def _comp_code(self, i: int, code: float, words: dict, known: bool, line: int) -> None:
