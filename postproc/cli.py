@@ -656,20 +656,18 @@ def compensate_cmd(
     _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
     forces = None if force is None else _floats(force, 3, "--force")
+    common = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
+              "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
+              "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
         if cut is not None or in_place or subdivide or force_file is not None or data:
             raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
-        options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
-                   "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"), "max_deviation_mm": max_deviation,
-                   "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                   "model_check": (str(model), robot, allow_mismatch)}
+        options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
         raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
     program = programs[0]
     if output is None:
         raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
-    stream_options = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces, "max_deviation_mm": max_deviation,
-                      "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
-                      "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+    stream_options = {**common, "max_deviation_mm": max_deviation}
     if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
     tp = _read_program(program, dialect, data)
@@ -682,10 +680,8 @@ def compensate_cmd(
         log.print(f"note: {note} (--allow-model-mismatch)")
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
-        options = dict(tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp, force_n=forces,
-                       frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool"),
-                       start_joints=None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
-                       force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=lambda m: bar.update(task, description=m))
+        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log),
+                       progress=lambda m: bar.update(task, description=m))
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -710,6 +706,12 @@ def compensate_cmd(
     _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
     if added:
         log.print(f"{len(added)} new target(s) subdivide straight segments and arcs (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
+    _print_compensation(summary, scheme, new.notes, log)
+
+
+def _print_compensation(summary: dict, scheme: str, notes, log) -> None:
+    """compensate's account of one program: predicted error before and after, the path between
+    targets, the arcs, and the program's notes."""
     b, a = summary["predicted_before"], summary["predicted_after"]
     if b["rms_mm"] is not None:
         log.print(
@@ -724,7 +726,7 @@ def compensate_cmd(
                   f"largest distance from the intended path {pth['max_mm']:.4f} mm, on the segment into line {pth['line']}; "
                   f"{pth['over_tolerance']} segment(s) over {pth['tolerance_mm']:g} mm (--max-deviation to refuse them)")
     _print_arc_deviation(summary["arcs"], log)
-    for note in new.notes:
+    for note in notes:
         log.print(f"note: {note}")
 
 
