@@ -5,7 +5,7 @@ A CELL is a controller tree (the folder holding KRC/R1/Program and KRC/R1/System
 checkout of HugoDanielson/ChinaMilling, Naqiu06/KUKA-Robotics or Aleynikovich/Zinkerreka
 (not in this repository: no licence). Every .src under KRC/R1/Program that uses inline forms
 (FDAT_ACT) is parsed alone and with KRC/R1/Program and KRC/R1/System/*.dat as its other
-modules; prints the targets whose point is known (resolved) and those placed (point, frame
+modules (and KRC/R1/Mada/$machine.dat, for $ROBROOT); prints the targets whose point is known (resolved) and those placed (point, frame
 and tool known).
 """
 
@@ -22,7 +22,8 @@ def count(cells: list[Path], with_modules: bool) -> tuple[int, int, int, int]:
     programs = targets = resolved = placed = 0
     for cell in cells:
         folder = cell / "KRC/R1/Program"
-        modules = [folder, *sorted((cell / "KRC/R1/System").glob("*.dat"))] if with_modules else []
+        machine = [p for p in [cell / "KRC/R1/Mada/$machine.dat"] if p.is_file()]  # $ROBROOT: where $WORLD is
+        modules = [folder, *sorted((cell / "KRC/R1/System").glob("*.dat")), *machine] if with_modules else []
         for src in sorted(folder.rglob("*.src")):
             if "FDAT_ACT" not in src.read_text("latin-1").upper():
                 continue

@@ -25,6 +25,7 @@ from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statemen
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
+from .inline_window import Window, code_of
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from . import calls as call_walk
 from .counters import Assign, CounterLoop, declared_ints
@@ -766,6 +767,7 @@ class KrlParser:
         tp, offsets, approx, virtual, envs = self._executed(tp, offsets, approx)
         tp = self._changed_points(tp, virtual)
         frame, tool, speed, cdis = self._program_state(offsets, virtual)
+        frame, tool = self._inline_windows(offsets, frame, tool)
         tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
         tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
@@ -783,6 +785,60 @@ class KrlParser:
             orientation=orientation,
             resolved=declared,
         )
+
+    def _inline_windows(self, offsets: np.ndarray, frame: np.ndarray, tool: np.ndarray):
+        """Rows whose frame or tool is unknown but whose own inline form sets both from an FDAT
+        the given files prove (inline_window.py) take those frames."""
+        b, src = self.builder, self.docs[0]
+        unknown = ~(np.array(b.frame_known, bool)[frame] & np.array(b.tool_known, bool)[tool])
+        if not unknown.any() or "fdat_act" not in src.text.lower():
+            return frame, tool
+        config = next((d.text for d in self.docs if d.doc.role == "config"), None)
+        window = Window.read(src.text, config, [d.text for d in self.docs[1:] if d.doc.role.startswith("module")])
+        if window.why_not is not None:
+            self.builder.notes.append(f"{src.doc.path}: inline forms after a jump or a call are not read where they stand: {window.why_not}")
+            return frame, tool
+        code_lines = [code_of(x) for x in src.text.split("\n")]
+        frame, tool = frame.copy(), tool.copy()
+        lines = src.lines.line(offsets)
+        for row in np.nonzero(unknown)[0].tolist():
+            line = int(lines[row])
+            found = self._window_frames(window, window.fdat_of(code_lines, line))
+            if found is None:
+                continue
+            (tool_name, tool_t), (base_name_, base_t) = found
+            tool[row] = self._register_exact(b.tool_index, b.tool_names, b.tools, b.tool_known, tool_name, tool_t, line)
+            frame[row] = self._register_exact(b.frame_index, b.frame_names, b.frames, b.frame_known, base_name_, base_t, line)
+        return frame, tool
+
+    def _window_frames(self, window: Window, fdat_text: str | None):
+        """((tool name, flange_T_tcp), (base name, base_T_frame)) FRAMES() sets from that FDAT; None if not exact."""
+        if fdat_text is None:
+            return None
+        fdat = parse_fdat(fdat_text) if fdat_text.startswith("{") else self._inline.fdats.get(fdat_text.upper())
+        tool, base, _ = frames_from_fdat(fdat, self._inline.machines, True)
+        out = []
+        for rhs in (tool, base):
+            if rhs is None or rhs.split("[")[0] in window.changed:
+                return None
+            if rhs in ("$NULLFRAME", "$WORLD"):
+                if rhs == "$WORLD" and not window.world:
+                    return None
+                out.append((rhs, np.eye(4)))
+                continue
+            point = self._declared(rhs)
+            if point is None or not point.known or np.isnan(point.values[:6]).any():
+                return None
+            out.append((rhs, _frame_of(point.values)))
+        return out
+
+    @staticmethod
+    def _register_exact(register, names, values, known, name: str, transform: np.ndarray, line: int) -> int:
+        """The index of a known frame; a name already held with another value (or unknown) gets the line."""
+        i = names.index(name) if name in names else None
+        if i is not None and not (known[i] and np.allclose(values[i], transform, rtol=0, atol=0)):
+            name = f"{name} (inline form on line {line})"
+        return register(name, transform, True)
 
     def _tables(self) -> dict:
         """The builder's frame and tool tables and notes as they are now (registered after build)."""
