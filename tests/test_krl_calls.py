@@ -224,16 +224,21 @@ END
 def test_a_jump_that_may_change_what_is_in_force_is_not_straight_line(tmp_path):
     # Skips $BASE = BASE_DATA[2]: at LIN XP1 $BASE is BASE_DATA[1] or [2] by $IN[1].
     skip_frame = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\n$BASE = BASE_DATA[2]\nSKIP:\nLIN XP1\nEND\n"
-    # Skips a motion: the motion may not run (conservative: the skipped part must not move).
-    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
     # Inside a loop (even to a label in the same pass): left to run time, conservatively.
     in_loop = "DEF p( )\n$BASE = BASE_DATA[1]\nFOR I = 1 TO 2\nIF $IN[1] THEN\nGOTO NEXT\nENDIF\nNEXT:\nLIN XP1\nENDFOR\nEND\n"
     # Backwards: the lines after the label run again after later changes.
     back = "DEF p( )\n$BASE = BASE_DATA[1]\nTOP:\nLIN XP1\n$BASE = BASE_DATA[2]\nGOTO TOP\nEND\n"
-    for text, line in ((skip_frame, 4), (skip_motion, 4), (in_loop, 5), (back, 6)):
+    for text, line in ((skip_frame, 4), (in_loop, 5), (back, 6)):
         tp = program(tmp_path, text)
         assert not tp.placed().any(), text
         assert any(f"p.src:{line}: GOTO" in n for n in tp.notes), tp.notes
+
+
+def test_a_motion_a_forward_jump_may_skip_is_placed_like_one_in_an_if(tmp_path):
+    # The skipped LIN runs or not (as a motion inside IF $IN[1]); where it runs, $BASE is
+    # BASE_DATA[1] ({X 1000}), set before the jump: both placed at (1100, 0, 500).
+    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
+    np.testing.assert_allclose(placed_positions(program(tmp_path, skip_motion)), [[1100, 0, 500]] * 2, atol=1e-9)
 
 
 def test_a_jump_in_a_subprogram_makes_its_frame_changes_unknown(tmp_path):

@@ -30,7 +30,7 @@ from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFram
 from . import calls as call_walk
 from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
-from .jumps import Goto, why_not_straight
+from .jumps import Goto, forward_ranges, skipped, why_not_straight
 from .executed import anchor_offsets, per_call
 from .functions import Caller
 from .passes import Passes, followable
@@ -216,6 +216,8 @@ class KrlParser:
         self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value): speed and approximation
         self.changes: list[Event] = []  # points and frames the program changes (see state.py)
         self.timeline = Timeline()
+        self._jump_ranges: list[tuple[int, int]] | None = None  # lines of the first DEF a forward GOTO may skip (jumps.py)
+        self._jump_why = ""
         self._has_goto = False  # a GOTO of the first DEF that may change what is in force at a target (jumps.py)
         self._gotos: list[Goto] = []
         self._labels: dict[tuple[int | None, str], list[int]] = {}
@@ -295,6 +297,7 @@ class KrlParser:
         named = moves.subset(~moves.present("agg"))
         skip = src_decl.copy()
         skip[moves.line] = True
+        self._jump_ranges = self._first_def_jumps(src)
         self._slow_lines(src, skip=skip, is_program=True)
         self._judge_jumps(src)
         self._plan_counter_loops(src)
@@ -322,6 +325,8 @@ class KrlParser:
             if not tree.children:
                 continue
             self._where = self._context(stack, start)
+            if is_program and self._jump_ranges and skipped(self._jump_ranges, int(d.lines.line(start))):
+                self._where = (self._where[0], False, self._where[2])  # a GOTO may skip it (jumps.forward_ranges)
             self._depth = sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in stack)
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
@@ -454,6 +459,21 @@ class KrlParser:
             self.builder.notes.append(f"{src.doc.path}:{loop.first_line}: the number of passes of this {loop.kind} is not known at post time "
                                       f"({why}): the motions in its body are listed once")
 
+    def _first_def_jumps(self, src: _Doc) -> list[tuple[int, int]] | None:
+        """The lines the first DEF's GOTOs may skip (jumps.forward_ranges); None where they are
+        not all forward to top-level labels (then no change of that DEF is straight-line)."""
+        text = src.text
+        m = re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF[ \t]", text, re.IGNORECASE | re.MULTILINE)
+        if m is None or "GOTO" not in text.upper():
+            return None
+        end = re.search(r"^[ \t]*END\b", text[m.end():], re.IGNORECASE | re.MULTILINE)
+        first = text.count("\n", 0, m.start()) + 1
+        last = text.count("\n", 0, m.end() + end.start()) + 1 if end else text.count("\n") + 1
+        code_lines = [_split_comment(line)[0] for line in text.split("\n")]
+        ranges, why = forward_ranges(code_lines, first, last)
+        self._jump_why = why
+        return ranges
+
     def _judge_jumps(self, src: _Doc) -> None:
         """A GOTO that may change what is in force at a target (jumps.py): in the first DEF no
         change is straight-line code; in a subprogram, none of that routine's."""
@@ -461,6 +481,10 @@ class KrlParser:
         for goto in self._gotos:
             why = why_not_straight(goto, self._labels, code_lines)
             if why is None:
+                continue
+            if goto.routine in (None, 0) and self._jump_ranges:
+                self.builder.notes.append(f"{src.doc.path}:{goto.line}: GOTO {goto.label}: {why}: the lines it skips are taken as maybe run "
+                                          "(every jump of the first DEF is forward to a label outside any block)")
                 continue
             if goto.routine in (None, 0):
                 self._has_goto = True
