@@ -124,26 +124,26 @@ class Window:
             why = _handlers_why("\n".join(program_code), routines)
         return cls(why, changed, world)
 
-    def fdat_of(self, code_lines: list[str], motion_line: int) -> str | None:
-        """The FDAT (a name or an aggregate's text) the inline form of the motion on
-        ``motion_line`` (1-based) sets its frames from; None where the fold is not whole."""
+    def fdat_of(self, code_lines: list[str], motion_line: int) -> tuple[str, int] | None:
+        """(the FDAT (a name or an aggregate's text), the BAS line) the inline form of the motion
+        on ``motion_line`` (1-based) sets its frames from; None where the fold is not whole."""
         if self.why_not is not None or not _MOTION.match(code_lines[motion_line - 1]):
             return None
-        bas = False
+        bas = 0
         for number in range(motion_line - 1, 0, -1):
             code = code_lines[number - 1]
             if not code:
                 continue
             m = _BAS.match(code)
-            if m and m.group(1).upper() in ("PTP_PARAMS", "CP_PARAMS", "FRAMES"):
-                bas = True
+            if m and m.group(1).upper() in ("PTP_PARAMS", "CP_PARAMS", "FRAMES") and not bas:
+                bas = number
             elif m and m.group(1).upper() in ("VEL_PTP", "ACC_PTP", "VEL_CP", "ACC_CP"):
                 continue
             elif _FOLD_LINE.match(code):
                 continue
             elif (f := _FDAT_SET.match(code)) and bas:
                 name = f.group(1)
-                return None if name.upper() in self.changed else name
+                return None if name.upper() in self.changed else (name, bas)
             else:
                 return None
         return None

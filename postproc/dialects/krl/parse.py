@@ -823,16 +823,19 @@ class KrlParser:
             self.builder.notes.append(f"{src.doc.path}: inline forms after a jump or a call are not read where they stand: {window.why_not}")
             return frame, tool
         code_lines = [code_of(x) for x in src.text.split("\n")]
-        frame, tool = frame.copy(), tool.copy()
+        frame, tool, read_here = frame.copy(), tool.copy(), set()
         lines = src.lines.line(offsets)
         for row in np.nonzero(unknown)[0].tolist():
             line = int(lines[row])
-            found = self._window_frames(window, window.fdat_of(code_lines, line))
+            fold = window.fdat_of(code_lines, line)
+            found = self._window_frames(window, fold[0] if fold else None)
             if found is None:
                 continue
+            read_here.add(f"{src.doc.path}:{fold[1]}: BAS sets")
             (tool_name, tool_t), (base_name_, base_t) = found
             tool[row] = self._register_exact(b.tool_index, b.tool_names, b.tools, b.tool_known, tool_name, tool_t, line)
             frame[row] = self._register_exact(b.frame_index, b.frame_names, b.frames, b.frame_known, base_name_, base_t, line)
+        b.notes[:] = [n for n in b.notes if not n.startswith(tuple(read_here))]  # that BAS is read where it stands
         return frame, tool
 
     def _window_frames(self, window: Window, fdat_text: str | None):
