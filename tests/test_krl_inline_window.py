@@ -109,6 +109,8 @@ def test_a_fold_after_a_call_of_another_modules_routine_is_placed(tmp_path):
      "a called routine switches a correction on"),
     ("MOVESETTINGS(0, 1)\n" + SWITCH_TABLE, MOVESETTINGS.replace("BAS(#FRAMES)", "TOOL_DATA[1].Z = n"), CONFIG, MACHINE,
      "a called routine changes TOOL_DATA"),
+    ("SETT(TOOL_DATA[1])\n" + SWITCH_TABLE, "GLOBAL DEF SETT(t :OUT)\nDECL FRAME t\nt.Z = 5\nEND\n", CONFIG, MACHINE,
+     "TOOL_DATA passed to a routine's :OUT parameter"),
     (SWITCH_TABLE, None, CONFIG.replace("BASE_CORR_ON=FALSE", "BASE_CORR_ON=TRUE"), MACHINE, "a correction is on in $config.dat"),
     (SWITCH_TABLE, None, CONFIG.replace("BOOL M_BAS_COR_ON=FALSE\n", ""), MACHINE, "a switch not declared"),
     ("SWITCH n\nCASE 1\n" + fold("XP1", "FP1").replace("BAS(", "LAB1:\nBAS(") + "ENDSWITCH\n", None, CONFIG, MACHINE, "a label inside the fold"),

@@ -18,7 +18,12 @@ statements of a routine run one after the other; only a label can be reached fro
   may set them: then nothing is claimed;
 - no INTERRUPT/TRIGGER routine the program names may change the frames, FDAT_ACT or the
   data they come from (its body is read: no such assignment, no call);
-- the FDAT, TOOL_DATA, BASE_DATA and $ROBROOT are changed by no code that may run.
+- the FDAT, TOOL_DATA, BASE_DATA and $ROBROOT are changed by no code that may run (assigned,
+  or passed to a routine: an :OUT parameter is the caller's variable).
+
+Data lists are read as the program starts with them (as everywhere postproc reads KRL): what
+other programs ran before it, or the submit interpreter (SPS.SUB, not read here), may have
+written into them is not known here; what the program itself may run is checked.
 
 ``BASE_NO 0`` is ``$BASE = $WORLD``: the robot base frame when ``$ROBROOT`` (KRC/R1/Mada/
 $machine.dat, "robot in world coordinates") is given and is the null frame; otherwise unknown.
@@ -82,7 +87,16 @@ def _calls(code: list[str]) -> set[str]:
 
 
 def _assigned(code: list[str]) -> set[str]:
-    return {m.group(1).upper() for m in map(_ASSIGNED.match, code) if m}
+    """Names a routine's lines may change: assigned, or passed to a routine (an :OUT parameter
+    is the caller's variable itself, KSS 8 "Parameter transfer")."""
+    names = {m.group(1).upper() for m in map(_ASSIGNED.match, code) if m}
+    for line in code:
+        if _DEF.match(line):
+            continue
+        for m in _CALLED.finditer(line):
+            if m.group(1).upper() not in _KEYWORDS | SYSTEM_FUNCTIONS | {"BAS"}:
+                names |= {n.upper() for n in re.findall(_NAME, line[m.end():])}
+    return names
 
 
 def reached(program_code: list[str], routines: Routines) -> tuple[set[str], str | None]:
