@@ -463,10 +463,10 @@ class KrlParser:
         """The lines the first DEF's GOTOs may skip (jumps.forward_ranges); None where they are
         not all forward to top-level labels (then no change of that DEF is straight-line)."""
         text = src.text
-        m = re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF[ \t]", text, re.IGNORECASE | re.MULTILINE)
+        m = re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]", text, re.IGNORECASE | re.MULTILINE)  # as _routine_opens
         if m is None or "GOTO" not in text.upper():
             return None
-        end = re.search(r"^[ \t]*END\b", text[m.end():], re.IGNORECASE | re.MULTILINE)
+        end = re.search(r"^[ \t]*END(?:FCT)?\b", text[m.end():], re.IGNORECASE | re.MULTILINE)
         first = text.count("\n", 0, m.start()) + 1
         last = text.count("\n", 0, m.end() + end.start()) + 1 if end else text.count("\n") + 1
         code_lines = [_split_comment(line)[0] for line in text.split("\n")]
