@@ -135,3 +135,9 @@ def test_base_zero_is_the_robot_base_only_with_a_null_robroot(tmp_path, machine)
     # given twice), where the world is in the robot base frame is not claimed.
     tp = cell(tmp_path, SWITCH_TABLE, machine=machine)
     assert tp.placed().tolist() == [True, True, False]
+
+
+def test_a_fold_of_a_routine_no_call_reaches_is_not_placed(tmp_path):
+    # SUB is run by no call of p (another module may call it, after code not read here).
+    tp = cell(tmp_path, SWITCH_TABLE, tail="GLOBAL DEF SUB( )\n" + fold("XP2", "FP2") + "END\n")
+    assert tp.placed().tolist() == [True, True, True, False]

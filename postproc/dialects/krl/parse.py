@@ -791,7 +791,7 @@ class KrlParser:
         tp, offsets, approx, virtual, envs = self._executed(tp, offsets, approx)
         tp = self._changed_points(tp, virtual)
         frame, tool, speed, cdis = self._program_state(offsets, virtual)
-        frame, tool = self._inline_windows(offsets, frame, tool)
+        frame, tool = self._inline_windows(offsets, virtual, frame, tool)
         tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
         tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
@@ -810,11 +810,12 @@ class KrlParser:
             resolved=declared,
         )
 
-    def _inline_windows(self, offsets: np.ndarray, frame: np.ndarray, tool: np.ndarray):
+    def _inline_windows(self, offsets: np.ndarray, virtual: np.ndarray, frame: np.ndarray, tool: np.ndarray):
         """Rows whose frame or tool is unknown but whose own inline form sets both from an FDAT
-        the given files prove (inline_window.py) take those frames."""
+        the given files prove (inline_window.py) take those frames; not a routine no call from
+        the first DEF reaches (virtual offset -1: run from elsewhere, after code not read here)."""
         b, src = self.builder, self.docs[0]
-        unknown = ~(np.array(b.frame_known, bool)[frame] & np.array(b.tool_known, bool)[tool])
+        unknown = ~(np.array(b.frame_known, bool)[frame] & np.array(b.tool_known, bool)[tool]) & (virtual >= 0)
         if not unknown.any() or "fdat_act" not in src.text.lower():
             return frame, tool
         config = next((d.text for d in self.docs if d.doc.role == "config"), None)
