@@ -105,6 +105,8 @@ def test_a_fold_after_a_call_of_another_modules_routine_is_placed(tmp_path):
     (JUMP_TABLE, SAVELAST.replace("LASTK = k", "$BASE = BASE_DATA[1]"), CONFIG, MACHINE, "the TRIGGER routine changes $BASE"),
     (JUMP_TABLE, SAVELAST.replace("LASTK = k", "OTHER()"), CONFIG, MACHINE, "the TRIGGER routine calls a routine"),
     ("OTHER()\n" + SWITCH_TABLE, None, CONFIG, MACHINE, "a routine not in the given files may switch a correction on"),
+    ("ARM()\n" + SWITCH_TABLE, "GLOBAL DEF ARM( )\nINTERRUPT DECL 5 WHEN $IN[5] DO IR5( )\nINTERRUPT ON 5\nEND\n"
+     "GLOBAL DEF IR5( )\n$TOOL = $NULLFRAME\nEND\n", CONFIG, MACHINE, "an interrupt a called routine declares changes $TOOL"),
     ("MOVESETTINGS(0, 1)\n" + SWITCH_TABLE, MOVESETTINGS.replace("BAS(#FRAMES)", "BASE_CORR_ON = TRUE"), CONFIG, MACHINE,
      "a called routine switches a correction on"),
     ("MOVESETTINGS(0, 1)\n" + SWITCH_TABLE, MOVESETTINGS.replace("BAS(#FRAMES)", "TOOL_DATA[1].Z = n"), CONFIG, MACHINE,

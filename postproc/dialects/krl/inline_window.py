@@ -135,7 +135,8 @@ class Window:
         if why is None:
             why = _corrections_why(config_text, changed)
         if why is None:
-            why = _handlers_why("\n".join(program_code), routines)
+            code = program_code + [line for name in names for line in routines.bodies[name]]  # handlers a called routine declares too
+            why = _handlers_why("\n".join(code), routines)
         return cls(why, changed, world)
 
     def fdat_of(self, code_lines: list[str], motion_line: int) -> tuple[str, int] | None:
