@@ -224,16 +224,45 @@ END
 def test_a_jump_that_may_change_what_is_in_force_is_not_straight_line(tmp_path):
     # Skips $BASE = BASE_DATA[2]: at LIN XP1 $BASE is BASE_DATA[1] or [2] by $IN[1].
     skip_frame = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\n$BASE = BASE_DATA[2]\nSKIP:\nLIN XP1\nEND\n"
-    # Skips a motion: the motion may not run (conservative: the skipped part must not move).
-    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
     # Inside a loop (even to a label in the same pass): left to run time, conservatively.
     in_loop = "DEF p( )\n$BASE = BASE_DATA[1]\nFOR I = 1 TO 2\nIF $IN[1] THEN\nGOTO NEXT\nENDIF\nNEXT:\nLIN XP1\nENDFOR\nEND\n"
     # Backwards: the lines after the label run again after later changes.
     back = "DEF p( )\n$BASE = BASE_DATA[1]\nTOP:\nLIN XP1\n$BASE = BASE_DATA[2]\nGOTO TOP\nEND\n"
-    for text, line in ((skip_frame, 4), (skip_motion, 4), (in_loop, 5), (back, 6)):
+    for text, line in ((skip_frame, 4), (in_loop, 5), (back, 6)):
         tp = program(tmp_path, text)
         assert not tp.placed().any(), text
         assert any(f"p.src:{line}: GOTO" in n for n in tp.notes), tp.notes
+
+
+def test_a_motion_a_forward_jump_may_skip_is_placed_like_one_in_an_if(tmp_path):
+    # The skipped LIN runs or not (as a motion inside IF $IN[1]); where it runs, $BASE is
+    # BASE_DATA[1] ({X 1000}), set before the jump: both placed at (1100, 0, 500).
+    skip_motion = "DEF p( )\n$BASE = BASE_DATA[1]\nIF $IN[1] THEN\nGOTO SKIP\nENDIF\nLIN XP1\nSKIP:\nLIN XP1\nEND\n"
+    np.testing.assert_allclose(placed_positions(program(tmp_path, skip_motion)), [[1100, 0, 500]] * 2, atol=1e-9)
+
+
+JUMP_TABLE = "DEF p(n :IN)\nINT n\n{before}SWITCH n\nCASE 1\nGOTO A\nCASE 2\nGOTO B\nENDSWITCH\nA:\n{in_a}B:\n{after}LIN XP1\nEND\n"
+
+
+@pytest.mark.parametrize("before, in_a, after, expected", [
+    # Set before the jump table: runs once on every way to LIN (nothing the jumps skip changes it).
+    ("$BASE = BASE_DATA[1]\nXP1.X = 70\n", "WAIT SEC 0\n", "", [1070, 0, 500]),
+    # Set after the last label: runs on every way, last.
+    ("$BASE = BASE_DATA[1]\n", "$BASE = BASE_DATA[1]\n", "$BASE = BASE_DATA[2]\n", [100, 2000, 500]),
+    # Set between A: and B: (GOTO B skips it): BASE_DATA[1] or [2] at LIN: not placed.
+    ("$BASE = BASE_DATA[1]\n", "$BASE = BASE_DATA[2]\n", "", None),
+    # The point changed where GOTO B skips it: XP1.X 100 or 70: not resolved.
+    ("$BASE = BASE_DATA[1]\n", "XP1.X = 70\n", "", None),
+])
+def test_a_forward_jump_table_skips_only_the_lines_between_its_gotos_and_labels(tmp_path, before, in_a, after, expected):
+    # KSS 8 SI "SWITCH": one CASE runs; "GOTO": the program continues at the label (forward,
+    # outside any block): a line between a GOTO and its label may or may not have run, every
+    # other line of the routine runs once, in order, whichever CASE the selector n picks.
+    tp = program(tmp_path, JUMP_TABLE.format(before=before, in_a=in_a, after=after))
+    if expected is None:
+        assert not tp.placed().any()
+    else:
+        np.testing.assert_allclose(placed_positions(tp), [expected], atol=1e-9)
 
 
 def test_a_jump_in_a_subprogram_makes_its_frame_changes_unknown(tmp_path):

@@ -60,3 +60,57 @@ def why_not_straight(goto: Goto, labels: dict[tuple[int | None, str], list[int]]
     if depth > 0:
         return "it jumps into a block"
     return None
+
+
+_LABEL = re.compile(r"^[ \t]*([A-Za-z_]\w*)[ \t]*:(?![ \t]*=)[ \t]*$")
+_GOTO = re.compile(r"\bGOTO[ \t]+([A-Za-z_]\w*)[ \t]*$", re.IGNORECASE)
+_BLOCK_OPEN = re.compile(r"^[ \t]*(?:IF\b[^\n]*\bTHEN|SWITCH\b|FOR\b|WHILE\b|LOOP\b|REPEAT\b)", re.IGNORECASE)
+_BLOCK_CLOSE = re.compile(r"^[ \t]*(?:ENDIF|ENDSWITCH|ENDFOR|ENDWHILE|ENDLOOP|UNTIL)\b", re.IGNORECASE)
+_CONDITION = re.compile(r"^[ \t]*(?:IF|SWITCH|WHILE|UNTIL|CASE|ELSE)\b", re.IGNORECASE)
+_CALL_IN_CONDITION = re.compile(r"([A-Za-z_$][\w$]*)[ \t]*\(")
+_LOOP = re.compile(r"^[ \t]*(?:FOR|WHILE|LOOP|REPEAT|ENDFOR|ENDWHILE|ENDLOOP|UNTIL)\b", re.IGNORECASE)
+
+
+def forward_ranges(code_lines: list[str], first: int, last: int) -> tuple[list[tuple[int, int]] | None, str]:
+    """The lines the GOTOs of one routine (lines ``first``..``last``, 1-based, comments cut)
+    may skip, as (GOTO line, label line) pairs, when every jump is forward to a label at the
+    routine's top level and no loop lies between the first GOTO and the last label; else
+    (None, why).
+
+    Then (KSS 8 "GOTO": the program continues at the label, jumps into a block are not
+    allowed) a statement strictly between a GOTO and its label may or may not have run when
+    the program is past the label, and every other top-level statement runs exactly once, in
+    text order, on every way through the routine: its changes are straight-line code."""
+    labels: dict[str, list[tuple[int, int]]] = {}
+    gotos: list[tuple[int, str]] = []
+    depth = 0
+    for number in range(first, last + 1):
+        code = code_lines[number - 1]
+        if (m := _LABEL.match(code)) is not None:
+            labels.setdefault(m.group(1).upper(), []).append((number, depth))
+        if (m := _GOTO.search(code)) is not None:
+            gotos.append((number, m.group(1).upper()))
+        depth += bool(_BLOCK_OPEN.match(code)) - bool(_BLOCK_CLOSE.match(code))
+    ranges = []
+    for line, name in gotos:
+        found = labels.get(name, [])
+        if len(found) != 1:
+            return None, f"label {name} is not found once in its routine"
+        label, label_depth = found[0]
+        if label < line:
+            return None, f"GOTO {name} on line {line} jumps back"
+        if label_depth:
+            return None, f"label {name} is inside a block"
+        ranges.append((line, label))
+    if ranges and any(_LOOP.match(code_lines[n - 1]) for n in range(min(g for g, _ in ranges), max(l for _, l in ranges))):
+        return None, "a loop lies between its jumps and their labels"
+    for number in (n for n in range(first, last + 1) if skipped(ranges, n)):
+        calls = {c.upper() for c in _CALL_IN_CONDITION.findall(code_lines[number - 1])} if _CONDITION.match(code_lines[number - 1]) else set()
+        if calls - {"VARSTATE"}:  # a function run or not by the jump may change anything
+            return None, f"line {number}, which a jump may skip, calls a function in a condition"
+    return ranges, ""
+
+
+def skipped(ranges: list[tuple[int, int]], line: int) -> bool:
+    """True where a jump may skip ``line``."""
+    return any(g < line < l for g, l in ranges)

@@ -25,11 +25,12 @@ from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statemen
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from ...parse.name_table import NameTable
+from .inline_window import Window, code_of
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from . import calls as call_walk
 from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
-from .jumps import Goto, why_not_straight
+from .jumps import Goto, forward_ranges, skipped, why_not_straight
 from .executed import anchor_offsets, per_call
 from .functions import Caller
 from .passes import Passes, followable
@@ -215,6 +216,8 @@ class KrlParser:
         self.events: list[tuple[int, str, object]] = []  # (offset in src, key, value): speed and approximation
         self.changes: list[Event] = []  # points and frames the program changes (see state.py)
         self.timeline = Timeline()
+        self._jump_ranges: list[tuple[int, int]] | None = None  # lines of the first DEF a forward GOTO may skip (jumps.py)
+        self._jump_why = ""
         self._has_goto = False  # a GOTO of the first DEF that may change what is in force at a target (jumps.py)
         self._gotos: list[Goto] = []
         self._labels: dict[tuple[int | None, str], list[int]] = {}
@@ -294,6 +297,7 @@ class KrlParser:
         named = moves.subset(~moves.present("agg"))
         skip = src_decl.copy()
         skip[moves.line] = True
+        self._jump_ranges = self._first_def_jumps(src)
         self._slow_lines(src, skip=skip, is_program=True)
         self._judge_jumps(src)
         self._plan_counter_loops(src)
@@ -321,6 +325,8 @@ class KrlParser:
             if not tree.children:
                 continue
             self._where = self._context(stack, start)
+            if is_program and self._jump_ranges and skipped(self._jump_ranges, int(d.lines.line(start))):
+                self._where = (self._where[0], False, self._where[2])  # a GOTO may skip it (jumps.forward_ranges)
             self._depth = sum(want not in ("END", "ENDFCT", "ENDDAT", "ENDFOLD") for want, _ in stack)
             self._statement(d, tree.children[0], start, stack, is_program)
         if stack:
@@ -453,6 +459,21 @@ class KrlParser:
             self.builder.notes.append(f"{src.doc.path}:{loop.first_line}: the number of passes of this {loop.kind} is not known at post time "
                                       f"({why}): the motions in its body are listed once")
 
+    def _first_def_jumps(self, src: _Doc) -> list[tuple[int, int]] | None:
+        """The lines the first DEF's GOTOs may skip (jumps.forward_ranges); None where they are
+        not all forward to top-level labels (then no change of that DEF is straight-line)."""
+        text = src.text
+        m = re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF(?:FCT[ \t]+\w+)?[ \t]", text, re.IGNORECASE | re.MULTILINE)  # as _routine_opens
+        if m is None or "GOTO" not in text.upper():
+            return None
+        end = re.search(r"^[ \t]*END(?:FCT)?\b", text[m.end():], re.IGNORECASE | re.MULTILINE)
+        first = text.count("\n", 0, m.start()) + 1
+        last = text.count("\n", 0, m.end() + end.start()) + 1 if end else text.count("\n") + 1
+        code_lines = [_split_comment(line)[0] for line in text.split("\n")]
+        ranges, why = forward_ranges(code_lines, first, last)
+        self._jump_why = why
+        return ranges
+
     def _judge_jumps(self, src: _Doc) -> None:
         """A GOTO that may change what is in force at a target (jumps.py): in the first DEF no
         change is straight-line code; in a subprogram, none of that routine's."""
@@ -460,6 +481,10 @@ class KrlParser:
         for goto in self._gotos:
             why = why_not_straight(goto, self._labels, code_lines)
             if why is None:
+                continue
+            if goto.routine in (None, 0) and self._jump_ranges:
+                self.builder.notes.append(f"{src.doc.path}:{goto.line}: GOTO {goto.label}: {why}: the lines it skips are taken as maybe run "
+                                          "(every jump of the first DEF is forward to a label outside any block)")
                 continue
             if goto.routine in (None, 0):
                 self._has_goto = True
@@ -766,6 +791,7 @@ class KrlParser:
         tp, offsets, approx, virtual, envs = self._executed(tp, offsets, approx)
         tp = self._changed_points(tp, virtual)
         frame, tool, speed, cdis = self._program_state(offsets, virtual)
+        frame, tool = self._inline_windows(offsets, virtual, frame, tool)
         tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
         tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
         pose, values = _absolute_poses(tp.values, tp.relative)
@@ -783,6 +809,64 @@ class KrlParser:
             orientation=orientation,
             resolved=declared,
         )
+
+    def _inline_windows(self, offsets: np.ndarray, virtual: np.ndarray, frame: np.ndarray, tool: np.ndarray):
+        """Rows whose frame or tool is unknown but whose own inline form sets both from an FDAT
+        the given files prove (inline_window.py) take those frames; not a routine no call from
+        the first DEF reaches (virtual offset -1: run from elsewhere, after code not read here)."""
+        b, src = self.builder, self.docs[0]
+        unknown = ~(np.array(b.frame_known, bool)[frame] & np.array(b.tool_known, bool)[tool]) & (virtual >= 0)
+        if not unknown.any() or "fdat_act" not in src.text.lower():
+            return frame, tool
+        config = next((d.text for d in self.docs if d.doc.role == "config"), None)
+        window = Window.read(src.text, config, [d.text for d in self.docs[1:] if d.doc.role.startswith("module")])
+        if window.why_not is not None:
+            self.builder.notes.append(f"{src.doc.path}: inline forms after a jump or a call are not read where they stand: {window.why_not}")
+            return frame, tool
+        code_lines = [code_of(x) for x in src.text.split("\n")]
+        frame, tool, read_here = frame.copy(), tool.copy(), set()
+        lines = src.lines.line(offsets)
+        for row in np.nonzero(unknown)[0].tolist():
+            line = int(lines[row])
+            fold = window.fdat_of(code_lines, line)
+            found = self._window_frames(window, fold[0] if fold else None)
+            if found is None:
+                continue
+            read_here.add(f"{src.doc.path}:{fold[1]}: BAS sets")
+            (tool_name, tool_t), (base_name_, base_t) = found
+            tool[row] = self._register_exact(b.tool_index, b.tool_names, b.tools, b.tool_known, tool_name, tool_t, line)
+            frame[row] = self._register_exact(b.frame_index, b.frame_names, b.frames, b.frame_known, base_name_, base_t, line)
+        b.notes[:] = [n for n in b.notes if not n.startswith(tuple(read_here))]  # that BAS is read where it stands
+        return frame, tool
+
+    def _window_frames(self, window: Window, fdat_text: str | None):
+        """((tool name, flange_T_tcp), (base name, base_T_frame)) FRAMES() sets from that FDAT; None if not exact."""
+        if fdat_text is None:
+            return None
+        fdat = parse_fdat(fdat_text) if fdat_text.startswith("{") else self._inline.fdats.get(fdat_text.upper())
+        tool, base, _ = frames_from_fdat(fdat, self._inline.machines, True)
+        out = []
+        for rhs in (tool, base):
+            if rhs is None or rhs.split("[")[0] in window.changed:
+                return None
+            if rhs in ("$NULLFRAME", "$WORLD"):
+                if rhs == "$WORLD" and not window.world:
+                    return None
+                out.append((rhs, np.eye(4)))
+                continue
+            point = self._declared(rhs)
+            if point is None or not point.known or np.isnan(point.values[:6]).any():
+                return None
+            out.append((rhs, _frame_of(point.values)))
+        return out
+
+    @staticmethod
+    def _register_exact(register, names, values, known, name: str, transform: np.ndarray, line: int) -> int:
+        """The index of a known frame; a name already held with another value (or unknown) gets the line."""
+        i = names.index(name) if name in names else None
+        if i is not None and not (known[i] and np.allclose(values[i], transform, rtol=0, atol=0)):
+            name = f"{name} (inline form on line {line})"
+        return register(name, transform, True)
 
     def _tables(self) -> dict:
         """The builder's frame and tool tables and notes as they are now (registered after build)."""
