@@ -202,8 +202,11 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray,
     set the posture, every other target carries it. Also returns, per Cartesian target, why
     the controller could not take that posture (POSTURE_* codes, 0 where it can)."""
     n = len(tp)
-    sols = np.full((n, 8, 6), np.nan)
-    sols[rows] = kin.ik(robot, flange)
+    if len(rows) == n:  # no joint targets: the IK's own array (a NaN-filled copy costs ~0.3 us a point)
+        sols = kin.ik(robot, flange)
+    else:
+        sols = np.full((n, 8, 6), np.nan)
+        sols[rows] = kin.ik(robot, flange)
     dialect = dialects.of(tp)
     cartesian = np.zeros(n, dtype=bool)
     cartesian[rows] = True

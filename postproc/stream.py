@@ -640,6 +640,9 @@ def _worker_start(baton: _Baton) -> None:
     _keep_freed_memory()
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(1, user_api="blas")  # for this worker's life: a second BLAS thread only spins on the thin products here
 
 
 @contextmanager
