@@ -202,18 +202,14 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray,
     set the posture, every other target carries it. Also returns, per Cartesian target, why
     the controller could not take that posture (POSTURE_* codes, 0 where it can)."""
     n = len(tp)
-    if len(rows) == n:  # no joint targets: the IK's own array (a NaN-filled copy costs ~0.3 us a point)
-        sols = kin.ik(robot, flange)
-    else:
-        sols = np.full((n, 8, 6), np.nan)
-        sols[rows] = kin.ik(robot, flange)
+    sols = posture.Solutions(robot, flange, rows, n)  # IK as far as the rules read it: one branch of most targets
     dialect = dialects.of(tp)
     cartesian = np.zeros(n, dtype=bool)
     cartesian[rows] = True
     by_conf = dialect.conf_applies(tp) & cartesian
     anchor_q = np.full((n, 6), np.nan)
     if by_conf.any():
-        anchor_q[by_conf] = dialect.branch_from_conf(robot, sols[by_conf], tp.conf[by_conf])[0]
+        anchor_q[by_conf] = dialect.branch_from_conf(robot, sols.all(np.nonzero(by_conf)[0]), tp.conf[by_conf])[0]
     joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
     anchor_q[joint_targets] = tp.joints[joint_targets]
     carried = posture.carry(robot, sols, by_conf | joint_targets, anchor_q, start_q, lines=tp.line)
@@ -302,6 +298,7 @@ class Reference:
     branch: np.ndarray
     posture_problem: np.ndarray
     notes: list
+    target: np.ndarray | None = None  # (Cartesian targets, 4, 4) their poses in the base frame, as compensate needs them
 
     @property
     def end_joints(self) -> np.ndarray | None:
@@ -319,8 +316,14 @@ def reference_postures(tp: Toolpath, model: ErrorModel, *, frames: dict | None =
         tp = tp.with_frames(frames, tools)
     _refuse_unplaced(tp)  # as compensate: an InputError, not a posture of NaN
     rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
-    flange = tp.base_poses()[rows] @ np.linalg.inv(tp.tools)[tp.tool[rows]]  # as _Problem.of and _Plant
-    return Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints))
+    target = _rows_of(tp.base_poses(), rows)
+    flange = target @ np.linalg.inv(tp.tools)[tp.tool[rows]]  # as _Problem.of and _Plant
+    return Reference(*_reference_joints(tp, model.robot, flange, rows, start_joints), target=target)
+
+
+def _rows_of(per_target: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """per_target[rows], without a copy where rows are all of them (a long program without joint targets)."""
+    return per_target if len(rows) == len(per_target) else per_target[rows]
 
 def _require_usable_model(model: ErrorModel) -> None:
     """Compensation solves the nominal IK and needs the model in the robot's base frame."""
@@ -375,7 +378,7 @@ class _Problem:
     def of(cls, tp: Toolpath, model: ErrorModel, temp_c, force_n, start_joints=None, force_per_target=None,
            reference: Reference | None = None) -> "_Problem":
         rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
-        target = tp.base_poses()[rows]
+        target = reference.target if reference is not None and reference.target is not None else _rows_of(tp.base_poses(), rows)
         force_rows = _force_rows(len(tp), rows, target, force_n) if force_per_target is None else np.asarray(force_per_target, dtype=float)
         plant = _Plant(model, tp.tools, tp.tool, temp_c, force_rows)
         if reference is None:

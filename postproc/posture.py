@@ -51,15 +51,66 @@ def branch_of(robot, q_deg: np.ndarray) -> np.ndarray:
     return idx
 
 
-def carry(robot, solutions: np.ndarray, anchor: np.ndarray, anchor_q: np.ndarray, start_q=None, lines=None) -> Postures:
+class Solutions:
+    """The IK of N flange poses, computed only as far as the posture rules read it: all eight
+    branches of the few targets that need them (configuration data, the start posture), one
+    branch of every other (``kin.ik_branch``, bit for bit the same numbers at an eighth of the
+    work: a long program's targets all carry a branch). ``rows``: the targets that have a
+    pose (Cartesian ones, in program order among N); the others have no solution (NaN)."""
+
+    def __init__(self, robot, flange: np.ndarray, rows: np.ndarray, n: int):
+        self.robot, self.flange, self.n = robot, flange, n
+        self._at = np.full(n, -1)
+        self._at[rows] = np.arange(len(rows))
+
+    def __len__(self) -> int:
+        return self.n
+
+    def all(self, idx: np.ndarray) -> np.ndarray:
+        """(len(idx), 8, 6) every branch of the targets idx."""
+        out = np.full((len(idx), 8, 6), np.nan)
+        at = self._at[idx]
+        has = at >= 0
+        if has.any():
+            out[has] = kin.ik(self.robot, self.flange[at[has]])
+        return out
+
+    def on(self, idx: np.ndarray, branch: np.ndarray) -> np.ndarray:
+        """(len(idx), 6) the solution of target idx[k] on branch[k]."""
+        out = np.full((len(idx), 6), np.nan)
+        at = self._at[idx]
+        has = at >= 0
+        if has.any():
+            out[has] = kin.ik_branch(self.robot, self.flange[at[has]], branch[has])
+        return out
+
+
+class _Computed:
+    """``Solutions`` of an IK already computed (N, 8, 6)."""
+
+    def __init__(self, solutions: np.ndarray):
+        self.sols = np.asarray(solutions, dtype=float)
+
+    def __len__(self) -> int:
+        return self.sols.shape[0]
+
+    def all(self, idx: np.ndarray) -> np.ndarray:
+        return self.sols[idx]
+
+    def on(self, idx: np.ndarray, branch: np.ndarray) -> np.ndarray:
+        return self.sols[idx, branch]
+
+
+def carry(robot, solutions, anchor: np.ndarray, anchor_q: np.ndarray, start_q=None, lines=None) -> Postures:
     """Postures along a path of N targets (program order).
 
-    solutions (N, 8, 6): IK of every target's flange pose (NaN rows for joint targets are fine);
-    anchor (N,) bool: the target sets the posture (a joint target, or configuration data that
-    apply); anchor_q (N, 6): its joints where anchor is True (NaN: the data match no solution).
+    solutions: ``Solutions``, or the IK (N, 8, 6) of every target's flange pose (NaN rows for
+    joint targets are fine); anchor (N,) bool: the target sets the posture (a joint target,
+    or configuration data that apply); anchor_q (N, 6): its joints where anchor is True
+    (NaN: the data match no solution).
     """
-    sols = np.asarray(solutions, dtype=float)
-    n = sols.shape[0]
+    sols = solutions if hasattr(solutions, "on") else _Computed(solutions)
+    n = len(sols)
     valid_anchor = anchor & ~np.isnan(anchor_q).any(axis=1)
     start, notes = _start_posture(robot, sols, valid_anchor, start_q, lines)
     # Row 0 is the robot's start posture, an anchor like any other; rows 1..N the targets.
@@ -72,8 +123,8 @@ def carry(robot, solutions: np.ndarray, anchor: np.ndarray, anchor_q: np.ndarray
         anchor_branch[finite_anchor] = branch_of(robot, anchor_rows[finite_anchor])
     carried = anchor_branch[last][1:]
     raw = np.full((n, 6), np.nan)
-    has = carried >= 0
-    raw[has] = sols[np.nonzero(has)[0], carried[has]]
+    has = (carried >= 0) & ~valid_anchor
+    raw[has] = sols.on(np.nonzero(has)[0], carried[has])
     raw[valid_anchor] = anchor_q[valid_anchor]
     q, jump = _unwrap_from_anchors(np.vstack([start[None], raw]), is_anchor, last)
     q, jump = q[1:], jump[1:]
@@ -92,8 +143,8 @@ def _start_posture(robot, sols, valid_anchor, start_q, lines):
     unset = ~np.maximum.accumulate(valid_anchor)
     if not unset.any():
         return np.full(6, np.nan), []
-    first = int(np.argmax(unset & ~np.isnan(sols).all(axis=(1, 2)))) if (unset & ~np.isnan(sols).all(axis=(1, 2))).any() else 0
-    q0, idx = kin.select_nearest(robot, sols[first : first + 1], np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg))
+    first, first_sols = _first_solved(sols, np.nonzero(unset)[0])
+    q0, idx = kin.select_nearest(robot, first_sols, np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg))
     where = ""
     if lines is not None:
         sel = np.asarray(lines)[unset]
@@ -101,6 +152,17 @@ def _start_posture(robot, sols, valid_anchor, start_q, lines):
     note = (f"the program sets no posture before its first joint target or configuration data{where}: the posture nearest to "
             "all-zero joints is assumed there (give --start-joints to state the robot's real start posture)")
     return (q0[0] if idx[0] >= 0 else np.full(6, np.nan)), [note]
+
+
+def _first_solved(sols, candidates: np.ndarray, block: int = 64) -> tuple[int, np.ndarray]:
+    """The first of ``candidates`` with any IK solution (the first candidate if none has)
+    and its solutions (1, 8, 6); the IK is computed a block of targets at a time."""
+    for s in range(0, len(candidates), block):
+        some = sols.all(candidates[s : s + block])
+        solved = np.nonzero(~np.isnan(some).all(axis=(1, 2)))[0]
+        if len(solved):
+            return int(candidates[s + solved[0]]), some[solved[:1]]
+    return int(candidates[0]), sols.all(candidates[:1])
 
 
 def _unwrap_from_anchors(raw, anchors, last):

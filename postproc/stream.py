@@ -42,12 +42,14 @@ Both paths give byte-identical output on a program both can take
 
 from __future__ import annotations
 
+import mmap
 import multiprocessing
 import os
+import pickle
 from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field, fields, replace
 from itertools import chain
 from pathlib import Path
 
@@ -326,6 +328,7 @@ class _Task:
     header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
     tail: str
     packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+    texts: tuple = ()  # with ``packed``: the text of each of tp's sources, Latin-1 bytes (uint8)
     chunk: int = 0  # its place in the program (0: the first)
 
     def for_pipe(self) -> "_Task":
@@ -341,7 +344,13 @@ class _Task:
             bits = flat.view(f"u{a.dtype.itemsize}")  # bits, not values: NaN and -0.0 kept as they are
             varies = (bits != bits[0]).any(axis=0)
             packed[name] = (a.shape, a.dtype, flat[0].copy(), varies, flat[:, varies].copy())
-        return replace(self, tp=replace(self.tp, **{name: None for name in packed}), packed=packed)
+        # Whole arrays and the chunk's text as bytes: a shared slot (``_Slots``) takes them as they are.
+        contiguous = {f.name: np.ascontiguousarray(v) for f in fields(self.tp)
+                      if f.name not in packed and isinstance(v := getattr(self.tp, f.name), np.ndarray) and not v.flags.c_contiguous}
+        texts = tuple(np.frombuffer(doc.encode(), np.uint8) for doc in self.tp.sources)
+        sources = tuple(replace(doc, text="") for doc in self.tp.sources)
+        tp = replace(self.tp, **{name: None for name in packed}, **contiguous, sources=sources)
+        return replace(self, tp=tp, packed=packed, texts=texts)
 
     def toolpath(self) -> Toolpath:
         if not self.packed:
@@ -352,7 +361,8 @@ class _Task:
             flat[:] = first
             flat[:, varies] = columns
             arrays[name] = flat.reshape(shape)
-        return replace(self.tp, **arrays)
+        sources = tuple(replace(doc, text=text.tobytes().decode("latin-1")) for doc, text in zip(self.tp.sources, self.texts))
+        return replace(self.tp, **arrays, sources=sources)
 
 
 _WIDE = ("spans", "scale", "values", "joints", "ext", "conf", "orientation", "insert_at")
@@ -385,7 +395,7 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     if rep.failed.any():
-        return "", rep, new.notes, None
+        return b"", rep, new.notes, None
     texts = dialects.of(tp).emit_texts(tp, new)
     check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
     main = texts[0]
@@ -396,7 +406,17 @@ def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list
         if not main.endswith(task.tail):
             raise StreamFallback("the chunk's closing text changed")
         main = main[: len(main) - len(task.tail)]
-    return main, rep, new.notes, texts[1:]
+    return main.encode("latin-1"), rep, new.notes, texts[1:]
+
+
+def _finish_shared(model, options: dict, slot: int, head: bytes, layout: list) -> tuple:
+    """``_finish`` in a worker of a task put in shared slot ``slot`` (``_Slots``); its result
+    is put back there: ("slot", head, layout), or ("pipe", result) where it does not fit."""
+    slots = _WORKER_SLOTS
+    text, rep, notes, others = _finish(model, options, slots.take(slot, head, layout))
+    result = (np.frombuffer(text, np.uint8), rep, notes, others)
+    packed = slots.put(slot, result)
+    return ("pipe", result) if packed is None else ("slot", *packed)
 
 
 def _postures(model, options: dict, task: _Task, baton: "_Baton") -> tuple[Toolpath, Reference, np.ndarray | None]:
@@ -455,7 +475,9 @@ class _Baton:
             self._posted.notify_all()
 
 
-_WORKER_BATON: _Baton | None = None  # set in each worker process by ``_worker_start``, its only per-process state
+# Set in each worker process by ``_worker_start``, its only per-process state:
+_WORKER_BATON: _Baton | None = None
+_WORKER_SLOTS: "_Slots | None" = None
 
 
 class _Job:
@@ -517,7 +539,17 @@ class _Job:
             self.other_texts = others
         elif others != self.other_texts:
             raise StreamFallback("a later chunk changes the program's other files")
-        return text.encode("latin-1")
+        return text
+
+    def _submit(self, pool, slots, task: _Task, chunk: int):
+        """(slot or None, future): the task to a worker, through shared slot chunk % len(slots) where it fits."""
+        task = task.for_pipe()
+        if slots is not None:
+            slot = chunk % len(slots)
+            packed = slots.put(slot, task)
+            if packed is not None:
+                return slot, pool.submit(_finish_shared, self.model, self.options, slot, *packed)
+        return None, pool.submit(_finish, self.model, self.options, task)
 
     def _first(self, tp: Toolpath) -> None:
         """The first chunk: the header's target lines blanked for the later chunks."""
@@ -526,24 +558,78 @@ class _Job:
         for line in np.unique(in_header):
             self.blanked[int(line) - 1] = "\n"
 
-    def results(self, batches, first_own: str, pool, depth: int):
+    def results(self, batches, first_own: str, pool, depth: int, slots: "_Slots | None" = None):
         """The new text of every chunk in order; with a pool, up to ``depth`` chunks are
-        compensated in its worker processes while this one reads and parses the next."""
+        compensated in its worker processes while this one reads and parses the next.
+        ``slots``: shared memory for them (``_Slots``, more slots than ``depth``), else the pipe."""
+        if slots is not None and len(slots) <= depth:
+            raise ValueError(f"{len(slots)} shared slots for {depth + 1} chunks in flight")
         pending: deque = deque()
         carry, first_line = None, 1
         for chunk, (own, is_last) in enumerate(batches):
             own = first_own + own if carry is None else own
             task, meta, carry = self.prepare(own, is_last, first_line, carry, chunk, here=pool is None)
             first_line += own.count("\n")
-            pending.append((meta, pool.submit(_finish, self.model, self.options, task.for_pipe()) if pool else _finish(self.model, self.options, task)))
+            pending.append((meta, self._submit(pool, slots, task, chunk) if pool else _finish(self.model, self.options, task)))
             while len(pending) > depth:
                 meta, done = pending.popleft()
-                yield self.collect(meta, done.result() if pool else done)
+                yield self.collect(meta, _result(done, slots) if pool else done)
         while pending:
             meta, done = pending.popleft()
-            yield self.collect(meta, done.result() if pool else done)
+            yield self.collect(meta, _result(done, slots) if pool else done)
         if self.totals.failed:
             raise CompensationError(f"{self.totals.failed} target(s) cannot be compensated; nothing was written", None)
+
+
+def _result(submitted, slots: "_Slots | None") -> tuple:
+    """A worker's result (``_finish``), taken out of its shared slot where it came back there."""
+    slot, future = submitted
+    out = future.result()
+    if slot is None:
+        return out
+    kind, *rest = out
+    text, rep, notes, others = slots.take(slot, *rest) if kind == "slot" else rest[0]
+    return text.tobytes(), rep, notes, others
+
+
+class _Slots:
+    """Shared memory for the chunks in flight, one slot each (chunk % count: a slot is used
+    again only after its chunk's result was taken, so count must exceed the chunks in
+    flight). A task's arrays and text go to the worker, and its result comes back, copied
+    once each way, where the pool's pipe would pickle, write, read and unpickle them (~1 CPU s
+    per 10^6 points in the processes together). Anonymous shared mappings: forked workers
+    inherit them; pages are only touched as used. What does not fit a slot takes the pipe."""
+
+    CAPACITY = 64 * 2**20  # a chunk of 10^5 lines takes ~25 MB
+
+    def __init__(self, count: int, capacity: int | None = None):
+        self._maps = [mmap.mmap(-1, capacity or self.CAPACITY) for _ in range(count)]
+
+    def __len__(self) -> int:
+        return len(self._maps)
+
+    def put(self, slot: int, obj) -> tuple[bytes, list] | None:
+        """Put ``obj`` in ``slot``: (its pickle without its arrays' data, where that data lies),
+        or None where it does not fit (nothing usable is left in the slot)."""
+        buffers: list[pickle.PickleBuffer] = []
+        head = pickle.dumps(obj, protocol=5, buffer_callback=buffers.append)
+        layout, at = [], 0
+        with memoryview(self._maps[slot]) as view:
+            for buffer in buffers:
+                with buffer.raw() as raw:
+                    if at + raw.nbytes > len(view):
+                        return None
+                    view[at : at + raw.nbytes] = raw
+                    layout.append((at, raw.nbytes))
+                    at += -(-raw.nbytes // 64) * 64  # each array 64-byte aligned
+        return head, layout
+
+    def take(self, slot: int, head: bytes, layout: list):
+        """The object put in ``slot``, its arrays in memory of this process (one copy): the slot is free again."""
+        end = max((at + size for at, size in layout), default=0)
+        with memoryview(self._maps[slot]) as view:
+            private = memoryview(bytearray(view[:end]))
+        return pickle.loads(head, buffers=[private[at : at + size] for at, size in layout])
 
 
 @dataclass
@@ -574,10 +660,10 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     workers = default_workers() if workers is None else workers
-    with fh, _pool(workers) as pool:
+    with fh, _pool(workers) as (pool, slots):
         program, first = _open(path, lang, rules, fh)
         job = _Job(program, model, options, progress)
-        results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers)
+        results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers, slots)
         try:
             text = next(results)
         except CompensationError as exc:
@@ -628,15 +714,15 @@ def default_workers() -> int:
     return min(WORKERS_MAX, cores) if cores > 1 else 0
 
 
-def _worker_start(baton: _Baton) -> None:
-    """Worker start: the job's baton (``_postures``); one torch thread (a forked child whose
+def _worker_start(baton: _Baton, slots: "_Slots | None") -> None:
+    """Worker start: the job's baton (``_postures``) and shared slots (``_finish_shared``); one torch thread (a forked child whose
     parent already ran torch's thread pool, a learned predictor, hangs in its first parallel
     torch operation; the workers are the parallelism). Torch is not imported for a model
     without one."""
     import sys
 
-    global _WORKER_BATON
-    _WORKER_BATON = baton
+    global _WORKER_BATON, _WORKER_SLOTS
+    _WORKER_BATON, _WORKER_SLOTS = baton, slots
     _keep_freed_memory()
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
@@ -647,16 +733,18 @@ def _worker_start(baton: _Baton) -> None:
 
 @contextmanager
 def _pool(workers: int):
-    """Worker processes for ``_finish`` (forked where the system can: no re-import), or None."""
+    """(worker processes for ``_finish`` or None, their shared slots or None): forked where
+    the system can (no re-import, and the slots are inherited; spawned workers take the pipe)."""
     if workers < 1:
-        yield None
+        yield None, None
         return
     import scipy.spatial.transform  # noqa: F401  (posture's lazy import, done once before the fork, not in every worker)
 
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
-    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context),))
+    slots = _Slots(workers + 1) if context.get_start_method() == "fork" else None  # results(): up to workers + 1 chunks in flight
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context), slots))
     try:
-        yield pool
+        yield pool, slots
     finally:
         pool.shutdown(wait=True, cancel_futures=True)

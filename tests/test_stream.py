@@ -189,7 +189,7 @@ a = torch.randn(600, 600); (a @ a).sum()  # the parent's thread pool runs (as a 
 def work(_):
     b = torch.randn(600, 600)
     return float((torch.tanh(b) @ b).sum() * 0)
-with stream._pool(2) as pool:
+with stream._pool(2) as (pool, _slots):
     print(sum(pool.map(work, range(4))))
 """
 

@@ -130,3 +130,48 @@ def test_a_chunk_that_fails_in_a_worker_hands_the_failure_on(monkeypatch):
         _postures(None, {}, _Task(None, None, None, -1, "", chunk=3), baton)
     with pytest.raises(StreamFallback, match="chunk before failed"):
         baton.take(4)
+
+
+def test_shared_slots_give_back_what_was_put_or_refuse_what_does_not_fit():
+    """A task's arrays go through shared memory as they are (bits, dtype, shape, writable in
+    the taker); an object whose arrays exceed the slot is refused, for the pipe to take."""
+    from postproc.stream import _Slots
+
+    slots = _Slots(2, capacity=4096)
+    values = np.array([1.5, np.nan, -0.0, 3.0])
+    obj = {"values": values, "rows": np.arange(7, dtype=np.int16), "text": np.frombuffer(b"LIN {X 1}\n", np.uint8), "name": "P1"}
+    got = slots.take(1, *slots.put(1, obj))
+    assert got["name"] == "P1" and got["values"].tobytes() == values.tobytes()
+    assert got["rows"].dtype == np.int16 and got["rows"].tolist() == list(range(7)) and got["text"].tobytes() == b"LIN {X 1}\n"
+    got["values"][0] = 2.0  # the taker's own copy: the slot may be reused at once
+    assert slots.put(0, {"big": np.zeros(1000)}) is None
+
+
+def test_chunks_through_shared_slots_and_through_the_pipe_write_the_same_bytes(tmp_path, model, monkeypatch):
+    """The workers take their chunks through shared slots where they fit and through the pipe
+    where they do not: the same output either way, and the same as one process."""
+    from postproc import stream
+
+    program = tmp_path / "p.src"
+    xy = [(900.0 + 200.0 * (i // 40) / 10, -200.0 + 400.0 * (i % 40) / 40) for i in range(400)]
+    lines = [f"LIN {{X {x:.3f}, Y {y:.3f}, Z 450, A 0, B 180, C 0}} C_DIS" for x, y in xy]
+    head = ["DEF raster( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", "$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}", "$APO.CDIS = 0.2"]
+    program.write_text("\n".join(head + lines + ["END"]) + "\n", encoding="latin-1")
+    put = stream._Slots.put
+    placed = []
+
+    def recorded(self, slot, obj):
+        packed = put(self, slot, obj)
+        placed.append(packed is not None)
+        return packed
+
+    monkeypatch.setattr(stream._Slots, "put", recorded)
+    outputs = {}
+    for capacity in (stream._Slots.CAPACITY, 256):
+        monkeypatch.setattr(stream._Slots, "CAPACITY", capacity)
+        placed.clear()
+        compensate_streamed(program, model, tmp_path / f"{capacity}.src", chunk_lines=60, workers=2)
+        outputs[capacity] = (tmp_path / f"{capacity}.src").read_bytes()
+        assert placed and all(placed) == (capacity > 256) and any(placed) == (capacity > 256)
+    compensate_streamed(program, model, tmp_path / "serial.src", chunk_lines=60, workers=0)
+    assert outputs[stream._Slots.CAPACITY] == outputs[256] == (tmp_path / "serial.src").read_bytes()
