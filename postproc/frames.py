@@ -45,23 +45,31 @@ def quat_wxyz_to_matrix(quat: np.ndarray) -> np.ndarray:
 def matrix_to_quat_wxyz(rot: np.ndarray) -> np.ndarray:
     """(N, 3, 3) -> unit quaternions [w, x, y, z] with w >= 0 (Shepperd's method, stable everywhere)."""
     r = np.asarray(rot, dtype=float)
-    m00, m11, m22 = r[..., 0, 0], r[..., 1, 1], r[..., 2, 2]
+    shape = r.shape[:-2]
+    r = r.reshape(-1, 3, 3)
+    m00, m11, m22 = r[:, 0, 0], r[:, 1, 1], r[:, 2, 2]
     trace = m00 + m11 + m22
-    # Build the four candidate (unnormalised) quaternions and keep, per rotation, the
-    # one with the largest pivot, which avoids dividing by a small number.
-    cands = np.stack(
-        [
-            np.stack([1 + trace, r[..., 2, 1] - r[..., 1, 2], r[..., 0, 2] - r[..., 2, 0], r[..., 1, 0] - r[..., 0, 1]], -1),
-            np.stack([r[..., 2, 1] - r[..., 1, 2], 1 + m00 - m11 - m22, r[..., 0, 1] + r[..., 1, 0], r[..., 0, 2] + r[..., 2, 0]], -1),
-            np.stack([r[..., 0, 2] - r[..., 2, 0], r[..., 0, 1] + r[..., 1, 0], 1 - m00 + m11 - m22, r[..., 1, 2] + r[..., 2, 1]], -1),
-            np.stack([r[..., 1, 0] - r[..., 0, 1], r[..., 0, 2] + r[..., 2, 0], r[..., 1, 2] + r[..., 2, 1], 1 - m00 - m11 + m22], -1),
-        ],
-        -2,
-    )
+    # Of the four candidate (unnormalised) quaternions, each rotation takes the one with the
+    # largest pivot, which avoids dividing by a small number; only that one is computed.
     pivot = np.argmax(np.stack([trace, m00, m11, m22], -1), axis=-1)
-    q = np.take_along_axis(cands, pivot[..., None, None], axis=-2)[..., 0, :]
+    q = np.empty((len(r), 4))
+    for p in range(4):
+        at = np.nonzero(pivot == p)[0]
+        if not len(at):
+            continue
+        s, t = r[at], trace[at]
+        a00, a11, a22 = s[:, 0, 0], s[:, 1, 1], s[:, 2, 2]
+        q[at] = np.stack(_SHEPPERD[p](s, t, a00, a11, a22), -1)
     q = q / np.linalg.norm(q, axis=-1, keepdims=True)
-    return np.where(q[..., :1] < 0, -q, q)
+    return np.where(q[..., :1] < 0, -q, q).reshape(shape + (4,))
+
+
+_SHEPPERD = (  # the candidate of each pivot (trace, m00, m11, m22), from the rotations s with trace t
+    lambda s, t, a00, a11, a22: (1 + t, s[:, 2, 1] - s[:, 1, 2], s[:, 0, 2] - s[:, 2, 0], s[:, 1, 0] - s[:, 0, 1]),
+    lambda s, t, a00, a11, a22: (s[:, 2, 1] - s[:, 1, 2], 1 + a00 - a11 - a22, s[:, 0, 1] + s[:, 1, 0], s[:, 0, 2] + s[:, 2, 0]),
+    lambda s, t, a00, a11, a22: (s[:, 0, 2] - s[:, 2, 0], s[:, 0, 1] + s[:, 1, 0], 1 - a00 + a11 - a22, s[:, 1, 2] + s[:, 2, 1]),
+    lambda s, t, a00, a11, a22: (s[:, 1, 0] - s[:, 0, 1], s[:, 0, 2] + s[:, 2, 0], s[:, 1, 2] + s[:, 2, 1], 1 - a00 - a11 + a22),
+)
 
 
 def quat_xyzw_to_matrix(quat: np.ndarray) -> np.ndarray:

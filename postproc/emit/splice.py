@@ -120,17 +120,29 @@ class _BulkEdits:
         return self._sorted[self.file[self._sorted] == file]
 
 
-def _text_values(modified: Toolpath, original: Toolpath) -> np.ndarray:
-    """New numbers as the text writes them: undo the scale, and make G91-style increments."""
-    values = modified.values.copy()
+def _text_values(modified: Toolpath, original: Toolpath, columns=slice(None)) -> np.ndarray:
+    """New numbers as the text writes them: undo the scale, and make G91-style increments.
+    ``columns``: only these fields (sorted indices), in that order."""
+    values = modified.values[:, columns].copy()
     rel = modified.relative
     if rel.any():
         # Increments are relative to the previous target's (new) position.
         prev = np.vstack([np.zeros((1, 3)), modified.position[:-1]])
-        values[rel, F_POS] = values[rel, F_POS] - np.nan_to_num(prev[rel])
+        pos = np.arange(len(FIELDS))[columns] < 3
+        axes = np.arange(len(FIELDS))[columns][pos]
+        values[np.ix_(rel, pos)] = values[np.ix_(rel, pos)] - np.nan_to_num(prev[rel][:, axes])
     if modified.offset is not None:
-        values = values - modified.offset
-    return values / modified.scale
+        values = values - modified.offset[:, columns]
+    return values / modified.scale[:, columns]
+
+
+def _changed_columns(modified: Toolpath, original: Toolpath) -> np.ndarray:
+    """Fields whose value changed at some target (bits compared): only their numbers can be
+    written anew in place (a G91 increment's position numbers are written apart, in
+    ``increments_and_inserts``; scale and offset are the original's)."""
+    if modified.values is original.values:
+        return np.zeros(0, dtype=np.int64)
+    return np.nonzero((modified.values.view(np.int64) != original.values.view(np.int64)).any(axis=0))[0]
 
 
 def _seen_from_next_frame(original: Toolpath, position: np.ndarray) -> np.ndarray:
@@ -181,16 +193,19 @@ class _Splice:
     def changed_numbers(self) -> None:
         """Every number of a target whose value changed, written in place (vectorised)."""
         original, modified, spans = self.original, self.modified, self.spans
-        new = _text_values(modified, original)
-        old = _text_values(original, original)
+        columns = _changed_columns(modified, original)  # the others cannot change (most of a wide IR)
+        new = _text_values(modified, original, columns)
+        old = _text_values(original, original, columns)
         # An incremental (G91) target's position numbers are written in increments_and_inserts;
         # its arc words (I J K relative to the arc's start, or R) are plain numbers.
-        incremental = original.relative[:, None] & (np.arange(len(FIELDS)) < F_ARC.start)[None, :]
-        changed = (spans[:, :, 1] >= 0) & ~np.isnan(new) & (new != old) & ~incremental & ~self.derived()
-        rows, fields = np.nonzero(changed)
+        incremental = original.relative[:, None] & (columns < F_ARC.start)[None, :]
+        changed = (spans[:, columns, 1] >= 0) & ~np.isnan(new) & (new != old) & ~incremental & ~self.derived()[:, columns]
+        rows, at = np.nonzero(changed)
+        fields = columns[at]
+        new = new[rows, at]
         if not len(rows):
             return
-        self.bulk = bulk = _BulkEdits(original, rows, fields, new[rows, fields], TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
+        self.bulk = bulk = _BulkEdits(original, rows, fields, new, TOLERANCE[fields] / np.maximum(np.abs(original.scale[rows, fields]), 1e-12))
         bulk.refuse_conflicts(original)
         pos = fields < 3
         if pos.any():
