@@ -23,8 +23,9 @@ how to restate the state at a cut (``Dialect.stream_rules``, ``dialects.base.Str
 The chunks go through a pipeline of processes (``workers``, default one per core up to
 WORKERS_MAX): this process reads the program in blocks, cuts it (body lines told by their
 shape, ``StreamRules.body_shape``), parses each chunk and hands it to a worker (the IR's
-varying columns only, ``_Task.for_pipe``) while it reads the next; results are taken in
-program order, at most ``workers + 1`` chunks in flight. The worker computes the chunk's
+varying columns only, ``_Task.for_pipe``, through shared memory, ``_Slots``) while it reads
+the next; results come back the same way and are taken in program order, at most
+``workers + 1`` chunks in flight. The worker computes the chunk's
 postures as written (``compensate.reference_postures``) from the posture at the previous
 chunk's end, which the worker of that chunk hands on through shared memory (``_Baton``: the
 chain waits only for postures, not for compensation), then compensates, emits and checks it.
