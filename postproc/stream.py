@@ -29,6 +29,8 @@ the next; results come back the same way and are taken in program order, at most
 postures as written (``compensate.reference_postures``) from the posture at the previous
 chunk's end, which the worker of that chunk hands on through shared memory (``_Baton``: the
 chain waits only for postures, not for compensation), then compensates, emits and checks it.
+Each worker first compensates the program's first move once and throws it away
+(``_warm_up``: its compiled kernels load while this process parses the first chunk).
 ``workers=0`` does every stage here; both write the same bytes.
 
 What is not streamed (``StreamFallback``; the caller reads the program whole, as before): a
@@ -650,8 +652,6 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     CompensationError (nothing written) whose ``failures`` list the targets that failed.
     ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
     CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
-    from .programs import refuse_overwrite
-
     path, output = Path(path), Path(output)
     lang, rules = stream_rules_for(path, dialect, model)
     if tune_malloc:
@@ -661,25 +661,35 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
     workers = default_workers() if workers is None else workers
-    with fh, _pool(workers) as (pool, slots):
+    with fh:
         program, first = _open(path, lang, rules, fh)
-        job = _Job(program, model, options, progress)
-        results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers, slots)
-        try:
-            text = next(results)
-        except CompensationError as exc:
-            exc.failures = job.totals.failures
-            raise
-        main = lang.output_paths(job.first_tp, output)[0]
-        files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
-        files[main] = ""
-        refuse_overwrite(job.first_tp, files, in_place)
-        try:
-            write_all({main: chain([text], results),
-                       **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
-        except CompensationError as exc:
-            exc.failures = job.totals.failures
-            raise
+        with _pool(workers, warm=(model, options, program, first)) as (pool, slots):
+            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots)
+
+
+def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,
+         pool, workers: int, slots) -> StreamResult:
+    """``compensate_streamed`` once the program is open and the workers (if any) started."""
+    from .programs import refuse_overwrite
+
+    lang, rules = program.lang, program.rules
+    job = _Job(program, model, options, progress)
+    results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers, slots)
+    try:
+        text = next(results)
+    except CompensationError as exc:
+        exc.failures = job.totals.failures
+        raise
+    main = lang.output_paths(job.first_tp, output)[0]
+    files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
+    files[main] = ""
+    refuse_overwrite(job.first_tp, files, in_place)
+    try:
+        write_all({main: chain([text], results),
+                   **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
+    except CompensationError as exc:
+        exc.failures = job.totals.failures
+        raise
     return StreamResult(job.totals.summary(), job.notes, list(files))
 
 
@@ -715,7 +725,7 @@ def default_workers() -> int:
     return min(WORKERS_MAX, cores) if cores > 1 else 0
 
 
-def _worker_start(baton: _Baton, slots: "_Slots | None") -> None:
+def _worker_start(baton: _Baton, slots: "_Slots | None", warm: tuple | None = None) -> None:
     """Worker start: the job's baton (``_postures``) and shared slots (``_finish_shared``); one torch thread (a forked child whose
     parent already ran torch's thread pool, a learned predictor, hangs in its first parallel
     torch operation; the workers are the parallelism). Torch is not imported for a model
@@ -730,10 +740,24 @@ def _worker_start(baton: _Baton, slots: "_Slots | None") -> None:
     from threadpoolctl import threadpool_limits
 
     threadpool_limits(1, user_api="blas")  # for this worker's life: a second BLAS thread only spins on the thin products here
+    if warm is not None:
+        _warm_up(*warm)
+
+
+def _warm_up(model, options: dict, program: _Program, first: str) -> None:
+    """The program's first move compensated, emitted and checked in this worker, and thrown
+    away: the compiled kernels and lazy imports a worker needs (~0.2 s) load while the main
+    process parses the first chunk, not inside the worker's first chunk. Whatever fails here
+    fails again, and is reported, in the chunk itself."""
+    try:
+        task = _Job(program, model, options, lambda msg: None).prepare("".join(program.header) + first, False, 1, None, 0, here=True)[0]
+        _finish(model, options, task)
+    except (InputError, StreamFallback, CompensationError):
+        pass
 
 
 @contextmanager
-def _pool(workers: int):
+def _pool(workers: int, warm: tuple | None = None):
     """(worker processes for ``_finish`` or None, their shared slots or None): forked where
     the system can (no re-import, and the slots are inherited; spawned workers take the pipe)."""
     if workers < 1:
@@ -744,7 +768,7 @@ def _pool(workers: int):
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")
     slots = _Slots(workers + 1) if context.get_start_method() == "fork" else None  # results(): up to workers + 1 chunks in flight
-    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context), slots))
+    pool = ProcessPoolExecutor(workers, mp_context=context, initializer=_worker_start, initargs=(_Baton(context), slots, warm))
     try:
         yield pool, slots
     finally:
