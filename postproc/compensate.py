@@ -325,6 +325,7 @@ def _rows_of(per_target: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """per_target[rows], without a copy where rows are all of them (a long program without joint targets)."""
     return per_target if len(rows) == len(per_target) else per_target[rows]
 
+
 def _require_usable_model(model: ErrorModel) -> None:
     """Compensation solves the nominal IK and needs the model in the robot's base frame."""
     robot = model.robot

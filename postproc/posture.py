@@ -143,8 +143,8 @@ def _start_posture(robot, sols, valid_anchor, start_q, lines):
     unset = ~np.maximum.accumulate(valid_anchor)
     if not unset.any():
         return np.full(6, np.nan), []
-    first, first_sols = _first_solved(sols, np.nonzero(unset)[0])
-    q0, idx = kin.select_nearest(robot, first_sols, np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg))
+    zero = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
+    q0, idx = kin.select_nearest(robot, _first_solved(sols, np.nonzero(unset)[0]), zero)
     where = ""
     if lines is not None:
         sel = np.asarray(lines)[unset]
@@ -154,15 +154,15 @@ def _start_posture(robot, sols, valid_anchor, start_q, lines):
     return (q0[0] if idx[0] >= 0 else np.full(6, np.nan)), [note]
 
 
-def _first_solved(sols, candidates: np.ndarray, block: int = 64) -> tuple[int, np.ndarray]:
-    """The first of ``candidates`` with any IK solution (the first candidate if none has)
-    and its solutions (1, 8, 6); the IK is computed a block of targets at a time."""
+def _first_solved(sols, candidates: np.ndarray, block: int = 64) -> np.ndarray:
+    """The solutions (1, 8, 6) of the first of ``candidates`` with any IK solution (of the
+    first candidate if none has); the IK is computed a block of targets at a time."""
     for s in range(0, len(candidates), block):
         some = sols.all(candidates[s : s + block])
         solved = np.nonzero(~np.isnan(some).all(axis=(1, 2)))[0]
         if len(solved):
-            return int(candidates[s + solved[0]]), some[solved[:1]]
-    return int(candidates[0]), sols.all(candidates[:1])
+            return some[solved[:1]]
+    return sols.all(candidates[:1])
 
 
 def _unwrap_from_anchors(raw, anchors, last):

@@ -65,7 +65,7 @@ from .files import write_all
 from .ir import SourceDoc, Toolpath
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
-CHUNK_LINES = 50_000  # 2 x 10^4 .. 10^5 measured on 2 cores (benchmarks/stream.py): the fastest, with half the memory of 10^5
+CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
 HEADER_MAX_LINES = 10_000
 TRAILER_MAX_LINES = 100_000
 
@@ -330,7 +330,7 @@ class _Task:
     reference: Reference | None  # the postures as written; None: the worker computes them (``_postures``)
     header_chars: int  # length of the (blanked) header before the restated line; -1 for the first chunk
     tail: str
-    packed: dict | None = None  # tp's wide arrays, for the pipe to a worker (``for_pipe``)
+    packed: dict | None = None  # tp's wide arrays, for a worker (``for_pipe``: through the pipe or a shared slot)
     texts: tuple = ()  # with ``packed``: the text of each of tp's sources, Latin-1 bytes (uint8)
     chunk: int = 0  # its place in the program (0: the first)
 
@@ -381,7 +381,7 @@ class _Meta:
     first: bool
 
 
-def _finish(model, options: dict, task: _Task) -> tuple[str, Report, tuple, list[str] | None]:
+def _finish(model, options: dict, task: _Task) -> tuple[bytes, Report, tuple, list[str] | None]:
     """Compensate, emit and re-parse check one chunk: (its own new text, the report, the notes,
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
     from .programs import check_texts
@@ -726,10 +726,10 @@ def default_workers() -> int:
 
 
 def _worker_start(baton: _Baton, slots: "_Slots | None", warm: tuple | None = None) -> None:
-    """Worker start: the job's baton (``_postures``) and shared slots (``_finish_shared``); one torch thread (a forked child whose
-    parent already ran torch's thread pool, a learned predictor, hangs in its first parallel
-    torch operation; the workers are the parallelism). Torch is not imported for a model
-    without one."""
+    """Worker start: the job's baton (``_postures``) and shared slots (``_finish_shared``);
+    one torch thread (a forked child whose parent already ran torch's thread pool, a learned
+    predictor, hangs in its first parallel torch operation; the workers are the parallelism;
+    torch is not imported for a model without one); the warm-up (``_warm_up``)."""
     import sys
 
     global _WORKER_BATON, _WORKER_SLOTS
@@ -748,11 +748,12 @@ def _warm_up(model, options: dict, program: _Program, first: str) -> None:
     """The program's first move compensated, emitted and checked in this worker, and thrown
     away: the compiled kernels and lazy imports a worker needs (~0.2 s) load while the main
     process parses the first chunk, not inside the worker's first chunk. Whatever fails here
-    fails again, and is reported, in the chunk itself."""
+    fails again, and is reported, in the chunk itself; raised here, in the pool's initializer,
+    it would break the pool (BrokenProcessPool) and hide that report. So nothing is raised."""
     try:
         task = _Job(program, model, options, lambda msg: None).prepare("".join(program.header) + first, False, 1, None, 0, here=True)[0]
         _finish(model, options, task)
-    except (InputError, StreamFallback, CompensationError):
+    except Exception:  # noqa: BLE001  (the chunk repeats this work and reports its error)
         pass
 
 

@@ -177,7 +177,7 @@ def test_chunks_through_shared_slots_and_through_the_pipe_write_the_same_bytes(t
     assert outputs[stream._Slots.CAPACITY] == outputs[256] == (tmp_path / "serial.src").read_bytes()
 
 
-def test_worker_warm_up_runs_the_first_move_and_leaves_errors_to_the_chunk(tmp_path, model):
+def test_worker_warm_up_runs_the_first_move_and_leaves_errors_to_the_chunk(tmp_path, model, monkeypatch):
     """A worker compensates the program's first move once at its start (kernels loaded while
     the main process parses); a move that cannot be compensated is not reported there but by
     the chunk itself."""
@@ -188,10 +188,19 @@ def test_worker_warm_up_runs_the_first_move_and_leaves_errors_to_the_chunk(tmp_p
     good.write_text(head + "LIN {X 900, Y 0, Z 450, A 0, B 180, C 0}\nLIN {X 901, Y 0, Z 450, A 0, B 180, C 0}\nEND\n", encoding="latin-1")
     bad.write_text(head.replace("$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}", "$TOOL = TOOL_DATA[7]") + "LIN {X 900, Y 0, Z 450, A 0, B 180, C 0}\nEND\n",
                    encoding="latin-1")
+    opened = {}
     for path in (good, bad):
         lang, rules = stream.stream_rules_for(path, None, model)
         with open(path, encoding="latin-1", newline="") as fh:
-            program, first = stream._open(path, lang, rules, fh)
-        assert stream._warm_up(model, {}, program, first) is None
+            opened[path] = stream._open(path, lang, rules, fh)
+        assert stream._warm_up(model, {}, *opened[path]) is None
+    from postproc.errors import OutputCheckError
+
+    def check_fails(*args):
+        raise OutputCheckError("the written numbers do not read back")
+
+    monkeypatch.setattr(stream, "_finish", check_fails)  # any error: raised in the pool's initializer it would break the pool
+    assert stream._warm_up(model, {}, *opened[good]) is None
+    monkeypatch.undo()
     with pytest.raises(StreamFallback, match="input error"):
         compensate_streamed(bad, model, tmp_path / "out.src", workers=2)
