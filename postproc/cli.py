@@ -1099,7 +1099,8 @@ def place_cmd(
     axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
     tp = parse_program(program, dialect)
     problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin, "keep" if keep_conf else "rederive")
-    result = pl.search(problem, *axes, z, refine=refine)
+    with report.progress_reporter(err, "placements") as progress:
+        result = pl.search(problem, *axes, z, refine=refine, progress=progress)
     frame0, cur = report.current_placement(tp, problem, result, z)
     doc = {"best": None, **report.summary(result, problem), "current": cur, "reduction_percent": None, **sources}
     if not np.isfinite(result.best_mm):

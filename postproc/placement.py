@@ -99,8 +99,9 @@ def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
     return err, cn, reason
 
 
-def evaluate(problem: PlacementProblem, frames: np.ndarray, chunk_poses: int = CHUNK_POSES) -> Evaluation:
-    """Mean normal error of each workpiece frame (M, 4, 4): NaN where infeasible."""
+def evaluate(problem: PlacementProblem, frames: np.ndarray, chunk_poses: int = CHUNK_POSES, progress=None) -> Evaluation:
+    """Mean normal error of each workpiece frame (M, 4, 4): NaN where infeasible.
+    ``progress(done, total)`` is called after each chunk."""
     frames = np.asarray(frames, dtype=float).reshape(-1, 4, 4)
     per = max(1, chunk_poses // max(len(problem.local_tcp), 1))
     mean = np.full(len(frames), np.nan)
@@ -109,6 +110,8 @@ def evaluate(problem: PlacementProblem, frames: np.ndarray, chunk_poses: int = C
         err, _, why = _chunk_errors(problem, frames[s : s + per])
         reason[s : s + per] = why
         mean[s : s + per] = np.where(why == 0, comp.weighted_mean(np.nan_to_num(err), problem.weights), np.nan)
+        if progress is not None:
+            progress(min(s + per, len(frames)), len(frames))
     return Evaluation(mean, reason == 0, reason)
 
 
@@ -156,11 +159,13 @@ class SearchResult:
     evaluated: int
 
 
-def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool = True, chunk_poses: int = CHUNK_POSES) -> SearchResult:
-    """Grid search over xs x ys x thetas (mm, mm, deg), then bounded local refinement."""
+def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool = True, chunk_poses: int = CHUNK_POSES,
+           progress=None) -> SearchResult:
+    """Grid search over xs x ys x thetas (mm, mm, deg), then bounded local refinement;
+    ``progress(done, total)`` after each chunk of the grid."""
     xs, ys, thetas = (np.asarray(v, dtype=float) for v in (xs, ys, thetas))
     cand = np.stack(np.meshgrid(xs, ys, thetas, indexing="ij"), axis=-1).reshape(-1, 3)
-    ev = evaluate(problem, placement_frames(cand, z_mm), chunk_poses)
+    ev = evaluate(problem, placement_frames(cand, z_mm), chunk_poses, progress)
     grid = ev.mean_mm.reshape(len(xs), len(ys), len(thetas))
     why = ev.reason.reshape(grid.shape)
     if not ev.feasible.any():
