@@ -54,7 +54,7 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
         if np.isclose(result.grid_best[2], thetas[k]):
             ax.plot(result.grid_best[0], result.grid_best[1], "*", color="red", markersize=14, markeredgecolor="white")
         if current_xyt is not None and np.isclose(current_xyt[2], thetas[k]):
-            ax.plot(current_xyt[0], current_xyt[1], "o", color=CURRENT, markersize=9, markeredgecolor="black")
+            ax.plot(current_xyt[0], current_xyt[1], "o", color="white", markersize=9, markeredgecolor="black", markeredgewidth=1.5)
         ax.set_title(f"θ = {thetas[k]:g}°", fontsize=10)
         ax.set_xlabel("workpiece x (mm, base frame)")
         ax.set_ylabel("workpiece y (mm)")
@@ -69,7 +69,7 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
     handles = [Patch(facecolor=REASON_COLOURS[REASONS.index(name)], edgecolor="#7f7f7f", label=f"{name} ({n})") for name, n in counts.items()]
     handles.append(Line2D([], [], marker="*", color="red", markeredgecolor="white", markersize=14, linestyle="none", label="best grid candidate"))
     if current_xyt is not None:
-        handles.append(Line2D([], [], marker="o", color=CURRENT, markeredgecolor="black", markersize=9, linestyle="none", label="current placement"))
+        handles.append(Line2D([], [], marker="o", color="white", markeredgecolor="black", markeredgewidth=1.5, markersize=9, linestyle="none", label="current placement"))
     fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 4), fontsize=9, frameon=False,
                title="infeasible cells by reason (count over the whole grid)", title_fontsize=9)
     shown = "" if len(pick) == len(thetas) else f" ({len(pick)} of {len(thetas)} θ values shown)"
