@@ -192,3 +192,36 @@ def test_progress_lines_off_a_terminal(monkeypatch, capsys):
     with place_report.progress_reporter(Console(file=io.StringIO()), "placements") as progress:
         pl.search(problem, [900.0, 1000], [-500.0], [90.0], 1170.0, refine=False, chunk_poses=len(problem.local_tcp), progress=progress)
     assert capsys.readouterr().err.splitlines()[-1].startswith("placements: 2 of 2 evaluated")
+
+
+@pytest.fixture(scope="module")
+def face_st(tmp_path_factory):
+    """block_face.src with Status and Turn on its first PTP (those of its joints as written)."""
+    path = tmp_path_factory.mktemp("krl") / "face_st.src"
+    path.write_text(FACE_SRC.read_text().replace("PTP {X 0, Y 50, Z 150, A 0, B 180, C 0}", "PTP {X 0, Y 50, Z 150, A 0, B 180, C 0, S 2, T 37}"))
+    return path
+
+
+@pytest.mark.parametrize("mode", ["rederive", "keep"])
+def test_krl_status_turn_equal_the_reference(robot, face_st, mode):
+    problem = problem_from_program(parse_program(face_st), robot, force_tool=FORCE, conf_mode=mode)
+    assert problem.conf_applies[0] and not problem.conf_applies[1:].any() and problem.arm[0] == 2
+    frames = pl.placement_frames(_grid([700.0, 1000, 1300], [-500.0, 0, 300], [0.0, 90]), 1170.0)
+    ev = pl.evaluate(problem, frames)
+    np.testing.assert_array_equal(ev.reason, [reference_cell(problem, f)[0] for f in frames])
+    assert ev.feasible.any() and not ev.feasible.all()
+
+
+def test_krl_placed_program_gets_the_new_status_and_turn(robot, face_st, tmp_path):
+    """Moved to where axes 2 and 3 change sign, the PTP's Turn changes; the .src reads back with it."""
+    out = tmp_path / "placed.src"
+    res = _place(face_st, "--search", "1200:1200:0,-300:-300:0,90:90:0", "-o", out, "--no-refine")
+    assert res.exit_code == 0, res.stderr
+    placed = parse_program(out)
+    frame = pl.placement_frames([[1200.0, -300.0, 90.0]], 1170.0)[0]
+    q, why = pl.placement_joints(problem_from_program(placed, robot, force_tool=FORCE, conf_mode="keep"), frame)
+    assert (why == 0).all()
+    status, turn = pb.dialects.get("krl").conf_of_joints(robot, q[:1])[0, :2]
+    assert (status, turn) == (2, 35) and tuple(placed.conf[0, :2]) == (status, turn)  # A2 < 0 now, A3 >= 0: T 37 -> 35
+    changed = [a for a, b in zip(out.read_text().splitlines(), face_st.read_text().splitlines()) if a != b]
+    assert len(changed) == 2 and changed[0].startswith("$BASE") and changed[1].endswith("S 2, T 35}")
