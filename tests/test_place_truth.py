@@ -6,6 +6,7 @@ work object and configuration data that ``compensate`` reads back."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -81,15 +82,14 @@ def test_reasons_name_the_joint_the_coupling_and_the_singularity(robot):
     sols = np.zeros((1, 2, 8, 6))
     sols[0, :, :] = [0.0, 10.0, 10.0, 0.0, 60.0, 0.0]
     cases = {pb.LIMIT + 1: [0.0, 90.0, 10.0, 0.0, 60.0, 0.0], pb.COUPLING: [0.0, -30.0, -15.0, 0.0, 60.0, 0.0],
-             pb.WRIST: [0.0, 10.0, 10.0, 0.0, 1.0, 0.0], pb.REACH: [np.nan] * 6}
+             pb.WRIST: [0.0, 10.0, 10.0, 0.0, 1.0, 0.0], pb.FLIP: [0.0, 10.0, 10.0, 60.0, 60.0, 0.0], pb.REACH: [np.nan] * 6}
+    one, two = problem, slice(0, 2)
+    small = replace(one, local_tcp=one.local_tcp[two], flange_T_tcp=one.flange_T_tcp[two], force_local=one.force_local[two],
+                    normal_local=one.normal_local[two], weights=one.weights[two], conf=one.conf[two],
+                    conf_applies=np.zeros(2, dtype=bool), line=one.line[two], arm=one.arm[two])
     for code, q in cases.items():
-        one = problem_from_program(parse_program(FACE_SRC), robot, force_tool=FORCE)
         s = sols.copy()
         s[0, 1, :] = q
-        pts = np.zeros(2, dtype=bool)
-        small = pl.PlacementProblem(**{**one.__dict__, "local_tcp": one.local_tcp[:2], "flange_T_tcp": one.flange_T_tcp[:2],
-                                       "force_local": one.force_local[:2], "normal_local": one.normal_local[:2], "weights": one.weights[:2],
-                                       "conf": one.conf[:2], "conf_applies": pts, "line": one.line[:2], "arm": one.arm[:2]})
         _, reason = pb.program_postures(small, s)
         assert reason[0, 1] == code, (code, reason)
     # joints move continuously: axis 6 (+-360 deg) through 180 deg is fine, axis 1 (+-180 deg) cannot pass it
