@@ -27,6 +27,14 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
+from placement_reference import reference_cell  # noqa: E402  (tests/, put on the path above)
+
+from postproc import placement as pl  # noqa: E402
+from postproc.place_program import problem_from_program  # noqa: E402
+from postproc.placement_branch import REASONS, reason_counts  # noqa: E402
+from postproc.programs import parse_program  # noqa: E402
+from postproc.robots import load_robot  # noqa: E402
+
 CASES = [  # (program, extra options, what it is)
     ("examples/data/block_face.mod", [], "RAPID, confdata on every target, re-derived (default)"),
     ("examples/data/block_face.mod", ["--keep-conf"], "RAPID, confdata kept as written"),
@@ -68,14 +76,6 @@ def describe(doc: dict | None, wall: float, errors: list[str]) -> str:
 
 
 def reference_counts(program: str, extra: list[str], search: str) -> str:
-    from placement_reference import reference_cell
-
-    from postproc import placement as pl
-    from postproc.place_program import problem_from_program
-    from postproc.placement_branch import REASONS, reason_counts
-    from postproc.programs import parse_program
-    from postproc.robots import load_robot
-
     mode = "keep" if "--keep-conf" in extra else "rederive"
     problem = problem_from_program(parse_program(ROOT / program), load_robot("irb6660_205_190"), force_tool=(200.0, 100.0, 300.0), conf_mode=mode)
     axes = [pl.grid_axis(tuple(float(v) for v in part.split(":")), name) for part, name in zip(search.split(","), "xyt")]
@@ -91,7 +91,7 @@ def reference_counts(program: str, extra: list[str], search: str) -> str:
             last = time.monotonic()
             print(f"    reference: {k + 1} of {len(frames)} cells ({last - t0:.0f} s)", file=sys.stderr, flush=True)
     differ = int((ref != product).sum())
-    counts = ", ".join(f"{k} {v}" for k, v in reason_counts(ref).items())
+    counts = ", ".join(f"{k} {v}" for k, v in reason_counts(ref).items()) or "no infeasible cell"
     sampled = "" if stride == 1 else f" (every {stride}th cell)"
     return (f"  reference{sampled}: {(ref == 0).sum()} of {len(ref)} feasible ({time.monotonic() - t0:.0f} s); {counts}; "
             f"cells whose reason differs from the product's: {differ}" + ("" if not differ else f" (first: {REASONS[ref[np.nonzero(ref != product)[0][0]]]})"))

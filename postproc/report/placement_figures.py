@@ -7,6 +7,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from ..placement_branch import REASONS, reason_counts  # noqa: E402
 
 BEST, CURRENT = "#1f77b4", "#ff7f0e"
 # One colour per infeasibility reason (placement_branch.REASONS order; index 0, feasible, unused)
@@ -18,10 +23,6 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
     """Mean normal error over (x, y), one panel per theta (up to max_panels, evenly
     picked); infeasible cells coloured by their reason (``result.grid_reason``); the best
     candidate (star) and the current placement (circle) marked on their theta's panel."""
-    from matplotlib.colors import BoundaryNorm, ListedColormap
-    from matplotlib.patches import Patch
-
-    from ..placement_branch import REASONS, reason_counts
 
     thetas = result.thetas
     pick = np.unique(np.linspace(0, len(thetas) - 1, min(len(thetas), max_panels)).round().astype(int))
@@ -63,8 +64,6 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
         ax.set_visible(False)
     if image is not None:
         fig.colorbar(image, cax=fig.add_axes([0.89, 0.15, 0.015, 0.7]), label="mean normal error (µm)")
-    from matplotlib.lines import Line2D
-
     counts = reason_counts(result.grid_reason)
     handles = [Patch(facecolor=REASON_COLOURS[REASONS.index(name)], edgecolor="#7f7f7f", label=f"{name} ({n})") for name, n in counts.items()]
     handles.append(Line2D([], [], marker="*", color="red", markeredgecolor="white", markersize=14, linestyle="none", label="best grid candidate"))
