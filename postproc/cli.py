@@ -7,6 +7,7 @@ act on, 2 bad input or usage (message on stderr naming file, line/row and column
 from __future__ import annotations
 
 import functools
+import io
 import json
 import sys
 from pathlib import Path
@@ -19,6 +20,7 @@ from rich.table import Table
 
 from . import __version__
 from .errors import InputError, JobError, OutputError, PostprocError
+from .files import write_all
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik
@@ -1083,48 +1085,58 @@ def place_cmd(
     plot: Optional[Path] = typer.Option(None, "--plot", help="Heat map PNG of the mean normal error per theta; the error along the path goes beside it (*_path.png)."),
     refine: bool = typer.Option(True, "--refine/--no-refine", help="Bounded local refinement after the grid."),
     singular_margin: float = typer.Option(5.0, "--singular-margin", help="Minimum distance from wrist and elbow singularities, deg."),
+    keep_conf: bool = typer.Option(False, "--keep-conf", help="Keep the program's configuration data (turn data included) at every placement; by default they are re-derived for the moved workpiece as a re-post would, keeping its arm configuration."),
     dialect: Optional[str] = typer.Option(None, "--dialect"),
 ):
     """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
     from . import placement as pl
-    from .place_program import check_placed, placed_texts
-    from .programs import parse_program, write_texts
+    from . import place_report as report
+    from .place_program import check_placed, placed_conf, placed_texts
+    from .programs import parse_program
 
     if (force is None) == (cut is None):
         raise InputError("give the cutting force as either --force FX,FY,FZ or --cut CUT.toml")
     axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
     tp = parse_program(program, dialect)
-    problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin)
-    result = pl.search(problem, *axes, z, refine=refine)
-    frame0, cur = _current_placement(tp, problem)
-    doc = {"best": None, "evaluated": int(result.evaluated), "feasible": int(np.isfinite(result.grid_mean_mm).sum()),
-           "grid": int(result.grid_mean_mm.size), "current": cur, "reduction_percent": None, **sources}
+    problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin, "keep" if keep_conf else "rederive")
+    with report.progress_reporter(err, "placements") as progress:
+        result = pl.search(problem, *axes, z, refine=refine, progress=progress)
+    frame0, cur = report.current_placement(tp, problem, result, z)
+    doc = {"best": None, **report.summary(result, problem), "current": cur, "reduction_percent": None, **sources}
     if not np.isfinite(result.best_mm):
         if json_out:
             print(json.dumps(doc))
-        raise JobError(f"no feasible placement in the search grid ({result.grid_mean_mm.size} candidates): every one leaves the reach, the joint limits or comes near a singularity")
+        else:
+            out.print("\n".join(report.lines(doc, z)))
+        raise JobError(f"no feasible placement in the search grid ({result.grid_mean_mm.size} candidates): "
+                       + ", ".join(f"{name} {n}" for name, n in doc["infeasible"].items()))
     doc["best"] = {"x": float(result.best[0]), "y": float(result.best[1]), "theta": float(result.best[2]), "z": z, "mean_normal_error_mm": result.best_mm}
     doc["grid_best"] = {"x": float(result.grid_best[0]), "y": float(result.grid_best[1]), "theta": float(result.grid_best[2]), "mean_normal_error_mm": result.grid_best_mm}
     if cur is not None and cur["mean_normal_error_mm"]:
         doc["reduction_percent"] = 100.0 * (1.0 - result.best_mm / cur["mean_normal_error_mm"])
     best_frame = pl.placement_frames(result.best, z)[0]
+    files: dict[Path, bytes] = {}  # the program's files and the figures: written together or not at all
     if output is not None:
-        texts = placed_texts(tp, best_frame)
-        check_placed(tp, texts, best_frame)
+        new_conf = placed_conf(problem, best_frame) if not keep_conf else None
+        texts = placed_texts(tp, best_frame, new_conf)
+        check_placed(tp, texts, best_frame, new_conf)
         from .dialects import of as dialect_of
 
-        files = dialect_of(tp).files(tp, texts, output)
-        write_texts(list(files.values()), list(files.keys()))
+        files.update({Path(p): text.encode("latin-1") for p, text in dialect_of(tp).files(tp, texts, output).items()})
         doc["written"] = str(output)
+        doc["conf_written"] = 0 if new_conf is None else int(np.isfinite(new_conf).any(axis=1).sum())
     if plot is not None:
-        doc["figures"] = _place_figures(plot, result, problem, best_frame, frame0, cur)
+        figures = _place_figures(plot, result, problem, best_frame, frame0, cur)
+        files.update(figures)
+        doc["figures"] = [str(p) for p in figures]
+    write_all(files)
     if json_out:
         print(json.dumps(doc))
         return
-    _print_placement(doc, z)
+    out.print("\n".join(report.lines(doc, z)))
 
 
-def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
+def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, conf_mode):
     """The placement problem of the place command's inputs, and where its force and compliance come from."""
     from .compliance import identified_compliance
     from .forces import load_cut_params
@@ -1144,40 +1156,15 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin):
         from .engagement import load_stock, program_engagement
 
         engagement = program_engagement(tp, params.diameter, load_stock(stock))
-    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin)
+    problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin, conf_mode=conf_mode)
     sources = {"force": "constant tool-frame force" if force is not None else f"mechanistic model ({cut})" + (f", engagement from {stock}" if stock else ""),
                "stiffness": "identified by the model" if fitted is not None and identified_compliance(fitted) is not None else f"joint stiffness of {robot_model.name}"}
     return problem, sources
 
 
-def _current_placement(tp, problem):
-    """The program's own workpiece frame and its mean normal error (None where undefined or infeasible)."""
+def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> dict[Path, bytes]:
+    """The heat map (PLOT) and the error along the path (PLOT_path), as PNG bytes by path."""
     from . import placement as pl
-    from .compliance import weighted_mean
-    from .place_program import current_frame, frame_xy_theta
-
-    frame0 = current_frame(tp)
-    if frame0 is None:
-        return None, None
-    err0, _, ok0 = pl.path_errors(problem, frame0)
-    x0, y0, t0, z0 = frame_xy_theta(frame0)
-    mean0 = float(weighted_mean(err0, problem.weights)) if ok0 else None
-    return frame0, {"x": x0, "y": y0, "theta": t0, "z": z0, "feasible": ok0, "mean_normal_error_mm": mean0}
-
-
-def _print_placement(doc: dict, z: float) -> None:
-    b, cur = doc["best"], doc["current"]
-    out.print(f"{doc['evaluated']} placements evaluated ({doc['feasible']} of {doc['grid']} grid cells feasible)")
-    out.print(f"best: x {b['x']:.1f} mm, y {b['y']:.1f} mm, theta {b['theta']:.2f} deg, z {z:g} mm: mean normal error {b['mean_normal_error_mm'] * 1000:.2f} um")
-    if cur is not None:
-        now = "infeasible" if cur["mean_normal_error_mm"] is None else f"{cur['mean_normal_error_mm'] * 1000:.2f} um"
-        out.print(f"current: x {cur['x']:.1f}, y {cur['y']:.1f}, theta {cur['theta']:.2f}: {now}"
-                  + ("" if doc["reduction_percent"] is None else f"; reduction {doc['reduction_percent']:.1f} %"))
-
-
-def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> list[str]:
-    from . import placement as pl
-    from .errors import OutputError
     from .report.placement_figures import error_maps, path_errors
 
     steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))
@@ -1191,14 +1178,12 @@ def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> list
     cutting = problem.weights > 0
     figs = [error_maps(result, current_xyt),
             path_errors(dist[cutting], err_best[cutting], None if err_cur is None else err_cur[cutting])]
+    pngs = {}
     for fig, path in zip(figs, paths):
-        tmp = path.with_name("." + path.name + ".tmp.png")
-        try:
-            fig.savefig(tmp, dpi=110)
-            tmp.replace(path)
-        except OSError as exc:
-            raise OutputError(f"{path}: cannot write the figure ({exc.strerror})") from None
-    return [str(p) for p in paths]
+        buffer = io.BytesIO()
+        fig.savefig(buffer, dpi=110, format="png")
+        pngs[path] = buffer.getvalue()
+    return pngs
 
 
 def main() -> None:

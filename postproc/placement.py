@@ -3,10 +3,11 @@
 The workpiece frame is base_T_wobj = Trans(x, y, z) Rz(theta); the program's targets stay
 in it. For every candidate (x, y, theta) and every cutter-contact point the robot's joints
 come from the analytic IK on the program's own configuration (ABB confdata, KUKA
-Status/Turn, or path continuity where the program gives none: the selection functions of
-``kinematics`` that compensation uses); a candidate is feasible when every Cartesian target
-is reachable inside the joint (and coupling) limits and away from the wrist, elbow and
-shoulder singularities (eq. 3). Its objective is the step-length weighted mean of
+Status/Turn, or path continuity where the program gives none: ``placement_branch``, by
+default with the turn data re-derived for the moved workpiece as a re-post would); a
+candidate is feasible when every Cartesian target is reachable inside the joint (and
+coupling) limits and away from the wrist, elbow and shoulder singularities (eq. 3); the
+reason of each infeasible one is kept. Its objective is the step-length weighted mean of
 |n . C_tt F| over the path (``compliance``). The search is a grid of m1 x m2 x m3
 candidates (eq. 24), vectorised over candidates x points in chunks that bound memory,
 then a bounded Nelder-Mead refinement inside the best grid cell's neighbourhood.
@@ -20,10 +21,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import compliance as comp
-from . import dialects
 from . import kinematics as kin
-from .posture import singularity_margins
 from .errors import InputError
+from .placement_branch import CONF_MODES, cell_reasons, program_postures
 from .robots import RobotModel
 
 CHUNK_POSES = 120_000  # candidate x point poses per chunk: ~0.2 GB of scratch at most
@@ -44,14 +44,21 @@ class PlacementProblem:
     conf_applies: np.ndarray  # (P,) True where the controller takes the configuration data (the dialect's rule)
     compliance: np.ndarray  # (6,) joint compliance, rad/(N*m)
     line: np.ndarray  # (P,) program lines
+    arm: np.ndarray  # (P,) the program's arm configuration (ABB cfx, KUKA Status) where its data apply, -1 else
     singular_deg: float = 5.0
     shoulder_mm: float = 50.0
+    conf_mode: str = "rederive"  # or "keep" (placement_branch)
+
+    def __post_init__(self):
+        if self.conf_mode not in CONF_MODES:
+            raise InputError(f"configuration data mode '{self.conf_mode}': expected one of {', '.join(CONF_MODES)}")
 
 
 @dataclass(frozen=True)
 class Evaluation:
     mean_mm: np.ndarray  # (M,) weighted mean |e_n|, NaN where infeasible
     feasible: np.ndarray  # (M,)
+    reason: np.ndarray  # (M,) placement_branch reason code, 0 where feasible
 
 
 def placement_frames(candidates: np.ndarray, z_mm: float) -> np.ndarray:
@@ -66,36 +73,8 @@ def placement_frames(candidates: np.ndarray, z_mm: float) -> np.ndarray:
     return out
 
 
-def _program_branch(problem: PlacementProblem, sols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Joints (M, P, 6) on the program's configuration and whether each was found (M, P)."""
-    m, p = sols.shape[:2]
-    robot, conf = problem.robot, problem.conf
-    q = np.full((m, p, 6), np.nan)
-    ok = np.zeros((m, p), dtype=bool)
-    has = problem.conf_applies
-    if has.any():
-        flat = sols[:, has].reshape(-1, 8, 6)
-        want = np.tile(conf[has], (m, 1))
-        qs, idx = dialects.get(problem.dialect).branch_from_conf(robot, flat, want)
-        q[:, has] = qs.reshape(m, -1, 6)
-        ok[:, has] = (idx >= 0).reshape(m, -1)
-    free = ~has
-    if free.any():
-        # No configuration data: the controller keeps the branch of the first target, the
-        # one nearest the middle of the joint ranges (as compensation assumes).
-        rows = sols[:, free]
-        start = np.clip(np.zeros(6), robot.lower_deg, robot.upper_deg)
-        q0, b0 = kin.select_nearest(robot, rows[:, 0], start)
-        # That branch's solution at every target; the IK's [-180, 180] values need no
-        # unwrapping here: only the wide wrist joints (ranges over a turn) could take another.
-        picked = np.take_along_axis(rows, np.maximum(b0, 0)[:, None, None, None], axis=2)[:, :, 0]
-        q[:, free] = picked
-        ok[:, free] = (b0 >= 0)[:, None] & kin.within_limits(robot, picked)
-    return q, ok
-
-
 def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
-    """Per point normal errors (M, P), normal compliance (M, P) and feasibility (M,).
+    """Per point normal errors (M, P), normal compliance (M, P) and reason code (M,), 0 where feasible.
 
     Reach, limits and singularities are settled first; the Jacobians and compliances are
     only computed for the candidates that passed (NaN elsewhere)."""
@@ -103,11 +82,9 @@ def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
     tcp = frames[:, None] @ problem.local_tcp[None]  # (M, P, 4, 4)
     flange = tcp @ np.linalg.inv(problem.flange_T_tcp)[None]
     sols = kin.ik(problem.robot, flange.reshape(-1, 4, 4)).reshape(m, p, 8, 6)
-    q, ok = _program_branch(problem, sols)
-    q_flat = np.where(ok[..., None], q, 0.0).reshape(-1, 6)
-    wrist, elbow, shoulder = singularity_margins(problem.robot, q_flat)
-    clear = (wrist > problem.singular_deg) & (elbow > problem.singular_deg) & (shoulder > problem.shoulder_mm)
-    feasible = (ok & clear.reshape(m, p)).all(axis=1)
+    q, point_reason = program_postures(problem, sols)
+    reason = cell_reasons(point_reason)
+    feasible = reason == 0
     err = np.full((m, p), np.nan)
     cn = np.full((m, p), np.nan)
     if feasible.any():
@@ -119,26 +96,38 @@ def _chunk_errors(problem: PlacementProblem, frames: np.ndarray):
         jv = comp.tcp_linear_jacobian(problem.robot, q[keep].reshape(-1, 6), r)
         e, c = comp.normal_error_and_compliance(jv, problem.compliance, force, normal)
         err[keep], cn[keep] = e.reshape(-1, p), c.reshape(-1, p)
-    return err, cn, feasible
+    return err, cn, reason
 
 
-def evaluate(problem: PlacementProblem, frames: np.ndarray, chunk_poses: int = CHUNK_POSES) -> Evaluation:
-    """Mean normal error of each workpiece frame (M, 4, 4): NaN where infeasible."""
+def evaluate(problem: PlacementProblem, frames: np.ndarray, chunk_poses: int = CHUNK_POSES, progress=None) -> Evaluation:
+    """Mean normal error of each workpiece frame (M, 4, 4): NaN where infeasible.
+    ``progress(done, total)`` is called after each chunk."""
     frames = np.asarray(frames, dtype=float).reshape(-1, 4, 4)
     per = max(1, chunk_poses // max(len(problem.local_tcp), 1))
     mean = np.full(len(frames), np.nan)
-    feasible = np.zeros(len(frames), dtype=bool)
+    reason = np.zeros(len(frames), dtype=np.int8)
     for s in range(0, len(frames), per):
-        err, _, ok = _chunk_errors(problem, frames[s : s + per])
-        feasible[s : s + per] = ok
-        mean[s : s + per] = np.where(ok, comp.weighted_mean(np.nan_to_num(err), problem.weights), np.nan)
-    return Evaluation(mean, feasible)
+        err, _, why = _chunk_errors(problem, frames[s : s + per])
+        reason[s : s + per] = why
+        mean[s : s + per] = np.where(why == 0, comp.weighted_mean(np.nan_to_num(err), problem.weights), np.nan)
+        if progress is not None:
+            progress(min(s + per, len(frames)), len(frames))
+    return Evaluation(mean, reason == 0, reason)
 
 
 def path_errors(problem: PlacementProblem, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
     """Normal error (P,) mm and normal compliance (P,) mm/N along the path at one frame, and feasibility."""
-    err, cn, ok = _chunk_errors(problem, np.asarray(frame, dtype=float).reshape(1, 4, 4))
-    return err[0], cn[0], bool(ok[0])
+    err, cn, why = _chunk_errors(problem, np.asarray(frame, dtype=float).reshape(1, 4, 4))
+    return err[0], cn[0], bool(why[0] == 0)
+
+
+def placement_joints(problem: PlacementProblem, frame: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Joints (P, 6) the robot takes at each target with the workpiece at ``frame``, and their reason codes (P,)."""
+    tcp = np.asarray(frame, dtype=float)[None] @ problem.local_tcp
+    flange = tcp @ np.linalg.inv(problem.flange_T_tcp)
+    sols = kin.ik(problem.robot, flange)[None]
+    q, reason = program_postures(problem, sols)
+    return q[0], reason[0]
 
 
 def grid_axis(spec: tuple[float, float, float], name: str) -> np.ndarray:
@@ -162,6 +151,7 @@ class SearchResult:
     ys: np.ndarray
     thetas: np.ndarray
     grid_mean_mm: np.ndarray  # (nx, ny, nt), NaN where infeasible
+    grid_reason: np.ndarray  # (nx, ny, nt) placement_branch reason codes, 0 where feasible
     grid_best: np.ndarray  # (3,) x, y, theta of the best grid candidate
     grid_best_mm: float
     best: np.ndarray  # (3,) after refinement
@@ -169,21 +159,24 @@ class SearchResult:
     evaluated: int
 
 
-def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool = True, chunk_poses: int = CHUNK_POSES) -> SearchResult:
-    """Grid search over xs x ys x thetas (mm, mm, deg), then bounded local refinement."""
+def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool = True, chunk_poses: int = CHUNK_POSES,
+           progress=None) -> SearchResult:
+    """Grid search over xs x ys x thetas (mm, mm, deg), then bounded local refinement;
+    ``progress(done, total)`` after each chunk of the grid."""
     xs, ys, thetas = (np.asarray(v, dtype=float) for v in (xs, ys, thetas))
     cand = np.stack(np.meshgrid(xs, ys, thetas, indexing="ij"), axis=-1).reshape(-1, 3)
-    ev = evaluate(problem, placement_frames(cand, z_mm), chunk_poses)
+    ev = evaluate(problem, placement_frames(cand, z_mm), chunk_poses, progress)
     grid = ev.mean_mm.reshape(len(xs), len(ys), len(thetas))
+    why = ev.reason.reshape(grid.shape)
     if not ev.feasible.any():
-        return SearchResult(xs, ys, thetas, grid, np.full(3, np.nan), math.nan, np.full(3, np.nan), math.nan, len(cand))
+        return SearchResult(xs, ys, thetas, grid, why, np.full(3, np.nan), math.nan, np.full(3, np.nan), math.nan, len(cand))
     k = int(np.nanargmin(ev.mean_mm))
     best, best_mm, evaluated = cand[k].copy(), float(ev.mean_mm[k]), len(cand)
     grid_best, grid_best_mm = best.copy(), best_mm
     if refine:
         best, best_mm, used = _refine(problem, cand[k], best_mm, (xs, ys, thetas), z_mm)
         evaluated += used
-    return SearchResult(xs, ys, thetas, grid, grid_best, grid_best_mm, best, best_mm, evaluated)
+    return SearchResult(xs, ys, thetas, grid, why, grid_best, grid_best_mm, best, best_mm, evaluated)
 
 
 def _refine(problem: PlacementProblem, start: np.ndarray, start_mm: float, axes, z_mm: float):

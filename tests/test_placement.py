@@ -13,7 +13,9 @@ from postproc import compliance as comp
 from postproc.cli import app
 from postproc import kinematics as kin
 from postproc import placement as pl
+from postproc import placement_branch as pb
 from postproc.place_program import current_frame, problem_from_program
+from postproc.posture import singularity_margins
 from postproc.programs import parse_program
 from postproc.robots import load_robot
 
@@ -126,9 +128,9 @@ def test_chunking_does_not_change_results(block_pass):
 def test_infeasible_far_away_and_near_singularity(block_pass, robot):
     _, problem = block_pass
     far = pl.evaluate(problem, pl.placement_frames([[3000.0, 0.0, 0.0]], 1170.0))
-    assert not far.feasible[0] and np.isnan(far.mean_mm[0])
+    assert not far.feasible[0] and np.isnan(far.mean_mm[0]) and far.reason[0] == pb.REACH
     q = np.array([[0.0, 30.0, 20.0, 0.0, 0.5, 0.0]])
-    wrist, elbow, shoulder = pl.singularity_margins(robot, q)
+    wrist, elbow, shoulder = singularity_margins(robot, q)
     assert wrist[0] < 1.0 and elbow[0] > 5.0 and shoulder[0] > 50.0
 
 
@@ -152,12 +154,14 @@ def test_rapid_confdata_rules_the_branch(robot, tmp_path):
     program = tmp_path / "block.mod"
     program.write_text("\n".join(lines))
     tp = parse_program(program)
-    problem = problem_from_program(tp, robot, force_tool=FORCE)
-    ev = pl.evaluate(problem, pl.placement_frames([[1200.0, 0.0, 0.0], [1200.0, 0.0, 180.0], [1200, 0, 100.0]], 1170.0))
-    assert ev.feasible[0]
-    assert not ev.feasible[2]  # axis 6 would leave the programmed quadrant (cf6)
+    frames = pl.placement_frames([[1200.0, 0.0, 0.0], [1200.0, 0.0, 180.0], [1200, 0, 100.0]], 1170.0)
+    kept = pl.evaluate(problem_from_program(tp, robot, force_tool=FORCE, conf_mode="keep"), frames)
+    assert kept.feasible[0]
+    assert not kept.feasible[2] and kept.reason[2] == pb.CONF  # axes 1 and 6 would leave the programmed quadrants
+    rederived = pl.evaluate(problem_from_program(tp, robot, force_tool=FORCE), frames)
+    assert rederived.feasible[0] and rederived.feasible[2]  # a re-post writes the quadrants the joints are in
     out = tmp_path / "placed.mod"
-    proc = _cli(program, "--search", "1100:1300:100,-100:100:100,0:0:0", "-o", out, cwd=tmp_path)
+    proc = _cli(program, "--search", "1100:1300:100,-100:100:100,0:0:0", "-o", out, "--keep-conf", cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     doc = json.loads(proc.stdout)
     best = doc["best"]

@@ -131,6 +131,9 @@ class Dialect:
     # ------------------------------------------------------- new targets (subdividing)
     #: longest name of a declared point (0: the language has no named points)
     point_name_limit: int = 0
+    # which column of conf_of_joints is the arm configuration (shoulder, elbow, wrist), the rest
+    # being turn data; None where the language states no configuration
+    arm_conf_column: int | None = None
     #: what ends a statement that may run over several lines ("\n": one line each)
     statement_end: str = "\n"
 
@@ -159,6 +162,11 @@ class Dialect:
         """``text`` (the program's main file) with its workpiece frame ``frame_name`` set to
         ``new_frame`` (base_T_workpiece), for ``postproc place -o``."""
         raise EmitError(f"{path}: writing a placed {self.name} program is not supported")
+
+    def target_literal(self, text: str, first_number: int) -> tuple[int, int]:
+        """(start, end) of the target literal (the aggregate holding its configuration data)
+        whose first number starts at ``first_number``, for writing its configuration data."""
+        raise EmitError(f"writing configuration data into a {self.name} program is not supported")
 
     # ------------------------------------------------------------- streaming
     def stream_rules(self) -> "StreamRules | None":
@@ -226,3 +234,20 @@ def read_head(path: str | Path, size: int = 4096) -> bytes:
             return fh.read(size)
     except OSError as exc:
         raise InputError(f"{path}: cannot read ({exc.strerror})") from None
+
+
+def aggregate_around(text: str, first_number: int, opener: str, depth: int) -> tuple[int, int]:
+    """(start, end) of the aggregate whose first number starts at ``first_number``: ``depth``
+    ``opener`` brackets back from it (whitespace and a component name between), to its match."""
+    closer = {"[": "]", "{": "}"}[opener]
+    start = first_number
+    for _ in range(depth):
+        start = text.rfind(opener, 0, start)
+        if start < 0:
+            raise EmitError(f"no '{opener}' before offset {first_number}: not a target literal")
+    level = 0
+    for end in range(start, len(text)):
+        level += (text[end] == opener) - (text[end] == closer)
+        if level == 0:
+            return start, end + 1
+    raise EmitError(f"target literal at offset {start} is not closed")

@@ -7,14 +7,23 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
+from matplotlib.lines import Line2D  # noqa: E402
+from matplotlib.patches import Patch  # noqa: E402
+
+from ..placement_branch import REASONS, reason_counts  # noqa: E402
 
 BEST, CURRENT = "#1f77b4", "#ff7f0e"
+# One colour per infeasibility reason (placement_branch.REASONS order; index 0, feasible, unused)
+REASON_COLOURS = ("#ffffff", "#d9d9d9", "#e377c2", "#fdd0a2", "#fdae6b", "#fd8d3c", "#e6550d", "#a63603", "#7f2704",
+                  "#8c564b", "#9e9ac8", "#6a51a3", "#3f007d", "#252525")
 
 
 def error_maps(result, current_xyt=None, max_panels: int = 24):
     """Mean normal error over (x, y), one panel per theta (up to max_panels, evenly
-    picked); infeasible cells grey with an x; the best candidate (star) and the current
-    placement (circle) marked on their theta's panel."""
+    picked); infeasible cells coloured by their reason (``result.grid_reason``); the best
+    candidate (star) and the current placement (circle) marked on their theta's panel."""
+
     thetas = result.thetas
     pick = np.unique(np.linspace(0, len(thetas) - 1, min(len(thetas), max_panels)).round().astype(int))
     cols = min(4, len(pick))
@@ -23,27 +32,30 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
     span_x = max(float(np.ptp(xs)), 1.0)
     span_y = max(float(np.ptp(ys)), 1.0)
     panel_h = float(np.clip(3.6 * span_y / span_x, 1.6, 4.2)) + 0.9  # equal aspect plus labels
-    height = panel_h * rows + 1.3
+    legend_rows = int(np.ceil((len(reason_counts(result.grid_reason)) + 2) / 4))
+    legend_h = 0.3 + 0.28 * legend_rows  # inches under the axis labels: the legend and its title
+    height = panel_h * rows + 1.3 + legend_h
     fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols + 1.2, height), squeeze=False)
     # fixed margins (constrained layout costs seconds per figure on a busy machine)
-    fig.subplots_adjust(left=0.07, right=0.86, top=1 - 0.55 / height, bottom=0.95 / height, wspace=0.45, hspace=0.9 / panel_h)
+    fig.subplots_adjust(left=0.07, right=0.86, top=1 - 0.55 / height, bottom=(0.95 + legend_h) / height, wspace=0.45, hspace=0.9 / panel_h)
     grid_um = result.grid_mean_mm * 1000.0
     finite = grid_um[np.isfinite(grid_um)]
     vmin, vmax = (finite.min(), finite.max()) if finite.size else (0.0, 1.0)
     cmap = plt.get_cmap("viridis").with_extremes(bad="#d9d9d9")
     extent = _edges(xs), _edges(ys)
     image = None
-    gx, gy = np.meshgrid(xs, ys, indexing="ij")
+    reason_cmap = ListedColormap(REASON_COLOURS)
+    reason_norm = BoundaryNorm(np.arange(len(REASON_COLOURS) + 1) - 0.5, len(REASON_COLOURS))
     for ax, k in zip(axes.flat, pick):
         values = np.ma.masked_invalid(grid_um[:, :, k].T)
         image = ax.pcolormesh(extent[0], extent[1], values, cmap=cmap, vmin=vmin, vmax=vmax, shading="flat")
-        bad = ~np.isfinite(grid_um[:, :, k])
-        if bad.any():
-            ax.plot(gx[bad], gy[bad], "x", color="#7f7f7f", markersize=3, linestyle="none")
+        why = np.ma.masked_equal(result.grid_reason[:, :, k].T.astype(int), 0)
+        if why.count():
+            ax.pcolormesh(extent[0], extent[1], why, cmap=reason_cmap, norm=reason_norm, shading="flat", edgecolors="face")
         if np.isclose(result.grid_best[2], thetas[k]):
             ax.plot(result.grid_best[0], result.grid_best[1], "*", color="red", markersize=14, markeredgecolor="white")
         if current_xyt is not None and np.isclose(current_xyt[2], thetas[k]):
-            ax.plot(current_xyt[0], current_xyt[1], "o", color=CURRENT, markersize=9, markeredgecolor="black")
+            ax.plot(current_xyt[0], current_xyt[1], "o", color="white", markersize=9, markeredgecolor="black", markeredgewidth=1.5)
         ax.set_title(f"θ = {thetas[k]:g}°", fontsize=10)
         ax.set_xlabel("workpiece x (mm, base frame)")
         ax.set_ylabel("workpiece y (mm)")
@@ -52,13 +64,13 @@ def error_maps(result, current_xyt=None, max_panels: int = 24):
         ax.set_visible(False)
     if image is not None:
         fig.colorbar(image, cax=fig.add_axes([0.89, 0.15, 0.015, 0.7]), label="mean normal error (µm)")
-    from matplotlib.lines import Line2D
-
-    handles = [Line2D([], [], marker="x", color="#7f7f7f", linestyle="none", label="infeasible (reach, limits, singularity)"),
-               Line2D([], [], marker="*", color="red", markeredgecolor="white", markersize=14, linestyle="none", label="best grid candidate")]
+    counts = reason_counts(result.grid_reason)
+    handles = [Patch(facecolor=REASON_COLOURS[REASONS.index(name)], edgecolor="#7f7f7f", label=f"{name} ({n})") for name, n in counts.items()]
+    handles.append(Line2D([], [], marker="*", color="red", markeredgecolor="white", markersize=14, linestyle="none", label="best grid candidate"))
     if current_xyt is not None:
-        handles.append(Line2D([], [], marker="o", color=CURRENT, markeredgecolor="black", markersize=9, linestyle="none", label="current placement"))
-    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=9, frameon=False)
+        handles.append(Line2D([], [], marker="o", color="white", markeredgecolor="black", markeredgewidth=1.5, markersize=9, linestyle="none", label="current placement"))
+    fig.legend(handles=handles, loc="lower center", ncol=min(len(handles), 4), fontsize=9, frameon=False,
+               title="infeasible cells by reason (count over the whole grid)", title_fontsize=9)
     shown = "" if len(pick) == len(thetas) else f" ({len(pick)} of {len(thetas)} θ values shown)"
     fig.suptitle(f"Force-induced mean normal error over workpiece placements{shown}", fontsize=12)
     return fig

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from ...ir import SourceDoc, Toolpath
-from ..base import Dialect, read_bytes
+from ..base import Dialect, aggregate_around, read_bytes
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -80,6 +80,9 @@ class KrlDialect(Dialect):
 
         return load_masses(tp)
 
+    def target_literal(self, text, first_number):
+        return aggregate_around(text, first_number, "{", 1)  # {X .., S .., T ..}
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_base
 
@@ -124,6 +127,7 @@ class KrlDialect(Dialect):
         return doc.role in ("src", "dat")  # a module is its .src and its .dat
 
     point_name_limit = 24  # KRL names: at most 24 characters (KSS 8 programming manual, "Names")
+    arm_conf_column = 0  # Status (overhead, elbow, wrist flip); Turn is the joints' signs
 
     def conf_of_joints(self, robot, q_deg):
         """S and T of new points (LIN ignores them; a PTP to the point later would take them)."""

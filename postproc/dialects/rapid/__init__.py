@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...ir import SourceDoc, Toolpath
-from ..base import Dialect, read_bytes
+from ..base import Dialect, aggregate_around, read_bytes
 
 
 class RapidDialect(Dialect):
@@ -82,6 +82,9 @@ class RapidDialect(Dialect):
 
         return wrist_singularity_avoidance(tp)
 
+    def target_literal(self, text, first_number):
+        return aggregate_around(text, first_number, "[", 2)  # [[x,y,z],[q],[conf],[ext]]
+
     def place_workpiece(self, text, frame_name, new_frame, path):
         from .placing import set_work_object
 
@@ -100,6 +103,7 @@ class RapidDialect(Dialect):
         return True  # a program is all its modules
 
     point_name_limit = 32  # RAPID identifiers: at most 32 characters (RAPID overview, "Identifiers")
+    arm_conf_column = 3  # cfx (shoulder, elbow, wrist); cf1, cf4, cf6 are quadrants
     statement_end = ";"
 
     def conf_of_joints(self, robot, q_deg):
