@@ -146,4 +146,4 @@ def test_import_ur10_writes_the_group_columns(shared, tmp_path):
     result = runner.invoke(app, ["import-ur10", str(shared / "data" / "ur10_ipa" / "Series_B"), "-o", str(tmp_path / "B.csv")])
     assert result.exit_code == 0, result.output
     header = (tmp_path / "B.csv").read_text().splitlines()[0].split(",")
-    assert header[-2:] == ["point", "pose"] and "session" not in header  # B's time stamps are lost
+    assert header[-5:] == ["point", "pose", "probe_rx", "probe_ry", "probe_rz"] and "session" not in header  # B's time stamps are lost

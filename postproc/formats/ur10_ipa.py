@@ -12,6 +12,9 @@ Three group columns are added for the evaluation protocols (``postproc validate`
 ``point`` (one id per commanded position, all its orientations), ``pose`` (one id per
 commanded probe pose: Series B reaches each in two arm configurations) and, where the
 timestamps survive, ``session`` (a new session after a pause of more than 30 minutes).
+The probe's measured orientation in the tracker frame is kept as ``probe_rx``,
+``probe_ry``, ``probe_rz`` (degrees, as the file gives them): what a tracker- or
+probe-side error would depend on.
 """
 
 from __future__ import annotations
@@ -31,6 +34,7 @@ GOAL_DECIMALS = 4  # commanded poses are planned in metres and radians: equal to
 SESSION_GAP_S = 1800.0  # as postproc.validate: a pause of more than 30 min starts a new session
 JOINT_COLUMNS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 MEASURED_COLUMNS = ("measurement_x", "measurement_y", "measurement_z")
+ORIENTATION_COLUMNS = ("measurement_rx", "measurement_ry", "measurement_rz")
 
 
 def probe_offset(trafo_path: str | Path) -> np.ndarray:
@@ -73,7 +77,7 @@ def read_series(series_dir: str | Path) -> tuple[MeasurementSet, np.ndarray]:
         raise MeasurementError(path, 1, None, "empty file")
     header = [h.strip() for h in rows[0]]
     col = {name: i for i, name in enumerate(header)}
-    for name in ("Timestamp",) + GOAL_COLUMNS + JOINT_COLUMNS + MEASURED_COLUMNS + ("measurement_temperature",):
+    for name in ("Timestamp",) + GOAL_COLUMNS + JOINT_COLUMNS + MEASURED_COLUMNS + ORIENTATION_COLUMNS + ("measurement_temperature",):
         if name not in col:
             raise MeasurementError(path, 1, name, "column missing")
     n = len(rows) - 1
@@ -81,6 +85,7 @@ def read_series(series_dir: str | Path) -> tuple[MeasurementSet, np.ndarray]:
     measured = np.empty((n, 3))
     temp = np.empty(n)
     goal = np.empty((n, 6))
+    probe = np.empty((n, 3))
     stamps = []
     for r, row in enumerate(rows[1:]):
         line = r + 2
@@ -90,12 +95,14 @@ def read_series(series_dir: str | Path) -> tuple[MeasurementSet, np.ndarray]:
             q[r, j] = math.degrees(_number(row[col[name]], path, line, name))
         for j, name in enumerate(MEASURED_COLUMNS):
             measured[r, j] = _number(row[col[name]], path, line, name)
+        for j, name in enumerate(ORIENTATION_COLUMNS):
+            probe[r, j] = _number(row[col[name]], path, line, name)
         for j, name in enumerate(GOAL_COLUMNS):
             goal[r, j] = _number(row[col[name]], path, line, name)
         temp[r] = _number(row[col["measurement_temperature"]], path, line, "measurement_temperature")
         stamps.append(row[col["Timestamp"]].strip())
     ids = tuple(str(i + 1) for i in range(n))  # the row number in the source file
-    meas = MeasurementSet(q_deg=q, measured_mm=measured, ids=ids, temp_c=temp, source=str(path), extra=_groups(goal))
+    meas = MeasurementSet(q_deg=q, measured_mm=measured, ids=ids, temp_c=temp, source=str(path), extra={**_groups(goal), **{f"probe_{axis}": probe[:, k] for k, axis in enumerate(("rx", "ry", "rz"))}})
     if len(set(stamps)) > 1 and all(len(s) == 14 and s.isdigit() for s in stamps):
         moments = np.array([dt.datetime.strptime(s, "%Y%m%d%H%M%S").timestamp() for s in stamps])
         # The shared schema wants rows in measurement order; Series A's file is not.
