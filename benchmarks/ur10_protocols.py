@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import json
 import subprocess
+import os
 import sys
 import tempfile
 import time
@@ -49,7 +50,7 @@ def run(args: list[str]) -> tuple[dict, float]:
 
 def main() -> None:
     argv = [x for x in sys.argv[1:] if x != "--skip-hybrid"]
-    data = Path(argv[0]) if argv else ROOT.parent / "shared" / "data" / "ur10_ipa"
+    data = Path(argv[0]) if argv else Path(os.environ.get("POSTPROC_SHARED", ROOT.parent / "shared")) / "data" / "ur10_ipa"
     with tempfile.TemporaryDirectory() as tmp:
         a, b = str(Path(tmp) / "A.csv"), str(Path(tmp) / "B.csv")
         for series, path in (("Series_A", a), ("Series_B", b)):
