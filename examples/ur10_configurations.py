@@ -16,7 +16,9 @@ on all of Series B, i.e. the best this model can do on B. Prints:
    gear's lost motion), the tracker direction; joint-angle errors of every joint at every
    order 1..259 (through the Jacobian; strain-wave gears put their kinematic error at
    orders 1, 2 and twice the gear ratio: Ghorbel et al. 2001);
-4. what the common part follows: the tracker direction and the probe's orientation.
+4. what the common part follows: the tracker direction and the probe's orientation;
+5. elbow-configuration-dependent geometry: one physics model per elbow configuration,
+   fitted on half of the commanded positions and scored on the other half.
 
 Figure (``OUT/ur10_configurations.png``): the joint-angle spectrum of the residual, and the
 pair difference against the gravity-torque change of joint 3 before (catalog physics) and
@@ -42,6 +44,7 @@ from postproc.effects import parse_effects  # noqa: E402
 from postproc.formats.ur10_ipa import read_series  # noqa: E402
 from postproc.identify import fit, residuals  # noqa: E402
 from postproc.kinematics import gravity_torque, jacobian  # noqa: E402
+from postproc.validate import every_kth_group  # noqa: E402
 
 PHYSICS = "geometric,base_frame,tool_offset,joint_compliance"
 MAX_ORDER = 259
@@ -126,7 +129,7 @@ def main() -> None:
         "gravity torques (linear)": tau[first] - tau[second],
         "sign of the gravity torques (load reversal)": np.sign(tau[first]) - np.sign(tau[second]),
         "joint angles (linear)": dq,
-        "tracker direction (azimuth, elevation, range)": tracker_direction(meas.measured_mm[first]),
+        "workspace position (tracker azimuth, elevation, range)": tracker_direction(meas.measured_mm[first]),
     }
     q_rad = np.radians(meas.q_deg)
     harmonics = np.column_stack([f(k * q_rad[:, 1:4]) for k in (1, 2, 3, 4) for f in (np.sin, np.cos)])
@@ -148,6 +151,13 @@ def main() -> None:
     differ_after = (resid_after[first] - resid_after[second]) / 2
     print(f"   best catalog candidate {better.effects.spec()}: half the difference RMS {rms(differ):.3f} -> {rms(differ_after):.3f} mm, "
           f"common part {rms(common):.3f} -> {rms((resid_after[first] + resid_after[second]) / 2):.3f} mm (fitted on all of B)")
+    test = every_kth_group(meas.extra["point"].astype(int), 2)  # half the commanded positions, as validate --every 2
+    up = meas.q_deg[:, 2] > 0
+    split = [np.linalg.norm(residuals(fit(robot, tool, parse_effects(PHYSICS), meas.subset(c & ~test), cv_folds=0).model, meas.subset(c & test)), axis=1)
+             for c in (up, ~up)]
+    shared = np.linalg.norm(residuals(fit(robot, tool, parse_effects(PHYSICS), meas.subset(~test), cv_folds=0).model, meas.subset(test)), axis=1)
+    print("5. elbow-configuration-dependent geometry: the physics fitted on half of B's commanded positions, scored on the other half:")
+    print(f"   one model for both configurations mean {shared.mean():.3f} mm; one model per elbow configuration mean {np.concatenate(split).mean():.3f} mm")
     figure(out / "ur10_configurations.png", spectrum, tau[first, 2] - tau[second, 2], differ, differ_after, better.effects.spec())
     print(f"figure: {out / 'ur10_configurations.png'}")
 
