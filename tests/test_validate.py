@@ -147,3 +147,12 @@ def test_import_ur10_writes_the_group_columns(shared, tmp_path):
     assert result.exit_code == 0, result.output
     header = (tmp_path / "B.csv").read_text().splitlines()[0].split(",")
     assert header[-5:] == ["point", "pose", "probe_rx", "probe_ry", "probe_rz"] and "session" not in header  # B's time stamps are lost
+
+
+def test_a_group_id_that_is_not_whole_names_its_line(world, tmp_path):
+    _, _, meas, _ = world
+    point = meas.extra["point"].copy()
+    point[7] = 2.5
+    write_measurements(tmp_path / "half.csv", replace(meas, extra={"point": point}))
+    result = _validate(str(tmp_path / "half.csv"), "--protocol", "points")
+    assert result.exit_code == 2 and "line 9" in result.output and "'point'" in result.output
