@@ -22,7 +22,7 @@ is only tested where the test poses lie near what it was fitted on.
 
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -124,6 +124,16 @@ def fit_model(spec: FitSpec, meas: MeasurementSet, say: Callable[[str], None]) -
                          progress=lambda done, total, msg: say(f"{msg} ({done}/{total})"))
 
 
+def with_order_columns(effects: EffectSum, meas: MeasurementSet) -> MeasurementSet:
+    """Columns an effect infers from the row order (the approach directions of backlash),
+    taken from the whole set before it is split: a subset's rows are no longer consecutive."""
+    for effect in effects:
+        columns = effect.path_columns(meas.q_deg)
+        if "approach" in columns and meas.approach is None:
+            meas = replace(meas, approach=columns["approach"])
+    return meas
+
+
 def joint_distance(train_q_deg: np.ndarray, test_q_deg: np.ndarray) -> np.ndarray:
     """Distance (rad) of each test pose to its nearest training pose in joint space."""
     dist, _ = cKDTree(np.radians(train_q_deg)).query(np.radians(test_q_deg))
@@ -186,6 +196,7 @@ def rigid_offset(pred_mm: np.ndarray, resid_mm: np.ndarray) -> tuple[np.ndarray,
 
 def _held_out(spec: FitSpec, meas: MeasurementSet, test: np.ndarray, say) -> tuple[ErrorModel, np.ndarray, np.ndarray]:
     """Fit on the rows not in ``test``; (model, residual of the test rows, their joint distance)."""
+    meas = with_order_columns(spec.effects, meas)
     train = meas.subset(~test)
     if len(train) == 0 or not test.any():
         raise InputError("a protocol fold has no training or no test poses")
@@ -256,6 +267,7 @@ def run_series(spec: FitSpec, meas: MeasurementSet, other: MeasurementSet, say=l
     if len(other) < 12:
         raise InputError(f"{other.source}: the series protocol re-registers 6 DOF on half of the set and needs at least 12 poses, it has {len(other)}")
     model = fit_model(spec, meas, say)
+    other = with_order_columns(spec.effects, other)
     first = halves(other)
     norms = []
     for register, score in ((first, ~first), (~first, first)):

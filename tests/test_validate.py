@@ -16,7 +16,7 @@ from postproc.errors import InputError, MeasurementError
 from postproc.formats.ur10_ipa import read_series
 from postproc.measurements import write_measurements
 from postproc.sim import JointBox, random_truth, sample_poses, simulate
-from postproc.validate import FitSpec, run_points, run_random, run_series, run_sessions, session_ids
+from postproc.validate import FitSpec, run_points, run_random, run_series, run_sessions, session_ids, with_order_columns
 
 runner = CliRunner()
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
@@ -156,3 +156,14 @@ def test_a_group_id_that_is_not_whole_names_its_line(world, tmp_path):
     write_measurements(tmp_path / "half.csv", replace(meas, extra={"point": point}))
     result = _validate(str(tmp_path / "half.csv"), "--protocol", "points")
     assert result.exit_code == 2 and "line 9" in result.output and "'point'" in result.output
+
+
+def test_approach_from_the_row_order_is_taken_before_the_split(world):
+    meas = replace(world[2], approach=None)  # as the UR10 data: no s1..s6 columns
+    effects = parse_effects(EFFECTS + ",backlash")
+    whole = with_order_columns(effects, meas)
+    assert whole.approach is not None and meas.approach is None
+    # Row 10's direction is from row 9, which a split may hold out: the column keeps it.
+    step = np.sign(meas.q_deg[10] - meas.q_deg[9])
+    assert np.array_equal(whole.approach[10][step != 0], step[step != 0])
+    assert with_order_columns(parse_effects(EFFECTS), meas).approach is None  # no effect asks for it
