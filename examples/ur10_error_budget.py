@@ -8,7 +8,9 @@ behind each statement:
    colder, every goal pose in two joint configurations, each configuration measured twice);
 2. repeatability: the same joint configuration measured twice (the noise floor);
 3. time: is Series A's drift over the days a rigid move of the tracker (one 6-DOF frame per
-   measuring session) or the workspace region each day measured?
+   measuring session) or the workspace region each day measured? A grid point's
+   orientations on one day against its other orientations on another day mix the two;
+   like with like, pose pairs close in joint space on the same day against different days;
 4. the validation protocol: Series B re-registered on all of its rows (6 DOF) against
    registered on half and scored on the other half, and with the probe offset re-fitted too;
 5. the ceiling: physics models fitted on Series B itself. No model of the same effects
@@ -97,10 +99,7 @@ for s in np.unique(session):
         left[rows] = rigid_residual(pred_a[rows], resid_a[rows])
 print(f"   {session.max() + 1} sessions; Series A residual {stats(resid_a)} -> with a frame per session {stats(left)}")
 day = np.floor(series_a.time_s / 86400 + 0.69).astype(int)  # calendar day (the series starts at 16:39)
-goal_a = np.round(np.array([[float(v.replace(",", ".")) for v in raw_column("Series_A", c)] for c in ("Goal x", "Goal y", "Goal z")]).T, 3)
-goal_a = goal_a[np.argsort(raw_column("Series_A", "Timestamp"), kind="stable")]  # read_series puts the rows in time order
-_, point = np.unique(goal_a, axis=0, return_inverse=True)
-point = point.ravel()
+point = series_a.extra["point"].astype(int)  # commanded position (read_series groups the goal poses)
 across, within = [], []
 for g in range(point.max() + 1):
     rows = np.nonzero(point == g)[0]
@@ -110,8 +109,22 @@ for g in range(point.max() + 1):
     elif len(rows) >= 10:
         half = len(rows) // 2
         within.append(np.linalg.norm(resid_a[rows[:half]].mean(0) - resid_a[rows[half:]].mean(0)))
-print(f"   same grid point, mean residual of its orientations: {len(across)} points measured on two days differ by median {np.median(across):.3f} mm;")
-print(f"   {len(within)} points measured on one day, first against second half of their orientations: median {np.median(within):.3f} mm")
+print(f"   same grid point, mean residual of its orientations: {len(across)} points measured on two days differ by median {np.median(across):.3f} mm,")
+print(f"   but that compares different orientations: {len(within)} points measured on one day, first against second half of their orientations, median {np.median(within):.3f} mm")
+# Like with like: pairs of poses close in joint space, measured on the same day or on different days.
+from scipy.spatial import cKDTree  # noqa: E402
+
+pairs = cKDTree(np.radians(series_a.q_deg)).query_pairs(0.05, output_type="ndarray")
+gap = np.linalg.norm(resid_a[pairs[:, 0]] - resid_a[pairs[:, 1]], axis=1)
+apart = np.linalg.norm(np.radians(series_a.q_deg[pairs[:, 0]] - series_a.q_deg[pairs[:, 1]]), axis=1)
+same_day = day[pairs[:, 0]] == day[pairs[:, 1]]
+print("   pose pairs closer than 0.05 rad in joint space, residual difference (median mm):")
+for lo, hi in ((0.0, 0.025), (0.025, 0.05)):
+    near = (apart >= lo) & (apart < hi)
+    one, two = np.median(gap[near & same_day]), np.median(gap[near & ~same_day])
+    print(f"     {lo:.3f}-{hi:.3f} rad: same day {one:.3f} ({np.sum(near & same_day)} pairs), different days {two:.3f} ({np.sum(near & ~same_day)} pairs):"
+          f" {two - one:+.3f} mm across days, a day-to-day part of about {np.sqrt(max(two**2 - one**2, 0.0)):.3f} mm")
+print("   held-out sessions and each session's rigid offset: postproc validate A.csv --protocol sessions (docs/guide/validate.md)")
 print(f"   elbow configuration q3 > 0: {np.mean(series_a.q_deg[:, 2] > 0):.0%} of Series A, {np.mean(series_b.q_deg[:, 2] > 0):.0%} of Series B")
 print(f"4. validation protocol on Series B (model fitted on one pose in {EVERY} of Series A)")
 print(f"   re-registered on all rows (evaluate --reregister): {stats(resid_b)}")

@@ -239,6 +239,7 @@ def write_measurements(path: str | Path, meas: MeasurementSet, decimals: int = 4
         cols.append(("t", meas.time_s))
     if meas.temp_c is not None:
         cols.append(("temp", meas.temp_c))
+    cols += list(meas.extra.items())  # e.g. group ids (point, session): read back as extra columns
     buf = io.StringIO()
     writer = csv.writer(buf, lineterminator="\n")
     writer.writerow(["id"] + [c for c, _ in cols])
@@ -246,7 +247,8 @@ def write_measurements(path: str | Path, meas: MeasurementSet, decimals: int = 4
         cells = [meas.ids[r]]
         for c, values in cols:
             v = values[r]
-            cells.append(f"{int(v):d}" if c in APPROACH else f"{v:.{decimals if c not in JOINTS else 6}f}")
+            whole = c in APPROACH or (c in meas.extra and float(v).is_integer())
+            cells.append(f"{int(v):d}" if whole else f"{v:.{decimals if c not in JOINTS else 6}f}")
         writer.writerow(cells)
     write_text_atomic(path, buf.getvalue())
 

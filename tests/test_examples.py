@@ -22,6 +22,8 @@ def test_example_runs(script, tmp_path, shared):
         args.append(str(shared / "data" / "ur10_ipa"))
     if script.name == "ur10_error_budget.py":
         args += [str(shared / "data" / "ur10_ipa"), "--quick"]
+    if script.name == "ur10_configurations.py":
+        args += [str(tmp_path), str(shared / "data" / "ur10_ipa")]
     if script.name == "ur10_ladder.py":
         args += [str(tmp_path), str(shared / "data" / "ur10_ipa"), "--quick"]
     proc = subprocess.run(args, capture_output=True, text=True, timeout=600, cwd=tmp_path)

@@ -7,6 +7,14 @@ the T-Mac probe's transform from which the measured point's offset from the flan
 follows. Timestamps are YYYYMMDDhhmmss: rows are put in measurement order (the ids keep
 each row's number in the file); a series whose timestamps were mangled into one number
 (Series B) keeps its file order and gets no time column.
+
+Three group columns are added for the evaluation protocols (``postproc validate``):
+``point`` (one id per commanded position, all its orientations), ``pose`` (one id per
+commanded probe pose: Series B reaches each in two arm configurations) and, where the
+timestamps survive, ``session`` (a new session after a pause of more than 30 minutes).
+The probe's measured orientation in the tracker frame is kept as ``probe_rx``,
+``probe_ry``, ``probe_rz`` (degrees, as the file gives them): what a tracker- or
+probe-side error would depend on.
 """
 
 from __future__ import annotations
@@ -21,8 +29,12 @@ import numpy as np
 from ..errors import MeasurementError
 from ..measurements import MeasurementSet
 
+GOAL_COLUMNS = ("Goal x", "Goal y", "Goal z", "Goal roll", "Goal pitch", "Goal yaw")
+GOAL_DECIMALS = 4  # commanded poses are planned in metres and radians: equal to 0.1 mm / 0.1 mrad are one
+SESSION_GAP_S = 1800.0  # as postproc.validate: a pause of more than 30 min starts a new session
 JOINT_COLUMNS = ("shoulder_pan_joint", "shoulder_lift_joint", "elbow_joint", "wrist_1_joint", "wrist_2_joint", "wrist_3_joint")
 MEASURED_COLUMNS = ("measurement_x", "measurement_y", "measurement_z")
+ORIENTATION_COLUMNS = ("measurement_rx", "measurement_ry", "measurement_rz")
 
 
 def probe_offset(trafo_path: str | Path) -> np.ndarray:
@@ -65,13 +77,15 @@ def read_series(series_dir: str | Path) -> tuple[MeasurementSet, np.ndarray]:
         raise MeasurementError(path, 1, None, "empty file")
     header = [h.strip() for h in rows[0]]
     col = {name: i for i, name in enumerate(header)}
-    for name in ("Timestamp",) + JOINT_COLUMNS + MEASURED_COLUMNS + ("measurement_temperature",):
+    for name in ("Timestamp",) + GOAL_COLUMNS + JOINT_COLUMNS + MEASURED_COLUMNS + ORIENTATION_COLUMNS + ("measurement_temperature",):
         if name not in col:
             raise MeasurementError(path, 1, name, "column missing")
     n = len(rows) - 1
     q = np.empty((n, 6))
     measured = np.empty((n, 3))
     temp = np.empty(n)
+    goal = np.empty((n, 6))
+    probe = np.empty((n, 3))
     stamps = []
     for r, row in enumerate(rows[1:]):
         line = r + 2
@@ -81,14 +95,28 @@ def read_series(series_dir: str | Path) -> tuple[MeasurementSet, np.ndarray]:
             q[r, j] = math.degrees(_number(row[col[name]], path, line, name))
         for j, name in enumerate(MEASURED_COLUMNS):
             measured[r, j] = _number(row[col[name]], path, line, name)
+        for j, name in enumerate(ORIENTATION_COLUMNS):
+            probe[r, j] = _number(row[col[name]], path, line, name)
+        for j, name in enumerate(GOAL_COLUMNS):
+            goal[r, j] = _number(row[col[name]], path, line, name)
         temp[r] = _number(row[col["measurement_temperature"]], path, line, "measurement_temperature")
         stamps.append(row[col["Timestamp"]].strip())
     ids = tuple(str(i + 1) for i in range(n))  # the row number in the source file
-    meas = MeasurementSet(q_deg=q, measured_mm=measured, ids=ids, temp_c=temp, source=str(path))
+    meas = MeasurementSet(q_deg=q, measured_mm=measured, ids=ids, temp_c=temp, source=str(path), extra={**_groups(goal), **{f"probe_{axis}": probe[:, k] for k, axis in enumerate(("rx", "ry", "rz"))}})
     if len(set(stamps)) > 1 and all(len(s) == 14 and s.isdigit() for s in stamps):
         moments = np.array([dt.datetime.strptime(s, "%Y%m%d%H%M%S").timestamp() for s in stamps])
         # The shared schema wants rows in measurement order; Series A's file is not.
         order = np.argsort(moments, kind="stable")
         meas = meas.subset(order)
-        meas = MeasurementSet(**{**meas.__dict__, "time_s": moments[order] - moments[order[0]]})
+        time_s = moments[order] - moments[order[0]]
+        session = np.cumsum(np.r_[True, np.diff(time_s) > SESSION_GAP_S]) - 1.0
+        meas = MeasurementSet(**{**meas.__dict__, "time_s": time_s, "extra": {**meas.extra, "session": session}})
     return meas, probe_offset(folder / "Trafo_TM_F_init.txt")
+
+
+def _groups(goal: np.ndarray) -> dict[str, np.ndarray]:
+    """Group ids from the commanded poses: 'point' (position) and 'pose' (position and orientation)."""
+    rounded = np.round(goal, GOAL_DECIMALS)
+    _, point = np.unique(rounded[:, :3], axis=0, return_inverse=True)
+    _, pose = np.unique(rounded, axis=0, return_inverse=True)
+    return {"point": point.ravel().astype(float), "pose": pose.ravel().astype(float)}
