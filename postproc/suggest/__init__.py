@@ -39,6 +39,7 @@ class Suggestion:
     random_rms_mm: float  # the same for random designs of the same size (mean of RANDOM_DRAWS)
     random_equivalent_n: int | None  # poses random selection needs for expected_rms_mm (None: more than the curve spans)
     std: dict[str, float]  # expected standard error of each identified parameter, in its unit
+    units: dict[str, str]  # each identified parameter's unit
     fixed: dict[str, str]  # parameters the candidates cannot separate, and why (as fit reports them)
     condition_number: float  # of the identification Jacobian of measured + chosen poses (columns in typical sizes)
     curve: tuple[tuple[int, float, float], ...]  # (N, expected RMS suggested, expected RMS random), mm
@@ -49,7 +50,7 @@ class Suggestion:
     def as_json(self) -> dict:
         return {"chosen": list(self.ids), "criterion": self.criterion, "expected_rms_mm": self.expected_rms_mm,
                 "random_rms_mm": self.random_rms_mm, "random_equivalent_n": self.random_equivalent_n, "n_random": self.n_random,
-                "condition_number": self.condition_number, "expected_std": self.std, "fixed": self.fixed,
+                "condition_number": self.condition_number, "expected_std": self.std, "units": self.units, "fixed": self.fixed,
                 "curve": [{"n": n, "expected_rms_mm": s, "random_rms_mm": r} for n, s, r in self.curve], "notes": list(self.notes)}
 
 
@@ -110,6 +111,7 @@ class _Information:
     fixed: dict[str, str]
     scale: np.ndarray  # (K,) typical size of each identifiable parameter
     names: tuple[str, ...]
+    units: dict[str, str]
     evaluation: np.ndarray  # (T, 3, K) position Jacobian (mm per typical size) where expected_rms_mm is taken
     where: str
 
@@ -133,8 +135,8 @@ def _information(model: ErrorModel, cands: Candidates, measured: MeasurementSet 
     else:
         evaluation, where = jac[:c], f"the {c} candidate poses"
     problem = design.Problem.of(blocks, prior, evaluation)
-    names = tuple(p.name for p, f in zip(model.params, free) if f)
-    return _Information(problem, free, fixed, scale, names, evaluation, where)
+    kept = [p for p, f in zip(model.params, free) if f]
+    return _Information(problem, free, fixed, scale, tuple(p.name for p in kept), {p.name: p.unit for p in kept}, evaluation, where)
 
 
 _COLUMNS = {"force": FORCES, "approach": APPROACH, "temp": ("temp",), "t": ("t",)}
@@ -195,7 +197,7 @@ def _summarise(info_: _Information, cands: Candidates, order, greedy_order, crit
     if cands.rounded_deg > 0:
         notes.append(f"candidate joints rounded to 4 decimals (the precision of the robot program), by at most {cands.rounded_deg:.2g} deg")
     return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random,
-                      expected_rms_mm=expected, random_rms_mm=float(random_same), random_equivalent_n=equivalent, std=std,
+                      expected_rms_mm=expected, random_rms_mm=float(random_same), random_equivalent_n=equivalent, std=std, units=info_.units,
                       fixed=info_.fixed, condition_number=cond, curve=curve, swaps=swaps, where=info_.where, notes=tuple(notes))
 
 

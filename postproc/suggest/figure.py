@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import io
+import textwrap
 
 import matplotlib
 
@@ -10,12 +11,14 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from . import RANDOM_DRAWS  # noqa: E402
+
 
 def curve_png(suggestion, title: str) -> bytes:
     """PNG bytes of the expected-RMS curve (log-log), the chosen N marked."""
     n, suggested, rand = (np.array(v, dtype=float) for v in zip(*suggestion.curve))
     fig, ax = plt.subplots(figsize=(7.0, 4.5), dpi=110)
-    ax.plot(n, rand, "o-", color="#7f7f7f", label=f"random poses (mean of {8} draws)")
+    ax.plot(n, rand, "o-", color="#7f7f7f", label=f"random poses (mean of {RANDOM_DRAWS} draws)")
     ok = np.isfinite(suggested)
     ax.plot(n[ok], suggested[ok], "s-", color="#1f77b4", label=f"suggested ({suggestion.criterion}-optimal, greedy prefix)")
     chosen = len(suggestion.chosen)
@@ -25,8 +28,8 @@ def curve_png(suggestion, title: str) -> bytes:
     ax.set_xscale("log")
     ax.set_yscale("log")
     ax.set_xlabel("poses measured, N")
-    ax.set_ylabel(f"predicted model error RMS at {suggestion.where} (mm)")
-    ax.set_title(title, fontsize=10)
+    ax.set_ylabel("predicted model error RMS (mm)")
+    ax.set_title(f"{textwrap.fill(title, 80)}\npredicted error (noise only) at {suggestion.where}", fontsize=9)
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     fig.tight_layout()

@@ -16,17 +16,18 @@ from ..programs import parse_program
 DEFAULT_SPEED_MM_S = 250.0
 
 
-def visiting_program(language: str, name: str, q_deg: np.ndarray, ids, tool_mm, speed_mm_s: float = DEFAULT_SPEED_MM_S) -> list[str]:
+def visiting_program(language: str, name: str, q_deg: np.ndarray, ids, speed_mm_s: float = DEFAULT_SPEED_MM_S) -> list[str]:
     """Texts of the program's files (``Dialect.new_program_paths`` order)."""
     lang = dialects.get(language, "--program-language")
     writer = lang.new_writer(name)
     if writer is None:
         able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
         raise EmitError(f"--program-language: cannot write a new {language} program ({' or '.join(able)})")
-    tool = np.eye(4)
-    tool[:3, 3] = np.asarray(tool_mm, dtype=float)
     writer.start(name)
-    writer.tool("tool0" if not np.any(tool[:3, 3]) else "tmeas", tool)
+    # Joint moves: the tool frame does not change where the robot goes, and a tooldata of
+    # our own would need a load we do not know (a wrong one changes what is measured), so
+    # the controller's tool0 and its load as set on the robot.
+    writer.tool("tool0", np.eye(4))
     if hasattr(writer, "load"):
         writer.load(None)
     writer.speed(speed_mm_s)
