@@ -75,9 +75,10 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     m = 0 if measured is None else len(measured)
     if n > available:
         raise InputError(f"-n {n}: only {available} candidate poses{' not measured yet' if m else ''} to choose from")
-    if 3 * (n + m) <= k:
-        raise InputError(f"-n {n}: {n + m} poses give {3 * (n + m)} equations for the {k} parameters these candidates can identify; "
-                         f"choose at least {k // 3 + 1 - m}")
+    least = fewest_poses(len(model.params), k)
+    if n + m < least:
+        raise InputError(f"-n {n}: {n + m} poses give {3 * (n + m)} equations; fit needs at least {3 * least} for the model's "
+                         f"{len(model.params)} parameters ({k} of them identifiable from these candidates): choose at least {least - m}")
     rng = np.random.default_rng(seed)
     n_random = int(round(random_share * n))
     fixed = rng.choice(np.nonzero(~excluded)[0], size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
@@ -88,6 +89,11 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     start = measured.q_deg[-1] if m else None
     order = final[measuring_order(candidates.q_deg[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
+
+
+def fewest_poses(n_params: int, n_identifiable: int) -> int:
+    """The fewest poses fit accepts: 3 equations each for all parameters, more than the identifiable ones."""
+    return max(-(-n_params // 3), n_identifiable // 3 + 1)
 
 
 def _check_options(criterion: str, targets_q, n: int, random_share: float, noise_mm: float) -> str:
@@ -209,7 +215,7 @@ def _curve(info_: _Information, greedy_order, final, excluded, rng, m: int) -> t
     k = problem.blocks.shape[-1]
     n = len(final)
     pool = np.nonzero(~excluded)[0]
-    low = max(k // 3 + 1 - m, 1)
+    low = max(fewest_poses(len(info_.free), k) - m, 1)
     top = min(len(pool), 4 * n)
     grid = np.unique(np.concatenate([np.geomspace(low, top, 24).round().astype(int), [n]]))
     grid = grid[(grid >= low) & (grid <= top)]
