@@ -619,6 +619,7 @@ def suggest_poses_cmd(
     from .suggest.candidates import generate, read_candidates
     from .suggest.inputs import design_model, tracker_from
     from .suggest.job import report_lines, write_outputs
+    from .suggest.program import language_of
 
     _refuse_unused("with --candidates (they are not generated)", {"--region": candidates is not None and region is not None,
                                                                   "--tracker": candidates is not None and tracker is not None,
@@ -632,6 +633,8 @@ def suggest_poses_cmd(
     design_for = design_model(robot_model, tool_mm, parse_effects(effects) if effects is not None else None, fitted)
     for path, option in ((output, "-o"), (plot, "--plot"), (program_out, "--program-out")):
         _check_output_folder(path, option)
+    if program_out is not None:
+        language_of(program_out, program_language)  # an unknown language fails before the search, not after
     rng = np.random.default_rng(seed)
     if candidates is not None:
         cands = read_candidates(candidates, robot_model)

@@ -20,7 +20,7 @@ from postproc.programs import parse_program
 from postproc.robots import load_robot
 from postproc.sim import Cylinder, random_truth, simulate
 from postproc.suggest import _information, design, suggest_poses  # _information: the very blocks the design uses
-from postproc.suggest.candidates import Candidates, generate, read_candidates
+from postproc.suggest.candidates import Candidates, Tracker, generate, read_candidates, visible
 
 runner = CliRunner()
 ROBOT = load_robot("kr160_r1570")
@@ -202,7 +202,8 @@ def test_bad_options_exit_2(tmp_path, cands):
     _write_candidates(path, cands)
     base = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", EFFECTS, "--candidates", str(path), "-o", str(tmp_path / "c.csv")]
     for extra, text in ((["-n", "2"], "choose at least"), (["-n", "10", "--criterion", "X"], "--criterion"),
-                        (["-n", "10", "--random-share", "1.5"], "--random-share"), (["-n", "10", "--region", "x=1:2"], "--region")):
+                        (["-n", "10", "--random-share", "1.5"], "--random-share"), (["-n", "10", "--region", "x=1:2"], "--region"),
+                        (["-n", "10", "--program-out", str(tmp_path / "p.txt")], "--program-language")):
         result = runner.invoke(app, base + extra)
         assert result.exit_code == 2 and text in result.stderr, (extra, result.stderr)
     missing = tmp_path / "noq.csv"
@@ -217,3 +218,14 @@ def test_candidates_reader_carries_other_columns(tmp_path, cands):
     back = read_candidates(path, ROBOT)
     assert back.columns == ("note",) and back.cells[0] == ("row s1",) and back.ids == cands.ids
     np.testing.assert_array_equal(back.q_deg, cands.q_deg)
+
+
+def test_tracker_line_of_sight_and_range(cands):
+    q = cands.q_deg
+    assert visible(ROBOT, TOOL, q, Tracker(np.array([2500.0, 0.0, 500.0]))).all()  # in front, clear view
+    behind = visible(ROBOT, TOOL, q, Tracker(np.array([-2500.0, 0.0, 800.0]))).mean()
+    assert 0.3 < behind < 0.99  # the robot's own links hide part of the workspace
+    assert not visible(ROBOT, TOOL, q, Tracker(np.array([900.0, 0.0, 550.0]))).any()  # closer than the range's minimum
+    up = replace(Tracker(np.array([1000.0, 0.0, -2500.0])), cone_deg=60.0)  # below, the reflector facing down
+    assert visible(ROBOT, TOOL, q, up).all()
+    assert not visible(ROBOT, TOOL, q, replace(up, position_mm=np.array([1000.0, 0.0, 4000.0]))).any()

@@ -63,6 +63,6 @@ def language_of(output: Path, language: str | None) -> str:
     suffix = Path(output).suffix.lower()
     able = [d for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
     for d in able:
-        if suffix in d.extensions and suffix != ".txt":
+        if suffix in d.extensions:
             return d.name
     raise EmitError(f"--program-out {output}: cannot tell the language from '{suffix}'; give --program-language ({', '.join(d.name for d in able)})")
