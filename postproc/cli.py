@@ -597,7 +597,7 @@ def suggest_poses_cmd(
     tracker: Optional[str] = typer.Option(None, "--tracker", help="X,Y,Z of the laser tracker in the robot base frame, mm: generated candidates must be in its range and line of sight."),
     tracker_range: Optional[str] = typer.Option(None, "--tracker-range", help="MIN:MAX distance the tracker measures, mm (default 1000:15000)."),
     tracker_cone: Optional[float] = typer.Option(None, "--tracker-cone", help="Reflector acceptance half-angle about the tool z axis, deg (default: not checked)."),
-    criterion: str = typer.Option("D", "--criterion", help="D (default), E or A-optimal design of the parameters."),
+    criterion: str = typer.Option("D", "--criterion", help="D (default), E or A-optimal design of the parameters, or I: the least mean predicted error over the candidates (with --program: at its targets)."),
     program: Optional[Path] = typer.Option(None, "--program", help="Region-targeted: minimise the predicted error at this program's targets."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of --program (default: from the extension or content)."),
     measured: Optional[Path] = typer.Option(None, "--measured", help="Poses measured already (measurement CSV): suggest the next batch."),
@@ -624,7 +624,7 @@ def suggest_poses_cmd(
     _refuse_unused("with --candidates (they are not generated)", {"--region": candidates is not None and region is not None,
                                                                   "--tracker": candidates is not None and tracker is not None,
                                                                   "--n-candidates": candidates is not None and n_candidates != 2000})
-    _refuse_unused("with --program (the design is region-targeted)", {"--criterion": program is not None and criterion != "D"})
+    _refuse_unused("with --program (the design is region-targeted)", {"--criterion": program is not None and criterion not in ("D", "I")})
     fitted = load_model(model)[0] if model is not None else None
     if fitted is None and (robot is None or tool is None):
         raise InputError("suggest-poses needs --robot and --tool (or --model MODEL.json)")

@@ -23,7 +23,7 @@ from .targets import program_targets
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
 DEFAULT_NOISE_MM = 0.02  # per axis, tracker + repeatability (spec/measurements.md)
 CRITERION_NAMES = {"D": "D-optimal (O1: log det of the information)", "E": "E-optimal (O3: its smallest eigenvalue)",
-                   "A": "A-optimal (trace of the parameter covariance)", "I": "I-optimal (mean predicted error variance at the program's targets)"}
+                   "A": "A-optimal (trace of the parameter covariance)", "I": "I-optimal (mean predicted error variance at the program's targets, or over the candidates)"}
 RANDOM_DRAWS = 8  # random designs averaged for the comparison curve
 
 __all__ = ["Candidates", "Suggestion", "program_targets", "suggest_poses", "DEFAULT_RANDOM_SHARE", "DEFAULT_NOISE_MM"]
@@ -60,8 +60,8 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     """Choose ``n`` of ``candidates`` to measure next, for the effects of ``model`` (its
     parameter values are where the Jacobian is taken: nominal, or a fitted model's).
 
-    ``criterion``: D, E or A; with ``targets_q`` (joints at a program's targets) the design
-    minimises the predicted error variance there instead (reported as I). ``measured``: the
+    ``criterion``: D, E, A or I (the mean predicted error variance over the candidates); with
+    ``targets_q`` (joints at a program's targets) the design minimises it there (I). ``measured``: the
     poses measured already (their information is counted; their ids are not chosen again).
     ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search.
     """
@@ -98,9 +98,7 @@ def fewest_poses(n_params: int, n_identifiable: int) -> int:
 
 def _check_options(criterion: str, targets_q, n: int, random_share: float, noise_mm: float) -> str:
     if criterion not in (*design.CRITERIA, "I"):
-        raise InputError(f"--criterion: '{criterion}' is not one of D, E, A")
-    if criterion == "I" and targets_q is None:
-        raise InputError("--criterion I (region-targeted) needs the program's targets (--program)")
+        raise InputError(f"--criterion: '{criterion}' is not one of D, E, A, I")
     if n < 1:
         raise InputError("-n must be at least 1")
     if not 0.0 <= random_share < 1.0:
