@@ -229,3 +229,9 @@ def test_tracker_line_of_sight_and_range(cands):
     up = replace(Tracker(np.array([1000.0, 0.0, -2500.0])), cone_deg=60.0)  # below, the reflector facing down
     assert visible(ROBOT, TOOL, q, up).all()
     assert not visible(ROBOT, TOOL, q, replace(up, position_mm=np.array([1000.0, 0.0, 4000.0]))).any()
+
+
+def test_library_entry_point_is_on_the_package():
+    import postproc  # noqa: PLC0415  (the attribute is resolved lazily: that is what is tested)
+
+    assert postproc.suggest_poses is suggest_poses
