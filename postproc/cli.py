@@ -641,7 +641,8 @@ def suggest_poses_cmd(
     else:
         track = tracker_from(None if tracker is None else _floats(tracker, 3, "--tracker"),
                              None if tracker_range is None else tuple(_floats(tracker_range.replace(":", ","), 2, "--tracker-range")), tracker_cone)
-        cands = generate(robot_model, tool_mm, n_candidates, parse_region(workspace, region), rng, track)
+        # ids name the seed: a batch generated with another seed has other poses under other ids
+        cands = generate(robot_model, tool_mm, n_candidates, parse_region(workspace, region), rng, track, id_prefix=f"s{seed}-")
     done = _load_measurements(measured, robot_model) if measured is not None else None
     targets = program_targets(program, design_for, dialect) if program is not None else None
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:

@@ -13,6 +13,7 @@ from typer.testing import CliRunner
 
 from postproc.cli import app
 from postproc.effects import parse_effects
+from postproc.errors import InputError
 from postproc.errormodel import ErrorModel
 from postproc.identify import fit
 from postproc.measurements import read_measurements, write_measurements
@@ -235,3 +236,13 @@ def test_library_entry_point_is_on_the_package():
     import postproc  # noqa: PLC0415  (the attribute is resolved lazily: that is what is tested)
 
     assert postproc.suggest_poses is suggest_poses
+
+
+def test_a_candidate_id_naming_another_measured_pose_is_refused(tmp_path, cands, model):
+    measured = simulate(random_truth(ROBOT, TOOL, parse_effects(EFFECTS), np.random.default_rng(0)), cands.q_deg[:12] + 1.0,
+                        np.random.default_rng(1))
+    measured = replace(measured, ids=cands.ids[:12], source="m.csv")
+    with pytest.raises(InputError, match="ids must name one pose"):
+        suggest_poses(model, cands, 12, measured=measured)
+    same = replace(measured, q_deg=cands.q_deg[:12])
+    assert not set(suggest_poses(model, cands, 12, measured=same).ids) & set(cands.ids[:12])

@@ -69,7 +69,7 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     criterion = _check_options(criterion, targets_q, n, random_share, noise_mm)
     say("identification Jacobian")
     info = _information(model, candidates, measured, targets_q, noise_mm)
-    excluded = np.isin(np.asarray(candidates.ids, dtype=object), np.asarray(measured.ids if measured is not None else (), dtype=object))
+    excluded = _measured_already(candidates, measured)
     available = int((~excluded).sum())
     k = info.problem.blocks.shape[-1]
     m = 0 if measured is None else len(measured)
@@ -89,6 +89,27 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     start = measured.q_deg[-1] if m else None
     order = final[measuring_order(candidates.q_deg[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
+
+
+SAME_POSE_DEG = 1e-3  # joints this close (each) are the same pose
+
+
+def _measured_already(cands: Candidates, measured: MeasurementSet | None) -> np.ndarray:
+    """(C,) True for candidates that are poses of the measured set: the same id with the same
+    joints. The same id at other joints is refused: the joined CSVs would mix two poses."""
+    if measured is None:
+        return np.zeros(len(cands), dtype=bool)
+    row_of = {ident: r for r, ident in enumerate(measured.ids)}
+    out = np.zeros(len(cands), dtype=bool)
+    for c, ident in enumerate(cands.ids):
+        r = row_of.get(ident)
+        if r is None:
+            continue
+        if np.abs(cands.q_deg[c] - measured.q_deg[r]).max() > SAME_POSE_DEG:
+            raise InputError(f"{cands.source}: candidate id '{ident}' is the id of another pose in {measured.source} "
+                             f"(line {measured.line_of(r)}); ids must name one pose")
+        out[c] = True
+    return out
 
 
 def fewest_poses(n_params: int, n_identifiable: int) -> int:

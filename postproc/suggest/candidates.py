@@ -85,8 +85,10 @@ def visible(robot: RobotModel, tool_mm, q_deg: np.ndarray, tracker: Tracker) -> 
     return ok & (dist.min(axis=(1, 2)) > tracker.link_radius_mm)
 
 
-def generate(robot: RobotModel, tool_mm, n: int, region, rng: np.random.Generator, tracker: Tracker | None = None) -> Candidates:
-    """n candidate poses in ``region`` (postproc.sim regions) inside the joint limits, visible to the tracker."""
+def generate(robot: RobotModel, tool_mm, n: int, region, rng: np.random.Generator, tracker: Tracker | None = None,
+             id_prefix: str = "s") -> Candidates:
+    """n candidate poses in ``region`` (postproc.sim regions) inside the joint limits, visible
+    to the tracker, with ids ``{id_prefix}1``, ``{id_prefix}2``, ..."""
     if n < 1:
         raise InputError("--n-candidates must be at least 1")
     kept = np.empty((0, 6))
@@ -101,7 +103,7 @@ def generate(robot: RobotModel, tool_mm, n: int, region, rng: np.random.Generato
     if len(kept) < n:
         raise InputError(f"only {len(kept)} of {n} candidate poses in the workspace region are within the tracker's range and line of sight; "
                          "move the tracker (--tracker) or widen the region")
-    return Candidates(q_deg=kept[:n], ids=tuple(f"s{i + 1}" for i in range(n)), source="<generated>")
+    return Candidates(q_deg=kept[:n], ids=tuple(f"{id_prefix}{i + 1}" for i in range(n)), source="<generated>")
 
 
 def read_candidates(path: str | Path, robot: RobotModel) -> Candidates:
