@@ -246,3 +246,20 @@ def test_a_candidate_id_naming_another_measured_pose_is_refused(tmp_path, cands,
         suggest_poses(model, cands, 12, measured=measured)
     same = replace(measured, q_deg=cands.q_deg[:12])
     assert not set(suggest_poses(model, cands, 12, measured=same).ids) & set(cands.ids[:12])
+
+
+def test_effects_that_need_more_columns_take_them_from_the_candidates(tmp_path, cands):
+    effects = EFFECTS + ",external_load"  # needs the force on the tool, fx,fy,fz
+    path = tmp_path / "cand.csv"
+    _write_candidates(path, cands)
+    base = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", effects, "-n", "20", "-o", str(tmp_path / "c.csv")]
+    result = runner.invoke(app, base + ["--candidates", str(path)])
+    assert result.exit_code == 2 and "fx,fy,fz" in result.stderr and str(path) in result.stderr
+    forces = np.random.default_rng(0).normal(0.0, 200.0, (len(cands), 3))  # the loads each pose will be measured under, N
+    lines = path.read_text().splitlines()
+    with_f = [lines[0] + ",fx,fy,fz"] + [f"{line},{','.join(f'{v:.1f}' for v in f)}" for line, f in zip(lines[1:], forces)]
+    path.write_text("\n".join(with_f) + "\n")
+    result = runner.invoke(app, base + ["--candidates", str(path), "--json"])
+    assert result.exit_code == 0, result.output
+    assert len(json.loads(result.stdout)["expected_std"]) > len(suggest_poses(ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS)), cands, 20).std)
+    assert list(csv.DictReader(open(tmp_path / "c.csv")))[0].keys() >= {"fx", "fy", "fz"}  # carried along for the measurement
