@@ -593,6 +593,8 @@ def suggest_poses_cmd(
     candidates: Optional[Path] = typer.Option(None, "--candidates", help="CSV of poses the robot can reach (q1..q6 degrees; id and other columns optional)."),
     workspace: str = typer.Option("cylinder", "--workspace", help="Without --candidates: where to generate them: cylinder, box or joints (as simulate)."),
     region: Optional[str] = typer.Option(None, "--region", help="Workspace extents, as simulate's --region."),
+    box: Optional[str] = typer.Option(None, "--box", help="Generate candidates in a box: the same as --workspace box --region TEXT ('' for the default box)."),
+    cylinder: Optional[str] = typer.Option(None, "--cylinder", help="Generate candidates in a cylinder sector: --workspace cylinder --region TEXT."),
     n_candidates: int = typer.Option(2000, "--n-candidates", help="Without --candidates: how many to generate."),
     tracker: Optional[str] = typer.Option(None, "--tracker", help="X,Y,Z of the laser tracker in the robot base frame, mm: generated candidates must be in its range and line of sight."),
     tracker_range: Optional[str] = typer.Option(None, "--tracker-range", help="MIN:MAX distance the tracker measures, mm (default 1000:15000)."),
@@ -621,7 +623,11 @@ def suggest_poses_cmd(
     from .suggest.job import report_lines, write_outputs
     from .suggest.program import language_of
 
-    _refuse_unused("with --candidates (they are not generated)", {"--region": candidates is not None and region is not None,
+    if box is not None or cylinder is not None:  # spec/cli.md's --box/--cylinder: a workspace and its region in one option
+        _refuse_unused("with --box or --cylinder (they give the workspace)", {"--workspace": workspace != "cylinder", "--region": region is not None,
+                                                                                "--box and --cylinder together": box is not None and cylinder is not None})
+        workspace, region = ("box", box) if box is not None else ("cylinder", cylinder)
+    _refuse_unused("with --candidates (they are not generated)", {"--box/--cylinder/--region": candidates is not None and region is not None,
                                                                   "--tracker": candidates is not None and tracker is not None,
                                                                   "--n-candidates": candidates is not None and n_candidates != 2000})
     _refuse_unused("with --program (the design is region-targeted)", {"--criterion": program is not None and criterion not in ("D", "I")})

@@ -167,7 +167,7 @@ def test_region_targeted_by_a_program(tmp_path, examples):
     out = tmp_path / "chosen.csv"
     # block_face.src: a face pass for the IRB 6660 of seed 002's placement experiment
     result = runner.invoke(app, ["suggest-poses", "--robot", "irb6660_205_190", "--tool", "0,0,200", "--effects", EFFECTS, "--n-candidates", "300",
-                                 "--workspace", "box", "--region", "x=900:1500;y=-700:700;z=900:1400;tilt=20", "-n", "20", "-o", str(out),
+                                 "--box", "x=900:1500;y=-700:700;z=900:1400;tilt=20", "-n", "20", "-o", str(out),
                                  "--program", str(examples / "data" / "block_face.src"), "--json"])
     assert result.exit_code == 0, result.output
     doc = json.loads(result.stdout)
@@ -204,7 +204,8 @@ def test_bad_options_exit_2(tmp_path, cands):
     base = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", EFFECTS, "--candidates", str(path), "-o", str(tmp_path / "c.csv")]
     for extra, text in ((["-n", "2"], "choose at least"), (["-n", "10", "--criterion", "X"], "--criterion"),
                         (["-n", "10", "--random-share", "1.5"], "--random-share"), (["-n", "10", "--region", "x=1:2"], "--region"),
-                        (["-n", "10", "--program-out", str(tmp_path / "p.txt")], "--program-language")):
+                        (["-n", "10", "--program-out", str(tmp_path / "p.txt")], "--program-language"),
+                        (["-n", "12", "--box", "x=900:1500"], "--box/--cylinder/--region")):
         result = runner.invoke(app, base + extra)
         assert result.exit_code == 2 and text in result.stderr, (extra, result.stderr)
     missing = tmp_path / "noq.csv"
