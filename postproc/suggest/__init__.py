@@ -83,7 +83,7 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     n_random = int(round(random_share * n))
     fixed = rng.choice(np.nonzero(~excluded)[0], size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
     say(f"greedy search ({n} poses from {available})")
-    greedy_order, _ = design.greedy(info.problem, n, criterion, fixed, excluded, say=say)
+    greedy_order = design.greedy(info.problem, n, criterion, fixed, excluded, say=say)
     say("exchange refinement")
     final, swaps = design.exchange(info.problem, greedy_order, criterion, n_random, excluded, say=say)
     start = measured.q_deg[-1] if m else None
@@ -97,18 +97,16 @@ SAME_POSE_DEG = 1e-3  # joints this close (each) are the same pose
 def _measured_already(cands: Candidates, measured: MeasurementSet | None) -> np.ndarray:
     """(C,) True for candidates that are poses of the measured set: the same id with the same
     joints. The same id at other joints is refused: the joined CSVs would mix two poses."""
-    if measured is None:
-        return np.zeros(len(cands), dtype=bool)
-    row_of = {ident: r for r, ident in enumerate(measured.ids)}
     out = np.zeros(len(cands), dtype=bool)
-    for c, ident in enumerate(cands.ids):
-        r = row_of.get(ident)
-        if r is None:
-            continue
-        if np.abs(cands.q_deg[c] - measured.q_deg[r]).max() > SAME_POSE_DEG:
-            raise InputError(f"{cands.source}: candidate id '{ident}' is the id of another pose in {measured.source} "
-                             f"(line {measured.line_of(r)}); ids must name one pose")
-        out[c] = True
+    if measured is None:
+        return out
+    _, c, m = np.intersect1d(np.asarray(cands.ids, dtype=str), np.asarray(measured.ids, dtype=str), return_indices=True)
+    other = np.abs(cands.q_deg[c] - measured.q_deg[m]).max(axis=1) > SAME_POSE_DEG
+    if other.any():
+        k = int(np.argmax(other))
+        raise InputError(f"{cands.source}: candidate id '{cands.ids[c[k]]}' is the id of another pose in {measured.source} "
+                         f"(line {measured.line_of(m[k])}); ids must name one pose")
+    out[c] = True
     return out
 
 

@@ -119,24 +119,20 @@ def best_gain(problem: Problem, info: np.ndarray, criterion: str, allowed: np.nd
 
 
 def greedy(problem: Problem, n: int, criterion: str, fixed: np.ndarray, excluded: np.ndarray | None = None,
-           say=lambda msg: None) -> tuple[np.ndarray, np.ndarray]:
-    """Add candidates one at a time until the design has n (``fixed`` ones first).
-    Returns the design in the order chosen and the criterion after each addition."""
+           say=lambda msg: None) -> np.ndarray:
+    """Add candidates one at a time until the design has n (``fixed`` ones first); the
+    design in the order chosen (its prefixes are the greedy designs of fewer poses)."""
     allowed = np.ones(len(problem.blocks), dtype=bool) if excluded is None else ~excluded
     allowed[fixed] = False
     chosen = [int(i) for i in fixed]
     info = problem.information(chosen)
-    trace = [criterion_value(problem, problem.information(chosen[: k + 1]), criterion) for k in range(len(chosen))]
-    while len(chosen) < n:
-        if not allowed.any():
-            break
+    while len(chosen) < n and allowed.any():
         i, _ = best_gain(problem, info, criterion, allowed)
         say(f"greedy search: pose {len(chosen) + 1} of {n}")
         chosen.append(i)
         allowed[i] = False
         info = info + problem.blocks[i].T @ problem.blocks[i]
-        trace.append(criterion_value(problem, info, criterion))
-    return np.array(chosen, dtype=int), np.array(trace)
+    return np.array(chosen, dtype=int)
 
 
 def exchange(problem: Problem, design: np.ndarray, criterion: str, n_fixed: int, excluded: np.ndarray | None = None,
