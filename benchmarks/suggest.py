@@ -184,49 +184,69 @@ def main():
     parser.add_argument("--ur10-seeds", type=int, default=2)
     parser.add_argument("--figure", type=Path, default=Path("docs/suggest-poses.png"))
     parser.add_argument("--output", type=Path, default=Path("benchmarks/results/suggest.txt"))
+    parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
     args = parser.parse_args()
     t0 = time.perf_counter()
-    runs = {"whole": simulated(args.seeds, None)}
-    for name, box in (("pass", PASS), ("free", FREE)):
+    runs = {}
+    if not args.pass_only:
+        runs["whole"] = simulated(args.seeds, None)
+    for name, box in (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE)):
         runs[name] = simulated(args.seeds, box)
         runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0)  # the same truths and candidates; random designs as above
-    real = ur10(args.ur10, args.ur10_seeds)
-    lines = report(args, runs, real, time.perf_counter() - t0)
+    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds)
+    lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
+             + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
+             f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
+             f"suggested: D-optimal (region: I-optimal), random share 0.2, greedy + exchange; random: {RANDOM_DRAWS} draws per seed"]
+    if "whole" in runs:
+        lines += whole_lines(runs, args.seeds)
+    lines += region_lines(runs, args.seeds)
+    if real is not None:
+        lines += ur10_lines(real, args.ur10_seeds)
     args.output.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
-    raw = args.output.with_suffix(".npz")
-    np.savez_compressed(raw, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
-                        **{f"ur10_{label}__{key}": v for label in ("whole", "region") for key, v in real[label].items()}, ur10_grid=np.array(real["grid"]))
-    figure(args.figure, runs, real)
+    if real is not None:
+        raw = args.output.with_suffix(".npz")
+        np.savez_compressed(raw, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
+                            **{f"ur10_{label}__{key}": v for label in ("whole", "region") for key, v in real[label].items()}, ur10_grid=np.array(real["grid"]))
+        figure(args.figure, runs, real)
 
 
-def report(args, runs, real, seconds) -> list[str]:
+def whole_lines(runs, seeds: int) -> list[str]:
     w = summary(GRID, runs["whole"]["suggested_val"], runs["whole"]["random_val"])
     wt = summary(GRID, runs["whole"]["suggested"], runs["whole"]["random"])
-    lines = [f"benchmarks/suggest.py --seeds {args.seeds} --ur10-seeds {args.ur10_seeds}  ({seconds / 60:.1f} min)",
-             f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal), random share 0.2, greedy + exchange; random: {RANDOM_DRAWS} draws per seed",
-             "", f"1. simulated KR160, whole workspace (1,500 candidates, 500 validation poses), mean +- std over {args.seeds} seeds",
+    lines = ["", f"1. simulated KR160, whole workspace (1,500 candidates, 500 validation poses), mean +- std over {seeds} seeds",
              *table(GRID, [("validation suggested", w[0], w[1]), ("validation random", w[2], w[3]),
                            ("true suggested", wt[0], wt[1]), ("true random", wt[2], wt[3])])]
     for name, mean in (("suggested", w[0]), ("random", w[2])):
         n = first_n_below(GRID, mean, 1.2 * FLOOR)
         lines.append(f"  {name}: validation RMS reaches 1.2 x floor at N = " + ("beyond the grid" if n is None else f"<= {-n:.0f}" if n < 0 else f"{n:.1f}"))
-    lines += ["  true error: same error with fewer poses:", *saving_lines(GRID, wt[0], wt[2], (32, 50, 64, 100))]
+    return lines + ["  true error: same error with fewer poses:", *saving_lines(GRID, wt[0], wt[2], (32, 50, 64, 100))]
+
+
+def region_lines(runs, seeds: int) -> list[str]:
+    lines = []
     for k, (name, what) in enumerate((("pass", "a machining pass: tool within 2 deg of down, turned <= 5 deg"),
                                       ("free", "orientations free: within 15 deg of down, any turn"))):
+        if name not in runs:
+            continue
         rg = summary(GRID, runs[name]["suggested"], runs[name]["random"])
         r0 = summary(GRID, runs[name + "0"]["suggested"], runs[name]["random"])
         lines += ["", f"2{'ab'[k]}. simulated KR160, region-targeted: 200 targets in a 250 x 300 x 200 mm box, {what}; "
-                  f"true error at the targets, {args.seeds} seeds",
+                  f"true error at the targets, {seeds} seeds",
                   *table(GRID, [("suggested (I)", rg[0], rg[1]), ("random", rg[2], rg[3]), ("suggested, share 0", r0[0], r0[1])]),
                   *saving_lines(GRID, rg[0], rg[2], (32, 50, 64, 100)),
                   "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100))]
+    return lines
+
+
+def ur10_lines(real, seeds: int) -> list[str]:
+    lines = []
     grid = real["grid"]
     for label in ("whole", "region"):
         m = summary(grid, real[label]["suggested"], real[label]["random"])
         what = "all 2,000 held-out poses (D-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
-        lines += ["", f"3. UR10 Series A retrospectively ({label}): held-out RMS on {what}, {args.ur10_seeds} seeds",
+        lines += ["", f"3. UR10 Series A retrospectively ({label}): held-out RMS on {what}, {seeds} seeds",
                   *table(grid, [("suggested", m[0], m[1]), ("random", m[2], m[3])]),
                   *saving_lines(grid, m[0], m[2], tuple(n for n in (32, 50, 64, 100) if n in grid))]
     return lines
