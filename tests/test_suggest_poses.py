@@ -17,6 +17,7 @@ from postproc.errors import InputError
 from postproc.errormodel import ErrorModel
 from postproc.identify import fit
 from postproc.measurements import read_measurements, write_measurements
+from postproc.model_io import save_model
 from postproc.programs import parse_program
 from postproc.robots import load_robot
 from postproc.sim import Cylinder, random_truth, simulate
@@ -264,3 +265,16 @@ def test_effects_that_need_more_columns_take_them_from_the_candidates(tmp_path, 
     assert result.exit_code == 0, result.output
     assert len(json.loads(result.stdout)["expected_std"]) > len(suggest_poses(ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS)), cands, 20).std)
     assert list(csv.DictReader(open(tmp_path / "c.csv")))[0].keys() >= {"fx", "fy", "fz"}  # carried along for the measurement
+
+
+def test_a_fitted_model_gives_robot_tool_effects_and_values(tmp_path, cands):
+    path = tmp_path / "cand.csv"
+    _write_candidates(path, cands)
+    fitted = tmp_path / "model.json"
+    save_model(fitted, random_truth(ROBOT, TOOL, parse_effects(EFFECTS), np.random.default_rng(0)))
+    base = ["suggest-poses", "--model", str(fitted), "--candidates", str(path), "-n", "15", "-o", str(tmp_path / "c.csv"), "--json"]
+    result = runner.invoke(app, base)
+    assert result.exit_code == 0, result.output
+    assert len(json.loads(result.stdout)["expected_std"]) + len(json.loads(result.stdout)["fixed"]) == len(ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS)).params)
+    wrong = runner.invoke(app, base + ["--robot", "ur10"])
+    assert wrong.exit_code == 2 and "does not match" in wrong.stderr
