@@ -30,4 +30,16 @@ __all__ = [
     "kinematics",
     "load_robot",
     "post",
+    "suggest_poses",
 ]
+
+
+def __getattr__(name: str):
+    # postproc.suggest_poses (issue 32) is resolved on first use: postproc.suggest pulls in
+    # compensation, the dialects and the program writers (about 1.5 s), which a plain
+    # `import postproc` should not pay for.
+    if name == "suggest_poses":
+        from .suggest import suggest_poses
+
+        return suggest_poses
+    raise AttributeError(f"module 'postproc' has no attribute {name!r}")

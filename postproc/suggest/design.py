@@ -1,0 +1,163 @@
+"""Optimal experiment design over candidate poses (Sun & Hollerbach 2008: observability
+index O1 = D-optimal, O3 = E-optimal, A-optimal; Fedorov / DETMAX exchange).
+
+Every candidate pose contributes a 3 x K block ``J_i`` of the identification Jacobian
+(identifiable parameters only, each column in units of its parameter's typical size,
+rows divided by the measurement noise), so a design's information is
+``M = prior + sum_i J_i^T J_i`` and ``M^-1`` is the covariance of the identified
+parameters (in those units). The criteria, all to be maximised:
+
+- ``D``: log det M (the volume of the confidence ellipsoid; invariant to the units);
+- ``E``: the smallest eigenvalue of M (the worst-determined direction);
+- ``A``: -trace(M^-1) (the sum of the parameters' variances);
+- ``I``: -trace(W M^-1) with W = G^T G / T, G the position Jacobian at a program's T
+  targets: minus the mean predicted error variance (mm^2) there (I-/V-optimal design).
+
+The search is greedy (each step adds the candidate with the largest gain, all
+candidates scored at once by rank-3 updates), then exchange passes swap a chosen pose
+for a better candidate while that improves the criterion. Poses fixed in advance (a
+random share) stay. Everything is vectorised over candidates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+CRITERIA = ("D", "E", "A")
+RIDGE = 1e-9  # x the mean per-pose information: makes the empty design invertible, far below any real one
+E_SCREEN = 64  # E-optimal exchange: candidates scored exactly after a first-order screen
+MAX_EXCHANGE_PASSES = 6
+
+
+@dataclass(frozen=True)
+class Problem:
+    """What a design is chosen from: per-candidate information blocks and what is known already."""
+
+    blocks: np.ndarray  # (C, 3, K) whitened, scaled Jacobian of each candidate
+    prior: np.ndarray  # (K, K) information of the poses already measured
+    weight: np.ndarray | None  # (K, K) G^T G / T at a program's targets (None: no region)
+    ridge: float
+
+    @classmethod
+    def of(cls, blocks: np.ndarray, prior: np.ndarray | None = None, targets: np.ndarray | None = None) -> "Problem":
+        """``targets``: (T, 3, K) position Jacobian at the targets (scaled columns, mm)."""
+        k = blocks.shape[-1]
+        per_pose = float(np.einsum("cik,cik->", blocks, blocks)) / max(len(blocks), 1) / k
+        weight = None
+        if targets is not None:
+            g = targets.reshape(-1, k)
+            weight = g.T @ g / len(targets)
+        return cls(blocks, np.zeros((k, k)) if prior is None else prior, weight, RIDGE * max(per_pose, 1e-300))
+
+    def information(self, chosen: np.ndarray) -> np.ndarray:
+        """M of the prior plus the chosen candidates (index array, repeats allowed)."""
+        b = self.blocks[np.asarray(chosen, dtype=int)].reshape(-1, self.blocks.shape[-1])
+        return self.prior + b.T @ b
+
+
+def criterion_value(problem: Problem, info: np.ndarray, criterion: str) -> float:
+    """The criterion of information ``info`` (larger is better); -inf where M is singular."""
+    m = info + problem.ridge * np.eye(len(info))
+    if criterion == "D":
+        sign, logdet = np.linalg.slogdet(m)
+        return float(logdet) if sign > 0 else -np.inf
+    if criterion == "E":
+        return float(np.linalg.eigvalsh(m)[0])
+    cov = np.linalg.inv(m)
+    weight = problem.weight if criterion == "I" else np.eye(len(info))
+    return -float(np.einsum("kl,lk->", weight, cov))
+
+
+def gains(problem: Problem, info: np.ndarray, criterion: str, among: np.ndarray | None = None) -> np.ndarray:
+    """Increase of the criterion from adding each candidate (or those in ``among``) to ``info``."""
+    blocks = problem.blocks if among is None else problem.blocks[among]
+    m = info + problem.ridge * np.eye(len(info))
+    if criterion == "E":
+        return _e_gains(m, blocks)
+    cov = np.linalg.inv(m)
+    jc = blocks @ cov  # (C, 3, K)
+    s = jc @ blocks.transpose(0, 2, 1) + np.eye(3)  # I + J M^-1 J^T
+    if criterion == "D":
+        return np.linalg.slogdet(s)[1]
+    weight = problem.weight if criterion == "I" else np.eye(len(info))
+    t = (jc @ weight) @ jc.transpose(0, 2, 1)  # J M^-1 W M^-1 J^T
+    # Woodbury: trace(W (M + J^T J)^-1) = trace(W M^-1) - trace((I + J M^-1 J^T)^-1 J M^-1 W M^-1 J^T)
+    return np.einsum("cii->c", np.linalg.solve(s, t))
+
+
+def _e_gains(m: np.ndarray, blocks: np.ndarray, chunk: int = 1024) -> np.ndarray:
+    """Smallest eigenvalue of M + J_i^T J_i minus that of M, for every block (batched)."""
+    base = np.linalg.eigvalsh(m)[0]
+    out = np.empty(len(blocks))
+    for start in range(0, len(blocks), chunk):
+        b = blocks[start:start + chunk]
+        out[start:start + chunk] = np.linalg.eigvalsh(m + b.transpose(0, 2, 1) @ b)[:, 0] - base
+    return out
+
+
+def _e_screen(m: np.ndarray, blocks: np.ndarray, k: int) -> np.ndarray:
+    """Indices of the k blocks a first-order estimate (||J_i v||^2 over the few weakest
+    directions v of M) rates best: the E criterion's exact batched eigenvalues are then
+    needed for those only."""
+    values, vectors = np.linalg.eigh(m)
+    weak = vectors[:, : min(3, len(values))]
+    score = np.einsum("cik,kv->civ", blocks, weak) ** 2
+    estimate = (score.sum(axis=1) / np.maximum(values[: weak.shape[1]] - values[0] + 1.0, 1.0)).max(axis=1)
+    return np.argsort(-estimate, kind="stable")[:k]
+
+
+def best_gain(problem: Problem, info: np.ndarray, criterion: str, allowed: np.ndarray) -> tuple[int, float]:
+    """(candidate, gain) of the allowed candidate that adds most; ties go to the lowest index."""
+    idx = np.nonzero(allowed)[0]
+    if criterion == "E" and len(idx) > E_SCREEN:
+        idx = np.sort(idx[_e_screen(info + problem.ridge * np.eye(len(info)), problem.blocks[idx], E_SCREEN)])
+    g = gains(problem, info, criterion, idx)
+    k = int(np.argmax(g))
+    return int(idx[k]), float(g[k])
+
+
+def greedy(problem: Problem, n: int, criterion: str, fixed: np.ndarray, excluded: np.ndarray | None = None,
+           say=lambda msg: None) -> np.ndarray:
+    """Add candidates one at a time until the design has n (``fixed`` ones first); the
+    design in the order chosen (its prefixes are the greedy designs of fewer poses)."""
+    allowed = np.ones(len(problem.blocks), dtype=bool) if excluded is None else ~excluded
+    allowed[fixed] = False
+    chosen = [int(i) for i in fixed]
+    info = problem.information(chosen)
+    while len(chosen) < n and allowed.any():
+        i, _ = best_gain(problem, info, criterion, allowed)
+        say(f"greedy search: pose {len(chosen) + 1} of {n}")
+        chosen.append(i)
+        allowed[i] = False
+        info = info + problem.blocks[i].T @ problem.blocks[i]
+    return np.array(chosen, dtype=int)
+
+
+def exchange(problem: Problem, design: np.ndarray, criterion: str, n_fixed: int, excluded: np.ndarray | None = None,
+             rel_tol: float = 1e-6, say=lambda msg: None) -> tuple[np.ndarray, int]:
+    """Exchange passes: each free pose of the design is taken out and the best candidate put
+    in its place when that beats putting it back. Returns the design and the swaps made."""
+    design = design.copy()
+    allowed = np.ones(len(problem.blocks), dtype=bool) if excluded is None else ~excluded
+    allowed[design] = False
+    info = problem.information(design)
+    swaps = 0
+    for p in range(MAX_EXCHANGE_PASSES):
+        say(f"exchange pass {p + 1} ({swaps} swaps so far)")
+        swapped = False
+        for slot in range(n_fixed, len(design)):
+            out = design[slot]
+            without = info - problem.blocks[out].T @ problem.blocks[out]
+            keep_gain = float(gains(problem, without, criterion, np.array([out]))[0])
+            j, gain = best_gain(problem, without, criterion, allowed)
+            if gain > keep_gain + rel_tol * max(abs(keep_gain), 1e-12):
+                design[slot] = j
+                allowed[j], allowed[out] = False, True
+                info = without + problem.blocks[j].T @ problem.blocks[j]
+                swaps += 1
+                swapped = True
+        if not swapped:
+            break
+    return design, swaps

@@ -1,0 +1,43 @@
+"""What a suggest-poses job designs for: the model (effects at nominal or fitted values)
+and the tracker, from the command line's parts."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ..effects import EffectSum
+from ..errormodel import ErrorModel, require_resolved
+from ..errors import InputError
+from .candidates import Tracker
+
+
+def design_model(robot, tool_mm, effects: EffectSum | None, fitted: ErrorModel | None) -> ErrorModel:
+    """The model whose identification the design serves: ``effects`` (default: the fitted
+    model's) with the fitted model's values and registration where it has them, else nominal."""
+    if fitted is None:
+        if effects is None:
+            raise InputError("suggest-poses needs --effects (or --model MODEL.json)")
+        require_resolved(effects)
+        return ErrorModel.create(robot, tool_mm, effects)
+    if robot.name != fitted.robot.name:
+        raise InputError(f"--robot {robot.name} does not match the model's robot {fitted.robot.name}")
+    chosen = fitted.effects if effects is None else effects
+    require_resolved(chosen)
+    model = ErrorModel.create(robot, tool_mm, chosen, fitted.as_dict())
+    return replace(model, base_rotation=fitted.base_rotation, base_translation=fitted.base_translation)
+
+
+def tracker_from(position_mm: np.ndarray | None, range_mm: tuple[float, float] | None, cone_deg: float | None) -> Tracker | None:
+    """A Tracker from --tracker X,Y,Z [--tracker-range MIN:MAX] [--tracker-cone DEG], or None without a position."""
+    if position_mm is None:
+        if range_mm is not None or cone_deg is not None:
+            raise InputError("--tracker-range and --tracker-cone need the tracker's position (--tracker X,Y,Z, robot base frame, mm)")
+        return None
+    if range_mm is not None and not 0 <= range_mm[0] < range_mm[1]:
+        raise InputError(f"--tracker-range: {range_mm[0]:g}:{range_mm[1]:g} must be MIN:MAX with 0 <= MIN < MAX (mm)")
+    if cone_deg is not None and not 0 < cone_deg <= 180:
+        raise InputError(f"--tracker-cone: {cone_deg:g} must be a half-angle in (0, 180] degrees")
+    base = Tracker(np.asarray(position_mm, dtype=float))
+    return replace(base, range_mm=base.range_mm if range_mm is None else tuple(range_mm), cone_deg=cone_deg)
