@@ -18,6 +18,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import __version__
+from .coverage_text import describe_model, model_summary
 from .errors import InputError, JobError, OutputError, PostprocError
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
@@ -195,18 +196,20 @@ def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
 def _load_measurements(path: Path, robot=None, drop_invalid: bool = False):
     """Read a measurement set; with a robot, rows beyond its joint limits are an error
     (or, with --drop-invalid, dropped and listed on stderr)."""
-    from .measurements import check_joint_limits, read_measurements
+    from .measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
 
     data = read_measurements(path)
     if robot is None:
         return data
-    # Limits a robot file marks as estimates are not grounds to refuse measured data:
-    # rows beyond them are listed as warnings and kept.
-    enforce = not robot.estimates.get("limits", False)
-    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid, enforce=enforce)
-    if dropped and not enforce:
-        err.print(f"warning: {path}: {len(dropped)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; kept (first: {dropped[0]})")
-        dropped = []
+    # Limits a robot file marks as estimates are not grounds to refuse measured data just
+    # beyond them: rows within a margin of them are listed as warnings and kept.
+    estimated = robot.estimates.get("limits", False)
+    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid,
+                                       margin_deg=ESTIMATED_LIMIT_MARGIN_DEG if estimated else 0.0)
+    warned = outside_limits(data, robot.lower_deg, robot.upper_deg) if estimated else []
+    if warned:
+        err.print(f"warning: {path}: {len(warned)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; "
+                  f"kept, as within {ESTIMATED_LIMIT_MARGIN_DEG:g} deg of them (first: {warned[0]})")
     for message in dropped:
         err.print(f"dropped: {path}, {message}")
     if dropped and len(data) == 0:
@@ -338,7 +341,8 @@ def evaluate_cmd(
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
-    """Position error of a model on a measurement set."""
+    """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
+    from .coverage import describe_outside, outside_poses
     from .identify import Stats, residuals
     from .model_io import load_model
 
@@ -350,14 +354,17 @@ def evaluate_cmd(
 
         error_model = refit_base(error_model, data)
     stats = Stats.of(residuals(error_model, data))
+    outside = outside_poses(error_model, data.q_deg)
     if json_out:
-        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}))
+        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm,
+                          "outside_region": None if outside is None else outside.summary()}))
         return
     out.print(
         f"{stats.n} poses: RMS {stats.rms_mm:.4f} mm, mean {stats.mean_mm:.4f} mm, max {stats.max_mm:.4f} mm "
         f"(RMS x/y/z {stats.rms_axis_mm[0]:.4f}/{stats.rms_axis_mm[1]:.4f}/{stats.rms_axis_mm[2]:.4f})",
         highlight=False,
     )
+    out.print(describe_outside(outside, stats.n))
 
 
 @app.command("diagnose")
@@ -624,6 +631,7 @@ def compensate_cmd(
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
     stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
+    allow_extrapolation: bool = typer.Option(False, "--allow-extrapolation", help="Compensate targets outside the joint ranges and the region the model was measured in (refused by default: the model only extrapolates there)."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
@@ -635,7 +643,8 @@ def compensate_cmd(
             "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
             "--force": force is not None, "--report": report is not None,
             "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
-            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch})
+            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch,
+            "--allow-extrapolation (a machine's error grid is never extrapolated)": allow_extrapolation})
 
         if len(programs) != 1 or output is None:
             raise InputError("five-axis compensation takes one program and -o OUT")
@@ -658,7 +667,8 @@ def compensate_cmd(
     forces = None if force is None else _floats(force, 3, "--force")
     common = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
               "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
-              "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+              "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+              "allow_extrapolation": allow_extrapolation}
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
         if cut is not None or in_place or subdivide or force_file is not None or data:
             raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
@@ -667,7 +677,7 @@ def compensate_cmd(
     program = programs[0]
     if output is None:
         raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
-    stream_options = {**common, "max_deviation_mm": max_deviation}
+    stream_options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
     if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
     tp = _read_program(program, dialect, data)
@@ -690,7 +700,7 @@ def compensate_cmd(
             written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
         else:
             new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
-    summary = rep.summary()
+    summary = {**rep.summary(), **model_summary(error_model)}
     from .arcs import summary as arc_summary
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
@@ -698,6 +708,7 @@ def compensate_cmd(
         _write_point_report(report, rep, summary)
     failures = rep.failures_at(written)
     if failures:
+        err.print(describe_model(summary["model"]), highlight=False)
         for where, reason in failures[:50]:
             err.print(f"{where}: {reason}", highlight=False)
         if len(failures) > 50:
@@ -713,6 +724,7 @@ def _print_compensation(summary: dict, scheme: str, notes, log) -> None:
     """compensate's account of one program: predicted error before and after, the path between
     targets, the arcs, and the program's notes."""
     b, a = summary["predicted_before"], summary["predicted_after"]
+    log.print(describe_model(summary["model"]))
     if b["rms_mm"] is not None:
         log.print(
             f"{summary['compensated']} of {summary['targets']} targets compensated ({scheme}); predicted error RMS {b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, "
@@ -1229,11 +1241,13 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
         return False
     except CompensationError as exc:
         failures = getattr(exc, "failures", [])
+        err.print(describe_model(model_summary(model)["model"]), highlight=False)
         for line, reason in failures[:50]:
-            err.print(f"line {line}: {reason}")
+            err.print(f"{program}:{line}: {reason}", highlight=False)
         raise
     s = result.summary
     b, a = s["predicted_before"], s["predicted_after"]
+    out.print(describe_model(model_summary(model)["model"]))
     if b["rms_mm"] is not None:
         out.print(f"{s['compensated']} of {s['targets']} targets compensated ({options['scheme']}, {s['chunks']} chunks); predicted error RMS "
                   f"{b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, max {b['max_mm']:.4f} -> {a['max_mm']:.4f} mm; "

@@ -80,6 +80,7 @@ class Report:
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
     end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
+    outside_region: np.ndarray | None = None  # (N,) str: why the target lies outside the model's measured region ('' inside; postproc.coverage)
 
     @property
     def failed(self) -> np.ndarray:
@@ -88,6 +89,8 @@ class Report:
             fine &= self.posture == 0
         if self.path_limit_mm is not None and self.path_mm is not None:
             fine &= ~(self.path_mm > self.path_limit_mm)
+        if self.outside_region is not None:
+            fine &= self.outside_region == ""
         return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
@@ -105,6 +108,8 @@ class Report:
             if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
                 reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
                                f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments and splits CIRC / MoveC arcs)")
+            if self.outside_region is not None and self.outside_region[i]:
+                reasons.append(self.outside_region[i] + " (--allow-extrapolation compensates it all the same)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
@@ -252,9 +257,11 @@ def compensate(
     max_deviation_mm: float | None = None,
     progress=lambda msg: None,
     reference: Reference | None = None,
+    allow_extrapolation: bool = False,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring).
-    ``reference``: ``reference_postures`` of the same program, frames, tools and start joints."""
+    ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
+    Targets outside the region the model was measured in fail unless ``allow_extrapolation``."""
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
@@ -279,7 +286,8 @@ def compensate(
     path = _path_deviation(problem, solution)
     arc_fit.put_deviation(path, problem.rows)
     report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
-                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
+                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None,
+                     outside_region=None if allow_extrapolation else _outside_region(problem, solution, model))
     out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
     notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
     if notes:
@@ -581,6 +589,20 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
         branch_changed=full(False, changed, bool),
         posture=full(0, posture_problem, int),
     )
+
+
+def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> np.ndarray | None:
+    """(N,) why each Cartesian target lies outside the region the model was measured in
+    ('' inside): its joints where the model predicts them (the compensated command's, or the
+    target's as written where there is none) and its TCP. None where the model records no region."""
+    if model.coverage is None:
+        return None
+    q = np.where(np.isnan(sol.q), problem.q_ref, sol.q)
+    outside = model.coverage.outside(q, problem.goal)
+    reasons = np.full(len(problem.rows), "", dtype=object)
+    for i in np.nonzero(outside.mask)[0]:
+        reasons[i] = outside.reason(int(i), model.coverage)
+    return _scatter(len(problem.tp), problem.rows, "", reasons, object)
 
 
 def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:

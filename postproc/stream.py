@@ -63,6 +63,7 @@ from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report,
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
+from .program_check import check_model_fits
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
 CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
@@ -488,8 +489,10 @@ class _Job:
     carries the restated state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
     here or in a worker process; ``collect`` folds the results in, in program order."""
 
-    def __init__(self, program: _Program, model, options: dict, progress):
+    def __init__(self, program: _Program, model, options: dict, progress, model_check: tuple | None = None):
         self.program, self.model, self.options, self.progress = program, model, options, progress
+        self.model_check = model_check  # (model path, --robot, --allow-model-mismatch): checked on the first chunk
+        self.mismatches: list[str] = []
         self.totals = Totals()
         self.notes: list[str] = []
         self.first_tp: Toolpath | None = None
@@ -555,8 +558,11 @@ class _Job:
         return None, pool.submit(_finish, self.model, self.options, task)
 
     def _first(self, tp: Toolpath) -> None:
-        """The first chunk: the header's target lines blanked for the later chunks."""
+        """The first chunk: the model checked against it (robot, tools, payload), the header's
+        target lines blanked for the later chunks."""
         self.first_tp = tp
+        if self.model_check is not None:
+            self.mismatches = check_model_fits(tp, self.model, *self.model_check)
         in_header = tp.line[(tp.line <= len(self.blanked)) & (tp.file == 0)]
         for line in np.unique(in_header):
             self.blanked[int(line) - 1] = "\n"
@@ -653,6 +659,8 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
     CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
     path, output = Path(path), Path(output)
+    options = dict(options)
+    model_check = options.pop("model_check", None)  # (model path, --robot, --allow-model-mismatch), as postproc.batch
     lang, rules = stream_rules_for(path, dialect, model)
     if tune_malloc:
         _keep_freed_memory()
@@ -664,16 +672,16 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     with fh:
         program, first = _open(path, lang, rules, fh)
         with _pool(workers, warm=(model, options, program, first)) as (pool, slots):
-            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots)
+            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots, model_check)
 
 
 def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,
-         pool, workers: int, slots) -> StreamResult:
+         pool, workers: int, slots, model_check: tuple | None = None) -> StreamResult:
     """``compensate_streamed`` once the program is open and the workers (if any) started."""
     from .programs import refuse_overwrite
 
     lang, rules = program.lang, program.rules
-    job = _Job(program, model, options, progress)
+    job = _Job(program, model, options, progress, model_check)
     results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers, slots)
     try:
         text = next(results)
@@ -690,7 +698,8 @@ def _run(program: _Program, first: str, fh, model, options: dict, progress, chun
     except CompensationError as exc:
         exc.failures = job.totals.failures
         raise
-    return StreamResult(job.totals.summary(), job.notes, list(files))
+    notes = [f"{m} (--allow-model-mismatch)" for m in job.mismatches] + job.notes
+    return StreamResult(job.totals.summary(), notes, list(files))
 
 
 HEAP_BLOCK_MAX = 256 * 2**20  # arrays up to this size come from the heap, not from their own mapping

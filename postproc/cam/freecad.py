@@ -70,6 +70,8 @@ def argument_parser() -> argparse.ArgumentParser:
     p.add_argument("--temp", type=float, help="cell temperature, degC (models with a thermal effect)")
     p.add_argument("--allow-model-mismatch", action="store_true",
                    help="go on when the program's tool, payload or robot is not the model's (printed as a note)")
+    p.add_argument("--allow-extrapolation", action="store_true",
+                   help="compensate targets outside the joint ranges and region the model was measured in (refused by default)")
     p.add_argument("--force", metavar="FX,FY,FZ", help="process force in N, base frame (models with external_load)")
     return p
 
@@ -255,7 +257,7 @@ def run(request: dict) -> dict:
     try:
         files = post(gcode.text, args.model, args.to, output=output, dialect="gcode", frames=frames, tools=tools,
                      robot=args.robot, tol_mm=args.tol, max_iter=args.max_iter, scheme=args.scheme, temp_c=args.temp, force_n=force,
-                     allow_model_mismatch=args.allow_model_mismatch)
+                     allow_model_mismatch=args.allow_model_mismatch, allow_extrapolation=args.allow_extrapolation)
     except PostprocError as exc:
         raise _annotated(exc, gcode.origin) from None
     if filename != "-":
