@@ -617,7 +617,7 @@ def compensate_cmd(
     scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
     temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal)."),
     force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load)."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON, or (a name ending in .html) a page to look at: the path in 3-D, the error, reach and singularity margins along it, the model's measured region against the program's."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable. Five-axis G-code: A is the turn about Z, not a rotary-axis offset (those are the program's own G10/G92 A B C, else zero)."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
@@ -691,7 +691,7 @@ def compensate_cmd(
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log),
-                       progress=lambda m: bar.update(task, description=m))
+                       progress=lambda m: bar.update(task, description=m), detail=_is_page(report))
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -705,7 +705,7 @@ def compensate_cmd(
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if report is not None:
-        _write_point_report(report, rep, summary)
+        _write_point_report(report, rep, summary) if not _is_page(report) else _write_page(report, rep, summary, error_model, program, model)
     failures = rep.failures_at(written)
     if failures:
         err.print(describe_model(summary["model"]), highlight=False)
@@ -772,6 +772,18 @@ def _block_forces(cut, force_file, forces, tp, frame, tool, log):
         log.print(f"note: {unlisted} Cartesian target(s) have no row in {force_file}: no process force there")
     placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
     return base_frame_forces(placed, tool_frame)
+
+
+def _is_page(report: Optional[Path]) -> bool:
+    """--report PAGE.html: the page (postproc.report.compensation), else the JSON."""
+    return report is not None and report.suffix.lower() in (".html", ".htm")
+
+
+def _write_page(report: Path, rep, summary: dict, model, program: str, model_path: Path) -> None:
+    from .measurements import write_text_atomic
+    from .report.compensation import compensation_report
+
+    write_text_atomic(report, compensation_report(rep, summary, model, program, str(model_path)))
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:

@@ -81,6 +81,7 @@ class Report:
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
     end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
     outside_region: np.ndarray | None = None  # (N,) str: why the target lies outside the model's measured region ('' inside; postproc.coverage)
+    detail: "PathDetail | None" = None  # per-target vectors for the --report page (compensate(detail=True))
 
     @property
     def failed(self) -> np.ndarray:
@@ -258,10 +259,12 @@ def compensate(
     progress=lambda msg: None,
     reference: Reference | None = None,
     allow_extrapolation: bool = False,
+    detail: bool = False,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring).
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
-    Targets outside the region the model was measured in fail unless ``allow_extrapolation``."""
+    Targets outside the region the model was measured in fail unless ``allow_extrapolation``.
+    ``detail``: the report also carries the per-target vectors of ``PathDetail``."""
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
@@ -287,7 +290,8 @@ def compensate(
     arc_fit.put_deviation(path, problem.rows)
     report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
                      end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None,
-                     outside_region=None if allow_extrapolation else _outside_region(problem, solution, model))
+                     outside_region=None if allow_extrapolation else _outside_region(problem, solution, model),
+                     detail=PathDetail.of(problem, before, solution) if detail else None)
     out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
     notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
     if notes:
@@ -295,6 +299,29 @@ def compensate(
     return out, report
 
 
+
+
+@dataclass(frozen=True)
+class PathDetail:
+    """Per target of the program (NaN for joint targets): where it is programmed, the
+    model's predicted error of the program as written and compensated (predicted TCP minus
+    target), and the joints of the compensated command. For ``postproc.report``."""
+
+    goal_mm: np.ndarray  # (N, 3) base frame
+    before_mm: np.ndarray  # (N, 3)
+    after_mm: np.ndarray  # (N, 3)
+    joints_deg: np.ndarray  # (N, 6)
+
+    @classmethod
+    def of(cls, problem: "_Problem", before: np.ndarray, sol: "_Solution") -> "PathDetail":
+        n, rows = len(problem.tp), problem.rows
+
+        def full(values):
+            out = np.full((n, values.shape[1]), np.nan)
+            out[rows] = values
+            return out
+
+        return cls(full(problem.goal), full(before), full(sol.err), full(sol.q))
 
 
 @dataclass

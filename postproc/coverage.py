@@ -27,9 +27,12 @@ from .errors import ModelFileError
 # the hull of N poses scattered through a volume V falls short of the volume sampled by
 # about one spacing between poses, (V / N)^(1/3) (250 poses of the KR160 cylinder region:
 # 106 mm; 14 of 100 poses drawn from the same region lay up to 69 mm outside the hull), so
-# the Cartesian tolerance is that spacing, within these bounds. Joint ranges are sampled
-# end to end (the gap at an end is about the range / N): one degree.
+# the Cartesian tolerance is that spacing, within these bounds. A joint may go beyond its
+# fitted range by a twentieth of that range (at least 1 deg): the model's terms in that
+# joint vary over the range, and so change little within 5 % beyond it (a wrist fitted over
+# -175..168 deg may take 172 deg; a q2 fitted over -30..28 deg may not take -120 deg).
 JOINT_TOLERANCE_DEG = 1.0
+JOINT_TOLERANCE_FRACTION = 0.05
 HULL_TOLERANCE_MIN_MM = 10.0
 HULL_TOLERANCE_MAX_MM = 100.0
 
@@ -65,6 +68,11 @@ class Coverage:
 
     # ---------------------------------------------------------------- the check
 
+    @property
+    def joint_tolerance_deg(self) -> np.ndarray:
+        """(6,) how far beyond its fitted range each joint may go (see JOINT_TOLERANCE_*)."""
+        return np.maximum(JOINT_TOLERANCE_DEG, JOINT_TOLERANCE_FRACTION * (self.joint_upper_deg - self.joint_lower_deg))
+
     def joint_excess(self, q_deg: np.ndarray) -> np.ndarray:
         """(N, 6) deg beyond the fitted range per joint (0 inside; NaN rows stay NaN)."""
         q = np.asarray(q_deg, dtype=float)
@@ -96,11 +104,13 @@ class Coverage:
         joints_known = ~np.isnan(joints).any(axis=1)
         joints = np.nan_to_num(joints)
         cart = self.hull_excess(xyz_mm)
-        worst_joint = np.argmax(joints, axis=1)
+        beyond = joints > self.joint_tolerance_deg
+        # The joint named: the furthest beyond its tolerance, else the furthest beyond its range.
+        worst_joint = np.where(beyond.any(axis=1), np.argmax(np.where(beyond, joints, -1.0), axis=1), np.argmax(joints, axis=1))
         worst_deg = joints[np.arange(len(joints)), worst_joint]
         tolerance = self.hull_tolerance_mm
-        out = ((worst_deg > JOINT_TOLERANCE_DEG) & joints_known) | (cart > tolerance)
-        return Outside(out, worst_joint, worst_deg, cart, tolerance)
+        out = (beyond.any(axis=1) & joints_known) | (cart > tolerance)
+        return Outside(out, worst_joint, worst_deg, cart, tolerance, self.joint_tolerance_deg)
 
     # ---------------------------------------------------------------- model file
 
@@ -150,14 +160,15 @@ class Outside:
     joint_deg: np.ndarray
     cartesian_mm: np.ndarray
     tolerance_mm: float  # Cartesian: a pose this close to the hull is inside
+    tolerance_deg: np.ndarray  # (6,) per joint: this far beyond the fitted range is inside
 
     def reason(self, i: int, coverage: Coverage) -> str:
         """Why pose ``i`` is outside, in words."""
         parts = []
-        if self.joint_deg[i] > JOINT_TOLERANCE_DEG:
-            j = int(self.joint[i])
+        j = int(self.joint[i])
+        if self.joint_deg[i] > self.tolerance_deg[j]:
             parts.append(f"q{j + 1} is {self.joint_deg[i]:.1f} deg beyond the fitted range "
-                         f"[{coverage.joint_lower_deg[j]:.1f}, {coverage.joint_upper_deg[j]:.1f}]")
+                         f"[{coverage.joint_lower_deg[j]:.1f}, {coverage.joint_upper_deg[j]:.1f}] (tolerance {self.tolerance_deg[j]:.1f} deg)")
         if self.cartesian_mm[i] > self.tolerance_mm:
             parts.append(f"the TCP is {self.cartesian_mm[i]:.0f} mm outside the measured region (tolerance {self.tolerance_mm:.0f} mm)")
         return "outside the region the model was measured in: " + " and ".join(parts)
@@ -165,7 +176,7 @@ class Outside:
     def summary(self) -> dict:
         """Count and worst distances, for --json."""
         return {"count": int(self.mask.sum()), "worst_joint_deg": float(self.joint_deg.max(initial=0.0)),
-                "worst_mm": float(self.cartesian_mm.max(initial=0.0)), "tolerance_deg": JOINT_TOLERANCE_DEG, "tolerance_mm": self.tolerance_mm}
+                "worst_mm": float(self.cartesian_mm.max(initial=0.0)), "tolerance_deg": self.tolerance_deg.round(3).tolist(), "tolerance_mm": self.tolerance_mm}
 
 
 def _hull_vertices(points: np.ndarray) -> np.ndarray | None:

@@ -41,7 +41,8 @@ class ModelMismatchError(InputError):
 
 def check_model_fits(tp: Toolpath, model, model_path: str, robot_name: str | None = None, allow: bool = False) -> list[str]:
     """Every mismatch between the program and the model, as errors (or notes with ``allow``)."""
-    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path)
+    # The maker's last: where the tool or payload differ too, the message names them first.
+    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path) + _maker(tp, model.robot, model_path)
     if problems and not allow:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ModelMismatchError(f"{problems[0]}{more}; give the model fitted for this set-up, or --allow-model-mismatch if the difference is known to be harmless")
@@ -53,7 +54,6 @@ def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list
     out = []
     if robot_name is not None and robot_name not in (robot.name, robot.source_path):
         out.append(f"--robot {robot_name}: the model {model_path} is for robot {robot.name}")
-    out += _maker(tp, robot, model_path)
     joints = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
     if joints.any():
         q = tp.joints[joints]
