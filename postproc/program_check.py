@@ -66,9 +66,7 @@ def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list
     return out
 
 
-# The robot makers whose controllers alone run a dialect, and how robot files' descriptions
-# name them (their first word).
-_DIALECT_MAKER = {"krl": "KUKA", "rapid": "ABB"}
+# Robot makers as robot files' descriptions name them (their first word).
 _MAKERS = ("KUKA", "ABB", "FANUC", "Yaskawa", "Universal", "Staubli", "Kawasaki", "Comau", "Nachi", "Denso")
 
 
@@ -76,7 +74,7 @@ def _maker(tp: Toolpath, robot, model_path: str) -> list[str]:
     """A KRL program is for a KUKA robot, a RAPID program for an ABB one: a model of another
     maker's robot is for another robot. Robot files whose description names no known maker
     are not judged."""
-    want = _DIALECT_MAKER.get(tp.dialect)
+    want = dialects.of(tp).controller_maker
     words = robot.description.split()
     maker = words[0] if words and words[0] in _MAKERS else None
     if want is None or maker is None or maker == want:
