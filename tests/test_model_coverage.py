@@ -76,7 +76,7 @@ def test_joint_beyond_360_is_refused_with_line_and_column_even_under_estimated_l
     bad = _edited(meas, tmp_path / "m.csv", 5, "q2", "400")
     result = runner.invoke(app, ["evaluate", str(model), str(bad), "--json"])
     assert result.exit_code == 2, result.output
-    assert f"{bad}, line 6, column 'q2'" in result.output and "360" in result.output
+    assert f"{bad}, line 6, column 'q2'" in result.output and "beyond +-360 deg: no revolute joint turns that far" in result.output
 
 
 def test_joint_beyond_estimated_limits_plus_margin_is_refused(measured, tmp_path):
