@@ -315,6 +315,8 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         hybrid = Stats.of(residuals(final, data))
         out.print(f"with the {predictor} predictor on the residual: training RMS {hybrid.rms_mm:.4f} mm (validate with 'postproc evaluate')")
     out.print(f"model written to {output}", highlight=False)
+    if final.coverage is not None:  # compensate refuses targets outside it (docs/model-coverage.md)
+        out.print(f"measured region recorded in the model: {final.coverage.describe()}", highlight=False)
 
 
 # A rigid 6-DOF registration needs three points that span a plane; a handful more makes
@@ -673,6 +675,7 @@ def compensate_cmd(
         if cut is not None or in_place or subdivide or force_file is not None or data:
             raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
         options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
+        out.print(describe_model(model_summary(error_model)["model"]))
         raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
     program = programs[0]
     if output is None:

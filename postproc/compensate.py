@@ -80,7 +80,7 @@ class Report:
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
     end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
-    outside_region: np.ndarray | None = None  # (N,) str: why the target lies outside the model's measured region ('' inside; postproc.coverage)
+    outside_region: dict[int, str] | None = None  # target index -> why it lies outside the model's measured region (postproc.coverage); None: not checked
     detail: "PathDetail | None" = None  # per-target vectors for the --report page (compensate(detail=True))
 
     @property
@@ -90,8 +90,8 @@ class Report:
             fine &= self.posture == 0
         if self.path_limit_mm is not None and self.path_mm is not None:
             fine &= ~(self.path_mm > self.path_limit_mm)
-        if self.outside_region is not None:
-            fine &= self.outside_region == ""
+        if self.outside_region:
+            fine[list(self.outside_region)] = False
         return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
@@ -109,7 +109,7 @@ class Report:
             if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
                 reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
                                f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments and splits CIRC / MoveC arcs)")
-            if self.outside_region is not None and self.outside_region[i]:
+            if self.outside_region and i in self.outside_region:
                 reasons.append(self.outside_region[i] + " (--allow-extrapolation compensates it all the same)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
@@ -618,18 +618,16 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
     )
 
 
-def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> np.ndarray | None:
-    """(N,) why each Cartesian target lies outside the region the model was measured in
-    ('' inside): its joints where the model predicts them (the compensated command's, or the
-    target's as written where there is none) and its TCP. None where the model records no region."""
+def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> dict[int, str] | None:
+    """{target index: why it lies outside the region the model was measured in}: its joints
+    where the model predicts them (the compensated command's, or the target's as written where
+    there is none) and its TCP. None where the model records no region. (A dict, not a column:
+    nearly always empty, and postproc.stream sends every chunk's report between processes.)"""
     if model.coverage is None:
         return None
     q = np.where(np.isnan(sol.q), problem.q_ref, sol.q)
     outside = model.coverage.outside(q, problem.goal)
-    reasons = np.full(len(problem.rows), "", dtype=object)
-    for i in np.nonzero(outside.mask)[0]:
-        reasons[i] = outside.reason(int(i), model.coverage)
-    return _scatter(len(problem.tp), problem.rows, "", reasons, object)
+    return {int(problem.rows[i]): outside.reason(int(i), model.coverage) for i in np.nonzero(outside.mask)[0]}
 
 
 def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:

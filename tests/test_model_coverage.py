@@ -216,7 +216,7 @@ def test_batch_refuses_the_program_outside_the_region(measured, tmp_path):
     (tmp_path / "done").mkdir()
     result = runner.invoke(app, ["compensate", str(inside), str(outside), "--model", str(model), "--out-dir", str(tmp_path / "done"), "--jobs", "1"])
     assert result.exit_code == 1, result.output
-    assert "outside the region the model was measured in" in result.output
+    assert "outside the region the model was measured in" in result.output and "model for kr160_r1570" in result.output
     assert (tmp_path / "done" / "in.src").exists() and not (tmp_path / "done" / "out.src").exists()
 
 

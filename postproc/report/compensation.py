@@ -22,7 +22,9 @@ def compensation_report(report, summary: dict, model, program: str, model_path: 
     cart = ~np.isnan(d.goal_mm).any(axis=1)
     goal, before, after, q = d.goal_mm[cart], d.before_mm[cart], d.after_mm[cart], d.joints_deg[cart]
     distance = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(goal, axis=0), axis=1))])
-    outside = np.zeros(len(goal), dtype=bool) if report.outside_region is None else (report.outside_region[cart] != "")
+    outside_rows = np.zeros(len(cart), dtype=bool)
+    outside_rows[list(report.outside_region or {})] = True
+    outside = outside_rows[cart]
     title = f"Compensation of {program}"
     parts = [f"<!doctype html><html><head><meta charset='utf-8'><title>{html.escape(title)}</title><style>{CSS}</style></head><body>",
              f"<h1>{html.escape(title)}</h1>",
