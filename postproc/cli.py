@@ -707,8 +707,10 @@ def compensate_cmd(
     from .arcs import summary as arc_summary
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
-    if report is not None:
-        _write_point_report(report, rep, summary) if not _is_page(report) else _write_page(report, rep, summary, error_model, program, model)
+    if _is_page(report):  # written also when targets fail: the page shows where
+        _write_page(report, rep, summary, error_model, program, model)
+    elif report is not None:
+        _write_point_report(report, rep, summary)
     failures = rep.failures_at(written)
     if failures:
         err.print(describe_model(summary["model"]), highlight=False)
@@ -783,10 +785,15 @@ def _is_page(report: Optional[Path]) -> bool:
 
 
 def _write_page(report: Path, rep, summary: dict, model, program: str, model_path: Path) -> None:
+    """--report PAGE.html (its figures take a few seconds: a spinner meanwhile)."""
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
     from .measurements import write_text_atomic
     from .report.compensation import compensation_report
 
-    write_text_atomic(report, compensation_report(rep, summary, model, program, str(model_path)))
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+        bar.add_task(f"writing the report page {report}", total=None)
+        write_text_atomic(report, compensation_report(rep, summary, model, program, str(model_path)))
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:
