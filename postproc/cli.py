@@ -1264,8 +1264,9 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
     except CompensationError as exc:
         failures = getattr(exc, "failures", [])
         err.print(describe_model(model_summary(model)["model"]), highlight=False)
+        columns = getattr(exc, "columns", {})
         for line, reason in failures[:50]:
-            err.print(f"{program}:{line}: {reason}", highlight=False)
+            err.print(f"{program}:{line}:{columns[line]}: {reason}" if line in columns else f"{program}:{line}: {reason}", highlight=False)
         raise
     s = result.summary
     b, a = s["predicted_before"], s["predicted_after"]

@@ -119,8 +119,14 @@ class Report:
     def failures_at(self, tp: Toolpath) -> list[tuple[str, str]]:
         """``failures`` with each target's ``file:line:column`` in ``tp`` (the program compensated):
         the column of its first number, or 1 where its numbers are elsewhere (a named point)."""
+        failed = np.nonzero(self.failed)[0].tolist()
+        return [(f"{tp.sources[int(tp.file[i])].path}:{tp.line[i]}:{column}", reason)
+                for i, column, (_, reason) in zip(failed, self.failure_columns(tp), self.failures())]
+
+    def failure_columns(self, tp: Toolpath) -> list[int]:
+        """The column in ``tp``'s text of each failed target, in the order of ``failures``."""
         out = []
-        for i, (_, reason) in zip(np.nonzero(self.failed)[0].tolist(), self.failures()):
+        for i in np.nonzero(self.failed)[0].tolist():
             doc = tp.sources[int(tp.file[i])]
             spans = tp.spans[i]
             here = spans[(spans[:, 0] == tp.file[i]) & (spans[:, 1] >= 0), 1]
@@ -128,8 +134,7 @@ class Report:
             line_end = doc.text.find("\n", line_start) % (len(doc.text) + 1)
             inside = here[(here >= line_start) & (here < line_end)]
             named = doc.text.upper().find(tp.target_name[i].upper(), line_start, line_end) if tp.target_name[i] else -1
-            column = int(inside.min()) - line_start + 1 if len(inside) else (named - line_start + 1 if named >= 0 else 1)
-            out.append((f"{doc.path}:{tp.line[i]}:{column}", reason))
+            out.append(int(inside.min()) - line_start + 1 if len(inside) else (named - line_start + 1 if named >= 0 else 1))
         return out
 
     def summary(self) -> dict:

@@ -120,11 +120,13 @@ class Totals:
     over_tolerance: int = 0
     failed: int = 0
     failures: list = field(default_factory=list)
+    columns: dict = field(default_factory=dict)  # program line of a failure -> its column
     chunks: int = 0
 
-    def add(self, rep: Report, keep: np.ndarray, line_shift: int, first_line: int) -> None:
+    def add(self, rep: Report, keep: np.ndarray, line_shift: int, first_line: int, columns: list[int] | None = None) -> None:
         """One chunk's report: its targets ``keep`` (from line ``first_line`` of the chunk) count;
-        ``line_shift`` turns the chunk's line numbers into the program's."""
+        ``line_shift`` turns the chunk's line numbers into the program's; ``columns``: those of
+        its failures (``Report.failure_columns``)."""
         self.chunks += 1
         self.targets += int(keep.sum())
         c = rep.compensated & keep
@@ -146,7 +148,10 @@ class Totals:
         failed = rep.failed & keep
         self.failed += int(failed.sum())
         if failed.any() and len(self.failures) < 1000:
-            self.failures += [(line + line_shift, reason) for line, reason in rep.failures() if line >= first_line][:1000]
+            listed = [(line + line_shift, reason, column) for (line, reason), column in zip(rep.failures(), columns or [None] * int(rep.failed.sum()))
+                      if line >= first_line][:1000]
+            self.failures += [(line, reason) for line, reason, _ in listed]
+            self.columns.update({line: column for line, _, column in listed if column is not None})
 
     def _add_path(self, rep: Report, keep: np.ndarray, line_shift: int) -> None:
         if rep.path_mm is None:
@@ -399,7 +404,7 @@ def _finish(model, options: dict, task: _Task) -> tuple[bytes, Report, tuple, li
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     if rep.failed.any():
-        return b"", rep, new.notes, None
+        return b"", rep, new.notes, rep.failure_columns(tp)  # no text: nothing will be written; where the failures are
     texts = dialects.of(tp).emit_texts(tp, new)
     check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
     main = texts[0]
@@ -535,7 +540,7 @@ class _Job:
     def collect(self, meta: _Meta, result) -> bytes:
         """One chunk's result (in program order): its report counted, its new text."""
         text, rep, notes, others = result
-        self.totals.add(rep, meta.keep, meta.shift, meta.first_line)
+        self.totals.add(rep, meta.keep, meta.shift, meta.first_line, others if rep.failed.any() else None)
         if meta.first:
             self.notes = list(notes)
         self.progress(f"chunk {self.totals.chunks}: {self.totals.targets:,} targets")
@@ -686,7 +691,7 @@ def _run(program: _Program, first: str, fh, model, options: dict, progress, chun
     try:
         text = next(results)
     except CompensationError as exc:
-        exc.failures = job.totals.failures
+        exc.failures, exc.columns = job.totals.failures, job.totals.columns
         raise
     main = lang.output_paths(job.first_tp, output)[0]
     files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
@@ -696,7 +701,7 @@ def _run(program: _Program, first: str, fh, model, options: dict, progress, chun
         write_all({main: chain([text], results),
                    **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
     except CompensationError as exc:
-        exc.failures = job.totals.failures
+        exc.failures, exc.columns = job.totals.failures, job.totals.columns
         raise
     notes = [f"{m} (--allow-model-mismatch)" for m in job.mismatches] + job.notes
     return StreamResult(job.totals.summary(), notes, list(files))

@@ -204,7 +204,7 @@ def test_streamed_compensation_refuses_them_too(measured, tmp_path):
     out = tmp_path / "o.src"
     result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--stream", "always"])
     assert result.exit_code == 1, result.output
-    assert f"{program}:4: outside the region the model was measured in" in result.output and not out.exists()
+    assert f"{program}:4:8: outside the region the model was measured in" in result.output and not out.exists()
     allowed = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--stream", "always", "--allow-extrapolation"])
     assert allowed.exit_code == 0, allowed.output
     assert "model for kr160_r1570" in allowed.output
