@@ -284,3 +284,45 @@ def test_report_page_lists_the_targets_outside(measured, tmp_path):
     assert result.exit_code == 1
     text = page.read_text()
     assert "Targets that cannot be compensated" in text and "outside the region the model was measured in" in text
+
+
+# ------------------------------------------------------------------ the region itself
+
+
+def _cube_coverage(poses: int = 1000) -> Coverage:
+    corners = np.array([[x, y, z] for x in (0.0, 100.0) for y in (0.0, 100.0) for z in (0.0, 100.0)]) + [1000.0, 0.0, 500.0]
+    return Coverage(poses, np.full(6, -10.0), np.full(6, 10.0), (1000.0, 1105.0), (500.0, 600.0), corners)
+
+
+def test_hull_distance_and_tolerances():
+    cube = _cube_coverage()
+    inside, beyond_face = [1050.0, 50.0, 550.0], [1050.0, 50.0, 625.0]
+    np.testing.assert_allclose(cube.hull_excess(np.array([inside, beyond_face])), [0.0, 25.0], atol=1e-9)
+    assert cube.hull_tolerance_mm == 10.0  # (1e6 mm^3 / 1000 poses)^(1/3) = 10 mm
+    assert _cube_coverage(poses=8).hull_tolerance_mm == pytest.approx(50.0)  # sparser poses: one spacing
+    # Joints: 5 % of the 20-deg range is 1 deg: 10.9 is inside, 11.5 outside.
+    q = np.zeros((2, 6))
+    q[:, 1] = [10.9, 11.5]
+    out = cube.outside(q, np.array([inside, inside]))
+    assert out.mask.tolist() == [False, True] and int(out.joint[1]) == 1
+    assert "q2 is 1.5 deg beyond the fitted range [-10.0, 10.0]" in out.reason(1, cube)
+    far = cube.outside(np.zeros((1, 6)), np.array([[1050.0, 50.0, 700.0]]))
+    assert far.mask.tolist() == [True] and "100 mm outside the measured region" in far.reason(0, cube)
+
+
+def test_flat_poses_fall_back_on_the_radius_and_z_ranges():
+    robot = postproc.load_robot(KR160)
+    q = np.zeros((20, 6))
+    q[:, 0] = np.linspace(-20, 20, 20)  # joint 1 alone: the TCP sweeps a horizontal arc
+    cov = Coverage.of(robot, TOOL, q)
+    assert cov.hull_vertices_mm is None
+    r = np.mean(cov.radius_mm)
+    assert cov.hull_excess(np.array([[r, 0.0, cov.z_mm[0]], [r, 0.0, cov.z_mm[1] + 40.0]])).tolist() == pytest.approx([0.0, 40.0])
+
+
+def test_region_round_trips_through_the_model_file(measured):
+    _, _, model_path = measured
+    model, doc = load_model(model_path)
+    again = Coverage.from_document(json.loads(json.dumps(model.coverage.to_document())), "x")
+    np.testing.assert_allclose(again.hull_vertices_mm, model.coverage.hull_vertices_mm, atol=0.01)
+    assert again.poses == model.coverage.poses and again.z_mm == pytest.approx(model.coverage.z_mm, abs=1e-3)
