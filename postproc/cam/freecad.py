@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import dialects
+from ..coverage_text import describe_model, model_summary
 from ..errors import InputError, JobError, PostprocError
 from .arcs import linearise_arc
 
@@ -247,6 +248,7 @@ def planned_targets(request: dict):
 
 def run(request: dict) -> dict:
     """One post request (see the module docstring) -> its answer; raises PostprocError."""
+    from ..model_io import load_model  # as .post: the fitting stack, loaded only when a job is posted
     from .post import post, write_programs
 
     args, gcode, frames, tools = _prepare(request)
@@ -263,7 +265,8 @@ def run(request: dict) -> dict:
     if filename != "-":
         write_programs(files)
     main_text = next(iter(files.values()))
-    messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}"]
+    messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}",
+                f"postproc: {describe_model(model_summary(load_model(args.model)[0])['model'])}"]
     if filename != "-" and not filename.lower().endswith(suffix):
         messages.append(f"postproc: note: a {args.to.upper()} program's file name usually ends in {suffix}")
     return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "cam_gcode": gcode.text, "messages": messages}
