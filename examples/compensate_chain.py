@@ -54,6 +54,8 @@ lines.append("END")
 # 4. Compensate it and write the corrected program (only its numbers change).
 program = parse_program(out / "pocket.src")
 corrected, report = compensate(program, result.model)
+if report.failed.any():  # e.g. targets outside the region the model was measured in: nothing to run
+    sys.exit(f"{int(report.failed.sum())} target(s) cannot be compensated: {report.failures()[:3]}")
 (out / "pocket_compensated.src").write_bytes(emit_texts(program, corrected)[0].encode("latin-1"))
 s = report.summary()
 print(f"2. compensated {s['compensated']} targets: predicted error {s['predicted_before']['rms_mm']:.3f} -> {s['predicted_after']['rms_mm']:.5f} mm RMS, "

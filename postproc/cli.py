@@ -19,6 +19,7 @@ from rich.console import Console
 from rich.table import Table
 
 from . import __version__
+from .coverage_text import describe_model, model_summary
 from .errors import InputError, JobError, OutputError, PostprocError
 from .files import write_all
 from .frames import abc_to_matrix, make_transform, matrix_to_abc
@@ -197,18 +198,20 @@ def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
 def _load_measurements(path: Path, robot=None, drop_invalid: bool = False):
     """Read a measurement set; with a robot, rows beyond its joint limits are an error
     (or, with --drop-invalid, dropped and listed on stderr)."""
-    from .measurements import check_joint_limits, read_measurements
+    from .measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
 
     data = read_measurements(path)
     if robot is None:
         return data
-    # Limits a robot file marks as estimates are not grounds to refuse measured data:
-    # rows beyond them are listed as warnings and kept.
-    enforce = not robot.estimates.get("limits", False)
-    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid, enforce=enforce)
-    if dropped and not enforce:
-        err.print(f"warning: {path}: {len(dropped)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; kept (first: {dropped[0]})")
-        dropped = []
+    # Limits a robot file marks as estimates are not grounds to refuse measured data just
+    # beyond them: rows within a margin of them are listed as warnings and kept.
+    estimated = robot.estimates.get("limits", False)
+    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid,
+                                       margin_deg=ESTIMATED_LIMIT_MARGIN_DEG if estimated else 0.0)
+    warned = outside_limits(data, robot.lower_deg, robot.upper_deg) if estimated else []
+    if warned:
+        err.print(f"warning: {path}: {len(warned)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; "
+                  f"kept, as within {ESTIMATED_LIMIT_MARGIN_DEG:g} deg of them (first: {warned[0]})")
     for message in dropped:
         err.print(f"dropped: {path}, {message}")
     if dropped and len(data) == 0:
@@ -314,6 +317,8 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         hybrid = Stats.of(residuals(final, data))
         out.print(f"with the {predictor} predictor on the residual: training RMS {hybrid.rms_mm:.4f} mm (validate with 'postproc evaluate')")
     out.print(f"model written to {output}", highlight=False)
+    if final.coverage is not None:  # compensate refuses targets outside it (docs/model-coverage.md)
+        out.print(f"measured region recorded in the model: {final.coverage.describe()}", highlight=False)
 
 
 # A rigid 6-DOF registration needs three points that span a plane; a handful more makes
@@ -340,7 +345,8 @@ def evaluate_cmd(
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
-    """Position error of a model on a measurement set."""
+    """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
+    from .coverage import describe_outside, outside_poses
     from .identify import Stats, residuals
     from .model_io import load_model
 
@@ -352,14 +358,17 @@ def evaluate_cmd(
 
         error_model = refit_base(error_model, data)
     stats = Stats.of(residuals(error_model, data))
+    outside = outside_poses(error_model, data.q_deg)
     if json_out:
-        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}))
+        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm,
+                          "outside_region": None if outside is None else outside.summary()}))
         return
     out.print(
         f"{stats.n} poses: RMS {stats.rms_mm:.4f} mm, mean {stats.mean_mm:.4f} mm, max {stats.max_mm:.4f} mm "
         f"(RMS x/y/z {stats.rms_axis_mm[0]:.4f}/{stats.rms_axis_mm[1]:.4f}/{stats.rms_axis_mm[2]:.4f})",
         highlight=False,
     )
+    out.print(describe_outside(outside, stats.n))
 
 
 @app.command("validate")
@@ -748,7 +757,7 @@ def compensate_cmd(
     scheme: str = typer.Option("broyden", "--scheme", help="broyden (3-D quasi-Newton) or seed000 (XY direct, secant on depth)."),
     temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal)."),
     force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load)."),
-    report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON."),
+    report: Optional[Path] = typer.Option(None, "--report", help="Write the per-point report as JSON, or (a name ending in .html) a page to look at: the path in 3-D, the error, reach and singularity margins along it, the model's measured region against the program's."),
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable. Five-axis G-code: A is the turn about Z, not a rotary-axis offset (those are the program's own G10/G92 A B C, else zero)."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable."),
     start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data)."),
@@ -762,6 +771,7 @@ def compensate_cmd(
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
     stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
+    allow_extrapolation: bool = typer.Option(False, "--allow-extrapolation", help="Compensate targets outside the joint ranges and the region the model was measured in (refused by default: the model only extrapolates there)."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
@@ -773,7 +783,8 @@ def compensate_cmd(
             "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
             "--force": force is not None, "--report": report is not None,
             "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
-            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch})
+            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch,
+            "--allow-extrapolation (a machine's error grid is never extrapolated)": allow_extrapolation})
 
         if len(programs) != 1 or output is None:
             raise InputError("five-axis compensation takes one program and -o OUT")
@@ -796,16 +807,18 @@ def compensate_cmd(
     forces = None if force is None else _floats(force, 3, "--force")
     common = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
               "frames": _named_frames(frame, "--frame"), "tools": _named_frames(tool, "--tool"),
-              "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints")}
+              "start_joints": None if start_joints is None else _floats(start_joints, 6, "--start-joints"),
+              "allow_extrapolation": allow_extrapolation}
     if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
         if cut is not None or in_place or subdivide or force_file is not None or data:
             raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
         options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
+        out.print(describe_model(model_summary(error_model)["model"]))
         raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
     program = programs[0]
     if output is None:
         raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
-    stream_options = {**common, "max_deviation_mm": max_deviation}
+    stream_options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
     if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
     tp = _read_program(program, dialect, data)
@@ -819,7 +832,7 @@ def compensate_cmd(
     with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
         task = bar.add_task("compensating", total=None)
         options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log),
-                       progress=lambda m: bar.update(task, description=m))
+                       progress=lambda m: bar.update(task, description=m), detail=_is_page(report))
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -828,14 +841,17 @@ def compensate_cmd(
             written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
         else:
             new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
-    summary = rep.summary()
+    summary = {**rep.summary(), **model_summary(error_model)}
     from .arcs import summary as arc_summary
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
-    if report is not None:
+    if _is_page(report):  # written also when targets fail: the page shows where
+        _write_page(report, rep, summary, error_model, program, model)
+    elif report is not None:
         _write_point_report(report, rep, summary)
     failures = rep.failures_at(written)
     if failures:
+        err.print(describe_model(summary["model"]), highlight=False)
         for where, reason in failures[:50]:
             err.print(f"{where}: {reason}", highlight=False)
         if len(failures) > 50:
@@ -851,6 +867,7 @@ def _print_compensation(summary: dict, scheme: str, notes, log) -> None:
     """compensate's account of one program: predicted error before and after, the path between
     targets, the arcs, and the program's notes."""
     b, a = summary["predicted_before"], summary["predicted_after"]
+    log.print(describe_model(summary["model"]))
     if b["rms_mm"] is not None:
         log.print(
             f"{summary['compensated']} of {summary['targets']} targets compensated ({scheme}); predicted error RMS {b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, "
@@ -898,6 +915,23 @@ def _block_forces(cut, force_file, forces, tp, frame, tool, log):
         log.print(f"note: {unlisted} Cartesian target(s) have no row in {force_file}: no process force there")
     placed = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool")) if (frame or tool) else tp
     return base_frame_forces(placed, tool_frame)
+
+
+def _is_page(report: Optional[Path]) -> bool:
+    """--report PAGE.html: the page (postproc.report.compensation), else the JSON."""
+    return report is not None and report.suffix.lower() in (".html", ".htm")
+
+
+def _write_page(report: Path, rep, summary: dict, model, program: str, model_path: Path) -> None:
+    """--report PAGE.html (its figures take a few seconds: a spinner meanwhile)."""
+    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
+
+    from .measurements import write_text_atomic
+    from .report.compensation import compensation_report
+
+    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
+        bar.add_task(f"writing the report page {report}", total=None)
+        write_text_atomic(report, compensation_report(rep, summary, model, program, str(model_path)))
 
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:
@@ -1350,11 +1384,14 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
         return False
     except CompensationError as exc:
         failures = getattr(exc, "failures", [])
+        err.print(describe_model(model_summary(model)["model"]), highlight=False)
+        columns = getattr(exc, "columns", {})
         for line, reason in failures[:50]:
-            err.print(f"line {line}: {reason}")
+            err.print(f"{program}:{line}:{columns[line]}: {reason}" if line in columns else f"{program}:{line}: {reason}", highlight=False)
         raise
     s = result.summary
     b, a = s["predicted_before"], s["predicted_after"]
+    out.print(describe_model(model_summary(model)["model"]))
     if b["rms_mm"] is not None:
         out.print(f"{s['compensated']} of {s['targets']} targets compensated ({options['scheme']}, {s['chunks']} chunks); predicted error RMS "
                   f"{b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, max {b['max_mm']:.4f} -> {a['max_mm']:.4f} mm; "

@@ -80,6 +80,8 @@ class Report:
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
     end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
+    outside_region: dict[int, str] | None = None  # target index -> why it lies outside the model's measured region (postproc.coverage); None: not checked
+    detail: "PathDetail | None" = None  # per-target vectors for the --report page (compensate(detail=True))
 
     @property
     def failed(self) -> np.ndarray:
@@ -88,6 +90,8 @@ class Report:
             fine &= self.posture == 0
         if self.path_limit_mm is not None and self.path_mm is not None:
             fine &= ~(self.path_mm > self.path_limit_mm)
+        if self.outside_region:
+            fine[list(self.outside_region)] = False
         return self.compensated & ~fine
 
     def failures(self) -> list[tuple[int, str]]:
@@ -105,6 +109,8 @@ class Report:
             if self.path_limit_mm is not None and self.path_mm is not None and self.path_mm[i] > self.path_limit_mm:
                 reasons.append(f"on the segment into it the predicted path strays {self.path_mm[i]:.4f} mm from the intended one "
                                f"(over --max-deviation {self.path_limit_mm:g} mm; --subdivide adds targets on straight segments and splits CIRC / MoveC arcs)")
+            if self.outside_region and i in self.outside_region:
+                reasons.append(self.outside_region[i] + " (--allow-extrapolation compensates it all the same)")
             if not self.converged[i] and self.within_limits[i]:
                 reasons.append(f"did not converge (residual {self.after_mm[i]:.4f} mm after {self.iterations[i]} iterations)")
             out.append((int(self.line[i]), "; ".join(reasons)))
@@ -113,8 +119,14 @@ class Report:
     def failures_at(self, tp: Toolpath) -> list[tuple[str, str]]:
         """``failures`` with each target's ``file:line:column`` in ``tp`` (the program compensated):
         the column of its first number, or 1 where its numbers are elsewhere (a named point)."""
+        failed = np.nonzero(self.failed)[0].tolist()
+        return [(f"{tp.sources[int(tp.file[i])].path}:{tp.line[i]}:{column}", reason)
+                for i, column, (_, reason) in zip(failed, self.failure_columns(tp), self.failures())]
+
+    def failure_columns(self, tp: Toolpath) -> list[int]:
+        """The column in ``tp``'s text of each failed target, in the order of ``failures``."""
         out = []
-        for i, (_, reason) in zip(np.nonzero(self.failed)[0].tolist(), self.failures()):
+        for i in np.nonzero(self.failed)[0].tolist():
             doc = tp.sources[int(tp.file[i])]
             spans = tp.spans[i]
             here = spans[(spans[:, 0] == tp.file[i]) & (spans[:, 1] >= 0), 1]
@@ -122,8 +134,7 @@ class Report:
             line_end = doc.text.find("\n", line_start) % (len(doc.text) + 1)
             inside = here[(here >= line_start) & (here < line_end)]
             named = doc.text.upper().find(tp.target_name[i].upper(), line_start, line_end) if tp.target_name[i] else -1
-            column = int(inside.min()) - line_start + 1 if len(inside) else (named - line_start + 1 if named >= 0 else 1)
-            out.append((f"{doc.path}:{tp.line[i]}:{column}", reason))
+            out.append(int(inside.min()) - line_start + 1 if len(inside) else (named - line_start + 1 if named >= 0 else 1))
         return out
 
     def summary(self) -> dict:
@@ -252,9 +263,13 @@ def compensate(
     max_deviation_mm: float | None = None,
     progress=lambda msg: None,
     reference: Reference | None = None,
+    allow_extrapolation: bool = False,
+    detail: bool = False,
 ) -> tuple[Toolpath, Report]:
     """Compensated copy of a toolpath and the per-point report (see the module docstring).
-    ``reference``: ``reference_postures`` of the same program, frames, tools and start joints."""
+    ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
+    Targets outside the region the model was measured in fail unless ``allow_extrapolation``.
+    ``detail``: the report also carries the per-target vectors of ``PathDetail``."""
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
@@ -279,7 +294,9 @@ def compensate(
     path = _path_deviation(problem, solution)
     arc_fit.put_deviation(path, problem.rows)
     report = replace(report, path_mm=_scatter(len(tp), problem.rows, np.nan, path, float), path_limit_mm=max_deviation_mm,
-                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None)
+                     end_joints=problem.q_ref[-1].copy() if len(problem.rows) else None,
+                     outside_region=None if allow_extrapolation else _outside_region(problem, solution, model),
+                     detail=PathDetail.of(problem, before, solution) if detail else None)
     out = arc_fit.apply(written.with_positions(problem.positions_for(solution.cmd)))
     notes = tuple(problem.notes) + ((f"{inexact}: the distances reported between targets assume exact interpolation",) if inexact else ())
     if notes:
@@ -287,6 +304,29 @@ def compensate(
     return out, report
 
 
+
+
+@dataclass(frozen=True)
+class PathDetail:
+    """Per target of the program (NaN for joint targets): where it is programmed, the
+    model's predicted error of the program as written and compensated (predicted TCP minus
+    target), and the joints of the compensated command. For ``postproc.report``."""
+
+    goal_mm: np.ndarray  # (N, 3) base frame
+    before_mm: np.ndarray  # (N, 3)
+    after_mm: np.ndarray  # (N, 3)
+    joints_deg: np.ndarray  # (N, 6)
+
+    @classmethod
+    def of(cls, problem: "_Problem", before: np.ndarray, sol: "_Solution") -> "PathDetail":
+        n, rows = len(problem.tp), problem.rows
+
+        def full(values):
+            out = np.full((n, values.shape[1]), np.nan)
+            out[rows] = values
+            return out
+
+        return cls(full(problem.goal), full(before), full(sol.err), full(sol.q))
 
 
 @dataclass
@@ -581,6 +621,18 @@ def _report(problem: _Problem, before: np.ndarray, sol: _Solution) -> Report:
         branch_changed=full(False, changed, bool),
         posture=full(0, posture_problem, int),
     )
+
+
+def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> dict[int, str] | None:
+    """{target index: why it lies outside the region the model was measured in}: its joints
+    where the model predicts them (the compensated command's, or the target's as written where
+    there is none) and its TCP. None where the model records no region. (A dict, not a column:
+    nearly always empty, and postproc.stream sends every chunk's report between processes.)"""
+    if model.coverage is None:
+        return None
+    q = np.where(np.isnan(sol.q), problem.q_ref, sol.q)
+    outside = model.coverage.outside(q, problem.goal)
+    return {int(problem.rows[i]): outside.reason(int(i), model.coverage) for i in np.nonzero(outside.mask)[0]}
 
 
 def _path_deviation(problem: _Problem, sol: _Solution) -> np.ndarray:

@@ -59,6 +59,7 @@ class ErrorModel:
     base_rotation: np.ndarray = field(default_factory=lambda: np.eye(3))  # R0 of the base-frame registration
     base_translation: np.ndarray = field(default_factory=lambda: np.zeros(3))  # t0
     residual: object | None = None  # a data-driven predictor of what the effects leave (postproc.learn.Residual)
+    coverage: object | None = None  # the region it was fitted on (postproc.coverage.Coverage); None: unknown
 
     # ------------------------------------------------------------------ building
 

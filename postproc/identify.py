@@ -18,6 +18,7 @@ import numpy as np
 from scipy.linalg import qr
 from scipy.optimize import least_squares
 
+from .coverage import Coverage
 from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
 from .errors import IdentificationError
@@ -196,8 +197,9 @@ def fit(
     start this fit, e.g. to extend a model by one effect.
     """
     say = progress or (lambda msg: None)
+    coverage = Coverage.of(robot, tool_mm, meas.q_deg)  # the model records the region it was fitted on
     effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say)
-    model = _initial_model(robot, tool_mm, effects, meas, prior)
+    model = replace(_initial_model(robot, tool_mm, effects, meas, prior), coverage=coverage)
     prep = model.prepare(meas)
     notes.extend(prep.notes)
     framed = bool(effects.of_kind("base"))

@@ -144,6 +144,7 @@ def parse_measurements(text: str, source: str) -> MeasurementSet:
             first[ident] = line
 
     _check_magnitudes(source, body, data)
+    _check_joint_magnitudes(source, body, data)
     measured = np.column_stack([data[c] for c in MEASURED])
     _check_millimetres(source, body, measured, MEASURED)
     q = np.column_stack([data[c] for c in JOINTS])
@@ -192,30 +193,67 @@ def _check_magnitudes(source, body, data) -> None:
             raise MeasurementError(source, body[bad[0]][0], col, f"{value:g} mm is more than 10 m from the origin: not a position of a robot cell")
 
 
+# No revolute joint of an industrial arm turns further than one full turn either way (the
+# widest, UR10's, is +-360 deg): a larger value is a unit or export error, whatever the limits.
+ABSURD_JOINT_DEG = 360.0
+
+# Limits a robot file marks as estimates may be wrong by this much before a measured joint
+# beyond them is refused rather than kept with a warning. The bundled KR160 R1570's limits
+# are commonly published data-sheet ranges converted into the file's DH convention, and
+# the project's own KR160 sets (data/kr160_dev_*) reach up to 49.6 deg beyond them (A3 down
+# to -149.6 against -100, A5 up to 169.3 against +120): 60 deg keeps such sets and still
+# refuses values no error of a data sheet explains.
+ESTIMATED_LIMIT_MARGIN_DEG = 60.0
+
+
+def _check_joint_magnitudes(source, body, data) -> None:
+    """Refuse joint values beyond +-360 deg (a unit or export error), naming the first such cell."""
+    for col in JOINTS:
+        bad = np.nonzero(np.abs(data[col]) > ABSURD_JOINT_DEG)[0]
+        if bad.size:
+            value = data[col][bad[0]]
+            raise MeasurementError(source, body[bad[0]][0], col, f"{value:g} deg is beyond +-{ABSURD_JOINT_DEG:g} deg: "
+                                   "no revolute joint turns that far (a unit or export error)")
+
+
 def check_joint_limits(meas: MeasurementSet, lower_deg: np.ndarray, upper_deg: np.ndarray, drop_invalid: bool = False,
-                       enforce: bool = True) -> tuple[MeasurementSet, list[str]]:
-    """Rows whose joints lie outside the robot's limits: an error naming the first row's line
-    and column, or (``drop_invalid``) the set without them and one message per dropped row.
-    With ``enforce=False`` (limits that are only estimates) the rows are kept and the
-    messages returned as warnings."""
-    outside = (meas.q_deg < lower_deg - 1e-9) | (meas.q_deg > upper_deg + 1e-9)
+                       margin_deg: float = 0.0) -> tuple[MeasurementSet, list[str]]:
+    """Rows whose joints lie more than ``margin_deg`` outside the robot's limits: an error
+    naming the first row's line and column, or (``drop_invalid``) the set without them and
+    one message per dropped row. (A margin is for limits that are only estimates; rows
+    within it are ``outside_limits``' warnings.)"""
+    lower, upper = lower_deg - margin_deg, upper_deg + margin_deg
+    outside = (meas.q_deg < lower - 1e-9) | (meas.q_deg > upper + 1e-9)
     bad_rows = np.nonzero(outside.any(axis=1))[0]
     if bad_rows.size == 0:
         return meas, []
-    messages = []
-    for row in bad_rows:
+    beyond = f" by more than the {margin_deg:g} deg allowed for limits marked as estimates" if margin_deg else ""
+
+    def message(row: int) -> tuple[int, str]:
         j = int(np.argmax(outside[row]))
-        where = f"line {meas.line_of(row)}" if meas.lines is not None else f"row {row + 1}"
-        messages.append(f"{where}, id {meas.ids[row]}: q{j + 1} = {meas.q_deg[row, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]")
-    if not enforce:
-        return meas, messages
+        return j, f"{meas.q_deg[row, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]{beyond}"
+
     if not drop_invalid:
-        first = int(bad_rows[0])
-        j = int(np.argmax(outside[first]))
-        raise MeasurementError(meas.source, meas.line_of(first), f"q{j + 1}",
-                               f"{meas.q_deg[first, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]"
-                               f" ({bad_rows.size} row(s) in all; --drop-invalid drops and lists them)")
+        j, text = message(int(bad_rows[0]))
+        raise MeasurementError(meas.source, meas.line_of(int(bad_rows[0])), f"q{j + 1}",
+                               f"{text} ({bad_rows.size} row(s) in all; --drop-invalid drops and lists them)")
+    messages = [f"{_row_name(meas, row)}: q{message(row)[0] + 1} = {message(row)[1]}" for row in bad_rows]
     return meas.subset(~outside.any(axis=1)), messages
+
+
+def outside_limits(meas: MeasurementSet, lower_deg: np.ndarray, upper_deg: np.ndarray) -> list[str]:
+    """One message per row with a joint outside the limits (the warnings of estimated limits)."""
+    outside = (meas.q_deg < lower_deg - 1e-9) | (meas.q_deg > upper_deg + 1e-9)
+    messages = []
+    for row in np.nonzero(outside.any(axis=1))[0]:
+        j = int(np.argmax(outside[row]))
+        messages.append(f"{_row_name(meas, row)}: q{j + 1} = {meas.q_deg[row, j]:g} deg is outside the robot's limits [{lower_deg[j]:g}, {upper_deg[j]:g}]")
+    return messages
+
+
+def _row_name(meas: MeasurementSet, row: int) -> str:
+    where = f"line {meas.line_of(row)}" if meas.lines is not None else f"row {row + 1}"
+    return f"{where}, id {meas.ids[row]}"
 
 
 def _check_millimetres(source, body, xyz, cols):

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from .coverage import COVERAGE_KEY, Coverage
 from .effects import EffectSpecError, parse_effects
 from .errormodel import ErrorModel
 from .errors import InputError, ModelFileError
@@ -46,6 +47,7 @@ def model_document(model: ErrorModel, result: FitResult | None = None, measureme
         "base_registration": {"rotation": model.base_rotation.tolist(), "translation_mm": model.base_translation.tolist()},
         "predictor": None if model.residual is None else model.residual.to_state(),
     }
+    doc.update(_coverage_document(model))
     if result is not None:
         doc["fit"] = {
             "measurements": measurements,
@@ -133,7 +135,18 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         from .learn import Residual
 
         residual = Residual.from_state(doc["predictor"], source)
-    return replace(model.with_values(values), base_rotation=rot, base_translation=trans, residual=residual)
+    return replace(model.with_values(values), base_rotation=rot, base_translation=trans, residual=residual,
+                   coverage=_coverage_of(doc, source))
+
+
+def _coverage_document(model: ErrorModel) -> dict[str, Any]:
+    """The model's ``coverage`` key: the region it was fitted on (none for a model not fitted)."""
+    return {} if model.coverage is None else {COVERAGE_KEY: model.coverage.to_document()}
+
+
+def _coverage_of(doc: dict, source: str) -> Coverage | None:
+    """The region a model file records; None for files written before it was recorded."""
+    return None if doc.get(COVERAGE_KEY) is None else Coverage.from_document(doc[COVERAGE_KEY], source)
 
 
 def _finite(v) -> bool:

@@ -4,9 +4,11 @@ A model predicts one robot's error with one measured tool and the load it carrie
 the measurements. A program written for another robot, cutting with another tool or
 carrying another payload would be "compensated" with the wrong numbers and exit 0. So:
 
-- robot: the robot the user names (``--robot``) must be the model's; every joint target
-  of the program must lie within the model robot's joint ranges (a program for a robot
-  with other ranges is for another robot);
+- robot: the robot the user names (``--robot``) must be the model's; a program in a
+  maker's own language (KRL: KUKA, RAPID: ABB) must be for a robot of that maker, as the
+  robot file's description names it; every joint target of the program must lie within
+  the model robot's joint ranges (a program for a robot with other ranges is for another
+  robot);
 - tool: every tool the program's Cartesian targets use (its frame, ``$TOOL``/``TOOL_DATA``,
   RAPID tooldata) must put the TCP where the model's tool is (``TOOL_TOLERANCE_MM``);
 - payload: where the model has an effect that gravity drives (``payload_dependent``: joint
@@ -39,7 +41,8 @@ class ModelMismatchError(InputError):
 
 def check_model_fits(tp: Toolpath, model, model_path: str, robot_name: str | None = None, allow: bool = False) -> list[str]:
     """Every mismatch between the program and the model, as errors (or notes with ``allow``)."""
-    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path)
+    # The maker's last: where the tool or payload differ too, the message names them first.
+    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path) + _maker(tp, model.robot, model_path)
     if problems and not allow:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ModelMismatchError(f"{problems[0]}{more}; give the model fitted for this set-up, or --allow-model-mismatch if the difference is known to be harmless")
@@ -61,6 +64,23 @@ def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list
             out.append(f"{_where(tp, row)}: axis {j + 1} = {q[i, j]:g} deg is outside the range [{robot.lower_deg[j]:g}, {robot.upper_deg[j]:g}] "
                        f"of the model's robot {robot.name} ({model_path}): the program is for another robot")
     return out
+
+
+# Robot makers as robot files' descriptions name them (their first word).
+_MAKERS = ("KUKA", "ABB", "FANUC", "Yaskawa", "Universal", "Staubli", "Kawasaki", "Comau", "Nachi", "Denso")
+
+
+def _maker(tp: Toolpath, robot, model_path: str) -> list[str]:
+    """A KRL program is for a KUKA robot, a RAPID program for an ABB one: a model of another
+    maker's robot is for another robot. Robot files whose description names no known maker
+    are not judged."""
+    want = dialects.of(tp).controller_maker
+    words = robot.description.split()
+    maker = words[0] if words and words[0] in _MAKERS else None
+    if want is None or maker is None or maker == want:
+        return []
+    return [f"{tp.sources[0].path}: the program is {tp.dialect.upper()}, the language of {want} controllers; the model {model_path} "
+            f"is for robot {robot.name} ({robot.description}): the program is for another robot"]
 
 
 def _tools(tp: Toolpath, model, model_path: str) -> list[str]:

@@ -63,6 +63,7 @@ from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report,
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
+from .program_check import check_model_fits
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
 CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
@@ -119,11 +120,13 @@ class Totals:
     over_tolerance: int = 0
     failed: int = 0
     failures: list = field(default_factory=list)
+    columns: dict = field(default_factory=dict)  # program line of a failure -> its column
     chunks: int = 0
 
-    def add(self, rep: Report, keep: np.ndarray, line_shift: int, first_line: int) -> None:
+    def add(self, rep: Report, keep: np.ndarray, line_shift: int, first_line: int, columns: list[int] | None = None) -> None:
         """One chunk's report: its targets ``keep`` (from line ``first_line`` of the chunk) count;
-        ``line_shift`` turns the chunk's line numbers into the program's."""
+        ``line_shift`` turns the chunk's line numbers into the program's; ``columns``: those of
+        its failures (``Report.failure_columns``)."""
         self.chunks += 1
         self.targets += int(keep.sum())
         c = rep.compensated & keep
@@ -145,7 +148,10 @@ class Totals:
         failed = rep.failed & keep
         self.failed += int(failed.sum())
         if failed.any() and len(self.failures) < 1000:
-            self.failures += [(line + line_shift, reason) for line, reason in rep.failures() if line >= first_line][:1000]
+            listed = [(line + line_shift, reason, column) for (line, reason), column in zip(rep.failures(), columns or [None] * int(rep.failed.sum()))
+                      if line >= first_line][:1000]
+            self.failures += [(line, reason) for line, reason, _ in listed]
+            self.columns.update({line: column for line, _, column in listed if column is not None})
 
     def _add_path(self, rep: Report, keep: np.ndarray, line_shift: int) -> None:
         if rep.path_mm is None:
@@ -398,7 +404,7 @@ def _finish(model, options: dict, task: _Task) -> tuple[bytes, Report, tuple, li
     except InputError as exc:
         raise StreamFallback(f"input error in a chunk ({exc})") from None
     if rep.failed.any():
-        return b"", rep, new.notes, None
+        return b"", rep, new.notes, rep.failure_columns(tp)  # no text: nothing will be written; where the failures are
     texts = dialects.of(tp).emit_texts(tp, new)
     check_texts(tp, new, texts, np.nonzero(rep.compensated)[0])
     main = texts[0]
@@ -488,8 +494,10 @@ class _Job:
     carries the restated state to the next (``prepare``); ``_finish`` compensates, emits and checks it,
     here or in a worker process; ``collect`` folds the results in, in program order."""
 
-    def __init__(self, program: _Program, model, options: dict, progress):
+    def __init__(self, program: _Program, model, options: dict, progress, model_check: tuple | None = None):
         self.program, self.model, self.options, self.progress = program, model, options, progress
+        self.model_check = model_check  # (model path, --robot, --allow-model-mismatch): checked on the first chunk
+        self.mismatches: list[str] = []
         self.totals = Totals()
         self.notes: list[str] = []
         self.first_tp: Toolpath | None = None
@@ -532,7 +540,7 @@ class _Job:
     def collect(self, meta: _Meta, result) -> bytes:
         """One chunk's result (in program order): its report counted, its new text."""
         text, rep, notes, others = result
-        self.totals.add(rep, meta.keep, meta.shift, meta.first_line)
+        self.totals.add(rep, meta.keep, meta.shift, meta.first_line, others if rep.failed.any() else None)
         if meta.first:
             self.notes = list(notes)
         self.progress(f"chunk {self.totals.chunks}: {self.totals.targets:,} targets")
@@ -555,8 +563,11 @@ class _Job:
         return None, pool.submit(_finish, self.model, self.options, task)
 
     def _first(self, tp: Toolpath) -> None:
-        """The first chunk: the header's target lines blanked for the later chunks."""
+        """The first chunk: the model checked against it (robot, tools, payload), the header's
+        target lines blanked for the later chunks."""
         self.first_tp = tp
+        if self.model_check is not None:
+            self.mismatches = check_model_fits(tp, self.model, *self.model_check)
         in_header = tp.line[(tp.line <= len(self.blanked)) & (tp.file == 0)]
         for line in np.unique(in_header):
             self.blanked[int(line) - 1] = "\n"
@@ -653,6 +664,8 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
     CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
     path, output = Path(path), Path(output)
+    options = dict(options)
+    model_check = options.pop("model_check", None)  # (model path, --robot, --allow-model-mismatch), as postproc.batch
     lang, rules = stream_rules_for(path, dialect, model)
     if tune_malloc:
         _keep_freed_memory()
@@ -664,21 +677,21 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     with fh:
         program, first = _open(path, lang, rules, fh)
         with _pool(workers, warm=(model, options, program, first)) as (pool, slots):
-            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots)
+            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots, model_check)
 
 
 def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,
-         pool, workers: int, slots) -> StreamResult:
+         pool, workers: int, slots, model_check: tuple | None = None) -> StreamResult:
     """``compensate_streamed`` once the program is open and the workers (if any) started."""
     from .programs import refuse_overwrite
 
     lang, rules = program.lang, program.rules
-    job = _Job(program, model, options, progress)
+    job = _Job(program, model, options, progress, model_check)
     results = job.results(_batches(fh, first, rules, chunk_lines), "".join(program.header), pool, workers, slots)
     try:
         text = next(results)
     except CompensationError as exc:
-        exc.failures = job.totals.failures
+        exc.failures, exc.columns = job.totals.failures, job.totals.columns
         raise
     main = lang.output_paths(job.first_tp, output)[0]
     files = lang.files(job.first_tp, [job.first_tp.sources[0].text] + (job.other_texts or [d.text for d in program.others]), output)
@@ -688,9 +701,10 @@ def _run(program: _Program, first: str, fh, model, options: dict, progress, chun
         write_all({main: chain([text], results),
                    **{p: t.encode("latin-1") for p, t in files.items() if p != main}}, backup=in_place)
     except CompensationError as exc:
-        exc.failures = job.totals.failures
+        exc.failures, exc.columns = job.totals.failures, job.totals.columns
         raise
-    return StreamResult(job.totals.summary(), job.notes, list(files))
+    notes = [f"{m} (--allow-model-mismatch)" for m in job.mismatches] + job.notes
+    return StreamResult(job.totals.summary(), notes, list(files))
 
 
 HEAP_BLOCK_MAX = 256 * 2**20  # arrays up to this size come from the heap, not from their own mapping

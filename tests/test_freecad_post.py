@@ -190,6 +190,7 @@ def test_recorded_job_posts_and_lands_on_the_cam_path(fitted, tmp_path):
     out = tmp_path / "part.src"
     answer = run({"argstring": f"--model {model} {ARGS}", "filename": str(out), "objects": objects})
     assert answer["ok"] and answer["files"] == [str(out), str(tmp_path / "part.dat")]
+    assert any("model for kr160_r1570" in m and "measured region" in m for m in answer["messages"]), answer["messages"]
     back = check_program(out, objects, model, truth)
     assert answer["text"] == out.read_bytes().decode("latin-1")
     # Every straight move FreeCAD wrote is a target (arcs add their segments in between).

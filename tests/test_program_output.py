@@ -135,7 +135,7 @@ def test_rapid_to_standard_output_still_works(model_path, tmp_path):
         "MODULE P\n  PERS tooldata t1 := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];\n  PROC main()\n    ConfL\\Off;\n"
         "    MoveL [[950,0,400],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, t1;\n  ENDPROC\nENDMODULE\n"
     )
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-"])
+    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", "-", "--allow-model-mismatch"])  # RAPID, a KUKA model
     assert result.exit_code == 0, result.stderr
     assert result.stdout.startswith("MODULE P") and "[[950,0,400]" not in result.stdout
 
@@ -179,7 +179,7 @@ def test_a_rapid_program_of_several_modules_is_compensated_and_written_whole(mod
     assert result.exit_code == 2 and "standard output cannot carry" in result.stderr and result.stdout == ""
     out = tmp_path / "out" / "cell.pgf"
     out.parent.mkdir()
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out)])
+    result = runner.invoke(app, ["compensate", str(program), "--model", str(model_path), "-o", str(out), "--allow-model-mismatch"])  # RAPID, a KUKA model
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in out.parent.iterdir()) == ["Data.mod", "Main.mod", "cell.pgf"]
     assert (out.parent / "cell.pgf").read_bytes() == program.read_bytes()

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import dialects
+from ..coverage_text import describe_model, model_summary
 from ..errors import InputError, JobError, PostprocError
 from .arcs import linearise_arc
 
@@ -70,6 +71,8 @@ def argument_parser() -> argparse.ArgumentParser:
     p.add_argument("--temp", type=float, help="cell temperature, degC (models with a thermal effect)")
     p.add_argument("--allow-model-mismatch", action="store_true",
                    help="go on when the program's tool, payload or robot is not the model's (printed as a note)")
+    p.add_argument("--allow-extrapolation", action="store_true",
+                   help="compensate targets outside the joint ranges and region the model was measured in (refused by default)")
     p.add_argument("--force", metavar="FX,FY,FZ", help="process force in N, base frame (models with external_load)")
     return p
 
@@ -245,6 +248,7 @@ def planned_targets(request: dict):
 
 def run(request: dict) -> dict:
     """One post request (see the module docstring) -> its answer; raises PostprocError."""
+    from ..model_io import load_model  # as .post: the fitting stack, loaded only when a job is posted
     from .post import post, write_programs
 
     args, gcode, frames, tools = _prepare(request)
@@ -255,13 +259,14 @@ def run(request: dict) -> dict:
     try:
         files = post(gcode.text, args.model, args.to, output=output, dialect="gcode", frames=frames, tools=tools,
                      robot=args.robot, tol_mm=args.tol, max_iter=args.max_iter, scheme=args.scheme, temp_c=args.temp, force_n=force,
-                     allow_model_mismatch=args.allow_model_mismatch)
+                     allow_model_mismatch=args.allow_model_mismatch, allow_extrapolation=args.allow_extrapolation)
     except PostprocError as exc:
         raise _annotated(exc, gcode.origin) from None
     if filename != "-":
         write_programs(files)
     main_text = next(iter(files.values()))
-    messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}"]
+    messages = [f"postproc: {len(gcode.lines)} G-code lines from FreeCAD, program {', '.join(files)}",
+                f"postproc: {describe_model(model_summary(load_model(args.model)[0])['model'])}"]
     if filename != "-" and not filename.lower().endswith(suffix):
         messages.append(f"postproc: note: a {args.to.upper()} program's file name usually ends in {suffix}")
     return {"ok": True, "files": list(files) if filename != "-" else [], "text": main_text, "cam_gcode": gcode.text, "messages": messages}

@@ -42,6 +42,7 @@ def post(
     temp_c: float | None = None,
     force_n=None,
     allow_model_mismatch: bool = False,
+    allow_extrapolation: bool = False,
 ) -> dict[str, str]:
     """Compensated robot program for ``program`` under ``model``: ``{path: text}`` (KRL: .src and .dat).
 
@@ -55,6 +56,7 @@ def post(
     Raises InputError (bad input, naming the line) or CompensationError (targets that
     cannot be compensated, listed by line of ``program``), ModelMismatchError where the
     program's tool, payload or robot is not the model's (``allow_model_mismatch``: go on).
+    Targets outside the region the model was measured in fail (``allow_extrapolation``: compensate them).
     """
     from ..compensate import CompensationError, compensate
     from ..programs import write_program
@@ -82,7 +84,8 @@ def post(
     from ..program_check import check_model_fits
 
     check_model_fits(converted, error_model, str(model) if not hasattr(model, "robot") else "the model", robot, allow_model_mismatch)
-    new, report = compensate(converted, error_model, tol_mm=tol_mm, max_iter=max_iter, scheme=scheme, temp_c=temp_c, force_n=force_n)
+    new, report = compensate(converted, error_model, tol_mm=tol_mm, max_iter=max_iter, scheme=scheme, temp_c=temp_c, force_n=force_n,
+                             allow_extrapolation=allow_extrapolation)
     report = replace(report, line=tp.line.copy())  # failures name the lines of the input
     if report.failed.any():
         raise CompensationError(f"{int(report.failed.sum())} target(s) cannot be compensated; nothing was written", report)

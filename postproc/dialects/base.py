@@ -31,6 +31,9 @@ class Dialect:
     #: programs of this language drive machine axes (a CNC: five-axis emitters and machine
     #: kinematics apply), not a robot controller's Cartesian targets
     machine_program: bool = False
+    #: the robot maker whose controllers alone run this language, as robot files'
+    #: descriptions name it first (None: any maker's, or a CNC's)
+    controller_maker: str | None = None
     #: the program's speeds (as the IR keeps them) times this are mm/s (G-code feeds: mm/min)
     speed_to_mm_per_s: float = 1.0
 

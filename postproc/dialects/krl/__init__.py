@@ -15,6 +15,7 @@ CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA
 class KrlDialect(Dialect):
     name = "krl"
     description = "KUKA KRL (.src with its .dat and $config.dat)"
+    controller_maker = "KUKA"
     extensions = (".src", ".sub")
 
     def sniff(self, head: str) -> bool:

@@ -15,6 +15,7 @@ from ..base import Dialect, aggregate_around, read_bytes
 class RapidDialect(Dialect):
     name = "rapid"
     description = "ABB RAPID module, or a program file (.pgf) with its modules"
+    controller_maker = "ABB"
     extensions = (".mod", ".modx", ".prg", ".sys", ".pgf")
 
     def sniff(self, head: str) -> bool:
