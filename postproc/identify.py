@@ -378,11 +378,13 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     from .learn import FEATURES, GPRPredictor, GridPredictor, PSOBPPredictor, Residual, TrGPRPredictor
     from .learn.features import features
 
-    if kind not in FEATURES:
-        raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join(FEATURES)})")
+    from .predictor_plugins import PREDICTORS
+
+    if kind not in FEATURES and kind not in PREDICTORS:
+        raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")
     physics = _replace(model, residual=None)
     target = meas.measured_mm - physics.predict(meas)
-    feature_kind = FEATURES[kind]
+    feature_kind = FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":
@@ -391,6 +393,8 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
+    elif kind in PREDICTORS:
+        est = PREDICTORS[kind](random_state=seed).fit(X, target)
     else:
         if source is None:
             raise IdentificationError("tr-gpr needs a source-region measurement set (--source)")
