@@ -40,7 +40,7 @@ from .predictor_plugins import PluginPredictor
 ENV = "POSTPROC_PLUGINS"
 GROUPS = {"effect": "postproc.effects", "predictor": "postproc.predictors", "dialect": "postproc.dialects"}
 RECORD_ATTR = "__postproc_plugin__"
-HOW_TO_LOAD = f"load it with --plugins PATH (a .py file or a folder of them), the environment variable {ENV}, or an installed package's 'postproc.effects' entry point"
+HOW_TO_LOAD = f"--plugins PATH (a .py file or a folder of them), the environment variable {ENV}, or an installed package's 'postproc.effects' entry point"
 
 
 class PluginError(InputError):
@@ -172,7 +172,10 @@ def _register(obj, module: ModuleType, origin: str, file: Path | None) -> Plugin
     else:
         kind, register = "predictor", predictor_registry.register
     record = PluginRecord(kind, obj.name, module.__name__, None if source is None else str(source.resolve()), digest, origin)
-    register(obj, where)
+    try:
+        register(obj, where)
+    except InputError as exc:  # a name clash or a bad declaration: one error type for every plugin problem
+        raise PluginError(str(exc)) from None
     object.__setattr__(obj, RECORD_ATTR, record) if isinstance(obj, Dialect) else setattr(obj, RECORD_ATTR, record)
     return record
 
@@ -233,7 +236,8 @@ def check_model_plugins(doc: dict, source: str) -> None:
         what = f"{entry['kind']} '{entry['name']}' (from {entry.get('file') or entry.get('module')})"
         loaded = tables.get(entry["kind"], {}).get(entry["name"])
         if loaded is None:
-            raise ModelFileError(f"{source}: the model uses the plugin {what}, which is not loaded: {HOW_TO_LOAD}")
+            hint = f"--plugins {entry['file']} (or POSTPROC_PLUGINS)" if entry.get("file") else HOW_TO_LOAD
+            raise ModelFileError(f"{source}: the model uses the plugin {what}, which is not loaded: load it with {hint}")
         record = plugin_record(loaded)
         if record is None or record.sha256 != entry["sha256"]:
             now = "a built-in" if record is None else f"{record.file or record.module}, sha256 {str(record.sha256)[:12]}"
