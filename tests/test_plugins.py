@@ -296,3 +296,16 @@ def test_dialect_plugin_on_the_command_line(tmp_path):
     del dialects.REGISTRY["user_krl"]  # as in a new process without --plugins
     without = runner.invoke(app, ["inspect", str(REPO / "examples/data/block_pass.src"), "--dialect", "user_krl"])
     assert without.exit_code == 2 and "user_krl" in without.stderr
+
+
+@pytest.mark.slow
+def test_batch_workers_load_the_plugins_the_command_was_given(user_model, tmp_path):
+    """Dask worker processes load the --plugins files before the model (batch.ModelPlugin)."""
+    inputs, out_dir = tmp_path / "in", tmp_path / "out"
+    inputs.mkdir()
+    out_dir.mkdir()
+    programs = [shutil.copy(REPO / "examples/data/block_pass.src", inputs / f"pass{k}.src") for k in range(2)]
+    res = runner.invoke(app, ["compensate", *map(str, programs), "--model", str(user_model), "--out-dir", str(out_dir), "--jobs", "1",
+                              "--plugins", str(EFFECT_FILE)])
+    assert res.exit_code == 0, res.stdout + res.stderr
+    assert sorted(p.name for p in out_dir.iterdir()) == ["pass0.src", "pass1.src"]
