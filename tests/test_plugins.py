@@ -309,3 +309,24 @@ def test_batch_workers_load_the_plugins_the_command_was_given(user_model, tmp_pa
                               "--plugins", str(EFFECT_FILE)])
     assert res.exit_code == 0, res.stdout + res.stderr
     assert sorted(p.name for p in out_dir.iterdir()) == ["pass0.src", "pass1.src"]
+
+
+@pytest.mark.slow
+def test_streamed_workers_compensate_with_a_plugin_model(user_model, tmp_path):
+    """compensate --stream's forked workers resolve the plugin effect as this process does."""
+    from postproc.compensate import compensate
+    from postproc.programs import emit_texts, parse_program
+    from postproc.stream import compensate_streamed
+
+    head = (REPO / "examples/data/block_pass.src").read_text().splitlines()[:6]
+    moves = [f"LIN {{X {0.2 * i:.1f}, Y {50 + 10 * np.sin(i / 9):.3f}, Z 100, A 0, B 180, C 0}}" for i in range(240)]
+    program = tmp_path / "long.src"
+    program.write_text("\n".join(head + ["PTP {X 0, Y 50, Z 150, A 0, B 180, C 0}"] + moves + ["END"]) + "\n", encoding="latin-1")
+    load_plugins([EFFECT_FILE], environ={})
+    model, _ = load_model(user_model)
+    tp = parse_program(program)
+    new, rep = compensate(tp, model)
+    assert not rep.failed.any()
+    result = compensate_streamed(program, model, tmp_path / "streamed.src", chunk_lines=50, workers=2)
+    assert result.summary["chunks"] > 3
+    assert (tmp_path / "streamed.src").read_text(encoding="latin-1") == emit_texts(tp, new)[0]
