@@ -23,6 +23,7 @@ from .errormodel import ErrorModel, Prepared
 from .errors import IdentificationError
 from .frames import kabsch
 from .measurements import MeasurementSet
+from .predictor_plugins import PREDICTORS
 from .robots import RobotModel
 
 RANK_TOL = 1e-7
@@ -377,8 +378,6 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
 
     from .learn import FEATURES, GPRPredictor, GridPredictor, PSOBPPredictor, Residual, TrGPRPredictor
     from .learn.features import features
-
-    from .predictor_plugins import PREDICTORS
 
     if kind not in FEATURES and kind not in PREDICTORS:
         raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")

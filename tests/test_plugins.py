@@ -20,6 +20,7 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc import dialects
+from postproc import effects as effect_catalog
 from postproc import predictor_plugins as predictors
 from postproc.cli import app
 from postproc.effect_check import check_effect
@@ -27,6 +28,7 @@ from postproc.effect_template import write_template
 from postproc.effects import CATALOG, parse_effects
 from postproc.errors import ModelFileError
 from postproc.identify import Stats, fit, fit_predictor, residuals
+from postproc.measurements import write_measurements
 from postproc.model_io import load_model, model_document, model_from_document, save_model
 from postproc.plugins import ENV, PluginError, load_plugins, loaded_plugin_files
 from postproc.robots import load_robot
@@ -60,9 +62,7 @@ def builtins_only(monkeypatch):
 
 
 def _builtin_names(table) -> frozenset:
-    from postproc import effects
-
-    return {id(CATALOG): effects.BUILTIN, id(dialects.REGISTRY): dialects.BUILTIN, id(predictors.PREDICTORS): frozenset()}[id(table)]
+    return {id(CATALOG): effect_catalog.BUILTIN, id(dialects.REGISTRY): dialects.BUILTIN, id(predictors.PREDICTORS): frozenset()}[id(table)]
 
 
 def _installed(tmp_path: Path, group: str, name: str, source: Path) -> Path:
@@ -244,7 +244,7 @@ def test_compensate_with_a_plugin_model_in_fresh_processes(user_model, tmp_path)
 
 
 def test_feature_kinds_agree_with_the_learners():
-    from postproc.learn.features import KINDS
+    from postproc.learn.features import KINDS  # here only: postproc.learn loads scikit-learn (seconds)
 
     assert predictors.FEATURE_KINDS == KINDS
 
@@ -267,8 +267,6 @@ def test_predictor_plugin_loads_each_way_fits_and_round_trips(way, tmp_path, mon
 
 def test_fit_command_takes_a_plugin_predictor(tmp_path):
     robot, _, data = _simulated("geometric", 60, seed=6)
-    from postproc.measurements import write_measurements
-
     write_measurements(tmp_path / "d.csv", data)
     res = runner.invoke(app, ["fit", str(tmp_path / "d.csv"), "--robot", ROBOT, "--tool", "0,0,250", "--effects", "geometric",
                               "--predictor", "user_plane", "-o", str(tmp_path / "m.json"), "--plugins", str(PREDICTOR_FILE)])

@@ -109,7 +109,7 @@ def _model(model, plugins=()):
 
     if isinstance(model, ErrorModel):
         return model
-    from ..model_io import load_model
+    from ..model_io import load_model  # lazily, as above: the model and plugin machinery only when a path is given
     from ..plugins import load_plugins
 
     load_plugins(plugins)  # the same three ways as the command line: the model file names what it needs

@@ -11,11 +11,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..predictor_plugins import PluginPredictor, state_of
+from ..predictor_plugins import from_state as plugin_from_state
 from .gp import GPRPredictor
 from .grid import GridPredictor
 from .nn import PSOBPPredictor
-from ..predictor_plugins import PluginPredictor, state_of
-from ..predictor_plugins import from_state as plugin_from_state
 
 
 def estimator_state(est) -> dict:
