@@ -1221,12 +1221,12 @@ app.add_typer(effect_app, name="effect")
 @handles_errors
 def effect_new_cmd(
     name: str = typer.Argument(..., help="The effect's name (lower case, e.g. wrist_cable)."),
-    out_dir: Path = typer.Option(Path("."), "-o", "--out-dir", help="Folder to write NAME.py in (an existing file is never overwritten)."),
+    output: Path = typer.Option(Path("."), "-o", "--output", help="FILE.py to write, or a folder to write NAME.py in (an existing file is never overwritten)."),
 ):
-    """Write a commented template effect file NAME.py, outside the package."""
+    """Write a commented template effect file (NAME.py), outside the package."""
     from .effect_template import write_template
 
-    path = write_template(name, out_dir)
+    path = write_template(name, output)
     out.print(f"wrote {path}; check it with 'postproc effect check {path}', load it with '--plugins {path}'")
 
 

@@ -95,16 +95,18 @@ def class_name(name: str) -> str:
     return "".join(part.capitalize() for part in name.split("_")) or "MyEffect"
 
 
-def write_template(name: str, out_dir: str | Path = ".") -> Path:
-    """Write ``OUT_DIR/NAME.py``; refuses a bad or built-in name and an existing file."""
+def write_template(name: str, output: str | Path = ".") -> Path:
+    """Write the template to ``output``: a ``.py`` file, or ``NAME.py`` in an existing
+    folder (spec/cli.md: ``effect new NAME [-o FILE.py]``); refuses a bad or built-in name
+    and an existing file."""
     if not re.fullmatch(r"[a-z][a-z0-9_]*", name):
         raise InputError(f"effect name '{name}': use lower case letters, digits and _, starting with a letter")
     if name in BUILTIN:
         raise InputError(f"effect name '{name}' is a built-in effect's; choose another")
-    folder = Path(out_dir)
-    if not folder.is_dir():
-        raise OutputError(f"-o {folder}: not an existing folder")
-    path = folder / f"{name}.py"
+    target = Path(output)
+    path = target / f"{name}.py" if target.is_dir() else target
+    if path.suffix != ".py" or not path.parent.is_dir():
+        raise OutputError(f"-o {target}: give a .py file in an existing folder, or an existing folder")
     if path.exists():
         raise OutputError(f"{path}: already exists; nothing was written (remove it or choose another name or folder)")
     write_text_atomic(path, TEMPLATE.format(name=name, cls=class_name(name), file=path.name))

@@ -8,6 +8,7 @@ and an entry point of an installed distribution (a dist-info folder on sys.path)
 
 from __future__ import annotations
 
+import difflib
 import json
 import os
 import shutil
@@ -113,6 +114,15 @@ def test_template_is_a_working_effect_but_asks_for_its_texts(tmp_path):
     assert all(c.ok for name, c in checks.items() if name != "texts")
 
 
+def test_the_user_effect_is_the_template_with_a_few_lines_edited(tmp_path):
+    """tests/plugins/user_wrist_cable.py stays what `effect new` writes, edited: if the
+    template changes, regenerate it (and docs/own-effect.md's diff)."""
+    fresh = write_template("user_wrist_cable", tmp_path).read_text().splitlines()
+    mine = EFFECT_FILE.read_text().splitlines()
+    changed = [line for line in difflib.unified_diff(fresh, mine, lineterm="", n=0) if line[:1] in "+-" and line[:3] not in ("+++", "---")]
+    assert 0 < len(changed) <= 16, changed
+
+
 def test_effect_new_refuses_to_overwrite_and_bad_names(tmp_path):
     assert runner.invoke(app, ["effect", "new", "wrist_cable", "-o", str(tmp_path)]).exit_code == 0
     before = (tmp_path / "wrist_cable.py").read_text()
@@ -121,6 +131,9 @@ def test_effect_new_refuses_to_overwrite_and_bad_names(tmp_path):
     assert (tmp_path / "wrist_cable.py").read_text() == before
     for bad in ("geometric", "Wrist", "2x"):
         assert runner.invoke(app, ["effect", "new", bad, "-o", str(tmp_path)]).exit_code == 2
+    named = runner.invoke(app, ["effect", "new", "cable", "-o", str(tmp_path / "my_cable.py")])  # spec/cli.md: -o FILE.py
+    assert named.exit_code == 0 and 'name = "cable"' in (tmp_path / "my_cable.py").read_text()
+    assert runner.invoke(app, ["effect", "new", "cable", "-o", str(tmp_path / "no" / "x.py")]).exit_code == 2
 
 
 def test_effect_check_passes_the_user_effect_and_lists_failures():
