@@ -2,7 +2,9 @@
 
 Every module of this package except ``base`` defines one ``Effect`` subclass; the
 catalog discovers them, so adding an effect is adding one file. Names are fixed by
-spec/cli.md (more may be added).
+spec/cli.md (more may be added). Effects written outside the package (against
+``postproc.effects.api``) join the catalog through ``register``, called by
+``postproc.plugins.load_plugins``.
 """
 
 from __future__ import annotations
