@@ -177,7 +177,24 @@ def _register(obj, module: ModuleType, origin: str, file: Path | None) -> Plugin
     except InputError as exc:  # a name clash or a bad declaration: one error type for every plugin problem
         raise PluginError(str(exc)) from None
     object.__setattr__(obj, RECORD_ATTR, record) if isinstance(obj, Dialect) else setattr(obj, RECORD_ATTR, record)
+    if file is not None and isinstance(obj, type):
+        obj.__reduce__ = _reduce_plugin_object  # pickled by file: a spawned process loads the file first
     return record
+
+
+def _reduce_plugin_object(self):
+    """Pickle an instance of a plugin class loaded from a file as (file, class, state), so
+    that a process that never loaded the file (a spawned worker) loads it on unpickling."""
+    record = plugin_record(type(self))
+    return _rebuild_plugin_object, (record.file, type(self).__qualname__, self.__dict__)
+
+
+def _rebuild_plugin_object(file: str, qualname: str, state: dict):
+    module = _load_file(Path(file), "a pickled plugin object's")
+    _register_module(module, "--plugins", Path(file))
+    obj = object.__new__(getattr(module, qualname))
+    obj.__dict__.update(state)
+    return obj
 
 
 def _source_file(module: ModuleType) -> Path | None:

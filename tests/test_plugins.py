@@ -11,6 +11,7 @@ from __future__ import annotations
 import difflib
 import json
 import os
+import pickle
 import shutil
 import subprocess
 import sys
@@ -341,3 +342,14 @@ def test_streamed_workers_compensate_with_a_plugin_model(user_model, tmp_path):
     result = compensate_streamed(program, model, tmp_path / "streamed.src", chunk_lines=50, workers=2)
     assert result.summary["chunks"] > 3
     assert (tmp_path / "streamed.src").read_text(encoding="latin-1") == emit_texts(tp, new)[0]
+
+
+def test_a_plugin_effect_unpickles_in_a_process_that_never_loaded_it(tmp_path):
+    """A spawned worker (stream, Dask) gets the model pickled: the plugin file is loaded on unpickling."""
+    load_plugins([EFFECT_FILE], environ={})
+    effect = parse_effects("user_wrist_cable[joints=4,6;by=5]").effects[0]
+    (tmp_path / "effect.pickle").write_bytes(pickle.dumps(effect))
+    code = "import pickle, sys; e = pickle.loads(open(sys.argv[1], 'rb').read()); print(e.spec(), e.joints)"
+    done = subprocess.run([sys.executable, "-c", code, str(tmp_path / "effect.pickle")], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "user_wrist_cable[joints=4,6;by=5] (4, 6)"
