@@ -19,6 +19,7 @@ from pathlib import Path
 from distributed import WorkerPlugin
 
 from .errors import InputError, JobError, PostprocError
+from .plugins import loaded_plugin_files
 
 PLUGIN_NAME = "postproc-model"
 
@@ -71,13 +72,18 @@ class ModelPlugin(WorkerPlugin):
 
     name = PLUGIN_NAME
 
-    def __init__(self, model_path: str):
+    def __init__(self, model_path: str, plugin_files: tuple[str, ...] = ()):
         self.model_path = model_path
+        self.plugin_files = tuple(plugin_files)  # the plugins this process loaded from files (--plugins, POSTPROC_PLUGINS)
         self.model = None
 
     def setup(self, worker=None):
         from .model_io import load_model
+        from .plugins import load_plugins
 
+        # The worker loads the same plugin files (and its own entry points) before the
+        # model, which refuses a plugin that is missing or changed there.
+        load_plugins(self.plugin_files)
         self.model, _ = load_model(self.model_path)
 
     def teardown(self, worker=None):
@@ -116,7 +122,7 @@ def run_batch(programs: list[Path], model_path: Path, out_dir: Path, options: di
         cluster = None
         client = _connect(scheduler)
     try:
-        client.register_plugin(ModelPlugin(str(model_path.resolve())), name=PLUGIN_NAME)
+        client.register_plugin(ModelPlugin(str(model_path.resolve()), tuple(loaded_plugin_files())), name=PLUGIN_NAME)
         futures = {client.submit(_task, str(p.resolve()), str(out_dir.resolve()), options, dialect, pure=False): str(p) for p in programs}
         results = {}
         for fut in as_completed(futures):

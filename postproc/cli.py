@@ -26,6 +26,7 @@ from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik
 from .kinematics import within_limits
+from .plugin_option import with_plugins
 from .robots import available_robots, load_robot
 
 app = typer.Typer(
@@ -235,6 +236,7 @@ def _check_output_folder(path: Optional[Path], option: str) -> None:
 
 @app.command("fit")
 @handles_errors
+@with_plugins
 def fit_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV (spec/measurements.md)."),
     robot: Optional[str] = typer.Option(None, "--robot", help="Robot name or file (not needed with --from)."),
@@ -270,10 +272,11 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
 
     from .effects import parse_effects
     from .identify import fit as run_fit
+    from .predictor_plugins import predictor_names
     from .model_io import load_model, save_model
 
-    if predictor is not None and predictor not in ("gpr", "tr-gpr", "pso-bp", "grid"):
-        raise InputError(f"--predictor: '{predictor}' is not one of gpr, tr-gpr, pso-bp, grid")
+    if predictor is not None and predictor not in predictor_names():
+        raise InputError(f"--predictor: '{predictor}' is not one of {', '.join(predictor_names())}")
     if predictor == "tr-gpr" and source is None:
         raise InputError("--predictor tr-gpr needs --source SRC.csv (measurements from another workspace region)")
     if loss not in ("linear", "soft_l1", "huber", "cauchy"):
@@ -338,6 +341,7 @@ def _check_registrable(path: Path, data) -> None:
 
 @app.command("evaluate")
 @handles_errors
+@with_plugins
 def evaluate_cmd(
     model: Path = typer.Argument(..., help="Model JSON from 'postproc fit'."),
     meas: Path = typer.Argument(..., help="Measurement CSV."),
@@ -424,6 +428,7 @@ def validate_cmd(
 
 @app.command("diagnose")
 @handles_errors
+@with_plugins
 def diagnose_cmd(
     model: Path = typer.Argument(..., help="Model JSON from 'postproc fit'."),
     meas: Path = typer.Argument(..., help="Measurement CSV."),
@@ -486,6 +491,7 @@ def diagnose_cmd(
 
 @app.command("ladder")
 @handles_errors
+@with_plugins
 def ladder_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV."),
     robot: str = typer.Option(..., "--robot"),
@@ -548,6 +554,7 @@ def ladder_cmd(
 
 @app.command("similarity")
 @handles_errors
+@with_plugins
 def similarity_cmd(
     region_a: Path = typer.Argument(..., help="Measurements of one workspace region (e.g. the source)."),
     region_b: Path = typer.Argument(..., help="Measurements of another region (e.g. a target sub-space)."),
@@ -600,6 +607,7 @@ def import_ur10_cmd(
 
 @app.command("simulate")
 @handles_errors
+@with_plugins
 def simulate_cmd(
     robot: str = typer.Option(..., "--robot", help="Robot name or file."),
     output: Path = typer.Option(..., "-o", "--output", help="Measurement CSV to write."),
@@ -743,6 +751,7 @@ def _named_frames(items: list[str] | None, option: str) -> dict:
 
 @app.command("compensate")
 @handles_errors
+@with_plugins
 def compensate_cmd(
     programs: list[str] = typer.Argument(..., help="Program file, or - for standard input (then give --dialect); several with --out-dir."),
     model: Path = typer.Option(..., "--model", help="Model JSON from 'postproc fit'."),
@@ -1034,6 +1043,7 @@ _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4:
 
 @app.command("inspect")
 @handles_errors
+@with_plugins
 def inspect_cmd(
     program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, or a .pgf with its modules; KRL .src/.sub with its .dat, or a .dat alone; G-code .nc/.ngc/.gcode/.tap/.cnc/.mpf/.spf/.iso; other names by content)."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
@@ -1109,6 +1119,7 @@ def inspect_cmd(
 
 @app.command("convert")
 @handles_errors
+@with_plugins
 def convert_cmd(
     program: Path = typer.Argument(..., help="Program in any supported dialect."),
     to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program (gcode: a five-axis G-code program, with --machine and --rtcp)."),
@@ -1241,6 +1252,7 @@ def _search_spec(text: str) -> list[tuple[float, float, float]]:
 
 @app.command("place")
 @handles_errors
+@with_plugins
 def place_cmd(
     program: Path = typer.Argument(..., help="Program whose Cartesian targets are in one workpiece frame (RAPID work object, KRL $BASE)."),
     robot: str = typer.Option(..., "--robot", help="Robot name from robots/ or a robot file."),
@@ -1354,6 +1366,51 @@ def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> dict
         fig.savefig(buffer, dpi=110, format="png")
         pngs[path] = buffer.getvalue()
     return pngs
+
+
+effect_app = typer.Typer(help="Write and check an error effect of your own (docs/own-effect.md).", no_args_is_help=True)
+app.add_typer(effect_app, name="effect")
+
+
+@effect_app.command("new")
+@handles_errors
+def effect_new_cmd(
+    name: str = typer.Argument(..., help="The effect's name (lower case, e.g. wrist_cable)."),
+    output: Path = typer.Option(Path("."), "-o", "--output", help="FILE.py to write, or a folder to write NAME.py in (an existing file is never overwritten)."),
+):
+    """Write a commented template effect file (NAME.py), outside the package."""
+    from .effect_template import write_template
+
+    path = write_template(name, output)
+    out.print(f"wrote {path}; check it with 'postproc effect check {path}', load it with '--plugins {path}'")
+
+
+@effect_app.command("check")
+@handles_errors
+def effect_check_cmd(
+    file: Path = typer.Argument(..., help="The effect's .py file."),
+    robot: str = typer.Option("kr160_r1570", "--robot", help="Robot the checks run on."),
+):
+    """Contract checks of the effects in FILE: Jacobian, zero parameters, bounds, texts, round trips."""
+    from .effect_check import check_effect
+    from .effects import CATALOG
+    from .plugins import PluginError, load_plugins
+
+    records = [r for r in load_plugins([file], environ={}, entry_points=False) if r.kind == "effect"]
+    if not records:
+        raise PluginError(f"{file}: defines no Effect subclass with a name")
+    table = Table(title=f"effect check {file}")
+    for col in ("effect", "check", "result", "detail"):
+        table.add_column(col)
+    failures = []
+    for record in records:
+        for check in check_effect(CATALOG[record.name], robot):
+            table.add_row(record.name, check.name, "ok" if check.ok else "FAILED", check.detail)
+            if not check.ok:
+                failures.append(f"{record.name}: {check.name}: {check.detail}")
+    out.print(table)
+    if failures:
+        raise PluginError(f"{file}: {len(failures)} check(s) failed:\n  " + "\n  ".join(failures))
 
 
 def main() -> None:

@@ -24,6 +24,7 @@ from .errormodel import ErrorModel, Prepared
 from .errors import IdentificationError
 from .frames import kabsch
 from .measurements import MeasurementSet
+from .predictor_plugins import PREDICTORS
 from .robots import RobotModel
 
 RANK_TOL = 1e-7
@@ -380,11 +381,11 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     from .learn import FEATURES, GPRPredictor, GridPredictor, PSOBPPredictor, Residual, TrGPRPredictor
     from .learn.features import features
 
-    if kind not in FEATURES:
-        raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join(FEATURES)})")
+    if kind not in FEATURES and kind not in PREDICTORS:
+        raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")
     physics = _replace(model, residual=None)
     target = meas.measured_mm - physics.predict(meas)
-    feature_kind = FEATURES[kind]
+    feature_kind = FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":
@@ -393,6 +394,8 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
+    elif kind in PREDICTORS:
+        est = PREDICTORS[kind](random_state=seed).fit(X, target)
     else:
         if source is None:
             raise IdentificationError("tr-gpr needs a source-region measurement set (--source)")

@@ -20,6 +20,7 @@ from .errormodel import ErrorModel
 from .errors import InputError, ModelFileError
 from .identify import FitResult
 from .measurements import write_text_atomic
+from .plugins import check_model_plugins, plugin_document
 from .robots import load_robot
 
 FORMAT = "postproc-model"
@@ -46,6 +47,7 @@ def model_document(model: ErrorModel, result: FitResult | None = None, measureme
         "parameters": params,
         "base_registration": {"rotation": model.base_rotation.tolist(), "translation_mm": model.base_translation.tolist()},
         "predictor": None if model.residual is None else model.residual.to_state(),
+        **plugin_document(model),  # "plugins": where each plugin effect / predictor came from (postproc.plugins)
     }
     doc.update(_coverage_document(model))
     if result is not None:
@@ -100,6 +102,7 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
     tool = doc.get("tool_mm")
     if not (isinstance(tool, list) and len(tool) == 3 and all(_finite(v) for v in tool)):
         raise fail("tool_mm", "must be three numbers (mm)")
+    check_model_plugins(doc, source)
     try:
         effects = parse_effects(doc.get("effects", ""))
     except EffectSpecError as exc:

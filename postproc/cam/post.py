@@ -43,6 +43,7 @@ def post(
     force_n=None,
     allow_model_mismatch: bool = False,
     allow_extrapolation: bool = False,
+    plugins=(),
 ) -> dict[str, str]:
     """Compensated robot program for ``program`` under ``model``: ``{path: text}`` (KRL: .src and .dat).
 
@@ -57,6 +58,8 @@ def post(
     cannot be compensated, listed by line of ``program``), ModelMismatchError where the
     program's tool, payload or robot is not the model's (``allow_model_mismatch``: go on).
     Targets outside the region the model was measured in fail (``allow_extrapolation``: compensate them).
+    ``plugins``: paths of effect / predictor plugins a model file needs (as ``--plugins``;
+    ``POSTPROC_PLUGINS`` and installed entry points are loaded as well).
     """
     from ..compensate import CompensationError, compensate
     from ..programs import write_program
@@ -66,7 +69,7 @@ def post(
     if to not in robot_languages():
         raise InputError(f"--to: '{to}' is not one of {', '.join(robot_languages())}"
                          + (" (five-axis machines: use 'postproc convert --to gcode --machine M --rtcp MODE')" if target.machine_program else ""))
-    error_model = _model(model)
+    error_model = _model(model, plugins)
     if robot is not None and robot != error_model.robot.name:
         raise InputError(f"--robot {robot} does not match the model's robot {error_model.robot.name}")
     output = Path(output) if output is not None else Path("postproc" + target.extensions[0])
@@ -104,12 +107,15 @@ def write_programs(files: dict[str, str]) -> None:
     write_texts(list(files.values()), list(files.keys()))
 
 
-def _model(model):
+def _model(model, plugins=()):
     from ..errormodel import ErrorModel
 
     if isinstance(model, ErrorModel):
         return model
-    from ..model_io import load_model
+    from ..model_io import load_model  # lazily, as above: the model and plugin machinery only when a path is given
+    from ..plugins import load_plugins
+
+    load_plugins(plugins)  # the same three ways as the command line: the model file names what it needs
 
     return load_model(Path(model))[0]
 

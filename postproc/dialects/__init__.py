@@ -16,7 +16,24 @@ from .gcode import GCODE
 from .krl import KRL
 from .rapid import RAPID
 
+# A module-level table on purpose: a toolpath names its dialect (Toolpath.dialect) and
+# every stage, forked workers included, resolves it here. Built-ins are fixed at import;
+# plugin dialects are added only by ``register`` (postproc.plugins.load_plugins), idempotently.
 REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, KRL, GCODE)}  # sniffing tries them in this order
+BUILTIN: frozenset[str] = frozenset(REGISTRY)
+
+
+def register(dialect: Dialect, where: str) -> None:
+    """Add a plugin dialect (an instance of a Dialect subclass); the same name from the
+    same module again replaces it, a built-in name or another plugin's is refused."""
+    if not (isinstance(dialect, Dialect) and dialect.name):
+        raise InputError(f"{where}: not a Dialect instance with a name")
+    if dialect.name in BUILTIN:
+        raise InputError(f"{where}: dialect '{dialect.name}' is a built-in dialect's name; choose another")
+    held = REGISTRY.get(dialect.name)
+    if held is not None and type(held).__module__ != type(dialect).__module__:
+        raise InputError(f"{where}: dialect '{dialect.name}' is already defined by {type(held).__module__}")
+    REGISTRY[dialect.name] = dialect
 
 
 def names() -> tuple[str, ...]:
@@ -51,4 +68,4 @@ def sniff(path: str | Path, data: bytes | None = None) -> Dialect:
     raise InputError(f"{path}: cannot tell the dialect (give --dialect {', '.join(REGISTRY)})")
 
 
-__all__ = ["REGISTRY", "Dialect", "get", "names", "of", "sniff"]
+__all__ = ["BUILTIN", "REGISTRY", "Dialect", "get", "names", "of", "register", "sniff"]

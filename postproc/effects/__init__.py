@@ -2,7 +2,9 @@
 
 Every module of this package except ``base`` defines one ``Effect`` subclass; the
 catalog discovers them, so adding an effect is adding one file. Names are fixed by
-spec/cli.md (more may be added).
+spec/cli.md (more may be added). Effects written outside the package (against
+``postproc.effects.api``) join the catalog through ``register``, called by
+``postproc.plugins.load_plugins``.
 """
 
 from __future__ import annotations
@@ -39,7 +41,34 @@ def _discover() -> dict[str, type[Effect]]:
     return found
 
 
+def _check_class(cls: type[Effect], where: str) -> None:
+    if not (isinstance(cls, type) and issubclass(cls, Effect) and cls.name):
+        raise EffectSpecError(f"{where}: not an Effect subclass with a name")
+    if cls.kind not in KINDS:
+        raise EffectSpecError(f"effect '{cls.name}' ({where}) has kind '{cls.kind}', not one of {', '.join(KINDS)}")
+
+
+# The catalog is a module-level table on purpose: model files, toolpath-independent
+# workers (Dask, forked stream workers) and diagnose resolve effect names through it.
+# Built-ins are fixed at import; plugins are added only by ``register`` (called by
+# postproc.plugins.load_plugins, explicitly), which is idempotent for the same class.
 CATALOG: dict[str, type[Effect]] = _discover()
+BUILTIN: frozenset[str] = frozenset(CATALOG)
+
+
+def register(cls: type[Effect], where: str) -> None:
+    """Add a plugin effect class to the catalog (``where``: its file, for messages).
+
+    Registering a class under its own name again (the same plugin loaded twice, or
+    reloaded from a changed file) replaces it; a built-in name or a name another
+    plugin holds is refused."""
+    _check_class(cls, where)
+    if cls.name in BUILTIN:
+        raise EffectSpecError(f"{where}: effect '{cls.name}' is a built-in effect's name; choose another")
+    held = CATALOG.get(cls.name)
+    if held is not None and held is not cls and getattr(held, "__module__", None) != cls.__module__:
+        raise EffectSpecError(f"{where}: effect '{cls.name}' is already defined by {held.__module__}")
+    CATALOG[cls.name] = cls
 
 
 def catalog_of_kind(kind: str) -> list[type[Effect]]:
@@ -76,7 +105,8 @@ def parse_effect(item: str) -> Effect:
     name, _, rest = item.partition("[")
     name = name.strip()
     if name not in CATALOG:
-        raise EffectSpecError(f"unknown effect '{name}' (known: {', '.join(CATALOG)})")
+        raise EffectSpecError(f"unknown effect '{name}' (known: {', '.join(CATALOG)}; "
+                              "an effect of your own: load its file with --plugins PATH or POSTPROC_PLUGINS)")
     opts: dict[str, str] = {}
     if rest:
         if not rest.endswith("]"):
@@ -102,6 +132,7 @@ def parse_effects(text: str) -> EffectSum:
 
 
 __all__ = [
+    "BUILTIN",
     "CATALOG",
     "DH",
     "Backlash",
@@ -120,4 +151,5 @@ __all__ = [
     "catalog_of_kind",
     "consumers_of",
     "parse_effects",
+    "register",
 ]

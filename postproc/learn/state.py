@@ -11,6 +11,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import InputError
+from ..predictor_plugins import PluginPredictor, state_of
+from ..predictor_plugins import from_state as plugin_from_state
 from .gp import GPRPredictor
 from .grid import GridPredictor
 from .nn import PSOBPPredictor
@@ -31,6 +33,8 @@ def estimator_state(est) -> dict:
                 "x_mean": est.x_mean_.tolist(), "x_std": est.x_std_.tolist(), "y_mean": est.y_mean_.tolist(), "y_std": est.y_std_.tolist()}
     if isinstance(est, GridPredictor):
         return {"type": "grid", "params": est.get_params(), "axes": [a.tolist() for a in est.axes_], "values": est.interp_.values.tolist()}
+    if isinstance(est, PluginPredictor):
+        return state_of(est)
     if hasattr(est, "to_state"):
         return est.to_state()
     raise InputError(f"cannot save a predictor of type {type(est).__name__}")
@@ -65,7 +69,10 @@ def base_estimator_from_state(state: dict):
         est.interp_ = RegularGridInterpolator(est.axes_, np.asarray(state["values"]), method="linear", bounds_error=False, fill_value=np.nan)
         est.n_features_in_ = 3
         return est
-    raise ValueError(f"unknown predictor type '{kind}'")
+    plugin = plugin_from_state(state)
+    if plugin is not None:
+        return plugin
+    raise ValueError(f"unknown predictor type '{kind}' (a predictor of your own: load its file with --plugins PATH or POSTPROC_PLUGINS)")
 
 
 def _finite_or_none(a: np.ndarray) -> list:
