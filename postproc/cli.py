@@ -1417,10 +1417,6 @@ def main() -> None:
     app()
 
 
-if __name__ == "__main__":
-    sys.exit(main())
-
-
 def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
@@ -1461,3 +1457,8 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
     for note in result.notes:
         out.print(f"note: {note}")
     return True
+
+
+# At the end: every command and helper above is defined before `python -m postproc.cli` runs one.
+if __name__ == "__main__":
+    sys.exit(main())
