@@ -18,8 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import EmitError, InputError
+from ..errors import EmitError, InputError, ParseError
 from ..ir import SourceDoc, Toolpath
+from . import bom
 
 
 class Dialect:
@@ -47,7 +48,15 @@ class Dialect:
         return [SourceDoc(str(path), data.decode("latin-1"), "program")]
 
     def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
-        """The IR of a program from its source files (as ``read_sources`` gives them)."""
+        """The IR of a program from its source files (as ``read_sources`` gives them); a
+        UTF-8 byte order mark is read past and kept (``bom``)."""
+        try:
+            return bom.restored(self.read_ir(bom.blanked(sources)), sources)
+        except ParseError as exc:
+            raise bom.editor_columns(exc, sources) from None
+
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
+        """The IR of the program (the language's parser; no byte order mark in the texts)."""
         raise NotImplementedError
 
     def parse(self, path: str | Path, data: bytes | None = None, modules=()) -> Toolpath:

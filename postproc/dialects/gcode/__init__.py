@@ -16,7 +16,7 @@ class GcodeDialect(Dialect):
     def sniff(self, head: str) -> bool:
         return any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2"))
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import GcodeParser
 
         return GcodeParser(sources[0]).parse()

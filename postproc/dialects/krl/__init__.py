@@ -45,7 +45,7 @@ class KrlDialect(Dialect):
 
         return module_docs(program, paths) if paths else []
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import KrlParser
 
         return KrlParser(sources).parse()

@@ -34,7 +34,7 @@ class RapidDialect(Dialect):
             docs.append(SourceDoc.read(path.parent / module, "module"))
         return docs
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import parse_modules
 
         return parse_modules(sources)
