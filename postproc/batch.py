@@ -19,6 +19,7 @@ from pathlib import Path
 from distributed import WorkerPlugin
 
 from .errors import InputError, JobError, PostprocError
+from .program_content import require_program
 
 PLUGIN_NAME = "postproc-model"
 
@@ -43,6 +44,7 @@ def compensate_file(program: str | Path, model, out_dir: str | Path, options: di
     program = Path(program)
     try:
         tp = parse_program(program, dialect)
+        require_program(tp)
         check = options.get("model_check")  # (model path, --robot, --allow-model-mismatch)
         if check is not None:
             from .program_check import check_model_fits

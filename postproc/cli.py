@@ -23,6 +23,7 @@ from .frames import abc_to_matrix, make_transform, matrix_to_abc
 from .kinematics import fk as _fk
 from .kinematics import ik as _ik
 from .kinematics import within_limits
+from .program_content import require_program
 from .robots import available_robots, load_robot
 
 app = typer.Typer(
@@ -671,6 +672,7 @@ def compensate_cmd(
     if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
     tp = _read_program(program, dialect, data)
+    require_program(tp)  # an empty file, no DEF / MODULE, no motion: nothing is written
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out

@@ -14,6 +14,7 @@ from . import dialects
 from .errors import OutputCheckError, OutputError
 from .files import write_all
 from .ir import F_POS, Kind, SourceDoc, Toolpath
+from .program_content import require_program
 
 DIALECTS = dialects.names()
 
@@ -111,6 +112,7 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
     from .emit.writer import drive
     from .errors import EmitError
 
+    require_program(tp)  # an empty input would give a program that does nothing
     lang = dialects.get(dialect, "--to")
     writer = lang.new_writer(name)
     if writer is None:

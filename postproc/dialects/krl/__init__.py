@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
 from ...ir import SourceDoc, Toolpath
-from ..base import Dialect, read_bytes
+from ..base import Dialect, first_statement, read_bytes
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -16,6 +17,15 @@ class KrlDialect(Dialect):
     name = "krl"
     description = "KUKA KRL (.src with its .dat and $config.dat)"
     extensions = (".src", ".sub")
+    comment_pattern = r"[;&][^\n]*"  # comments and the &ACCESS / &REL header lines
+    motion_words = "PTP, LIN, CIRC, SPTP, SLIN, SCIRC or their _REL forms"
+
+    def missing_program(self, role: str, text: str) -> tuple[int, str] | None:
+        """A .src runs from its DEF (KSS 8.x operating and programming manual, 'Structure
+        of a KRL program'): without one the controller does not select it."""
+        if role != "src" or re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF[ \t]", text, re.MULTILINE | re.IGNORECASE):
+            return None
+        return first_statement(text, self.comment_pattern), "no DEF in this .src: KSS runs a program from 'DEF name( )' to END; give the program's .src"
 
     def sniff(self, head: str) -> bool:
         # A data list on its own starts with DEFDAT; a program with DEF and its motions.
