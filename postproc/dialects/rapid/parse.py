@@ -57,6 +57,7 @@ _MOVE_KIND = {"MOVEL": Kind.LINEAR, "MOVEJ": Kind.JOINT, "MOVELDO": Kind.LINEAR,
 _CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC", "TRIGGC"}
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open": "ENDRECORD", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "test_open": "ENDTEST"}
+_OPTIONAL = ("optarg", "optarg_pass")  # \Name[:=value] and \Name?Name (an optional argument passed on)
 _CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
 _BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
 _LABEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*\s*:\s*$")
@@ -73,6 +74,23 @@ def _closer(line: str) -> str:
     if m is None:
         return "line" if _LABEL.match(line) else ";"
     return _HEADS.get(m.group(1).upper(), "line")
+
+
+# Where a line holds more than one statement: after each ';' and after THEN, DO or ELSE (a
+# string's text is skipped). RAPID is free-form (RAPID kernel reference, "Basic elements":
+# statements are separated by ';' or end with their block keyword, not by line ends), so
+# 'IF a <= b THEN x := 0; ENDIF' on one line is the IF block of three statements.
+_CUT = re.compile(r'"(?:[^"\n]|"")*"|;|(?<![A-Za-z0-9_])(?:THEN|DO|ELSE)(?![A-Za-z0-9_])', re.IGNORECASE)
+
+
+def _pieces(code: str, start: int, end: int) -> list[tuple[int, int]]:
+    """(start, end) offsets of the statements, or statement parts, of one line."""
+    line = code[start:end]
+    if ";" not in line or line.rstrip().endswith(";") and line.count(";") == 1 and not _CUT.search(line.rstrip()[:-1]):
+        return [(start, end)]  # the common line: one statement (or part of one)
+    cuts = [start + m.end() for m in _CUT.finditer(line) if not m.group().startswith('"')]
+    bounds = [start] + [c for c in cuts if c < end] + [end]
+    return [(a, b) for a, b in zip(bounds, bounds[1:]) if code[a:b].strip()]
 
 
 def _complete(stripped: str, closer: str, depth: int) -> bool:
@@ -409,20 +427,21 @@ class RapidParser:
                 continue
             if header:
                 continue
-            end = self._line_end(li)
-            line = code[start:end]
-            stripped = line.strip()
-            if not stripped or stripped.startswith("%%%"):
-                continue
-            if pending is None:
-                first = start + (len(line) - len(line.lstrip()))
-                closer, depth = _closer(line), 0
-            depth += line.count("(") - line.count(")")
-            if _complete(stripped, closer, depth):
-                yield (pending if pending is not None else first), end
-                pending = None
-            elif pending is None:
-                pending = first
+            line_end = self._line_end(li)
+            for piece_start, end in _pieces(code, start, line_end):
+                line = code[piece_start:end]
+                stripped = line.strip()
+                if not stripped or stripped.startswith("%%%"):
+                    continue
+                if pending is None:
+                    first = piece_start + (len(line) - len(line.lstrip()))
+                    closer, depth = _closer(line), 0
+                depth += line.count("(") - line.count(")")
+                if _complete(stripped, closer, depth):
+                    yield (pending if pending is not None else first), end
+                    pending = None
+                elif pending is None:
+                    pending = first
         if pending is not None:
             raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
 
@@ -616,7 +635,7 @@ class RapidParser:
         arguments' data names, in case the procedure writes them)."""
         name = str(node.children[0])
         args = node.children[1].children if len(node.children) > 1 else []
-        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data in _OPTIONAL)]
         for name in set(self._locals) & {str(t).upper() for t in node.scan_values(lambda v: isinstance(v, Token) and v.type == "NAME")}:
             self._locals[name] = None  # an argument the instruction may write
         path, lines = self.doc.path, self.lines
@@ -763,11 +782,11 @@ class RapidParser:
         mv = str(node.children[0]).upper()
         args = node.children[1].children
         # Positional arguments: those that do not start with an optional \Name argument.
-        positional = [a for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        positional = [a for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data in _OPTIONAL)]
         options = {}
         for a in args:
             for o in a.children:
-                if isinstance(o, Tree) and o.data == "optarg":
+                if isinstance(o, Tree) and o.data in _OPTIONAL:  # \WObj?wobj: the caller's, where it gave one
                     key = str(o.children[0]).upper()
                     options[key] = o.children[1] if len(o.children) > 1 else None
         targets, at_speed, at_zone, at_tool = LAYOUTS.get(mv, CIRCULAR_LAYOUT if mv in _CIRC else LINEAR_LAYOUT)
