@@ -306,3 +306,14 @@ def test_inline_forms_take_their_frames_from_config_dat_beside_the_program(tmp_p
     missing = program(alone, INI + fold("PTP", "P1", "FP1", ""), config=None)  # no $config.dat: flagged, never guessed
     assert np.isnan(placed(missing)).all() and "BASE_DATA[2]" in " ".join(missing.frame_names)
     assert "BASE_DATA[2]={X 0,Y 2000" in CONFIG
+
+
+def test_a_compensated_tool_frame_step_is_refused_not_written_as_base_increments(tmp_path, model_path):
+    """The splice writes increments per base axis: for a #TOOL step those would be wrong
+    numbers, so a compensation that moves one is refused at its #TOOL word, nothing written."""
+    path = tmp_path / "rel.src"
+    path.write_bytes(REL.encode())
+    (tmp_path / "out").mkdir()
+    result = _compensate(path, model_path, tmp_path / "out" / "rel.src")
+    assert result.exit_code == 2 and "rel.src:5:22: a LIN_REL ... #TOOL step" in " ".join(result.output.split())
+    assert list((tmp_path / "out").iterdir()) == []

@@ -48,6 +48,12 @@ class KrlDialect(Dialect):
             docs.append(SourceDoc.read(config, "config"))
         return docs
 
+    def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
+        from .tool_relative import refuse_moved_tool_steps
+
+        refuse_moved_tool_steps(original, modified)  # tool-frame increments: refused, never written as base ones
+        return super().emit_texts(original, modified)
+
     def module_sources(self, program, paths) -> list[SourceDoc]:
         """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
         functions), or folders of them (modules.py)."""
