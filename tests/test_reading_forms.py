@@ -317,3 +317,56 @@ def test_a_compensated_tool_frame_step_is_refused_not_written_as_base_increments
     result = _compensate(path, model_path, tmp_path / "out" / "rel.src")
     assert result.exit_code == 2 and "rel.src:5:22: a LIN_REL ... #TOOL step" in " ".join(result.output.split())
     assert list((tmp_path / "out").iterdir()) == []
+
+
+# ------------------------------------------------------------------ RAPID runtime assignments
+RAPID_UPDATES = """MODULE m
+  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
+  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    ConfL\\Off;
+    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+    p1.trans := [100, 50, 120];
+    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+    p1.trans.z := 130;
+    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+    wobj1.oframe.trans := [100, 50, 0];
+    MoveL [[0,0,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tSpindle\\WObj:=wobj1;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_rapid_constant_assignments_in_straight_line_code_are_followed(tmp_path):
+    """RAPID runs a routine's statements in order: the move before 'p1.trans := [100, 50, 120]'
+    goes to the declared p1, the one after to the new one. Worked by hand: wobj1's uframe is at
+    (900, -100, 300), unturned: p1 (10, 20, 150) -> (910, -80, 450); (100, 50, 120) -> (1000,
+    -50, 420); z := 130 -> (1000, -50, 430); after 'wobj1.oframe.trans := [100, 50, 0]' the
+    literal (0, 0, 150) is at 900 + 100, -100 + 50, 300 + 150 = (1000, -50, 450)."""
+    path = tmp_path / "upd.mod"
+    path.write_text(RAPID_UPDATES)
+    tp = parse_program(path)
+    np.testing.assert_allclose(tp.base_positions(), [[910, -80, 450], [1000, -50, 420], [1000, -50, 430], [1000, -50, 450]], atol=1e-9)
+    assert tp.resolved.all() and not tp.notes
+
+
+def test_rapid_assignment_in_a_block_still_leaves_the_targets_unresolved(tmp_path):
+    path = tmp_path / "upd.mod"
+    path.write_text(RAPID_UPDATES.replace("    p1.trans := [100, 50, 120];", "    IF DInput(di1) = 1 THEN p1.trans := [100, 50, 120]; ENDIF"))
+    tp = parse_program(path)
+    assert not tp.resolved[:3].any() and any("p1 is assigned" in n for n in tp.notes)
+
+
+def test_rapid_followed_assignments_are_compensated_into_their_own_numbers(tmp_path, model_path):
+    """The target after 'p1.trans := [...]' has its numbers in the assignment: the compensation
+    is written there, the declaration keeps the first move's."""
+    path = tmp_path / "upd.mod"
+    path.write_text(RAPID_UPDATES.replace("    p1.trans.z := 130;\n    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;\n", ""))
+    (tmp_path / "out").mkdir()
+    result = _compensate(path, model_path, tmp_path / "out" / "upd.mod")
+    assert result.exit_code == 0, result.output
+    text = (tmp_path / "out" / "upd.mod").read_text()
+    assert "p1.trans := [100, 50, 120];" not in text and "p1.trans := [" in text
+    back = parse_program(tmp_path / "out" / "upd.mod")
+    assert back.resolved.all() and np.abs(back.base_positions() - parse_program(path).base_positions()).max() > 1e-3

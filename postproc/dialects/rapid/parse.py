@@ -25,6 +25,7 @@ from ...parse.line_shapes import LineShapes
 from . import counters
 from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
+from .updates import Update, Updates, apply, update_fields
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -207,6 +208,21 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
     for module in modules:
         module.bulk_moves()
     _bind_late_declarations(builder, data)
+    routines = sorted(r for m in modules for r in m.routine_lines)
+    gotos = {r for m in modules if _has_goto(m.code) for r in m.routine_lines}
+
+    def routine_of(file: int, line: int) -> tuple[int, int] | None:
+        mine = [r for r in routines if r[0] == file and r[1] <= line]
+        return mine[-1] if mine else None
+
+    def frame_index(name: str, transform) -> int:  # the builder's frame of that name as the program writes it; -1: none
+        written = next((n for n in builder.frame_names if n.upper() == name.upper()), None)
+        if written is None and transform is None:
+            return -1
+        return builder.frame_index(written or name, transform)
+
+    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index):
+        data.facts.changed.pop(name, None)  # followed: its targets are known where they run
     _runtime_changes(builder, data.facts)
     return builder.build()
 
@@ -265,6 +281,7 @@ class _Data:
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
         self.facts = RuntimeFacts()
+        self.updates = Updates()
 
 
 class RapidParser:
@@ -289,6 +306,8 @@ class RapidParser:
         self._replayed = 0  # statements run by unrolled loops (bounded: MAX_REPLAYED)
         self._locals: dict[str, float | None] = {}  # the routine's own VAR nums: value, None if unknown (counters.py)
         self._in_routine = False
+        self.updates = data.updates  # robtargets changed by constants (updates.py)
+        self.routine_lines: list[tuple[int, int]] = []  # (file, line) of each PROC/FUNC/TRAP
         self._conditional = False  # inside a one-statement IF
         self._track_locals = not _has_goto(self.code)  # a jump may run any line again
 
@@ -500,6 +519,7 @@ class RapidParser:
             if kind == "routine_open":
                 self._routine(node)
                 self._locals, self._in_routine = {}, True
+                self.routine_lines.append((self.index, int(self.lines.line(start))))
         elif kind in _CLOSE:
             if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
                 want, where = stack[-1]
@@ -522,8 +542,11 @@ class RapidParser:
             self._move(node, start)
         elif kind == "assign" and self._local_update(node, stack):
             return
+        elif kind == "assign" and self._constant_update(node, start, stack):
+            return
         elif kind == "assign":
             self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
+            self.updates.spoiled.add(str(node.children[0].children[0]).upper())
         elif kind == "call":
             self._call(node, start)
         elif kind == "record_field" and not (stack and stack[-1][0] == "ENDRECORD"):
@@ -556,6 +579,27 @@ class RapidParser:
 
     def _forget_locals(self) -> None:
         self._locals = dict.fromkeys(self._locals)
+
+    def _constant_update(self, node: Tree, start: int, stack) -> bool:
+        """``p1.trans.z := 305;`` / ``p1.trans := [x, y, z];`` of a declared robtarget in a
+        routine's straight-line code: recorded to be followed (updates.py); False otherwise."""
+        lhs, rhs = node.children[0], node.children[-1]
+        parts = [str(c) for c in lhs.children]
+        known = parts[0].upper() in self.points or parts[0].upper() in self.updates.wobj_parts
+        if not (self._straight(stack) and self.routine_lines and len(parts) > 1 and known):
+            return False
+        s, e = self._span(rhs, start)
+        sl = self.numbers.between(s, e)
+        literal = isinstance(rhs, Tree) and (rhs.data in ("number", "neg") or rhs.data == "aggregate" and all(
+            isinstance(c, Tree) and c.data in ("number", "neg") for c in rhs.children))
+        numbers = [(float(v), (self.index, int(a), int(b))) for v, a, b in zip(self.numbers.value[sl], self.numbers.start[sl], self.numbers.end[sl])]
+        fields = update_fields(parts[1:], numbers) if literal else None
+        if fields is None:
+            return False
+        line = int(self.lines.line(start))
+        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields))
+        self.facts.change(parts[0], f"{self._where(start)}: {{name}} is assigned")  # flagged unless followed (parse_modules)
+        return True
 
     def _local_update(self, node: Tree, stack) -> bool:
         """``v := e`` / ``Incr v`` / ``Decr v`` of a local num: its value in straight-line code,
@@ -700,6 +744,8 @@ class RapidParser:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
                 # robhold TRUE here: the robot holds the work object (a stationary tool set-up).
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
+                if self.wobjs[name.upper()] is not None:
+                    self.updates.wobj_parts[name.upper()] = (nums[:7].copy(), nums[7:14].copy())  # uframe, oframe (updates.py)
 
     def _target(self, node, start: int, joint: bool = False):
         """(values, spans, conf, offset, offset_span), name of a target expression; NaN values where unknown.
