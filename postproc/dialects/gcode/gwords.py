@@ -18,11 +18,14 @@ LINUXCNC = frozenset({
 })
 
 # Codes LinuxCNC takes that postproc does not follow: each changes where the tool goes or what
-# the axis words mean (LinuxCNC manual, G-code reference), so reading past it is wrong.
+# the axis words mean (LinuxCNC manual, G-code reference), so reading past it is wrong. Plain
+# G70 / G71 are not among them: SINUMERIK, Heidenhain and most ISO controls read them as inch /
+# metric (a program postproc writes for SINUMERIK has "G71"), LinuxCNC as lathe cycles; they
+# are read as before (units on SINUMERIK programs).
 NOT_MODELLED = {
     5.0: "G5 cubic spline", 5.1: "G5.1 quadratic spline", 5.2: "G5.2 NURBS block", 5.3: "G5.3 NURBS block end",
-    7.0: "G7 lathe diameter mode (X words are diameters)", 70.0: "G70 lathe finishing cycle",
-    71.0: "G71 lathe roughing cycle", 71.1: "G71.1 lathe roughing cycle", 71.2: "G71.2 lathe roughing cycle",
+    7.0: "G7 lathe diameter mode (X words are diameters)",
+    71.1: "G71.1 lathe roughing cycle", 71.2: "G71.2 lathe roughing cycle",
     72.0: "G72 lathe facing cycle", 72.1: "G72.1 lathe facing cycle", 72.2: "G72.2 lathe facing cycle",
     76.0: "G76 threading cycle",
 }

@@ -26,7 +26,7 @@ from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
-from . import arcwords, flow, gwords
+from . import arcwords, flow, gwords, siemens
 from .canned import PLANE_AXES
 
 AXES = "XYZABCIJKRF"
@@ -102,7 +102,9 @@ class GcodeParser:
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
         self.event_offsets: dict[int, int] = {}  # flow.py: execution index of an event -> its offset in the text
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
-        self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
+        # a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA; its own G groups): known
+        # before any block is read, flow or not (flow.py sets it again)
+        self.siemens = siemens.is_siemens(doc.path, doc.text)
 
     def parse(self) -> Toolpath:
         text = self.text
