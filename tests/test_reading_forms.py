@@ -370,3 +370,12 @@ def test_rapid_followed_assignments_are_compensated_into_their_own_numbers(tmp_p
     assert "p1.trans := [100, 50, 120];" not in text and "p1.trans := [" in text
     back = parse_program(tmp_path / "out" / "upd.mod")
     assert back.resolved.all() and np.abs(back.base_positions() - parse_program(path).base_positions()).max() > 1e-3
+
+
+def test_rapid_assignment_of_a_target_also_passed_to_a_routine_is_not_followed(tmp_path):
+    path = tmp_path / "upd.mod"
+    text = RAPID_UPDATES.replace("    wobj1.oframe.trans", "    shift p1;\n    wobj1.oframe.trans").replace(
+        "ENDMODULE", "  PROC shift(INOUT robtarget p)\n    p := Offs(p, 0, 0, 10);\n  ENDPROC\nENDMODULE")
+    path.write_text(text)
+    tp = parse_program(path)
+    assert not tp.resolved[:3].any() and tp.resolved[3]

@@ -221,6 +221,8 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
             return -1
         return builder.frame_index(written or name, transform)
 
+    # a robtarget or work object passed to a routine may be changed there (INOUT): never followed
+    data.updates.spoiled.update(root.upper() for _, roots, _, _ in data.facts.calls for root in roots if root)
     for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index):
         data.facts.changed.pop(name, None)  # followed: its targets are known where they run
     _runtime_changes(builder, data.facts)
@@ -843,6 +845,7 @@ class RapidParser:
             root = _root(positional[SEARCH_POINT[mv]].children[0])
             if root:
                 self.facts.change(root, f"{self._where(start)}: {{name}} is written by {mv.title()}")
+                self.updates.spoiled.add(root.upper())
         speed_node, tool_node = positional[at_speed], positional[at_tool] if at_tool is not None else None
         zone_node = positional[at_zone] if at_zone is not None else None
         speed = _speed(self._text(speed_node, start))
