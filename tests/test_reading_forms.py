@@ -379,3 +379,13 @@ def test_rapid_assignment_of_a_target_also_passed_to_a_routine_is_not_followed(t
     path.write_text(text)
     tp = parse_program(path)
     assert not tp.resolved[:3].any() and tp.resolved[3]
+
+
+def test_rapid_assignment_of_a_target_searchl_writes_is_not_followed(tmp_path):
+    """SearchL writes where the signal came into its search point (instruction SearchL): a
+    robtarget it writes is not known after it, constant assignments or not."""
+    path = tmp_path / "upd.mod"
+    path.write_text(RAPID_UPDATES.replace("    wobj1.oframe.trans", "    SearchL \\Stop, di1, p1, [[0,0,100],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v20, tSpindle\\WObj:=wobj1;\n    wobj1.oframe.trans"))
+    tp = parse_program(path)
+    named = np.array([str(n).upper() == "P1" for n in tp.target_name])
+    assert not tp.resolved[named].any()
