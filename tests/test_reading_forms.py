@@ -308,15 +308,25 @@ def test_inline_forms_take_their_frames_from_config_dat_beside_the_program(tmp_p
     assert "BASE_DATA[2]={X 0,Y 2000" in CONFIG
 
 
-def test_a_compensated_tool_frame_step_is_refused_not_written_as_base_increments(tmp_path, model_path):
-    """The splice writes increments per base axis: for a #TOOL step those would be wrong
-    numbers, so a compensation that moves one is refused at its #TOOL word, nothing written."""
+def test_tool_frame_steps_are_compensated_and_written_back_in_the_tool_frame(tmp_path, model_path):
+    """A #TOOL step's increments stay in the tool frame: the written program, read back by the
+    KSS rule above, puts every target where the compensation put it (within the 0.5 um the
+    numbers are written to), and the steps keep their #TOOL / #BASE words."""
+    from postproc.compensate import compensate
+    from postproc.model_io import load_model
+
     path = tmp_path / "rel.src"
     path.write_bytes(REL.encode())
     (tmp_path / "out").mkdir()
     result = _compensate(path, model_path, tmp_path / "out" / "rel.src")
-    assert result.exit_code == 2 and "rel.src:5:22: a LIN_REL ... #TOOL step" in " ".join(result.output.split())
-    assert list((tmp_path / "out").iterdir()) == []
+    assert result.exit_code == 0, result.output
+    text = (tmp_path / "out" / "rel.src").read_text()
+    assert text.count("#TOOL") == 2 and text.count("#BASE") == 2
+    model, _ = load_model(model_path)
+    expected, _ = compensate(parse_program(path), model)
+    back = parse_program(tmp_path / "out" / "rel.src")
+    assert np.abs(back.position - expected.position).max() < 1e-3
+    assert np.abs(back.position - parse_program(path).position).max() > 0.1  # the model moved them
 
 
 # ------------------------------------------------------------------ RAPID runtime assignments

@@ -49,10 +49,12 @@ class KrlDialect(Dialect):
         return docs
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
-        from .tool_relative import refuse_moved_tool_steps
+        """The splice, with LIN_REL / PTP_REL ... #TOOL steps written in the tool frame (tool_relative.py)."""
+        from .tool_relative import held_and_moved, write_steps
 
-        refuse_moved_tool_steps(original, modified)  # tool-frame increments: refused, never written as base ones
-        return super().emit_texts(original, modified)
+        held, steps = held_and_moved(original, modified)
+        texts = super().emit_texts(original, held)
+        return write_steps(texts, original, modified, steps, self.parse_sources, self.insert_field) if steps.any() else texts
 
     def module_sources(self, program, paths) -> list[SourceDoc]:
         """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
