@@ -1089,8 +1089,8 @@ def _absolute_poses(values: np.ndarray, relative: np.ndarray, in_tool: np.ndarra
     if relative.any():
         for i in np.nonzero(relative)[0]:
             prev = pose[i - 1] if i > 0 else np.zeros(6)
-            if in_tool is not None and in_tool[i]:
-                pose[i] = _tool_frame_step(prev, np.nan_to_num(values[i, :6]))
+            if in_tool is not None and in_tool[i]:  # the first motion's start (where the robot is) is not in the text
+                pose[i] = _tool_frame_step(prev if i > 0 else np.full(6, np.nan), np.nan_to_num(values[i, :6]))
             else:
                 pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
     values = values.copy()

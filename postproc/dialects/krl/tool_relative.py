@@ -44,6 +44,9 @@ def held_and_moved(original: Toolpath, modified: Toolpath) -> tuple[Toolpath, np
     todo = steps & (moved | np.concatenate([[False], moved[:-1]]))
     if not todo.any():
         return modified, todo
+    if todo[0]:  # a step from where the robot happens to be (or a streamed chunk's first target)
+        raise EmitError(f"{original.sources[int(original.file[0])].path}:{int(original.line[0])}:1: a #TOOL step before any target of the "
+                        "program starts from a place the text does not give; it cannot be written back compensated")
     position = modified.position.copy()
     position[todo] = original.position[todo]
     return modified.with_positions(position), todo
