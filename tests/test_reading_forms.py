@@ -399,3 +399,12 @@ def test_rapid_assignment_of_a_target_searchl_writes_is_not_followed(tmp_path):
     tp = parse_program(path)
     named = np.array([str(n).upper() == "P1" for n in tp.target_name])
     assert not tp.resolved[named].any()
+
+
+def test_a_tool_frame_step_before_any_target_is_unknown(tmp_path):
+    """The first motion starts where the robot is, which the text does not give: a #TOOL step
+    from there is not placed (it was never stepped from the origin)."""
+    path = tmp_path / "first.src"
+    path.write_text("DEF first( )\nLIN_REL {X 5} #TOOL\nLIN {X 1000,Y 0,Z 500,A 0,B 90,C 0}\nEND\n")
+    tp = parse_program(path)
+    assert tp.resolved.tolist() == [False, True] and np.isnan(tp.position[0]).all()
