@@ -50,7 +50,7 @@ class KrlDialect(Dialect):
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
         """The splice, with LIN_REL / PTP_REL ... #TOOL steps written in the tool frame (tool_relative.py)."""
-        from .tool_relative import held_and_moved, write_steps
+        from .tool_relative import held_and_moved, write_steps  # (here, as base.emit_texts: it loads the numba splice kernels)
 
         held, steps = held_and_moved(original, modified)
         texts = super().emit_texts(original, held)
