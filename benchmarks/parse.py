@@ -49,6 +49,16 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
         fs.write("END\n")
         fd.write("ENDDAT\n")
     out["krl (.src + .dat)"] = src
+    # A CAM point list: a FRAME array in the .dat, stepped through by a FOR to n (issue 28)
+    src, dat = folder / "frame_array.src", folder / "frame_array.dat"
+    count = max(half - 3, 1)
+    with open(src, "w", encoding="latin-1") as fs, open(dat, "w", encoding="latin-1") as fd:
+        fs.write(f"DEF frame_array( )\nDECL INT i\nDECL INT n\nn = {count}\nFOR i = 1 TO n\n  LIN gfPoint[i] C_DIS\nENDFOR\nEND\n")
+        fd.write(f"DEFDAT frame_array PUBLIC\nDECL GLOBAL FRAME gfPoint[{count}]\n")
+        for i in range(1, count + 1):
+            fd.write(f"gfPoint[{i}]={{X {800 + (i % 400) * 0.5:.3f},Y {-200 + (i // 400) % 400:.3f},Z {300 + (i % 7) * 0.125:.3f},A 0.0,B 180.0,C 0.0}}\n")
+        fd.write("ENDDAT\n")
+    out["krl FRAME[] + FOR"] = src
     gcode = folder / "big.ngc"
     with open(gcode, "w", encoding="latin-1") as fh:
         fh.write("G21 G90 G17\nG0 X0 Y0 Z5\nF1500\n")

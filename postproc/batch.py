@@ -20,6 +20,7 @@ from distributed import WorkerPlugin
 
 from .errors import InputError, JobError, PostprocError
 from .plugins import loaded_plugin_files
+from .program_content import require_program
 
 PLUGIN_NAME = "postproc-model"
 
@@ -44,6 +45,7 @@ def compensate_file(program: str | Path, model, out_dir: str | Path, options: di
     program = Path(program)
     try:
         tp = parse_program(program, dialect)
+        require_program(tp)
         check = options.get("model_check")  # (model path, --robot, --allow-model-mismatch)
         if check is not None:
             from .program_check import check_model_fits

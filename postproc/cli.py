@@ -27,6 +27,7 @@ from .kinematics import fk as _fk
 from .kinematics import ik as _ik
 from .kinematics import within_limits
 from .plugin_option import with_plugins
+from .program_content import require_program
 from .robots import available_robots, load_robot
 
 app = typer.Typer(
@@ -831,6 +832,7 @@ def compensate_cmd(
     if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
         return
     tp = _read_program(program, dialect, data)
+    require_program(tp)  # an empty file, no DEF / MODULE, no motion: nothing is written
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
@@ -1132,6 +1134,7 @@ def convert_cmd(
     frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z[,A,B,C]: a frame the program uses but does not define (G54, BASE_DATA[1]): the robot base (five-axis: the machine) -> the frame (mm; KUKA A B C, deg), written as the robot's base / work object. Repeatable. Five-axis G-code (--machine): A is its turn about Z (B, C zero), not a rotary-axis offset; the rotary axes' offsets are the program's own (G10 L2/L20, G92/G52 A B C), else zero."),
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length): the flange -> the TCP (mm; KUKA A B C, deg), written as the robot's tool. Repeatable."),
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it the load the input program states is carried where it applies; with it, that load must be this one. Where neither gives one, RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
+    arc_tol: Optional[float] = typer.Option(None, "--arc-tol", help="mm: write helical and spiral arcs (G2/G3 with a move along the plane's normal, or a changing radius), which no circular move holds, as straight moves within this chord error (without it they are refused)."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     from .dialects import get
@@ -1143,7 +1146,7 @@ def convert_cmd(
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         _refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
-        _refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None})
+        _refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None, "--arc-tol": arc_tol is not None})
         for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
                                  frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
@@ -1156,7 +1159,7 @@ def convert_cmd(
     tp = parse_program(program, dialect)
     if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
         tp = tp.with_frames(_named_frames(frame, "--frame"), _named_frames(tool, "--tool"))
-    texts = write_program(tp, to, output.stem, tool_load=load)
+    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

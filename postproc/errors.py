@@ -78,6 +78,7 @@ class ParseError(InputError):
         self.path = path
         self.line = line
         self.column = column
+        self.message = message
         self.excerpt = excerpt
         text = f"{path}:{line}:{column}: {message}"
         if excerpt:

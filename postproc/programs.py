@@ -14,6 +14,7 @@ from . import dialects
 from .errors import OutputCheckError, OutputError
 from .files import write_all
 from .ir import F_POS, Kind, SourceDoc, Toolpath
+from .program_content import require_program
 
 DIALECTS = dialects.names()
 
@@ -104,13 +105,16 @@ def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
     write_set(dict(zip(map(Path, outputs), texts)))
 
 
-def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None) -> list[str]:
+def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None, arc_tol_mm: float | None = None) -> list[str]:
     """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
     ``Dialect.new_program_paths`` order); ``tool_load`` (emit.tool_load.ToolLoad) is the load
-    every tool of it carries; without it, the load the input states is carried where it applies."""
+    every tool of it carries; without it, the load the input states is carried where it applies.
+    ``arc_tol_mm``: helical and spiral G2/G3 are written as straight moves within this chord
+    error (without it they are refused: no circular move holds them)."""
     from .emit.writer import drive
     from .errors import EmitError
 
+    require_program(tp)  # an empty input would give a program that does nothing
     lang = dialects.get(dialect, "--to")
     writer = lang.new_writer(name)
     if writer is None:
@@ -118,4 +122,7 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
         raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
     from .emit.load_plan import carried_loads
 
-    return drive(writer, tp, name, loads=carried_loads(tp, tool_load))  # the program's own load, or --tool-load's
+    if arc_tol_mm is not None and not arc_tol_mm > 0:
+        raise EmitError(f"--arc-tol must be > 0 mm, got {arc_tol_mm}")
+    # the program's own load, or --tool-load's; helices as straight moves within arc_tol_mm
+    return drive(writer, tp, name, loads=carried_loads(tp, tool_load), arc_tol_mm=arc_tol_mm)

@@ -157,11 +157,17 @@ def test_moveldo_searchl_triggl_read_their_target_speed_and_zone():
     assert any(":6: sp is written by Searchl" in n for n in tp.notes)
 
 
-def test_a_work_object_changed_at_run_time_leaves_its_targets_unresolved():
-    """`wobj1.oframe.trans := [...]` moves every later target in wobj1 (data type wobjdata):
-    the declared frame is not where they go, so they are not resolved (never the declared
-    value used silently); a target in another frame stays resolved."""
+def test_a_work_object_changed_at_run_time_is_followed_in_straight_line_code_only():
+    """`wobj1.oframe.trans := [...]` moves every later target in wobj1 (data type wobjdata).
+    A constant in straight-line code is followed as the controller runs it (issue 28): uframe
+    (500, 0, 0), oframe (0, 0, 100) -> (0, 0, 250), so p1 (100, 200, 300) goes to (600, 200, 400)
+    before and (600, 200, 550) after; a target in another frame is untouched. Inside an IF the
+    frame is not known: the targets in wobj1 are not resolved (never the declared value)."""
     tp = read(module("    MoveL p1, v100, z1, tool0\\WObj:=wobj1;", "    wobj1.oframe.trans := [0, 0, 250];",
+                     "    MoveL p1, v100, z1, tool0\\WObj:=wobj1;", "    MoveL p1, v100, z1, tool0;", data=(WOBJ1,)))
+    assert tp.resolved.all()
+    np.testing.assert_allclose(tp.base_positions(), [[600, 200, 400], [600, 200, 550], [100, 200, 300]], atol=1e-9)
+    tp = read(module("    MoveL p1, v100, z1, tool0\\WObj:=wobj1;", "    IF DInput(di1) = 1 wobj1.oframe.trans := [0, 0, 250];",
                      "    MoveL p1, v100, z1, tool0\\WObj:=wobj1;", "    MoveL p1, v100, z1, tool0;", data=(WOBJ1,)))
     assert tp.resolved.tolist() == [False, False, True]
     assert not tp.placed()[:2].any()

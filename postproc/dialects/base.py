@@ -18,8 +18,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import EmitError, InputError
+from ..errors import EmitError, InputError, ParseError
 from ..ir import SourceDoc, Toolpath
+from . import bom
 
 
 class Dialect:
@@ -36,6 +37,10 @@ class Dialect:
     controller_maker: str | None = None
     #: the program's speeds (as the IR keeps them) times this are mm/s (G-code feeds: mm/min)
     speed_to_mm_per_s: float = 1.0
+    #: a regular expression of one comment (or header line) in the language
+    comment_pattern: str = "(?!)"
+    #: the statements that move, for messages
+    motion_words: str = "motion statements"
 
     # ---------------------------------------------------------------- reading
     def sniff(self, head: str) -> bool:
@@ -50,11 +55,24 @@ class Dialect:
         return [SourceDoc(str(path), data.decode("latin-1"), "program")]
 
     def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
-        """The IR of a program from its source files (as ``read_sources`` gives them)."""
+        """The IR of a program from its source files (as ``read_sources`` gives them); a
+        UTF-8 byte order mark is read past and kept (``bom``)."""
+        try:
+            return bom.restored(self.read_ir(bom.blanked(sources)), sources)
+        except ParseError as exc:
+            raise bom.editor_columns(exc, sources) from None
+
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
+        """The IR of the program (the language's parser; no byte order mark in the texts)."""
         raise NotImplementedError
 
     def parse(self, path: str | Path, data: bytes | None = None, modules=()) -> Toolpath:
         return self.parse_sources(self.read_sources(path, data) + self.module_sources(path, modules))
+
+    def missing_program(self, role: str, text: str) -> tuple[int, str] | None:
+        """(offset, why) where a file of ``role`` is not a program the controller would run
+        (KRL: a .src without DEF); None where it is (``program_content.require_program``)."""
+        return None
 
     def module_sources(self, program: str | Path, paths) -> list[SourceDoc]:
         """Other modules' files the program uses (``--data``): KRL only."""
@@ -221,6 +239,12 @@ def short_number(value: float, decimals: int) -> str:
     """``value`` with at most ``decimals`` decimals and no trailing zeros ('-0' is '0')."""
     text = f"{value:.{decimals}f}".rstrip("0").rstrip(".")
     return "0" if text in ("-0", "") else text
+
+
+def first_statement(text: str, comment: str) -> int:
+    """Offset of the first character that is neither blank nor inside a comment (``comment``:
+    a regular expression of one comment); the text's length when there is none."""
+    return re.compile(rf"(?:\s+|{comment})*").match(text).end()
 
 
 def read_bytes(path: str | Path) -> bytes:

@@ -16,6 +16,7 @@ from ..errors import EmitError
 from ..frames import quat_wxyz_to_matrix
 from ..ir import Kind, Toolpath
 from .feeds import machine_speeds
+from .unknown_axes import refuse_unknown_positions
 
 # A tool pointing straight down (180 degrees about y): the orientation given to targets
 # that come without one (3-axis G-code).
@@ -34,14 +35,13 @@ def short_number(v: float, decimals: int = 4) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def drive(w, tp: Toolpath, name: str = "converted", loads=None) -> list[str]:
+def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: float | None = None) -> list[str]:
     """Texts of a new program (the writer's files, e.g. KRL [src, dat]) with every target of tp;
     ``loads`` (emit.load_plan.LoadPlan): the load of each target, given to ``w.load`` after its
-    tool and wherever it changes."""
+    tool and wherever it changes; ``arc_tol_mm``: helical and spiral arcs become straight
+    moves within this chord error (refused without it)."""
     w.start(name)
-    bad = np.nonzero(np.isnan(tp.position).any(axis=1) & (tp.kind != Kind.ABSJ))[0]
-    if len(bad):
-        raise EmitError(f"line {tp.line[bad[0]]}: target position unknown in the input; cannot write it")
+    refuse_unknown_positions(tp)  # which axis, why, and how to give it
     refuse_unplaced(tp)
     poses = tp.target_poses()
     no_ori = np.isnan(tp.orientation).any(axis=1)
@@ -55,7 +55,7 @@ def drive(w, tp: Toolpath, name: str = "converted", loads=None) -> list[str]:
     per_second = dialects.of(tp).speed_to_mm_per_s
     # G93 / G95 feeds as the speed the machine moves at (F x length, F x S), or refused with the F word's place.
     speeds = machine_speeds(tp) if dialects.of(tp).machine_program else tp.speed
-    arcs = circular_moves(tp, poses)
+    arcs = circular_moves(tp, poses, arc_tol_mm)
     i = 0
     while i < len(tp):
         if tp.frame[i] != frame:
@@ -85,7 +85,10 @@ def drive(w, tp: Toolpath, name: str = "converted", loads=None) -> list[str]:
             w.move_joint(poses[i], tp.conf[i])
         elif kind in (Kind.ARC_CW, Kind.ARC_CCW) and i in arcs:
             for via, end in arcs[i]:  # a G2/G3 as circular moves through the points the controller's arc passes
-                w.move_circular(via, end, tp.conf[i])
+                if via is None:  # a helix or spiral piece (--arc-tol): a straight move
+                    w.move_linear(end, tp.conf[i])
+                else:
+                    w.move_circular(via, end, tp.conf[i])
         else:
             w.move_linear(poses[i], tp.conf[i])
         i += 1
@@ -142,11 +145,12 @@ def where(tp: Toolpath, row: int) -> str:
 ARC_RADIUS_TOL_MM = 2e-3  # start and end radius may differ this much (LinuxCNC accepts such arcs) for one circle
 
 
-def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.ndarray, np.ndarray]]]:
+def circular_moves(tp: Toolpath, poses: np.ndarray, arc_tol_mm: float | None = None) -> dict[int, list[tuple[np.ndarray | None, np.ndarray]]]:
     """Target row of each G2/G3 -> its (via, end) poses for circular moves (a full circle: two
     halves), on the arc as the controller runs it, with the end target's orientation. An arc
-    no circle through three points can hold (a helix, a spiral) is refused with its line:
-    writing its chord would cut a different path."""
+    no circle through three points can hold (a helix, a spiral) is refused with its place
+    (writing its chord would cut a different path), or with ``arc_tol_mm`` written as
+    straight moves (via None) whose chord error is at most that."""
     from ..arcs import arc_rows, geometry  # (not at the top: postproc.arcs imports the IR and frames only, but keep the writer light)
 
     rows = arc_rows(tp)
@@ -161,14 +165,33 @@ def circular_moves(tp: Toolpath, poses: np.ndarray) -> dict[int, list[tuple[np.n
     r1 = np.linalg.norm(geo.in_plane(geo.end) - geo.centre, axis=1)
     helix = np.abs(geo.normal(geo.end) - geo.normal(geo.start)) > 1e-6
     spiral = np.abs(r1 - r0) > ARC_RADIUS_TOL_MM
-    if (helix | spiral).any():
-        bad = int(geo.rows[np.argmax(helix | spiral)])
-        raise EmitError(f"line {tp.line[bad]}: a {'helical' if helix[np.argmax(helix | spiral)] else 'spiral'} arc is no circle: "
-                        "the target language's circular move cannot write it (split it into plane arcs first)")
+    if (helix | spiral).any() and arc_tol_mm is None:
+        m = int(np.argmax(helix | spiral))
+        bad = int(geo.rows[m])
+        raise EmitError(f"{where(tp, bad)}: a {'helical' if helix[m] else 'spiral'} arc is no circle: the target language's circular "
+                        "move cannot write it; give --arc-tol MM to write it as straight moves within that chord error (as the FreeCAD post "
+                        "does), or split it into plane arcs first")
     # The arcs' points at 1/4, 1/2, 3/4 of the sweep, as poses with the end target's orientation.
     via = np.repeat(poses[geo.rows][:, None], 3, axis=1)
     via[:, :, :3, 3] = geo.points(np.array([0.25, 0.5, 0.75]))
     out = {}
     for m, r in enumerate(geo.rows.tolist()):
+        if helix[m] or spiral[m]:
+            out[r] = [(None, p) for p in _straight_pieces(geo, m, poses[r], max(r0[m], r1[m]), arc_tol_mm)]
+            continue
         out[r] = [(via[m, 0], via[m, 1]), (via[m, 2], poses[r])] if geo.full[m] else [(via[m, 1], poses[r])]
     return out
+
+
+def _straight_pieces(geo, m: int, end_pose: np.ndarray, radius: float, tol_mm: float) -> list[np.ndarray]:
+    """End poses of the fewest straight moves along arc ``m`` of ``geo`` (a helix or a spiral,
+    as the controller interpolates it) whose chord error in the plane is at most ``tol_mm``;
+    the last is the arc's own end target (the angle whose chord has sagitta tol: 2 acos(1 - tol/r))."""
+    _, sweep = geo.sweep()
+    step = 2 * np.arccos(max(1.0 - tol_mm / max(radius, 1e-9), -1.0))
+    n = max(int(np.ceil(abs(float(sweep[m])) / step)), 1)
+    points = geo.points(np.arange(1, n) / n)[m] if n > 1 else np.zeros((0, 3))
+    pieces = [end_pose.copy() for _ in range(n - 1)]
+    for pose, point in zip(pieces, points):
+        pose[:3, 3] = point
+    return pieces + [end_pose]

@@ -12,11 +12,13 @@ class GcodeDialect(Dialect):
     extensions = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".mpf", ".spf", ".iso", ".txt")
     machine_program = True
     speed_to_mm_per_s = 1.0 / 60.0  # F words are mm/min (G94)
+    comment_pattern = r"\([^)\n]*\)|;[^\n]*|%[^\n]*"
+    motion_words = "G0, G1, G2, G3 or a canned cycle"
 
     def sniff(self, head: str) -> bool:
         return any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2"))
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import GcodeParser
 
         return GcodeParser(sources[0]).parse()

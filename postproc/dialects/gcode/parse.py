@@ -26,7 +26,7 @@ from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
-from . import arcwords, flow
+from . import arcwords, flow, gwords, siemens
 from .canned import PLANE_AXES
 
 AXES = "XYZABCIJKRF"
@@ -102,7 +102,9 @@ class GcodeParser:
         self.clock: int | None = None  # flow.py: execution index of the block being read (events are timed by it)
         self.event_offsets: dict[int, int] = {}  # flow.py: execution index of an event -> its offset in the text
         self.trees: dict | None = None  # flow.py: the parsed blocks, by offset
-        self.siemens = False  # flow.py: a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA)
+        # a SINUMERIK program (G70/G700 inch, G71/G710 metric, SUPA; its own G groups): known
+        # before any block is read, flow or not (flow.py sets it again)
+        self.siemens = siemens.is_siemens(doc.path, doc.text)
 
     def parse(self) -> Toolpath:
         text = self.text
@@ -332,7 +334,7 @@ class GcodeParser:
         vnode = item.children[1]
         if letter in _UNMODELLED_AXES and not self.siemens:
             # A U V W axis moves the machine, but the IR has no place for it: refuse, never drop.
-            raise self.lines.error(self.doc.path, start + item.meta.start_pos if hasattr(item, "meta") and not item.meta.empty else start,
+            raise self.lines.error(self.doc.path, self._word_offset(item, start),
                                    f"axis word {letter}: the {letter} axis moves the machine but postproc models only X Y Z A B C")
         known = True
         try:
@@ -342,6 +344,9 @@ class GcodeParser:
             value, known = (np.inf if letter in "XYZABC" else -np.inf if letter == "F" else np.nan), False
             self.notes.append(f"line {self.lines.line(start)}: {letter} value cannot be evaluated ({exc}); the target is flagged")
         if letter == "G":
+            why = None if self.siemens or not known else gwords.refusal(round(value, 1))
+            if why is not None:
+                raise self.lines.error(self.doc.path, self._word_offset(item, start), why)
             gcodes.append(round(value, 1))
         elif letter == "H":
             state["h"] = value
@@ -359,6 +364,11 @@ class GcodeParser:
                 tok_start, tok_end = _token_span(vnode)
                 spans[_AX[letter]] = (start + tok_start, start + tok_end)
         return known
+
+    @staticmethod
+    def _word_offset(item: Tree, start: int) -> int:
+        """Offset of a word in the file (``start``: its block's)."""
+        return start + item.meta.start_pos if hasattr(item, "meta") and not item.meta.empty else start
 
     def _apply_gcodes(self, gcodes: list[float], state: dict, values, start: int) -> tuple[bool, bool]:
         """The block's G codes into its modal state; returns (no motion in this block, G53)."""

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
 from ...ir import SourceDoc, Toolpath
-from ..base import Dialect, aggregate_around, read_bytes
+from ..base import Dialect, aggregate_around, first_statement, read_bytes
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -17,6 +18,15 @@ class KrlDialect(Dialect):
     description = "KUKA KRL (.src with its .dat and $config.dat)"
     controller_maker = "KUKA"
     extensions = (".src", ".sub")
+    comment_pattern = r"[;&][^\n]*"  # comments and the &ACCESS / &REL header lines
+    motion_words = "PTP, LIN, CIRC, SPTP, SLIN, SCIRC or their _REL forms"
+
+    def missing_program(self, role: str, text: str) -> tuple[int, str] | None:
+        """A .src runs from its DEF (KSS 8.x operating and programming manual, 'Structure
+        of a KRL program'): without one the controller does not select it."""
+        if role != "src" or re.search(r"^[ \t]*(?:GLOBAL[ \t]+)?DEF[ \t]", text, re.MULTILINE | re.IGNORECASE):
+            return None
+        return first_statement(text, self.comment_pattern), "no DEF in this .src: KSS runs a program from 'DEF name( )' to END; give the program's .src"
 
     def sniff(self, head: str) -> bool:
         # A data list on its own starts with DEFDAT; a program with DEF and its motions.
@@ -39,6 +49,14 @@ class KrlDialect(Dialect):
             docs.append(SourceDoc.read(config, "config"))
         return docs
 
+    def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
+        """The splice, with LIN_REL / PTP_REL ... #TOOL steps written in the tool frame (tool_relative.py)."""
+        from .tool_relative import held_and_moved, write_steps  # (here, as base.emit_texts: it loads the numba splice kernels)
+
+        held, steps = held_and_moved(original, modified)
+        texts = super().emit_texts(original, held)
+        return write_steps(texts, original, modified, steps, self.parse_sources, self.insert_field) if steps.any() else texts
+
     def module_sources(self, program, paths) -> list[SourceDoc]:
         """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
         functions), or folders of them (modules.py)."""
@@ -46,7 +64,7 @@ class KrlDialect(Dialect):
 
         return module_docs(program, paths) if paths else []
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import KrlParser
 
         return KrlParser(sources).parse()

@@ -133,6 +133,6 @@ def _passes(kind: str, start: int, step: int, op: str, limit: int) -> list[int] 
 def declared_ints(text: str) -> set[str]:
     """INT variables declared in a DEF's declaration section (``DECL INT I, J`` / ``INT I``)."""
     out: set[str] = set()
-    for m in re.finditer(r"^[ \t]*(?:DECL[ \t]+)?INT[ \t]+([^;\n=]+)", text, re.IGNORECASE | re.MULTILINE):
+    for m in re.finditer(r"^[ \t]*(?:DECL[ \t]+)?INT[ \t]+([^;\r\n=]+)", text, re.IGNORECASE | re.MULTILINE):
         out.update(n.strip().upper() for n in m.group(1).split(",") if re.fullmatch(r"[ \t]*[A-Za-z_]\w*[ \t]*", n))
     return out

@@ -58,6 +58,14 @@ def _sequence(rows: np.ndarray, lines: np.ndarray, loops: list[ForLoop], env: di
         body = rows[position:][lines[rows[position:]] < lp.last_line]
         position += len(body)
         inner = [o for o in loops if lp.first_line < o.first_line and o.last_line < lp.last_line]
+        if not inner and lp.update is None and lp.values is not None:  # a plain body: its rows once per pass
+            if len(out) + len(body) * len(lp.values) > MAX_ROWS:
+                raise OverflowError(lp.first_line)
+            body_rows = body.tolist()
+            for value in lp.values:
+                out.extend(body_rows)
+                envs.extend([{**env, lp.counter: value}] * len(body_rows))
+            continue
         for value in lp.values if lp.values is not None else [None]:
             first = len(out)
             _sequence(body, lines, inner, {**env, lp.counter: value}, out, envs)
@@ -87,28 +95,32 @@ def executed_rows(tp: Toolpath, loops: list[ForLoop], lines: np.ndarray | None =
     return np.array(out + others.tolist(), dtype=np.int64), envs + [{}] * len(others)
 
 
-def unroll(tp: Toolpath, loops: list[ForLoop], lookup, changed_arrays: set[str]) -> Toolpath:
+def unroll(tp: Toolpath, loops: list[ForLoop], symbols, changed_arrays: set[str]) -> Toolpath:
     """``tp`` with every known-count FOR of the program file run (see the module's docstring).
-    ``lookup(name)`` gives a declared point's (values, spans, conf, insert) or None."""
+    ``symbols``: the declared points (``rows(names)`` and ``table()``)."""
     rows, envs = executed_rows(tp, loops)
-    return indexed_by_counter(tp.take(rows), envs, lookup, changed_arrays)
+    return indexed_by_counter(tp.take(rows), envs, symbols, changed_arrays)
 
 
-def indexed_by_counter(tp: Toolpath, envs: list[dict], lookup, changed_arrays: set[str]) -> Toolpath:
-    """Targets ``NAME[I]`` with I a counter of the pass: the element of that pass."""
+def indexed_by_counter(tp: Toolpath, envs: list[dict], symbols, changed_arrays: set[str]) -> Toolpath:
+    """Targets ``NAME[I]`` with I a counter of the pass: the element of that pass (``symbols``:
+    the parser's point table, looked up once for every pass together)."""
     index = re.compile(r"^([A-Za-z_$][\w$]*)\[\s*([A-Za-z_]\w*)\s*\]$")
-    hits = [(r, m) for r, name in enumerate(tp.target_name) if envs[r] and (m := index.match(name or ""))]
-    if not hits:
+    shapes = {name: index.match(name or "") for name in set(tp.target_name)}  # a few names, many passes
+    hits = [(r, m) for r, name in enumerate(tp.target_name) if envs[r] and (m := shapes[name])]
+    wanted = [(r, f"{m.group(1).upper()}[{envs[r].get(m.group(2).upper())}]") for r, m in hits
+              if envs[r].get(m.group(2).upper()) is not None and m.group(1).upper() + "[" not in changed_arrays]
+    if not wanted:
         return tp
+    rows = np.array([r for r, _ in wanted], np.int64)
+    found = symbols.rows([name for _, name in wanted])
+    table_values, table_spans, table_conf, table_insert = symbols.table()  # its last row: not declared (NaN)
+    # an element not declared, or partial: stays unresolved (no values)
+    ok = ~np.isnan(table_values[found][:, :6]).any(axis=1)
+    rows, found = rows[ok], found[ok]
     values, spans, conf = tp.values.copy(), tp.spans.copy(), tp.conf.copy()
+    values[rows], spans[rows], conf[rows] = table_values[found], table_spans[found], table_conf[found]
     insert = tp.insert_at.copy() if tp.insert_at is not None else None
-    for r, m in hits:
-        array, counter = m.group(1).upper(), m.group(2).upper()
-        value = envs[r].get(counter)
-        found = lookup(f"{array}[{value}]") if value is not None and array + "[" not in changed_arrays else None
-        if found is None or np.isnan(found[0][:6]).any():
-            continue  # an element not declared, or partial: stays unresolved (no values)
-        values[r], spans[r], conf[r] = found[0], found[1], found[2]
-        if insert is not None:
-            insert[r] = found[3]
+    if insert is not None:
+        insert[rows] = table_insert[found]
     return replace(tp, values=values, spans=spans, conf=conf, insert_at=insert)  # poses and 'resolved' follow from the values

@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 from lark import Token, Tree
 
-from ...frames import abc_to_matrix, abc_to_quat_wxyz, make_transform
+from ...frames import abc_to_matrix, abc_to_quat_wxyz, make_transform, matrix_to_abc
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse import scan_kernel
 from ...parse.common import Builder, LineIndex, Numbers, _ranges, parse_statement, scan_numbers
@@ -28,6 +28,8 @@ from ...parse.name_table import NameTable
 from .inline_window import Window, code_of
 from .inline_forms import CORRECTION_SWITCHES, FRAME_COMMANDS, Fdat, MachineFrames, declared_fdats, frames_from_fdat, parse_fdat
 from . import calls as call_walk
+from .bounds import NamedFor
+from .bounds import planned as plan_named_for
 from .counters import Assign, CounterLoop, declared_ints
 from .counters import plan as plan_counter_loop
 from .jumps import Goto, forward_ranges, skipped, why_not_straight
@@ -135,6 +137,15 @@ class Symbols:
             rows[found] = np.array([self.overlay[k] for k in keys])[local[found]]
         return rows
 
+    def rows(self, names: list[str]) -> np.ndarray:
+        """Row of each name in ``table()``; ``count`` where it is not declared (one vectorised
+        lookup: a FOR over a 30,000-element array looks its elements up at once)."""
+        rows = self._global(self.bulk.rows(names)) if names else np.zeros(0, np.int64)
+        if self.overlay:
+            over = np.array([self.overlay.get(_key(n), -1) for n in names], np.int64)
+            rows = np.where(over >= 0, over, rows)
+        return rows
+
     def get(self, name: str):
         i = self.overlay.get(_key(name))
         if i is None:
@@ -223,12 +234,15 @@ class KrlParser:
         self._labels: dict[tuple[int | None, str], list[int]] = {}
         self._defs = 0  # DEFs of the program file seen so far: only the first runs straight through
         self.slow_targets: list[tuple] = []
+        self.tool_relative: set[tuple[int, int]] = set()  # (file, line) of LIN_REL / PTP_REL ... #TOOL
         self._approx_blocks: list[tuple[np.ndarray, np.ndarray]] = []
         self._inline = _InlineFormState(self.docs)
         self._routine_names: set[str] | None = None  # DEF names of the program file, read at the first call
         self._for_open: list[tuple[int, str, list[int] | None]] = []  # FORs of the program file being read: (line, counter, values)
         self.for_loops: list[ForLoop] = []
         self._counter_open: list[CounterLoop] = []  # WHILE / REPEAT of the program file being read
+        self._named_bounds: dict[int, list] = {}  # FOR line -> bound trees naming a variable (bounds.py)
+        self._named_fors: list[NamedFor] = []
         self._counter_loops: list[CounterLoop] = []
         self._assigns: list[Assign] = []  # assignments of the program file to plain names (counters.py)
         self._depth = 0  # blocks open around the statement being read (the DEF not counted)
@@ -301,6 +315,7 @@ class KrlParser:
         self._slow_lines(src, skip=skip, is_program=True)
         self._judge_jumps(src)
         self._plan_counter_loops(src)
+        self._plan_named_fors(src)
         self._follow_calls(src)
         self._follow_passes(src)
         caller = Caller([d.doc for d in self.docs])
@@ -388,6 +403,10 @@ class KrlParser:
                     self.builder.notes.append(f"{d.doc.path}:{line}: the number of passes of this FOR is not known at post time "
                                               "(its body has EXIT, RETURN or GOTO): the motions in its body are listed once")
                 self.for_loops.append(ForLoop(line, end, counter, values))
+                if line in self._named_bounds:
+                    exprs = self._named_bounds.pop(line)
+                    names = {_lvalue_text(n) for e in exprs for n in e.iter_subtrees() if n.data == "lvalue"}
+                    self._named_fors.append(NamedFor(self.for_loops[-1], exprs, names))
             elif kind in ("endwhile", "until") and is_program and self._counter_open:
                 loop = self._counter_open.pop()
                 loop.last_line = int(d.lines.line(start))
@@ -457,6 +476,24 @@ class KrlParser:
                 self.for_loops.append(planned)
                 continue
             self.builder.notes.append(f"{src.doc.path}:{loop.first_line}: the number of passes of this {loop.kind} is not known at post time "
+                                      f"({why}): the motions in its body are listed once")
+
+    def _plan_named_fors(self, src: _Doc) -> None:
+        """FOR I = 1 TO N with N set to a constant: run pass by pass (bounds.py); any other listed once, noted."""
+        if not self._named_fors:
+            return
+        lines = src.text.split("\n")
+        main = self.routines[0] if self.routines else None
+        local_ints = declared_ints(src.text[main.start:main.end if main.end > 0 else len(src.text)]) if main else set()
+        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        for named in self._named_fors:
+            loop, why = plan_named_for(named, self._assigns, local_ints, calls_text, self._has_goto)
+            if loop is not None and _leaves_early(src.text, loop.first_line, loop.last_line):
+                loop, why = None, "its body has EXIT, RETURN or GOTO"
+            if loop is not None:
+                self.for_loops[self.for_loops.index(named.loop)] = loop
+                continue
+            self.builder.notes.append(f"{src.doc.path}:{named.loop.first_line}: the number of passes of this FOR is not known at post time "
                                       f"({why}): the motions in its body are listed once")
 
     def _first_def_jumps(self, src: _Doc) -> list[tuple[int, int]] | None:
@@ -544,6 +581,10 @@ class KrlParser:
             self._for_open.append((line, counter, values))
             self._for_depth[line] = self._depth  # 0: not inside another block (passes.py)
             if values is not None:
+                return
+            names = {_lvalue_text(n) for e in exprs for n in e.iter_subtrees() if n.data == "lvalue"} if d.index == 0 else set()
+            if names and None not in names:  # FOR I = 1 TO N: decided when the whole program is read (bounds.py)
+                self._named_bounds[line] = exprs
                 return
         if kind in ("while_open", "repeat_open"):  # run when its counter is known (counters.py), decided at the end
             self._for_depth[line] = self._depth
@@ -686,6 +727,11 @@ class KrlParser:
         approx = any(isinstance(c, Tree) and c.data == "approx" for c in node.children)
         relative = move.endswith("_REL")
         base_move = move.replace("_REL", "")
+        frame_word = next((str(c.children[0]).upper() for c in node.children if isinstance(c, Tree) and c.data == "rel_frame"), None)
+        if frame_word is not None and (not relative or base_move not in ("LIN", "PTP")):
+            raise d.lines.error(d.doc.path, start, f"{frame_word} after {move}: only LIN_REL and PTP_REL take #BASE or #TOOL (KSS 8.3 'LIN_REL', 'PTP_REL')")
+        if frame_word == "#TOOL":
+            self.tool_relative.add((d.index, int(d.lines.line(start))))
         if base_move in ("CIRC", "SCIRC"):
             kinds = [Kind.CIRC_VIA, Kind.CIRC_END]
         else:
@@ -794,7 +840,8 @@ class KrlParser:
         frame, tool = self._inline_windows(offsets, virtual, frame, tool)
         tp = replace(tp, frame=frame, tool=tool, speed=speed, zone=np.where(approx, cdis, 0.0), **self._tables())
         tp = self._unroll(tp, envs)  # before the poses: partial aggregates and _REL increments follow execution order
-        pose, values = _absolute_poses(tp.values, tp.relative)
+        in_tool = np.array([(int(f), int(ln)) in self.tool_relative for f, ln in zip(tp.file, tp.line)], bool) if self.tool_relative else None
+        pose, values = _absolute_poses(tp.values, tp.relative, in_tool)
         orientation = np.full((len(tp.values), 4), np.nan)
         ok = ~np.isnan(pose[:, 3:6]).any(axis=1)
         if ok.any():
@@ -922,7 +969,7 @@ class KrlParser:
         tl = self.timeline
         changed = set(tl.arrays) | {k.split("[")[0] + "[" for k in tl.points if "[" in k}
         if any(envs):  # some row runs in a FOR pass
-            tp = indexed_by_counter(tp, envs, self.symbols.get, changed)
+            tp = indexed_by_counter(tp, envs, self.symbols, changed)
             tp = replace(tp, joints=tp.values[:, 7:13].copy(), ext=tp.values[:, 13:19].copy())  # NAME[I] may be an E6AXIS
         by_counter = [n for n in set(tp.target_name) if re.search(r"\[\s*[A-Za-z_]\w*\s*\]$", n or "")]  # NAME[I]: few names
         now_known = {n for n in by_counter if not np.isnan(tp.values[np.array(tp.target_name, dtype=object) == n]).all(axis=1).any()}
@@ -1020,12 +1067,17 @@ class _InlineFormState:
         return frames_from_fdat(None if self.anytime else self.fdat_act, self.machines, self.initmov_ran and not self.corrections_touched)
 
 
-def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _absolute_poses(values: np.ndarray, relative: np.ndarray, in_tool: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """(N, 6) X Y Z A B C of every target, and the IR values with absolute components.
 
     A partial aggregate ({X 10}) keeps the other components of the previous Cartesian
     target; LIN_REL / PTP_REL components are increments from the previous target (the IR
-    holds absolute values; the emitter turns them back into increments)."""
+    holds absolute values; the emitter turns them back into increments). ``in_tool``: rows
+    written ``... #TOOL``, whose increments are in the tool frame at the previous target
+    (KSS 8.3 'LIN_REL': "#TOOL: the coordinates of the target position refer to the
+    coordinate system of the current tool"; #BASE, the default, to the current base): the
+    target is the previous pose times the increment's frame, and where the previous pose
+    is not known neither is the target."""
     n = len(values)
     cart = ~np.isnan(values[:, :3]).all(axis=1)
     pose = values[:, :6].copy()
@@ -1037,10 +1089,24 @@ def _absolute_poses(values: np.ndarray, relative: np.ndarray) -> tuple[np.ndarra
     if relative.any():
         for i in np.nonzero(relative)[0]:
             prev = pose[i - 1] if i > 0 else np.zeros(6)
-            pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
+            if in_tool is not None and in_tool[i]:  # the first motion's start (where the robot is) is not in the text
+                pose[i] = _tool_frame_step(prev if i > 0 else np.full(6, np.nan), np.nan_to_num(values[i, :6]))
+            else:
+                pose[i] = np.nan_to_num(prev) + np.nan_to_num(values[i, :6])
     values = values.copy()
     values[relative, :6] = np.where(np.isnan(values[relative, :6]), np.nan, pose[relative])
+    if in_tool is not None and in_tool.any():
+        # a tool-frame step moves every component: the IR holds them all (the text keeps its own)
+        values[in_tool, :6] = pose[in_tool]
     return pose, values
+
+
+def _tool_frame_step(prev: np.ndarray, step: np.ndarray) -> np.ndarray:
+    """X Y Z A B C of ``prev`` (base frame) moved by ``step`` given in its own tool frame."""
+    if np.isnan(prev).any():
+        return np.full(6, np.nan)
+    moved = make_transform(abc_to_matrix(prev[3:6]), prev[:3]) @ make_transform(abc_to_matrix(step[3:6]), step[:3])
+    return np.concatenate([moved[:3, 3], matrix_to_abc(moved[:3, :3])])
 
 
 def _leaves_early(text: str, first: int, last: int) -> bool:

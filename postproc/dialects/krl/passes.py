@@ -42,8 +42,13 @@ class Followed:
         after = self.update is not None and real > self.update[0]
         return self.values[pass_index] + (self.update[1] if after else 0)
 
+    def __post_init__(self):
+        # the first pass with each counter value, as list.index gives it, in one dict: a
+        # pass-by-pass index() was quadratic in the passes (minutes for 30,000)
+        self._pass_at = {v: i for i, v in reversed(list(enumerate(self.values)))}
+
     def pass_of(self, real: int, value: int) -> int:
-        return self.values.index(value - (self.update[1] if self.update is not None and real > self.update[0] else 0))
+        return self._pass_at[value - (self.update[1] if self.update is not None and real > self.update[0] else 0)]
 
 
 class Passes:

@@ -9,7 +9,7 @@ import numpy as np
 
 from ...errors import InputError
 from ...ir import SourceDoc, Toolpath
-from ..base import Dialect, aggregate_around, read_bytes
+from ..base import Dialect, aggregate_around, first_statement, read_bytes
 
 
 class RapidDialect(Dialect):
@@ -20,6 +20,16 @@ class RapidDialect(Dialect):
 
     def sniff(self, head: str) -> bool:
         return "MODULE " in head and ("ENDMODULE" in head or "PROC " in head)
+
+    comment_pattern = r"![^\n]*"
+    motion_words = "MoveJ, MoveL, MoveC, MoveAbsJ or another Move instruction"
+
+    def missing_program(self, role: str, text: str) -> tuple[int, str] | None:
+        """A module file starts with MODULE name and ends with ENDMODULE (RAPID kernel
+        reference, 'Module declarations'); the controller loads nothing else."""
+        if role == "pgf" or re.search(r"^[ \t]*MODULE[ \t]", text, re.MULTILINE | re.IGNORECASE):
+            return None
+        return first_statement(text, self.comment_pattern), "no MODULE in this file: the controller loads RAPID code as 'MODULE name' ... ENDMODULE"
 
     def read_sources(self, path: str | Path, data: bytes | None = None) -> list[SourceDoc]:
         """A module on its own; or a program file (.pgf) and every module it lists, which
@@ -35,7 +45,7 @@ class RapidDialect(Dialect):
             docs.append(SourceDoc.read(path.parent / module, "module"))
         return docs
 
-    def parse_sources(self, sources: list[SourceDoc]) -> Toolpath:
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import parse_modules
 
         return parse_modules(sources)

@@ -25,6 +25,7 @@ from ...parse.line_shapes import LineShapes
 from . import counters
 from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
+from .updates import Update, Updates, apply, update_fields
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
 W = r"[ \t]*"
@@ -57,6 +58,7 @@ _MOVE_KIND = {"MOVEL": Kind.LINEAR, "MOVEJ": Kind.JOINT, "MOVELDO": Kind.LINEAR,
 _CIRC = {"MOVEC", "MOVECDO", "MOVECSYNC", "MOVECGO", "MOVECAO", "SEARCHC", "TRIGGC"}
 _IDENT = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 _OPEN = {"module_open": "ENDMODULE", "routine_open": "ENDROUTINE", "record_open": "ENDRECORD", "if_open": "ENDIF", "for_open": "ENDFOR", "while_open": "ENDWHILE", "test_open": "ENDTEST"}
+_OPTIONAL = ("optarg", "optarg_pass")  # \Name[:=value] and \Name?Name (an optional argument passed on)
 _CLOSE = {"module_close": "ENDMODULE", "routine_close": "ENDROUTINE", "record_close": "ENDRECORD", "endif": "ENDIF", "endfor": "ENDFOR", "endwhile": "ENDWHILE", "endtest": "ENDTEST"}
 _BLOCK_WORDS = re.compile(r"^\s*(?:LOCAL\s+|TASK\s+)*(MODULE|ENDMODULE|PROC|ENDPROC|FUNC|ENDFUNC|TRAP|ENDTRAP|RECORD|ENDRECORD|IF|ELSEIF|ELSE|ENDIF|FOR|ENDFOR|WHILE|ENDWHILE|TEST|CASE|DEFAULT|ENDTEST|ERROR|BACKWARD|UNDO)\b", re.IGNORECASE)
 _LABEL = re.compile(r"^\s*[A-Za-z][A-Za-z0-9_]*\s*:\s*$")
@@ -73,6 +75,23 @@ def _closer(line: str) -> str:
     if m is None:
         return "line" if _LABEL.match(line) else ";"
     return _HEADS.get(m.group(1).upper(), "line")
+
+
+# Where a line holds more than one statement: after each ';' and after THEN, DO or ELSE (a
+# string's text is skipped). RAPID is free-form (RAPID kernel reference, "Basic elements":
+# statements are separated by ';' or end with their block keyword, not by line ends), so
+# 'IF a <= b THEN x := 0; ENDIF' on one line is the IF block of three statements.
+_CUT = re.compile(r'"(?:[^"\n]|"")*"|;|(?<![A-Za-z0-9_])(?:THEN|DO|ELSE)(?![A-Za-z0-9_])', re.IGNORECASE)
+
+
+def _pieces(code: str, start: int, end: int) -> list[tuple[int, int]]:
+    """(start, end) offsets of the statements, or statement parts, of one line."""
+    line = code[start:end]
+    if ";" not in line or line.rstrip().endswith(";") and line.count(";") == 1 and not _CUT.search(line.rstrip()[:-1]):
+        return [(start, end)]  # the common line: one statement (or part of one)
+    cuts = [start + m.end() for m in _CUT.finditer(line) if not m.group().startswith('"')]
+    bounds = [start] + [c for c in cuts if c < end] + [end]
+    return [(a, b) for a, b in zip(bounds, bounds[1:]) if code[a:b].strip()]
 
 
 def _complete(stripped: str, closer: str, depth: int) -> bool:
@@ -189,6 +208,23 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
     for module in modules:
         module.bulk_moves()
     _bind_late_declarations(builder, data)
+    routines = sorted(r for m in modules for r in m.routine_lines)
+    gotos = {r for m in modules if _has_goto(m.code) for r in m.routine_lines}
+
+    def routine_of(file: int, line: int) -> tuple[int, int] | None:
+        mine = [r for r in routines if r[0] == file and r[1] <= line]
+        return mine[-1] if mine else None
+
+    def frame_index(name: str, transform) -> int:  # the builder's frame of that name as the program writes it; -1: none
+        written = next((n for n in builder.frame_names if n.upper() == name.upper()), None)
+        if written is None and transform is None:
+            return -1
+        return builder.frame_index(written or name, transform)
+
+    # a robtarget or work object passed to a routine may be changed there (INOUT): never followed
+    data.updates.spoiled.update(root.upper() for _, roots, _, _ in data.facts.calls for root in roots if root)
+    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index):
+        data.facts.changed.pop(name, None)  # followed: its targets are known where they run
     _runtime_changes(builder, data.facts)
     return builder.build()
 
@@ -247,6 +283,7 @@ class _Data:
         self.tools: dict[str, np.ndarray | None] = {"TOOL0": np.eye(4)}
         self.wobjs: dict[str, np.ndarray | None] = {"WOBJ0": np.eye(4)}
         self.facts = RuntimeFacts()
+        self.updates = Updates()
 
 
 class RapidParser:
@@ -271,6 +308,8 @@ class RapidParser:
         self._replayed = 0  # statements run by unrolled loops (bounded: MAX_REPLAYED)
         self._locals: dict[str, float | None] = {}  # the routine's own VAR nums: value, None if unknown (counters.py)
         self._in_routine = False
+        self.updates = data.updates  # robtargets changed by constants (updates.py)
+        self.routine_lines: list[tuple[int, int]] = []  # (file, line) of each PROC/FUNC/TRAP
         self._conditional = False  # inside a one-statement IF
         self._track_locals = not _has_goto(self.code)  # a jump may run any line again
 
@@ -409,20 +448,21 @@ class RapidParser:
                 continue
             if header:
                 continue
-            end = self._line_end(li)
-            line = code[start:end]
-            stripped = line.strip()
-            if not stripped or stripped.startswith("%%%"):
-                continue
-            if pending is None:
-                first = start + (len(line) - len(line.lstrip()))
-                closer, depth = _closer(line), 0
-            depth += line.count("(") - line.count(")")
-            if _complete(stripped, closer, depth):
-                yield (pending if pending is not None else first), end
-                pending = None
-            elif pending is None:
-                pending = first
+            line_end = self._line_end(li)
+            for piece_start, end in _pieces(code, start, line_end):
+                line = code[piece_start:end]
+                stripped = line.strip()
+                if not stripped or stripped.startswith("%%%"):
+                    continue
+                if pending is None:
+                    first = piece_start + (len(line) - len(line.lstrip()))
+                    closer, depth = _closer(line), 0
+                depth += line.count("(") - line.count(")")
+                if _complete(stripped, closer, depth):
+                    yield (pending if pending is not None else first), end
+                    pending = None
+                elif pending is None:
+                    pending = first
         if pending is not None:
             raise self.lines.error(self.doc.path, pending, "statement not terminated (missing ';')")
 
@@ -481,6 +521,7 @@ class RapidParser:
             if kind == "routine_open":
                 self._routine(node)
                 self._locals, self._in_routine = {}, True
+                self.routine_lines.append((self.index, int(self.lines.line(start))))
         elif kind in _CLOSE:
             if stack and stack[-1][0] != _CLOSE[kind] and any(w == _CLOSE[kind] for w, _ in stack):
                 want, where = stack[-1]
@@ -503,8 +544,11 @@ class RapidParser:
             self._move(node, start)
         elif kind == "assign" and self._local_update(node, stack):
             return
+        elif kind == "assign" and self._constant_update(node, start, stack):
+            return
         elif kind == "assign":
             self.facts.change(str(node.children[0].children[0]), f"{self._where(start)}: {{name}} is assigned")
+            self.updates.spoiled.add(str(node.children[0].children[0]).upper())
         elif kind == "call":
             self._call(node, start)
         elif kind == "record_field" and not (stack and stack[-1][0] == "ENDRECORD"):
@@ -537,6 +581,27 @@ class RapidParser:
 
     def _forget_locals(self) -> None:
         self._locals = dict.fromkeys(self._locals)
+
+    def _constant_update(self, node: Tree, start: int, stack) -> bool:
+        """``p1.trans.z := 305;`` / ``p1.trans := [x, y, z];`` of a declared robtarget in a
+        routine's straight-line code: recorded to be followed (updates.py); False otherwise."""
+        lhs, rhs = node.children[0], node.children[-1]
+        parts = [str(c) for c in lhs.children]
+        known = parts[0].upper() in self.points or parts[0].upper() in self.updates.wobj_parts
+        if not (self._straight(stack) and self.routine_lines and len(parts) > 1 and known):
+            return False
+        s, e = self._span(rhs, start)
+        sl = self.numbers.between(s, e)
+        literal = isinstance(rhs, Tree) and (rhs.data in ("number", "neg") or rhs.data == "aggregate" and all(
+            isinstance(c, Tree) and c.data in ("number", "neg") for c in rhs.children))
+        numbers = [(float(v), (self.index, int(a), int(b))) for v, a, b in zip(self.numbers.value[sl], self.numbers.start[sl], self.numbers.end[sl])]
+        fields = update_fields(parts[1:], numbers) if literal else None
+        if fields is None:
+            return False
+        line = int(self.lines.line(start))
+        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields))
+        self.facts.change(parts[0], f"{self._where(start)}: {{name}} is assigned")  # flagged unless followed (parse_modules)
+        return True
 
     def _local_update(self, node: Tree, stack) -> bool:
         """``v := e`` / ``Incr v`` / ``Decr v`` of a local num: its value in straight-line code,
@@ -616,7 +681,7 @@ class RapidParser:
         arguments' data names, in case the procedure writes them)."""
         name = str(node.children[0])
         args = node.children[1].children if len(node.children) > 1 else []
-        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        roots = [_root(a.children[0]) for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data in _OPTIONAL)]
         for name in set(self._locals) & {str(t).upper() for t in node.scan_values(lambda v: isinstance(v, Token) and v.type == "NAME")}:
             self._locals[name] = None  # an argument the instruction may write
         path, lines = self.doc.path, self.lines
@@ -681,6 +746,8 @@ class RapidParser:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
                 # robhold TRUE here: the robot holds the work object (a stationary tool set-up).
                 self.wobjs[name.upper()] = None if holds or len(nums) < 14 or not fixed else _pose(nums[:7]) @ _pose(nums[7:14])
+                if self.wobjs[name.upper()] is not None:
+                    self.updates.wobj_parts[name.upper()] = (nums[:7].copy(), nums[7:14].copy())  # uframe, oframe (updates.py)
 
     def _target(self, node, start: int, joint: bool = False):
         """(values, spans, conf, offset, offset_span), name of a target expression; NaN values where unknown.
@@ -763,11 +830,11 @@ class RapidParser:
         mv = str(node.children[0]).upper()
         args = node.children[1].children
         # Positional arguments: those that do not start with an optional \Name argument.
-        positional = [a for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data == "optarg")]
+        positional = [a for a in args if a.children and not (isinstance(a.children[0], Tree) and a.children[0].data in _OPTIONAL)]
         options = {}
         for a in args:
             for o in a.children:
-                if isinstance(o, Tree) and o.data == "optarg":
+                if isinstance(o, Tree) and o.data in _OPTIONAL:  # \WObj?wobj: the caller's, where it gave one
                     key = str(o.children[0]).upper()
                     options[key] = o.children[1] if len(o.children) > 1 else None
         targets, at_speed, at_zone, at_tool = LAYOUTS.get(mv, CIRCULAR_LAYOUT if mv in _CIRC else LINEAR_LAYOUT)
@@ -778,6 +845,7 @@ class RapidParser:
             root = _root(positional[SEARCH_POINT[mv]].children[0])
             if root:
                 self.facts.change(root, f"{self._where(start)}: {{name}} is written by {mv.title()}")
+                self.updates.spoiled.add(root.upper())
         speed_node, tool_node = positional[at_speed], positional[at_tool] if at_tool is not None else None
         zone_node = positional[at_zone] if at_zone is not None else None
         speed = _speed(self._text(speed_node, start))
