@@ -90,9 +90,10 @@ def with_effects(model: ErrorModel, extra: EffectSum) -> ErrorModel:
 
 
 def score_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], base_sq: np.ndarray, fold_of: np.ndarray, floor_mm: float,
-                     seed: int = 0, progress=silent) -> tuple[list[Scored], Scored | None]:
-    """Every candidate scored (best first), and the best combination of the top few when
-    none is recommended alone (None when there is no combination to try)."""
+                     seed: int = 0, progress=silent) -> tuple[list[Scored], Scored | None, float]:
+    """Every candidate scored (best first), the best combination of the top few when none
+    is recommended alone (None when there is no combination to try), and the noise floor
+    they were judged against (``floor_mm``, or the lowest held-out RMS when lower)."""
     scored = []
     for i, name in enumerate(names):
         report(progress, f"trying {name}", i, len(names) + 1)
@@ -105,10 +106,16 @@ def score_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], 
             continue
         sq = _held_out_sq(linearise(with_effects(model, extra), meas), fold_of)
         scored.append(judge(extra.spec(), base_sq, sq, floor_mm, seed, note=note))
+    # A held-out RMS is never below the noise (in expectation): a candidate that goes lower
+    # than the floor's estimate shows the estimate is too high; judge them all against it.
+    lowest = min((s.cv_rms_mm for s in scored if s.added), default=np.inf)
+    if lowest < floor_mm:
+        floor_mm = lowest
+        scored = [judge(s.spec, base_sq, s.sq, floor_mm, seed, s.added, s.selection_note) for s in scored]
     scored = [confirm(model, meas, s, base_sq, fold_of, floor_mm, seed) if s.recommended else s for s in scored]
     scored.sort(key=lambda s: (-s.explained, s.p_value))
     report(progress, "trying combinations", len(names), len(names) + 1)
-    return scored, _best_combination(model, meas, scored, base_sq, fold_of, floor_mm, seed)
+    return scored, _best_combination(model, meas, scored, base_sq, fold_of, floor_mm, seed), floor_mm
 
 
 def confirm(model: ErrorModel, meas: MeasurementSet, scored: Scored, base_sq: np.ndarray, fold_of: np.ndarray, floor_mm: float, seed: int) -> Scored:

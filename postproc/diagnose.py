@@ -249,7 +249,9 @@ def _diagnose(model, meas, folds, seed, noise_mm, candidates, progress, files) -
     def step(message, done=None, total=None):
         report(progress, message, 3 + (done or 0), steps)
 
-    scored, combined = score_candidates(base_fit.model, meas, names, base_sq, fold_of, noise.floor_mm, seed, step)
+    scored, combined, floor = score_candidates(base_fit.model, meas, names, base_sq, fold_of, noise.floor_mm, seed, step)
+    if floor < noise.floor_mm:
+        noise = noise_floors.lowered(noise, floor, "held-out RMS of the model with " + min((s for s in scored if s.added), key=lambda s: s.cv_rms_mm).spec)
     ranked = _as_candidates(scored)
     combination = _as_candidates([combined])[0] if combined is not None else None
     at_floor = cv_rms <= AT_FLOOR * noise.floor_mm
@@ -457,6 +459,9 @@ def _ladder(robot, tool_mm, meas, steps, folds, seed, noise_mm, validation, max_
         model = result.model
         held = held_out_miss(linearise(model, meas, free=inside_bounds(model, free_mask(result))), fold_of)
         record(_step_label(nxt, current), model, rms(held))
+    noise = noise_floors.given(noise_mm) if noise_mm is not None else noise_floors.estimate(meas, -residuals(model, meas), len(model.params))
+    for row in rows:
+        row["noise_floor_mm"] = noise.floor_mm
     report(progress, "done", total, total)
     return rows
 

@@ -201,7 +201,8 @@ def fit(
     prep = model.prepare(meas)
     notes.extend(prep.notes)
     framed = bool(effects.of_kind("base"))
-    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=framed), meas))
+    # One nominal error for a data set everywhere (simulate, fit, report, ladder): the nominal robot registered onto it.
+    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=True), meas))
     if not model.params:
         # --effects none: the nominal model, nothing to identify (a predictor may sit on top).
         return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=before,

@@ -47,6 +47,12 @@ def given(noise_mm: float) -> NoiseFloor:
     return NoiseFloor(float(noise_mm * np.sqrt(3.0)), float(noise_mm), "given", f"noise given as {noise_mm:g} mm per axis")
 
 
+def lowered(noise: NoiseFloor, floor_mm: float, why: str) -> NoiseFloor:
+    """A lower floor than ``noise`` found otherwise (a held-out RMS below it)."""
+    return NoiseFloor(float(floor_mm), float(floor_mm / np.sqrt(3.0)), noise.method,
+                      f"{why}, below the {noise.floor_mm:.4f} mm of the {noise.detail}")
+
+
 def estimate(meas: MeasurementSet, resid: np.ndarray, n_params: int = 0, focus: np.ndarray | None = None) -> NoiseFloor:
     """The noise floor of ``meas`` from repeats, else from a flexible fit of ``resid`` (N, 3),
     the residual of a model with ``n_params`` identified parameters.

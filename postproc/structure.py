@@ -82,8 +82,9 @@ def _varies(values: np.ndarray) -> bool:
     return float(np.ptp(values)) > 1e-9 * max(1.0, float(np.abs(values).max()))
 
 
-def _score(cols: np.ndarray, resid: np.ndarray, fold_of: np.ndarray) -> tuple[float, float, float]:
-    """(held-out share, in-sample share, F-test p) of a least-squares fit of resid on cols."""
+def _score(cols: np.ndarray, resid: np.ndarray, fold_of: list[np.ndarray]) -> tuple[float, float, float]:
+    """(held-out share, in-sample share, F-test p) of a least-squares fit of resid on cols;
+    ``fold_of``: each fold's test mask."""
     n, k = cols.shape
     centred = resid - resid.mean(axis=0)
     total = float(np.sum(centred**2))
@@ -93,8 +94,7 @@ def _score(cols: np.ndarray, resid: np.ndarray, fold_of: np.ndarray) -> tuple[fl
     coef, _, rank, _ = np.linalg.lstsq(design, resid, rcond=None)
     rss = float(np.sum((resid - design @ coef) ** 2))
     held = 0.0
-    for f in np.unique(fold_of):
-        test = fold_of == f
+    for test in fold_of:
         c, *_ = np.linalg.lstsq(design[~test], resid[~test], rcond=None)
         held += float(np.sum((resid[test] - design[test] @ c) ** 2))
     rank -= 1  # the constant
@@ -107,6 +107,7 @@ def find_structure(variables: dict, resid: np.ndarray, fold_of: np.ndarray) -> l
     """Every variable and every pair of pose variables, strongest held-out share first.
 
     ``variables``: name -> (label, unit, values (N,), categorical)."""
+    fold_of = [fold_of == f for f in np.unique(fold_of)]
     usable = {name: (v[2], v[3]) for name, v in variables.items() if _varies(v[2])}
     bases = {name: {d: basis(values, cat, d) for d in (SINGLE_DEGREE, PAIR_DEGREE, PRODUCT_DEGREE)} for name, (values, cat) in usable.items()}
     paired = [name for name in usable if name.startswith(PAIRED_PREFIXES)]

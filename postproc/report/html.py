@@ -36,11 +36,11 @@ figure { margin: 1em 0; } img { max-width: 100%; } figcaption { color: #555; fon
 
 
 def _nominal_stats(model, meas):
-    """The nominal robot's error as ``postproc fit`` and ``postproc simulate`` print it:
-    rigidly registered onto the data when the model has a base frame."""
+    """The nominal robot's error as ``postproc fit``, ``simulate`` and ``ladder`` print it:
+    rigidly registered onto the data (6-DOF best fit), whatever the model's effects."""
     from ..identify import Stats, nominal_model, residuals
 
-    return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=bool(model.effects.of_kind("base"))), meas))
+    return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=True), meas))
 
 
 def _finding(finding: str) -> str:
