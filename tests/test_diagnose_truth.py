@@ -99,7 +99,7 @@ def test_linearised_ranking_matches_the_full_refit():
     from postproc.identify import cross_validation_errors, free_mask
 
     data, model = _case(FR + ",backlash[joints=2,3],thermal", 5, 120)
-    names = ["backlash", "thermal", "base_tilt", "external_load"]
+    names = ["backlash", "thermal", "base_tilt", "link_bending"]
     result = diagnose(model, data, seed=5, folds=4, candidates=names, noise_mm=0.02)
     full = {}
     for name in names:
@@ -112,15 +112,17 @@ def test_linearised_ranking_matches_the_full_refit():
 
 
 def test_noise_floor_from_repeats_and_from_a_flexible_fit():
-    data, model = _case(FR, 2, 150)
-    resid = -residuals(model, data)
-    flexible = noise_floor.estimate(data, resid, len(model.params))
+    rng = np.random.default_rng(2)
+    truth = random_truth(kr160(), TOOL, parse_effects(FR), rng)
+    q = sample_poses(kr160(), TOOL, 150, Cylinder(), rng)
+    data = simulate(truth, q, rng)
+    model = fit(kr160(), TOOL, parse_effects(FR), data, cv_folds=0).model
+    flexible = noise_floor.estimate(data, -residuals(model, data), len(model.params))
     assert flexible.method == "flexible fit" and flexible.floor_mm == pytest.approx(FLOOR, rel=0.2)
-    twice = MeasurementSet(q_deg=np.vstack([data.q_deg, data.q_deg]), measured_mm=np.vstack([data.measured_mm, data.measured_mm + np.random.default_rng(0).normal(0, 0.02, data.measured_mm.shape)]),
-                           ids=tuple(str(i) for i in range(2 * len(data))))
-    again = noise_floor.estimate(twice, np.vstack([resid, resid]), len(model.params))
-    # The spread between two measurements of one pose: noise twice over (the first carries its own).
-    assert again.method == "repeats" and again.floor_mm == pytest.approx(FLOOR, rel=0.15)
+    again = simulate(truth, q, rng)  # every pose measured a second time
+    twice = MeasurementSet(q_deg=np.vstack([q, q]), measured_mm=np.vstack([data.measured_mm, again.measured_mm]), ids=tuple(str(i) for i in range(2 * len(q))))
+    repeated = noise_floor.estimate(twice, -residuals(model, twice), len(model.params))
+    assert repeated.method == "repeats" and repeated.floor_mm == pytest.approx(FLOOR, rel=0.15)
 
 
 def test_diagnose_runs_with_one_blas_thread(monkeypatch):
@@ -143,12 +145,12 @@ def test_progress_lines_when_not_a_terminal():
     now = [0.0]
     stream = io.StringIO()
     with ProgressLine("ladder", terminal=False, clock=lambda: now[0], stream=stream) as progress:
-        for step in range(6):
+        for step in range(7):
             now[0] = 4.0 * step
-            progress(f"step {step}", step, 6)
+            progress(f"step {step}", step, 7)
     lines = stream.getvalue().splitlines()
     assert len(lines) == 3  # at 0, 12 and 24 s
-    assert lines[1].startswith("ladder: step 3 [3/6] (12 s") and "s left" in lines[1]
+    assert lines[1].startswith("ladder: step 3 [3/7] (12 s") and "16 s left" in lines[1]
 
 
 def test_diagnose_json_carries_the_verdict(tmp_path):
