@@ -166,3 +166,16 @@ def test_diagnose_json_carries_the_verdict(tmp_path):
     for c in verdict["candidates"]:
         assert {"effect", "explained", "rms_if_added_mm", "cv_rms_mm", "stability", "significant"} <= set(c)
     assert verdict["structure"][0]["variable"] and {"explained", "significant"} <= set(verdict["structure"][0])
+
+
+def test_seven_percent_is_never_significant():
+    """The issue's case: a candidate that removes 7 % of the residual on every pose (so a
+    paired test calls it significant beyond doubt) goes 5 % of the way to the floor: left out."""
+    from postproc.candidates import judge
+
+    base_sq = np.random.default_rng(0).chisquare(3, 600) * 0.01  # CV RMS 0.17 mm, floor 0.035 mm
+    small = judge("thermal", base_sq, 0.93 * base_sq, floor_mm=0.035, rng_seed=0)
+    assert small.explained == pytest.approx(0.07) and small.p_value < 1e-10
+    assert small.progress < 0.2 and small.stability < 0.8 and not small.recommended
+    large = judge("backlash", base_sq, 0.2 * base_sq, floor_mm=0.035, rng_seed=0)
+    assert large.progress > 0.5 and large.stability > 0.95 and large.recommended
