@@ -55,6 +55,8 @@ def inside_bounds(model: ErrorModel, free: np.ndarray) -> np.ndarray:
 
 
 def _unit_columns(jac: np.ndarray) -> np.ndarray:
+    if jac.shape[-1] == 0:  # the nominal model: nothing to refit
+        return jac
     norms = np.linalg.norm(jac.reshape(-1, jac.shape[-1]), axis=0)
     keep = norms > 1e-12 * max(norms.max(initial=0.0), 1e-300)
     return jac[:, :, keep] / norms[keep]

@@ -205,8 +205,9 @@ def fit(
     before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=True), meas))
     if not model.params:
         # --effects none: the nominal model, nothing to identify (a predictor may sit on top).
-        return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=before,
-                         cv_rms_mm=before.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
+        as_saved = Stats.of(residuals(model, meas))  # unregistered: what evaluate gives for this model
+        return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=as_saved,
+                         cv_rms_mm=as_saved.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
     if framed and prior is None:
         model = register_base(model, meas, prep)
 

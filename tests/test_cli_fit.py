@@ -146,7 +146,10 @@ def test_effects_none_is_the_nominal_model(sim, tmp_path):
     doc = json.loads(out.read_text())
     assert doc["effects"] == "none" and doc["parameters"] == {}
     ev = json.loads(runner.invoke(app, ["evaluate", str(out), str(sim / "sim.csv"), "--json"]).stdout)
-    assert ev["rms_mm"] == pytest.approx(doc["fit"]["before"]["rms_mm"]) and ev["rms_mm"] > 1.0
+    # 'after' is the model as saved (the nominal robot in its own frame); 'before', as everywhere,
+    # the nominal robot registered onto the data, which can only be closer.
+    assert ev["rms_mm"] == pytest.approx(doc["fit"]["after"]["rms_mm"]) and ev["rms_mm"] > 1.0
+    assert doc["fit"]["before"]["rms_mm"] <= ev["rms_mm"]
 
 
 def test_diagnose_from_the_nominal_model_names_the_geometry(sim, tmp_path):
