@@ -27,6 +27,8 @@ REPEAT_TOL_DEG = 1e-3
 MIN_REPEAT_DOF = 10
 #: the RBF kernel's length scales tried, in units of each standardised variable
 LENGTH_SCALES = (0.35, 0.7, 1.4, 2.8)
+#: poses the flexible fit uses at most (a seeded subset of a larger set)
+MAX_POSES = 300
 #: the smoother may spend at most this share of the poses on effective parameters
 MAX_DF_SHARE = 0.5
 
@@ -105,6 +107,10 @@ def _standardised(x: np.ndarray) -> np.ndarray:
 
 
 def _flexible_fit(x: np.ndarray, resid: np.ndarray, n_params: int, on: str = "the per-pose variables") -> NoiseFloor:
+    if len(x) > MAX_POSES:
+        # The noise is the same over any subset; the kernel's eigendecomposition costs N^3.
+        keep = np.sort(np.random.default_rng(0).choice(len(x), MAX_POSES, replace=False))
+        x, resid, n_params = x[keep], resid[keep], int(round(n_params * MAX_POSES / len(x)))
     n = len(x)
     sq = np.sum(x**2, axis=1)
     dist2 = np.maximum(sq[:, None] + sq[None, :] - 2 * x @ x.T, 0.0)
