@@ -86,7 +86,8 @@ def main():
     if args.child:
         _child(args.child, args.n)
         return
-    lines = [f"benchmarks/diagnose.py --n {args.n} --timeout {args.timeout:.0f} ({os.cpu_count()} CPUs; truth {TRUTH}; diagnose's model {MODEL})"]
+    lines = [f"benchmarks/diagnose.py --n {args.n} --timeout {args.timeout:.0f} ({os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f} at the start: "
+             f"'idle' means no second job of ours; truth {TRUTH}; diagnose's model {MODEL})"]
     print(lines[0], flush=True)
     for case in args.cases.split(","):
         for loaded in (False, True):

@@ -262,8 +262,6 @@ def fit_cmd(
 
 
 def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .effects import parse_effects
     from .progress import ProgressLine
     from .identify import fit as run_fit
@@ -301,12 +299,9 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
     if predictor is not None:
         from .identify import Stats, fit_predictor, residuals
 
-        from rich.progress import BarColumn, MofNCompleteColumn
-
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
-            task = bar.add_task(f"fitting the {predictor} predictor", total=None)
+        with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
             final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed,
-                                  gp_options=gp_options, progress=lambda done, total, msg: bar.update(task, completed=done, total=total, description=msg))
+                                  gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total))
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
     if predictor is not None:
@@ -580,8 +575,13 @@ def simulate_cmd(
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
     rng = np.random.default_rng(seed)
     truth = random_truth(robot_model, tool_mm, chosen, rng, magnitude=magnitude)
-    q = sample_poses(robot_model, tool_mm, n, space, rng)
-    data = simulate(truth, q, rng, noise_mm=noise)
+    from .progress import ProgressLine
+
+    with ProgressLine("simulate", console=err) as progress:
+        progress(f"sampling {n:,} poses", 0, 2)
+        q = sample_poses(robot_model, tool_mm, n, space, rng)
+        progress("measuring them", 1, 2)
+        data = simulate(truth, q, rng, noise_mm=noise)
     write_measurements(output, data)
     if truth_out is not None:
         save_model(truth_out, truth)

@@ -24,6 +24,7 @@ from .errors import IdentificationError
 from .frames import kabsch
 from .measurements import MeasurementSet
 from .robots import RobotModel
+from .threads import small_matrices
 
 RANK_TOL = 1e-7
 OUTLIER_SIGMAS = 4.0  # per-pose 3-D residual beyond 4 robust sigmas (chi, 3 dof: p < 0.2 %)
@@ -193,8 +194,14 @@ def fit(
     """Identify the parameters of ``effects`` from a measurement set.
 
     ``prior``: a previously fitted model whose parameter values (and base registration)
-    start this fit, e.g. to extend a model by one effect.
+    start this fit, e.g. to extend a model by one effect. BLAS runs one thread unless the
+    set is large (``postproc.threads``).
     """
+    with small_matrices(3 * len(meas)):
+        return _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress)
+
+
+def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -> FitResult:
     say = progress or (lambda msg: None)
     effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say)
     model = _initial_model(robot, tool_mm, effects, meas, prior)

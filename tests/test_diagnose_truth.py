@@ -179,3 +179,13 @@ def test_seven_percent_is_never_significant():
     assert small.progress < 0.2 and small.stability < 0.8 and not small.recommended
     large = judge("backlash", base_sq, 0.2 * base_sq, floor_mm=0.035, rng_seed=0)
     assert large.progress > 0.5 and large.stability > 0.95 and large.recommended
+
+
+def test_the_report_shows_the_partial_residual_of_the_verdict():
+    from postproc.report.html import diagnosis_report
+
+    _, model, data = hidden_case("joint_coupling", seed=0, n=120)
+    result = diagnose(model, data, seed=0, folds=3)
+    assert result.follows is not None and set(result.follows.variables) == {"q3", "q4"}
+    page = diagnosis_report(model, data, result)
+    assert "Partial residual: the residual against q3 x q4" in page and "What the residual follows" in page
