@@ -123,7 +123,8 @@ def test_diagnose_json_and_report(sim, tmp_path):
     assert first["effect"].startswith("joint_harmonics") and first["explained"] > 0.5
     assert [c["explained"] for c in doc["candidates"]] == sorted((c["explained"] for c in doc["candidates"]), reverse=True)
     page = report.read_text()
-    assert page.count("data:image/png;base64,") == 4 and "What is missing" in page
+    # error histograms, error vectors, residual vs variables, partial residual of what it follows, candidates
+    assert page.count("data:image/png;base64,") == 5 and "What is missing" in page and "Partial residual" in page
 
 
 def test_ladder_cli_plot_and_json(sim, tmp_path):
