@@ -415,7 +415,7 @@ def _print_diagnosis(result, error_model) -> None:
     if rows:
         table = Table(title=f"What is missing (recommended: >= {100 * MIN_PROGRESS:.0f}% of the way to the noise floor in >= {100 * MIN_STABILITY:.0f}% of resamples)", show_edge=False)
         for col in ("candidate", "explained", "CV RMS if added (mm)", "way to floor", "stability", "recommended"):
-            table.add_column(col, justify="left" if col == "candidate" else "right")
+            table.add_column(col, justify="left" if col == "candidate" else "right", overflow="fold", min_width=22 if col == "candidate" else None)
         for c in rows:
             table.add_row(c.effect, f"{100 * c.explained:.1f}%", f"{c.rms_if_added_mm:.4f}", f"{100 * c.progress:.0f}%", f"{100 * c.stability:.0f}%", "yes" if c.significant else "no")
         out.print(table)

@@ -257,8 +257,7 @@ def _diagnose(model, meas, folds, seed, noise_mm, candidates, progress, files) -
     at_floor = cv_rms <= AT_FLOOR * noise.floor_mm
     recommended = any(c.significant for c in ranked) or (combination is not None and combination.significant)
     exhausted = not at_floor and not recommended
-    findings = _findings(structure, ranked, cv_rms, noise.floor_mm, files, model, follows=follows, exhausted=exhausted, combination=combination,
-                         noise_detail=noise.detail)
+    findings = _findings(structure, ranked, cv_rms, noise.floor_mm, files, model, follows=follows, exhausted=exhausted, combination=combination)
     if model.residual is not None:
         findings.append(with_command(
             f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
