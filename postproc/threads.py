@@ -11,7 +11,6 @@ threads to pay (``BLAS_THREADS_FROM_ROWS`` Jacobian rows) keeps the pool as it i
 from __future__ import annotations
 
 import contextlib
-import functools
 
 from threadpoolctl import threadpool_limits
 
@@ -27,13 +26,3 @@ def small_matrices(rows: int = 0):
         return contextlib.nullcontext()
     return threadpool_limits(limits=1)
 
-
-def one_thread(func):
-    """Run ``func`` with one BLAS/OpenMP thread (for work made of small matrices only)."""
-
-    @functools.wraps(func)
-    def wrapper(*args, **kwargs):
-        with threadpool_limits(limits=1):
-            return func(*args, **kwargs)
-
-    return wrapper
