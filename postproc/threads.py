@@ -14,8 +14,9 @@ import contextlib
 
 from threadpoolctl import threadpool_limits
 
-#: Jacobian rows (3 x poses) from which a multi-threaded BLAS pays on the identification's
-#: products; below it one thread is faster, and never slower when the cores are shared.
+#: Jacobian rows (3 x poses) from which the pool is left as it is: at 50,000 poses the
+#: products are large enough that threads may pay (an estimate, not measured here; at
+#: 600 poses one thread is what benchmarks/diagnose.py measured).
 BLAS_THREADS_FROM_ROWS = 150_000
 
 
