@@ -656,8 +656,6 @@ def compensate_cmd(
                                             frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .compensate import CompensationError, compensate
     from .model_io import load_model
 
@@ -691,10 +689,10 @@ def compensate_cmd(
 
     for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
         log.print(f"note: {note} (--allow-model-mismatch)")
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-        task = bar.add_task("compensating", total=None)
-        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log),
-                       progress=lambda m: bar.update(task, description=m))
+    from .progress import ProgressLine
+
+    with ProgressLine("compensating", console=err) as progress:
+        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=progress)
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -1225,18 +1223,16 @@ if __name__ == "__main__":
 def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .compensate import CompensationError
+    from .progress import ProgressLine
     from .stream import StreamFallback, compensate_streamed, wants_stream
 
     if not wants_stream(program, mode):
         return False
     try:
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-            task = bar.add_task("compensating in chunks", total=None)
+        with ProgressLine("compensating in chunks", console=err) as progress:
             result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place, tune_malloc=True,
-                                         progress=lambda m: bar.update(task, description=m), **options)
+                                         progress=progress, **options)
     except StreamFallback as exc:
         err.print(f"note: the program is read whole, not in chunks: {exc}")
         return False
