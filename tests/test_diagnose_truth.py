@@ -189,3 +189,14 @@ def test_the_report_shows_the_partial_residual_of_the_verdict():
     assert result.follows is not None and set(result.follows.variables) == {"q3", "q4"}
     page = diagnosis_report(model, data, result)
     assert "Partial residual: the residual against q3 x q4" in page and "What the residual follows" in page
+
+
+def test_progress_bar_on_a_terminal_shows_counts():
+    from rich.console import Console
+
+    screen = io.StringIO()
+    console = Console(file=screen, force_terminal=True, width=100)
+    with ProgressLine("diagnose", terminal=True, console=console) as progress:
+        progress("trying backlash", 3, 9)
+        progress._bar.refresh()
+    assert "trying backlash" in screen.getvalue() and "3/9" in screen.getvalue()
