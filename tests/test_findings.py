@@ -3,6 +3,7 @@ it, no two findings contradict each other, and the nominal RMS is one number eve
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
 
@@ -97,7 +98,10 @@ def test_the_cli_finding_command_runs_and_adds_the_effect(tmp_path):
     diag = runner.invoke(app, ["diagnose", str(model_path), str(csv), "--folds", "3", "--report", str(report)])
     assert diag.exit_code == 0, diag.output
     runs = [line.split("run: ", 1)[1] for line in diag.output.splitlines() if line.strip().startswith("run: ")]
-    assert runs and len(set(runs)) == 1
+    assert len(runs) == 1  # the suggested command, printed once
+    ladder = runner.invoke(app, ["ladder", str(csv), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "base_frame", "--json"])
+    assert ladder.exit_code == 0, ladder.output
+    assert f"{json.loads(ladder.stdout)['steps'][0]['train_rms_mm']:.4f}" == nominal_sim  # the ladder's step 0: the same nominal RMS
     assert runs[0] == f"postproc fit {csv} --from {model_path} --effects +backlash --cv 0 -o {tmp_path / 'm_next.json'}"
     page = report.read_text()
     assert f"<td>{nominal_fit}</td>" in page  # the report's nominal row: the same number
