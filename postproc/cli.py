@@ -184,6 +184,7 @@ def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
     for label, st in (("nominal (mm)", result.before), ("fitted (mm)", result.after)):
         table.add_row(label, *(f"{v:.4f}" for v in (st.rms_mm, st.mean_mm, st.max_mm, *st.rms_axis_mm)))
     out.print(table)
+    out.print("nominal: the nominal robot registered onto the data (6-DOF best fit), as simulate, ladder and the report give it", highlight=False)
     if result.cv_rms_mm is not None:
         out.print(f"cross-validated RMS: {result.cv_rms_mm:.4f} mm")
     for note in result.notes:
@@ -269,9 +270,8 @@ def fit_cmd(
 
 
 def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .effects import parse_effects
+    from .progress import ProgressLine
     from .identify import fit as run_fit
     from .predictor_plugins import predictor_names
     from .model_io import load_model, save_model
@@ -302,19 +302,15 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
     _check_output_folder(output, "-o")
     data = _load_measurements(meas, robot_model, drop_invalid)
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-        task = bar.add_task("fitting", total=None)
-        result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=lambda msg: bar.update(task, description=msg))
+    with ProgressLine("fit", console=err) as progress:
+        result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress)
     final = result.model
     if predictor is not None:
         from .identify import Stats, fit_predictor, residuals
 
-        from rich.progress import BarColumn, MofNCompleteColumn
-
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
-            task = bar.add_task(f"fitting the {predictor} predictor", total=None)
+        with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
             final = fit_predictor(result.model, data, predictor, _load_measurements(source) if source is not None else None, seed=seed,
-                                  gp_options=gp_options, progress=lambda done, total, msg: bar.update(task, completed=done, total=total, description=msg))
+                                  gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total))
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
     if predictor is not None:
@@ -435,27 +431,24 @@ def diagnose_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write an HTML report with figures."),
-    noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm (sets the noise floor)."),
+    noise: Optional[float] = typer.Option(None, "--noise", help="Measurement noise per axis, mm (sets the noise floor); default: estimated from the data (repeats, else a flexible fit)."),
     folds: int = typer.Option(5, "--folds", help="Cross-validation folds."),
     seed: int = typer.Option(0, "--seed"),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Where the model fails and which effect is missing."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
-    from .diagnose import Files, diagnose, split_command
+    from .diagnose import Files, diagnose
     from .measurements import write_text_atomic
     from .model_io import load_model
+    from .progress import ProgressLine
 
     if folds < 2:
         raise InputError("--folds must be at least 2")
     _check_output_folder(report, "--report")
     error_model, _ = load_model(model)
     data = _load_measurements(meas, error_model.robot, drop_invalid)
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
-        task = bar.add_task("diagnosing", total=None)
-        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=lambda msg: bar.update(task, description=msg),
-                          files=Files(str(model), str(meas)))
+    with ProgressLine("diagnose", console=err, disable=json_out) as progress:
+        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas)))
     if report is not None:
         from .report.html import diagnosis_report
 
@@ -463,31 +456,48 @@ def diagnose_cmd(
     if json_out:
         print(json.dumps(result.as_json()))
         return
-    st = result.stats
-    out.print(f"model {error_model.effects.spec()} on {st.n} poses: RMS {st.rms_mm:.4f} mm, mean {st.mean_mm:.4f}, max {st.max_mm:.4f} "
-              f"(x/y/z {st.rms_axis_mm[0]:.4f}/{st.rms_axis_mm[1]:.4f}/{st.rms_axis_mm[2]:.4f}); cross-validated {result.cv_rms_mm:.4f} mm; noise floor {result.noise_floor_mm:.4f} mm")
-    structured = [b for b in result.breakdowns if b.significant]
-    if structured:
-        table = Table(title="Where it fails (significant after Holm correction)", show_edge=False)
-        for col in ("variable", "share of variance", "p"):
-            table.add_column(col, justify="left" if col == "variable" else "right")
-        for b in structured:
-            table.add_row(b.label, f"{100 * b.eta2:.1f}%", f"{b.p_adjusted:.1e}")
-        out.print(table)
-    if result.candidates:
-        table = Table(title="What is missing (held-out, whole model refitted)", show_edge=False)
-        for col in ("candidate", "explained", "CV RMS if added (mm)", "p (Holm)", "significant"):
-            table.add_column(col, justify="left" if col == "candidate" else "right")
-        for c in result.candidates:
-            table.add_row(c.effect, f"{100 * c.explained:.1f}%", f"{c.rms_if_added_mm:.4f}", f"{c.p_adjusted:.1e}", "yes" if c.significant else "no")
-        out.print(table)
-    for finding in result.findings:
-        text, command = split_command(finding)
-        out.print(f"- {text}", highlight=False)
-        if command:
-            out.print(f"    run: {command}", highlight=False, soft_wrap=True)
+    _print_diagnosis(result, error_model)
     if report is not None:
         out.print(f"report written to {report}")
+
+
+def _print_diagnosis(result, error_model) -> None:
+    """The diagnosis on one screen; each suggested command printed once, after its findings."""
+    from .candidates import MIN_PROGRESS, MIN_STABILITY
+    from .diagnose import split_command
+
+    st = result.stats
+    out.print(f"model {error_model.effects.spec()} on {st.n} poses: RMS {st.rms_mm:.4f} mm, mean {st.mean_mm:.4f}, max {st.max_mm:.4f} "
+              f"(x/y/z {st.rms_axis_mm[0]:.4f}/{st.rms_axis_mm[1]:.4f}/{st.rms_axis_mm[2]:.4f}); cross-validated {result.cv_rms_mm:.4f} mm")
+    if result.noise is not None:
+        out.print(f"noise floor {result.noise_floor_mm:.4f} mm (3-D RMS of the noise; {result.noise.detail})")
+    structured = [s for s in result.structure if s.significant][:6]
+    if structured:
+        table = Table(title="What the residual follows (smooth function of one variable or a pair; held-out)", show_edge=False)
+        for col in ("variable(s)", "explained", "p (Holm)"):
+            table.add_column(col, justify="left" if col == "variable(s)" else "right")
+        for s in structured:
+            table.add_row(s.name, f"{100 * s.explained:.1f}%", f"{s.p_adjusted:.1e}")
+        out.print(table)
+    rows = list(result.candidates) + ([result.combination] if result.combination is not None else [])
+    if rows:
+        table = Table(title=f"What is missing (recommended: >= {100 * MIN_PROGRESS:.0f}% of the way to the noise floor in >= {100 * MIN_STABILITY:.0f}% of resamples)", show_edge=False)
+        for col in ("candidate", "explained", "CV RMS if added (mm)", "way to floor", "stability", "recommended"):
+            table.add_column(col, justify="left" if col == "candidate" else "right", overflow="fold", min_width=22 if col == "candidate" else None)
+        for c in rows:
+            table.add_row(c.effect, f"{100 * c.explained:.1f}%", f"{c.rms_if_added_mm:.4f}", f"{100 * c.progress:.0f}%", f"{100 * c.stability:.0f}%", "yes" if c.significant else "no")
+        out.print(table)
+    if result.catalog_exhausted:
+        out.print("catalog exhausted" + (f": the residual follows {result.follows.name}" if result.follows is not None else ""), highlight=False)
+    previous = None
+    for finding in result.findings:
+        text, command = split_command(finding)
+        if previous is not None and command != previous:
+            out.print(f"    run: {previous}", highlight=False, soft_wrap=True)
+        out.print(f"- {text}", highlight=False)
+        previous = command or None
+    if previous:
+        out.print(f"    run: {previous}", highlight=False, soft_wrap=True)
 
 
 @app.command("ladder")
@@ -501,15 +511,14 @@ def ladder_cmd(
     validation: Optional[Path] = typer.Option(None, "--val", help="A validation set to report as well."),
     report: Optional[Path] = typer.Option(None, "--report", help="Write an HTML page with the ladder chart."),
     plot: Optional[Path] = typer.Option(None, "--plot", help="Write the ladder chart as PNG."),
-    noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
+    noise: Optional[float] = typer.Option(None, "--noise", help="Measurement noise per axis, mm; default: estimated from the data."),
     json_out: bool = typer.Option(False, "--json"),
     seed: int = typer.Option(0, "--seed"),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .diagnose import ladder
+    from .progress import ProgressLine
     from .effects import _split_top_level, parse_effects
 
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
@@ -521,10 +530,9 @@ def ladder_cmd(
     if effects is not None:
         steps = _split_top_level(effects)
         parse_effects(effects)  # validate names and options before any work
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True, disable=json_out) as bar:
-        task = bar.add_task("ladder", total=None)
-        rows = ladder(robot_model, tool_mm, data, steps, seed=seed, noise_mm=noise, validation=val, progress=lambda msg: bar.update(task, description=msg))
-    floor = noise * np.sqrt(3.0)
+    with ProgressLine("ladder", console=err, disable=json_out) as progress:
+        rows = ladder(robot_model, tool_mm, data, steps, seed=seed, noise_mm=noise, validation=val, progress=progress)
+    floor = rows[-1]["noise_floor_mm"]
     if plot is not None:
         from .report.figures import ladder_chart
 
@@ -545,6 +553,7 @@ def ladder_cmd(
     if json_out:
         print(json.dumps({"noise_floor_mm": floor, "steps": rows}))
         return
+    out.print("step 0 is the nominal robot registered onto the data (6-DOF best fit), as simulate, fit and the report give it", highlight=False)
     table = Table(title=f"ladder: {robot_model.name} on {meas.name} (noise floor {floor:.4f} mm)", show_edge=False)
     for col in ("step", "added", "train RMS", "CV RMS") + (("validation RMS",) if val is not None else ()):
         table.add_column(col, justify="left" if col == "added" else "right")
@@ -637,18 +646,22 @@ def simulate_cmd(
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
     rng = np.random.default_rng(seed)
     truth = random_truth(robot_model, tool_mm, chosen, rng, magnitude=magnitude)
-    q = sample_poses(robot_model, tool_mm, n, space, rng)
-    data = simulate(truth, q, rng, noise_mm=noise)
+    from .progress import ProgressLine
+
+    with ProgressLine("simulate", console=err) as progress:
+        progress(f"sampling {n:,} poses", 0, 2)
+        q = sample_poses(robot_model, tool_mm, n, space, rng)
+        progress("measuring them", 1, 2)
+        data = simulate(truth, q, rng, noise_mm=noise)
     write_measurements(output, data)
     if truth_out is not None:
         save_model(truth_out, truth)
     from .identify import Stats, nominal_model, residuals
 
-    # The same nominal error as fit and diagnose print: registered onto the data when there is a base frame.
-    framed = bool(chosen.of_kind("base"))
-    st = Stats.of(residuals(nominal_model(robot_model, tool_mm, data, registered=framed), data))
+    # The same nominal error as fit, ladder and the report print: the nominal robot registered onto the data.
+    st = Stats.of(residuals(nominal_model(robot_model, tool_mm, data, registered=True), data))
     out.print(f"{n} poses written to {output}; nominal error RMS {st.rms_mm:.4f} mm, max {st.max_mm:.4f} mm"
-              + (" (nominal robot registered onto the data, as fit reports it)" if framed else ""), highlight=False)
+              " (nominal robot registered onto the data, 6-DOF best fit, as fit, ladder and the report give it)", highlight=False)
 
 
 
@@ -802,8 +815,6 @@ def compensate_cmd(
                                             frames=_named_frames(frame, "--frame"), tools=_named_frames(tool, "--tool")):
             out.print(line)
         return
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .compensate import CompensationError, compensate
     from .model_io import load_model
 
@@ -840,10 +851,11 @@ def compensate_cmd(
 
     for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
         log.print(f"note: {note} (--allow-model-mismatch)")
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-        task = bar.add_task("compensating", total=None)
-        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log),
-                       progress=lambda m: bar.update(task, description=m), detail=_is_page(report))
+    from .progress import ProgressLine
+
+    with ProgressLine("compensating", console=err) as progress:
+        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=progress,
+                       detail=_is_page(report))
         written, added = tp, ()
         if subdivide:
             from .subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
@@ -1423,18 +1435,16 @@ def main() -> None:
 def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
-
     from .compensate import CompensationError
+    from .progress import ProgressLine
     from .stream import StreamFallback, compensate_streamed, wants_stream
 
     if not wants_stream(program, mode):
         return False
     try:
-        with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-            task = bar.add_task("compensating in chunks", total=None)
+        with ProgressLine("compensating in chunks", console=err) as progress:
             result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place, tune_malloc=True,
-                                         progress=lambda m: bar.update(task, description=m), **options)
+                                         progress=progress, **options)
     except StreamFallback as exc:
         err.print(f"note: the program is read whole, not in chunks: {exc}")
         return False

@@ -1,16 +1,21 @@
 """Where a model fails and which physical effect is missing.
 
 1. Compare: residual statistics overall, per axis, and broken down by workspace region
-   (theta1 sector, radius, height), each joint's angle, load, temperature, time and
-   approach direction.
-2. Where it fails: for every variable, a one-way analysis of variance of the residual
-   across bins of that variable; p-values Holm-corrected over all variables, so noise is
-   not reported as structure.
-3. What is missing: each catalog effect not in the model whose columns the data have is
-   added and the *whole* model refitted; k-fold held-out errors (the same folds for all)
-   give the fraction of residual variance it explains and the RMS with it added. A paired
-   one-sided test on the per-pose held-out squared errors, Holm-corrected over the
-   candidates, says whether the gain is beyond noise.
+   (theta1 sector, radius, height), each joint's angle, gravity torque, load,
+   temperature, time and approach direction (binned means for the figures).
+2. What the residual follows (``postproc.structure``): a smooth function of each variable
+   and of each pair of them, its held-out share of the residual variance, Holm-corrected
+   F tests; so a residual that depends on two variables together is still seen.
+3. The noise floor every judgement is made against, from the data (``postproc.noise_floor``:
+   repeats, else the residual of a flexible fit), unless the user states the noise.
+4. What is missing (``postproc.candidates``): each catalog effect not in the model whose
+   columns the data have is added to the fitted model and cross-validated on the same
+   folds by a linearised refit (``postproc.held_out``). It is recommended only when it
+   brings the cross-validated RMS at least 20 % of the way to the noise floor, in at least
+   80 % of bootstrap resamples, and its per-pose gain passes a Holm-corrected paired test.
+   When none does, the best few together are tried; when they do not either, the catalog
+   is exhausted: the verdict names what the residual follows and points at writing the
+   effect (``postproc effect new``), a data-driven predictor being the other way.
 """
 
 from __future__ import annotations
@@ -22,14 +27,21 @@ import numpy as np
 from scipy import stats as sps
 
 from . import kinematics as kin
+from . import noise_floor as noise_floors
+from .candidates import MIN_PROGRESS, MIN_STABILITY, Scored, score_candidates
 from .effects import CATALOG, EffectSum, parse_effects
 from .errormodel import ErrorModel
-from .identify import Stats, cross_validation_errors, fit, free_mask, refit_base, residuals
+from .held_out import held_out_miss, inside_bounds, linearise, rms
+from .identify import Stats, fit, fold_assignment, free_mask, nominal_model, refit_base, residuals
 from .measurements import MeasurementSet
+from .progress import report, silent
+from .structure import Structure, find_structure, holm, named
+from .threads import small_matrices
 
 ALPHA = 0.05
-MIN_EXPLAINED = 0.02  # a candidate must remove at least 2 % of the held-out residual variance
 BINS = 5
+#: the model is at the noise floor when its cross-validated RMS is within this factor of it
+AT_FLOOR = 1.25
 
 
 @dataclass(frozen=True)
@@ -56,12 +68,19 @@ class Breakdown:
 @dataclass(frozen=True)
 class Candidate:
     effect: str  # spec, with the options the fit chose
-    explained: float
-    rms_if_added_mm: float
+    explained: float  # held-out share of the residual variance it removes
+    rms_if_added_mm: float  # cross-validated RMS with it added
     p_value: float
     p_adjusted: float
-    significant: bool
+    significant: bool  # recommended: far enough towards the floor, stable, and beyond noise
     message: str
+    progress: float = 0.0  # share of the way from the model's CV RMS to the noise floor
+    stability: float = 0.0  # share of resamples in which it still goes MIN_PROGRESS of the way
+
+    def as_json(self) -> dict:
+        return {"effect": self.effect, "explained": self.explained, "rms_if_added_mm": self.rms_if_added_mm, "cv_rms_mm": self.rms_if_added_mm,
+                "progress_to_floor": self.progress, "stability": self.stability, "p_value": self.p_adjusted, "significant": self.significant,
+                "message": self.message}
 
 
 @dataclass(frozen=True)
@@ -74,6 +93,11 @@ class Diagnosis:
     findings: tuple[str, ...]
     residual_mm: np.ndarray = field(repr=False)
     variables: dict = field(repr=False, default_factory=dict)
+    structure: tuple[Structure, ...] = ()
+    follows: Structure | None = None  # the variable or pair the residual follows, if any
+    catalog_exhausted: bool = False
+    combination: Candidate | None = None  # the best few candidates together, when none is enough alone
+    noise: noise_floors.NoiseFloor | None = None
 
     def as_json(self) -> dict:
         return {
@@ -84,36 +108,16 @@ class Diagnosis:
             "n": self.stats.n,
             "cv_rms_mm": self.cv_rms_mm,
             "noise_floor_mm": self.noise_floor_mm,
-            "candidates": [
-                {
-                    "effect": c.effect,
-                    "explained": c.explained,
-                    "rms_if_added_mm": c.rms_if_added_mm,
-                    "p_value": c.p_adjusted,
-                    "significant": c.significant,
-                    "message": c.message,
-                }
-                for c in self.candidates
-            ],
-            "structure": [
-                {"variable": b.variable, "eta2": b.eta2, "p_value": b.p_adjusted, "significant": b.significant}
-                for b in self.breakdowns
-            ],
+            "noise_floor": None if self.noise is None else self.noise.as_json(),
+            "thresholds": {"progress_to_floor": MIN_PROGRESS, "stability": MIN_STABILITY, "alpha": ALPHA, "at_floor": AT_FLOOR},
+            "candidates": [c.as_json() for c in self.candidates],
+            "combination": None if self.combination is None else self.combination.as_json(),
+            "catalog_exhausted": self.catalog_exhausted,
+            "variables": list(self.follows.variables) if self.follows is not None else [],
+            "follows": None if self.follows is None else self.follows.as_json(),
+            "structure": [s.as_json() for s in self.structure if s.significant or len(s.variables) == 1],
             "findings": list(self.findings),
         }
-
-
-def holm(p_values: list[float]) -> list[float]:
-    """Holm-Bonferroni adjusted p-values (family-wise error control), in the input order."""
-    p = np.asarray(p_values, dtype=float)
-    m = len(p)
-    order = np.argsort(p)
-    adjusted = np.empty(m)
-    running = 0.0
-    for rank, idx in enumerate(order):
-        running = max(running, min(1.0, (m - rank) * p[idx]))
-        adjusted[idx] = running
-    return adjusted.tolist()
 
 
 def explanatory_variables(model: ErrorModel, meas: MeasurementSet) -> dict[str, tuple[str, str, np.ndarray, bool]]:
@@ -126,10 +130,13 @@ def explanatory_variables(model: ErrorModel, meas: MeasurementSet) -> dict[str, 
     }
     for j in range(6):
         out[f"q{j + 1}"] = (f"joint {j + 1} angle", "deg", meas.q_deg[:, j], False)
+    torque = kin.gravity_torque(model.robot, meas.q_deg)
+    for j in range(6):
+        out[f"tau{j + 1}"] = (f"gravity torque on joint {j + 1}", "N*m", torque[:, j], False)
     if meas.force_n is not None:
         out["load"] = ("load |F|", "N", np.linalg.norm(meas.force_n, axis=1), False)
     if meas.temp_c is not None:
-        out["temperature"] = ("temperature", "degC", meas.temp_c, False)
+        out["temp"] = ("temperature", "degC", meas.temp_c, False)
     if meas.time_s is not None:
         out["time"] = ("time", "s", meas.time_s, False)
     if meas.approach is not None:
@@ -186,9 +193,14 @@ def candidate_effects(model: ErrorModel, meas: MeasurementSet) -> list[str]:
     return [name for name, cls in CATALOG.items() if name not in present and all(meas.has(group) for group in cls.needs)]
 
 
-def _message(spec: str, explained: float) -> str:
-    effect = parse_effects(spec).effects[0]
-    return f"{effect.describe_finding()}; {spec} explains {100 * explained:.0f}% of them"
+def _message(spec: str, scored: Scored) -> str:
+    effects = parse_effects(spec).effects
+    what = effects[0].describe_finding() if len(effects) == 1 else f"together, {spec}"
+    text = (f"{what}; {spec} explains {100 * scored.explained:.0f}% of them, {100 * scored.progress:.0f}% of the way to the noise floor "
+            f"in {100 * scored.stability:.0f}% of resamples")
+    if scored.selection_note:
+        text += f" ({scored.selection_note})"
+    return text
 
 
 def diagnose(
@@ -197,71 +209,83 @@ def diagnose(
     *,
     folds: int = 5,
     seed: int = 0,
-    noise_mm: float = 0.02,
+    noise_mm: float | None = None,
     candidates: list[str] | None = None,
-    progress=lambda msg: None,
+    progress=silent,
     files: "Files | None" = None,
 ) -> Diagnosis:
-    """Compare the model with measurements, find structure, rank the missing effects.
+    """Compare the model with measurements, find what the residual follows, rank the missing effects.
 
-    ``files``: the model and measurement paths the findings' commands name (placeholders
-    MODEL.json and MEAS.csv when not given)."""
-    resid = residuals(model, meas)  # predicted - measured
-    miss = -resid  # measured - predicted: what the model misses
+    ``noise_mm``: the measurement noise per axis when known; None estimates the noise floor
+    from the data. ``files``: the model and measurement paths the findings' commands name
+    (placeholders MODEL.json and MEAS.csv when not given)."""
+    with small_matrices(3 * len(meas)):
+        return _diagnose(model, meas, folds, seed, noise_mm, candidates, progress, files or Files())
+
+
+def _diagnose(model, meas, folds, seed, noise_mm, candidates, progress, files) -> Diagnosis:
+    miss = -residuals(model, meas)  # measured - predicted: what the model misses
     variables = explanatory_variables(model, meas)
     breakdowns = [b for name, (label, unit, values, cat) in variables.items() if (b := _breakdown(name, label, unit, values, cat, miss)) is not None]
     adjusted = holm([b.p_value for b in breakdowns]) if breakdowns else []
     breakdowns = [Breakdown(**{**b.__dict__, "p_adjusted": p}) for b, p in zip(breakdowns, adjusted)]
     breakdowns.sort(key=lambda b: (not b.significant, -b.eta2))
 
-    progress("refitting the model with cross-validation")
-    base_fit = fit(model.robot, model.tool_mm, model.effects, meas, cv_folds=0, prior=model, seed=seed)
-    base_err = cross_validation_errors(base_fit.model, meas, free_mask(base_fit), folds, seed=seed)
-    base_sq = np.sum(base_err**2, axis=1)
-    base_mse = float(base_sq.mean())
-
     names = candidate_effects(model, meas) if candidates is None else candidates
-    ranked = _rank_candidates(model, meas, names, base_fit.model, base_sq, folds, seed, progress)
+    steps = len(names) + 3
+    report(progress, "refitting the model", 0, steps)
+    base_fit = fit(model.robot, model.tool_mm, model.effects, meas, cv_folds=0, prior=model, seed=seed)
+    base = linearise(base_fit.model, meas, free=inside_bounds(base_fit.model, free_mask(base_fit)))
+    fold_of = fold_assignment(len(meas), folds, seed)
+    base_sq = np.sum(held_out_miss(base, fold_of) ** 2, axis=1)
+    cv_rms = float(np.sqrt(base_sq.mean()))
+    report(progress, "looking for structure", 1, steps)
+    structure = find_structure(variables, base.miss, fold_of)
+    follows = named(structure)
+    report(progress, "estimating the noise floor", 2, steps)
+    noise = noise_floors.given(noise_mm) if noise_mm is not None else noise_floors.estimate(
+        meas, base.miss, int(base.free.sum()), _focus(variables, structure))
 
-    floor = float(noise_mm * np.sqrt(3.0))
-    cv_rms = float(np.sqrt(base_mse))
-    files = files or Files()
-    findings = _findings(breakdowns, ranked, cv_rms, floor, files, model)
+    def step(message, done=None, total=None):
+        report(progress, message, 3 + (done or 0), steps)
+
+    scored, combined, floor = score_candidates(base_fit.model, meas, names, base_sq, fold_of, noise.floor_mm, seed, step)
+    if floor < noise.floor_mm:
+        noise = noise_floors.lowered(noise, floor, "held-out RMS of the model with " + min((s for s in scored if s.added), key=lambda s: s.cv_rms_mm).spec)
+    ranked = _as_candidates(scored)
+    combination = _as_candidates([combined])[0] if combined is not None else None
+    at_floor = cv_rms <= AT_FLOOR * noise.floor_mm
+    recommended = any(c.significant for c in ranked) or (combination is not None and combination.significant)
+    exhausted = not at_floor and not recommended
+    findings = _findings(structure, ranked, cv_rms, noise.floor_mm, files, model, follows=follows, exhausted=exhausted, combination=combination)
     if model.residual is not None:
         findings.append(with_command(
             f"The model's {model.residual.kind} predictor is in the comparison above; the candidate effects and the "
             "cross-validated RMS concern its physics part (the predictor is fitted on what the physics leaves).",
             files.evaluate_command()))
-    return Diagnosis(Stats.of(miss), cv_rms, floor, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables)
+    return Diagnosis(Stats.of(miss), cv_rms, noise.floor_mm, tuple(breakdowns), tuple(ranked), tuple(findings), miss, variables,
+                     tuple(structure), follows, exhausted, combination, noise)
 
 
-def _rank_candidates(model: ErrorModel, meas: MeasurementSet, names: list[str], base: ErrorModel, base_sq: np.ndarray, folds: int, seed: int, progress) -> list[Candidate]:
-    """Add each candidate to the whole model, refit, and compare held-out errors pose by pose
-    with the model as it is (paired one-sided test, Holm-corrected over the candidates)."""
-    base_mse = float(base_sq.mean())
-    raw = []
-    for name in names:
-        progress(f"trying {name}")
-        result = fit(model.robot, model.tool_mm, model.effects + parse_effects(name), meas, cv_folds=0, prior=base, seed=seed)
-        added = [e for e in result.model.effects if e.name not in set(model.effects.names())]
-        if not added:  # e.g. a term family when the data support no term
-            raw.append((name, 0.0, float(np.sqrt(base_mse)), 1.0, ""))
-            continue
-        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
-        sq = np.sum(err**2, axis=1)
-        mse = float(sq.mean())
-        gain = base_sq - sq
-        p = float(sps.ttest_1samp(gain, 0.0, alternative="greater").pvalue) if np.std(gain) > 0 else 1.0
-        chosen_how = "".join(f" ({n.split('how often they were chosen: ', 1)[1]}" for n in result.notes if "how often they were chosen: " in n)
-        raw.append((added[0].spec(), 1.0 - mse / base_mse, float(np.sqrt(mse)), p, chosen_how))  # terms a fit chose, with their stability
-    adjusted = holm([r[3] for r in raw]) if raw else []
-    ranked = []
-    for (spec, explained, rms, p, chosen_how), p_adj in zip(raw, adjusted):
-        significant = p_adj < ALPHA and explained >= MIN_EXPLAINED
-        verdict = "" if significant else " (not beyond noise: leave it out)"
-        ranked.append(Candidate(spec, max(0.0, explained), rms, p, p_adj, significant, _message(spec, max(0.0, explained)) + chosen_how + verdict))
-    ranked.sort(key=lambda c: (-c.explained, c.p_adjusted))
-    return ranked
+def _focus(variables: dict, structure: list[Structure], count: int = 3) -> np.ndarray:
+    """(N, k) the variables of the strongest significant structures (for the noise floor's smoother)."""
+    names = list(dict.fromkeys(v for s in structure if s.significant for v in s.variables))[:count]
+    return np.stack([variables[n][2] for n in names], axis=1) if names else np.zeros((len(next(iter(variables.values()))[2]), 0))
+
+
+def _as_candidates(scored: list[Scored]) -> list[Candidate]:
+    """Scored candidates as the report shows them; Holm over the candidates for the paired test."""
+    adjusted = holm([s.p_value for s in scored]) if scored else []
+    out = []
+    for s, p_adj in zip(scored, adjusted):
+        significant = s.recommended and p_adj < ALPHA
+        if not s.added:
+            message = f"{s.spec}: the data support no term ({s.selection_note})"
+        else:
+            message = _message(s.spec, s) + ("" if significant else
+                                             f" (below {100 * MIN_PROGRESS:.0f}% of the way in {100 * MIN_STABILITY:.0f}% of resamples: leave it out)")
+        out.append(Candidate(s.spec, s.explained, s.cv_rms_mm, s.p_value, p_adj, significant, message, s.progress, s.stability))
+    return out
 
 
 #: Between a finding's words and the command that acts on it (``split_command`` takes it apart).
@@ -294,6 +318,11 @@ class Files:
         """The model is as good as the data allow: compensate a program with it."""
         return f"postproc compensate PROGRAM --model {_quote(self.model)} -o PROGRAM_compensated"
 
+    @staticmethod
+    def effect_new_command(variables: tuple[str, ...]) -> str:
+        """Write the effect the catalog lacks (a template outside the package)."""
+        return f"postproc effect new {'_'.join(variables) or 'my'}_effect"
+
 
 def _quote(text: str) -> str:
     return shlex.quote(text)
@@ -309,43 +338,63 @@ def split_command(finding: str) -> tuple[str, str]:
     return (text, command) if text else (finding, "")
 
 
-def _findings(breakdowns, ranked, cv_rms, floor, files: Files, model) -> list[str]:
+#: The finding that offers a data-driven predictor as the other way starts so.
+OTHER_WAY = "The other way:"
+
+
+def _findings(structure, ranked, cv_rms, floor, files: Files, model, *, follows: Structure | None = None, exhausted: bool = False,
+              combination: Candidate | None = None, noise_detail: str = "") -> list[str]:
     """Plain-language findings, each ending with the command that acts on it. Only a
-    significant candidate is ever recommended; structure with no significant candidate
-    behind it points at a data-driven predictor, never at an effect."""
+    recommended candidate is ever suggested; when the catalog is exhausted the verdict
+    names what the residual follows and points at writing the effect, a data-driven
+    predictor being the other way (its own finding, starting with ``OTHER_WAY``)."""
     out = []
-    significant = [c for c in ranked if c.significant]
-    at_floor = cv_rms < 1.25 * floor
-    if significant:
-        action = files.fit_command(significant[0].effect)
+    recommended = [c for c in ranked if c.significant]
+    together = combination if (not recommended and combination is not None and combination.significant) else None
+    at_floor = cv_rms <= AT_FLOOR * floor
+    if recommended:
+        action = files.fit_command(recommended[0].effect)
+    elif together is not None:
+        action = files.fit_command(together.effect)
     elif at_floor:
         action = files.use_command()
+    elif exhausted and follows is not None:
+        action = files.effect_new_command(follows.variables)
     else:
         action = files.predictor_command(model)
-    structured = [b for b in breakdowns if b.significant]
-    for b in structured[:4]:
-        axis = int(np.argmax(np.abs(np.array(b.mean_mm)).max(axis=0)))
-        spread = np.ptp(np.array(b.mean_mm)[:, axis])
-        why = f"residual {'xyz'[axis]} varies with {b.label} (bin means span {spread:.3f} mm, {100 * b.eta2:.0f}% of residual variance, p = {b.p_adjusted:.1e})"
-        if significant:
-            hint = f"; of the catalog's effects, {significant[0].effect} explains the most of the residual."
-        elif at_floor:
-            hint = "; the model is within the noise floor all the same, nothing to add."
-        else:
-            hint = "; no catalog effect explains it beyond noise, a data-driven predictor may."
-        out.append(with_command(why + hint, action))
-    if significant:
-        best = significant[0]
-        out.append(with_command(best.message[0].upper() + best.message[1:] + f": add it (cross-validated RMS {cv_rms:.4f} -> {best.rms_if_added_mm:.4f} mm).", action))
+    floor_words = f"noise floor {floor:.4f} mm" + (f" ({noise_detail})" if noise_detail else "")
+    shown = follows if follows is not None else next((s for s in structure if s.significant), None)
+    if shown is not None:
+        why = (f"The residual follows {shown.name}: a smooth function of {'them' if len(shown.variables) > 1 else 'it'} explains "
+               f"{100 * shown.explained:.0f}% of the held-out residual variance (p = {shown.p_adjusted:.1e}).")
+        out.append(with_command(why, action))
+    if recommended:
+        best = recommended[0]
+        out.append(with_command(best.message[0].upper() + best.message[1:] + f": add it (cross-validated RMS {cv_rms:.4f} -> {best.rms_if_added_mm:.4f} mm, {floor_words}).", action))
+    elif together is not None:
+        out.append(with_command(f"No catalog effect is enough alone, but {together.effect} together bring the cross-validated RMS {cv_rms:.4f} -> "
+                                f"{together.rms_if_added_mm:.4f} mm, {100 * together.progress:.0f}% of the way to the {floor_words}: add them.", action))
+    elif at_floor:
+        out.append(with_command(f"No candidate explains the residual beyond noise. Cross-validated RMS {cv_rms:.4f} mm against a {floor_words} "
+                                f"({cv_rms / floor:.2f} x): the model is as good as the data allow; use it.", action))
     else:
-        text = (
-            f"No candidate explains the residual beyond noise. Cross-validated RMS {cv_rms:.4f} mm against a noise floor of "
-            f"{floor:.4f} mm ({cv_rms / floor:.2f} x)"
-        )
-        text += ": the model is as good as the data allow; use it." if at_floor else ": what is left is not in the catalog; learn it with a data-driven predictor."
+        best = max(ranked, key=lambda c: c.progress, default=None)
+        best_words = f" (the best, {best.effect}, goes {100 * best.progress:.0f}% of the way in {100 * best.stability:.0f}% of resamples)" if best else ""
+        text = (f"No candidate explains the residual beyond noise: no catalog effect, alone or with others, brings the cross-validated RMS "
+                f"{cv_rms:.4f} mm {100 * MIN_PROGRESS:.0f}% of the way to the {floor_words} in {100 * MIN_STABILITY:.0f}% of resamples{best_words}. "
+                "The catalog is exhausted")
+        if follows is not None:
+            text += (f": what is left follows {follows.name} ({100 * follows.explained:.0f}% of the held-out residual variance is a smooth "
+                     f"function of {'them' if len(follows.variables) > 1 else 'it'}). Write the effect that depends on "
+                     f"{' and '.join(follows.variables)} outside the package, then fit with it.")
+        else:
+            text += ": what is left follows none of the measured variables, alone or in pairs."
         out.append(with_command(text, action))
-    if not structured:
-        out.append(with_command("No variable shows structure in the residual beyond chance.", action))
+        if follows is not None:
+            out.append(with_command(f"{OTHER_WAY} learn what is left with a data-driven predictor on top of the physics "
+                                    "(it knows no physics and holds only inside the measured workspace).", files.predictor_command(model)))
+    if not any(s.significant for s in structure):
+        out.append(with_command("No variable, alone or in pairs, shows structure in the residual beyond chance.", action))
     return out
 
 
@@ -357,65 +406,80 @@ def ladder(
     *,
     folds: int = 5,
     seed: int = 0,
-    noise_mm: float = 0.02,
+    noise_mm: float | None = None,
     validation: MeasurementSet | None = None,
     max_steps: int = 8,
     reregister: bool = False,
-    progress=lambda msg: None,
+    progress=silent,
 ) -> list[dict]:
     """Fit a sequence of models, each adding the next effect; report the error per step.
 
     ``steps``: the effects in order; None lets diagnose choose the next one each time,
     starting from the nominal robot (with a base frame if the data are far from it), and
-    stops when no candidate is significant. ``reregister``: the validation set was measured
+    stops when no candidate is recommended. ``reregister``: the validation set was measured
     from another tracker position; its measurement frame is registered anew (6 DOF, every
-    other parameter kept) before each step's error is taken.
+    other parameter kept) before each step's error is taken. The nominal row is the
+    nominal robot registered onto the data, as fit, simulate and the report give it.
     """
+    with small_matrices(3 * len(meas)):
+        return _ladder(robot, tool_mm, meas, steps, folds, seed, noise_mm, validation, max_steps, reregister, progress)
+
+
+def _ladder(robot, tool_mm, meas, steps, folds, seed, noise_mm, validation, max_steps, reregister, progress) -> list[dict]:
     rows = []
     current = EffectSum()
-    model = ErrorModel.create(robot, tool_mm, current)
+    fold_of = fold_assignment(len(meas), folds, seed)
+    total = (len(steps) if steps is not None else max_steps) + 1
 
-    def record(label: str, model: ErrorModel, cv_rms: float):
-        row = {"step": len(rows), "added": label, "effects": model.effects.spec(), "cv_rms_mm": cv_rms, "train_rms_mm": Stats.of(residuals(model, meas)).rms_mm}
+    def record(label: str, model: ErrorModel, cv_rms: float, train_model: ErrorModel | None = None):
+        row = {"step": len(rows), "added": label, "effects": model.effects.spec(), "cv_rms_mm": cv_rms,
+               "train_rms_mm": Stats.of(residuals(train_model or model, meas)).rms_mm}
         if validation is not None:
-            val_st = Stats.of(residuals(refit_base(model, validation) if reregister else model, validation))
+            val_st = Stats.of(residuals(refit_base(model, validation) if reregister or train_model is not None else model, validation))
             row["val_rms_mm"], row["val_mean_mm"], row["val_max_mm"] = val_st.rms_mm, val_st.mean_mm, val_st.max_mm
         rows.append(row)
 
-    nominal_err = residuals(model, meas)
-    record("nominal", model, float(np.sqrt(np.mean(np.sum(nominal_err**2, axis=1)))))
+    model = ErrorModel.create(robot, tool_mm, current)
+    registered = nominal_model(robot, tool_mm, meas, registered=True)
+    record("nominal", model, Stats.of(residuals(registered, meas)).rms_mm, train_model=registered)
     planned = list(steps) if steps is not None else None
     while len(rows) <= max_steps:
         if planned is not None:
             nxt = planned.pop(0) if planned else None
         else:
-            progress(f"step {len(rows)}: diagnosing")
+            report(progress, f"step {len(rows)}: diagnosing", len(rows), total)
             nxt = _diagnosed_step(model, meas, folds, seed, noise_mm, progress)
         if nxt is None:
             break
-        progress(f"step {len(rows)}: adding {nxt}")
+        report(progress, f"step {len(rows)}: adding {nxt}", len(rows), total)
         current = current + parse_effects(nxt)
         result = fit(robot, tool_mm, current, meas, cv_folds=0, prior=model if len(model.params) else None, seed=seed)
         current = result.model.effects
-        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
         model = result.model
-        record(_step_label(nxt, current), model, float(np.sqrt(np.mean(np.sum(err**2, axis=1)))))
+        held = held_out_miss(linearise(model, meas, free=inside_bounds(model, free_mask(result))), fold_of)
+        record(_step_label(nxt, current), model, rms(held))
+    noise = noise_floors.given(noise_mm) if noise_mm is not None else noise_floors.estimate(meas, -residuals(model, meas), len(model.params))
+    for row in rows:
+        row["noise_floor_mm"] = noise.floor_mm
+    report(progress, "done", total, total)
     return rows
 
 
-def _diagnosed_step(model: ErrorModel, meas: MeasurementSet, folds: int, seed: int, noise_mm: float, progress) -> str | None:
+def _diagnosed_step(model: ErrorModel, meas: MeasurementSet, folds: int, seed: int, noise_mm: float | None, progress) -> str | None:
     """The next effect for the ladder: the best first step from the nominal robot, else the
-    most significant candidate diagnose finds (None when none is significant)."""
+    recommended candidate (or combination) diagnose finds (None when there is none)."""
     if not len(model.effects):
         return _first_step(model.robot, model.tool_mm, meas, folds, seed)
-    diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm, progress=progress)
+    diag = diagnose(model, meas, folds=folds, seed=seed, noise_mm=noise_mm)
     best = [c for c in diag.candidates if c.significant]
-    return best[0].effect if best else None
+    if best:
+        return best[0].effect
+    return diag.combination.effect if diag.combination is not None and diag.combination.significant else None
 
 
 def _step_label(step: str, effects) -> str:
     """A ladder step as fitted: a term family without options shows the terms the fit chose."""
-    if "[" in step:
+    if "[" in step or "," in step:
         return step
     effect = effects.get(step)
     return step if effect is None else effect.spec()
@@ -424,11 +488,11 @@ def _step_label(step: str, effects) -> str:
 def _first_step(robot, tool_mm, meas, folds, seed) -> str:
     """From the nominal robot, the single effect with the lowest cross-validated error
     (among the effects the catalog marks as first steps: frames and geometry)."""
+    fold_of = fold_assignment(len(meas), folds, seed)
     best, best_rms = None, np.inf
     for name in [name for name, cls in CATALOG.items() if cls.first_step]:
         result = fit(robot, tool_mm, parse_effects(name), meas, cv_folds=0, seed=seed)
-        err = cross_validation_errors(result.model, meas, free_mask(result), folds, seed=seed)
-        rms = float(np.sqrt(np.mean(np.sum(err**2, axis=1))))
-        if rms < best_rms:
-            best, best_rms = name, rms
+        held = rms(held_out_miss(linearise(result.model, meas, free=inside_bounds(result.model, free_mask(result))), fold_of))
+        if held < best_rms:
+            best, best_rms = name, held
     return best

@@ -26,6 +26,7 @@ from .frames import kabsch
 from .measurements import MeasurementSet
 from .predictor_plugins import PREDICTORS
 from .robots import RobotModel
+from .threads import small_matrices
 
 RANK_TOL = 1e-7
 OUTLIER_SIGMAS = 4.0  # per-pose 3-D residual beyond 4 robust sigmas (chi, 3 dof: p < 0.2 %)
@@ -195,8 +196,14 @@ def fit(
     """Identify the parameters of ``effects`` from a measurement set.
 
     ``prior``: a previously fitted model whose parameter values (and base registration)
-    start this fit, e.g. to extend a model by one effect.
+    start this fit, e.g. to extend a model by one effect. BLAS runs one thread unless the
+    set is large (``postproc.threads``).
     """
+    with small_matrices(3 * len(meas)):
+        return _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress)
+
+
+def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -> FitResult:
     say = progress or (lambda msg: None)
     coverage = Coverage.of(robot, tool_mm, meas.q_deg)  # the model records the region it was fitted on
     effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say)
@@ -204,11 +211,13 @@ def fit(
     prep = model.prepare(meas)
     notes.extend(prep.notes)
     framed = bool(effects.of_kind("base"))
-    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=framed), meas))
+    # One nominal error for a data set everywhere (simulate, fit, report, ladder): the nominal robot registered onto it.
+    before = Stats.of(residuals(nominal_model(robot, tool_mm, meas, registered=True), meas))
     if not model.params:
         # --effects none: the nominal model, nothing to identify (a predictor may sit on top).
-        return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=before,
-                         cv_rms_mm=before.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
+        as_saved = Stats.of(residuals(model, meas))  # unregistered: what evaluate gives for this model
+        return FitResult(model=model, std={}, fixed={}, outliers=(), before=before, after=as_saved,
+                         cv_rms_mm=as_saved.rms_mm if cv_folds else None, approach_inferred=False, notes=tuple(notes))
     if framed and prior is None:
         model = register_base(model, meas, prep)
 

@@ -3,6 +3,7 @@ it, no two findings contradict each other, and the nominal RMS is one number eve
 
 from __future__ import annotations
 
+import json
 import re
 import shlex
 
@@ -11,10 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.diagnose import Breakdown, Candidate, Files, _findings, split_command
+from postproc.diagnose import OTHER_WAY, Candidate, Files, _findings, split_command
 from postproc.effects import parse_effects
 from postproc.errormodel import ErrorModel
 from postproc.model_io import load_model
+from postproc.structure import Structure
 
 runner = CliRunner()
 FLOOR = 0.02 * np.sqrt(3)
@@ -25,8 +27,8 @@ def _candidate(spec, explained, significant):
     return Candidate(spec, explained, 0.1, 0.01, 0.01 if significant else 0.5, significant, f"{spec} explains {100 * explained:.0f}% of them{verdict}")
 
 
-def _breakdown(significant):
-    return Breakdown("q3", "joint 3 angle", "deg", (0, 1, 2), (0.5, 1.5), (10, 10), ((0.1, 0, 0), (-0.1, 0, 0)), (0.1, 0.1), 0.3, 1e-5, 1e-5 if significant else 0.5)
+def _breakdown(significant, variables=("q3",)):
+    return Structure(variables, 0.3, 0.31, 1e-5, 1e-5 if significant else 0.5)
 
 
 @pytest.fixture(scope="module")
@@ -41,6 +43,7 @@ CASES = {
     "none significant, far from floor": ([_breakdown(True)], [_candidate("base_tilt", 0.01, False)], 0.3),
     "none significant, at the floor": ([_breakdown(True)], [_candidate("base_tilt", 0.01, False)], 1.05 * FLOOR),
     "no structure": ([_breakdown(False)], [_candidate("thermal", 0.0, False)], 1.0 * FLOOR),
+    "catalog exhausted": ([_breakdown(True, ("tau2", "s2"))], [_candidate("backlash", 0.05, False)], 0.3),
 }
 
 
@@ -48,7 +51,13 @@ CASES = {
 def test_every_finding_ends_with_a_command_and_none_contradicts(case, model):
     breakdowns, ranked, cv = CASES[case]
     files = Files("my model.json", "A.csv")
-    findings = _findings(breakdowns, ranked, cv, FLOOR, files, model)
+    exhausted = case == "catalog exhausted"
+    findings = _findings(breakdowns, ranked, cv, FLOOR, files, model, follows=breakdowns[0] if exhausted else None, exhausted=exhausted)
+    if exhausted:  # the other way, a data-driven predictor, is offered in its own finding with its own command
+        (other,) = [f for f in findings if f.startswith(OTHER_WAY)]
+        assert "--predictor gpr" in split_command(other)[1]
+        findings = [f for f in findings if f is not other]
+        assert "catalog is exhausted" in findings[-1] and "tau2 x s2" in findings[-1]
     commands = set()
     for finding in findings:
         text, command = split_command(finding)
@@ -61,7 +70,9 @@ def test_every_finding_ends_with_a_command_and_none_contradicts(case, model):
     assert len(commands) == 1, commands  # all findings point the same way
     (command,) = commands
     significant = [c for c in ranked if c.significant]
-    if significant:
+    if exhausted:
+        assert command == "postproc effect new tau2_s2_effect"
+    elif significant:
         assert command == f"postproc fit A.csv --from 'my model.json' --effects +{significant[0].effect} --cv 0 -o 'my model_next.json'"
     elif cv < 1.25 * FLOOR:
         assert command.startswith("postproc compensate PROGRAM --model 'my model.json'")
@@ -87,7 +98,10 @@ def test_the_cli_finding_command_runs_and_adds_the_effect(tmp_path):
     diag = runner.invoke(app, ["diagnose", str(model_path), str(csv), "--folds", "3", "--report", str(report)])
     assert diag.exit_code == 0, diag.output
     runs = [line.split("run: ", 1)[1] for line in diag.output.splitlines() if line.strip().startswith("run: ")]
-    assert runs and len(set(runs)) == 1
+    assert len(runs) == 1  # the suggested command, printed once
+    ladder = runner.invoke(app, ["ladder", str(csv), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "base_frame", "--json"])
+    assert ladder.exit_code == 0, ladder.output
+    assert f"{json.loads(ladder.stdout)['steps'][0]['train_rms_mm']:.4f}" == nominal_sim  # the ladder's step 0: the same nominal RMS
     assert runs[0] == f"postproc fit {csv} --from {model_path} --effects +backlash --cv 0 -o {tmp_path / 'm_next.json'}"
     page = report.read_text()
     assert f"<td>{nominal_fit}</td>" in page  # the report's nominal row: the same number

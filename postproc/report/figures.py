@@ -17,6 +17,11 @@ MEASURED, MODEL, RESIDUAL = "#7f7f7f", "#1f77b4", "#d62728"
 BEFORE, AFTER = "#ff7f0e", "#1f77b4"
 
 
+#: arrow widths (share of the panel) of the layers drawn on top of each other: the one
+#: below wider, so at hundreds of poses both stay visible
+LAYER_WIDTHS = (0.0055, 0.0025)
+
+
 def _quiver_views(axes, nominal_mm, layers, gain, title_suffix):
     radius = np.hypot(nominal_mm[:, 0], nominal_mm[:, 1])
     views = (
@@ -25,13 +30,13 @@ def _quiver_views(axes, nominal_mm, layers, gain, title_suffix):
     )
     for v, (ax, (title, px, py, xl, yl)) in enumerate(zip(axes, views)):
         xs, ys = [px], [py]
-        for err, colour, label in layers:
+        for layer, (err, colour, label) in enumerate(layers):
             if v == 0:
                 ux, uy = err[:, 0], err[:, 1]
             else:  # radial component against height
                 ux = (err[:, 0] * nominal_mm[:, 0] + err[:, 1] * nominal_mm[:, 1]) / np.maximum(radius, 1e-9)
                 uy = err[:, 2]
-            ax.quiver(px, py, ux * gain, uy * gain, angles="xy", scale_units="xy", scale=1, color=colour, width=0.003, alpha=0.8, label=label)
+            ax.quiver(px, py, ux * gain, uy * gain, angles="xy", scale_units="xy", scale=1, color=colour, width=LAYER_WIDTHS[layer] if len(layers) > 1 else 0.003, alpha=0.55 if layer == 0 and len(layers) > 1 else 0.9, label=label)
             xs.append(px + ux * gain)
             ys.append(py + uy * gain)
         ax.set_title(f"{title}: {title_suffix}", fontsize=10)
@@ -39,15 +44,19 @@ def _quiver_views(axes, nominal_mm, layers, gain, title_suffix):
         ax.set_ylabel(yl)
         _limits_around(ax, np.concatenate(xs), np.concatenate(ys))
         ax.grid(alpha=0.3)
-    axes[0].legend(loc="upper left", fontsize=8, framealpha=0.9)
+    axes[0].figure.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center" if len(layers) > 1 else "outside lower right", ncol=len(layers), fontsize=9)
+
+
+PANEL_RATIO = 0.8
 
 
 def _limits_around(ax, x, y, margin: float = 0.05):
     """Equal-scale limits that hold every arrow's base and tip (quiver does not widen the
     view for its arrows, so without this the arrows at the edge are cut off)."""
     half_x, half_y = np.ptp(x) * (0.5 + margin), np.ptp(y) * (0.5 + margin)
-    least = max(0.3 * max(half_x, half_y), 0.5)  # no strip-thin panel
-    half_x, half_y = max(half_x, least), max(half_y, least)
+    # Widen the shorter side to the panel's own shape (height/width about 0.8 in the 2 x 2
+    # grid) so an equal-scale view fills its panel instead of leaving a thin strip.
+    half_x, half_y = max(half_x, half_y / PANEL_RATIO, 0.5), max(half_y, half_x * PANEL_RATIO, 0.5)
     cx, cy = (x.min() + x.max()) / 2, (y.min() + y.max()) / 2
     ax.set_xlim(cx - half_x, cx + half_x)
     ax.set_ylim(cy - half_y, cy + half_y)
@@ -55,9 +64,11 @@ def _limits_around(ax, x, y, margin: float = 0.05):
 
 
 def _gain(nominal_mm, err):
-    """Arrow gain so the largest arrow spans 8 % of the workspace."""
+    """Arrow gain so a long arrow (90th percentile) spans about the spacing between poses
+    (at most 8 % of the workspace): at hundreds of poses the arrows do not hide each other."""
     span = max(np.ptp(nominal_mm, axis=0).max(), 1.0)
-    return 0.08 * span / max(np.linalg.norm(err, axis=1).max(), 1e-9)
+    spacing = span / np.sqrt(max(len(nominal_mm), 1))
+    return min(0.08 * span, 1.2 * spacing) / max(np.percentile(np.linalg.norm(err, axis=1), 90), 1e-9)
 
 
 def error_vectors(nominal_mm: np.ndarray, measured_err: np.ndarray, model_err: np.ndarray, residual: np.ndarray):

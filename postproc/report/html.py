@@ -10,7 +10,9 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import kinematics as kin
+from ..structure import smooth_fit
 from . import figures
+from .partial_residual import partial_residual
 
 
 def _png(fig) -> str:
@@ -36,11 +38,11 @@ figure { margin: 1em 0; } img { max-width: 100%; } figcaption { color: #555; fon
 
 
 def _nominal_stats(model, meas):
-    """The nominal robot's error as ``postproc fit`` and ``postproc simulate`` print it:
-    rigidly registered onto the data when the model has a base frame."""
+    """The nominal robot's error as ``postproc fit``, ``simulate`` and ``ladder`` print it:
+    rigidly registered onto the data (6-DOF best fit), whatever the model's effects."""
     from ..identify import Stats, nominal_model, residuals
 
-    return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=bool(model.effects.of_kind("base"))), meas))
+    return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=True), meas))
 
 
 def _finding(finding: str) -> str:
@@ -84,11 +86,14 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
         parts.append(f"<tr class='{'sig' if b.significant else ''}'><td class='l'>{html.escape(b.label)}</td><td>{100 * b.eta2:.1f}%</td><td>{b.p_adjusted:.1e}</td><td>{biggest:.4f}</td><td class='l'>{verdict}</td></tr>")
     parts.append("</table>")
     parts.append(_img(figures.residual_vs_variables(diagnosis.breakdowns, diagnosis.variables, diagnosis.residual_mm), "Residual against each variable; lines are binned means, red titles are significant after Holm correction."))
+    parts.extend(_follows_section(diagnosis))
     parts.append("<h2>What is missing</h2>")
     if diagnosis.candidates:
-        parts.append("<table><tr><th class='l'>candidate effect</th><th>explained (held out)</th><th>CV RMS if added (mm)</th><th>p (Holm)</th><th class='l'>in plain words</th></tr>")
-        for c in diagnosis.candidates:
-            parts.append(f"<tr class='{'sig' if c.significant else ''}'><td class='l'><code>{html.escape(c.effect)}</code></td><td>{100 * c.explained:.1f}%</td><td>{c.rms_if_added_mm:.4f}</td><td>{c.p_adjusted:.1e}</td><td class='l'>{html.escape(c.message)}</td></tr>")
+        parts.append("<p>Recommended only when it brings the cross-validated RMS at least 20% of the way to the noise floor in at least 80% of bootstrap resamples.</p>")
+        parts.append("<table><tr><th class='l'>candidate effect</th><th>explained (held out)</th><th>CV RMS if added (mm)</th><th>way to floor</th><th>stability</th><th>p (Holm)</th><th class='l'>in plain words</th></tr>")
+        for c in list(diagnosis.candidates) + ([diagnosis.combination] if diagnosis.combination is not None else []):
+            parts.append(f"<tr class='{'sig' if c.significant else ''}'><td class='l'><code>{html.escape(c.effect)}</code></td><td>{100 * c.explained:.1f}%</td><td>{c.rms_if_added_mm:.4f}</td>"
+                         f"<td>{100 * c.progress:.0f}%</td><td>{100 * c.stability:.0f}%</td><td>{c.p_adjusted:.1e}</td><td class='l'>{html.escape(c.message)}</td></tr>")
         parts.append("</table>")
         parts.append(_img(figures.candidates_chart(list(diagnosis.candidates), diagnosis.cv_rms_mm, diagnosis.noise_floor_mm), "Cross-validated RMS with each candidate added."))
     else:
@@ -98,6 +103,22 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
         parts.append(_img(figures.ladder_chart(ladder_rows, diagnosis.noise_floor_mm), "Error per step: each step adds one effect."))
     parts.append("</body></html>")
     return "\n".join(parts)
+
+
+def _follows_section(diagnosis) -> list[str]:
+    """What the residual follows: the strongest variables and pairs, and the partial-residual
+    plot of the one the verdict names."""
+    shown = [st for st in diagnosis.structure if st.significant][:8]
+    if not shown:
+        return ["<h2>What the residual follows</h2><p>No variable, alone or in pairs, beyond chance.</p>"]
+    out = ["<h2>What the residual follows</h2><table><tr><th class='l'>variable(s)</th><th>explained by a smooth function (held out)</th><th>p (Holm)</th></tr>"]
+    out.extend(f"<tr><td class='l'><code>{html.escape(st.name)}</code></td><td>{100 * st.explained:.1f}%</td><td>{st.p_adjusted:.1e}</td></tr>" for st in shown)
+    out.append("</table>")
+    if diagnosis.follows is not None:
+        fitted = smooth_fit(diagnosis.variables, diagnosis.follows.variables, diagnosis.residual_mm)
+        out.append(_img(partial_residual(diagnosis.variables, diagnosis.follows, diagnosis.residual_mm, fitted),
+                        f"Partial residual: the residual against {diagnosis.follows.name}, with the smooth function of them."))
+    return out
 
 
 def ladder_table(rows) -> str:
