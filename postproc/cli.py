@@ -28,6 +28,7 @@ from .kinematics import ik as _ik
 from .kinematics import within_limits
 from .plugin_option import with_plugins
 from .program_content import require_program
+from .progress import ProgressLine
 from .robots import available_robots, load_robot
 
 app = typer.Typer(
@@ -271,7 +272,6 @@ def fit_cmd(
 
 def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
     from .effects import parse_effects
-    from .progress import ProgressLine
     from .identify import fit as run_fit
     from .predictor_plugins import predictor_names
     from .model_io import load_model, save_model
@@ -391,7 +391,6 @@ def validate_cmd(
     """Error on held-out poses under a named protocol, with each test pose's distance to the training poses."""
     from . import validate as protocols
     from .effects import parse_effects
-    from .progress_lines import progress_reporter
 
     if protocol not in protocols.PROTOCOLS:
         raise InputError(f"--protocol: '{protocol}' is not one of {', '.join(protocols.PROTOCOLS)}")
@@ -407,7 +406,7 @@ def validate_cmd(
     spec = protocols.FitSpec(robot_model, _floats(tool, 3, "--tool"), chosen, predictor, seed=seed)
     data = _load_measurements(meas, robot_model, drop_invalid)
     other_data = _load_measurements(other, robot_model, drop_invalid) if other is not None else None
-    with progress_reporter(err, 'validating') as say:
+    with ProgressLine("validate", console=err, disable=json_out) as say:
         if protocol == "random":
             result = protocols.run_random(spec, data, fraction, seed, say)
         elif protocol == "points":
@@ -440,7 +439,6 @@ def diagnose_cmd(
     from .diagnose import Files, diagnose
     from .measurements import write_text_atomic
     from .model_io import load_model
-    from .progress import ProgressLine
 
     if folds < 2:
         raise InputError("--folds must be at least 2")
@@ -518,7 +516,6 @@ def ladder_cmd(
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
     from .diagnose import ladder
-    from .progress import ProgressLine
     from .effects import _split_top_level, parse_effects
 
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
@@ -646,7 +643,6 @@ def simulate_cmd(
     robot_model, tool_mm = load_robot(robot), _floats(tool, 3, "--tool")
     rng = np.random.default_rng(seed)
     truth = random_truth(robot_model, tool_mm, chosen, rng, magnitude=magnitude)
-    from .progress import ProgressLine
 
     with ProgressLine("simulate", console=err) as progress:
         progress(f"sampling {n:,} poses", 0, 2)
@@ -696,7 +692,6 @@ def suggest_poses_cmd(
     program_language: Optional[str] = typer.Option(None, "--program-language", help="Language of --program-out (default: from its extension)."),
 ):
     """Choose the poses to measure that identify the model best (optimal experiment design)."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .effects import parse_effects
     from .model_io import load_model
@@ -735,11 +730,9 @@ def suggest_poses_cmd(
         cands = generate(robot_model, tool_mm, n_candidates, parse_region(workspace, region), rng, track, id_prefix=f"s{seed}-")
     done = _load_measurements(measured, robot_model) if measured is not None else None
     targets = program_targets(program, design_for, dialect) if program is not None else None
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-        task = bar.add_task("choosing poses", total=None)
+    with ProgressLine("suggest-poses", console=err, disable=json_out) as progress:
         result = suggest_poses(design_for, cands, n, criterion=criterion, targets_q=targets, measured=done, random_share=random_share,
-                               noise_mm=noise, seed=seed,
-                               progress=lambda msg: bar.update(task, description=msg))
+                               noise_mm=noise, seed=seed, progress=progress)
     title = f"{robot_model.name}, {design_for.effects.spec()}: {n} poses from {len(cands)} candidates"
     written = write_outputs(result, cands, output, program_out, program_language, plot, title)
     if json_out:
@@ -851,7 +844,6 @@ def compensate_cmd(
 
     for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
         log.print(f"note: {note} (--allow-model-mismatch)")
-    from .progress import ProgressLine
 
     with ProgressLine("compensating", console=err) as progress:
         options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=progress,
@@ -947,13 +939,12 @@ def _is_page(report: Optional[Path]) -> bool:
 
 def _write_page(report: Path, rep, summary: dict, model, program: str, model_path: Path) -> None:
     """--report PAGE.html (its figures take a few seconds: a spinner meanwhile)."""
-    from rich.progress import Progress, SpinnerColumn, TextColumn, TimeElapsedColumn
 
     from .measurements import write_text_atomic
     from .report.compensation import compensation_report
 
-    with Progress(SpinnerColumn(), TextColumn("{task.description}"), TimeElapsedColumn(), console=err, transient=True) as bar:
-        bar.add_task(f"writing the report page {report}", total=None)
+    with ProgressLine("report", console=err) as progress:
+        progress(f"writing the report page {report}")
         write_text_atomic(report, compensation_report(rep, summary, model, program, str(model_path)))
 
 
@@ -1017,7 +1008,6 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None
 
 def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
     """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
-    from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
     from .batch import run_batch
     from .measurements import write_text_atomic
@@ -1030,10 +1020,16 @@ def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect
         raise InputError("--jobs must be at least 1")
     if "-" in programs:
         raise InputError("standard input (-) is for a single program with -o")
-    with Progress(TextColumn("compensating"), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=err, transient=True) as bar:
-        task = bar.add_task("programs", total=len(programs))
+    finished = []
+    with ProgressLine("compensating", console=err) as progress:
+        progress("programs", 0, len(programs))
+
+        def one_done(result) -> None:
+            finished.append(result)
+            progress("programs", len(finished), len(programs))
+
         results = run_batch([Path(p) for p in programs], model, out_dir, options, jobs=jobs, scheduler=scheduler, dialect=dialect,
-                            on_done=lambda r: bar.advance(task))
+                            on_done=one_done)
     table = Table(title=f"compensate: {len(programs)} programs -> {out_dir}", show_edge=False)
     for col in ("program", "status", "targets", "RMS before (mm)", "RMS after (mm)", "message"):
         table.add_column(col, justify="right" if "RMS" in col or col == "targets" else "left")
@@ -1296,8 +1292,8 @@ def place_cmd(
     axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
     tp = parse_program(program, dialect)
     problem, sources = _place_problem(tp, load_robot(robot), force, cut, stock, model, singular_margin, "keep" if keep_conf else "rederive")
-    with report.progress_reporter(err, "placements") as progress:
-        result = pl.search(problem, *axes, z, refine=refine, progress=progress)
+    with ProgressLine("place", console=err) as progress:
+        result = pl.search(problem, *axes, z, refine=refine, progress=report.counted(progress))
     frame0, cur = report.current_placement(tp, problem, result, z)
     doc = {"best": None, **report.summary(result, problem), "current": cur, "reduction_percent": None, **sources}
     if not np.isfinite(result.best_mm):
@@ -1436,7 +1432,6 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
     from .compensate import CompensationError
-    from .progress import ProgressLine
     from .stream import StreamFallback, compensate_streamed, wants_stream
 
     if not wants_stream(program, mode):

@@ -3,12 +3,7 @@ the infeasible candidates counted by reason, and the summary lines."""
 
 from __future__ import annotations
 
-import sys
-import time
-from contextlib import contextmanager
-
 import numpy as np
-from rich.progress import BarColumn, MofNCompleteColumn, Progress, TextColumn, TimeElapsedColumn
 
 from . import placement as pl
 from .place_program import current_frame, frame_xy_theta
@@ -76,25 +71,6 @@ def lines(doc: dict, z: float) -> list[str]:
     return out
 
 
-PLAIN_EVERY_S = 10.0  # seconds between progress lines when stderr is not a terminal
-
-
-@contextmanager
-def progress_reporter(console, what: str):
-    """A ``progress(done, total)`` callback: a rich bar on a terminal, else a plain line on
-    stderr every PLAIN_EVERY_S seconds."""
-    if console.is_terminal:
-        with Progress(TextColumn(what), BarColumn(), MofNCompleteColumn(), TimeElapsedColumn(), console=console, transient=True) as bar:
-            task = bar.add_task(what, total=None)
-            yield lambda done, total: bar.update(task, completed=done, total=total)
-        return
-    start = last = time.monotonic()
-
-    def plain(done, total):
-        nonlocal last
-        now = time.monotonic()
-        if now - last >= PLAIN_EVERY_S:
-            last = now
-            print(f"{what}: {done} of {total} evaluated ({now - start:.0f} s)", file=sys.stderr, flush=True)
-
-    yield plain
+def counted(progress):
+    """``placement.search``'s ``progress(done, total)`` as lines of a ``ProgressLine``."""
+    return lambda done, total: progress("placements evaluated", done, total)

@@ -179,19 +179,16 @@ def test_compensate_reads_the_placed_program(tmp_path):
     assert max(p["before_mm"] for p in points) > 0.01  # the model predicts an error there: the poses were read
 
 
-def test_progress_lines_off_a_terminal(monkeypatch, capsys):
-    """Off a terminal the search says how far it is on stderr (every PLAIN_EVERY_S seconds)."""
-    import io
-
-    from rich.console import Console
-
+def test_progress_lines_off_a_terminal(capsys):
+    """Off a terminal the search says how far it is on stderr (a plain line every few seconds)."""
     from postproc import place_report
+    from postproc.progress import ProgressLine
 
-    monkeypatch.setattr(place_report, "PLAIN_EVERY_S", 0.0)
     problem = problem_from_program(parse_program(FACE_SRC), load_robot(ROBOT), force_tool=FORCE)
-    with place_report.progress_reporter(Console(file=io.StringIO()), "placements") as progress:
-        pl.search(problem, [900.0, 1000], [-500.0], [90.0], 1170.0, refine=False, chunk_poses=len(problem.local_tcp), progress=progress)
-    assert capsys.readouterr().err.splitlines()[-1].startswith("placements: 2 of 2 evaluated")
+    with ProgressLine("place", terminal=False, every_s=0.0) as progress:
+        pl.search(problem, [900.0, 1000], [-500.0], [90.0], 1170.0, refine=False, chunk_poses=len(problem.local_tcp),
+                  progress=place_report.counted(progress))
+    assert capsys.readouterr().err.splitlines()[-1].startswith("place: placements evaluated [2/2]")
 
 
 @pytest.fixture(scope="module")
