@@ -462,7 +462,7 @@ def diagnose_cmd(
 def _print_diagnosis(result, error_model) -> None:
     """The diagnosis on one screen; each suggested command printed once, after its findings."""
     from .candidates import MIN_PROGRESS, MIN_STABILITY
-    from .diagnose import split_command
+    from .diagnose import grouped_findings
 
     st = result.stats
     out.print(f"model {error_model.effects.spec()} on {st.n} poses: RMS {st.rms_mm:.4f} mm, mean {st.mean_mm:.4f}, max {st.max_mm:.4f} "
@@ -487,15 +487,11 @@ def _print_diagnosis(result, error_model) -> None:
         out.print(table)
     if result.catalog_exhausted:
         out.print("catalog exhausted" + (f": the residual follows {result.follows.name}" if result.follows is not None else ""), highlight=False)
-    previous = None
-    for finding in result.findings:
-        text, command = split_command(finding)
-        if previous is not None and command != previous:
-            out.print(f"    run: {previous}", highlight=False, soft_wrap=True)
-        out.print(f"- {text}", highlight=False)
-        previous = command or None
-    if previous:
-        out.print(f"    run: {previous}", highlight=False, soft_wrap=True)
+    for texts, command in grouped_findings(result.findings):
+        for text in texts:
+            out.print(f"- {text}", highlight=False)
+        if command:
+            out.print(f"    run: {command}", highlight=False, soft_wrap=True)
 
 
 @app.command("ladder")

@@ -338,6 +338,19 @@ def split_command(finding: str) -> tuple[str, str]:
     return (text, command) if text else (finding, "")
 
 
+def grouped_findings(findings) -> list[tuple[list[str], str]]:
+    """Findings in order, those in a row that end in the same command grouped, so each
+    command is printed once: ``[([text, ...], command), ...]`` (command "" for none)."""
+    groups: list[tuple[list[str], str]] = []
+    for finding in findings:
+        text, command = split_command(finding)
+        if groups and command and groups[-1][1] == command:
+            groups[-1][0].append(text)
+        else:
+            groups.append(([text], command))
+    return groups
+
+
 #: The finding that offers a data-driven predictor as the other way starts so.
 OTHER_WAY = "The other way:"
 

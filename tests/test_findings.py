@@ -109,3 +109,14 @@ def test_the_cli_finding_command_runs_and_adds_the_effect(tmp_path):
     again = runner.invoke(app, shlex.split(runs[0])[1:])
     assert again.exit_code == 0, again.output
     assert "backlash" in load_model(tmp_path / "m_next.json")[0].effects.names()
+
+
+def test_each_command_is_printed_once_after_the_findings_it_acts_on():
+    """Findings in a row that end in the same command are grouped (the CLI, the report and
+    the examples print the command once)."""
+    from postproc.diagnose import grouped_findings, with_command
+
+    findings = [with_command("a follows s1", "postproc fit +backlash"), with_command("backlash explains 93%", "postproc fit +backlash"),
+                "no command here", with_command("use it", "postproc compensate"), with_command("use it too", "postproc compensate")]
+    assert grouped_findings(findings) == [(["a follows s1", "backlash explains 93%"], "postproc fit +backlash"),
+                                          (["no command here"], ""), (["use it", "use it too"], "postproc compensate")]

@@ -45,13 +45,16 @@ def _nominal_stats(model, meas):
     return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=True), meas))
 
 
-def _finding(finding: str) -> str:
-    """A finding's words, then the command that acts on it, ready to copy."""
-    from ..diagnose import split_command
+def _findings(findings) -> str:
+    """The findings' words, each group followed once by the command that acts on it, ready to copy."""
+    from ..diagnose import grouped_findings
 
-    text, command = split_command(finding)
-    run = f"<br/>Run: <code class='cmd'>{html.escape(command)}</code>" if command else ""
-    return f"<div class='finding'>{html.escape(text)}{run}</div>"
+    parts = []
+    for texts, command in grouped_findings(findings):
+        words = "<br/>".join(html.escape(text) for text in texts)
+        run = f"<br/>Run: <code class='cmd'>{html.escape(command)}</code>" if command else ""
+        parts.append(f"<div class='finding'>{words}{run}</div>")
+    return "".join(parts)
 
 
 def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None = None) -> str:
@@ -71,7 +74,7 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
         # Each effect's own plain-language description (postproc.effects: Effect.summary).
         parts.append("<ul>" + "".join(f"<li><code>{html.escape(e.spec())}</code>: {html.escape(e.summary)}</li>" for e in model.effects) + "</ul>")
     parts.append("<h2>What to do</h2>")
-    parts.extend(_finding(f) for f in diagnosis.findings)
+    parts.append(_findings(diagnosis.findings))
     parts.append("<h2>Compare</h2><table><tr><th class='l'></th><th>RMS (mm)</th><th>mean (mm)</th><th>max (mm)</th><th>RMS x</th><th>RMS y</th><th>RMS z</th></tr>")
     nominal_st = _nominal_stats(model, meas)
     parts.append(f"<tr><td class='l'>nominal robot{' (registered onto the data)' if model.effects.of_kind('base') else ''}</td><td>{nominal_st.rms_mm:.4f}</td><td>{nominal_st.mean_mm:.4f}</td><td>{nominal_st.max_mm:.4f}</td>" + "".join(f"<td>{v:.4f}</td>" for v in nominal_st.rms_axis_mm) + "</tr>")
