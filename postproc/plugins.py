@@ -23,6 +23,7 @@ import importlib.metadata
 import importlib.util
 import inspect
 import os
+import shlex
 import sys
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -225,6 +226,12 @@ def loaded_plugin_files() -> list[str]:
     """The files of every plugin loaded from a path (for workers, which load them again)."""
     records = [plugin_record(obj) for obj in _registered()]
     return sorted({r.file for r in records if r is not None and r.file and not r.origin.startswith("entry point")})
+
+
+def plugin_arguments() -> str:
+    """' --plugins F' for each loaded plugin file (shell-quoted; '' when none): appended to the
+    commands postproc suggests, so that they load what this command loaded."""
+    return "".join(f" --plugins {shlex.quote(file)}" for file in loaded_plugin_files())
 
 
 def _registered() -> list:

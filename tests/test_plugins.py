@@ -12,6 +12,7 @@ import difflib
 import json
 import os
 import pickle
+import shlex
 import shutil
 import subprocess
 import sys
@@ -32,7 +33,7 @@ from postproc.errors import ModelFileError
 from postproc.identify import Stats, fit, fit_predictor, residuals
 from postproc.measurements import write_measurements
 from postproc.model_io import load_model, model_document, model_from_document, save_model
-from postproc.plugins import ENV, PluginError, load_plugins, loaded_plugin_files
+from postproc.plugins import ENV, PluginError, load_plugins, loaded_plugin_files, plugin_arguments
 from postproc.robots import load_robot
 from postproc.sim import parse_region, random_truth, sample_poses, simulate
 
@@ -42,9 +43,14 @@ PREDICTOR_FILE = PLUGINS / "user_mean_predictor.py"
 DIALECT_FILE = PLUGINS / "user_krl_alias.py"
 BROKEN_FILE = PLUGINS / "user_broken.py"
 ROBOT = "irb6660_205_190"  # the robot the bundled examples/data programs are placed for
+# The measured region around block_pass's targets (radius 1365..1371 mm, z 1270..1320 mm in the
+# robot's base frame): compensate refuses targets outside the region a model was measured in.
+PROGRAM_REGION = "theta1=-30:30;radius=1150:1450;z=1150:1450"
+KUKA = "kr160_r1570"  # a KRL program streamed in chunks is for a KUKA robot (compensate refuses another maker's model)
 TOOL = np.array([0.0, 0.0, 250.0])  # the bundled examples/data programs' tool
 NOISE_MM = 0.02  # per axis: the 3-D noise floor is NOISE_MM * sqrt(3)
 REPO = Path(__file__).resolve().parents[1]
+KRL = REPO / "examples/data/block_pass.src"  # a KRL program placed for ROBOT: compensated for it as RAPID (rapid_program)
 runner = CliRunner()
 
 
@@ -92,14 +98,14 @@ def _load(way: str, source: Path, group: str, tmp_path: Path, monkeypatch) -> No
         load_plugins(environ={})
 
 
-def _simulated(spec: str, n: int, seed: int):
-    """A simulated set; the user effect's true coefficient is set (0.6 deg/rad)."""
-    robot = load_robot(ROBOT)
+def _simulated(spec: str, n: int, seed: int, robot: str = ROBOT, region: str | None = None):
+    """A simulated set (in the cylinder ``region``; None: seed 001's); the user effect's true coefficient is set (0.6 deg/rad)."""
+    robot = load_robot(robot)
     rng = np.random.default_rng(seed)
     truth = random_truth(robot, TOOL, parse_effects(spec), rng)
     if "user_wrist_cable" in spec:
         truth = truth.with_values({"user_wrist_cable.k4": 0.6})
-    q = sample_poses(robot, TOOL, n, parse_region("cylinder", None), rng)
+    q = sample_poses(robot, TOOL, n, parse_region("cylinder", region), rng)
     return robot, truth, simulate(truth, q, rng, noise_mm=NOISE_MM)
 
 
@@ -178,6 +184,18 @@ def test_folder_and_idempotent_loading(tmp_path):
     assert loaded_plugin_files() == sorted(str((folder / f).resolve()) for f in (EFFECT_FILE.name, PREDICTOR_FILE.name))
 
 
+def test_plugin_arguments_repeat_the_loaded_files_for_suggested_commands(tmp_path):
+    assert plugin_arguments() == ""
+    spaced = tmp_path / "my plugins"
+    spaced.mkdir()
+    shutil.copy(EFFECT_FILE, spaced)
+    load_plugins([spaced / EFFECT_FILE.name, PREDICTOR_FILE], environ={})
+    arguments = plugin_arguments()
+    assert f"'{(spaced / EFFECT_FILE.name).resolve()}'" in arguments  # quoted for the shell
+    words = shlex.split(arguments)
+    assert words[::2] == ["--plugins"] * 2 and sorted(words[1::2]) == sorted(str(f.resolve()) for f in (spaced / EFFECT_FILE.name, PREDICTOR_FILE))
+
+
 def test_bad_plugins_are_input_errors(tmp_path):
     (tmp_path / "syntax.py").write_text("def broken(:\n")
     (tmp_path / "empty.py").write_text("X = 1\n")
@@ -197,29 +215,42 @@ def test_bad_plugins_are_input_errors(tmp_path):
 # ------------------------------------------------------------- model files
 
 
-@pytest.fixture
-def user_model(tmp_path):
+def _user_model(path: Path, robot: str, region: str | None) -> Path:
     """A model with the user effect, fitted and saved; the plugin then unloaded."""
     load_plugins([EFFECT_FILE], environ={})
-    robot, _, data = _simulated("geometric,user_wrist_cable", 120, seed=4)
-    result = fit(robot, TOOL, parse_effects("geometric,user_wrist_cable"), data, cv_folds=0)
-    path = tmp_path / "model.json"
+    fitted_robot, _, data = _simulated("geometric,user_wrist_cable", 120, seed=4, robot=robot, region=region)
+    result = fit(fitted_robot, TOOL, parse_effects("geometric,user_wrist_cable"), data, cv_folds=0)
     save_model(path, result.model, result)
     del CATALOG["user_wrist_cable"]
     return path
 
 
-def test_model_records_the_plugin_and_refuses_without_it(user_model, tmp_path):
+@pytest.fixture
+def user_model(tmp_path):
+    """The IRB6660 measured around block_pass's targets."""
+    return _user_model(tmp_path / "model.json", ROBOT, PROGRAM_REGION)
+
+
+@pytest.fixture
+def rapid_program(tmp_path):
+    """block_pass.src written in RAPID, the language of the ABB robot the model is for."""
+    path = tmp_path / "block_pass.mod"
+    res = runner.invoke(app, ["convert", str(KRL), "--to", "rapid", "-o", str(path)])
+    assert res.exit_code == 0, res.stderr
+    return path
+
+
+def test_model_records_the_plugin_and_refuses_without_it(user_model, rapid_program, tmp_path):
     doc = json.loads(user_model.read_text())
     [record] = doc["plugins"]
     assert record["name"] == "user_wrist_cable" and record["file"] == str(EFFECT_FILE.resolve())
     assert len(record["sha256"]) == 64
-    for command in (["evaluate", str(user_model), "x.csv"], ["compensate", str(REPO / "examples/data/block_pass.src"), "--model", str(user_model), "-o", str(tmp_path / "o.src")]):
+    for command in (["evaluate", str(user_model), "x.csv"], ["compensate", str(rapid_program), "--model", str(user_model), "-o", str(tmp_path / "o.mod")]):
         res = runner.invoke(app, command)
         assert res.exit_code == 2, res.stdout
         assert "plugin effect 'user_wrist_cable'" in res.stderr and f"--plugins {EFFECT_FILE.resolve()}" in res.stderr
         assert "POSTPROC_PLUGINS" in res.stderr
-    assert not (tmp_path / "o.src").exists()
+    assert not (tmp_path / "o.mod").exists()
 
 
 def test_model_refuses_a_changed_plugin(user_model, tmp_path):
@@ -235,22 +266,22 @@ def test_model_refuses_a_changed_plugin(user_model, tmp_path):
 
 
 @pytest.mark.slow
-def test_compensate_with_a_plugin_model_in_fresh_processes(user_model, tmp_path):
+def test_compensate_with_a_plugin_model_in_fresh_processes(user_model, rapid_program, tmp_path):
     """The command line (--plugins) and the CAM hook (POSTPROC_PLUGINS) in new interpreters."""
     env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
     env.pop(ENV, None)
-    program = REPO / "examples/data/block_pass.src"
-    cli = subprocess.run([sys.executable, "-c", "from postproc.cli import main; main()", "compensate", str(program), "--model", str(user_model),
-                          "-o", str(tmp_path / "out.src"), "--plugins", str(EFFECT_FILE)], env=env, capture_output=True, text=True, timeout=300)
+    cli = subprocess.run([sys.executable, "-c", "from postproc.cli import main; main()", "compensate", str(rapid_program), "--model", str(user_model),
+                          "-o", str(tmp_path / "out.mod"), "--plugins", str(EFFECT_FILE)], env=env, capture_output=True, text=True, timeout=300)
     assert cli.returncode == 0, cli.stderr
-    assert "5 of 5 targets compensated" in cli.stdout or "targets compensated" in cli.stdout
-    hook = ("import postproc, sys; files = postproc.post(open(sys.argv[1]).read(), sys.argv[2], to='krl', output='cam.src'); "
+    assert "6 of 6 targets compensated" in cli.stdout
+    # The CAM hook converts the KRL program to RAPID for the ABB robot and compensates it.
+    hook = ("import postproc, sys; files = postproc.post(open(sys.argv[1]).read(), sys.argv[2], to='rapid', output='cam.mod'); "
             "print(sorted(files))")
-    cam = subprocess.run([sys.executable, "-c", hook, str(program), str(user_model)], env={**env, ENV: str(EFFECT_FILE)},
+    cam = subprocess.run([sys.executable, "-c", hook, str(KRL), str(user_model)], env={**env, ENV: str(EFFECT_FILE)},
                          capture_output=True, text=True, timeout=300)
     assert cam.returncode == 0, cam.stderr
-    assert "cam.src" in cam.stdout
-    refused = subprocess.run([sys.executable, "-c", hook, str(program), str(user_model)], env=env, capture_output=True, text=True, timeout=300)
+    assert "cam.mod" in cam.stdout
+    refused = subprocess.run([sys.executable, "-c", hook, str(KRL), str(user_model)], env=env, capture_output=True, text=True, timeout=300)
     assert refused.returncode != 0 and "which is not loaded" in refused.stderr
 
 
@@ -311,32 +342,39 @@ def test_dialect_plugin_on_the_command_line(tmp_path):
 
 
 @pytest.mark.slow
-def test_batch_workers_load_the_plugins_the_command_was_given(user_model, tmp_path):
+def test_batch_workers_load_the_plugins_the_command_was_given(user_model, rapid_program, tmp_path):
     """Dask worker processes load the --plugins files before the model (batch.ModelPlugin)."""
     inputs, out_dir = tmp_path / "in", tmp_path / "out"
     inputs.mkdir()
     out_dir.mkdir()
-    programs = [shutil.copy(REPO / "examples/data/block_pass.src", inputs / f"pass{k}.src") for k in range(2)]
+    programs = [shutil.copy(rapid_program, inputs / f"pass{k}.mod") for k in range(2)]
     res = runner.invoke(app, ["compensate", *map(str, programs), "--model", str(user_model), "--out-dir", str(out_dir), "--jobs", "1",
                               "--plugins", str(EFFECT_FILE)])
     assert res.exit_code == 0, res.stdout + res.stderr
-    assert sorted(p.name for p in out_dir.iterdir()) == ["pass0.src", "pass1.src"]
+    assert sorted(p.name for p in out_dir.iterdir()) == ["pass0.mod", "pass1.mod"]
 
 
 @pytest.mark.slow
-def test_streamed_workers_compensate_with_a_plugin_model(user_model, tmp_path):
-    """compensate --stream's forked workers resolve the plugin effect as this process does."""
+def test_streamed_workers_compensate_with_a_plugin_model(tmp_path):
+    """compensate --stream's forked workers resolve the plugin effect as this process does.
+
+    Streaming reads KRL, so the robot is a KUKA measured in seed 001's cylinder, and the
+    program is block_pass's header with $BASE moved into that region."""
     from postproc.compensate import compensate
+    from postproc.program_check import check_model_fits
     from postproc.programs import emit_texts, parse_program
     from postproc.stream import compensate_streamed
 
-    head = (REPO / "examples/data/block_pass.src").read_text().splitlines()[:6]
+    user_model = _user_model(tmp_path / "kuka.json", KUKA, None)
+    head = [line.replace("$BASE = {X 1400, Y 200, Z 1170,", "$BASE = {X 950, Y -100, Z 300,") for line in KRL.read_text().splitlines()[:6]]
+    assert any(line.startswith("$BASE = {X 950,") for line in head)
     moves = [f"LIN {{X {0.2 * i:.1f}, Y {50 + 10 * np.sin(i / 9):.3f}, Z 100, A 0, B 180, C 0}}" for i in range(240)]
     program = tmp_path / "long.src"
     program.write_text("\n".join(head + ["PTP {X 0, Y 50, Z 150, A 0, B 180, C 0}"] + moves + ["END"]) + "\n", encoding="latin-1")
     load_plugins([EFFECT_FILE], environ={})
     model, _ = load_model(user_model)
     tp = parse_program(program)
+    check_model_fits(tp, model, str(user_model))  # the robot is the program's (raises if not)
     new, rep = compensate(tp, model)
     assert not rep.failed.any()
     result = compensate_streamed(program, model, tmp_path / "streamed.src", chunk_lines=50, workers=2)
