@@ -27,6 +27,7 @@ from .kinematics import fk as _fk
 from .kinematics import ik as _ik
 from .kinematics import within_limits
 from .plugin_option import with_plugins
+from .plugins import plugin_arguments
 from .program_content import require_program
 from .progress import ProgressLine
 from .robots import available_robots, load_robot
@@ -342,7 +343,8 @@ def _check_registrable(path: Path, data) -> None:
 def evaluate_cmd(
     model: Path = typer.Argument(..., help="Model JSON from 'postproc fit'."),
     meas: Path = typer.Argument(..., help="Measurement CSV."),
-    json_out: bool = typer.Option(False, "--json", help="Print {n, rms_mm, mean_mm, max_mm}."),
+    json_out: bool = typer.Option(False, "--json", help="Print {n, rms_mm, mean_mm, max_mm} (spec/cli.md: exactly these keys; poses outside the model's region are said on stderr)."),
+    region_json: bool = typer.Option(False, "--region", help="With --json: add outside_region {count, worst_joint_deg, worst_mm, tolerance_deg, tolerance_mm} (null for a model without a recorded region)."),
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=_DROP_INVALID_HELP),
 ):
@@ -360,9 +362,14 @@ def evaluate_cmd(
         error_model = refit_base(error_model, data)
     stats = Stats.of(residuals(error_model, data))
     outside = outside_poses(error_model, data.q_deg)
+    _refuse_unused("without --json", {"--region": region_json and not json_out})
     if json_out:
-        print(json.dumps({"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm,
-                          "outside_region": None if outside is None else outside.summary()}))
+        doc = {"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}
+        if region_json:
+            doc["outside_region"] = None if outside is None else outside.summary()
+        elif outside is not None and outside.summary()["count"]:
+            err.print(describe_outside(outside, stats.n), highlight=False)
+        print(json.dumps(doc))
         return
     out.print(
         f"{stats.n} poses: RMS {stats.rms_mm:.4f} mm, mean {stats.mean_mm:.4f} mm, max {stats.max_mm:.4f} mm "
@@ -374,6 +381,7 @@ def evaluate_cmd(
 
 @app.command("validate")
 @handles_errors
+@with_plugins
 def validate_cmd(
     meas: Path = typer.Argument(..., help="Measurement CSV to fit on (and, except for --protocol series, to hold poses out of)."),
     protocol: str = typer.Option(..., "--protocol", help="random, points (whole commanded positions), sessions (each session in turn) or series (another series, re-registered on half)."),
@@ -446,7 +454,7 @@ def diagnose_cmd(
     error_model, _ = load_model(model)
     data = _load_measurements(meas, error_model.robot, drop_invalid)
     with ProgressLine("diagnose", console=err, disable=json_out) as progress:
-        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas)))
+        result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas), plugin_arguments()))
     if report is not None:
         from .report.html import diagnosis_report
 
@@ -659,6 +667,7 @@ def simulate_cmd(
 
 @app.command("suggest-poses")
 @handles_errors
+@with_plugins
 def suggest_poses_cmd(
     output: Path = typer.Option(..., "-o", "--output", help="CSV of the chosen poses (id, q1..q6 and the candidates' other columns), in measuring order."),
     n: int = typer.Option(..., "-n", "--n", help="Number of poses to choose."),

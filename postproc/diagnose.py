@@ -298,6 +298,9 @@ class Files:
 
     model: str = "MODEL.json"
     meas: str = "MEAS.csv"
+    #: ' --plugins F ...' that the command itself was given (postproc.plugins.plugin_arguments):
+    #: a suggested command that reads the model must load the same effects.
+    plugins: str = ""
 
     def next_model(self) -> str:
         stem = self.model[:-5] if self.model.endswith(".json") else self.model
@@ -305,18 +308,18 @@ class Files:
 
     def fit_command(self, spec: str) -> str:
         """Refit the model with one more effect (its terms as the diagnosis chose them)."""
-        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote('+' + spec)} --cv 0 -o {_quote(self.next_model())}"
+        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote('+' + spec)} --cv 0 -o {_quote(self.next_model())}{self.plugins}"
 
     def predictor_command(self, model) -> str:
         """Keep the physics and learn what it leaves (a hybrid model)."""
-        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote(model.effects.spec())} --predictor gpr --cv 0 -o {_quote(self.next_model())}"
+        return f"postproc fit {_quote(self.meas)} --from {_quote(self.model)} --effects {_quote(model.effects.spec())} --predictor gpr --cv 0 -o {_quote(self.next_model())}{self.plugins}"
 
     def evaluate_command(self) -> str:
-        return f"postproc evaluate {_quote(self.model)} {_quote(self.meas)}"
+        return f"postproc evaluate {_quote(self.model)} {_quote(self.meas)}{self.plugins}"
 
     def use_command(self) -> str:
         """The model is as good as the data allow: compensate a program with it."""
-        return f"postproc compensate PROGRAM --model {_quote(self.model)} -o PROGRAM_compensated"
+        return f"postproc compensate PROGRAM --model {_quote(self.model)} -o PROGRAM_compensated{self.plugins}"
 
     @staticmethod
     def effect_new_command(variables: tuple[str, ...]) -> str:

@@ -130,7 +130,7 @@ def test_old_model_file_loads_with_region_unknown(measured, tmp_path):
     old.write_text(json.dumps(doc))
     model, _ = load_model(old)
     assert model.coverage is None
-    result = runner.invoke(app, ["evaluate", str(old), str(meas), "--json"])
+    result = runner.invoke(app, ["evaluate", str(old), str(meas), "--json", "--region"])
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["outside_region"] is None
     program = _pocket(tmp_path / "p.src", 1300, 1400)  # outside the region, but none is recorded
@@ -163,10 +163,13 @@ def test_evaluate_reports_poses_outside_the_fitted_joint_range(tmp_path):
     result = fit(robot, TOOL, parse_effects("tool_offset"), data.subset(narrow), cv_folds=0)
     save_model(tmp_path / "m.json", result.model, result)
     write_measurements(tmp_path / "all.csv", data)
-    out = runner.invoke(app, ["evaluate", str(tmp_path / "m.json"), str(tmp_path / "all.csv"), "--json"])
+    out = runner.invoke(app, ["evaluate", str(tmp_path / "m.json"), str(tmp_path / "all.csv"), "--json", "--region"])
     assert out.exit_code == 0, out.output
     outside = json.loads(out.stdout)["outside_region"]
     assert outside["count"] >= 40 and outside["worst_joint_deg"] > 5.0
+    plain = runner.invoke(app, ["evaluate", str(tmp_path / "m.json"), str(tmp_path / "all.csv"), "--json"])
+    assert set(json.loads(plain.stdout)) == {"n", "rms_mm", "mean_mm", "max_mm"}  # spec/cli.md: exactly these keys
+    assert re.search(r"\d+ of 160 poses lie outside", plain.stderr), plain.stderr  # said on stderr instead
     text = runner.invoke(app, ["evaluate", str(tmp_path / "m.json"), str(tmp_path / "all.csv")])
     assert re.search(r"\d+ of 160 poses lie outside the joint ranges or region the model was fitted on", text.output), text.output
     inside = runner.invoke(app, ["evaluate", str(tmp_path / "m.json"), str(tmp_path / "all.csv"), "--json"])

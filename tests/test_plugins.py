@@ -253,6 +253,18 @@ def test_model_records_the_plugin_and_refuses_without_it(user_model, rapid_progr
     assert not (tmp_path / "o.mod").exists()
 
 
+def test_diagnose_suggests_commands_that_load_the_same_plugins(user_model, tmp_path):
+    """A command diagnose suggests reads the model, so it repeats the --plugins it was given."""
+    load_plugins([EFFECT_FILE], environ={})
+    _, _, data = _simulated("geometric,user_wrist_cable", 120, seed=5, region=PROGRAM_REGION)
+    del CATALOG["user_wrist_cable"]
+    write_measurements(tmp_path / "meas.csv", data)
+    res = runner.invoke(app, ["diagnose", str(user_model), str(tmp_path / "meas.csv"), "--plugins", str(EFFECT_FILE)])
+    assert res.exit_code == 0, res.stderr
+    runs = [line for line in res.stdout.splitlines() if line.strip().startswith("run: ")]
+    assert runs and all(f"--plugins {EFFECT_FILE.resolve()}" in line for line in runs), res.stdout
+
+
 def test_model_refuses_a_changed_plugin(user_model, tmp_path):
     changed = tmp_path / "user_wrist_cable.py"
     changed.write_text(EFFECT_FILE.read_text().replace("np.deg2rad(ctx.q_deg[:, self.by - 1])", "2 * np.deg2rad(ctx.q_deg[:, self.by - 1])"))
