@@ -10,8 +10,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.effects.base import Context, Effect, Param
-from postproc.kinematics import gravity_torque
+from postproc.effects.api import Context, Effect, Param
+from postproc.effects.api import gravity_torque
 
 
 class DirectionStiffness(Effect):
