@@ -12,6 +12,8 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
+from ..candidates import MIN_PROGRESS, MIN_STABILITY  # noqa: E402
+
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")  # x red, y green, z blue
 MEASURED, MODEL, RESIDUAL = "#7f7f7f", "#1f77b4", "#d62728"
 BEFORE, AFTER = "#ff7f0e", "#1f77b4"
@@ -136,10 +138,11 @@ def candidates_chart(candidates, cv_rms_mm: float, floor_mm: float):
     ax.axvline(cv_rms_mm, color="black", lw=1.5, label=f"current model: {cv_rms_mm:.4f} mm")
     ax.axvline(floor_mm, color="#9467bd", lw=1.5, ls="--", label=f"noise floor: {floor_mm:.4f} mm")
     for y, c in enumerate(candidates[::-1]):
-        ax.text(c.rms_if_added_mm, y, f"  {100 * c.explained:.0f}% explained", va="center", fontsize=9)
+        ax.text(c.rms_if_added_mm, y, f"  {100 * c.explained:.0f}% explained, {max(0.0, 100 * c.progress):.0f}% to the floor", va="center", fontsize=9)
     ax.set_xlabel("cross-validated RMS with the effect added (mm)")
-    ax.set_title("Which missing effect? (green: significant after Holm correction)")
-    ax.set_xlim(0, max(values + [cv_rms_mm]) * 1.35)
+    ax.set_title(f"Which missing effect?\ngreen: recommended (>= {100 * MIN_PROGRESS:.0f}% of the way to the noise floor "
+                 f"in >= {100 * MIN_STABILITY:.0f}% of resamples)", fontsize=10)
+    ax.set_xlim(0, max(values + [cv_rms_mm]) * 1.75)
     # The most explaining candidate sits at the top with the shortest bar: its right is free.
     ax.legend(loc="upper right", fontsize=9)
     ax.grid(axis="x", alpha=0.3)

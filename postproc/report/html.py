@@ -88,7 +88,7 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
         verdict = "structure" if b.significant else "noise"
         parts.append(f"<tr class='{'sig' if b.significant else ''}'><td class='l'>{html.escape(b.label)}</td><td>{100 * b.eta2:.1f}%</td><td>{b.p_adjusted:.1e}</td><td>{biggest:.4f}</td><td class='l'>{verdict}</td></tr>")
     parts.append("</table>")
-    parts.append(_img(figures.residual_vs_variables(diagnosis.breakdowns, diagnosis.variables, diagnosis.residual_mm), "Residual against each variable; lines are binned means, red titles are significant after Holm correction."))
+    parts.append(_img(figures.residual_vs_variables(diagnosis.breakdowns, diagnosis.variables, diagnosis.residual_mm), "Residual against each variable; lines are binned means, red titles: the residual follows the variable (Holm-corrected test)."))
     parts.extend(_follows_section(diagnosis))
     parts.append("<h2>What is missing</h2>")
     if diagnosis.candidates:
