@@ -46,3 +46,43 @@ def refusal(code: float) -> str | None:
         return None
     rs274 = "G-code out of range" if code >= 100 else "Unknown g code used"
     return f"{name} is not a G code the controller knows (LinuxCNC's rs274: '{rs274}'); it is refused, not read as a move"
+
+
+# M codes rs274 runs (the same probe, ``M0`` ... ``M199`` before a G1 block): every other
+# integer answered "Unknown m code used" (from M200 on "M-code greater than 199"), a fractional one "Non integer value for integer".
+# M100-M199 are LinuxCNC's user M codes (a program of that name on the configuration's
+# search path; the probe had none): they move no axis, so they are read with a note.
+LINUXCNC_M = frozenset({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 19, 30, 48, 49, 50, 51, 52, 53, 60, 61, 62, 63, 64, 65, 66, 67,
+                        68, 70, 71, 72, 73, 98, 99})
+USER_M = range(100, 200)
+
+# Letters rs274 refuses outright wherever they stand ("Bad character 'n' used": N only starts
+# a block; U V W are refused by the reader for its own reason, the axis it cannot hold).
+BAD_CHARACTER = frozenset("N")
+
+# rs274: "E word with no G70, G76, M66, M67 or M68 to use it" (the probe: ``G1 X1 E1``). An
+# extruder E word (3D printers) would otherwise be read past, the block's motion kept.
+E_USERS_G = frozenset({70.0, 76.0})
+E_USERS_M = frozenset({66.0, 67.0, 68.0})
+
+
+def m_refusal(code: float) -> str | None:
+    """Why a block with M``code`` is refused (None: LinuxCNC runs it). Not for SINUMERIK."""
+    if code != int(code):
+        return f"M{code:g} is not an M code the controller knows (LinuxCNC's rs274: 'Non integer value for integer')"
+    if int(code) in LINUXCNC_M or int(code) in USER_M:
+        return None
+    rs274 = "M-code greater than 199" if code >= 200 else "Unknown m code used"
+    return (f"M{int(code)} is not an M code the controller knows (LinuxCNC's rs274: '{rs274}'); "
+            "remove it, or use a user M code M100-M199")
+
+
+def letter_refusal(letter: str) -> str | None:
+    """Why a word of ``letter`` (upper case) is refused wherever it stands."""
+    if letter in BAD_CHARACTER:
+        return f"{letter} word inside a block (LinuxCNC's rs274: \"Bad character '{letter.lower()}' used\"): a line number only starts a block"
+    return None
+
+
+E_REFUSAL = ("E word with no G70, G76, M66, M67 or M68 to use it (LinuxCNC's rs274, word for word): "
+             "an E word (a 3D printer's extruder) moves nothing this machine has; remove it")
