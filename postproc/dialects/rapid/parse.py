@@ -223,7 +223,13 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
 
     # a robtarget or work object passed to a routine may be changed there (INOUT): never followed
     data.updates.spoiled.update(root.upper() for _, roots, _, _ in data.facts.calls for root in roots if root)
-    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index):
+    def tool_index(name: str, transform) -> int:  # the builder's tool of that name as the program writes it; -1: none
+        written = next((n for n in builder.tool_names if n.upper() == name.upper()), None)
+        if written is None and transform is None:
+            return -1
+        return builder.tool_index(written or name, transform)
+
+    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index, tool_index):
         data.facts.changed.pop(name, None)  # followed: its targets are known where they run
     _runtime_changes(builder, data.facts)
     return builder.build()
@@ -266,6 +272,15 @@ def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
         for i, name in enumerate(list(names)):
             if not known[i] and table.get(name.upper()) is not None:
                 register(name, table[name.upper()])
+
+
+def _literal_numbers(node) -> bool:
+    """A number or an aggregate of numbers (nested, as a whole robtarget): no name, no call."""
+    if not isinstance(node, Tree):
+        return False
+    if node.data == "aggregate":
+        return all(_literal_numbers(c) for c in node.children)
+    return node.data in ("number", "neg")
 
 
 def _has_goto(code: str) -> bool:
@@ -587,13 +602,13 @@ class RapidParser:
         routine's straight-line code: recorded to be followed (updates.py); False otherwise."""
         lhs, rhs = node.children[0], node.children[-1]
         parts = [str(c) for c in lhs.children]
-        known = parts[0].upper() in self.points or parts[0].upper() in self.updates.wobj_parts
-        if not (self._straight(stack) and self.routine_lines and len(parts) > 1 and known):
+        root = parts[0].upper()
+        known = root in self.points or root in self.updates.wobj_parts or root in self.updates.tool_parts
+        if not (self._straight(stack) and self.routine_lines and known and (len(parts) > 1 or root in self.points)):
             return False
         s, e = self._span(rhs, start)
         sl = self.numbers.between(s, e)
-        literal = isinstance(rhs, Tree) and (rhs.data in ("number", "neg") or rhs.data == "aggregate" and all(
-            isinstance(c, Tree) and c.data in ("number", "neg") for c in rhs.children))
+        literal = _literal_numbers(rhs)
         numbers = [(float(v), (self.index, int(a), int(b))) for v, a, b in zip(self.numbers.value[sl], self.numbers.start[sl], self.numbers.end[sl])]
         fields = update_fields(parts[1:], numbers) if literal else None
         if fields is None:
@@ -742,6 +757,8 @@ class RapidParser:
             if dtype == "tooldata":
                 # robhold TRUE: the robot holds the tool (the usual case); FALSE: a stationary tool.
                 self.tools[name.upper()] = None if not holds or len(nums) < 7 else _pose(nums[:7])
+                if self.tools[name.upper()] is not None:
+                    self.updates.tool_parts[name.upper()] = nums[:7].copy()  # tframe (updates.py)
             else:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
                 # robhold TRUE here: the robot holds the work object (a stationary tool set-up).
