@@ -183,3 +183,57 @@ def test_krl_component_assignment_sharing_numbers_is_refused_where_they_are(tmp_
     result = _compensate(tmp_path / "a.src", model_path, tmp_path / "out" / "a.src")
     assert result.exit_code == 2 and "a.src:5:" in result.output and "give each use its own point" in result.output, result.output
     assert list((tmp_path / "out").iterdir()) == []
+
+
+LOOP = """MODULE m
+  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
+  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
+  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
+  PROC main()
+    ConfL\\Off;
+    FOR i FROM 1 TO 3 DO
+      MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+      p1.trans.z := 120;
+      MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+      wobj1.oframe.trans := [100, 0, 0];
+    ENDFOR
+    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+  ENDPROC
+ENDMODULE
+"""
+
+
+def test_rapid_assignments_in_a_for_loop_with_known_count_are_followed_pass_by_pass(tmp_path):
+    """ABB RAPID instruction FOR: the body runs once per counter value, its statements in
+    order. Worked by hand: pass 1 moves to p1 as declared (910, -80, 450), then z := 120:
+    (910, -80, 420); 'wobj1.oframe.trans := [100, 0, 0]' moves wobj1 100 mm in x for passes 2
+    and 3 (both moves (1010, -80, 420)) and the move after ENDFOR: 7 moves."""
+    path = tmp_path / "loop.mod"
+    path.write_text(LOOP)
+    tp = parse_program(path)
+    np.testing.assert_allclose(tp.base_positions(), [[910, -80, 450], [910, -80, 420]] + [[1010, -80, 420]] * 5, atol=1e-9)
+    assert tp.resolved.all() and not tp.notes
+
+
+@pytest.mark.parametrize("head", ["FOR i FROM 1 TO nCount DO", "WHILE DInput(di1) = 1 DO"])
+def test_rapid_assignments_in_loops_of_unknown_count_stay_unresolved(tmp_path, head):
+    text = LOOP.replace("FOR i FROM 1 TO 3 DO", head)
+    path = tmp_path / "loop.mod"
+    path.write_text(text.replace("ENDFOR", "ENDWHILE") if head.startswith("WHILE") else text)
+    tp = parse_program(path)
+    assert not tp.resolved.all() and any("loop.mod:9: " in n and "is assigned" in n for n in tp.notes), tp.notes
+
+
+def test_rapid_assignment_in_a_loop_is_compensated_into_its_own_numbers(tmp_path, model_path):
+    """Every pass moves to the assignment's point: one compensated value, written there."""
+    text = LOOP.replace("      MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;\n      p1.trans.z := 120;\n", "      p1 := [[100,50,120],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];\n")
+    text = text.replace("      wobj1.oframe.trans := [100, 0, 0];\n", "")
+    path = tmp_path / "loop.mod"
+    path.write_text(text)
+    (tmp_path / "out").mkdir()
+    result = _compensate(path, model_path, tmp_path / "out" / "loop.mod")
+    assert result.exit_code == 0, result.output
+    written = (tmp_path / "out" / "loop.mod").read_text()
+    assert "p1 := [[100,50,120]" not in written and "[[10,20,150]" in written  # the declaration serves no move
+    after = parse_program(tmp_path / "out" / "loop.mod")
+    assert after.resolved.all() and len(after) == 4

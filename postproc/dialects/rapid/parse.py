@@ -326,6 +326,7 @@ class RapidParser:
         self.updates = data.updates  # robtargets changed by constants (updates.py)
         self.routine_lines: list[tuple[int, int]] = []  # (file, line) of each PROC/FUNC/TRAP
         self._conditional = False  # inside a one-statement IF
+        self._tick = 0  # statements of unrolled FOR passes run so far: their execution order (updates.py)
         self._track_locals = not _has_goto(self.code)  # a jump may run any line again
 
     # ------------------------------------------------------------- numbers
@@ -594,6 +595,22 @@ class RapidParser:
         """Straight-line code of a routine: no block open, no loop pass being run."""
         return [w for w, _ in stack] == ["ENDMODULE", "ENDROUTINE"] and self._loop_order is None and not self._conditional
 
+    def _followable(self, stack) -> bool:
+        """Where a constant assignment runs at a known point: straight-line code, or the body
+        of FOR loops whose passes are all known (counters bound), no block open in it."""
+        if self._straight(stack):
+            return True
+        plain = [w for w, _ in stack] == ["ENDMODULE", "ENDROUTINE"] and not self._conditional
+        return plain and self._loop_order is not None and bool(self.env) and all(np.isfinite(v) for v in self.env.values())
+
+    def _run_at(self, start: int) -> tuple[int, int]:
+        """When a statement runs, as (line, tick): its line in straight-line code; in an unrolled
+        loop the loop's line and a tick counting the passes' statements (updates.py compares them)."""
+        if self._loop_order is None:
+            return int(self.lines.line(start)), 0
+        self._tick += 1
+        return int(self.lines.line(self._loop_order)), self._tick
+
     def _forget_locals(self) -> None:
         self._locals = dict.fromkeys(self._locals)
 
@@ -604,7 +621,7 @@ class RapidParser:
         parts = [str(c) for c in lhs.children]
         root = parts[0].upper()
         known = root in self.points or root in self.updates.wobj_parts or root in self.updates.tool_parts
-        if not (self._straight(stack) and self.routine_lines and known and (len(parts) > 1 or root in self.points)):
+        if not (self._followable(stack) and self.routine_lines and known and (len(parts) > 1 or root in self.points)):
             return False
         s, e = self._span(rhs, start)
         sl = self.numbers.between(s, e)
@@ -614,7 +631,7 @@ class RapidParser:
         if fields is None:
             return False
         line = int(self.lines.line(start))
-        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields))
+        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields, self._run_at(start)))
         self.facts.change(parts[0], f"{self._where(start)}: {{name}} is assigned")  # flagged unless followed (parse_modules)
         return True
 
@@ -879,8 +896,9 @@ class RapidParser:
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             at = self._span(node, start)[0]
+            run_line, run_tick = self._run_at(start)
             self.rows.append(dict(order=at if self._loop_order is None else self._loop_order, at=at, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span, run_line=run_line, run_tick=run_tick))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)

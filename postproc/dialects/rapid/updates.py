@@ -40,6 +40,7 @@ class Update:
     file: int
     routine: tuple[int, int]  # (file, line of the PROC) it is in
     fields: dict[int, tuple[float, tuple[int, int, int]]]  # IR field (negative: configuration data) -> (value, span)
+    runs_at: tuple[int, int] = (0, 0)  # (line, tick): when it runs (parse.RapidParser._run_at)
 
 
 @dataclass
@@ -100,11 +101,11 @@ def apply(blocks: list[dict], updates: Updates, routine_of, goto_routines: set[t
             continue  # used inside an expression (Offs(p1, ...)): not followed
         if any(routine_of(int(_at(b, "file", i)), int(_at(b, "line", i))) != ups[0].routine for b, i in rows):
             continue  # used in another routine: its order against the updates is not read here
-        ups = sorted(ups, key=lambda u: u.line)
+        ups = sorted(ups, key=lambda u: u.runs_at)
         for b, i in rows:
-            line = int(_at(b, "line", i))
+            runs_at = _runs_at(b, i)
             for u in ups:
-                if u.line < line:
+                if u.runs_at < runs_at:
                     _set(b, i, u.fields)
         followed.add(name)
     return followed
@@ -136,17 +137,23 @@ def _apply_frames(blocks, key: str, name: str, ups: list[Update], parts: list[np
     if index < 0 or any(routine_of(int(_at(b, "file", i)), int(_at(b, "line", i))) != ups[0].routine for b, i in rows):
         return False
     parts = [p.copy() for p in parts]
-    entries = []  # (line, builder index) after each update
-    for u in ups:
+    entries = []  # (when it runs, builder index) after each update
+    seen: dict[int, list[np.ndarray]] = {}  # line -> the distinct frames its update gave
+    for u in sorted(ups, key=lambda u: u.runs_at):
         for f, (value, _) in u.fields.items():
             parts[f // _OFRAME][f % _OFRAME] = value
         transform = np.eye(4)
         for p in parts:
             transform = transform @ make_transform(quat_wxyz_to_matrix(p[3:7][None])[0], p[:3])
-        entries.append((u.line, register(f"{name}@{u.line}", transform)))
+        # one name per value: an update in a loop may give another frame on a later pass
+        made = seen.setdefault(u.line, [])
+        k = next((k for k, t in enumerate(made) if np.allclose(t, transform, rtol=0, atol=0)), len(made))
+        if k == len(made):
+            made.append(transform)
+        entries.append((u.runs_at, register(f"{name}@{u.line}" + (f" ({k + 1})" if k else ""), transform)))
     for b, i in rows:
-        line = int(_at(b, "line", i))
-        later = [k for at, k in entries if at < line]
+        runs_at = _runs_at(b, i)
+        later = [k for at, k in entries if at < runs_at]
         if later:
             b[key] = np.array(np.atleast_1d(b[key]), copy=True)
             b[key][i] = later[-1]
@@ -162,6 +169,14 @@ def _uses(block: dict, name: str) -> list[int]:
     pattern = re.compile(rf"(?<![A-Za-z0-9_]){re.escape(name)}(?![A-Za-z0-9_])", re.IGNORECASE)
     hit = np.array([bool(pattern.search(t)) for t in texts])
     return np.nonzero(hit[codes])[0].tolist()
+
+
+def _runs_at(block: dict, i: int) -> tuple[int, int]:
+    """When row ``i`` runs: (line, tick) where the parser recorded it (moves of the grammar),
+    else (line, 0) (bulk moves: straight-line code)."""
+    if "run_line" in block:
+        return int(_at(block, "run_line", i)), int(_at(block, "run_tick", i))
+    return int(_at(block, "line", i)), 0
 
 
 def _at(block: dict, key: str, i: int):
