@@ -5,7 +5,9 @@ controller runs them.
 routine is deterministic: RAPID runs a routine's statements in order (RAPID kernel reference,
 "Statements"), so the move before the assignment goes to the declared point and the one after
 to the changed one. Followed when every assignment of the robtarget in the program is such a
-literal update in straight-line code of one routine (no block open), the routine has no GOTO,
+literal update in straight-line code of one routine (no block open; or the body of FOR loops
+whose passes are all known, compared in execution order, see ``Update.runs_at``), the routine
+has no GOTO,
 and every move that uses the robtarget is a plain ``Move... p1`` of that routine; the changed
 numbers are the assignment's own (write-back splices them there). Literal updates: the whole
 robtarget (``p1 := [[x,y,z],[q1,q2,q3,q4],[cf1,cf4,cf6,cfx],[e1,...,e6]];``, its
