@@ -355,8 +355,8 @@ class GcodeParser:
             gcodes.append(round(value, 1))
         elif letter == "M" and known and not self.siemens and (why := gwords.m_refusal(value)) is not None:
             raise self.lines.error(self.doc.path, self._word_offset(item, start), why)
-        elif letter == "M" and known and not self.siemens and value in gwords.USER_M:
-            self.notes.append(f"line {self.lines.line(start)}: M{value:g} is a LinuxCNC user M code (a program on the configuration's search path); read as moving no axis")
+        elif letter == "M" and known and not self.siemens and (why := gwords.m_note(value)) is not None:
+            self.notes.append(f"line {self.lines.line(start)}: {why}")
         elif letter == "H":
             state["h"] = value
         elif letter == "S":
