@@ -53,8 +53,7 @@ def refusal(code: float) -> str | None:
 # fractional one "Non integer value for integer". A machine's configuration can give the
 # others a meaning (LinuxCNC manual, "Remap Extending G-code"; its interpreter's header
 # rs274ngc_interp.hh: ``M_REMAPPABLE(m) ((m >= 0) && (m < 1000) && ...)``; M100-M199 run a user
-# program of that name): LinuxCNC's
-# own 5-axis demos switch kinematics with M428 / M429. So an integer M code up to M999 that is
+# program of that name): LinuxCNC's own 5-axis demos switch kinematics with M428 / M429. So an integer M code up to M999 that is
 # not built in is read with a note (it moves no axis here; the note names what rs274 says
 # without such a configuration); a fractional one, or one from M1000 on, is refused.
 LINUXCNC_M = frozenset({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 19, 30, 48, 49, 50, 51, 52, 53, 60, 61, 62, 63, 64, 65, 66, 67,
