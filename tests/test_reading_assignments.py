@@ -79,10 +79,13 @@ def test_rapid_whole_robtargets_rotations_and_frames_are_followed(tmp_path):
     "IF DInput(di1) = 1 THEN p1.rot := [0,1,0,0]; ENDIF",
     "p1 := [[100,50,120],[0,0,1,0],[-1,0,0,nCfx],[9E9,9E9,9E9,9E9,9E9,9E9]];",
     "tSpindle.tframe.rot := ReadRot();",
+    "tSpindle.oframe.trans := [0,0,1];",  # no such component: not read as a change of the TCP
+    "wobj1.tframe.trans := [0,0,1];",
 ])
 def test_rapid_assignments_that_depend_on_inputs_or_calls_stay_unresolved(tmp_path, statement):
     """Only constants in straight-line code are followed: under an input, or of a value a
-    variable or a function gives, every target that uses the name is flagged with the line."""
+    variable or a function gives (or of a component the data type does not have), every target
+    that uses the name is flagged with the line."""
     text = RAPID.replace("    p1 := [[100,50,120],[0,0,1,0],[-1,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];\n", f"    {statement}\n")
     if "tSpindle" in statement:
         text = text.replace("    tSpindle.tframe.trans := [0,0,250];\n", "")

@@ -627,7 +627,8 @@ class RapidParser:
         sl = self.numbers.between(s, e)
         literal = _literal_numbers(rhs)
         numbers = [(float(v), (self.index, int(a), int(b))) for v, a, b in zip(self.numbers.value[sl], self.numbers.start[sl], self.numbers.end[sl])]
-        fields = update_fields(parts[1:], numbers) if literal else None
+        kind = "wobjdata" if root in self.updates.wobj_parts else "tooldata" if root in self.updates.tool_parts else "robtarget"
+        fields = update_fields(parts[1:], numbers, kind) if literal else None
         if fields is None:
             return False
         line = int(self.lines.line(start))

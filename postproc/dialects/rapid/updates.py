@@ -58,15 +58,23 @@ class Updates:
         self.by_name.setdefault(name.upper(), []).append(update)
 
 
-def update_fields(path: list[str], numbers: list[tuple[float, tuple[int, int, int]]]) -> dict | None:
-    """IR fields an lvalue path (after the robtarget's name) sets from literal numbers, or None
-    where the assignment is not such an update (``trans`` := [x, y, z]; ``trans.x`` := v;
-    ``rot`` := [q1, q2, q3, q4]; ``extax`` := [e1, ..., e6]; the whole robtarget)."""
+_FRAMES_OF = {"robtarget": (), "wobjdata": ("UFRAME", "OFRAME"), "tooldata": ("TFRAME",)}
+
+
+def update_fields(path: list[str], numbers: list[tuple[float, tuple[int, int, int]]], kind: str = "robtarget") -> dict | None:
+    """IR fields an lvalue path (after the name of a ``kind``: robtarget, wobjdata, tooldata)
+    sets from literal numbers, or None where the assignment is not such an update (``trans`` :=
+    [x, y, z]; ``trans.x`` := v; ``rot`` := [q1, q2, q3, q4]; ``extax`` := [e1, ..., e6]; the
+    whole robtarget; a work object's or tool's frame's ``trans`` / ``rot``)."""
     path = [p.upper() for p in path]
-    if path[:1] in (["UFRAME"], ["OFRAME"], ["TFRAME"]):  # a frame: fields 0-6 of uframe / tframe, 10-16 of oframe
+    if kind != "robtarget" and path[:1] and path[0] not in _FRAMES_OF[kind]:
+        return None  # another component of the work object / tool (or none it has): not followed
+    if path[:1] in (["UFRAME"], ["OFRAME"], ["TFRAME"]) and path[0] in _FRAMES_OF[kind]:  # fields 0-6 of uframe / tframe, 10-16 of oframe
         shift = _OFRAME if path[0] == "OFRAME" else 0
         inner = update_fields(path[1:], numbers) if path[1:2] in (["TRANS"], ["ROT"]) else None
         return None if inner is None else {f + shift: v for f, v in inner.items()}
+    if kind != "robtarget":
+        return None
     if not path and len(numbers) == len(_ROBTARGET):
         return {f: numbers[k] for k, f in enumerate(_ROBTARGET)}
     if path == ["TRANS"] and len(numbers) == 3:
