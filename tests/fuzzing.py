@@ -190,17 +190,23 @@ def krl_program(rng: random.Random) -> bytes:
 
 # G-code -------------------------------------------------------------
 
+def gnumber(rng: random.Random) -> str:
+    """A G-code number: no exponent ('X1e3' is X1 and an E word, which rs274 refuses)."""
+    word = number(rng)
+    return word if "e" not in word.lower() else str(rng.randint(-3000, 3000))
+
+
 def gcode_simple(rng: random.Random) -> str:
-    axes = lambda: " ".join(f"{k}{number(rng)}" for k in rng.sample("XYZABC", rng.randint(1, 5)))  # noqa: E731
+    axes = lambda: " ".join(f"{k}{gnumber(rng)}" for k in rng.sample("XYZABC", rng.randint(1, 5)))  # noqa: E731
     return rng.choice([
         lambda: f"{rng.choice(['G0 ', 'G1 ', 'G01 ', 'N10 G1 ', '/G1 '])}{axes()}{rng.choice(['', ' F1500', ' F#1'])}",
         lambda: f"{rng.choice(['G0 ', 'G1 '])}{axes()}",
-        lambda: f"{rng.choice(['G2 ', 'G3 '])}X{number(rng)} Y{number(rng)} I{number(rng)} J{number(rng)}",
-        lambda: f"{rng.choice(['G2 ', 'G3 '])}X{number(rng)} Y{number(rng)} R{number(rng)}",
-        lambda: f"G81 X{number(rng)} Y{number(rng)} Z-1 R2 F100", lambda: "G80",
+        lambda: f"{rng.choice(['G2 ', 'G3 '])}X{gnumber(rng)} Y{gnumber(rng)} I{gnumber(rng)} J{gnumber(rng)}",
+        lambda: f"{rng.choice(['G2 ', 'G3 '])}X{gnumber(rng)} Y{gnumber(rng)} R{gnumber(rng)}",
+        lambda: f"G81 X{gnumber(rng)} Y{gnumber(rng)} Z-1 R2 F100", lambda: "G80",
         lambda: rng.choice(["G90", "G91", "G20", "G21", "G17", "G18", "G19", "G54", "G55", "G59.3", "G93", "G94", "G43 H1", "T1 M6", "M3 S1000"]),
-        lambda: f"G92 X{number(rng)}", lambda: f"G10 L2 P1 X{number(rng)} Y{number(rng)}",
-        lambda: f"#1 = [#1 + {number(rng)}]", lambda: "#<depth> = -1.5", lambda: "G1 Z#<depth>",
+        lambda: f"G92 X{gnumber(rng)}", lambda: f"G10 L2 P1 X{gnumber(rng)} Y{gnumber(rng)}",
+        lambda: f"#1 = [#1 + {gnumber(rng)}]", lambda: "#<depth> = -1.5", lambda: "G1 Z#<depth>",
         lambda: "(a comment)", lambda: "; comment", lambda: "G1 X[sin[30]*10] Y[2*#1]",
     ])()
 

@@ -4,6 +4,7 @@ by hand from the controller manual's rule (quoted at the test)."""
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
@@ -160,6 +161,65 @@ def test_rs274_refuses_the_same_words(tmp_path):
         accepted, _, err = run_rs274(path)
         assert not accepted and says in err, err
     path.write_text("G21 G90 G17 G40 G49 G80 G94 G8 G97 S1000\nG61\nG64 P0.01\nG0 X0 Y0 Z5\nG1 Z0 F100\nG1 X10\nM2\n")
+    assert run_rs274(path)[0]
+
+
+# Other words rs274 refuses (each probed with rs274 -g on "G21 G90 / G0 X0 Y0 Z0 / F100 / <block> /
+# M2"; its message is the one quoted): read past before, the block's move kept, exit 0.
+WORD_REFUSALS = [
+    ("G1 X5 E2", 7, "E word with no G70, G76, M66, M67 or M68 to use it"),
+    ("G1 X5 Y1e3", 9, "E word with no G70, G76, M66, M67 or M68 to use it"),  # no exponents: Y1 E3
+    ("M1.5", 1, "Non integer value for integer"),
+    ("M1000", 1, "M-code greater than 199"),
+    ("G1 X5 N5", 7, "Bad character 'n' used"),
+]
+# M codes LinuxCNC does not build in: rs274 (no configuration) refuses them; a configuration may
+# define them (REMAP up to M999, user M100-M199; LinuxCNC's 5-axis demos use M428), so they
+# are read with a note quoting rs274.
+M_NOTED = [("G1 X5 M10", "Unknown m code used"), ("M47", "Unknown m code used"), ("M150", "Unknown m code used"),
+           ("M428", "M-code greater than 199")]
+
+
+@pytest.mark.parametrize("block, column, says", WORD_REFUSALS)
+def test_words_rs274_refuses_are_refused_at_their_column(tmp_path, block, column, says):
+    from postproc.errors import ParseError
+
+    path = tmp_path / "w.ngc"
+    path.write_text(f"G21 G90\nG0 X0 Y0 Z0\nF100\n{block}\nM2\n")
+    with pytest.raises(ParseError, match=rf"w\.ngc:4:{column}: .*{re.escape(says)}"):
+        parse_program(path)
+
+
+@pytest.mark.parametrize("block, says", M_NOTED)
+def test_m_codes_a_configuration_must_define_are_read_with_a_note(tmp_path, block, says):
+    path = tmp_path / "w.ngc"
+    path.write_text(f"G21 G90\nG0 X0 Y0 Z0\nF100\n{block}\nM2\n")
+    tp = parse_program(path)
+    code = block.split("M")[-1]
+    assert any(n.startswith(f"line 4: M{code} is not built into LinuxCNC") and says in n for n in tp.notes), tp.notes
+
+
+def test_m_codes_linuxcnc_runs_still_read(tmp_path):
+    """Every M code rs274 ran in the probe (M0-M9, M19, M30, M48-M53, M60-M73, M98/M99 where
+    they need no other word): read without a note."""
+    path = tmp_path / "m.ngc"
+    path.write_text("G21 G90\nM3 S1000\nM7\nM8\nM9\nM19\nM48\nM49\nM50 P1\nM51 P1\nM52 P1\nM53 P1\nM70\nM71\nM73\n"
+                    "G0 X0 Y0 Z0\nG1 X5 F100\nM5\nM30\n")
+    tp = parse_program(path)
+    assert len(tp) == 2 and not any("M" in n for n in tp.notes), tp.notes
+
+
+@pytest.mark.skipif(__import__("shutil").which("rs274") is None, reason="LinuxCNC's rs274 is not installed")
+def test_rs274_says_the_same_of_these_words(tmp_path):
+    from test_real_corpus import run_rs274
+
+    for block, says in [(b, s) for b, _, s in WORD_REFUSALS] + M_NOTED:
+        path = tmp_path / "w.ngc"
+        path.write_text(f"G21 G90\nG0 X0 Y0 Z0\nF100\n{block}\nM2\n")
+        accepted, _, err = run_rs274(path)
+        assert not accepted and says in err, (block, err)
+    path.write_text("G21 G90\nM3 S1000\nM7\nM8\nM9\nM19\nM48\nM49\nM50 P1\nM51 P1\nM52 P1\nM53 P1\nM70\nM71\nM73\n"
+                    "G0 X0 Y0 Z0\nG1 X5 F100\nM5\nM30\n")
     assert run_rs274(path)[0]
 
 

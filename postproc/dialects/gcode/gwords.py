@@ -46,3 +46,62 @@ def refusal(code: float) -> str | None:
         return None
     rs274 = "G-code out of range" if code >= 100 else "Unknown g code used"
     return f"{name} is not a G code the controller knows (LinuxCNC's rs274: '{rs274}'); it is refused, not read as a move"
+
+
+# M codes rs274 runs (the same probe, ``M0`` ... ``M199`` before a G1 block): every other
+# integer answered "Unknown m code used" (from M200 on "M-code greater than 199"), a
+# fractional one "Non integer value for integer". A machine's configuration can give the
+# others a meaning (LinuxCNC manual, "Remap Extending G-code"; its interpreter's header
+# rs274ngc_interp.hh: ``M_REMAPPABLE(m) ((m >= 0) && (m < 1000) && ...)``; M100-M199 run a user
+# program of that name): LinuxCNC's own 5-axis demos switch kinematics with M428 / M429. So an integer M code up to M999 that is
+# not built in is read with a note (it moves no axis here; the note names what rs274 says
+# without such a configuration); a fractional one, or one from M1000 on, is refused.
+LINUXCNC_M = frozenset({0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 19, 30, 48, 49, 50, 51, 52, 53, 60, 61, 62, 63, 64, 65, 66, 67,
+                        68, 70, 71, 72, 73, 98, 99})
+CONFIGURABLE_M = range(0, 1000)
+
+
+# Letters rs274 refuses outright wherever they stand ("Bad character 'n' used": N only starts
+# a block; U V W are refused by the reader for its own reason, the axis it cannot hold).
+BAD_CHARACTER = frozenset("N")
+
+# rs274: "E word with no G70, G76, M66, M67 or M68 to use it" (the probe: ``G1 X1 E1``). An
+# extruder E word (3D printers) would otherwise be read past, the block's motion kept.
+E_USERS_G = frozenset({70.0, 76.0})
+E_USERS_M = frozenset({66.0, 67.0, 68.0})
+
+
+def _rs274_m_words(code: float) -> str:
+    """What rs274 without a configuration says of M``code``."""
+    if code != int(code):
+        return "Non integer value for integer"
+    return "M-code greater than 199" if code >= 200 else "Unknown m code used"
+
+
+def m_refusal(code: float) -> str | None:
+    """Why a block with M``code`` is refused (None: LinuxCNC runs it, or a configuration may
+    define it: see ``m_note``). Not for SINUMERIK."""
+    if code == int(code) and int(code) in CONFIGURABLE_M:
+        return None
+    return (f"M{code:g} is not an M code the controller knows (LinuxCNC's rs274: '{_rs274_m_words(code)}'; "
+            "a configuration can define only whole M codes up to M999): remove it")
+
+
+def m_note(code: float) -> str | None:
+    """The note for an M code a configuration must define (None: built in)."""
+    if int(code) in LINUXCNC_M:
+        return None
+    return (f"M{int(code)} is not built into LinuxCNC (rs274 without a configuration: '{_rs274_m_words(code)}'); "
+            "read as a code the machine's configuration defines (REMAP, or a user M100-M199 program) that moves no axis: "
+            "check that it does not move the machine")
+
+
+def letter_refusal(letter: str) -> str | None:
+    """Why a word of ``letter`` (upper case) is refused wherever it stands."""
+    if letter in BAD_CHARACTER:
+        return f"{letter} word inside a block (LinuxCNC's rs274: \"Bad character '{letter.lower()}' used\"): a line number only starts a block"
+    return None
+
+
+E_REFUSAL = ("E word with no G70, G76, M66, M67 or M68 to use it (LinuxCNC's rs274, word for word): "
+             "an E word (a 3D printer's extruder) moves nothing this machine has; remove it")

@@ -284,6 +284,8 @@ class GcodeParser:
                 self.notes.append(f"line {self.lines.line(start)}: {item.children[0]} (Siemens transformation) — positions are taken as programmed")
             elif item.data == "word":
                 ok &= self._word(item, start, values, spans, state, gcodes, more)
+        if not self.siemens:
+            self._check_e_words(tree, start, gcodes)
         for key, value in assigns:  # LinuxCNC: a line's parameter settings take effect after the whole line is read
             if value is None:
                 self.params.pop(key, None)  # unknown from here on, never the old value
@@ -332,6 +334,9 @@ class GcodeParser:
         """One letter word into the block's values / state; False where its value is unknown."""
         letter = str(item.children[0]).upper()
         vnode = item.children[1]
+        why = None if self.siemens else gwords.letter_refusal(letter)
+        if why is not None:
+            raise self.lines.error(self.doc.path, self._word_offset(item, start), why)
         if letter in _UNMODELLED_AXES and not self.siemens:
             # A U V W axis moves the machine, but the IR has no place for it: refuse, never drop.
             raise self.lines.error(self.doc.path, self._word_offset(item, start),
@@ -348,6 +353,10 @@ class GcodeParser:
             if why is not None:
                 raise self.lines.error(self.doc.path, self._word_offset(item, start), why)
             gcodes.append(round(value, 1))
+        elif letter == "M" and known and not self.siemens and (why := gwords.m_refusal(value)) is not None:
+            raise self.lines.error(self.doc.path, self._word_offset(item, start), why)
+        elif letter == "M" and known and not self.siemens and (why := gwords.m_note(value)) is not None:
+            self.notes.append(f"line {self.lines.line(start)}: {why}")
         elif letter == "H":
             state["h"] = value
         elif letter == "S":
@@ -364,6 +373,17 @@ class GcodeParser:
                 tok_start, tok_end = _token_span(vnode)
                 spans[_AX[letter]] = (start + tok_start, start + tok_end)
         return known
+
+    def _check_e_words(self, tree: Tree, start: int, gcodes: list[float]) -> None:
+        """rs274 takes an E word only with G70, G76, M66, M67 or M68 in the same block."""
+        words = [item for item in tree.children if isinstance(item, Tree) and item.data == "word"]
+        e_words = [item for item in words if str(item.children[0]).upper() == "E"]
+        if not e_words or any(gc in gwords.E_USERS_G for gc in gcodes):
+            return
+        for item in words:
+            if str(item.children[0]).upper() == "M" and getattr(item.children[1], "data", None) == "number" and float(item.children[1].children[0]) in gwords.E_USERS_M:
+                return
+        raise self.lines.error(self.doc.path, self._word_offset(e_words[0], start), gwords.E_REFUSAL)
 
     @staticmethod
     def _word_offset(item: Tree, start: int) -> int:

@@ -223,7 +223,13 @@ def parse_modules(sources: list[SourceDoc]) -> Toolpath:
 
     # a robtarget or work object passed to a routine may be changed there (INOUT): never followed
     data.updates.spoiled.update(root.upper() for _, roots, _, _ in data.facts.calls for root in roots if root)
-    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index):
+    def tool_index(name: str, transform) -> int:  # the builder's tool of that name as the program writes it; -1: none
+        written = next((n for n in builder.tool_names if n.upper() == name.upper()), None)
+        if written is None and transform is None:
+            return -1
+        return builder.tool_index(written or name, transform)
+
+    for name in apply(builder.blocks, data.updates, routine_of, gotos, frame_index, tool_index):
         data.facts.changed.pop(name, None)  # followed: its targets are known where they run
     _runtime_changes(builder, data.facts)
     return builder.build()
@@ -266,6 +272,15 @@ def _bind_late_declarations(builder: Builder, data: "_Data") -> None:
         for i, name in enumerate(list(names)):
             if not known[i] and table.get(name.upper()) is not None:
                 register(name, table[name.upper()])
+
+
+def _literal_numbers(node) -> bool:
+    """A number or an aggregate of numbers (nested, as a whole robtarget): no name, no call."""
+    if not isinstance(node, Tree):
+        return False
+    if node.data == "aggregate":
+        return all(_literal_numbers(c) for c in node.children)
+    return node.data in ("number", "neg")
 
 
 def _has_goto(code: str) -> bool:
@@ -311,6 +326,7 @@ class RapidParser:
         self.updates = data.updates  # robtargets changed by constants (updates.py)
         self.routine_lines: list[tuple[int, int]] = []  # (file, line) of each PROC/FUNC/TRAP
         self._conditional = False  # inside a one-statement IF
+        self._tick = 0  # statements of unrolled FOR passes run so far: their execution order (updates.py)
         self._track_locals = not _has_goto(self.code)  # a jump may run any line again
 
     # ------------------------------------------------------------- numbers
@@ -579,6 +595,22 @@ class RapidParser:
         """Straight-line code of a routine: no block open, no loop pass being run."""
         return [w for w, _ in stack] == ["ENDMODULE", "ENDROUTINE"] and self._loop_order is None and not self._conditional
 
+    def _followable(self, stack) -> bool:
+        """Where a constant assignment runs at a known point: straight-line code, or the body
+        of FOR loops whose passes are all known (counters bound), no block open in it."""
+        if self._straight(stack):
+            return True
+        plain = [w for w, _ in stack] == ["ENDMODULE", "ENDROUTINE"] and not self._conditional
+        return plain and self._loop_order is not None and bool(self.env) and all(np.isfinite(v) for v in self.env.values())
+
+    def _run_at(self, start: int) -> tuple[int, int]:
+        """When a statement runs, as (line, tick): its line in straight-line code; in an unrolled
+        loop the loop's line and a tick counting the passes' statements (updates.py compares them)."""
+        if self._loop_order is None:
+            return int(self.lines.line(start)), 0
+        self._tick += 1
+        return int(self.lines.line(self._loop_order)), self._tick
+
     def _forget_locals(self) -> None:
         self._locals = dict.fromkeys(self._locals)
 
@@ -587,19 +619,20 @@ class RapidParser:
         routine's straight-line code: recorded to be followed (updates.py); False otherwise."""
         lhs, rhs = node.children[0], node.children[-1]
         parts = [str(c) for c in lhs.children]
-        known = parts[0].upper() in self.points or parts[0].upper() in self.updates.wobj_parts
-        if not (self._straight(stack) and self.routine_lines and len(parts) > 1 and known):
+        root = parts[0].upper()
+        known = root in self.points or root in self.updates.wobj_parts or root in self.updates.tool_parts
+        if not (self._followable(stack) and self.routine_lines and known and (len(parts) > 1 or root in self.points)):
             return False
         s, e = self._span(rhs, start)
         sl = self.numbers.between(s, e)
-        literal = isinstance(rhs, Tree) and (rhs.data in ("number", "neg") or rhs.data == "aggregate" and all(
-            isinstance(c, Tree) and c.data in ("number", "neg") for c in rhs.children))
+        literal = _literal_numbers(rhs)
         numbers = [(float(v), (self.index, int(a), int(b))) for v, a, b in zip(self.numbers.value[sl], self.numbers.start[sl], self.numbers.end[sl])]
-        fields = update_fields(parts[1:], numbers) if literal else None
+        kind = "wobjdata" if root in self.updates.wobj_parts else "tooldata" if root in self.updates.tool_parts else "robtarget"
+        fields = update_fields(parts[1:], numbers, kind) if literal else None
         if fields is None:
             return False
         line = int(self.lines.line(start))
-        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields))
+        self.updates.add(parts[0], Update(line, self.index, self.routine_lines[-1], fields, self._run_at(start)))
         self.facts.change(parts[0], f"{self._where(start)}: {{name}} is assigned")  # flagged unless followed (parse_modules)
         return True
 
@@ -742,6 +775,8 @@ class RapidParser:
             if dtype == "tooldata":
                 # robhold TRUE: the robot holds the tool (the usual case); FALSE: a stationary tool.
                 self.tools[name.upper()] = None if not holds or len(nums) < 7 else _pose(nums[:7])
+                if self.tools[name.upper()] is not None:
+                    self.updates.tool_parts[name.upper()] = nums[:7].copy()  # tframe (updates.py)
             else:
                 fixed = '""' in text.replace(" ", "")  # ufmec: no mechanical unit moves the frame
                 # robhold TRUE here: the robot holds the work object (a stationary tool set-up).
@@ -862,8 +897,9 @@ class RapidParser:
             (values, spans, conf, offset, offset_span), name = self._target(tnode.children[0], start, joint=k == Kind.ABSJ)
             usable = ~np.isnan(values[7:13]).any() if k == Kind.ABSJ else ~np.isnan(values[:3]).any()
             at = self._span(node, start)[0]
+            run_line, run_tick = self._run_at(start)
             self.rows.append(dict(order=at if self._loop_order is None else self._loop_order, at=at, kind=int(k), values=values, spans=spans, conf=conf, offset=offset, name=name, speed=speed, zone=zone,
-                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span))
+                                  tool=tool_idx, frame=wobj_idx, resolved=bool(usable), offset_span=offset_span, run_line=run_line, run_tick=run_tick))
 
     def _text(self, node, start: int) -> str:
         s, e = self._span(node, start)
