@@ -39,7 +39,8 @@ from postproc.errormodel import ErrorModel  # noqa: E402
 from postproc.formats.ur10_ipa import read_series  # noqa: E402
 from postproc.identify import fit  # noqa: E402
 from postproc.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
-from postproc.suggest import DEFAULT_RANDOM_SHARE, suggest_poses  # noqa: E402
+from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
+from postproc.suggest.design import i_optimal_bound  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
 
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
@@ -47,6 +48,7 @@ NOISE = 0.02
 FLOOR = np.sqrt(3) * NOISE  # 3-D RMS of the noise alone
 GRID = (14, 18, 24, 32, 40, 50, 64, 80, 100)
 RANDOM_DRAWS = 3
+THEORY_DRAWS = 30  # random designs per N for the noise-only prediction (no fit: cheap)
 # The program's targets: a machining pass over a 250 x 300 x 200 mm box, the tool within 2 deg
 # of straight down and turned by at most 5 deg about its axis; and the same box with the
 # orientations free (within 15 deg of down, any turn), a harder case for the design.
@@ -80,13 +82,17 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS) -> dict:
-    """Per N: validation and true errors (whole workspace) or true errors at the targets (region)."""
+def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False) -> dict:
+    """Per N: validation and true errors (whole workspace) or true errors at the targets (region).
+    ``theory`` (region): also the noise-only prediction of random designs (THEORY_DRAWS per N, on
+    a grid to 4 x the largest N) and the lower bound on N x variance no design from the candidates beats."""
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
     nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
     out = {"suggested": np.full((seeds, len(GRID)), np.nan), "random": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
-           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan)}
+           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
+           "theory_suggested": np.full((seeds, len(GRID)), np.nan), "theory_random": np.full((seeds, len(THEORY_GRID)), np.nan),
+           "bound": np.full(seeds, np.nan), "uniform": np.full(seeds, np.nan)}
     for s in range(seeds):
         rng = np.random.default_rng(100 + s)
         truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
@@ -96,9 +102,13 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
         val = simulate(truth, q_eval, rng, noise_mm=NOISE)
         true_eval = truth.predict_prepared(truth.prepare(q_deg=q_eval))
+        if theory:
+            _theory(out, s, nominal, cands, q_eval)
         for k, n in enumerate(GRID):
             t0 = time.perf_counter()
-            pick = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s).chosen
+            suggestion = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
+            pick = suggestion.chosen
+            out["theory_suggested"][s, k] = suggestion.expected_rms_mm
             pred = fitted_at(robot, tool, measured.subset(pick), q_eval)
             out["suggested"][s, k], out["suggested_val"][s, k] = rms(pred - true_eval), rms(pred - val.measured_mm)
             for d in range(draws):
@@ -109,6 +119,21 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
                 f"{out['suggested'][s, k]:.4f} random {np.mean(out['random'][s, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
+
+
+THEORY_GRID = (32, 50, 64, 100)  # the N whose random error the design is compared at
+
+
+def _theory(out: dict, s: int, nominal, cands, q_eval) -> None:
+    """Noise-only prediction at the targets: random designs' expected RMS against N, and
+    the I-optimal bound (N x variance of the best design of any N poses from these candidates)."""
+    info = _information(nominal, cands, None, q_eval, NOISE)
+    problem = info.problem
+    draws = np.random.default_rng(900 + s)
+    perms = [draws.permutation(len(cands)) for _ in range(THEORY_DRAWS)]
+    out["theory_random"][s] = [np.mean([_expected_rms(info, _covariance(problem, problem.information(p[:n]))) for p in perms]) for n in THEORY_GRID]
+    out["bound"][s] = i_optimal_bound(problem)[0]
+    out["uniform"][s] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(cands))) / len(cands)))
 
 
 def ur10(folder: Path, seeds: int) -> dict:
@@ -191,13 +216,14 @@ def main():
     if not args.pass_only:
         runs["whole"] = simulated(args.seeds, None)
     for name, box in (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE)):
-        runs[name] = simulated(args.seeds, box)
+        runs[name] = simulated(args.seeds, box, theory=True)
         runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0)  # the same truths and candidates; random designs as above
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds)
     lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
              + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal), random share 0.2, greedy + exchange; random: {RANDOM_DRAWS} draws per seed"]
+             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2, greedy + exchange; "
+             f"random: {RANDOM_DRAWS} draws per seed from all candidates (the same set the design chooses from)"]
     if "whole" in runs:
         lines += whole_lines(runs, args.seeds)
     lines += region_lines(runs, args.seeds)
@@ -236,7 +262,32 @@ def region_lines(runs, seeds: int) -> list[str]:
                   f"true error at the targets, {seeds} seeds",
                   *table(GRID, [("suggested (I)", rg[0], rg[1]), ("random", rg[2], rg[3]), ("suggested, share 0", r0[0], r0[1])]),
                   *saving_lines(GRID, rg[0], rg[2], (32, 50, 64, 100)),
-                  "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100))]
+                  "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100)),
+                  *theory_lines(runs[name], runs[name + "0"])]
+    return lines
+
+
+def theory_lines(run: dict, run0: dict) -> list[str]:
+    """Noise-only prediction (no fit): the share of random's poses the design needs, and the
+    least share any design of these candidates can need (the I-optimal bound), per seed."""
+    grid = np.array(THEORY_GRID)
+    asym = run["bound"] / run["uniform"]
+    lines = ["  noise-only prediction (linearised, no fit; random: 30 draws per N), mean [min, max] over seeds:",
+             f"  best possible design, large N: {100 * asym.mean():.0f} % [{100 * asym.min():.0f}, {100 * asym.max():.0f}] of random's poses "
+             "(I-optimal bound phi* / phi(all candidates equally))"]
+    for n_r in (32, 50, 64, 100):
+        rand = run["theory_random"][:, list(grid).index(n_r)]
+        best = run["bound"] / rand**2 / n_r
+        parts = []
+        for label, r in (("default share", run), ("share 0", run0)):
+            shares = []
+            for s in range(len(rand)):
+                n_s = first_n_below(GRID, r["theory_suggested"][s], rand[s])
+                shares.append(np.nan if n_s is None else abs(n_s) / n_r)
+            shares = np.array(shares)
+            parts.append(f"{label} {100 * np.nanmean(shares):.0f} % [{100 * np.nanmin(shares):.0f}, {100 * np.nanmax(shares):.0f}]")
+        lines.append(f"  random's predicted error at N = {n_r}: designed " + ", ".join(parts)
+                     + f"; bound {100 * best.mean():.0f} % [{100 * best.min():.0f}, {100 * best.max():.0f}]")
     return lines
 
 

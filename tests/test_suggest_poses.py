@@ -21,7 +21,7 @@ from postproc.model_io import save_model
 from postproc.programs import parse_program
 from postproc.robots import load_robot
 from postproc.sim import Cylinder, random_truth, simulate
-from postproc.suggest import _information, design, suggest_poses  # _information: the very blocks the design uses
+from postproc.suggest import NEAR_TARGETS_FRACTION, _information, design, near_targets, suggest_poses  # _information: the very blocks the design uses
 from postproc.suggest.candidates import Candidates, Tracker, generate, read_candidates, visible
 
 runner = CliRunner()
@@ -95,6 +95,30 @@ def test_region_targeted_design_predicts_less_error_at_the_targets(cands, model)
     assert region.criterion == "I" and region.expected_rms_mm < region.random_rms_mm
     problem = design.Problem.of(_problem(model, cands).blocks, None, _jac_at(model, targets))
     assert design.criterion_value(problem, problem.information(region.chosen), "I") > design.criterion_value(problem, problem.information(whole.chosen), "I")
+
+
+def test_region_targeted_random_share_is_drawn_near_the_targets(cands, model):
+    targets = cands.q_deg[:10] + 0.5  # the program runs near 10 of the candidates
+    assert near_targets(cands.q_deg, targets, np.arange(len(cands)), 10).tolist() == list(range(10))
+    pool = near_targets(cands.q_deg, targets, np.arange(len(cands)), max(4 * 12, int(NEAR_TARGETS_FRACTION * len(cands))))
+    s = suggest_poses(model, cands, 20, targets_q=targets, random_share=0.6, seed=1)
+    assert s.n_random == 12 and len(set(s.chosen) & set(pool)) >= 12  # the 12 random poses come from the pool
+    whole = suggest_poses(model, cands, 20, random_share=0.6, seed=1)  # no program: from all candidates
+    assert len(set(whole.chosen) & set(pool)) < 12
+
+
+def test_i_optimal_bound_holds_for_the_designs_and_is_nearly_reached(cands, model):
+    targets = cands.q_deg[:40]
+    problem = design.Problem.of(_problem(model, cands).blocks, None, _jac_at(model, targets))
+    bound, reached = design.i_optimal_bound(problem, iterations=300)
+    assert 0 < bound <= reached
+    rng = np.random.default_rng(0)
+    for n in (20, 40):
+        chosen = suggest_poses(model, cands, n, targets_q=targets, random_share=0.0).chosen
+        n_var = [-n * design.criterion_value(problem, problem.information(d), "I")
+                 for d in (chosen, *(rng.choice(len(cands), n, replace=False) for _ in range(5)))]
+        assert min(n_var) >= bound  # no design of n poses beats the bound
+        assert n_var[0] < 1.3 * bound < min(n_var[1:])  # the greedy + exchange design comes near it, random ones do not
 
 
 def _jac_at(model, q):

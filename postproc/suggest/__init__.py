@@ -12,6 +12,8 @@ from typing import Callable
 
 import numpy as np
 
+from scipy.spatial import cKDTree
+
 from ..errormodel import ErrorModel
 from ..errors import InputError
 from ..identify import identifiability
@@ -21,6 +23,11 @@ from .candidates import Candidates, measuring_order
 from .targets import program_targets
 
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
+# With --program the random share is drawn from this fraction of the candidates, those nearest
+# a target in joint space (at least 4 x the random poses): a model that misses an effect is
+# then checked where the program runs (benchmarks/suggest.py: 1-3 points of the poses random
+# selection needs better than drawing from the whole workspace, in the noise-only prediction).
+NEAR_TARGETS_FRACTION = 0.1
 DEFAULT_NOISE_MM = 0.02  # per axis, tracker + repeatability (spec/measurements.md)
 CRITERION_NAMES = {"D": "D-optimal (O1: log det of the information)", "E": "E-optimal (O3: its smallest eigenvalue)",
                    "A": "A-optimal (trace of the parameter covariance)", "I": "I-optimal (mean predicted error variance at the program's targets, or over the candidates)"}
@@ -63,7 +70,8 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     ``criterion``: D, E, A or I (the mean predicted error variance over the candidates); with
     ``targets_q`` (joints at a program's targets) the design minimises it there (I). ``measured``: the
     poses measured already (their information is counted; their ids are not chosen again).
-    ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search.
+    ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search;
+    with ``targets_q`` drawn from the candidates nearest the targets (``NEAR_TARGETS_FRACTION``).
     """
     say = progress or (lambda msg: None)
     criterion = _check_options(criterion, targets_q, n, random_share, noise_mm)
@@ -81,7 +89,10 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
                          f"{len(model.params)} parameters ({k} of them identifiable from these candidates): choose at least {least - m}")
     rng = np.random.default_rng(seed)
     n_random = int(round(random_share * n))
-    fixed = rng.choice(np.nonzero(~excluded)[0], size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
+    pool = np.nonzero(~excluded)[0]
+    if targets_q is not None and n_random:  # region-targeted: robustness where the program runs
+        pool = near_targets(candidates.q_deg, targets_q, pool, max(4 * n_random, int(NEAR_TARGETS_FRACTION * len(pool))))
+    fixed = rng.choice(pool, size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
     say(f"greedy search ({n} poses from {available})")
     greedy_order = design.greedy(info.problem, n, criterion, fixed, excluded, say=say)
     say("exchange refinement")
@@ -89,6 +100,12 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     start = measured.q_deg[-1] if m else None
     order = final[measuring_order(candidates.q_deg[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
+
+
+def near_targets(q_deg: np.ndarray, targets_q: np.ndarray, pool: np.ndarray, size: int) -> np.ndarray:
+    """The ``size`` candidates of ``pool`` nearest a target in joint space (degrees, Euclidean)."""
+    dist, _ = cKDTree(np.asarray(targets_q, dtype=float)).query(q_deg[pool])
+    return np.sort(pool[np.argsort(dist, kind="stable")[: min(size, len(pool))]])
 
 
 SAME_POSE_DEG = 1e-3  # joints this close (each) are the same pose
