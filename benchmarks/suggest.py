@@ -38,6 +38,7 @@ from postproc.effects import parse_effects  # noqa: E402
 from postproc.errormodel import ErrorModel  # noqa: E402
 from postproc.formats.ur10_ipa import read_series  # noqa: E402
 from postproc.identify import fit  # noqa: E402
+from postproc.measurements import MeasurementSet  # noqa: E402
 from postproc.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
 from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
 from postproc.suggest.design import i_optimal_bound  # noqa: E402
@@ -136,6 +137,73 @@ def _theory(out: dict, s: int, nominal, cands, q_eval) -> None:
     out["uniform"][s] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(cands))) / len(cands)))
 
 
+LOAD_EFFECTS = EFFECTS + ",external_load"
+LOAD_N = 500.0  # a load state: this force on the TCP (a weight and pulley, or a spring), N
+
+
+def _measure_at(truth, q, force, rng) -> MeasurementSet:
+    """The true robot measured at q under the given base-frame forces, noise as simulate's."""
+    prep = truth.prepare(q_deg=q, force_n=force)
+    measured = truth.predict_prepared(prep) + rng.normal(0.0, NOISE, (len(q), 3))
+    return MeasurementSet(q_deg=q, measured_mm=measured, ids=tuple(str(i + 1) for i in range(len(q))),
+                          nominal_mm=np.zeros((len(q), 3)), force_n=force, source="<benchmark>")
+
+
+def loads(seeds: int, grid=(24, 32, 50, 64, 100)) -> dict:
+    """Whole workspace with load states: effects + external_load (the compliances shared), candidates
+    = 1,000 poses unloaded plus the same poses under LOAD_N N along -z and along +x (base frame).
+    True error (model minus truth) over 500 other poses, unloaded and under random process forces
+    (0-500 N, any direction): D-optimal from the loaded candidates and random from the unloaded ones
+    (what a user measures without loads), D-optimal from the unloaded ones, random from all."""
+    robot = postproc.load_robot("kr160_r1570")
+    tool = np.array([0.0, 0.0, 200.0])
+    effects = parse_effects(LOAD_EFFECTS)
+    nominal = ErrorModel.create(robot, tool, effects)
+    states = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -LOAD_N], [LOAD_N, 0.0, 0.0]])
+    designs = ("D-optimal, load states", "random, unloaded", "D-optimal, unloaded", "random, load states")
+    out = {d: np.full((seeds, len(grid), 2), np.nan) for d in designs}
+    for s in range(seeds):
+        rng = np.random.default_rng(300 + s)
+        truth = random_truth(robot, tool, effects, rng)
+        q = np.round(sample_poses(robot, tool, 1000, Cylinder(), rng), JOINT_DECIMALS)
+        q_all = np.tile(q, (len(states), 1))
+        force = np.repeat(states, len(q), axis=0)
+        cands = Candidates(q_deg=q_all, ids=tuple(f"s{i + 1}" for i in range(len(q_all))), source="<benchmark>",
+                           numeric={"fx": force[:, 0], "fy": force[:, 1], "fz": force[:, 2]})
+        unloaded = Candidates(q_deg=q, ids=cands.ids[:len(q)], source="<benchmark>", numeric={k: v[:len(q)] for k, v in cands.numeric.items()})
+        pool = _measure_at(truth, q_all, force, rng)
+        q_eval = sample_poses(robot, tool, 500, Cylinder(), rng)
+        direction = rng.standard_normal((len(q_eval), 3))
+        f_eval = direction / np.linalg.norm(direction, axis=1, keepdims=True) * rng.uniform(0.0, LOAD_N, (len(q_eval), 1))
+        evals = [(np.zeros_like(f_eval)), f_eval]
+        true = [truth.predict_prepared(truth.prepare(q_deg=q_eval, force_n=f)) for f in evals]
+        for k, n in enumerate(grid):
+            picks = {designs[0]: suggest_poses(nominal, cands, n, seed=s).chosen, designs[1]: rng.choice(len(q), n, replace=False),
+                     designs[2]: suggest_poses(nominal, unloaded, n, seed=s).chosen, designs[3]: rng.choice(len(q_all), n, replace=False)}
+            for name, pick in picks.items():
+                model = fit(robot, tool, effects, pool.subset(pick), cv_folds=0).model
+                for e, (f, t) in enumerate(zip(evals, true)):
+                    out[name][s, k, e] = rms(model.predict_prepared(model.prepare(q_deg=q_eval, force_n=f)) - t)
+            say(f"loads seed {s + 1}/{seeds} N {n}: " + ", ".join(f"{d} {out[d][s, k, 0]:.4f}/{out[d][s, k, 1]:.4f}" for d in designs))
+    out["grid"] = np.array(grid)
+    return out
+
+
+def load_lines(res: dict, seeds: int) -> list[str]:
+    grid = tuple(int(n) for n in res["grid"])
+    names = [d for d in res if d != "grid"]
+    lines = ["", f"4. simulated KR160, whole workspace with load states ({LOAD_EFFECTS}); candidates 1,000 poses x 3 load states "
+             f"(none, {LOAD_N:g} N along -z, along +x); true error RMS (mm) over 500 other poses, mean +- std over {seeds} seeds"]
+    for e, what in enumerate(("unloaded", f"under random process forces 0-{LOAD_N:g} N")):
+        lines.append(f"  {what}:")
+        lines += ["  " + line for line in table(grid, [(d, np.nanmean(res[d][:, :, e], axis=0), np.nanstd(res[d][:, :, e], axis=0)) for d in names])]
+        base = np.nanmean(res[names[1]][:, :, e], axis=0)
+        for d in (names[0], names[2]):
+            lines.append(f"  {d} against random, unloaded:")
+            lines += ["  " + line for line in saving_lines(grid, np.nanmean(res[d][:, :, e], axis=0), base, tuple(n for n in (32, 50, 64, 100) if n in grid))]
+    return lines
+
+
 def ur10(folder: Path, seeds: int) -> dict:
     """Series A retrospectively: held-out RMS of fits on suggested and random subsets."""
     data, tool = read_series(folder / "Series_A")
@@ -210,7 +278,17 @@ def main():
     parser.add_argument("--figure", type=Path, default=Path("docs/suggest-poses.png"))
     parser.add_argument("--output", type=Path, default=Path("benchmarks/results/suggest.txt"))
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
+    parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
     args = parser.parse_args()
+    if args.loads_only:
+        t0 = time.perf_counter()
+        lines = [f"benchmarks/suggest.py --loads-only --seeds {args.seeds}  ({{}} min)", f"noise {NOISE} mm per axis; D-optimal with the default random share "
+                 f"{DEFAULT_RANDOM_SHARE:g}, greedy + exchange; random: 1 draw per seed and N"]
+        lines += load_lines(loads(args.seeds), args.seeds)
+        lines[0] = lines[0].format(f"{(time.perf_counter() - t0) / 60:.1f}")
+        args.output.write_text("\n".join(lines) + "\n")
+        print("\n".join(lines))
+        return
     t0 = time.perf_counter()
     runs = {}
     if not args.pass_only:

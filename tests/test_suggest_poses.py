@@ -302,3 +302,29 @@ def test_a_fitted_model_gives_robot_tool_effects_and_values(tmp_path, cands):
     assert len(json.loads(result.stdout)["expected_std"]) + len(json.loads(result.stdout)["fixed"]) == len(ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS)).params)
     wrong = runner.invoke(app, base + ["--robot", "ur10"])
     assert wrong.exit_code == 2 and "does not match" in wrong.stderr
+
+
+LOAD_EFFECTS = EFFECTS + ",joint_compliance,external_load"
+
+
+def test_load_states_separate_the_compliances_and_are_measured_state_by_state(tmp_path):
+    out = tmp_path / "chosen.csv"
+    args = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", LOAD_EFFECTS, "--n-candidates", "150",
+            "-n", "40", "--seed", "1", "-o", str(out), "--json"]
+    result = runner.invoke(app, [*args, "--load-states", "0,0,0;0,0,-500;500,0,0"])
+    assert result.exit_code == 0, result.output
+    loaded = json.loads(result.output)
+    rows = list(csv.DictReader(out.open()))
+    assert list(rows[0])[-3:] == ["fx", "fy", "fz"] and len(rows) == 40
+    states = [(r["fx"], r["fy"], r["fz"]) for r in rows]
+    assert len(set(states)) == 3 and sum(a != b for a, b in zip(states, states[1:])) == 2  # the load changes twice
+    assert all(r["id"].endswith(f"-L{[('0', '0', '0'), ('0', '0', '-500'), ('500', '0', '0')].index(st) + 1}") for r, st in zip(rows, states))
+    # joint 1 and 6 carry no gravity torque: without loads their compliances are fixed, with them identified
+    plain = runner.invoke(app, args)  # effects needing forces need them for every candidate
+    assert plain.exit_code == 2 and "fx,fy,fz" in plain.output
+    unloaded = runner.invoke(app, [*args, "--load-states", "0,0,0"])
+    assert unloaded.exit_code == 0, unloaded.output
+    assert "compliance.c1" in json.loads(unloaded.output)["fixed"] and "compliance.c1" not in loaded["fixed"]
+    assert "compliance.c1" in loaded["expected_std"]
+    bad = runner.invoke(app, [*args, "--load-states", "0,0"])
+    assert bad.exit_code == 2 and "--load-states" in bad.output

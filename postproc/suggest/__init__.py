@@ -19,7 +19,7 @@ from ..errors import InputError
 from ..identify import identifiability
 from ..measurements import APPROACH, FORCES, MeasurementSet
 from . import design
-from .candidates import Candidates, measuring_order
+from .candidates import Candidates, load_state_order
 from .targets import program_targets
 
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
@@ -98,7 +98,8 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     say("exchange refinement")
     final, swaps = design.exchange(info.problem, greedy_order, criterion, n_random, excluded, say=say)
     start = measured.q_deg[-1] if m else None
-    order = final[measuring_order(candidates.q_deg[final], start)]
+    forces = candidates.group(FORCES)
+    order = final[load_state_order(candidates.q_deg[final], None if forces is None else forces[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
 
 
