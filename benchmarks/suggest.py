@@ -197,10 +197,10 @@ def load_lines(res: dict, seeds: int) -> list[str]:
     for e, what in enumerate(("unloaded", f"under random process forces 0-{LOAD_N:g} N")):
         lines.append(f"  {what}:")
         lines += ["  " + line for line in table(grid, [(d, np.nanmean(res[d][:, :, e], axis=0), np.nanstd(res[d][:, :, e], axis=0)) for d in names])]
-        base = np.nanmean(res[names[1]][:, :, e], axis=0)
-        for d in (names[0], names[2]):
-            lines.append(f"  {d} against random, unloaded:")
-            lines += ["  " + line for line in saving_lines(grid, np.nanmean(res[d][:, :, e], axis=0), base, tuple(n for n in (32, 50, 64, 100) if n in grid))]
+        for d, r in ((names[0], names[3]), (names[0], names[1]), (names[2], names[1])):
+            lines.append(f"  {d} against {r}:")
+            lines += ["  " + line for line in saving_lines(grid, np.nanmean(res[d][:, :, e], axis=0), np.nanmean(res[r][:, :, e], axis=0),
+                                                           tuple(n for n in (32, 50, 64, 100) if n in grid))]
     return lines
 
 

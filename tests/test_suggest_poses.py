@@ -119,6 +119,9 @@ def test_i_optimal_bound_holds_for_the_designs_and_is_nearly_reached(cands, mode
                  for d in (chosen, *(rng.choice(len(cands), n, replace=False) for _ in range(5)))]
         assert min(n_var) >= bound  # no design of n poses beats the bound
         assert n_var[0] < 1.3 * bound < min(n_var[1:])  # the greedy + exchange design comes near it, random ones do not
+    reported = suggest_poses(model, cands, 20, targets_q=targets, random_share=0.0)
+    assert reported.bound_rms_mm is not None and reported.bound_rms_mm <= reported.expected_rms_mm < 1.15 * reported.bound_rms_mm
+    assert suggest_poses(model, cands, 20).bound_rms_mm is None  # no program: no bound
 
 
 def _jac_at(model, q):

@@ -32,6 +32,7 @@ DEFAULT_NOISE_MM = 0.02  # per axis, tracker + repeatability (spec/measurements.
 CRITERION_NAMES = {"D": "D-optimal (O1: log det of the information)", "E": "E-optimal (O3: its smallest eigenvalue)",
                    "A": "A-optimal (trace of the parameter covariance)", "I": "I-optimal (mean predicted error variance at the program's targets, or over the candidates)"}
 RANDOM_DRAWS = 8  # random designs averaged for the comparison curve
+REPORT_BOUND_ITERATIONS = 200  # the reported bound is then within ~1 % of the best (benchmarks/suggest.py: 1,000 iterations), ~2 s for 1,500 candidates
 
 __all__ = ["Candidates", "Suggestion", "program_targets", "suggest_poses", "DEFAULT_RANDOM_SHARE", "DEFAULT_NOISE_MM"]
 
@@ -53,12 +54,14 @@ class Suggestion:
     swaps: int  # exchanges the refinement made
     where: str  # what expected_rms_mm is measured over
     notes: tuple[str, ...] = field(default_factory=tuple)
+    bound_rms_mm: float | None = None  # with a program and nothing measured: no design of N poses from the candidates predicts better
 
     def as_json(self) -> dict:
         return {"chosen": list(self.ids), "criterion": self.criterion, "expected_rms_mm": self.expected_rms_mm,
                 "random_rms_mm": self.random_rms_mm, "random_equivalent_n": self.random_equivalent_n, "n_random": self.n_random,
                 "condition_number": self.condition_number, "expected_std": self.std, "units": self.units, "fixed": self.fixed,
-                "curve": [{"n": n, "expected_rms_mm": s, "random_rms_mm": r} for n, s, r in self.curve], "notes": list(self.notes)}
+                "curve": [{"n": n, "expected_rms_mm": s, "random_rms_mm": r} for n, s, r in self.curve], "notes": list(self.notes),
+                "bound_rms_mm": self.bound_rms_mm}
 
 
 def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterion: str = "D", targets_q: np.ndarray | None = None,
@@ -155,6 +158,7 @@ class _Information:
     units: dict[str, str]
     evaluation: np.ndarray  # (T, 3, K) position Jacobian (mm per typical size) where expected_rms_mm is taken
     where: str
+    region: bool  # evaluated at a program's targets
 
 
 def _information(model: ErrorModel, cands: Candidates, measured: MeasurementSet | None, targets_q, noise_mm: float) -> _Information:
@@ -177,7 +181,8 @@ def _information(model: ErrorModel, cands: Candidates, measured: MeasurementSet 
         evaluation, where = jac[:c], f"the {c} candidate poses"
     problem = design.Problem.of(blocks, prior, evaluation)
     kept = [p for p, f in zip(model.params, free) if f]
-    return _Information(problem, free, fixed, scale, tuple(p.name for p in kept), {p.name: p.unit for p in kept}, evaluation, where)
+    return _Information(problem, free, fixed, scale, tuple(p.name for p in kept), {p.name: p.unit for p in kept}, evaluation, where,
+                        targets_q is not None)
 
 
 _COLUMNS = {"force": FORCES, "approach": APPROACH, "temp": ("temp",), "t": ("t",)}
@@ -237,7 +242,10 @@ def _summarise(info_: _Information, cands: Candidates, order, greedy_order, crit
     notes = []
     if cands.rounded_deg > 0:
         notes.append(f"candidate joints rounded to 4 decimals (the precision of the robot program), by at most {cands.rounded_deg:.2g} deg")
-    return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random,
+    bound = None
+    if info_.region and m == 0:  # the I-optimal bound (a lower bound for any design of len(order) poses)
+        bound = float(np.sqrt(max(design.i_optimal_bound(problem, REPORT_BOUND_ITERATIONS)[0], 0.0) / len(order)))
+    return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random, bound_rms_mm=bound,
                       expected_rms_mm=expected, random_rms_mm=float(random_same), random_equivalent_n=equivalent, std=std, units=info_.units,
                       fixed=info_.fixed, condition_number=cond, curve=curve, swaps=swaps, where=info_.where, notes=tuple(notes))
 
