@@ -160,7 +160,7 @@ def loads(seeds: int, grid=(24, 32, 50, 64, 100)) -> dict:
     effects = parse_effects(LOAD_EFFECTS)
     nominal = ErrorModel.create(robot, tool, effects)
     states = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -LOAD_N], [LOAD_N, 0.0, 0.0]])
-    designs = ("D-optimal, load states", "random, unloaded", "D-optimal, unloaded", "random, load states")
+    designs = ("D-opt, load states", "random, unloaded", "D-opt, unloaded", "random, load states")
     out = {d: np.full((seeds, len(grid), 2), np.nan) for d in designs}
     for s in range(seeds):
         rng = np.random.default_rng(300 + s)
