@@ -279,7 +279,19 @@ def main():
     parser.add_argument("--output", type=Path, default=Path("benchmarks/results/suggest.txt"))
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
     parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
+    parser.add_argument("--figure-only", action="store_true", help="Only redraw the figure from the raw arrays of the last full run (--output's .npz).")
     args = parser.parse_args()
+    if args.figure_only:
+        raw = np.load(args.output.with_suffix(".npz"))
+        runs, real = {}, {"grid": tuple(int(n) for n in raw["ur10_grid"])}
+        for key in raw.files:
+            head, _, field = key.partition("__")
+            if head.startswith("ur10_") and field:
+                real.setdefault(head[5:], {})[field] = raw[key]
+            elif field:
+                runs.setdefault(head, {})[field] = raw[key]
+        figure(args.figure, runs, real)
+        return
     if args.loads_only:
         t0 = time.perf_counter()
         lines = [f"benchmarks/suggest.py --loads-only --seeds {args.seeds}  ({{}} min)", f"noise {NOISE} mm per axis; D-optimal with the default random share "
@@ -407,6 +419,9 @@ def figure(path: Path, runs, real) -> None:
     axes[1].set_yscale("log")
     sm = np.nanmean(runs["pass0"]["suggested"], axis=0)
     axes[1].plot(GRID, sm, "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
+    if "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
+        axes[1].plot(GRID, np.sqrt(np.mean(runs["pass"]["bound"]) / np.array(GRID)), "k:",
+                     label="I-optimal bound: the least any N poses\nof these candidates can expect (noise only)")
     sm, _, rm, _ = summary(real["grid"], real["whole"]["suggested"], real["whole"]["random"])
     axes[2].plot(real["grid"], rm, "o:", color="#bbbbbb", label="random, all held-out poses")
     axes[2].plot(real["grid"], sm, "s:", color="#9ecae1", label="suggested D-optimal, all held-out poses")
