@@ -175,22 +175,22 @@ def i_optimal_bound(problem: Problem, iterations: int = BOUND_ITERATIONS) -> tup
     Returns (lower bound, value reached); N x expected variance of any N-pose design is >= the bound."""
     if problem.weight is None:
         raise ValueError("i_optimal_bound needs the targets' weight (a region-targeted problem)")
-    blocks = problem.blocks
-    k = blocks.shape[-1]
-    w = np.full(len(blocks), 1.0 / len(blocks))
-    flat = blocks.reshape(len(blocks), -1)
+    c, _, k = problem.blocks.shape
+    rows = problem.blocks.reshape(-1, k)  # (3C, K): the candidates' equations, 3 each
+    w = np.full(c, 1.0 / c)
     for _ in range(iterations):
-        d, phi = _i_directional(problem, w, flat, k)
+        d, phi = _i_directional(problem, w, rows)
         w = w * np.sqrt(d / phi)  # sum w_i d_i = phi: the square-root update keeps the weights near the simplex, and converges monotonically
         w /= w.sum()
-    d, phi = _i_directional(problem, w, flat, k)
+    d, phi = _i_directional(problem, w, rows)
     return float(phi - (d.max() - phi)), float(phi)
 
 
-def _i_directional(problem: Problem, w: np.ndarray, flat: np.ndarray, k: int) -> tuple[np.ndarray, float]:
+def _i_directional(problem: Problem, w: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, float]:
     """(d_i for every candidate, phi) of the approximate design with weights w."""
-    m = (flat * w[:, None]).reshape(problem.blocks.shape).reshape(-1, k).T @ problem.blocks.reshape(-1, k) + problem.ridge * np.eye(k)
+    k = rows.shape[1]
+    m = (rows * np.repeat(w, 3)[:, None]).T @ rows + problem.ridge * np.eye(k)
     cov = np.linalg.inv(m)
     a = cov @ problem.weight @ cov
-    d = np.einsum("cik,kl,cil->c", problem.blocks, a, problem.blocks)
+    d = ((rows @ a) * rows).sum(axis=1).reshape(-1, 3).sum(axis=1)  # trace(J_i A J_i^T), as matrix products
     return d, float(np.einsum("kl,lk->", problem.weight, cov))
