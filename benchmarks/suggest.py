@@ -38,8 +38,10 @@ from postproc.effects import parse_effects  # noqa: E402
 from postproc.errormodel import ErrorModel  # noqa: E402
 from postproc.formats.ur10_ipa import read_series  # noqa: E402
 from postproc.identify import fit  # noqa: E402
+from postproc.measurements import MeasurementSet  # noqa: E402
 from postproc.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
-from postproc.suggest import DEFAULT_RANDOM_SHARE, suggest_poses  # noqa: E402
+from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
+from postproc.suggest.design import i_optimal_bound  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
 
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
@@ -47,6 +49,7 @@ NOISE = 0.02
 FLOOR = np.sqrt(3) * NOISE  # 3-D RMS of the noise alone
 GRID = (14, 18, 24, 32, 40, 50, 64, 80, 100)
 RANDOM_DRAWS = 3
+THEORY_DRAWS = 30  # random designs per N for the noise-only prediction (no fit: cheap)
 # The program's targets: a machining pass over a 250 x 300 x 200 mm box, the tool within 2 deg
 # of straight down and turned by at most 5 deg about its axis; and the same box with the
 # orientations free (within 15 deg of down, any turn), a harder case for the design.
@@ -80,13 +83,17 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS) -> dict:
-    """Per N: validation and true errors (whole workspace) or true errors at the targets (region)."""
+def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False) -> dict:
+    """Per N: validation and true errors (whole workspace) or true errors at the targets (region).
+    ``theory`` (region): also the noise-only prediction of random designs (THEORY_DRAWS per N, on
+    a grid to 4 x the largest N) and the lower bound on N x variance no design from the candidates beats."""
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
     nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
     out = {"suggested": np.full((seeds, len(GRID)), np.nan), "random": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
-           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan)}
+           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
+           "theory_suggested": np.full((seeds, len(GRID)), np.nan), "theory_random": np.full((seeds, len(THEORY_GRID)), np.nan),
+           "bound": np.full(seeds, np.nan), "uniform": np.full(seeds, np.nan)}
     for s in range(seeds):
         rng = np.random.default_rng(100 + s)
         truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
@@ -96,9 +103,13 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
         val = simulate(truth, q_eval, rng, noise_mm=NOISE)
         true_eval = truth.predict_prepared(truth.prepare(q_deg=q_eval))
+        if theory:
+            _theory(out, s, nominal, cands, q_eval)
         for k, n in enumerate(GRID):
             t0 = time.perf_counter()
-            pick = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s).chosen
+            suggestion = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
+            pick = suggestion.chosen
+            out["theory_suggested"][s, k] = suggestion.expected_rms_mm
             pred = fitted_at(robot, tool, measured.subset(pick), q_eval)
             out["suggested"][s, k], out["suggested_val"][s, k] = rms(pred - true_eval), rms(pred - val.measured_mm)
             for d in range(draws):
@@ -109,6 +120,88 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
                 f"{out['suggested'][s, k]:.4f} random {np.mean(out['random'][s, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
+
+
+THEORY_GRID = (32, 50, 64, 100)  # the N whose random error the design is compared at
+
+
+def _theory(out: dict, s: int, nominal, cands, q_eval) -> None:
+    """Noise-only prediction at the targets: random designs' expected RMS against N, and
+    the I-optimal bound (N x variance of the best design of any N poses from these candidates)."""
+    info = _information(nominal, cands, None, q_eval, NOISE)
+    problem = info.problem
+    draws = np.random.default_rng(900 + s)
+    perms = [draws.permutation(len(cands)) for _ in range(THEORY_DRAWS)]
+    out["theory_random"][s] = [np.mean([_expected_rms(info, _covariance(problem, problem.information(p[:n]))) for p in perms]) for n in THEORY_GRID]
+    out["bound"][s] = i_optimal_bound(problem)[0]
+    out["uniform"][s] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(cands))) / len(cands)))
+
+
+LOAD_EFFECTS = EFFECTS + ",external_load"
+LOAD_N = 500.0  # a load state: this force on the TCP (a weight and pulley, or a spring), N
+
+
+def _measure_at(truth, q, force, rng) -> MeasurementSet:
+    """The true robot measured at q under the given base-frame forces, noise as simulate's."""
+    prep = truth.prepare(q_deg=q, force_n=force)
+    measured = truth.predict_prepared(prep) + rng.normal(0.0, NOISE, (len(q), 3))
+    return MeasurementSet(q_deg=q, measured_mm=measured, ids=tuple(str(i + 1) for i in range(len(q))),
+                          nominal_mm=np.zeros((len(q), 3)), force_n=force, source="<benchmark>")
+
+
+def loads(seeds: int, grid=(24, 32, 50, 64, 100)) -> dict:
+    """Whole workspace with load states: effects + external_load (the compliances shared), candidates
+    = 1,000 poses unloaded plus the same poses under LOAD_N N along -z and along +x (base frame).
+    True error (model minus truth) over 500 other poses, unloaded and under random process forces
+    (0-500 N, any direction): D-optimal from the loaded candidates and random from the unloaded ones
+    (what a user measures without loads), D-optimal from the unloaded ones, random from all."""
+    robot = postproc.load_robot("kr160_r1570")
+    tool = np.array([0.0, 0.0, 200.0])
+    effects = parse_effects(LOAD_EFFECTS)
+    nominal = ErrorModel.create(robot, tool, effects)
+    states = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, -LOAD_N], [LOAD_N, 0.0, 0.0]])
+    designs = ("D-opt, load states", "random, unloaded", "D-opt, unloaded", "random, load states")
+    out = {d: np.full((seeds, len(grid), 2), np.nan) for d in designs}
+    for s in range(seeds):
+        rng = np.random.default_rng(300 + s)
+        truth = random_truth(robot, tool, effects, rng)
+        q = np.round(sample_poses(robot, tool, 1000, Cylinder(), rng), JOINT_DECIMALS)
+        q_all = np.tile(q, (len(states), 1))
+        force = np.repeat(states, len(q), axis=0)
+        cands = Candidates(q_deg=q_all, ids=tuple(f"s{i + 1}" for i in range(len(q_all))), source="<benchmark>",
+                           numeric={"fx": force[:, 0], "fy": force[:, 1], "fz": force[:, 2]})
+        unloaded = Candidates(q_deg=q, ids=cands.ids[:len(q)], source="<benchmark>", numeric={k: v[:len(q)] for k, v in cands.numeric.items()})
+        pool = _measure_at(truth, q_all, force, rng)
+        q_eval = sample_poses(robot, tool, 500, Cylinder(), rng)
+        direction = rng.standard_normal((len(q_eval), 3))
+        f_eval = direction / np.linalg.norm(direction, axis=1, keepdims=True) * rng.uniform(0.0, LOAD_N, (len(q_eval), 1))
+        evals = [(np.zeros_like(f_eval)), f_eval]
+        true = [truth.predict_prepared(truth.prepare(q_deg=q_eval, force_n=f)) for f in evals]
+        for k, n in enumerate(grid):
+            picks = {designs[0]: suggest_poses(nominal, cands, n, seed=s).chosen, designs[1]: rng.choice(len(q), n, replace=False),
+                     designs[2]: suggest_poses(nominal, unloaded, n, seed=s).chosen, designs[3]: rng.choice(len(q_all), n, replace=False)}
+            for name, pick in picks.items():
+                model = fit(robot, tool, effects, pool.subset(pick), cv_folds=0).model
+                for e, (f, t) in enumerate(zip(evals, true)):
+                    out[name][s, k, e] = rms(model.predict_prepared(model.prepare(q_deg=q_eval, force_n=f)) - t)
+            say(f"loads seed {s + 1}/{seeds} N {n}: " + ", ".join(f"{d} {out[d][s, k, 0]:.4f}/{out[d][s, k, 1]:.4f}" for d in designs))
+    out["grid"] = np.array(grid)
+    return out
+
+
+def load_lines(res: dict, seeds: int) -> list[str]:
+    grid = tuple(int(n) for n in res["grid"])
+    names = [d for d in res if d != "grid"]
+    lines = ["", f"4. simulated KR160, whole workspace with load states ({LOAD_EFFECTS}); candidates 1,000 poses x 3 load states "
+             f"(none, {LOAD_N:g} N along -z, along +x); true error RMS (mm) over 500 other poses, mean +- std over {seeds} seeds"]
+    for e, what in enumerate(("unloaded", f"under random process forces 0-{LOAD_N:g} N")):
+        lines.append(f"  {what}:")
+        lines += ["  " + line for line in table(grid, [(d, np.nanmean(res[d][:, :, e], axis=0), np.nanstd(res[d][:, :, e], axis=0)) for d in names])]
+        for d, r in ((names[0], names[3]), (names[0], names[1]), (names[2], names[1])):
+            lines.append(f"  {d} against {r}:")
+            lines += ["  " + line for line in saving_lines(grid, np.nanmean(res[d][:, :, e], axis=0), np.nanmean(res[r][:, :, e], axis=0),
+                                                           tuple(n for n in (32, 50, 64, 100) if n in grid))]
+    return lines
 
 
 def ur10(folder: Path, seeds: int) -> dict:
@@ -185,19 +278,42 @@ def main():
     parser.add_argument("--figure", type=Path, default=Path("docs/suggest-poses.png"))
     parser.add_argument("--output", type=Path, default=Path("benchmarks/results/suggest.txt"))
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
+    parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
+    parser.add_argument("--figure-only", action="store_true", help="Only redraw the figure from the raw arrays of the last full run (--output's .npz).")
     args = parser.parse_args()
+    if args.figure_only:
+        raw = np.load(args.output.with_suffix(".npz"))
+        runs, real = {}, {"grid": tuple(int(n) for n in raw["ur10_grid"])}
+        for key in raw.files:
+            head, _, field = key.partition("__")
+            if head.startswith("ur10_") and field:
+                real.setdefault(head[5:], {})[field] = raw[key]
+            elif field:
+                runs.setdefault(head, {})[field] = raw[key]
+        figure(args.figure, runs, real)
+        return
+    if args.loads_only:
+        t0 = time.perf_counter()
+        lines = [f"benchmarks/suggest.py --loads-only --seeds {args.seeds}  ({{}} min)", f"noise {NOISE} mm per axis; D-optimal with the default random share "
+                 f"{DEFAULT_RANDOM_SHARE:g}, greedy + exchange; random: 1 draw per seed and N"]
+        lines += load_lines(loads(args.seeds), args.seeds)
+        lines[0] = lines[0].format(f"{(time.perf_counter() - t0) / 60:.1f}")
+        args.output.write_text("\n".join(lines) + "\n")
+        print("\n".join(lines))
+        return
     t0 = time.perf_counter()
     runs = {}
     if not args.pass_only:
         runs["whole"] = simulated(args.seeds, None)
     for name, box in (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE)):
-        runs[name] = simulated(args.seeds, box)
+        runs[name] = simulated(args.seeds, box, theory=True)
         runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0)  # the same truths and candidates; random designs as above
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds)
     lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
              + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal), random share 0.2, greedy + exchange; random: {RANDOM_DRAWS} draws per seed"]
+             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2, greedy + exchange; "
+             f"random: {RANDOM_DRAWS} draws per seed from all candidates (the same set the design chooses from)"]
     if "whole" in runs:
         lines += whole_lines(runs, args.seeds)
     lines += region_lines(runs, args.seeds)
@@ -236,7 +352,32 @@ def region_lines(runs, seeds: int) -> list[str]:
                   f"true error at the targets, {seeds} seeds",
                   *table(GRID, [("suggested (I)", rg[0], rg[1]), ("random", rg[2], rg[3]), ("suggested, share 0", r0[0], r0[1])]),
                   *saving_lines(GRID, rg[0], rg[2], (32, 50, 64, 100)),
-                  "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100))]
+                  "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100)),
+                  *theory_lines(runs[name], runs[name + "0"])]
+    return lines
+
+
+def theory_lines(run: dict, run0: dict) -> list[str]:
+    """Noise-only prediction (no fit): the share of random's poses the design needs, and the
+    least share any design of these candidates can need (the I-optimal bound), per seed."""
+    grid = np.array(THEORY_GRID)
+    asym = run["bound"] / run["uniform"]
+    lines = ["  noise-only prediction (linearised, no fit; random: 30 draws per N), mean [min, max] over seeds:",
+             f"  best possible design, large N: {100 * asym.mean():.0f} % [{100 * asym.min():.0f}, {100 * asym.max():.0f}] of random's poses "
+             "(I-optimal bound phi* / phi(all candidates equally))"]
+    for n_r in (32, 50, 64, 100):
+        rand = run["theory_random"][:, list(grid).index(n_r)]
+        best = run["bound"] / rand**2 / n_r
+        parts = []
+        for label, r in (("default share", run), ("share 0", run0)):
+            shares = []
+            for s in range(len(rand)):
+                n_s = first_n_below(GRID, r["theory_suggested"][s], rand[s])
+                shares.append(np.nan if n_s is None else abs(n_s) / n_r)
+            shares = np.array(shares)
+            parts.append(f"{label} {100 * np.nanmean(shares):.0f} % [{100 * np.nanmin(shares):.0f}, {100 * np.nanmax(shares):.0f}]")
+        lines.append(f"  random's predicted error at N = {n_r}: designed " + ", ".join(parts)
+                     + f"; bound {100 * best.mean():.0f} % [{100 * best.min():.0f}, {100 * best.max():.0f}]")
     return lines
 
 
@@ -278,6 +419,9 @@ def figure(path: Path, runs, real) -> None:
     axes[1].set_yscale("log")
     sm = np.nanmean(runs["pass0"]["suggested"], axis=0)
     axes[1].plot(GRID, sm, "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
+    if "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
+        axes[1].plot(GRID, np.sqrt(np.mean(runs["pass"]["bound"]) / np.array(GRID)), "k:",
+                     label="I-optimal bound: the least any N poses\nof these candidates can expect (noise only)")
     sm, _, rm, _ = summary(real["grid"], real["whole"]["suggested"], real["whole"]["random"])
     axes[2].plot(real["grid"], rm, "o:", color="#bbbbbb", label="random, all held-out poses")
     axes[2].plot(real["grid"], sm, "s:", color="#9ecae1", label="suggested D-optimal, all held-out poses")

@@ -688,7 +688,8 @@ def suggest_poses_cmd(
     program: Optional[Path] = typer.Option(None, "--program", help="Region-targeted: minimise the predicted error at this program's targets."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of --program (default: from the extension or content)."),
     measured: Optional[Path] = typer.Option(None, "--measured", help="Poses measured already (measurement CSV): suggest the next batch."),
-    random_share: float = typer.Option(0.2, "--random-share", help="Fraction of the poses drawn at random (robustness against effects the model lacks)."),
+    random_share: float = typer.Option(0.2, "--random-share", help="Fraction of the poses drawn at random (robustness against effects the model lacks; with --program drawn near its targets)."),
+    load_states: Optional[str] = typer.Option(None, "--load-states", help="FX,FY,FZ[;FX,FY,FZ...]: every candidate under each of these TCP forces (N, base frame; 0,0,0 for none), written as fx,fy,fz: separates compliance from geometry (effects joint_compliance + external_load)."),
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
     seed: int = typer.Option(0, "--seed"),
     json_out: bool = typer.Option(False, "--json", help="Print {chosen, criterion, expected_rms_mm, ...} as JSON."),
@@ -702,7 +703,7 @@ def suggest_poses_cmd(
     from .model_io import load_model
     from .sim import parse_region
     from .suggest import program_targets, suggest_poses
-    from .suggest.candidates import generate, read_candidates
+    from .suggest.candidates import generate, read_candidates, with_load_states
     from .suggest.inputs import design_model, tracker_from
     from .suggest.job import report_lines, write_outputs
     from .suggest.program import language_of
@@ -733,6 +734,11 @@ def suggest_poses_cmd(
                              None if tracker_range is None else tuple(_floats(tracker_range.replace(":", ","), 2, "--tracker-range")), tracker_cone)
         # ids name the seed: a batch generated with another seed has other poses under other ids
         cands = generate(robot_model, tool_mm, n_candidates, parse_region(workspace, region), rng, track, id_prefix=f"s{seed}-")
+    if load_states is not None:
+        items = [t for t in load_states.split(";") if t.strip()]
+        if not items:
+            raise InputError("--load-states: expected FX,FY,FZ[;FX,FY,FZ...] (N, base frame)")
+        cands = with_load_states(cands, np.array([_floats(t, 3, "--load-states") for t in items]))
     done = _load_measurements(measured, robot_model) if measured is not None else None
     targets = program_targets(program, design_for, dialect) if program is not None else None
     with ProgressLine("suggest-poses", console=err, disable=json_out) as progress:

@@ -21,7 +21,7 @@ from postproc.model_io import save_model
 from postproc.programs import parse_program
 from postproc.robots import load_robot
 from postproc.sim import Cylinder, random_truth, simulate
-from postproc.suggest import _information, design, suggest_poses  # _information: the very blocks the design uses
+from postproc.suggest import NEAR_TARGETS_FRACTION, _information, design, near_targets, suggest_poses  # _information: the very blocks the design uses
 from postproc.suggest.candidates import Candidates, Tracker, generate, read_candidates, visible
 
 runner = CliRunner()
@@ -95,6 +95,33 @@ def test_region_targeted_design_predicts_less_error_at_the_targets(cands, model)
     assert region.criterion == "I" and region.expected_rms_mm < region.random_rms_mm
     problem = design.Problem.of(_problem(model, cands).blocks, None, _jac_at(model, targets))
     assert design.criterion_value(problem, problem.information(region.chosen), "I") > design.criterion_value(problem, problem.information(whole.chosen), "I")
+
+
+def test_region_targeted_random_share_is_drawn_near_the_targets(cands, model):
+    targets = cands.q_deg[:10] + 0.5  # the program runs near 10 of the candidates
+    assert near_targets(cands.q_deg, targets, np.arange(len(cands)), 10).tolist() == list(range(10))
+    pool = near_targets(cands.q_deg, targets, np.arange(len(cands)), max(4 * 12, int(NEAR_TARGETS_FRACTION * len(cands))))
+    s = suggest_poses(model, cands, 20, targets_q=targets, random_share=0.6, seed=1)
+    assert s.n_random == 12 and len(set(s.chosen) & set(pool)) >= 12  # the 12 random poses come from the pool
+    whole = suggest_poses(model, cands, 20, random_share=0.6, seed=1)  # no program: from all candidates
+    assert len(set(whole.chosen) & set(pool)) < 12
+
+
+def test_i_optimal_bound_holds_for_the_designs_and_is_nearly_reached(cands, model):
+    targets = cands.q_deg[:40]
+    problem = design.Problem.of(_problem(model, cands).blocks, None, _jac_at(model, targets))
+    bound, reached = design.i_optimal_bound(problem, iterations=300)
+    assert 0 < bound <= reached
+    rng = np.random.default_rng(0)
+    for n in (20, 40):
+        chosen = suggest_poses(model, cands, n, targets_q=targets, random_share=0.0).chosen
+        n_var = [-n * design.criterion_value(problem, problem.information(d), "I")
+                 for d in (chosen, *(rng.choice(len(cands), n, replace=False) for _ in range(5)))]
+        assert min(n_var) >= bound  # no design of n poses beats the bound
+        assert n_var[0] < 1.3 * bound < min(n_var[1:])  # the greedy + exchange design comes near it, random ones do not
+    reported = suggest_poses(model, cands, 20, targets_q=targets, random_share=0.0)
+    assert reported.bound_rms_mm is not None and reported.bound_rms_mm <= reported.expected_rms_mm < 1.15 * reported.bound_rms_mm
+    assert suggest_poses(model, cands, 20).bound_rms_mm is None  # no program: no bound
 
 
 def _jac_at(model, q):
@@ -278,3 +305,29 @@ def test_a_fitted_model_gives_robot_tool_effects_and_values(tmp_path, cands):
     assert len(json.loads(result.stdout)["expected_std"]) + len(json.loads(result.stdout)["fixed"]) == len(ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS)).params)
     wrong = runner.invoke(app, base + ["--robot", "ur10"])
     assert wrong.exit_code == 2 and "does not match" in wrong.stderr
+
+
+LOAD_EFFECTS = EFFECTS + ",joint_compliance,external_load"
+
+
+def test_load_states_separate_the_compliances_and_are_measured_state_by_state(tmp_path):
+    out = tmp_path / "chosen.csv"
+    args = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", LOAD_EFFECTS, "--n-candidates", "150",
+            "-n", "40", "--seed", "1", "-o", str(out), "--json"]
+    result = runner.invoke(app, [*args, "--load-states", "0,0,0;0,0,-500;500,0,0"])
+    assert result.exit_code == 0, result.output
+    loaded = json.loads(result.output)
+    rows = list(csv.DictReader(out.open()))
+    assert list(rows[0])[-3:] == ["fx", "fy", "fz"] and len(rows) == 40
+    states = [(r["fx"], r["fy"], r["fz"]) for r in rows]
+    assert len(set(states)) == 3 and sum(a != b for a, b in zip(states, states[1:])) == 2  # the load changes twice
+    assert all(r["id"].endswith(f"-L{[('0', '0', '0'), ('0', '0', '-500'), ('500', '0', '0')].index(st) + 1}") for r, st in zip(rows, states))
+    # joint 1 and 6 carry no gravity torque: without loads their compliances are fixed, with them identified
+    plain = runner.invoke(app, args)  # effects needing forces need them for every candidate
+    assert plain.exit_code == 2 and "fx,fy,fz" in plain.output
+    unloaded = runner.invoke(app, [*args, "--load-states", "0,0,0"])
+    assert unloaded.exit_code == 0, unloaded.output
+    assert "compliance.c1" in json.loads(unloaded.output)["fixed"] and "compliance.c1" not in loaded["fixed"]
+    assert "compliance.c1" in loaded["expected_std"]
+    bad = runner.invoke(app, [*args, "--load-states", "0,0"])
+    assert bad.exit_code == 2 and "--load-states" in bad.output

@@ -12,19 +12,27 @@ from typing import Callable
 
 import numpy as np
 
+from scipy.spatial import cKDTree
+
 from ..errormodel import ErrorModel
 from ..errors import InputError
 from ..identify import identifiability
 from ..measurements import APPROACH, FORCES, MeasurementSet
 from . import design
-from .candidates import Candidates, measuring_order
+from .candidates import Candidates, load_state_order
 from .targets import program_targets
 
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
+# With --program the random share is drawn from this fraction of the candidates, those nearest
+# a target in joint space (at least 4 x the random poses): a model that misses an effect is
+# then checked where the program runs (benchmarks/suggest.py: 1-3 points of the poses random
+# selection needs better than drawing from the whole workspace, in the noise-only prediction).
+NEAR_TARGETS_FRACTION = 0.1
 DEFAULT_NOISE_MM = 0.02  # per axis, tracker + repeatability (spec/measurements.md)
 CRITERION_NAMES = {"D": "D-optimal (O1: log det of the information)", "E": "E-optimal (O3: its smallest eigenvalue)",
                    "A": "A-optimal (trace of the parameter covariance)", "I": "I-optimal (mean predicted error variance at the program's targets, or over the candidates)"}
 RANDOM_DRAWS = 8  # random designs averaged for the comparison curve
+REPORT_BOUND_ITERATIONS = 500  # the reported bound is then within ~0.3 % (in variance) of the converged one; < 1 s for 1,500 candidates
 
 __all__ = ["Candidates", "Suggestion", "program_targets", "suggest_poses", "DEFAULT_RANDOM_SHARE", "DEFAULT_NOISE_MM"]
 
@@ -46,12 +54,14 @@ class Suggestion:
     swaps: int  # exchanges the refinement made
     where: str  # what expected_rms_mm is measured over
     notes: tuple[str, ...] = field(default_factory=tuple)
+    bound_rms_mm: float | None = None  # with a program and nothing measured: no design of N poses from the candidates predicts better
 
     def as_json(self) -> dict:
         return {"chosen": list(self.ids), "criterion": self.criterion, "expected_rms_mm": self.expected_rms_mm,
                 "random_rms_mm": self.random_rms_mm, "random_equivalent_n": self.random_equivalent_n, "n_random": self.n_random,
                 "condition_number": self.condition_number, "expected_std": self.std, "units": self.units, "fixed": self.fixed,
-                "curve": [{"n": n, "expected_rms_mm": s, "random_rms_mm": r} for n, s, r in self.curve], "notes": list(self.notes)}
+                "curve": [{"n": n, "expected_rms_mm": s, "random_rms_mm": r} for n, s, r in self.curve], "notes": list(self.notes),
+                "bound_rms_mm": self.bound_rms_mm}
 
 
 def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterion: str = "D", targets_q: np.ndarray | None = None,
@@ -63,7 +73,8 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     ``criterion``: D, E, A or I (the mean predicted error variance over the candidates); with
     ``targets_q`` (joints at a program's targets) the design minimises it there (I). ``measured``: the
     poses measured already (their information is counted; their ids are not chosen again).
-    ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search.
+    ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search;
+    with ``targets_q`` drawn from the candidates nearest the targets (``NEAR_TARGETS_FRACTION``).
     """
     say = progress or (lambda msg: None)
     criterion = _check_options(criterion, targets_q, n, random_share, noise_mm)
@@ -81,14 +92,24 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
                          f"{len(model.params)} parameters ({k} of them identifiable from these candidates): choose at least {least - m}")
     rng = np.random.default_rng(seed)
     n_random = int(round(random_share * n))
-    fixed = rng.choice(np.nonzero(~excluded)[0], size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
+    pool = np.nonzero(~excluded)[0]
+    if targets_q is not None and n_random:  # region-targeted: robustness where the program runs
+        pool = near_targets(candidates.q_deg, targets_q, pool, max(4 * n_random, int(NEAR_TARGETS_FRACTION * len(pool))))
+    fixed = rng.choice(pool, size=n_random, replace=False) if n_random else np.zeros(0, dtype=int)
     say(f"greedy search ({n} poses from {available})")
     greedy_order = design.greedy(info.problem, n, criterion, fixed, excluded, say=say)
     say("exchange refinement")
     final, swaps = design.exchange(info.problem, greedy_order, criterion, n_random, excluded, say=say)
     start = measured.q_deg[-1] if m else None
-    order = final[measuring_order(candidates.q_deg[final], start)]
+    forces = candidates.group(FORCES)
+    order = final[load_state_order(candidates.q_deg[final], None if forces is None else forces[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
+
+
+def near_targets(q_deg: np.ndarray, targets_q: np.ndarray, pool: np.ndarray, size: int) -> np.ndarray:
+    """The ``size`` candidates of ``pool`` nearest a target in joint space (degrees, Euclidean)."""
+    dist, _ = cKDTree(np.asarray(targets_q, dtype=float)).query(q_deg[pool])
+    return np.sort(pool[np.argsort(dist, kind="stable")[: min(size, len(pool))]])
 
 
 SAME_POSE_DEG = 1e-3  # joints this close (each) are the same pose
@@ -137,6 +158,7 @@ class _Information:
     units: dict[str, str]
     evaluation: np.ndarray  # (T, 3, K) position Jacobian (mm per typical size) where expected_rms_mm is taken
     where: str
+    region: bool  # evaluated at a program's targets
 
 
 def _information(model: ErrorModel, cands: Candidates, measured: MeasurementSet | None, targets_q, noise_mm: float) -> _Information:
@@ -159,7 +181,8 @@ def _information(model: ErrorModel, cands: Candidates, measured: MeasurementSet 
         evaluation, where = jac[:c], f"the {c} candidate poses"
     problem = design.Problem.of(blocks, prior, evaluation)
     kept = [p for p, f in zip(model.params, free) if f]
-    return _Information(problem, free, fixed, scale, tuple(p.name for p in kept), {p.name: p.unit for p in kept}, evaluation, where)
+    return _Information(problem, free, fixed, scale, tuple(p.name for p in kept), {p.name: p.unit for p in kept}, evaluation, where,
+                        targets_q is not None)
 
 
 _COLUMNS = {"force": FORCES, "approach": APPROACH, "temp": ("temp",), "t": ("t",)}
@@ -219,7 +242,10 @@ def _summarise(info_: _Information, cands: Candidates, order, greedy_order, crit
     notes = []
     if cands.rounded_deg > 0:
         notes.append(f"candidate joints rounded to 4 decimals (the precision of the robot program), by at most {cands.rounded_deg:.2g} deg")
-    return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random,
+    bound = None
+    if info_.region and m == 0:  # the I-optimal bound (a lower bound for any design of len(order) poses)
+        bound = float(np.sqrt(max(design.i_optimal_bound(problem, REPORT_BOUND_ITERATIONS)[0], 0.0) / len(order)))
+    return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random, bound_rms_mm=bound,
                       expected_rms_mm=expected, random_rms_mm=float(random_same), random_equivalent_n=equivalent, std=std, units=info_.units,
                       fixed=info_.fixed, condition_number=cond, curve=curve, swaps=swaps, where=info_.where, notes=tuple(notes))
 

@@ -201,3 +201,43 @@ def measuring_order(q_deg: np.ndarray, start_deg: np.ndarray | None = None) -> n
         order.append(here)
         left[here] = False
     return np.array(order, dtype=int)
+
+
+def load_state_order(q_deg: np.ndarray, force_n: np.ndarray | None, start_deg: np.ndarray | None = None) -> np.ndarray:
+    """``measuring_order`` within each load state (rows of equal force), the states one after
+    another from the smallest force: the load is changed once per state, not between poses."""
+    if force_n is None:
+        return measuring_order(q_deg, start_deg)
+    states, state_of = np.unique(force_n, axis=0, return_inverse=True)
+    state_of = state_of.reshape(-1)
+    order = []
+    for s in np.argsort(np.linalg.norm(states, axis=1), kind="stable"):
+        rows = np.nonzero(state_of == s)[0]
+        tour = rows[measuring_order(q_deg[rows], start_deg)]
+        order.extend(tour.tolist())
+        start_deg = q_deg[tour[-1]]
+    return np.array(order, dtype=int)
+
+
+def with_load_states(cands: Candidates, states_n: np.ndarray) -> Candidates:
+    """Every candidate pose under each load state (forces on the TCP, base frame, N: rows of
+    ``states_n``), as columns fx, fy, fz; ids ``<id>-L<k>`` (k from 1, in the states' order).
+    Loads make the TCP force vary independently of the pose, which separates the joints'
+    compliance (``joint_compliance``, ``external_load``) from the geometry."""
+    states_n = np.asarray(states_n, dtype=float).reshape(-1, 3)
+    if not np.isfinite(states_n).all():
+        raise InputError("--load-states: forces must be finite numbers (N)")
+    if cands.group(FORCES) is not None:
+        raise InputError(f"{cands.source}: the candidates have force columns fx,fy,fz already; give either them or --load-states")
+    k = len(states_n)
+    force = np.repeat(states_n[None], len(cands), axis=0).reshape(-1, 3)  # pose-major: pose 1 in every state, then pose 2
+    text = [tuple(f"{v:g}" for v in f) for f in states_n]
+    return Candidates(
+        q_deg=np.repeat(cands.q_deg, k, axis=0),
+        ids=tuple(f"{ident}-L{j + 1}" for ident in cands.ids for j in range(k)),
+        source=cands.source,
+        columns=(*cands.columns, *FORCES),
+        cells=tuple((*(cands.cells[i] if cands.cells else ()), *text[j]) for i in range(len(cands)) for j in range(k)),
+        numeric={**{name: np.repeat(v, k) for name, v in cands.numeric.items()}, **{c: force[:, i] for i, c in enumerate(FORCES)}},
+        rounded_deg=cands.rounded_deg,
+    )
