@@ -126,7 +126,10 @@ def krl_outputs() -> dict[str, str]:
         stem = _out_name(path, path.stem)
         out[f"convert/{stem}.src"], out[f"convert/{stem}.dat"] = src, dat
         if not any(name.endswith("__tool_load.src") for name in out):  # `convert --tool-load` ($LOAD), once
-            src, dat = write_program(_undefined_as_identity(tp), "krl", path.stem, tool_load=TOOL_LOAD)
+            try:
+                src, dat = write_program(_undefined_as_identity(tp), "krl", path.stem, tool_load=TOOL_LOAD)
+            except InputError:  # the program states another load: convert refuses --tool-load there
+                continue
             out[f"convert/{stem}__tool_load.src"], out[f"convert/{stem}__tool_load.dat"] = src, dat
     return out
 
