@@ -11,7 +11,9 @@ from pathlib import Path
 import numpy as np
 
 from . import dialects
-from .errors import OutputCheckError, OutputError
+from .emit.load_plan import carried_loads
+from .emit.writer import drive
+from .errors import EmitError, OutputCheckError, OutputError
 from .files import write_all
 from .ir import F_POS, Kind, SourceDoc, Toolpath
 from .program_content import require_program
@@ -111,18 +113,15 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
     every tool of it carries; without it, the load the input states is carried where it applies.
     ``arc_tol_mm``: helical and spiral G2/G3 are written as straight moves within this chord
     error (without it they are refused: no circular move holds them)."""
-    from .emit.writer import drive
-    from .errors import EmitError
-
     require_program(tp)  # an empty input would give a program that does nothing
     lang = dialects.get(dialect, "--to")
     writer = lang.new_writer(name)
     if writer is None:
         able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
         raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
-    from .emit.load_plan import carried_loads
-
     if arc_tol_mm is not None and not arc_tol_mm > 0:
         raise EmitError(f"--arc-tol must be > 0 mm, got {arc_tol_mm}")
+    source = dialects.of(tp)  # emit imports no language: the input's rules are given to it here
     # the program's own load, or --tool-load's; helices as straight moves within arc_tol_mm
-    return drive(writer, tp, name, loads=carried_loads(tp, tool_load), arc_tol_mm=arc_tol_mm)
+    loads = carried_loads(tp, tool_load, source.stated_loads(tp))
+    return drive(writer, tp, name, loads=loads, arc_tol_mm=arc_tol_mm, source=source)

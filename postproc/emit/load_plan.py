@@ -16,6 +16,7 @@ import numpy as np
 
 from ..errors import InputError
 from .tool_load import ToolLoad, combined
+from .writer import where
 
 
 @dataclass(frozen=True)
@@ -83,8 +84,6 @@ def in_force(tp, statements: list[Statement]) -> np.ndarray:
     order = np.lexsort((tp.line, tp.file))
     if len(tp) and not (np.diff(order) > 0).all():
         row = int(np.nonzero(np.diff(order) <= 0)[0][0])
-        from .writer import where
-
         raise InputError(f"{where(tp, int(order[row + 1]))}: the targets do not run in the order they are written (a loop or a routine "
                          f"called twice) and the program changes its load ({statements[0].at}): which load each target carries is not carried")
     for f in with_rows:
@@ -125,13 +124,12 @@ def _agrees(given: ToolLoad, stated: ToolLoad) -> bool:
     return given.same_as(stated)
 
 
-def carried_loads(tp, given: ToolLoad | None) -> LoadPlan | None:
-    """The load of each target of the new program: the program's own (``Dialect.stated_loads``)
-    or ``given`` (``--tool-load``) on every tool; both: they must be the same load (else an
-    InputError naming both); a partial load the program states needs ``given``."""
-    from .. import dialects
-
-    plan = dialects.of(tp).stated_loads(tp)
+def carried_loads(tp, given: ToolLoad | None, plan: LoadPlan | None) -> LoadPlan | None:
+    """The load of each target of the new program: the program's own (``plan``, what its
+    language reads from it: ``Dialect.stated_loads``, given by the caller so that emit
+    imports no language) or ``given`` (``--tool-load``) on every tool; both: they must be
+    the same load (else an InputError naming both); a partial load the program states needs
+    ``given``."""
     if plan is not None:
         for state in plan.states:
             if not state.stated_at:

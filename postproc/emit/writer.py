@@ -3,7 +3,8 @@
 A narrow event protocol, as CAM post-processors use: start, frame, tool, speed, zone,
 move_joint / move_linear / move_circular / move_joints, raw line, end. Each dialect that
 can write a new program implements it (``Dialect.new_writer``); ``drive`` plays a
-Toolpath through one.
+Toolpath through one. This module imports no language: the rules of the language a
+Toolpath was read in come in as an argument (the dialects' writers import it).
 """
 
 from __future__ import annotations
@@ -35,14 +36,16 @@ def short_number(v: float, decimals: int = 4) -> str:
     return "0" if text in ("-0", "") else text
 
 
-def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: float | None = None) -> list[str]:
+def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: float | None = None, *, source) -> list[str]:
     """Texts of a new program (the writer's files, e.g. KRL [src, dat]) with every target of tp;
     ``loads`` (emit.load_plan.LoadPlan): the load of each target, given to ``w.load`` after its
     tool and wherever it changes; ``arc_tol_mm``: helical and spiral arcs become straight
-    moves within this chord error (refused without it)."""
+    moves within this chord error (refused without it). ``source``: the rules of the language
+    ``tp`` was read in (a ``Dialect``; its ``speed_to_mm_per_s`` and ``machine_program`` are
+    used), given by the caller so that emit imports no language."""
     w.start(name)
     refuse_unknown_positions(tp)  # which axis, why, and how to give it
-    refuse_unplaced(tp)
+    refuse_unplaced(tp, source.machine_program)
     poses = tp.target_poses()
     no_ori = np.isnan(tp.orientation).any(axis=1)
     if no_ori.any():
@@ -50,11 +53,9 @@ def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: floa
     frame = tool = load = -1
     speed = zone = None
     # G-code feeds are mm/min (the IR keeps speeds as written); the writers take mm/s.
-    from .. import dialects  # (not at the top: the dialects' writers import this module)
-
-    per_second = dialects.of(tp).speed_to_mm_per_s
+    per_second = source.speed_to_mm_per_s
     # G93 / G95 feeds as the speed the machine moves at (F x length, F x S), or refused with the F word's place.
-    speeds = machine_speeds(tp) if dialects.of(tp).machine_program else tp.speed
+    speeds = machine_speeds(tp) if source.machine_program else tp.speed
     arcs = circular_moves(tp, poses, arc_tol_mm)
     i = 0
     while i < len(tp):
@@ -95,21 +96,20 @@ def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: floa
     return w.end()
 
 
-def refuse_unplaced(tp: Toolpath) -> None:
+def refuse_unplaced(tp: Toolpath, machine_program: bool) -> None:
     """A new program states every target in the robot's base: a target whose position the
     input does not determine (flagged when read: an unknown parameter, a Z after a tool
     length change, cutter compensation), or whose frame or tool the input does not define
     (a work offset G54 never set by G10, a G43 H1 length in the tool table), would be
     written with a stand-in (the identity). Refused with file:line:column of its block
     (``frames``/``tools`` given by name, ``Toolpath.with_frames``, place them); so are
-    G-code rotary axis words, which a robot program has no place for."""
+    G-code rotary axis words, which a robot program has no place for (``machine_program``:
+    ``tp`` was read in a language that drives machine axes, ``Dialect.machine_program``)."""
     cart = tp.kind != Kind.ABSJ
     frame_ok = np.ones(len(tp), bool) if tp.frame_known is None else tp.frame_known[tp.frame]
     tool_ok = np.ones(len(tp), bool) if tp.tool_known is None else tp.tool_known[tp.tool]
-    from .. import dialects
-
     # (a five-axis program read with --machine has its rotary axes turned into orientations: carried)
-    rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1) & np.isnan(tp.orientation).any(axis=1) if dialects.of(tp).machine_program else np.zeros(len(tp), bool)
+    rotary = ~np.isnan(tp.ext[:, :3]).all(axis=1) & np.isnan(tp.orientation).any(axis=1) if machine_program else np.zeros(len(tp), bool)
     for rows, why in ((cart & ~tp.resolved, lambda r: "the target's position depends on what the program text does not determine (see the notes "
                                                        "of `postproc inspect`); it cannot be written"),
                       (cart & ~frame_ok, lambda r: f"the target is in frame {tp.frame_names[tp.frame[r]]}, which the program does not define (a work offset "

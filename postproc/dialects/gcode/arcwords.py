@@ -21,6 +21,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...ir import F_ARC, Toolpath
+from .blockwords import AXES
 
 WORDS = "IJKR"  # the parser's letters of the arc words, in IR field order (F_ARC)
 _IN_PLANE = {17.0: "IJ", 18.0: "IK", 19.0: "JK"}
@@ -34,8 +35,6 @@ def _letter_columns(axes: str) -> list[int]:
 def full_circles(t: dict, arc_blocks: np.ndarray, error_at) -> np.ndarray:
     """(n,) True for the G2/G3 blocks without end-point words that give centre words: full
     circles (the target is where the tool is). A radius-format one is refused."""
-    from .parse import AXES
-
     i, j, k, r = _letter_columns(AXES)
     values = t["values"]
     has_centre = ~np.isnan(values[:, [i, j, k]]).all(axis=1)
@@ -53,8 +52,6 @@ def arc_words(t: dict, rows: np.ndarray, arc_rows: np.ndarray, plane: np.ndarray
     returns ``Toolpath.arc`` (m, 3), or None when no target is an arc."""
     if not arc_rows.any():
         return None
-    from .parse import AXES
-
     cols = _letter_columns(AXES)
     at = np.nonzero(arc_rows)[0]
     blocks = rows[at]
@@ -84,8 +81,6 @@ _ALLOWED = {17.0: [True, True, False], 18.0: [True, False, True], 19.0: [False, 
 def _refuse_mixed(t: dict, blocks: np.ndarray, words: np.ndarray, plane: np.ndarray, error_at) -> None:
     """An arc has either centre words of its plane or R, never both, never an off-plane one
     (LinuxCNC refuses `G17 G2 ... K1`)."""
-    from .parse import AXES
-
     given = ~np.isnan(words)
     allowed = np.array([_ALLOWED[p] for p in np.unique(plane)])[np.searchsorted(np.unique(plane), plane)]
     both = given[:, 3] & given[:, :3].any(axis=1)

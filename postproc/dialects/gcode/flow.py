@@ -32,6 +32,7 @@ from ...ir import SourceDoc, Toolpath
 from ...parse.common import LineIndex, parse_statement
 from ...parse.grammar import grammar
 from . import siemens
+from .blockwords import Unknown
 
 # Executed blocks (lines) before the program is refused: bounds time and memory of a
 # `while [1]` (one IR row is ~1 kB while the block table is built).
@@ -512,13 +513,11 @@ class Runner:
 
     def _value(self, ln: Line, node, what: str):
         """An O-word expression's value, or None (and the run is marked unsure) when unknown."""
-        from .parse import _Unknown
-
         if node is None:
             return self._value_none(ln, what)
         try:
             return self.parser._eval(node)
-        except (_Unknown, ValueError, ZeroDivisionError, KeyError) as exc:
+        except (Unknown, ValueError, ZeroDivisionError, KeyError) as exc:
             self._taint(ln, f"{what} ({exc})")
             return None
 
@@ -547,13 +546,11 @@ class Runner:
 
     def _value_quiet(self, node):
         """An argument's value, None when unknown (reading it in the sub then flags the target)."""
-        from .parse import _Unknown
-
         if node is None:
             return None
         try:
             return self.parser._eval(node)
-        except (_Unknown, ValueError, ZeroDivisionError, KeyError):
+        except (Unknown, ValueError, ZeroDivisionError, KeyError):
             return None
 
     def _sub_file(self, label: str) -> str:

@@ -27,9 +27,10 @@ from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
 from . import arcwords, flow, gwords, siemens
+from .blockwords import AXES
+from .blockwords import Unknown as _Unknown
 from .canned import PLANE_AXES
 
-AXES = "XYZABCIJKRF"
 _AX = {c: i for i, c in enumerate(AXES)}
 MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, D (cutter compensation diameter; refused in a cycle): words only the grammar reads (no spans)
 _MORE = {c: i for i, c in enumerate(MORE)}
@@ -83,10 +84,6 @@ _BINOPS = {"+": lambda a, b: a + b, "-": lambda a, b: a - b, "*": lambda a, b: a
 
 
 _UNMODELLED_AXES = frozenset("UVW")
-
-
-class _Unknown(Exception):
-    """A parameter or expression whose value the program text does not determine."""
 
 
 class GcodeParser:
