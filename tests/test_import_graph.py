@@ -145,3 +145,30 @@ def test_a_circle_is_found_and_named():
 def test_no_import_circle():
     found = circles(import_graph())
     assert not found, "import circles:\n" + "\n\n".join("\n".join(c) for c in found)
+
+
+# Floors below the languages: they ask a controller object they are given, never the registry.
+BELOW_LANGUAGES = ("postproc.compensation", "postproc.emit", "postproc.kinematics", "postproc.posture", "postproc.errormodel",
+                   "postproc.effects", "postproc.ir", "postproc.arcs", "postproc.segments", "postproc.frames")
+
+
+def _reached(graph: dict[str, dict[str, str]], start: str) -> dict[str, list[str]]:
+    """{module: the path of imports from ``start`` to it} for every module ``start`` imports, however indirectly."""
+    paths = {start: [start]}
+    queue = deque([start])
+    while queue:
+        node = queue.popleft()
+        for child in graph[node]:
+            if child not in paths:
+                paths[child] = paths[node] + [child]
+                queue.append(child)
+    return paths
+
+
+def test_compensation_and_physics_import_no_language():
+    graph = import_graph()
+    bad = []
+    for module in graph:
+        if any(module == floor or module.startswith(floor + ".") for floor in BELOW_LANGUAGES):
+            bad += [" -> ".join(path) for target, path in _reached(graph, module).items() if target.startswith("postproc.dialects")]
+    assert not bad, "below the languages, yet reaching one:\n" + "\n".join(sorted(bad)[:20])
