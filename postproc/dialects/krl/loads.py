@@ -4,6 +4,12 @@ from __future__ import annotations
 
 import re
 
+import numpy as np
+
+from ...emit.load_plan import LoadState, Statement, in_force, plan_from_index
+from ...emit.tool_load import ToolLoad
+from ...errors import InputError
+from ...frames import abc_to_quat_wxyz
 from ..base import NUMBER
 
 _LOAD_M = re.compile(rf"^[ \t]*\$LOAD\.M[ \t]*=[ \t]*({NUMBER})", re.IGNORECASE | re.MULTILINE)
@@ -53,10 +59,6 @@ def _aggregate(text: str, open_at: int) -> str:
 
 def _load_of(agg: str):
     """ToolLoad of a $LOAD aggregate; a component it leaves out (or M -1) is NaN: the controller's."""
-    import numpy as np
-
-    from ...emit.tool_load import ToolLoad
-    from ...frames import abc_to_quat_wxyz
 
     def fields(name):
         m = re.search(rf"\b{name}[ \t]*\{{([^}}]*)\}}", agg, re.IGNORECASE)
@@ -73,10 +75,6 @@ def _load_of(agg: str):
 def stated_loads(tp):
     """LoadPlan of the program: the $LOAD in force at each target ($LOAD = {...}, $LOAD.M = m,
     $LOAD = LOAD_DATA[n] and BAS(#TOOL, n) with LOAD_DATA[n] declared, e.g. in $config.dat)."""
-    from ...emit.load_plan import LoadState, Statement, in_force, plan_from_index
-    from ...emit.tool_load import ToolLoad
-    from ...errors import InputError
-
     table = {int(m.group(1)): _load_of(_aggregate(doc.text, m.end() - 1)) for doc in tp.sources for m in _DECLARED.finditer(doc.text)}
     statements = []
     for f, doc in enumerate(tp.sources):
