@@ -148,8 +148,10 @@ def test_no_import_circle():
 
 
 # Floors below the languages: they ask a controller object they are given, never the registry.
-BELOW_LANGUAGES = ("postproc.compensation", "postproc.emit", "postproc.kinematics", "postproc.posture", "postproc.errormodel",
-                   "postproc.effects", "postproc.ir", "postproc.arcs", "postproc.segments", "postproc.frames")
+BELOW_LANGUAGES = ("postproc.compensation", "postproc.emit", "postproc.parse", "postproc.kinematics", "postproc.posture",
+                   "postproc.errormodel", "postproc.effects", "postproc.fast_model", "postproc.identify", "postproc.diagnose",
+                   "postproc.sim", "postproc.learn", "postproc.robots", "postproc.dh", "postproc.ir", "postproc.arcs",
+                   "postproc.segments", "postproc.frames", "postproc.errors")
 
 
 def _reached(graph: dict[str, dict[str, str]], start: str) -> dict[str, list[str]]:
