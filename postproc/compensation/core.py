@@ -17,6 +17,11 @@ tolerance (including a target already within it as written: 0 iterations), which
 the evaluation that would only confirm a sub-tolerance step. Orientation is kept as programmed (the model predicts position). Points that
 do not converge, leave the joint limits, come near a singularity or would change IK
 branch are reported with their program lines; the caller must not write such a program.
+
+The controller's rules (which configuration data apply and the branch they name, where its
+interpolation is not exact, where an arc ends) come from the ``controller`` object the
+caller gives: this module imports no language (``postproc.compensate`` is the public entry
+that gives the program's own).
 """
 
 from __future__ import annotations
