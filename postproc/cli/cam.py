@@ -7,6 +7,7 @@ from typing import Optional
 
 import typer
 
+from ..cam.install import default_macro_dir, install_post
 from .app import app, handles_errors, out
 
 
@@ -17,8 +18,6 @@ def freecad_install_post_cmd(
     python: Optional[str] = typer.Option(None, "--python", help="postproc's Python that the post runs (default: this one)."),
 ):
     """Install the postproc post-processor (postproc_post.py) where FreeCAD's Path/CAM workbench finds it."""
-    from ..cam.install import default_macro_dir, install_post
-
     how = "given with --dir"
     if directory is None:
         directory, how = default_macro_dir()

@@ -9,6 +9,7 @@ import numpy as np
 
 from ..errors import InputError, OutputError
 from ..frames import abc_to_matrix, make_transform
+from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
 from .app import err
 
 
@@ -35,8 +36,6 @@ def refuse_unused(why: str, options: dict[str, bool]) -> None:
 def load_measurements(path: Path, robot=None, drop_invalid: bool = False):
     """Read a measurement set; with a robot, rows beyond its joint limits are an error
     (or, with --drop-invalid, dropped and listed on stderr)."""
-    from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
-
     data = read_measurements(path)
     if robot is None:
         return data

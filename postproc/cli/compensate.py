@@ -12,11 +12,21 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from ..arcs import summary as arc_summary
+from ..compensate import CompensationError, compensate
 from ..coverage_text import describe_model, model_summary
 from ..errors import InputError
+from ..fivex.commands import compensate_five_program
+from ..force_file import base_frame_forces, read_force_file
+from ..forces import load_cut_params, program_forces
+from ..measurements import write_text_atomic
 from ..plugin_option import with_plugins
+from ..program_check import check_model_fits
 from ..program_content import require_program
+from ..programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, refuse_stdout, write_set
 from ..progress import ProgressLine
+from ..stream import StreamFallback, compensate_streamed, wants_stream
+from ..subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
 from .app import app, err, handles_errors, out
 from .common import check_output_folder, floats, named_frames, refuse_unused
 
@@ -57,8 +67,6 @@ def compensate_cmd(
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
     if model.suffix == ".toml":
-        from ..fivex.commands import compensate_five_program
-
         refuse_unused("by five-axis compensation (--model MACHINE.toml)", {
             "--out-dir": out_dir is not None, "--jobs": jobs is not None, "--scheduler": scheduler is not None, "--in-place": in_place,
             "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
@@ -73,7 +81,7 @@ def compensate_cmd(
                                             frames=named_frames(frame, "--frame"), tools=named_frames(tool, "--tool")):
             out.print(line)
         return
-    from ..compensate import CompensationError, compensate
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..model_io import load_model
 
     refuse_unused("with a robot model (five-axis only: --model MACHINE.toml)", {"--grid": grid is not None, "--input-axes": input_axes is not None})
@@ -105,7 +113,6 @@ def compensate_cmd(
     to_stdout = output == "-"
     _refuse_unsafe_output(tp, output, in_place)
     log = err if to_stdout else out
-    from ..program_check import check_model_fits
 
     for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
         log.print(f"note: {note} (--allow-model-mismatch)")
@@ -115,14 +122,11 @@ def compensate_cmd(
                        detail=_is_page(report))
         written, added = tp, ()
         if subdivide:
-            from ..subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
-
             sub = compensate_subdivided(tp, error_model, max_deviation or DEFAULT_TOLERANCE_MM, **options)
             written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
         else:
             new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
     summary = {**rep.summary(), **model_summary(error_model)}
-    from ..arcs import summary as arc_summary
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if _is_page(report):  # written also when targets fail: the page shows where
@@ -176,7 +180,6 @@ def _cut_forces(cut: Optional[Path], tp, frame, tool):
     """--cut: the mechanistic force (N, 3) of every target in the base frame, None without it."""
     if cut is None:
         return None
-    from ..forces import load_cut_params, program_forces
 
     placed = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool")) if (frame or tool) else tp
     return program_forces(placed, params=load_cut_params(cut))
@@ -186,7 +189,6 @@ def _block_forces(cut, force_file, forces, tp, frame, tool, log):
     """The force of every target in the base frame from --cut or --force-file, None without them."""
     if force_file is None:
         return _cut_forces(cut, tp, frame, tool)
-    from ..force_file import base_frame_forces, read_force_file
 
     if cut is not None or forces is not None:
         raise InputError("--force-file gives the force of every motion block: not with --force or --cut")
@@ -205,7 +207,7 @@ def _is_page(report: Optional[Path]) -> bool:
 def _write_page(report: Path, rep, summary: dict, model, program: str, model_path: Path) -> None:
     """--report PAGE.html (its figures take a few seconds: a spinner meanwhile)."""
 
-    from ..measurements import write_text_atomic
+    # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
     from ..report.compensation import compensation_report
 
     with ProgressLine("report", console=err) as progress:
@@ -215,8 +217,6 @@ def _write_page(report: Path, rep, summary: dict, model, program: str, model_pat
 
 def _write_point_report(report: Path, rep, summary: dict) -> None:
     """--report: the summary and one entry per target, as JSON."""
-    from ..measurements import write_text_atomic
-
     def num(v):
         return None if v is None or np.isnan(v) else float(v)
 
@@ -233,8 +233,6 @@ def _write_point_report(report: Path, rep, summary: dict) -> None:
 def _read_program(program: str, dialect: str | None, modules=None):
     """The program at ``program``, or - for standard input (then ``dialect`` is needed);
     ``modules``: other modules' files it uses (--data, KRL)."""
-    from ..programs import parse_program
-
     if program != "-":
         return parse_program(Path(program), dialect, modules=modules or ())
     if dialect is None:
@@ -245,8 +243,6 @@ def _read_program(program: str, dialect: str | None, modules=None):
 def _refuse_unsafe_output(tp, output: str, in_place: bool) -> None:
     """Before the work: standard output only for one-file programs; no input overwritten
     without --in-place (a changed $config.dat is checked again when the texts are known)."""
-    from ..programs import files_for, refuse_overwrite, refuse_stdout
-
     if output == "-":
         refuse_stdout(tp)
     else:
@@ -257,8 +253,6 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None
     """Emit, re-parse (the targets ``rows`` must read back as compensated), then write the
     whole set of changed files at once, or the program to standard output. ``original``:
     the program as read when ``tp`` has new targets (files differing from it are written)."""
-    from ..programs import check_texts, emit_texts, files_for, refuse_overwrite, write_set
-
     original = tp if original is None else original
 
     texts = emit_texts(tp, new)
@@ -274,8 +268,8 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None
 def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
     """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
 
+    # Deferred import: it loads dask.distributed (slow to import); `postproc --version` must stay fast.
     from ..batch import run_batch
-    from ..measurements import write_text_atomic
 
     if out_dir is None or output is not None:
         raise InputError("several programs take --out-dir DIR (not -o)")
@@ -316,9 +310,6 @@ def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect
 def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
-    from ..compensate import CompensationError
-    from ..stream import StreamFallback, compensate_streamed, wants_stream
-
     if not wants_stream(program, mode):
         return False
     try:

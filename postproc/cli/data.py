@@ -8,10 +8,15 @@ from typing import Optional
 import numpy as np
 import typer
 
+from ..effects import parse_effects
+from ..errormodel import require_resolved
 from ..errors import InputError
+from ..formats.ur10_ipa import read_series
+from ..measurements import write_measurements
 from ..plugin_option import with_plugins
 from ..progress import ProgressLine
 from ..robots import load_robot
+from ..sim import parse_region, random_truth, sample_poses, simulate
 from .app import app, err, handles_errors, out
 from .common import floats
 
@@ -23,9 +28,6 @@ def import_ur10_cmd(
     output: Path = typer.Option(..., "-o", "--output", help="Measurement CSV to write (shared schema)."),
 ):
     """Convert IPA UR10 laser-tracker data (';', decimal comma, radians) to the shared CSV schema."""
-    from ..formats.ur10_ipa import read_series
-    from ..measurements import write_measurements
-
     data, tool_mm = read_series(series)
     write_measurements(output, data)
     tool_text = ",".join(f"{v:.4f}" for v in np.where(np.abs(tool_mm) < 5e-5, 0.0, tool_mm))
@@ -50,11 +52,8 @@ def simulate_cmd(
     truth_out: Optional[Path] = typer.Option(None, "--truth", help="Also write the true robot as a model JSON."),
 ):
     """Generate a measurement set from a simulated robot with chosen error effects."""
-    from ..effects import parse_effects
-    from ..errormodel import require_resolved
-    from ..measurements import write_measurements
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..model_io import save_model
-    from ..sim import parse_region, random_truth, sample_poses, simulate
 
     space = parse_region(workspace, region)
     if n < 1:
@@ -73,6 +72,7 @@ def simulate_cmd(
     write_measurements(output, data)
     if truth_out is not None:
         save_model(truth_out, truth)
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..identify import Stats, nominal_model, residuals
 
     # The same nominal error as fit, ladder and the report print: the nominal robot registered onto the data.

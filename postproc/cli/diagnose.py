@@ -9,7 +9,10 @@ from typing import Optional
 import typer
 from rich.table import Table
 
+from ..effects import EffectSum, _split_top_level, parse_effects
+from ..errormodel import ErrorModel
 from ..errors import InputError, OutputError
+from ..measurements import write_text_atomic
 from ..plugin_option import with_plugins
 from ..plugins import plugin_arguments
 from ..progress import ProgressLine
@@ -32,8 +35,8 @@ def diagnose_cmd(
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
 ):
     """Where the model fails and which effect is missing."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..diagnose import Files, diagnose
-    from ..measurements import write_text_atomic
     from ..model_io import load_model
 
     if folds < 2:
@@ -44,6 +47,7 @@ def diagnose_cmd(
     with ProgressLine("diagnose", console=err, disable=json_out) as progress:
         result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas), plugin_arguments()))
     if report is not None:
+        # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
         from ..report.html import diagnosis_report
 
         write_text_atomic(report, diagnosis_report(error_model, data, result, title=f"Diagnosis of {model.name} on {meas.name}"))
@@ -57,6 +61,7 @@ def diagnose_cmd(
 
 def _print_diagnosis(result, error_model) -> None:
     """The diagnosis on one screen; each suggested command printed once, after its findings."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..candidates import MIN_PROGRESS, MIN_STABILITY
     from ..diagnose import grouped_findings
 
@@ -107,8 +112,8 @@ def ladder_cmd(
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..diagnose import ladder
-    from ..effects import _split_top_level, parse_effects
 
     robot_model, tool_mm = load_robot(robot), floats(tool, 3, "--tool")
     check_output_folder(plot, "--plot")
@@ -123,6 +128,7 @@ def ladder_cmd(
         rows = ladder(robot_model, tool_mm, data, steps, seed=seed, noise_mm=noise, validation=val, progress=progress)
     floor = rows[-1]["noise_floor_mm"]
     if plot is not None:
+        # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
         from ..report.figures import ladder_chart
 
         fig = ladder_chart(rows, floor)
@@ -135,7 +141,7 @@ def ladder_cmd(
         finally:
             tmp.unlink(missing_ok=True)
     if report is not None:
-        from ..measurements import write_text_atomic
+        # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
         from ..report.html import ladder_report
 
         write_text_atomic(report, ladder_report(rows, floor, f"Ladder on {meas.name}"))
@@ -163,8 +169,7 @@ def similarity_cmd(
     json_out: bool = typer.Option(False, "--json"),
 ):
     """How alike two regions' error patterns are (seed 001 eq. 9-10), and whether transfer learning is advisable."""
-    from ..errormodel import ErrorModel
-    from ..effects import EffectSum
+    # Deferred import: it loads torch and scikit-learn / scipy (slow to import); `postproc --version` must stay fast.
     from ..learn import region_similarity
     from ..model_io import load_model
 

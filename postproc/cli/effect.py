@@ -7,6 +7,9 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
+from ..effect_template import write_template
+from ..effects import CATALOG
+from ..plugins import PluginError, load_plugins
 from .app import app, handles_errors, out
 
 
@@ -21,8 +24,6 @@ def effect_new_cmd(
     output: Path = typer.Option(Path("."), "-o", "--output", help="FILE.py to write, or a folder to write NAME.py in (an existing file is never overwritten)."),
 ):
     """Write a commented template effect file (NAME.py), outside the package."""
-    from ..effect_template import write_template
-
     path = write_template(name, output)
     out.print(f"wrote {path}; check it with 'postproc effect check {path}', load it with '--plugins {path}'")
 
@@ -34,9 +35,8 @@ def effect_check_cmd(
     robot: str = typer.Option("kr160_r1570", "--robot", help="Robot the checks run on."),
 ):
     """Contract checks of the effects in FILE: Jacobian, zero parameters, bounds, texts, round trips."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..effect_check import check_effect
-    from ..effects import CATALOG
-    from ..plugins import PluginError, load_plugins
 
     records = [r for r in load_plugins([file], environ={}, entry_points=False) if r.kind == "effect"]
     if not records:

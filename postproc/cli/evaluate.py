@@ -40,6 +40,7 @@ def evaluate_cmd(
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
 ):
     """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..coverage import describe_outside, outside_poses
     from ..identify import Stats, residuals
     from ..model_io import load_model
@@ -48,6 +49,7 @@ def evaluate_cmd(
     data = load_measurements(meas, error_model.robot, drop_invalid)
     if reregister:
         _check_registrable(meas, data)
+        # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from ..identify import refit_base
 
         error_model = refit_base(error_model, data)

@@ -8,8 +8,10 @@ from typing import Optional
 import typer
 from rich.table import Table
 
+from ..effects import parse_effects
 from ..errors import InputError
 from ..plugin_option import with_plugins
+from ..predictor_plugins import predictor_names
 from ..progress import ProgressLine
 from ..robots import load_robot
 from .app import app, err, handles_errors, out
@@ -72,9 +74,8 @@ def fit_cmd(
 
 
 def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
-    from ..effects import parse_effects
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..identify import fit as run_fit
-    from ..predictor_plugins import predictor_names
     from ..model_io import load_model, save_model
 
     if predictor is not None and predictor not in predictor_names():
@@ -107,6 +108,7 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress)
     final = result.model
     if predictor is not None:
+        # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from ..identify import Stats, fit_predictor, residuals
 
         with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:

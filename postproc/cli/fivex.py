@@ -9,6 +9,7 @@ from typing import Optional
 import typer
 
 from ..errors import InputError
+from ..fivex.commands import calibration_summary, rtcp_calibrate
 from .app import app, handles_errors, out
 
 
@@ -27,8 +28,6 @@ def rtcp_calibrate_cmd(
     seed: int = typer.Option(0, "--seed", help="Seed of the random 3-point planes."),
 ):
     """Calibrate the rotary axes of a five-axis machine from probed sphere centres (seed 003)."""
-    from ..fivex.commands import calibration_summary, rtcp_calibrate
-
     if tip_radius and not _has_touch_column(probes):
         raise InputError(f"{probes}: --tip-radius is for touch probing; these rows are sphere centres (no touch column): leave it out")
     doc, _ = rtcp_calibrate(probes, machine, output, axis, method, seed, sphere_radius, tip_radius, min_outlier)

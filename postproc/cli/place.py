@@ -10,9 +10,15 @@ from typing import Optional
 import numpy as np
 import typer
 
+from .. import place_report as report, placement as pl
+from ..compliance import identified_compliance
+from ..dialects import of as dialect_of
 from ..errors import InputError, JobError
 from ..files import write_all
+from ..forces import load_cut_params
+from ..place_program import check_placed, placed_conf, placed_texts, problem_from_program
 from ..plugin_option import with_plugins
+from ..programs import parse_program
 from ..progress import ProgressLine
 from ..robots import load_robot
 from .app import app, err, handles_errors, out
@@ -51,11 +57,6 @@ def place_cmd(
     dialect: Optional[str] = typer.Option(None, "--dialect"),
 ):
     """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
-    from .. import placement as pl
-    from .. import place_report as report
-    from ..place_program import check_placed, placed_conf, placed_texts
-    from ..programs import parse_program
-
     if (force is None) == (cut is None):
         raise InputError("give the cutting force as either --force FX,FY,FZ or --cut CUT.toml")
     axes = [pl.grid_axis(spec, name) for spec, name in zip(_search_spec(search_spec), ("x", "y", "theta"))]
@@ -82,7 +83,6 @@ def place_cmd(
         new_conf = placed_conf(problem, best_frame) if not keep_conf else None
         texts = placed_texts(tp, best_frame, new_conf)
         check_placed(tp, texts, best_frame, new_conf)
-        from ..dialects import of as dialect_of
 
         files.update({Path(p): text.encode("latin-1") for p, text in dialect_of(tp).files(tp, texts, output).items()})
         doc["written"] = str(output)
@@ -100,12 +100,9 @@ def place_cmd(
 
 def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, conf_mode):
     """The placement problem of the place command's inputs, and where its force and compliance come from."""
-    from ..compliance import identified_compliance
-    from ..forces import load_cut_params
-    from ..place_program import problem_from_program
-
     fitted = None
     if model is not None:
+        # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from ..model_io import load_model
 
         fitted, _ = load_model(model)
@@ -115,6 +112,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, c
     if stock is not None:
         if params is None:
             raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
+        # Deferred import: it loads trimesh (slow to import); `postproc --version` must stay fast.
         from ..engagement import load_stock, program_engagement
 
         engagement = program_engagement(tp, params.diameter, load_stock(stock))
@@ -126,7 +124,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, c
 
 def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> dict[Path, bytes]:
     """The heat map (PLOT) and the error along the path (PLOT_path), as PNG bytes by path."""
-    from .. import placement as pl
+    # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
     from ..report.placement_figures import error_maps, path_errors
 
     steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))

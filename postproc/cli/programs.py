@@ -10,8 +10,15 @@ import numpy as np
 import typer
 from rich.table import Table
 
+from ..arcs import describe
+from ..dialects import get
+from ..emit.feeds import describe as describe_feeds
+from ..emit.tool_load import parse_tool_load
 from ..errors import InputError, JobError, PostprocError
+from ..fivex.commands import convert_five
+from ..frames import matrix_to_quat_wxyz
 from ..plugin_option import with_plugins
+from ..programs import emit_texts, parse_program, write_program, write_texts
 from .app import app, err, exit_code, handles_errors, out
 from .common import named_frames, refuse_unused
 
@@ -29,9 +36,6 @@ def inspect_cmd(
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
-    from ..frames import matrix_to_quat_wxyz
-    from ..programs import parse_program
-
     tp = parse_program(program, dialect, modules=data or ())
     poses = tp.base_poses()
     has_ori = ~np.isnan(tp.orientation).any(axis=1)
@@ -43,10 +47,8 @@ def inspect_cmd(
         return None if v is None or not np.isfinite(v) else round(float(v), 6)
 
     placed = tp.placed()
-    from ..arcs import describe
 
     arc_of = describe(tp)  # G2/G3: plane, direction, centre, radius
-    from ..emit.feeds import describe as describe_feeds
 
     feed_of = describe_feeds(tp)  # G-code: feed mode; G93 / G95: F, its unit and the derived mm/min
     moves = []
@@ -113,12 +115,7 @@ def convert_cmd(
     arc_tol: Optional[float] = typer.Option(None, "--arc-tol", help="mm: write helical and spiral arcs (G2/G3 with a move along the plane's normal, or a changing radius), which no circular move holds, as straight moves within this chord error (without it they are refused)."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
-    from ..dialects import get
-    from ..programs import parse_program, write_program, write_texts
-
     if machine is not None or rtcp is not None:
-        from ..fivex.commands import convert_five
-
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
@@ -128,7 +125,6 @@ def convert_cmd(
             out.print(line)
         return
     refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
-    from ..emit.tool_load import parse_tool_load
 
     load = None if tool_load is None else parse_tool_load(tool_load)
     outputs = get(to, "--to").new_program_paths(output)
@@ -146,8 +142,6 @@ def roundtrip_cmd(
     dialect: Optional[str] = typer.Option(None, "--dialect"),
 ):
     """Parse and re-emit programs unchanged; exit 0 only if every output is byte-identical."""
-    from ..programs import emit_texts, parse_program
-
     status = 0
     for program in programs:
         try:

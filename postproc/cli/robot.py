@@ -11,9 +11,7 @@ from rich.table import Table
 
 from ..errors import JobError
 from ..frames import abc_to_matrix, make_transform, matrix_to_abc
-from ..kinematics import fk as _fk
-from ..kinematics import ik as _ik
-from ..kinematics import within_limits
+from ..kinematics import fk as _fk, ik as _ik, within_limits
 from ..robots import available_robots, load_robot
 from .app import app, handles_errors, out
 from .common import floats

@@ -9,10 +9,12 @@ from typing import Optional
 import numpy as np
 import typer
 
+from ..effects import parse_effects
 from ..errors import InputError
 from ..plugin_option import with_plugins
 from ..progress import ProgressLine
 from ..robots import load_robot
+from ..sim import parse_region
 from .app import app, err, handles_errors, out
 from .common import check_output_folder, floats, load_measurements, refuse_unused
 
@@ -51,9 +53,8 @@ def suggest_poses_cmd(
 ):
     """Choose the poses to measure that identify the model best (optimal experiment design)."""
 
-    from ..effects import parse_effects
+    # Deferred import: it loads scipy / matplotlib (slow to import); `postproc --version` must stay fast.
     from ..model_io import load_model
-    from ..sim import parse_region
     from ..suggest import program_targets, suggest_poses
     from ..suggest.candidates import generate, read_candidates, with_load_states
     from ..suggest.inputs import design_model, tracker_from

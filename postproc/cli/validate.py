@@ -8,6 +8,7 @@ from typing import Optional
 
 import typer
 
+from ..effects import parse_effects
 from ..errors import InputError
 from ..plugin_option import with_plugins
 from ..progress import ProgressLine
@@ -34,8 +35,8 @@ def validate_cmd(
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
 ):
     """Error on held-out poses under a named protocol, with each test pose's distance to the training poses."""
+    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from .. import validate as protocols
-    from ..effects import parse_effects
 
     if protocol not in protocols.PROTOCOLS:
         raise InputError(f"--protocol: '{protocol}' is not one of {', '.join(protocols.PROTOCOLS)}")
