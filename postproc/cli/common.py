@@ -13,8 +13,8 @@ from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outsi
 from .app import err
 
 
-
 def floats(text: str, count: int, what: str) -> np.ndarray:
+    """'X,Y,Z' (commas or semicolons) -> `count` numbers; an InputError naming the option `what` otherwise."""
     parts = [p for p in text.replace(";", ",").split(",") if p.strip()]
     try:
         values = np.array([float(p) for p in parts])
@@ -23,7 +23,6 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
     if values.shape != (count,):
         raise InputError(f"{what}: expected {count} comma-separated numbers, got {len(parts)} in '{text}'")
     return values
-
 
 
 def refuse_unused(why: str, options: dict[str, bool]) -> None:
@@ -69,7 +68,6 @@ def check_output_folder(path: Optional[Path], option: str) -> None:
         raise OutputError(f"{option} {path}: is a folder, expected a file name")
 
 
-
 def named_frames(items: list[str] | None, option: str) -> dict:
     """'NAME=X,Y,Z[,A,B,C]' options -> {name: 4x4}."""
     out = {}
@@ -82,4 +80,3 @@ def named_frames(items: list[str] | None, option: str) -> dict:
         abc = nums[3:6] if len(nums) == 6 else np.zeros(3)
         out[name.strip()] = make_transform(abc_to_matrix(abc[None])[0], nums[:3])
     return out
-
