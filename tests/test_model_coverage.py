@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 
 import postproc
 from postproc.cli import app
+from postproc.cli.common import load_measurements
 from postproc.coverage import Coverage
 from postproc.effects import EffectSum, parse_effects
 from postproc.errormodel import ErrorModel
@@ -102,9 +103,7 @@ def test_joint_within_the_margin_is_kept_with_a_warning(measured, tmp_path):
 @pytest.mark.parametrize("name", ["kr160_dev_a_train", "kr160_dev_a_val", "kr160_dev_b_train", "kr160_dev_b_val"])
 def test_shared_kr160_sets_still_load(shared, name):
     """The shared sets reach 49.6 deg beyond the KR160's estimated limits (A3, A5): kept."""
-    from postproc.cli import _load_measurements
-
-    data = _load_measurements(shared / "data" / f"{name}.csv", postproc.load_robot(KR160))
+    data = load_measurements(shared / "data" / f"{name}.csv", postproc.load_robot(KR160))
     assert len(data) >= 100
 
 

@@ -1,4 +1,4 @@
-"""Library entry points of the five-axis CLI commands (cli.py only maps errors and prints)."""
+"""Library entry points of the five-axis CLI commands (postproc.cli only maps errors and prints)."""
 
 from __future__ import annotations
 

@@ -1,0 +1,8 @@
+"""`python -m postproc.cli ...` runs the command-line interface, as the `postproc` script does."""
+
+import sys
+
+from postproc.cli import main
+
+if __name__ == "__main__":
+    sys.exit(main())

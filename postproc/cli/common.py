@@ -1,0 +1,82 @@
+"""Option parsing and checks shared by several commands."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Optional
+
+import numpy as np
+
+from ..errors import InputError, OutputError
+from ..frames import abc_to_matrix, make_transform
+from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
+from .app import err
+
+
+def floats(text: str, count: int, what: str) -> np.ndarray:
+    """'X,Y,Z' (commas or semicolons) -> `count` numbers; an InputError naming the option `what` otherwise."""
+    parts = [p for p in text.replace(";", ",").split(",") if p.strip()]
+    try:
+        values = np.array([float(p) for p in parts])
+    except ValueError:
+        raise InputError(f"{what}: expected {count} comma-separated numbers, got '{text}'") from None
+    if values.shape != (count,):
+        raise InputError(f"{what}: expected {count} comma-separated numbers, got {len(parts)} in '{text}'")
+    return values
+
+
+def refuse_unused(why: str, options: dict[str, bool]) -> None:
+    """Options given (True) that this use of the command would not use are an error, not a no-op."""
+    unused = [name for name, given in options.items() if given]
+    if unused:
+        raise InputError(f"{', '.join(unused)}: not used {why}; leave {'it' if len(unused) == 1 else 'them'} out")
+
+
+def load_measurements(path: Path, robot=None, drop_invalid: bool = False):
+    """Read a measurement set; with a robot, rows beyond its joint limits are an error
+    (or, with --drop-invalid, dropped and listed on stderr)."""
+    data = read_measurements(path)
+    if robot is None:
+        return data
+    # Limits a robot file marks as estimates are not grounds to refuse measured data just
+    # beyond them: rows within a margin of them are listed as warnings and kept.
+    estimated = robot.estimates.get("limits", False)
+    data, dropped = check_joint_limits(data, robot.lower_deg, robot.upper_deg, drop_invalid,
+                                       margin_deg=ESTIMATED_LIMIT_MARGIN_DEG if estimated else 0.0)
+    warned = outside_limits(data, robot.lower_deg, robot.upper_deg) if estimated else []
+    if warned:
+        err.print(f"warning: {path}: {len(warned)} row(s) outside {robot.name}'s joint limits, which {robot.source_path} marks as estimates; "
+                  f"kept, as within {ESTIMATED_LIMIT_MARGIN_DEG:g} deg of them (first: {warned[0]})")
+    for message in dropped:
+        err.print(f"dropped: {path}, {message}")
+    if dropped and len(data) == 0:
+        raise InputError(f"{path}: every row is outside the robot's joint limits; nothing left to use")
+    return data
+
+
+DROP_INVALID_HELP = "Drop (and list) rows whose joints are outside the robot's limits instead of stopping."
+
+
+def check_output_folder(path: Optional[Path], option: str) -> None:
+    """Fail before any computation when an output cannot be written where asked."""
+    if path is None or str(path) == "-":
+        return
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise OutputError(f"{option} {path}: folder {folder} does not exist")
+    if path.is_dir():
+        raise OutputError(f"{option} {path}: is a folder, expected a file name")
+
+
+def named_frames(items: list[str] | None, option: str) -> dict:
+    """'NAME=X,Y,Z[,A,B,C]' options -> {name: 4x4}."""
+    out = {}
+    for item in items or []:
+        name, eq, values = item.partition("=")
+        if not eq or not name.strip():
+            raise InputError(f"{option}: expected NAME=X,Y,Z[,A,B,C], got '{item}'")
+        parts = [p for p in values.split(",") if p.strip()]
+        nums = floats(values, len(parts) if len(parts) in (3, 6) else 6, option)
+        abc = nums[3:6] if len(nums) == 6 else np.zeros(3)
+        out[name.strip()] = make_transform(abc_to_matrix(abc[None])[0], nums[:3])
+    return out
