@@ -331,3 +331,13 @@ def test_load_states_separate_the_compliances_and_are_measured_state_by_state(tm
     assert "compliance.c1" in loaded["expected_std"]
     bad = runner.invoke(app, [*args, "--load-states", "0,0"])
     assert bad.exit_code == 2 and "--load-states" in bad.output
+
+
+def test_the_spec_call_without_a_tool_designs_for_the_flange(tmp_path):
+    """spec/cli.md's call names --robot, --effects, a workspace, -n and -o, no --tool: it runs,
+    designs for the flange's centre and says so."""
+    result = runner.invoke(app, ["suggest-poses", "--robot", "kr160_r1570", "--effects", "geometric", "--cylinder", "",
+                                 "--n-candidates", "200", "-n", "40", "-o", str(tmp_path / "c.csv"), "--json"])
+    assert result.exit_code == 0, result.output
+    assert len(json.loads(result.stdout)["chosen"]) == 40
+    assert "no --tool" in result.stderr

@@ -26,7 +26,7 @@ def suggest_poses_cmd(
     output: Path = typer.Option(..., "-o", "--output", help="CSV of the chosen poses (id, q1..q6 and the candidates' other columns), in measuring order."),
     n: int = typer.Option(..., "-n", "--n", help="Number of poses to choose."),
     robot: Optional[str] = typer.Option(None, "--robot", help="Robot name or file (default: the --model's)."),
-    tool: Optional[str] = typer.Option(None, "--tool", help="X,Y,Z of the measured point in the flange frame, mm (default: the --model's)."),
+    tool: Optional[str] = typer.Option(None, "--tool", help="X,Y,Z of the measured point in the flange frame, mm (default: the --model's, else the flange's centre 0,0,0)."),
     effects: Optional[str] = typer.Option(None, "--effects", help="Effects the measurements are to identify (default: the --model's)."),
     model: Optional[Path] = typer.Option(None, "--model", help="A fitted model: the Jacobian is taken at its values."),
     candidates: Optional[Path] = typer.Option(None, "--candidates", help="CSV of poses the robot can reach (q1..q6 degrees; id and other columns optional)."),
@@ -70,10 +70,17 @@ def suggest_poses_cmd(
                                                                   "--n-candidates": candidates is not None and n_candidates != 2000})
     refuse_unused("with --program (the design is region-targeted)", {"--criterion": program is not None and criterion not in ("D", "I")})
     fitted = load_model(model)[0] if model is not None else None
-    if fitted is None and (robot is None or tool is None):
-        raise InputError("suggest-poses needs --robot and --tool (or --model MODEL.json)")
+    if fitted is None and robot is None:
+        raise InputError("suggest-poses needs --robot (or --model MODEL.json)")
     robot_model = load_robot(robot) if robot is not None else fitted.robot
-    tool_mm = floats(tool, 3, "--tool") if tool is not None else fitted.tool_mm
+    if tool is not None:
+        tool_mm = floats(tool, 3, "--tool")
+    elif fitted is not None:
+        tool_mm = fitted.tool_mm
+    else:  # spec/cli.md's call names no tool: design for the flange, and say so
+        tool_mm = np.zeros(3)
+        err.print("note: no --tool: the poses are chosen for a point at the flange's centre (0,0,0); "
+                  "give --tool X,Y,Z of the measured point (mm, flange frame) to design for it", highlight=False)
     design_for = design_model(robot_model, tool_mm, parse_effects(effects) if effects is not None else None, fitted)
     for path, option in ((output, "-o"), (plot, "--plot"), (program_out, "--program-out")):
         check_output_folder(path, option)
