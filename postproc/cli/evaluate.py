@@ -42,25 +42,22 @@ def evaluate_cmd(
     """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from ..coverage import describe_outside, outside_poses
-    from ..identify import Stats, residuals
+    from ..identify import Stats, refit_base, residuals
     from ..model_io import load_model
 
+    refuse_unused("without --json", {"--region": region_json and not json_out})  # usage first, before any work
     error_model, _ = load_model(model)
     data = load_measurements(meas, error_model.robot, drop_invalid)
     if reregister:
         _check_registrable(meas, data)
-        # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-        from ..identify import refit_base
-
         error_model = refit_base(error_model, data)
     stats = Stats.of(residuals(error_model, data))
     outside = outside_poses(error_model, data.q_deg)
-    refuse_unused("without --json", {"--region": region_json and not json_out})
     if json_out:
         doc = {"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}
         if region_json:
             doc["outside_region"] = None if outside is None else outside.summary()
-        elif outside is not None and outside.summary()["count"]:
+        elif outside is not None and outside.mask.any():
             err.print(describe_outside(outside, stats.n), highlight=False)
         print(json.dumps(doc))
         return
