@@ -27,7 +27,7 @@ from .machine import Machine
 from .offsets import machine_angles, program_to_machine, to_machine, tool_length
 
 ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # IR ext columns of the G-code rotary words
-_RTCP_ON = re.compile(r"G43\.4|G43\.5|TRAORI", re.IGNORECASE)
+_RTCP_ON = re.compile(r"G43\.4|G43\.5|TRAORI|\bM128\b|FUNCTION\s+TCPM", re.IGNORECASE)  # Klartext: M128 / FUNCTION TCPM (dialects/heidenhain)
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,49 @@
+"""Heidenhain Klartext (TNC conversational, ``.h``): reading, writing back, new programs."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ...ir import SourceDoc, Toolpath
+from ..base import Dialect
+from .controller import TNC
+from .parse import parse
+
+
+class HeidenhainDialect(Dialect):
+    name = "heidenhain"
+    description = "Heidenhain Klartext (TNC 640 / iTNC 530 conversational)"
+    extensions = (".h",)
+    machine_program = True
+    speed_to_mm_per_s = 1.0 / 60.0  # F is mm/min
+    comment_pattern = r";[^\n]*"
+    motion_words = "L, LN, C, CR, CT, LP or CP"
+    controller = TNC
+
+    def sniff(self, head: str) -> bool:
+        return re.search(r"^\s*\d*\s*BEGIN PGM\s", head, re.MULTILINE) is not None
+
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
+        return parse(sources[0])
+
+    def insert_field(self, source: int, field: str, text: str) -> str:
+        sign = "" if text.startswith("-") else "+"
+        return f" {field.upper()}{sign}{text}"  # Klartext writes the sign: X+10
+
+    # controller rules: delegated to the TNC (postproc.controller.Controller once merged)
+    def conf_applies(self, tp: Toolpath) -> np.ndarray:
+        return self.controller.conf_applies(tp)
+
+    def branch_from_conf(self, robot, solutions, conf):
+        return self.controller.branch_from_conf(robot, solutions, conf)
+
+    def inexact_interpolation(self, tp: Toolpath) -> str | None:
+        return self.controller.inexact_interpolation(tp)
+
+    def new_writer(self, name: str):
+        return None  # new programs come from a five-axis path: writer.write_tcpm (convert --to heidenhain --machine M --rtcp tcpm)
+
+
+HEIDENHAIN = HeidenhainDialect()

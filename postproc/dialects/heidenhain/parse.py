@@ -1,0 +1,661 @@
+"""Klartext (Heidenhain TNC conversational) to the IR, executed as the TNC runs it.
+
+Rules, each from the TNC 640 User's Manual (Klartext programming), by section:
+- "Path contours - Cartesian coordinates": L X Y Z A B C (absolute; I.. incremental from the
+  previous position), modal axis values; C X Y DR+/DR- a circle about the pole CC (DR+
+  counterclockwise); CR X Y R DR a circle of radius R (R+ at most 180 degrees, R- more); CT a
+  circle tangent to the previous element; CC without coordinates: the last position.
+- "Path contours - polar coordinates": LP PR PA / CP PA DR about the pole CC, PA from the
+  +X axis (tool axis Z), counterclockwise positive; IPR / IPA incremental; CP keeps the
+  distance from the pole.
+- "Feed rate F": F is modal; FMAX (rapid traverse) acts only in its own block.
+- "Radius compensation": RL/RR move the tool by its radius beside the contour; the path then
+  depends on the tool table's radius, which the text does not give: such targets are read
+  as programmed and flagged unresolved (never guessed).
+- "Subprograms and program-section repeats": LBL n ... CALL LBL n REP k runs the section k
+  more times; CALL LBL n without REP runs LBL n to LBL 0 and returns; FN 9..12 IF .. GOTO
+  LBL jump; M2/M30 and END PGM end the run.
+- "Q parameters" (qparams.py); FN 18 SYSREAD gives values the text does not determine.
+- "Cycles for coordinate transformation", Cycle 7 DATUM SHIFT: absolute values from the
+  workpiece preset, incremental from the shift in force; #n (datum table) is on the control.
+- "Tool call": TOOL CALL n Z S DL DR; the tool length is in the control's tool table (TOOL
+  DEF n L R in the program defines it, TNC 4xx programs), DL is added to it.
+- "Miscellaneous functions for rotary axes": M128 / FUNCTION TCPM keep the tool tip at the
+  programmed X Y Z while the rotary axes turn (rotary words are axis positions with AXIS POS);
+  M126 takes the shortest way round (the end angle is the programmed one).
+Targets whose position depends on what the text does not determine (radius compensation,
+tilted working plane, machining cycles, values read from the control) are kept, flagged
+unresolved, with a note: inspect shows them, compensate refuses them by file:line:column.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import replace
+
+import numpy as np
+
+from ...errors import ParseError
+from ...ir import F_ARC, F_EXT, FIELDS, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex
+from .blocks import Block, split_blocks
+from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
+from .words import PathWords, Word, WordError, read_words
+
+MAX_BLOCKS_RUN = 5_000_000  # a loop that never ends is refused, not run forever
+_AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
+_R = FIELDS.index("r")
+_PATH = re.compile(r"(LN|LP|L|CC|CR|CT|CP|C)(?![A-Z])", re.IGNORECASE)
+_REFUSED_STATEMENTS = {
+    "APPR": "approach contour (APPR): the path the TNC builds depends on the tool radius; not read",
+    "DEP": "departure contour (DEP): the path the TNC builds depends on the tool radius; not read",
+    "RND": "corner rounding (RND): the arc the TNC inserts is not read",
+    "CHF": "chamfer (CHF): the corner the TNC cuts is not read",
+    "FL": "FK free contour programming: not read", "FC": "FK free contour programming: not read",
+    "FPOL": "FK free contour programming: not read", "FCT": "FK free contour programming: not read",
+    "FLT": "FK free contour programming: not read",
+    "CALL PGM": "CALL PGM runs another program file, which is not read",
+    "SEL PGM": "SEL PGM selects another program file, which is not read",
+    "SPL": "spline blocks (SPL) are not read",
+}
+
+
+class KlartextReader:
+    """One run of a Klartext program: the state the TNC keeps, block by block."""
+
+    def __init__(self, doc: SourceDoc, dialect: str = "heidenhain"):
+        self.doc = doc
+        self.text = doc.text
+        self.lines = LineIndex(doc.text)
+        self.b = Builder(dialect, "none", [doc], tool_names=["<none>"], frame_names=["PRESET"], frame_known=[False])
+        self.blocks = split_blocks(doc.text)
+        self.labels = self._labels()
+        self.q: dict[str, float] = {}
+        self.q_origin: dict[str, int] = {}  # parameter -> line where it became unknown (FN 18)
+        self.scale = 1.0  # mm per program unit
+        self.feed_scale = 1.0
+        self.pos = np.full(6, np.nan)  # X Y Z A B C, program frame
+        self.unknown = np.zeros(6, bool)  # the value came from a parameter the text does not determine
+        self.feed = math.nan
+        self.feed_unknown = False
+        self.pole = np.full(2, np.nan)
+        self.polar = [math.nan, math.nan]  # last PR, PA
+        self.tangent = None  # direction at the end of the last contour element (CT)
+        self.comp = "R0"
+        self.comp_line = 0
+        self.tool = 0
+        self.frame = 0
+        self.shift = np.zeros(3)
+        self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
+        self.tcpm = False
+        self.notes: dict[str, None] = {}
+        self.rows: list[tuple] = []
+        self.cycle_defined = 0  # line of the last machining cycle defined (CYCL DEF n, not 7/19/32/9)
+        self.cycl7_line = 0
+        self.tolerance_line = 0
+
+    # ------------------------------------------------------------- driver
+    def _labels(self) -> dict[str, int]:
+        out = {}
+        for i, blk in enumerate(self.blocks):
+            m = re.match(r"\s*LBL\s*(\d+|\"[^\"]*\"|\S+)\s*$", blk.text, re.IGNORECASE)
+            if m:
+                out.setdefault(m.group(1).upper(), i)
+        return out
+
+    def error(self, offset: int, message: str) -> ParseError:
+        return self.lines.error(self.doc.path, offset, message)
+
+    def run(self) -> Toolpath:
+        pc, stack, repeats, executed = 0, [], {}, 0
+        blocks = self.blocks
+        while pc < len(blocks):
+            executed += 1
+            if executed > MAX_BLOCKS_RUN:
+                raise self.error(blocks[pc].start, f"more than {MAX_BLOCKS_RUN} blocks run: the program's jumps do not end")
+            blk = blocks[pc]
+            jump = self.block(blk, pc)
+            if jump is None:
+                pc += 1
+            elif jump == "end":
+                break
+            else:
+                kind, arg = jump
+                if kind == "goto":
+                    pc = arg
+                elif kind == "call":
+                    stack.append(pc + 1)
+                    pc = arg
+                    if len(stack) > 8:  # TNC 640 manual: subprograms nest up to 8 levels (19 on newer)
+                        raise self.error(blk.start, "subprogram calls nested deeper than 8")
+                elif kind == "return":
+                    if stack:
+                        pc = stack.pop()
+                    else:
+                        pc += 1
+                elif kind == "repeat":
+                    label, count = arg
+                    left = repeats.get(pc, count)
+                    if left > 0:
+                        repeats[pc] = left - 1
+                        pc = label
+                    else:
+                        repeats.pop(pc, None)
+                        pc += 1
+        return self.build()
+
+    # ------------------------------------------------------------- blocks
+    def block(self, blk: Block, index: int):
+        s = blk.text.lstrip()
+        at = blk.start + len(blk.text) - len(s)
+        head = s.split(None, 1)[0].upper() if s.split() else ""
+        m = _PATH.match(s)
+        if m and (len(s) == m.end() or not s[m.end()].isalnum() or m.group(1).upper() in ("L", "C") and s[m.end()] in "+- "):
+            return self.path_block(blk, m.group(1).upper(), at, m.end())
+        up = s.upper()
+        if up.startswith(("BEGIN PGM", "END PGM")):
+            return self.pgm(blk, up, at)
+        if up.startswith("BLK FORM") or up.startswith("STOP") or up.startswith(("FN 15", "FN15", "FN 16", "FN16")):
+            return None  # workpiece blank for the graphics; program stop; printing: no motion
+        if up.startswith("TOOL DEF"):
+            return self.tool_def(s, at)
+        if up.startswith("TOOL CALL"):
+            return self.tool_call(s, at, blk.line)
+        if up.startswith(("CYCL DEF", "CYCLE DEF")):
+            return self.cycle_def(s, at, blk.line)
+        if up.startswith("CYCL CALL"):
+            return self.cycle_call(at, blk.line)
+        if up.startswith("PLANE"):
+            return self.plane(s, at, blk.line)
+        if up.startswith("FUNCTION"):
+            return self.function(s, at, blk.line)
+        if up.startswith("LBL"):
+            return ("return", None) if re.match(r"LBL\s*0\s*$", up) else None
+        if up.startswith("CALL LBL"):
+            return self.call_label(s, at)
+        if re.match(r"FN\s*(9|10|11|12)\s*:", up):
+            return self.conditional(s, at)
+        if re.match(r"FN\s*\d+\s*:", up) or re.match(r"Q[LR]?\d+\s*=", up):
+            return self.assign(s, at, blk.line)
+        if re.match(r"M\d", up):
+            words = self.words(s, at, 0)
+            return self.m_functions(words, blk.line, at)
+        for key, why in _REFUSED_STATEMENTS.items():
+            if up.startswith(key) and (len(up) == len(key) or not up[len(key)].isalpha()):
+                raise self.error(at, why)
+        raise self.error(at, f"'{head}' is not a Klartext block this reader knows")
+
+    def words(self, s: str, at: int, start: int) -> PathWords:
+        try:
+            return read_words(s, start, at)
+        except WordError as exc:
+            raise self.error(exc.at, str(exc)) from None
+
+    def pgm(self, blk: Block, up: str, at: int):
+        if up.startswith("END PGM"):
+            return "end"
+        unit = up.split()[-1]
+        if unit == "INCH":
+            # TNC 640 manual, "Programming fundamentals": INCH programs; feed in 1/10 inch/min ("Feed rate F")
+            self.scale, self.feed_scale = 25.4, 2.54
+        elif unit != "MM":
+            raise self.error(at + len(blk.text.lstrip()) - len(unit), "BEGIN PGM needs the unit MM or INCH at its end")
+        return None
+
+    def tool_def(self, s: str, at: int):
+        m = re.match(r"TOOL DEF\s+(\d+)(.*)$", s, re.IGNORECASE)
+        if not m:
+            return None  # TOOL DEF "name" / TOOL DEF without data: pre-selection only
+        length = re.search(r"\bL\s*([+-]?(?:\d+\.?\d*|\.\d+))", m.group(2), re.IGNORECASE)
+        if length:  # TNC 4xx: TOOL DEF n L.. R.. defines the tool in the program
+            self.b.tool_index(f"T{m.group(1)}", _along_z(float(length.group(1)) * self.scale))
+        return None
+
+    def tool_call(self, s: str, at: int, line: int):
+        m = re.match(r"TOOL CALL\s*(\d+|\"[^\"]*\")?\s*([XYZ])?(.*)$", s, re.IGNORECASE)
+        if not m:
+            raise self.error(at, "TOOL CALL needs a tool number or name and the tool axis")
+        if m.group(2) and m.group(2).upper() != "Z":
+            raise self.error(at + m.start(2), f"tool axis {m.group(2).upper()}: only tool axis Z (working plane XY) is read")
+        if m.group(1) is None:
+            return None  # TOOL CALL Z: sets the tool axis only
+        name = f"T{m.group(1)}" if m.group(1)[0] != '"' else m.group(1).strip('"')
+        rest = m.group(3)
+        dl = re.search(r"\bDL\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
+        if re.search(r"\bDL\s*[+-]?\s*Q", rest, re.IGNORECASE):
+            raise self.error(at, "DL from a Q parameter is not read")
+        base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
+        if dl and float(dl.group(1)) != 0.0:
+            delta = float(dl.group(1)) * self.scale
+            known = bool(self.b.tool_known[base])
+            # DL is added to the tool table's length (TNC 640 manual, "Tool call: delta values")
+            self.tool = self.b.tool_index(f"{name}+DL{dl.group(1)}@line{line}", self.b.tools[base] @ _along_z(delta), known)
+        else:
+            self.tool = base
+        return None
+
+    def cycle_def(self, s: str, at: int, line: int):
+        m = re.match(r"CYCLE?\s+DEF\s+(\d+)(?:\.(\d+))?\s*(.*)$", s, re.IGNORECASE)
+        if not m:
+            raise self.error(at, "CYCL DEF needs a cycle number")
+        number, sub, rest = int(m.group(1)), m.group(2), m.group(3)
+        if number == 7:
+            return self.datum_shift(sub, rest, at + m.start(3), line)
+        if number == 19:
+            if sub and sub != "0":
+                angles = [float(v) for v in re.findall(r"[ABC]\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)]
+                self.tilt_line = line if any(a != 0.0 for a in angles) else 0
+            return None
+        if number in (8, 10, 11, 26):
+            if sub and sub != "0":
+                raise self.error(at, f"coordinate transformation cycle {number} (mirror / rotation / scaling) is not read")
+            return None
+        if number == 32:  # TOLERANCE: the TNC smooths the path within T (TNC 640 manual, Cycle 32)
+            if sub == "1" and re.search(r"T\s*\+?0*\.?0*[1-9]", rest):
+                self.tolerance_line = self.tolerance_line or line
+            return None
+        if number == 9:  # dwell
+            return None
+        self.cycle_defined = line  # a machining cycle: its moves run at CYCL CALL / M99 / M89
+        return None
+
+    def datum_shift(self, sub: str | None, rest: str, at: int, line: int):
+        if sub in (None, "0"):
+            self.cycl7_line = line
+            return None
+        table = re.match(r"\s*#", rest)
+        if table:
+            self.frame = self.b.frame_index(f"PRESET+datum table {rest.strip()}@line{line}", None)
+            return None
+        words = re.findall(r"(I?)([XYZ])\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
+        if not words or re.search(r"Q", rest, re.IGNORECASE):
+            raise self.error(at, "datum shift: a plain X/Y/Z value is read (Q parameters here are not)")
+        for inc, axis, value in words:
+            k = "XYZ".index(axis.upper())
+            v = float(value) * self.scale
+            self.shift[k] = self.shift[k] + v if inc else v
+        shown = " ".join(f"{a}{v:+g}" for a, v in zip("XYZ", self.shift / self.scale))
+        name = f"PRESET+CYCL7@line{self.cycl7_line or line}({shown})"  # one frame per shift value (a loop may shift again)
+        self.frame = self.b.frame_index(name, _translation(self.shift), False) if self.shift.any() else 0
+        return None
+
+    def cycle_call(self, at: int, line: int):
+        if self.cycle_defined:
+            self.unresolved_row(line, at, f"line {line}: CYCL CALL runs the machining cycle defined at line {self.cycle_defined}: its moves are not read")
+        return None
+
+    def plane(self, s: str, at: int, line: int):
+        up = s.upper()
+        if up.startswith("PLANE RESET"):
+            self.tilt_line = 0
+        else:
+            self.tilt_line = line
+        if re.search(r"\b(MOVE|TURN)\b", up):
+            # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
+            self.unresolved_row(line, at, f"line {line}: PLANE ... MOVE/TURN positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): not read")
+        return None
+
+    def function(self, s: str, at: int, line: int):
+        up = re.sub(r"\s+", " ", s.upper())
+        if up.startswith("FUNCTION RESET TCPM"):
+            self.tcpm = False
+        elif up.startswith("FUNCTION TCPM"):
+            if "AXIS SPAT" in up:
+                raise self.error(at, "FUNCTION TCPM ... AXIS SPAT: rotary words as spatial angles are not read (AXIS POS is)")
+            self.tcpm = True
+            self.notes["FUNCTION TCPM: rotary words are axis positions, X Y Z the tool tip (TNC 640 manual, FUNCTION TCPM)"] = None
+        else:
+            raise self.error(at, f"'{' '.join(up.split()[:2])}' is not read")
+        return None
+
+    def call_label(self, s: str, at: int):
+        m = re.match(r"CALL LBL\s*(\d+|\"[^\"]*\"|\S+)(?:\s+REP\s*(\d+)(?:\s*/\s*\d+)?)?\s*$", s, re.IGNORECASE)
+        if not m:
+            raise self.error(at, "CALL LBL needs a label (and REP count)")
+        label = m.group(1).upper()
+        if label not in self.labels:
+            raise self.error(at, f"label {m.group(1)} is not in the program")
+        if m.group(2) is not None:
+            return ("repeat", (self.labels[label] + 1, int(m.group(2))))
+        return ("call", self.labels[label] + 1)
+
+    def conditional(self, s: str, at: int):
+        m = re.match(r"FN\s*(9|10|11|12)\s*:\s*IF\s+(.+?)\s+(EQU|NE|GT|LT)\s+(.+?)\s+GOTO\s+LBL\s*(\S+)\s*$", s, re.IGNORECASE)
+        if not m:
+            raise self.error(at, "FN 9..12 needs IF a EQU|NE|GT|LT b GOTO LBL n")
+        a, used_a = self.value(m.group(2), at + m.start(2))
+        b, used_b = self.value(m.group(4), at + m.start(4))
+        if math.isnan(a) or math.isnan(b):
+            raise self.error(at, f"the jump depends on {self.unknown_cause(used_a + used_b)}: the program's flow is not determined by its text")
+        take = {"EQU": a == b, "NE": a != b, "GT": a > b, "LT": a < b}[m.group(3).upper()]
+        label = m.group(5).upper()
+        if label not in self.labels:
+            raise self.error(at + m.start(5), f"label {m.group(5)} is not in the program")
+        return ("goto", self.labels[label] + 1) if take else None
+
+    def unknown_cause(self, used: list[str]) -> str:
+        names = [u for u in used if math.isnan(self.q.get(u, math.nan))]
+        parts = [f"{u} (read from the control by FN 18 at line {self.q_origin[u]})" if u in self.q_origin else f"{u} (never set in this program)" for u in dict.fromkeys(names)]
+        return ", ".join(parts) or "a value the text does not determine"
+
+    def value(self, text: str, at: int) -> tuple[float, list[str]]:
+        try:
+            return evaluate(text, self.q)
+        except FormulaError as exc:
+            raise self.error(at + exc.at, str(exc)) from None
+
+    def assign(self, s: str, at: int, line: int):
+        m = FN_RE.match(s)
+        if m:
+            number = int(m.group(1))
+            if number == 18:
+                self.q[m.group(2).upper()] = math.nan
+                self.q_origin[m.group(2).upper()] = line
+                return None
+            try:
+                rhs = fn_as_formula(number, m.group(3), 0)
+            except FormulaError as exc:
+                raise self.error(at, str(exc)) from None
+            v, _ = self.value(rhs, at + m.start(3)) if number != 0 else self.value(m.group(3), at + m.start(3))
+            self.q[m.group(2).upper()] = v
+            return None
+        if re.match(r"FN\s*(14)\s*:", s, re.IGNORECASE):
+            raise self.error(at, "FN 14 ERROR: the program stops here with an error message")
+        if re.match(r"FN\s*\d+\s*:", s, re.IGNORECASE):
+            raise self.error(at, f"{s.split(':')[0].strip()} is not read (it reads or writes the control's data)")
+        m = ASSIGN_RE.match(s)
+        v, _ = self.value(m.group(2), at + m.start(2))
+        self.q[m.group(1).upper()] = v
+        self.q_origin.pop(m.group(1).upper(), None)
+        if math.isnan(v):
+            unknown = [u for u in _ if u in self.q_origin]
+            if unknown:
+                self.q_origin[m.group(1).upper()] = self.q_origin[unknown[0]]
+        return None
+
+    def m_functions(self, words: PathWords, line: int, at: int):
+        for number, where in words.m:
+            if number in (2, 30):
+                return "end"
+            if number == 128:
+                self.tcpm = True
+                self.notes["M128: rotary words are axis positions, X Y Z the tool tip (TNC 640 manual, M128)"] = None
+            elif number == 129:
+                self.tcpm = False
+            elif number == 126:
+                self.notes["M126: rotary axes take the shortest way to the programmed angle (TNC 640 manual, M126); the end angles are the programmed ones"] = None
+            elif number in (99, 89):
+                if self.cycle_defined:
+                    self.unresolved_row(line, where, f"line {line}: M{number} runs the machining cycle defined at line {self.cycle_defined}: its moves are not read")
+            elif number in (91, 92):
+                pass  # handled on the motion (machine datum)
+            elif number == 140:
+                raise self.error(where, "M140 retracts along the tool axis to a distance the text does not give (MB): not read")
+        return None
+
+    # ------------------------------------------------------------- motion
+    def path_block(self, blk: Block, kind: str, at: int, keyword_end: int):
+        words = self.words(blk.text.lstrip(), at, keyword_end)
+        line = blk.line
+        self._feed(words)
+        if words.comp is not None:
+            self.comp, self.comp_line = words.comp, line
+        machine_datum = any(n in (91, 92) for n, _ in words.m)
+        if kind == "CC":
+            self.set_pole(words, at)
+            return self.m_functions(words, line, at)
+        start = self.pos.copy()
+        vals = np.full(len(FIELDS), np.nan)
+        spans = np.full((len(FIELDS), 3), -1, np.int64)
+        arc = None
+        if kind in ("L", "LN"):
+            moved = self.cartesian(words, vals, spans, at)
+            if kind == "LN":
+                self.notes["LN: 3-D tool compensation offsets the point by the tool radius along N (TNC 640 manual, 3-D tool compensation): not read"] = None
+        elif kind in ("C", "CR", "CT"):
+            moved = self.cartesian(words, vals, spans, at)
+            arc = self.circle(kind, words, start, vals, spans, at)
+        else:  # LP, CP
+            moved = self.polar_move(kind, words, start, vals, spans, at)
+            if kind == "CP":
+                arc = "CP"
+        if not moved and not words.m:
+            return None
+        if moved or kind != "L":
+            self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
+        return self.m_functions(words, line, at)
+
+    def _feed(self, words: PathWords) -> None:
+        if words.feed_other:
+            key, where = words.feed_other
+            raise self.error(where, f"{key}: a feed from the tool table or per revolution / tooth, which the text does not give in mm/min")
+        if words.feed is not None:
+            v, used = self.value(words.feed.text, words.feed.start)
+            self.feed = v * self.feed_scale
+
+    def cartesian(self, words: PathWords, vals, spans, at: int) -> bool:
+        moved = False
+        for letter, k in _AXES.items():
+            w = words.words.get(letter)
+            if w is None:
+                continue
+            v, used = self.value(w.text, w.start)
+            i = "XYZABC".index(letter)
+            unit = self.scale if i < 3 else 1.0
+            v *= unit
+            new = self.pos[i] + v if w.incremental else v
+            self.unknown[i] = math.isnan(v)
+            self.pos[i] = new
+            moved = True
+            if w.plain and not w.incremental:
+                vals[k] = new
+                spans[k] = (0, w.start, w.end)
+            else:
+                vals[k] = new  # from a Q parameter or an increment: read, not rewritable in place (no span)
+        for extra in ("U", "V", "W", "NX", "NY", "NZ", "TX", "TY", "TZ", "PR", "PA"):
+            if extra in words.words and extra not in ("NX", "NY", "NZ", "TX", "TY", "TZ"):
+                raise self.error(words.words[extra].start, f"{extra} is not read in this block")
+        return moved
+
+    def set_pole(self, words: PathWords, at: int) -> None:
+        got = False
+        for letter, i in (("X", 0), ("Y", 1)):
+            w = words.words.get(letter)
+            if w is not None:
+                v, _ = self.value(w.text, w.start)
+                v *= self.scale
+                self.pole[i] = self.pole[i] + v if w.incremental else v
+                got = True
+        if not got:
+            self.pole = self.pos[:2].copy()  # CC without coordinates: the last programmed position
+        if np.isnan(self.pole).any():
+            raise self.error(at, "pole CC not determined (no position before it)")
+        self.polar = [math.nan, math.nan]
+
+    def circle(self, kind: str, words: PathWords, start, vals, spans, at: int):
+        if words.dr is None and kind != "CT":
+            raise self.error(at, f"{kind} needs DR+ or DR- (direction of rotation)")
+        if kind == "C":
+            if np.isnan(self.pole).any():
+                raise self.error(at, "C needs a pole CC before it")
+            centre = self.pole
+            r_start, r_end = np.hypot(*(start[:2] - centre)), np.hypot(*(self.pos[:2] - centre))
+            if abs(r_start - r_end) > 0.016:  # TNC 640 machine parameter circleDeviation default 0.016 mm... refused beyond
+                raise self.error(at, f"end point is {r_end:.4f} mm from the pole, start {r_start:.4f} mm: not on one circle")
+            vals[F_ARC.start], vals[F_ARC.start + 1] = centre
+            return ("C", centre, words.dr)
+        if kind == "CR":
+            w = words.words.get("R")
+            if w is None:
+                raise self.error(at, "CR needs R (the radius)")
+            r, _ = self.value(w.text, w.start)
+            vals[_R] = r * self.scale
+            if w.plain:
+                spans[_R] = (0, w.start, w.end)
+            centre = self._radius_centre(start[:2], self.pos[:2], r * self.scale, words.dr == "+", w.start)
+            return ("CR", centre, words.dr)
+        # CT: tangent to the previous element
+        if self.tangent is None:
+            raise self.error(at, "CT needs a contour element before it (its tangent)")
+        d = self.tangent
+        chord = self.pos[:2] - start[:2]
+        cross = d[0] * chord[1] - d[1] * chord[0]
+        if abs(cross) < 1e-12:
+            raise self.error(at, "CT end point on the tangent: no circle")
+        normal = np.array([-d[1], d[0]])
+        t = (chord @ chord) / (2.0 * (normal @ chord))
+        centre = start[:2] + t * normal
+        vals[F_ARC.start], vals[F_ARC.start + 1] = centre
+        return ("CT", centre, "+" if cross > 0 else "-")
+
+    def _radius_centre(self, a, b, r: float, ccw: bool, at: int) -> np.ndarray:
+        """Centre of the CR arc: R+ the arc of at most 180 degrees, R- the longer one (TNC 640
+        manual, "Circular path CR with defined radius"), left of the chord for DR+ and R+."""
+        chord = b - a
+        half = np.hypot(*chord) / 2.0
+        if half == 0.0 or abs(r) < half - 1e-9:
+            raise self.error(at, f"radius {abs(r):g} mm is shorter than half the chord ({half:.4f} mm): no such circle")
+        u = chord / (2.0 * half)
+        left = np.array([-u[1], u[0]])
+        side = 1.0 if ccw == (r > 0) else -1.0
+        return (a + b) / 2.0 + side * math.sqrt(max(r * r - half * half, 0.0)) * left
+
+    def polar_move(self, kind: str, words: PathWords, start, vals, spans, at: int) -> bool:
+        if np.isnan(self.pole).any():
+            raise self.error(at, f"{kind} needs a pole CC before it")
+        pr, pa = self.polar
+        if kind == "CP":
+            pr = float(np.hypot(*(start[:2] - self.pole)))  # CP keeps the distance from the pole
+            if math.isnan(pa):
+                pa = math.degrees(math.atan2(start[1] - self.pole[1], start[0] - self.pole[0]))
+        for letter in ("PR", "PA"):
+            w = words.words.get(letter)
+            if w is None:
+                continue
+            v, _ = self.value(w.text, w.start)
+            if letter == "PR":
+                if kind == "CP":
+                    raise self.error(w.start, "CP takes no PR (its radius is the distance from the pole)")
+                v *= self.scale
+                pr = pr + v if w.incremental else v
+            else:
+                if w.incremental and math.isnan(pa):
+                    pa = math.degrees(math.atan2(start[1] - self.pole[1], start[0] - self.pole[0]))
+                pa = pa + v if w.incremental else v
+        if math.isnan(pr) or math.isnan(pa):
+            raise self.error(at, f"{kind}: polar radius PR and angle PA not both known")
+        self.polar = [pr, pa]
+        self.pos[0] = self.pole[0] + pr * math.cos(math.radians(pa))
+        self.pos[1] = self.pole[1] + pr * math.sin(math.radians(pa))
+        vals[0], vals[1] = self.pos[0], self.pos[1]
+        for letter in ("Z", "A", "B", "C"):
+            w = words.words.get(letter)
+            if w is not None:
+                v, _ = self.value(w.text, w.start)
+                i = "XYZABC".index(letter)
+                v *= self.scale if i < 3 else 1.0
+                self.pos[i] = self.pos[i] + v if w.incremental else v
+                vals[_AXES[letter]] = self.pos[i]
+                if w.plain and not w.incremental:
+                    spans[_AXES[letter]] = (0, w.start, w.end)
+        if kind == "CP":
+            if words.dr is None:
+                raise self.error(at, "CP needs DR+ or DR-")
+            vals[F_ARC.start], vals[F_ARC.start + 1] = self.pole
+        return True
+
+    def unresolved_row(self, line: int, at: int, note: str) -> None:
+        self.notes[note] = None
+        self.rows.append((int(Kind.RAPID), line, np.full(len(FIELDS), np.nan), np.full((len(FIELDS), 3), -1, np.int64), math.nan, self.tool, self.frame,
+                          False, None, -1, self.pos.copy()))
+
+    def row(self, kind: str, words: PathWords, vals, spans, line: int, at: int, arc, machine_datum: bool, start) -> None:
+        # values: the block's own words (NaN for modal axes it leaves out, which splice may add
+        # at insert_at); the position and rotary angles in force are kept beside them
+        rapid = words.rapid
+        resolved = not self.unknown[:3].any() and not self.unknown[3:].any()
+        if rapid:
+            k = Kind.RAPID
+        elif arc is None:
+            k = Kind.LINEAR
+        else:
+            dr = arc[2] if arc != "CP" else words.dr
+            k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
+        if self.comp in ("RL", "RR"):
+            resolved = False
+            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give; those targets are read as programmed"] = None
+        if self.tilt_line:
+            resolved = False
+            self.notes[f"line {self.tilt_line}: tilted working plane: positions are in the tilted plane, whose rotary-axis solution (SEQ+/SEQ-) is the TNC's: not read"] = None
+        if kind == "LN":
+            resolved = False
+        if machine_datum:
+            resolved = False
+            self.notes[f"line {line}: M91/M92: coordinates in the machine datum, which the text does not give"] = None
+        if not resolved and self.unknown.any():
+            self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
+        feed = math.nan if rapid else self.feed
+        insert = at + len(kind) if kind in ("L", "LN") else -1
+        self.rows.append((int(k), line, vals, spans, feed, self.tool, self.frame, resolved, arc, insert, self.pos.copy()))
+        self.tangent = self._tangent(k, start, arc)
+
+    def _tangent(self, k, start, arc):
+        if arc is None:
+            d = self.pos[:2] - start[:2]
+            n = np.hypot(*d)
+            return d / n if n > 0 else self.tangent
+        centre = arc[1] if arc != "CP" else self.pole
+        radial = self.pos[:2] - centre
+        ccw = k == Kind.ARC_CCW
+        t = np.array([-radial[1], radial[0]]) if ccw else np.array([radial[1], -radial[0]])
+        n = np.hypot(*t)
+        return t / n if n > 0 else self.tangent
+
+    # ------------------------------------------------------------- IR
+    def build(self) -> Toolpath:
+        rows = self.rows
+        n = len(rows)
+        kind = np.array([r[0] for r in rows], np.int8)
+        line = np.array([r[1] for r in rows], np.int32)
+        values = np.array([r[2] for r in rows], float).reshape(n, len(FIELDS))
+        spans = np.array([r[3] for r in rows], np.int64).reshape(n, len(FIELDS), 3)
+        speed = np.array([r[4] for r in rows], float)
+        arcs = (kind == Kind.ARC_CW) | (kind == Kind.ARC_CCW)
+        arc = np.full((n, 3), np.nan)
+        arc[arcs] = (17, 1, 1)  # XY plane (tool axis Z), centre absolute, one turn
+        scale = np.ones((n, len(FIELDS)))
+        scale[:, :3] = self.scale
+        scale[:, F_ARC] = self.scale
+        block = dict(kind=kind, line=line, values=values, spans=spans, scale=scale, speed=speed,
+                     tool=np.array([r[5] for r in rows], np.int32), frame=np.array([r[6] for r in rows], np.int32),
+                     resolved=np.array([r[7] for r in rows], bool), feed_mode=np.full(n, 94, np.int8))
+        if arcs.any():
+            block["arc"] = arc
+        insert = np.array([r[9] for r in rows], np.int64).reshape(n)
+        block["insert_at"] = np.stack([np.where(insert >= 0, 0, -1), insert], axis=1)
+        self.b.add_block(np.arange(n), **block)  # execution order (a repeated section comes again)
+        self.b.notes.extend(self.notes)
+        if self.tolerance_line:
+            self.b.notes.append(f"line {self.tolerance_line}: CYCL DEF 32 TOLERANCE: the TNC smooths the path within the tolerance")
+        tp = self.b.build(orientation=False)
+        state = np.array([r[10] for r in rows], float).reshape(n, 6)
+        ext = tp.ext.copy()
+        ext[:, :3] = state[:, 3:]
+        return replace(tp, position=state[:, :3].copy(), ext=ext)
+
+
+def _along_z(length: float) -> np.ndarray:
+    t = np.eye(4)
+    t[2, 3] = length
+    return t
+
+
+def _translation(v) -> np.ndarray:
+    t = np.eye(4)
+    t[:3, 3] = v
+    return t
+
+
+def parse(doc: SourceDoc) -> Toolpath:
+    return KlartextReader(doc).run()

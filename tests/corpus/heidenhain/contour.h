@@ -1,0 +1,26 @@
+0  BEGIN PGM CONTOUR MM
+1  BLK FORM 0.1 Z  X+0  Y+0  Z-20
+2  BLK FORM 0.2  X+100  Y+100  Z+0
+3  ;------------- datum shift, Q parameters, arcs, polar, a repeated section
+4  TOOL CALL 1 Z S2000
+5  CYCL DEF 7.0 DATUM SHIFT
+6  CYCL DEF 7.1  X+10
+7  CYCL DEF 7.2  Y+20
+8  CYCL DEF 7.3  Z+0
+9  Q1 = 5
+10 FN 1: Q2 = +Q1 + +10 ; Q2 = 15
+11 Q3 = ( Q2 - Q1 ) * 2 ^ 2 / 4 ; Q3 = 10
+12 L  X+0  Y+0  Z+50 R0 FMAX
+13 L  Z-Q1 F200
+14 L  X+Q3  Y+0 F400
+15 CC  X+10  Y+10
+16 C  X+20  Y+10 DR+
+17 CR  X+30  Y+20 R+10 DR-
+18 LP  PR+10  PA+90
+19 CP  PA+180 DR+
+20 LBL 1
+21 L  IZ-1 F100
+22 CALL LBL 1 REP 2
+23 L  Z+50 FMAX
+24 M30
+25 END PGM CONTOUR MM
