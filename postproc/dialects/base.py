@@ -200,6 +200,16 @@ class Dialect:
         """An event writer (see postproc.emit.writer) for a new program, or None."""
         return None
 
+    #: RTCP modes in which this language writes new five-axis programs itself
+    #: (``five_axis_text``; empty: G-code's modes, postproc.fivex.emit)
+    rtcp_modes: tuple[str, ...] = ()
+
+    def five_axis_text(self, name: str, letters: tuple[str, ...], tip: np.ndarray, angles: np.ndarray, rapid: np.ndarray,
+                       feed: np.ndarray, lines: np.ndarray, header: list[str], tool: int = 1) -> str:
+        """A new five-axis program: tool tips (N, 3) mm, rotary positions (N, 2) deg of the
+        machine's axes ``letters``, rapid flags, tip feeds mm/min, the input lines (messages)."""
+        raise EmitError(f"{self.name} does not write five-axis programs itself")
+
     def new_program_paths(self, output: Path) -> list[Path]:
         """Paths of the files a new program written to ``output`` consists of."""
         return [Path(output)]

@@ -77,6 +77,8 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if input_axes not in (None, "tip", "machine"):
         raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
     target = dialects.get(to, "--to")
+    if target.rtcp_modes:  # a language that writes its own five-axis programs (Klartext M128)
+        return _convert_own(program, target, output, machine, rtcp, dialect, input_axes, tool, frames, tools)
     if target.machine_program and rtcp not in MODES:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
     tp = parse_program(program, dialect)
@@ -99,6 +101,28 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     outputs = target.new_program_paths(Path(output))
     write_all(dict(zip(outputs, texts)), encoding="latin-1")
     return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]
+
+
+def _convert_own(program: Path, target, output: Path, machine, rtcp: str | None, dialect: str | None, input_axes: str | None, tool: int,
+                 frames: dict | None, tools: dict | None) -> list[str]:
+    """``convert --to LANG --rtcp MODE`` for a language with ``rtcp_modes``: the tips and the
+    rotary positions the machine's inverse kinematics gives (emit.solve), written by the language."""
+    from ..errors import InputError
+    from ..programs import parse_program
+    from .emit import solve
+    from .program import from_toolpath
+
+    if rtcp not in target.rtcp_modes:
+        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(target.rtcp_modes)} (needed with --to {target.name})")
+    tp = parse_program(program, dialect)
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    path = from_toolpath(tp, machine, input_axes)
+    axes = solve(machine, path, path.tool_length).axes
+    header = [f"postproc: {rtcp} (tool tip + rotary axis positions), machine {machine.name}; from {Path(program).name}"]
+    text = target.five_axis_text(Path(output).stem, machine.rotary_names, path.tip, axes[:, 3:5], path.rapid, path.feed, path.line, header, tool)
+    write_all({Path(output): text}, encoding="latin-1")
+    return [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"] + [f"note: {n}" for n in path.notes]
 
 
 def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,

@@ -10,6 +10,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
 from .parse import parse
+from .writer import MODES, tcpm_text
 
 
 class HeidenhainDialect(Dialect):
@@ -42,8 +43,10 @@ class HeidenhainDialect(Dialect):
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         return self.controller.inexact_interpolation(tp)
 
-    def new_writer(self, name: str):
-        return None  # new programs come from a five-axis path: writer.write_tcpm (convert --to heidenhain --machine M --rtcp tcpm)
+    rtcp_modes = MODES  # convert --to heidenhain --machine M --rtcp tcpm
+
+    def five_axis_text(self, name, letters, tip, angles, rapid, feed, lines, header, tool=1) -> str:
+        return tcpm_text(name, letters, tip, angles, rapid, feed, lines, header, tool)
 
 
 HEIDENHAIN = HeidenhainDialect()

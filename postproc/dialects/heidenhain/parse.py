@@ -85,7 +85,7 @@ class KlartextReader:
         self.comp = "R0"
         self.comp_line = 0
         self.tool = 0
-        self.frame = 0
+        self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
         self.tcpm = False
@@ -266,7 +266,7 @@ class KlartextReader:
             return None
         table = re.match(r"\s*#", rest)
         if table:
-            self.frame = self.b.frame_index(f"PRESET+datum table {rest.strip()}@line{line}", None)
+            self.frame = (f"PRESET+datum table {rest.strip()}@line{line}", None)
             return None
         words = re.findall(r"(I?)([XYZ])\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
         if not words or re.search(r"Q", rest, re.IGNORECASE):
@@ -277,7 +277,7 @@ class KlartextReader:
             self.shift[k] = self.shift[k] + v if inc else v
         shown = " ".join(f"{a}{v:+g}" for a, v in zip("XYZ", self.shift / self.scale))
         name = f"PRESET+CYCL7@line{self.cycl7_line or line}({shown})"  # one frame per shift value (a loop may shift again)
-        self.frame = self.b.frame_index(name, _translation(self.shift), False) if self.shift.any() else 0
+        self.frame = (name, _translation(self.shift)) if self.shift.any() else ("PRESET", None)
         return None
 
     def cycle_call(self, at: int, line: int):
@@ -567,7 +567,7 @@ class KlartextReader:
 
     def unresolved_row(self, line: int, at: int, note: str) -> None:
         self.notes[note] = None
-        self.rows.append((int(Kind.RAPID), line, np.full(len(FIELDS), np.nan), np.full((len(FIELDS), 3), -1, np.int64), math.nan, self.tool, self.frame,
+        self.rows.append((int(Kind.RAPID), line, np.full(len(FIELDS), np.nan), np.full((len(FIELDS), 3), -1, np.int64), math.nan, self.tool, self._frame_index(),
                           False, None, -1, self.pos.copy()))
 
     def row(self, kind: str, words: PathWords, vals, spans, line: int, at: int, arc, machine_datum: bool, start) -> None:
@@ -597,8 +597,12 @@ class KlartextReader:
             self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
-        self.rows.append((int(k), line, vals, spans, feed, self.tool, self.frame, resolved, arc, insert, self.pos.copy()))
+        self.rows.append((int(k), line, vals, spans, feed, self.tool, self._frame_index(), resolved, arc, insert, self.pos.copy()))
         self.tangent = self._tangent(k, start, arc)
+
+    def _frame_index(self) -> int:
+        name, transform = self.frame
+        return 0 if name == "PRESET" else self.b.frame_index(name, transform, False)
 
     def _tangent(self, k, start, arc):
         if arc is None:
