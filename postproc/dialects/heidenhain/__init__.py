@@ -6,10 +6,11 @@ import re
 
 import numpy as np
 
+from ...errors import EmitError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
-from .parse import parse
+from .parse import read_klartext
 from .writer import MODES, tcpm_text
 
 
@@ -27,7 +28,20 @@ class HeidenhainDialect(Dialect):
         return re.search(r"^\s*\d*\s*BEGIN PGM\s", head, re.MULTILINE) is not None
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        return parse(sources[0])
+        return read_klartext(sources[0])
+
+    def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
+        """Changed numbers are written only where every target is determined by the text: a
+        target the reader flagged (radius compensation, a tilted plane, a cycle, a value from
+        the control) would be compensated from a position the machine does not take."""
+        moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True).all(axis=1)
+        moved |= ~np.isclose(modified.ext, original.ext, rtol=0, atol=0, equal_nan=True).all(axis=1)
+        if moved.any() and not original.resolved.all():
+            i = int(np.argmin(original.resolved))
+            note = next((n for n in original.notes if n.startswith(f"line {int(original.line[i])}:")), "see the notes of `postproc inspect`")
+            raise EmitError(f"{original.sources[int(original.file[i])].path}:{int(original.line[i])}: the target's position is not determined by the "
+                            f"program text ({note}); nothing was written")
+        return super().emit_texts(original, modified)
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         sign = "" if text.startswith("-") else "+"

@@ -43,7 +43,7 @@ from .blocks import Block, split_blocks
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, Word, WordError, read_words
 
-MAX_BLOCKS_RUN = 5_000_000  # a loop that never ends is refused, not run forever
+MAX_BLOCKS_RUN = 50_000_000  # a loop that never ends is refused at its jump, not run forever
 _AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
 _R = FIELDS.index("r")
 _PATH = re.compile(r"(LN|LP|L|CC|CR|CT|CP|C)(?![A-Z])", re.IGNORECASE)
@@ -108,12 +108,12 @@ class KlartextReader:
         return self.lines.error(self.doc.path, offset, message)
 
     def run(self) -> Toolpath:
-        pc, stack, repeats, executed = 0, [], {}, 0
+        pc, stack, repeats, executed, last_jump = 0, [], {}, 0, 0
         blocks = self.blocks
         while pc < len(blocks):
             executed += 1
             if executed > MAX_BLOCKS_RUN:
-                raise self.error(blocks[pc].start, f"more than {MAX_BLOCKS_RUN} blocks run: the program's jumps do not end")
+                raise self.error(blocks[last_jump].start, f"more than {MAX_BLOCKS_RUN} blocks run: the program's jumps do not end (the last jump is here)")
             blk = blocks[pc]
             jump = self.block(blk, pc)
             if jump is None:
@@ -122,6 +122,7 @@ class KlartextReader:
                 break
             else:
                 kind, arg = jump
+                last_jump = pc
                 if kind == "goto":
                     pc = arg
                 elif kind == "call":
@@ -346,13 +347,14 @@ class KlartextReader:
             raise self.error(at + exc.at, str(exc)) from None
 
     def assign(self, s: str, at: int, line: int):
+        sysread = re.match(r"FN\s*18\s*:\s*SYSREAD\s+(Q[LR]?\d+)\s*=", s, re.IGNORECASE)
+        if sysread:  # a value of the running control (TNC 640 manual, "FN 18: SYSREAD"): not in the text
+            self.q[sysread.group(1).upper()] = math.nan
+            self.q_origin[sysread.group(1).upper()] = line
+            return None
         m = FN_RE.match(s)
         if m:
             number = int(m.group(1))
-            if number == 18:
-                self.q[m.group(2).upper()] = math.nan
-                self.q_origin[m.group(2).upper()] = line
-                return None
             try:
                 rhs = fn_as_formula(number, m.group(3), 0)
             except FormulaError as exc:
@@ -661,5 +663,5 @@ def _translation(v) -> np.ndarray:
     return t
 
 
-def parse(doc: SourceDoc) -> Toolpath:
+def read_klartext(doc: SourceDoc) -> Toolpath:
     return KlartextReader(doc).run()
