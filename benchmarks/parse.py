@@ -66,7 +66,19 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["heidenhain"] = make_heidenhain(folder, n)
     return out
+
+
+def make_heidenhain(folder: Path, n: int) -> Path:
+    """A five-axis Klartext program: numbered L blocks with tip and rotary positions under M128."""
+    path = folder / "big.h"
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("0 BEGIN PGM BIG MM\n1 TOOL CALL 1 Z S12000\n2 M128\n")
+        for i in range(n - 5):
+            fh.write(f"{i + 3} L  X{(i % 400) * 0.5:+.3f}  Y{(i // 400) % 400:+.3f}  Z{-1 - (i % 7) * 0.125:+.3f}  A{-(i % 30) * 0.5:+.3f}  C{(i % 360):+.3f} F1500\n")
+        fh.write(f"{n - 2} M129\n{n - 1} END PGM BIG MM\n")
+    return path
 
 
 def measure(path: str) -> None:

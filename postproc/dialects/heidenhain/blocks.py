@@ -6,10 +6,10 @@ its block number; ``;`` starts a comment, a line starting with ``*`` is a struct
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 
-_LEAD = re.compile(r"[ \t]*(?:\d+[ \t]+|\d+(?=[A-Z*;]))?", re.IGNORECASE)
+import numpy as np
+
 
 
 @dataclass(frozen=True)
@@ -20,31 +20,61 @@ class Block:
     lines: int  # how many text lines it spans
 
 
-def split_blocks(text: str) -> list[Block]:
-    """Every block with a statement (comments, structure blocks and blank lines left out)."""
-    blocks: list[Block] = []
-    pos, line, n = 0, 1, len(text)
-    while pos < n:
-        end = text.find("\n", pos)
-        end = n if end < 0 else end
-        first_line = line
-        lead = _LEAD.match(text, pos, end).end()
-        body = _strip_comment(text[lead:end])
-        start = lead
-        lines = 1
+@dataclass(frozen=True)
+class PlainRun:
+    """Consecutive lines that are each one plain ``L`` block (read in bulk, parse.plain_run)."""
+
+    first: int  # 0-based line index of the first
+    end: int  # one past the last
+
+
+def split_blocks(text: str, plain: np.ndarray | None = None) -> list[Block | PlainRun]:
+    """Every block with a statement (comments, structure blocks and blank lines left out);
+    lines flagged in ``plain`` (per line) come as PlainRun items, a run per stretch of them."""
+    blocks: list[Block | PlainRun] = []
+    lines = text.split("\n")
+    n = len(lines)
+    if plain is None:
+        plain = np.zeros(n, bool)
+    starts = np.zeros(n + 1, np.int64)
+    np.cumsum(np.fromiter((len(x) + 1 for x in lines), np.int64, n), out=starts[1:])
+    # the lines to look at one by one: every line not in a plain run
+    todo = np.nonzero(~plain[:n])[0].tolist()
+    k, i = 0, 0
+    while i < n:
+        while k < len(todo) and todo[k] < i:
+            k += 1
+        if plain[i]:
+            j = todo[k] if k < len(todo) else n
+            blocks.append(PlainRun(i, j))
+            i = j
+            continue
+        raw = lines[i]
+        line_start = int(starts[i])
+        i += 1
+        body = raw.lstrip(" \t")
+        lead = len(raw) - len(body)
+        if body[:1].isdigit():  # the block number (TNC writes it; a file may leave it out)
+            j = 1
+            while j < len(body) and body[j].isdigit():
+                j += 1
+            rest = body[j:].lstrip(" \t")
+            lead += len(body) - len(rest)
+            body = rest
+        if ";" in body or body.endswith("\r"):
+            body = _strip_comment(body)
+        start = line_start + lead
+        count = 1
         # a block ending in '~' continues on the next line(s): cycle parameter lists
-        while body.rstrip().endswith("~") and end < n:
+        while body.rstrip().endswith("~") and i < n:
             body = body.rstrip()[:-1]
-            nxt = text.find("\n", end + 1)
-            nxt = n if nxt < 0 else nxt
-            cont = _strip_comment(text[end + 1:nxt])
-            body = body + " " * (end + 1 - (start + len(body))) + cont  # keeps offsets: text index = start + i
-            end = nxt
-            lines += 1
-        if body.strip() and not body.lstrip().startswith("*"):
-            blocks.append(Block(first_line, start, body.rstrip("\r \t"), lines))
-        line += lines
-        pos = end + 1
+            cont = _strip_comment(lines[i])
+            body = body + " " * (int(starts[i]) - (start + len(body))) + cont  # keeps offsets: text index = start + k
+            i += 1
+            count += 1
+        stripped = body.rstrip(" \t\r")
+        if stripped and stripped[0] != "*":
+            blocks.append(Block(i - count + 1, start, stripped, count))
     return blocks
 
 

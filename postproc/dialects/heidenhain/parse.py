@@ -38,11 +38,16 @@ import numpy as np
 
 from ...errors import ParseError
 from ...ir import F_ARC, F_EXT, FIELDS, Kind, SourceDoc, Toolpath
-from ...parse.common import Builder, LineIndex
-from .blocks import Block, split_blocks
+from ...parse.common import Builder, LineIndex, _ranges, scan_numbers
+from ...parse.line_shapes import LineMatches, LineShapes
+from .blocks import Block, PlainRun, split_blocks
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, Word, WordError, read_words
 
+# One plain L block alone on its line (block number, absolute plain numbers, no M, no comment):
+# digit runs only through \d+ / \d* so that lines of one shape match alike (line_shapes.py).
+_PLAIN_LINE = re.compile(r"[ \t]*(?:\d+[ \t]+)?L(?P<words>(?:[ \t]+[XYZABC][+-]?(?:\d+\.?\d*|\.\d+))+)(?:[ \t]+(?P<comp>R0|RL|RR))?"
+                         r"(?:[ \t]+(?:(?P<fmax>FMAX)|F(?P<feed>\d+\.?\d*)))?[ \t]*\r?")
 MAX_BLOCKS_RUN = 50_000_000  # a loop that never ends is refused at its jump, not run forever
 _AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
 _R = FIELDS.index("r")
@@ -69,7 +74,8 @@ class KlartextReader:
         self.text = doc.text
         self.lines = LineIndex(doc.text)
         self.b = Builder(dialect, "none", [doc], tool_names=["<none>"], frame_names=["PRESET"], frame_known=[False])
-        self.blocks = split_blocks(doc.text)
+        self.plain: LineMatches | None = None
+        self.blocks = split_blocks(doc.text, self._plain_lines())
         self.labels = self._labels()
         self.q: dict[str, float] = {}
         self.q_origin: dict[str, int] = {}  # parameter -> line where it became unknown (FN 18)
@@ -81,7 +87,8 @@ class KlartextReader:
         self.feed_unknown = False
         self.pole = np.full(2, np.nan)
         self.polar = [math.nan, math.nan]  # last PR, PA
-        self.tangent = None  # direction at the end of the last contour element (CT)
+        self.tangent = None  # direction at the end of the last contour element (CT); "line": from line_start
+        self.line_start = (math.nan, math.nan)
         self.comp = "R0"
         self.comp_line = 0
         self.tool = 0
@@ -90,7 +97,11 @@ class KlartextReader:
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
         self.tcpm = False
         self.notes: dict[str, None] = {}
-        self.rows: list[tuple] = []
+        self.numbers = None  # every number of the text, scanned once when a plain run needs it
+        self.segments: list[tuple[np.ndarray, np.ndarray]] = []  # (rows table, cells) read in bulk, in order with the rows
+        self.rows_before = 0  # rows already moved into segments
+        self.rows: list[tuple] = []  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C
+        self.cells: list[tuple] = []  # per number read: row, field, value, start, end (-1: not a plain number)
         self.cycle_defined = 0  # line of the last machining cycle defined (CYCL DEF n, not 7/19/32/9)
         self.cycl7_line = 0
         self.tolerance_line = 0
@@ -99,6 +110,8 @@ class KlartextReader:
     def _labels(self) -> dict[str, int]:
         out = {}
         for i, blk in enumerate(self.blocks):
+            if isinstance(blk, PlainRun) or blk.text[:3].upper() != "LBL":
+                continue
             m = re.match(r"\s*LBL\s*(\d+|\"[^\"]*\"|\S+)\s*$", blk.text, re.IGNORECASE)
             if m:
                 out.setdefault(m.group(1).upper(), i)
@@ -106,6 +119,87 @@ class KlartextReader:
 
     def error(self, offset: int, message: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, message)
+
+    def _plain_lines(self) -> np.ndarray:
+        """(lines,) True where the line is one plain L block (the bulk of CAM output), found by
+        shape (postproc.parse.line_shapes: one regular expression run per distinct line shape)."""
+        raw = np.frombuffer(self.text.encode("latin-1"), np.uint8)
+        starts = np.concatenate([[0], np.nonzero(raw == 10)[0] + 1]).astype(np.int64)
+        flags = np.zeros(len(starts), bool)
+        if len(raw) == 0:
+            return flags
+        self.raw = raw
+        self.plain = LineShapes(self.text, raw, starts).match(_PLAIN_LINE)
+        flags[self.plain.line] = True
+        self.plain_row = np.full(len(starts), -1, np.int64)
+        self.plain_row[self.plain.line] = np.arange(len(self.plain))
+        return flags
+
+    def plain_run(self, run: PlainRun) -> None:
+        """Lines run.first..run.end-1, each a plain L block, read at once: their numbers from one
+        vectorised scan of the text, the modal axes and feed carried forward as the TNC does
+        (the same reading as path_block gives them one by one)."""
+        if self.numbers is None:
+            self.numbers = scan_numbers(self.text, letter_prefix=True, raw=self.raw)
+        rows = self.plain_row[run.first:run.end]
+        n = len(rows)
+        ws, we = (a[rows] for a in self.plain.span("words"))
+        nums = self.numbers
+        lo, hi = np.searchsorted(nums.start, ws), np.searchsorted(nums.start, we)
+        count = hi - lo
+        owner = np.repeat(np.arange(n), count)
+        pick = _ranges(lo, hi)
+        num_start, num_end, value = nums.start[pick], nums.end[pick], nums.value[pick]
+        letter = self.raw[num_start - 1]
+        table = np.empty((n, 13))
+        cells = []
+        first_row = self.rows_all()
+        unknown_rows = np.zeros(n, bool)
+        for col, ch in enumerate(b"XYZABC"):
+            sel = letter == ch
+            r, v = owner[sel], value[sel] * (self.scale if col < 3 else 1.0)
+            given = np.full(n, np.nan)
+            given[r] = v
+            table[:, 7 + col] = _carried(given, self.pos[col])
+            if self.unknown[col]:  # from a parameter the text does not determine, until the axis is given
+                known_from = int(r[0]) if len(r) else n
+                unknown_rows[:known_from] = True
+                self.unknown[col] = known_from == n
+            cells.append(np.c_[r + first_row, np.full(len(r), _AXES[chr(ch)]), v, num_start[sel], num_end[sel]])
+        fs, _ = self.plain.span("feed")
+        fs = fs[rows]
+        feed = np.full(n, np.nan)
+        has_feed = fs >= 0
+        feed[has_feed] = nums.value[np.searchsorted(nums.start, fs[has_feed])] * self.feed_scale
+        feed = _carried(feed, self.feed)
+        rapid = self.plain.present("fmax")[rows]
+        table[:, 0] = np.where(rapid, int(Kind.RAPID), int(Kind.LINEAR))
+        table[:, 1] = np.arange(run.first, run.end) + 1
+        table[:, 2] = np.where(rapid, np.nan, feed)
+        table[:, 3] = self.tool
+        table[:, 4] = self._frame_index()
+        table[:, 6] = ws
+        compensated = np.zeros(n, bool)
+        cs, _ = self.plain.span("comp")
+        cs = cs[rows]
+        if (cs >= 0).any() or self.comp != "R0":  # R0 / RL / RR from the block that states it on
+            for i in range(n):
+                if cs[i] >= 0:
+                    self.comp, self.comp_line = self.text[cs[i]:cs[i] + 2], run.first + i + 1
+                if self.comp != "R0":
+                    compensated[i] = not self._state_resolved(run.first + i + 1, False)  # with its note
+        table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)
+        if unknown_rows.any():
+            self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
+        if self.tilt_line:
+            self._state_resolved(run.first + 1, False)  # the note
+        self.pos[:] = table[-1, 7:13]
+        self.feed = float(feed[-1])
+        if n > 1:
+            self.line_start, self.tangent = tuple(table[-2, 7:9]), "line"
+        else:
+            self.line_start, self.tangent = tuple(self.line_start), "line"
+        self.add_segment(table, np.concatenate(cells))
 
     def run(self) -> Toolpath:
         pc, stack, repeats, executed, last_jump = 0, [], {}, 0, 0
@@ -115,6 +209,10 @@ class KlartextReader:
             if executed > MAX_BLOCKS_RUN:
                 raise self.error(blocks[last_jump].start, f"more than {MAX_BLOCKS_RUN} blocks run: the program's jumps do not end (the last jump is here)")
             blk = blocks[pc]
+            if isinstance(blk, PlainRun):
+                self.plain_run(blk)
+                pc += 1
+                continue
             jump = self.block(blk, pc)
             if jump is None:
                 pc += 1
@@ -408,8 +506,8 @@ class KlartextReader:
             self.set_pole(words, at)
             return self.m_functions(words, line, at)
         start = self.pos.copy()
-        vals = np.full(len(FIELDS), np.nan)
-        spans = np.full((len(FIELDS), 3), -1, np.int64)
+        vals: dict[int, float] = {}  # field -> value of the block's own words (and arc data)
+        spans: dict[int, tuple[int, int, int]] = {}  # field -> (source, start, end) of a plain number
         arc = None
         if kind in ("L", "LN"):
             moved = self.cartesian(words, vals, spans, at)
@@ -442,7 +540,7 @@ class KlartextReader:
             w = words.words.get(letter)
             if w is None:
                 continue
-            v, used = self.value(w.text, w.start)
+            v = float(w.text) if w.plain else self.value(w.text, w.start)[0]
             i = "XYZABC".index(letter)
             unit = self.scale if i < 3 else 1.0
             v *= unit
@@ -498,7 +596,10 @@ class KlartextReader:
             centre = self._radius_centre(start[:2], self.pos[:2], r * self.scale, words.dr == "+", w.start)
             return ("CR", centre, words.dr)
         # CT: tangent to the previous element
-        if self.tangent is None:
+        if isinstance(self.tangent, str):  # after a plain L block: its direction
+            d = start[:2] - np.array(self.line_start)
+            self.tangent = d / np.hypot(*d) if np.hypot(*d) > 0 else None
+        if self.tangent is None or np.isnan(self.tangent).any():
             raise self.error(at, "CT needs a contour element before it (its tangent)")
         d = self.tangent
         chord = self.pos[:2] - start[:2]
@@ -569,14 +670,13 @@ class KlartextReader:
 
     def unresolved_row(self, line: int, at: int, note: str) -> None:
         self.notes[note] = None
-        self.rows.append((int(Kind.RAPID), line, np.full(len(FIELDS), np.nan), np.full((len(FIELDS), 3), -1, np.int64), math.nan, self.tool, self._frame_index(),
-                          False, None, -1, self.pos.copy()))
+        self.add_row(int(Kind.RAPID), line, math.nan, False, -1, {}, {})
 
-    def row(self, kind: str, words: PathWords, vals, spans, line: int, at: int, arc, machine_datum: bool, start) -> None:
+    def row(self, kind: str, words: PathWords, vals: dict, spans: dict, line: int, at: int, arc, machine_datum: bool, start) -> None:
         # values: the block's own words (NaN for modal axes it leaves out, which splice may add
         # at insert_at); the position and rotary angles in force are kept beside them
         rapid = words.rapid
-        resolved = not self.unknown[:3].any() and not self.unknown[3:].any()
+        resolved = self._state_resolved(line, machine_datum)
         if rapid:
             k = Kind.RAPID
         elif arc is None:
@@ -584,22 +684,11 @@ class KlartextReader:
         else:
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
-        if self.comp in ("RL", "RR"):
-            resolved = False
-            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give; those targets are read as programmed"] = None
-        if self.tilt_line:
-            resolved = False
-            self.notes[f"line {self.tilt_line}: tilted working plane: positions are in the tilted plane, whose rotary-axis solution (SEQ+/SEQ-) is the TNC's: not read"] = None
         if kind == "LN":
             resolved = False
-        if machine_datum:
-            resolved = False
-            self.notes[f"line {line}: M91/M92: coordinates in the machine datum, which the text does not give"] = None
-        if not resolved and self.unknown.any():
-            self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
-        self.rows.append((int(k), line, vals, spans, feed, self.tool, self._frame_index(), resolved, arc, insert, self.pos.copy()))
+        self.add_row(int(k), line, feed, resolved, insert, vals, spans)
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
@@ -619,36 +708,85 @@ class KlartextReader:
         return t / n if n > 0 else self.tangent
 
     # ------------------------------------------------------------- IR
+    def _state_resolved(self, line: int, machine_datum: bool) -> bool:
+        """False (with a note) where the modal state leaves the position to what the text does not give."""
+        resolved = True
+        if self.comp in ("RL", "RR"):
+            resolved = False
+            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give; those targets are read as programmed"] = None
+        if self.tilt_line:
+            resolved = False
+            self.notes[f"line {self.tilt_line}: tilted working plane: positions are in the tilted plane, whose rotary-axis solution (SEQ+/SEQ-) is the TNC's: not read"] = None
+        if machine_datum:
+            resolved = False
+            self.notes[f"line {line}: M91/M92: coordinates in the machine datum, which the text does not give"] = None
+        if self.unknown.any():
+            resolved = False
+            self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
+        return resolved
+
+    def rows_all(self) -> int:
+        """Rows read so far, in segments and in the row list."""
+        return self.rows_before + len(self.rows)
+
+    def add_segment(self, table: np.ndarray, cells: np.ndarray) -> None:
+        self._flush()
+        self.segments.append((table, cells))
+        self.rows_before += len(table)
+
+    def _flush(self) -> None:
+        if self.rows or self.cells:
+            self.segments.append((np.array(self.rows, float).reshape(-1, 13), np.array(self.cells, float).reshape(-1, 5)))
+            self.rows_before += len(self.rows)
+            self.rows, self.cells = [], []
+
+    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
+        r = self.rows_all()
+        p = self.pos
+        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5]))
+        for f, v in vals.items():
+            self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
+
+    # ------------------------------------------------------------- IR
     def build(self) -> Toolpath:
-        rows = self.rows
-        n = len(rows)
-        kind = np.array([r[0] for r in rows], np.int8)
-        line = np.array([r[1] for r in rows], np.int32)
-        values = np.array([r[2] for r in rows], float).reshape(n, len(FIELDS))
-        spans = np.array([r[3] for r in rows], np.int64).reshape(n, len(FIELDS), 3)
-        speed = np.array([r[4] for r in rows], float)
+        self._flush()
+        table = np.concatenate([t for t, _ in self.segments]) if self.segments else np.zeros((0, 13))
+        cells = np.concatenate([c for _, c in self.segments]) if self.segments else np.zeros((0, 5))
+        n = len(table)
+        kind = table[:, 0].astype(np.int8)
+        rows, fields = cells[:, 0].astype(np.int64), cells[:, 1].astype(np.int64)
+        values = np.full((n, len(FIELDS)), np.nan)
+        values[rows, fields] = cells[:, 2]
+        spans = np.full((n, len(FIELDS), 3), -1, np.int64)
+        plain = cells[:, 3] >= 0
+        spans[rows[plain], fields[plain]] = np.c_[np.zeros(int(plain.sum()), np.int64), cells[plain, 3:5].astype(np.int64)]
         arcs = (kind == Kind.ARC_CW) | (kind == Kind.ARC_CCW)
-        arc = np.full((n, 3), np.nan)
-        arc[arcs] = (17, 1, 1)  # XY plane (tool axis Z), centre absolute, one turn
         scale = np.ones((n, len(FIELDS)))
         scale[:, :3] = self.scale
         scale[:, F_ARC] = self.scale
-        block = dict(kind=kind, line=line, values=values, spans=spans, scale=scale, speed=speed,
-                     tool=np.array([r[5] for r in rows], np.int32), frame=np.array([r[6] for r in rows], np.int32),
-                     resolved=np.array([r[7] for r in rows], bool), feed_mode=np.full(n, 94, np.int8))
+        insert = table[:, 6].astype(np.int64)
+        block = dict(kind=kind, line=table[:, 1].astype(np.int32), values=values, spans=spans, scale=scale, speed=table[:, 2],
+                     tool=table[:, 3].astype(np.int32), frame=table[:, 4].astype(np.int32), resolved=table[:, 5].astype(bool),
+                     feed_mode=np.full(n, 94, np.int8), insert_at=np.stack([np.where(insert >= 0, 0, -1), insert], axis=1))
         if arcs.any():
+            arc = np.full((n, 3), np.nan)
+            arc[arcs] = (17, 1, 1)  # XY plane (tool axis Z), centre absolute, one turn
             block["arc"] = arc
-        insert = np.array([r[9] for r in rows], np.int64).reshape(n)
-        block["insert_at"] = np.stack([np.where(insert >= 0, 0, -1), insert], axis=1)
         self.b.add_block(np.arange(n), **block)  # execution order (a repeated section comes again)
         self.b.notes.extend(self.notes)
         if self.tolerance_line:
             self.b.notes.append(f"line {self.tolerance_line}: CYCL DEF 32 TOLERANCE: the TNC smooths the path within the tolerance")
         tp = self.b.build(orientation=False)
-        state = np.array([r[10] for r in rows], float).reshape(n, 6)
         ext = tp.ext.copy()
-        ext[:, :3] = state[:, 3:]
-        return replace(tp, position=state[:, :3].copy(), ext=ext)
+        ext[:, :3] = table[:, 10:13]
+        return replace(tp, position=table[:, 7:10].copy(), ext=ext)
+
+
+def _carried(given: np.ndarray, before: float) -> np.ndarray:
+    """Modal values: each NaN takes the last given value before it (``before`` at the start)."""
+    idx = np.where(np.isnan(given), -1, np.arange(len(given)))
+    np.maximum.accumulate(idx, out=idx)
+    return np.where(idx >= 0, given[np.maximum(idx, 0)], before)
 
 
 def _along_z(length: float) -> np.ndarray:
