@@ -204,3 +204,24 @@ def test_fuzzed_programs_never_crash():
             assert exc.line >= 1 and exc.column >= 1
             continue
         assert emit_texts(tp, tp)[0] == text
+
+
+def test_calibration_as_tnc_kinematics_chain(tmp_path):
+    """The chain written for the calibrated machine turns the table exactly as the calibrated
+    kinematics do (every axis a line through its calibrated point along its direction)."""
+    from postproc.dialects.heidenhain.kinematics import chain, chain_transform, tnc_kinematics
+    from postproc.fivex.kinematics import table_to_machine
+
+    cal = load_machine(TRUE)
+    entries = chain(cal)
+    rng = np.random.default_rng(4)
+    angles = rng.uniform([-90, -180], [30, 180], (20, 2))
+    points = rng.uniform(-50, 50, (20, 3))
+    want = np.stack([table_to_machine(cal, np.radians(a)[None], p[None])[0] for a, p in zip(angles, points)])
+    got = np.stack([(chain_transform(entries, dict(zip(cal.rotary_names, a))) @ np.r_[p, 1.0])[:3] for a, p in zip(angles, points)])
+    np.testing.assert_allclose(got, want, atol=1e-9)
+    text = tnc_kinematics(cal)
+    assert text.count("(rotary axis)") == 2 and "not a file the control imports" in text
+    res = runner.invoke(app, ["rtcp-calibrate", str(HERE / "data" / "fivex" / "probes_xyzac_sim.csv"), "--machine", "xyzac-trt", "-o", str(tmp_path / "cal.toml")])
+    assert res.exit_code == 0, res.output
+    assert (tmp_path / "cal.tnc-kinematics.txt").read_text().startswith("; Heidenhain TNC kinematics description")

@@ -7,6 +7,7 @@ from pathlib import Path
 from .. import dialects
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
+from ..dialects.heidenhain.kinematics import tnc_kinematics
 from ..files import write_all as write_bytes
 from .machine import load_machine, machine_toml
 from .probes import read_probes
@@ -35,12 +36,16 @@ def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, 
         header = (f"Calibrated by postproc rtcp-calibrate from {probes} ({method}); nominal machine {machine.source_path}.\n"
                   "Rotary axes: fitted direction and a point on the axis (the fitted circle centre).")
         files = {output: machine_toml(cal.machine, header), output.with_suffix(".heidenhain.csv"): heidenhain_csv(cal.machine)}
+        tnc = tnc_kinematics(cal.machine)  # the TNC's kinematics description (dialects/heidenhain/kinematics.py)
+        if tnc:
+            files[output.with_suffix(".tnc-kinematics.txt")] = tnc
         if lcnc:
             files[output.with_suffix(".linuxcnc.hal")] = lcnc["text"]
         if sie:
             files[output.with_suffix(".siemens.spf")] = sie["text"]
         write_all(files)
         doc["files"] = {str(p): label for p, label in zip(files, ["calibrated machine (postproc TOML)", "Heidenhain-style kinematics table (CSV)",
+                                                                   *(["Heidenhain TNC kinematics description (transformation chain)"] if tnc else []),
                                                                    *(["LinuxCNC trt kinematics HAL pins"] if lcnc else []),
                                                                    *(["Siemens 840D $TC_CARR (type P)"] if sie else [])])}
     return doc, cal
