@@ -367,13 +367,16 @@ class KlartextReader:
         if table:
             self.frame = (f"PRESET+datum table {rest.strip()}@line{line}", None)
             return None
-        words = re.findall(r"(I?)([XYZ])\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
-        if not words or re.search(r"Q", rest, re.IGNORECASE):
-            raise self.error(at, "datum shift: a plain X/Y/Z value is read (Q parameters here are not)")
-        for inc, axis, value in words:
-            k = "XYZ".index(axis.upper())
-            v = float(value) * self.scale
-            self.shift[k] = self.shift[k] + v if inc else v
+        words = list(re.finditer(r"(I?)([XYZ])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", rest, re.IGNORECASE))
+        if not words:
+            raise self.error(at, "datum shift: X, Y or Z and its value expected")
+        for w in words:
+            k = "XYZ".index(w.group(2).upper())
+            v = self.value(w.group(3), at + w.start(3))[0] * self.scale  # NaN: from a value the text does not give
+            self.shift[k] = self.shift[k] + v if w.group(1) else v
+        if np.isnan(self.shift).any():
+            self.frame = (f"PRESET+CYCL7@line{self.cycl7_line or line}(from Q parameters the text does not determine)", None)
+            return None
         shown = " ".join(f"{a}{v:+g}" for a, v in zip("XYZ", self.shift / self.scale))
         name = f"PRESET+CYCL7@line{self.cycl7_line or line}({shown})"  # one frame per shift value (a loop may shift again)
         self.frame = (name, _translation(self.shift)) if self.shift.any() else ("PRESET", None)
