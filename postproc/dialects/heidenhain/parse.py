@@ -42,7 +42,7 @@ from ...parse.common import Builder, LineIndex, _ranges, scan_numbers
 from ...parse.line_shapes import LineMatches, LineShapes
 from .blocks import Block, PlainRun, split_blocks
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
-from .words import PathWords, Word, WordError, read_words
+from .words import PathWords, WordError, read_words
 
 # One plain L block alone on its line (block number, absolute plain numbers, no M, no comment):
 # digit runs only through \d+ / \d* so that lines of one shape match alike (line_shapes.py).
@@ -460,21 +460,20 @@ class KlartextReader:
                 rhs = fn_as_formula(number, m.group(3), 0)
             except FormulaError as exc:
                 raise self.error(at, str(exc)) from None
-            v, _ = self.value(rhs, at + m.start(3)) if number != 0 else self.value(m.group(3), at + m.start(3))
-            self.q[m.group(2).upper()] = v
+            self.q[m.group(2).upper()] = self.value(rhs if number else m.group(3), at + m.start(3))[0]
             return None
         if re.match(r"FN\s*(14)\s*:", s, re.IGNORECASE):
             raise self.error(at, "FN 14 ERROR: the program stops here with an error message")
         if re.match(r"FN\s*\d+\s*:", s, re.IGNORECASE):
             raise self.error(at, f"{s.split(':')[0].strip()} is not read (it reads or writes the control's data)")
         m = ASSIGN_RE.match(s)
-        v, _ = self.value(m.group(2), at + m.start(2))
-        self.q[m.group(1).upper()] = v
-        self.q_origin.pop(m.group(1).upper(), None)
-        if math.isnan(v):
-            unknown = [u for u in _ if u in self.q_origin]
-            if unknown:
-                self.q_origin[m.group(1).upper()] = self.q_origin[unknown[0]]
+        name = m.group(1).upper()
+        v, used = self.value(m.group(2), at + m.start(2))
+        self.q[name] = v
+        self.q_origin.pop(name, None)
+        from_control = [u for u in used if u in self.q_origin]
+        if math.isnan(v) and from_control:  # unknown because of an FN 18 value: say which
+            self.q_origin[name] = self.q_origin[from_control[0]]
         return None
 
     def m_functions(self, words: PathWords, line: int, at: int):
@@ -534,8 +533,7 @@ class KlartextReader:
             key, where = words.feed_other
             raise self.error(where, f"{key}: a feed from the tool table or per revolution / tooth, which the text does not give in mm/min")
         if words.feed is not None:
-            v, used = self.value(words.feed.text, words.feed.start)
-            self.feed = v * self.feed_scale
+            self.feed = self.value(words.feed.text, words.feed.start)[0] * self.feed_scale
 
     def cartesian(self, words: PathWords, vals, spans, at: int) -> bool:
         moved = False
@@ -556,8 +554,8 @@ class KlartextReader:
                 spans[k] = (0, w.start, w.end)
             else:
                 vals[k] = new  # from a Q parameter or an increment: read, not rewritable in place (no span)
-        for extra in ("U", "V", "W", "NX", "NY", "NZ", "TX", "TY", "TZ", "PR", "PA"):
-            if extra in words.words and extra not in ("NX", "NY", "NZ", "TX", "TY", "TZ"):
+        for extra in ("U", "V", "W", "PR", "PA"):  # parallel axes; polar words belong to LP / CP
+            if extra in words.words:
                 raise self.error(words.words[extra].start, f"{extra} is not read in this block")
         return moved
 

@@ -148,8 +148,8 @@ def evaluate(text: str, q: dict[str, float]) -> tuple[float, list[str]]:
     return f.value(), f.used
 
 
-_FN_RE = re.compile(rf"FN\s*(\d+)\s*:\s*({QNAME})\s*=\s*(.*)$", re.IGNORECASE)
-_ASSIGN_RE = re.compile(rf"({QNAME})\s*=\s*(.*)$", re.IGNORECASE)
+FN_RE = re.compile(rf"FN\s*(\d+)\s*:\s*({QNAME})\s*=\s*(.*)$", re.IGNORECASE)
+ASSIGN_RE = re.compile(rf"({QNAME})\s*=\s*(.*)$", re.IGNORECASE)
 
 
 def fn_as_formula(number: int, rhs: str, at: int) -> str:
@@ -165,7 +165,3 @@ def fn_as_formula(number: int, rhs: str, at: int) -> str:
         return _FN_FORM[number].format(a=f"({a})", b=f"({b})")
     rhs = re.sub(r"^(SQRT|SIN|COS)\s*", "", rhs.strip(), flags=re.IGNORECASE) if number in (5, 6, 7) else rhs
     return _FN_FORM[number].format(a=f"({rhs})", b="")
-
-
-FN_RE = _FN_RE
-ASSIGN_RE = _ASSIGN_RE
