@@ -227,7 +227,7 @@ def test_calibration_as_tnc_kinematics_chain(tmp_path):
     assert (tmp_path / "cal.tnc-kinematics.txt").read_text().startswith("; Heidenhain TNC kinematics description")
 
 
-REAL = list(__import__("csv").DictReader((CORPUS / "real.tsv").open(encoding="utf-8"), delimiter="\t"))
+REAL = list(__import__("csv").DictReader((HERE / "data" / "heidenhain_real.tsv").open(encoding="utf-8"), delimiter="\t"))
 # file -> ("read", targets, flagged) or ("refused", line, column, words of the reason)
 REAL_EXPECTED = {
     "PROFILE.h": ("refused", 26, 1, "Q4 (read from the control by FN 18 at line 5)"),

@@ -36,6 +36,7 @@ class HeidenhainDialect(Dialect):
         the control) would be compensated from a position the machine does not take."""
         moved = ~np.isclose(modified.position, original.position, rtol=0, atol=0, equal_nan=True).all(axis=1)
         moved |= ~np.isclose(modified.ext, original.ext, rtol=0, atol=0, equal_nan=True).all(axis=1)
+        _refuse_missing_words(original, modified)
         if moved.any() and not original.resolved.all():
             i = int(np.argmin(original.resolved))
             note = next((n for n in original.notes if n.startswith(f"line {int(original.line[i])}:")), "see the notes of `postproc inspect`")
@@ -61,6 +62,18 @@ class HeidenhainDialect(Dialect):
 
     def five_axis_text(self, name, letters, tip, angles, rapid, feed, lines, header, tool=1) -> str:
         return tcpm_text(name, letters, tip, angles, rapid, feed, lines, header, tool)
+
+
+def _refuse_missing_words(original: Toolpath, modified: Toolpath) -> None:
+    """A changed coordinate that its block does not write (a modal axis of C, CR, CT, LP or
+    CP, where no word is added) is refused naming the block, never left as it was."""
+    moved = ~np.isclose(modified.position, original.position, rtol=0, atol=1e-9, equal_nan=True)
+    absent = np.isnan(original.values[:, :3]) & (original.spans[:, :3, 1] < 0) & (original.insert_at[:, 1] < 0)[:, None]
+    bad = moved & absent
+    if bad.any():
+        i, k = (int(v[0]) for v in np.nonzero(bad))
+        raise EmitError(f"{original.sources[int(original.file[i])].path}:{int(original.line[i])}:1: {'XYZ'[k]} of this circle / polar block "
+                        f"cannot be changed: the block does not write it (it is modal) and no word is added to a Klartext circle or polar block")
 
 
 HEIDENHAIN = HeidenhainDialect()

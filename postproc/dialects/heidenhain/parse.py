@@ -201,7 +201,18 @@ class KlartextReader:
             self.line_start, self.tangent = tuple(self.line_start), "line"
         self.add_segment(table, np.concatenate(cells))
 
+    def _require_frame(self) -> None:
+        """A program opens with BEGIN PGM and closes with END PGM (TNC 640 manual,
+        "Programming fundamentals": the control writes both; a file without them is cut off
+        or not a Klartext program)."""
+        texts = [(b.text, b.start) for b in self.blocks if isinstance(b, Block)]
+        if not texts or not texts[0][0].upper().startswith("BEGIN PGM"):
+            raise self.error(texts[0][1] if texts else 0, "a Klartext program starts with BEGIN PGM name MM|INCH")
+        if not (isinstance(self.blocks[-1], Block) and self.blocks[-1].text.upper().startswith("END PGM")):
+            raise self.error(len(self.text.rstrip()), "the program ends without END PGM (cut off?): the TNC runs a program only whole")
+
     def run(self) -> Toolpath:
+        self._require_frame()
         pc, stack, repeats, executed, last_jump = 0, [], {}, 0, 0
         blocks = self.blocks
         while pc < len(blocks):
