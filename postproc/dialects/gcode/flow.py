@@ -265,7 +265,7 @@ class Runner:
     def __init__(self, parser):
         self.parser = parser
         self.docs = [parser.doc] + (side_files(parser.doc) if Path(parser.doc.path).is_file() else [])
-        parser.siemens = self.siemens = siemens.is_siemens(parser.doc.path, parser.doc.text)
+        parser.siemens = self.siemens = parser.siemens or siemens.is_siemens(parser.doc.path, parser.doc.text)
         parser.params = Params(self.siemens)
         self.ints: set[str] = set()  # Siemens INT variables (a REAL assigned is rounded)
         self.joined = None

@@ -26,7 +26,7 @@ _CALL = re.compile(r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<name>[A-Za-z_][A-Za-z0-9_]{2,}
 _DETECT = re.compile(r"(?im)^[ \t]*(?:PROC|EXTERN|DEF)[ \t]")
 _EXTERN = re.compile(r"(?im)^[ \t]*EXTERN[ \t]+([A-Za-z_][A-Za-z0-9_]*)")
 _PROC = re.compile(r"(?i)^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?")
-_TOKEN = re.compile(r"\s*(==|<>|<=|>=|<|>|\+|-|\*|/|\(|\)|,|\d+\.?\d*|\.\d+|\$?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?)")
+_TOKEN = re.compile(r"\s*(==|<>|<=|>=|<|>|\+|-|\*|/|\(|\)|,|#\d+|\d+\.?\d*|\.\d+|\$?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?)")
 _OPS = {"==": " EQ ", "<>": " NE ", "<=": " LE ", ">=": " GE ", "<": " LT ", ">": " GT ", "(": "[", ")": "]"}
 _WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD ", "DIV": " / "}
 _FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN", "ROUND", "TRUNC"}
@@ -61,6 +61,8 @@ def expression(text: str) -> str:
             out.append(_WORD_OPS[up])
         elif up in _FUNCS:
             out.append({"TRUNC": "FIX"}.get(up, up))
+        elif tok[0] == "#":
+            out.append(tok)  # an R parameter the sinumerik dialect has already written as a # parameter
         elif up == "NOT":
             raise ValueError("NOT is not evaluated")
         elif tok[0].isalpha() or tok[0] in "_$":

@@ -1,0 +1,120 @@
+"""SINUMERIK 840D part programs (.MPF / .SPF) -> Toolpath.
+
+The G-code reader (``..gcode.parse.GcodeParser``) reads the blocks once ``translate.py`` has
+put the Sinumerik-only words in its syntax; this reader adds what it does not know:
+- the programmable frames (``frames.py``), kept as the reader keeps a G68.2 tilted plane: an
+  event per frame instruction, each later target's frame ``settable @ programmable``;
+- the offsets back into the file (``translate.OffsetMap``): every span, insertion point and
+  error position names the file's own characters, so the unchanged emit is byte-identical;
+- the toolpath's dialect, ``sinumerik``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from ...ir import SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex
+from ..gcode.blockwords import AXES
+from ..gcode.parse import GcodeParser
+from . import frames, translate
+
+_AX = {c: i for i, c in enumerate(AXES)}
+_FRAME_CODES = set(translate.FRAME_NAMES)
+
+
+class _MappedLines(LineIndex):
+    """Line index of the rewritten text whose errors name the file's line and column."""
+
+    def __init__(self, text: str, original: LineIndex, offsets: translate.OffsetMap):
+        super().__init__(text)
+        self.original = original
+        self.offsets = offsets
+
+    def error(self, path: str, offset: int, message: str):
+        return self.original.error(path, int(self.offsets([offset])[0]), message)
+
+
+class SinumerikParser(GcodeParser):
+    tilt_word = "FRAME"  # frame names: "G54+FRAME@line12"
+
+    def __init__(self, doc: SourceDoc):
+        original = LineIndex(doc.text)
+        try:
+            text, self.offsets = translate.rewrite(doc.text)
+        except translate.Refusal as exc:
+            raise original.error(doc.path, exc.offset, exc.message) from None
+        super().__init__(SourceDoc(doc.path, text, doc.role))
+        self.original = doc
+        self.siemens = True
+        self.builder = Builder("sinumerik", "none", [doc])
+        self.lines = _MappedLines(text, original, self.offsets)
+        self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
+        self.plane = 17.0
+        self.to_mm = 1.0
+
+    def parse(self) -> Toolpath:
+        return self._back_to_file(super().parse())
+
+    def _assign(self, item, start: int) -> tuple:
+        """R1=10 R2=R1*2: the 840D runs a block's assignments left to right (Fundamentals,
+        "Arithmetic parameters"), each seeing the one before (LinuxCNC sets them after the line)."""
+        key, value = super()._assign(item, start)
+        if value is None:
+            self.params.pop(key, None)
+        elif key is not None:
+            self.params[key] = value
+        return key, value
+
+    def _apply_gcodes(self, gcodes: list[float], state: dict, values, start: int) -> tuple[bool, bool]:
+        """The frame instructions (internal G codes from translate.py) here, the rest as G-code."""
+        for gc in gcodes:
+            if gc in (17.0, 18.0, 19.0):
+                self.plane = gc
+            elif gc in (70.0, 700.0, 71.0, 710.0):
+                self.to_mm = 25.4 if gc in (70.0, 700.0) else 1.0
+        mine = [gc for gc in gcodes if gc in _FRAME_CODES]
+        if not mine:
+            return super()._apply_gcodes(gcodes, state, values, start)
+        if len(mine) > 1 or len(gcodes) > 1:
+            raise self._error_at(start, "a frame instruction (TRANS, ROT, ...) takes a block of its own (840D Fundamentals, \"Frames\")")
+        xyz, rpl = values[[_AX["X"], _AX["Y"], _AX["Z"]]], values[_AX["R"]]
+        if np.isinf(xyz).any() or np.isinf(rpl):
+            self.notes.append(f"line {self.lines.line(start)}: {translate.FRAME_NAMES[mine[0]]} value cannot be evaluated; later targets are flagged")
+            self.frame = np.full((4, 4), np.nan)
+            self.tilts.append((self._when(start), "unknown"))
+            return True, False
+        if np.isnan(self.frame).any() and translate.FRAME_NAMES[mine[0]] not in frames.ABSOLUTE:
+            self.tilts.append((self._when(start), "unknown"))  # added to a frame that is not known: not known either
+            return True, False
+        try:
+            self.frame = frames.step(self.frame, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
+        except frames.FrameRefused as exc:
+            raise self._error_at(start, str(exc)) from None
+        identity = np.allclose(self.frame, np.eye(4), atol=0.0, rtol=0.0)
+        self.tilts.append((self._when(start), None if identity else self.frame.copy()))
+        return True, False
+
+    def _back_to_file(self, tp: Toolpath) -> Toolpath:
+        """Offsets of the rewritten main text -> the file's; the file itself as source 0."""
+        sources = (self.original,) + tuple(tp.sources[1:])
+        if not len(tp) or not len(self.offsets.new_start):
+            return replace(tp, sources=sources)
+        fields = {}
+        for name in ("spans", "offset_span"):
+            arr = getattr(tp, name)
+            if arr is None:
+                continue
+            arr = arr.copy()
+            main = (arr[..., 0] == 0) & (arr[..., 1] >= 0)
+            arr[..., 1] = np.where(main, self.offsets(arr[..., 1]), arr[..., 1])
+            arr[..., 2] = np.where(main, self.offsets(arr[..., 2] - 1) + 1, arr[..., 2])  # an end is one past a character
+            fields[name] = arr
+        if tp.insert_at is not None:
+            ins = tp.insert_at.copy()
+            main = (ins[:, 0] == 0) & (ins[:, 1] >= 0)
+            ins[:, 1] = np.where(main, self.offsets(ins[:, 1]), ins[:, 1])
+            fields["insert_at"] = ins
+        return replace(tp, sources=sources, **fields)

@@ -1,0 +1,179 @@
+"""SINUMERIK blocks rewritten in the G-code reader's syntax, with a map back to the file.
+
+The G-code reader (``..gcode``) already runs what Sinumerik shares with ISO G-code (G0-G3,
+G17-G19, G54-G57, G90/G91, G70/G71, F, arcs) and the Sinumerik control flow (``..gcode.siemens``,
+``..gcode.flow``: DEF, PROC, IF, WHILE, FOR, REPEAT, subprogram calls). What it cannot read is
+rewritten here, block by block, into words it can read; every other character stays where it
+was, so a plain ``X12.5`` keeps its number and the map (``OffsetMap``) takes each offset of the
+rewritten text back to the file's.
+
+Sources: SINUMERIK 840D sl "Fundamentals" programming manual (6FC5398-1BP40), sections
+"Arithmetic parameters (R)", "Variable assignments and arithmetic" (``X=R1+2*SIN(30)``: an
+address with an expression takes ``=``; SIN/COS/TAN in degrees), "Frames" (TRANS, ATRANS,
+ROT, AROT, RPL, SCALE, ASCALE, MIRROR, AMIRROR: each in a block of its own), "Circular
+interpolation" (``CR=`` radius, ``AR=`` opening angle, ``CIP`` with ``I1= J1= K1=``).
+
+What is rewritten:
+- ``R<n>`` (arithmetic parameter, global to the channel) -> ``#<1000+n>``: a global # parameter
+  of the reader, out of reach of the Siemens names (``#`` is no Sinumerik character);
+- ``<address>=<expression>`` -> ``<address>[<expression in LinuxCNC syntax>]``; a plain
+  number after ``=`` is left as it is (the reader takes ``X=10`` with its span);
+- ``CR=`` -> ``R=`` (the G-code reader's arc radius: the same rule, the short arc for a positive
+  radius, the long one for a negative);
+- a frame instruction's keyword -> an internal G code (``FRAME_CODES``) that ``parse.py``
+  takes back; ``RPL=`` -> ``R=`` (the plane rotation's angle).
+What is refused with its position (a ``ParseError`` from the reader's line index): ``AR=``,
+``CIP``, ``A3= B3= C3=`` orientation vectors, ``ORIMKS``/``ORIWKS``-dependent vector motion,
+and an R parameter used as an address word.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..gcode import siemens
+
+# Frame instructions -> internal G codes (no Sinumerik or ISO G code uses 9990-9997).
+FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0, "SCALE": 9994.0, "ASCALE": 9995.0,
+               "MIRROR": 9996.0, "AMIRROR": 9997.0}
+FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
+R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
+
+_FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw>AMIRROR|ASCALE|ATRANS|AROT|MIRROR|SCALE|TRANS|ROT)\b", re.IGNORECASE)
+# A block that may need rewriting: an '=' (outside a comparison), an R parameter, a frame word,
+# or a word refused below. Plain CAM blocks (G1 X.. Y..) never match and are not looked at.
+_CANDIDATE = re.compile(r"(?im)^[^;\n]*(?:=|\bR\d|\b(?:A?MIRROR|A?SCALE|A?TRANS|A?ROT|CIP)\b)")
+_ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
+_REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
+            "A3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
+            "B3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
+            "C3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
+            "I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
+            "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
+            "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
+_NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
+_R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
+
+
+class Refusal(Exception):
+    """A construct not read, at an offset of the original text."""
+
+    def __init__(self, offset: int, message: str):
+        super().__init__(message)
+        self.offset = offset
+        self.message = message
+
+
+@dataclass(frozen=True)
+class OffsetMap:
+    """Offsets of the rewritten text -> offsets of the file: each edit is an anchor (rewritten
+    start, original start, rewritten end, original end); between anchors the texts agree."""
+
+    new_start: np.ndarray
+    old_start: np.ndarray
+    new_end: np.ndarray
+    old_end: np.ndarray
+
+    def __call__(self, offsets):
+        offsets = np.asarray(offsets, dtype=np.int64)
+        if not len(self.new_start):
+            return offsets
+        k = np.searchsorted(self.new_start, offsets, side="right") - 1
+        k0 = np.maximum(k, 0)
+        inside = (k >= 0) & (offsets < self.new_end[k0])
+        same_length = (self.new_end - self.new_start)[k0] == (self.old_end - self.old_start)[k0]
+        # inside an edit of the same length (CR= -> R =) characters keep their places; else its start
+        within = np.where(same_length, self.old_start[k0] + offsets - self.new_start[k0], self.old_start[k0])
+        after = self.old_end[k0] + (offsets - self.new_end[k0])
+        out = np.where(k < 0, offsets, np.where(inside, within, after))
+        return np.where(offsets < 0, offsets, out)
+
+
+def expression(text: str) -> str:
+    """A Sinumerik expression in the reader's syntax (R parameters as # parameters)."""
+    return siemens.expression(_R_PARAM.sub(lambda m: f"#{R_BASE + int(m.group(1))}", text))
+
+
+def _split_items(code: str) -> list[tuple[int, int]]:
+    """(start, end) of the blank-separated items of a block (blanks inside brackets or quotes kept)."""
+    items, depth, quote, start = [], 0, False, None
+    for i, ch in enumerate(code):
+        if ch == '"':
+            quote = not quote
+        if not quote:
+            depth += (ch in "([") - (ch in ")]")
+        if ch in " \t" and depth == 0 and not quote:
+            if start is not None:
+                items.append((start, i))
+                start = None
+        elif start is None:
+            start = i
+    if start is not None:
+        items.append((start, len(code)))
+    return items
+
+
+def _rewrite_item(item: str, at: int, frame: bool) -> str:
+    """One item of a block in the reader's syntax (``at``: its offset in the file, for refusals)."""
+    m = _ITEM.match(item)
+    r_word = re.fullmatch(r"(?i)R(\d+)", item)
+    if r_word:
+        raise Refusal(at, f"{item}: an R parameter is not an address word (write e.g. X={item})")
+    if not m:
+        return item
+    name, value = m.group("name").upper(), item[m.end():]
+    if name in _REFUSED:
+        raise Refusal(at, _REFUSED[name])
+    r_param = re.fullmatch(r"R(\d+)", name)
+    if r_param:
+        return f"#{R_BASE + int(r_param.group(1))}={expression(value)}"
+    if name == "CR" or (frame and name == "RPL"):
+        name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
+    elif len(name) > 1 or name.startswith("_") or name.startswith("$"):
+        return item  # a DEF variable's or system variable's assignment: the flow reader's (gcode.siemens)
+    if _NUMBER.match(value.strip()):
+        return f"{name}{item[len(m.group('name')):]}"
+    return f"{name.strip()}{expression(value)}"
+
+
+def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
+    """The edits (start, end in the line, new text) that put a block of the file (offset
+    ``start``) in the reader's syntax; none for a block it reads as it is."""
+    code = line.partition(";")[0]
+    frame = _FRAME_LINE.match(code)
+    if siemens.classify(code) is not None and not frame and not re.match(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?R\d+[ \t]*=", code):
+        # a Siemens statement (DEF, IF, FOR, a variable's assignment, a call): R parameters in it read as # parameters
+        new = _R_PARAM.sub(lambda m: f"#{R_BASE + int(m.group(1))}", code)
+        return [(0, len(code), new)] if new != code else []
+    edits, pos = [], 0
+    if frame:
+        word = f"G{FRAME_CODES[frame.group('kw').upper()]:g}"
+        edits.append((frame.start("kw"), frame.end("kw"), word.ljust(frame.end("kw") - frame.start("kw"))))
+        pos = frame.end("kw")
+    for a, b in _split_items(code[pos:]):
+        old = code[pos + a : pos + b]
+        new = _rewrite_item(old, start + pos + a, bool(frame))
+        if new != old:
+            edits.append((pos + a, pos + b, new))
+    return edits
+
+
+def rewrite(text: str) -> tuple[str, OffsetMap]:
+    """The whole file in the reader's syntax and the offset map back (identity where nothing is rewritten)."""
+    pieces, anchors, pos, shift = [], [], 0, 0
+    for m in _CANDIDATE.finditer(text):
+        line_start = m.start()
+        end = text.find("\n", line_start)
+        line = text[line_start : len(text) if end < 0 else end].rstrip("\r")
+        for a, b, new in line_edits(line, line_start):
+            a, b = line_start + a, line_start + b
+            pieces += [text[pos:a], new]
+            anchors.append((a + shift, a, a + shift + len(new), b))
+            shift += len(new) - (b - a)
+            pos = b
+    pieces.append(text[pos:])
+    cols = np.array(anchors, dtype=np.int64).reshape(-1, 4)
+    return "".join(pieces), OffsetMap(cols[:, 0], cols[:, 1], cols[:, 2], cols[:, 3])
