@@ -1,0 +1,154 @@
+"""SINUMERIK 840D part programs (postproc/dialects/sinumerik): read, written back, judged.
+
+No open Sinumerik interpreter exists: the expected positions below are worked out by hand
+from the 840D sl "Fundamentals" programming manual (6FC5398-1BP40), section "Coordinate
+transformations (frames)" (TRANS / ROT absolute, ATRANS / AROT additive in the current
+frame, ROT order Z-Y'-X'' (RPY), RPL in the active plane) and "Arithmetic parameters" /
+"Variable assignments" (R parameters, ``X=expression``, SIN in degrees, a block's assignments
+run left to right). The geometry is cross-checked against LinuxCNC's rs274: the impeller
+part of tests/corpus/fivex written in Sinumerik gives the tool path rs274 recorded
+(tests/data/rs274/impeller_linuxcnc.canon).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_fivex_rs274 import canonical_axes
+
+from postproc import dialects
+from postproc.errors import ParseError
+from postproc.fivex.machine import load_machine
+from postproc.fivex.program import from_toolpath
+from postproc.programs import emit_texts, parse_program
+
+HERE = Path(__file__).parent
+
+FRAMES = """; frames and R parameters
+N10 G54 G17 G71 G90
+N20 R1=10 R2=R1*2
+N30 TRANS X10 Y20
+N40 G0 X0 Y0 Z5
+N50 AROT Z90
+N60 G1 X=R1 Y0 F500 ; R1 = 10
+N70 ATRANS X5
+N80 G1 X0 Y=R2/4+2*SIN(30)
+N90 ROT RPL=45
+N100 G1 X10 Y0
+N110 TRANS
+N120 G2 X20 Y0 CR=5
+N130 M30
+"""
+# By hand (Fundamentals, "Frames"): a point p is at TRANS @ ROT... @ p in the G54 frame.
+FRAMES_EXPECTED = [
+    (10.0, 20.0, 5.0),  # N40: TRANS X10 Y20 -> (0,0,5) + (10,20,0)
+    (10.0, 30.0, 5.0),  # N60: AROT Z90 on it: Rz(90) (10,0) = (0,10); + (10,20)
+    (4.0, 25.0, 5.0),  # N80: ATRANS X5 in the rotated frame: local (5, 20/4 + 2 sin 30 = 6); Rz(90) -> (-6,5); + (10,20)
+    (10 * np.sqrt(0.5), 10 * np.sqrt(0.5), 5.0),  # N100: ROT (absolute) deletes TRANS/AROT/ATRANS; RPL=45 about Z (G17)
+    (20.0, 0.0, 5.0),  # N120: TRANS without axes deletes the programmable frame
+]
+
+
+def _read(tmp_path: Path, text: str, name: str = "PART.MPF"):
+    path = tmp_path / name
+    path.write_bytes(text.encode("latin-1"))
+    return parse_program(path), path
+
+
+def test_frames_and_r_parameters_by_hand(tmp_path):
+    tp, path = _read(tmp_path, FRAMES)
+    assert tp.dialect == "sinumerik" and tp.resolved.all()
+    np.testing.assert_allclose(tp.base_poses()[:, :3, 3], FRAMES_EXPECTED, atol=1e-9)
+    assert list(tp.kind[-1:]) == [6]  # G2: clockwise arc
+    assert "G54+FRAME@line4" in tp.frame_names
+
+
+def test_round_trip_is_byte_identical_and_spans_name_the_numbers(tmp_path):
+    tp, path = _read(tmp_path, FRAMES.replace("\n", "\r\n"))
+    assert emit_texts(tp, tp)[0].encode("latin-1") == path.read_bytes()
+    text = tp.sources[0].text
+    words = [text[s[1] - 1 : s[2]] for s in tp.spans.reshape(-1, 3) if s[1] >= 0]
+    # every span is a plain number after its own letter in the file (X=R1 has none: an expression)
+    assert words == ["X0", "Y0", "Z5", "Y0", "X0", "X10", "Y0", "X20", "Y0", "=5"]
+
+
+def test_a_moved_number_is_written_in_place(tmp_path):
+    tp, path = _read(tmp_path, FRAMES)
+    moved = tp.position.copy()
+    moved[3, 0] += 0.5  # N100 X10 -> X10.5 in its own (rotated) frame
+    out = emit_texts(tp, tp.with_positions(moved))[0]
+    assert out == FRAMES.replace("N100 G1 X10 Y0", "N100 G1 X10.5 Y0")
+
+
+def test_sniffing_by_extension_and_content(tmp_path):
+    assert dialects.sniff("A.MPF").name == "sinumerik" and dialects.sniff("b.spf").name == "sinumerik"
+    assert dialects.sniff("c.txt", b"N10 G54\nTRANS X10\nG1 X1 F10\n").name == "sinumerik"
+    assert dialects.sniff("d.txt", b"G21 G90\nG1 X1 Y2 F100\nM2\n").name == "gcode"
+    assert dialects.sniff("e.ngc", b"TRANS X1\n").name == "gcode"  # the extension decides
+
+
+@pytest.mark.parametrize("text, line, column, why", [
+    ("G0 X0\nSCALE X2 Y2\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
+    ("G0 X0\nN20 MIRROR X0\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
+    ("G0 X0\nG3 X10 Y0 AR=90 F10\n", 2, 11, "AR="),
+    ("TRAORI\nG1 X1 A3=0 B3=0 C3=1 F10\n", 2, 7, "vector"),
+    ("G0 X0\nG1 X1 R5 F10\n", 2, 7, "not an address word"),
+    ("G0 X0\nTRANS X1 G1\n", 2, 1, "block of its own"),
+])
+def test_refused_with_file_line_and_column(tmp_path, text, line, column, why):
+    with pytest.raises(ParseError) as exc:
+        _read(tmp_path, text)
+    assert (exc.value.line, exc.value.column) == (line, column) and why in str(exc.value)
+
+
+def test_frame_reset_keeps_reading(tmp_path):
+    tp, _ = _read(tmp_path, "G0 X0 Y0 Z0\nSCALE\nMIRROR\nG1 X1 F10\n")
+    np.testing.assert_allclose(tp.base_poses()[:, :3, 3], [(0, 0, 0), (1, 0, 0)])
+
+
+def test_unknown_r_parameter_flags_the_target(tmp_path):
+    tp, _ = _read(tmp_path, "G0 X0 Y0 Z0\nG1 X=R7 F10\nR7=2\nG1 X=R7\n")
+    assert tp.resolved.tolist() == [True, False, True]
+    assert tp.position[2, 0] == 2.0
+
+
+def test_inch_translation_is_in_inches(tmp_path):
+    tp, _ = _read(tmp_path, "G70\nTRANS X1\nG0 X0 Y0 Z0\n")
+    np.testing.assert_allclose(tp.base_poses()[0, :3, 3], (25.4, 0, 0))
+
+
+# ------------------------------------------------------------------ cross-check with LinuxCNC
+
+SHIFT = np.array([12.5, -7.0, 3.0])
+
+
+def impeller_in_sinumerik() -> str:
+    """tests/data/rs274/impeller_linuxcnc.ngc (LinuxCNC TCP: tool tip + A C, G93) as a SINUMERIK
+    program: TRAORI, the tips written in a frame TRANS-lated by R parameters, so that the
+    numbers differ and only the frame brings them back."""
+    src = (HERE / "data" / "rs274" / "impeller_linuxcnc.ngc").read_text(encoding="latin-1")
+    out = ["; impeller_linuxcnc.ngc written for a SINUMERIK 840D", "N10 G54 G71 G90 G94 G17", "N20 R1=12.5 R2=-7 R3=R1-9.5",
+           "N30 TRANS X=R1 Y=R2 Z=R3", "N40 TRAORI"]
+    for line in src.splitlines():
+        m = re.match(r"(G93 )?(G[01]) X(\S+) Y(\S+) Z(\S+) A(\S+) C(\S+)(?: F(\S+))?$", line)
+        if m is None:
+            if line.startswith(("G93", "G94")):
+                out.append(line.split()[0])
+            continue
+        xyz = np.array([float(v) for v in m.group(3, 4, 5)]) - SHIFT
+        words = " ".join(f"{k}{v:.3f}" for k, v in zip("XYZ", xyz))
+        out.append(f"{m.group(1) or ''}{m.group(2)} {words} A{m.group(6)} C{m.group(7)}" + (f" F{m.group(8)}" if m.group(8) else ""))
+    return "\n".join(out + ["TRAFOOF", "M30", ""])
+
+
+def test_impeller_gives_the_tool_path_rs274_recorded(tmp_path):
+    tp, _ = _read(tmp_path, impeller_in_sinumerik(), "IMPELLER.MPF")
+    tp = tp.with_frames({"G54": np.eye(4)})
+    path = from_toolpath(tp, load_machine("xyzac-trt"))
+    canon = canonical_axes((HERE / "data" / "rs274" / "impeller_linuxcnc.canon").read_text(encoding="latin-1"))
+    assert len(canon) == len(path.tip) > 600
+    np.testing.assert_allclose(path.tip, canon[:, :3], atol=6e-4)  # rs274 prints 4 decimals
+    np.testing.assert_allclose(path.angles, canon[:, 3:], atol=6e-4)
