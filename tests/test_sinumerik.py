@@ -104,6 +104,23 @@ def test_refused_with_file_line_and_column(tmp_path, text, line, column, why):
     assert (exc.value.line, exc.value.column) == (line, column) and why in str(exc.value)
 
 
+@pytest.mark.parametrize("frame, expected", [
+    # ROT X90 Z90: Rz(90) @ Rx(90) (RPY, Z then Y' then X''): (1,2,3) -Rx-> (1,-3,2) -Rz-> (3,1,2)
+    ("ROT X90 Z90", (3.0, 1.0, 2.0)),
+    # AROT adds in the rotated frame: ROT Z90 then AROT X90 is the same rotation as above
+    ("ROT Z90\nAROT X90", (3.0, 1.0, 2.0)),
+    # RPL under G18 turns about Y: Ry(90) (1,2,3) = (3,2,-1)
+    ("G18\nROT RPL=90", (3.0, 2.0, -1.0)),
+    # ATRANS after AROT moves along the rotated axes: Rz(90) @ T(1,0,0): (1,2,3) -> (2,2,3) -> (-2,2,3)
+    ("AROT Z90\nATRANS X1", (-2.0, 2.0, 3.0)),
+    # TRANS (absolute) after ROT deletes the rotation
+    ("ROT Z90\nTRANS X1", (2.0, 2.0, 3.0)),
+])
+def test_rotation_order_and_composition_by_hand(tmp_path, frame, expected):
+    tp, _ = _read(tmp_path, f"G17 G90\n{frame}\nG0 X1 Y2 Z3\n")
+    np.testing.assert_allclose(tp.base_poses()[0, :3, 3], expected, atol=1e-12)
+
+
 def test_frame_reset_keeps_reading(tmp_path):
     tp, _ = _read(tmp_path, "G0 X0 Y0 Z0\nSCALE\nMIRROR\nG1 X1 F10\n")
     np.testing.assert_allclose(tp.base_poses()[:, :3, 3], [(0, 0, 0), (1, 0, 0)])
@@ -152,3 +169,66 @@ def test_impeller_gives_the_tool_path_rs274_recorded(tmp_path):
     assert len(canon) == len(path.tip) > 600
     np.testing.assert_allclose(path.tip, canon[:, :3], atol=6e-4)  # rs274 prints 4 decimals
     np.testing.assert_allclose(path.angles, canon[:, 3:], atol=6e-4)
+
+
+# ------------------------------------------------------------------ compensate, convert
+
+TRUE = HERE / "data" / "fivex" / "xyzac-trt-true.toml"
+AT_ZERO = ("--frame", "G54=0,0,0,0,0,0")  # the impeller was written for G54 at the machine zero (fivex/offsets.py)
+
+
+def _skeleton(text: str) -> str:
+    return re.sub(r"[+-]?\d+\.?\d*", "#", text)
+
+
+def test_compensated_impeller_lands_on_the_true_machine(tmp_path):
+    """compensate --model (the true machine): only numbers change, the frame's and R
+    parameters' text is kept, and the true machine running the new numbers under the 840D's
+    nominal TRAORI reaches the tips the program means (the KRL / RAPID compensated examples'
+    check, docs/guide/compensating.md, for a five-axis machine)."""
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+    from postproc.fivex.compensate import actual_tip, controller_axes
+
+    src = tmp_path / "IMPELLER.MPF"
+    src.write_text(impeller_in_sinumerik(), encoding="latin-1")
+    out = tmp_path / "IMPELLER_COMP.MPF"
+    result = CliRunner().invoke(app, ["compensate", str(src), "--model", str(TRUE), "--input-axes", "tip", "-o", str(out), *AT_ZERO])
+    assert result.exit_code == 0, result.output
+    before_text, after_text = src.read_text(encoding="latin-1"), out.read_text(encoding="latin-1")
+    assert _skeleton(after_text) == _skeleton(before_text) and after_text != before_text
+    assert after_text.splitlines()[:5] == before_text.splitlines()[:5]  # the frame block and R parameters untouched
+    nominal, true = load_machine("xyzac-trt"), load_machine(TRUE)
+    tp, new = (parse_program(p).with_frames({"G54": np.eye(4)}) for p in (src, out))
+    intended = from_toolpath(tp, nominal, "tip").tip  # machine frame: TRANS applied
+    cmd = {}
+    for key, prog in (("before", tp), ("after", new)):
+        tips = from_toolpath(prog, nominal, "tip")
+        cmd[key] = controller_axes(nominal, tips.tip, tips.angles, "tip")
+    before = np.linalg.norm(actual_tip(true, None, cmd["before"]) - intended, axis=1)
+    after = np.linalg.norm(actual_tip(true, None, cmd["after"]) - intended, axis=1)
+    assert before.max() > 0.1 and after.max() < 0.002  # 3 decimals as written; the brief's bar is 0.05 mm
+
+
+def test_convert_a_robot_program_to_sinumerik_and_back(tmp_path):
+    """convert --to sinumerik (TRAORI, the only RTCP form: the default) from RAPID; read back
+    as Sinumerik, the tips and tool axes are the RAPID program's."""
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    src = HERE / "corpus" / "fivex" / "tilted_pass.mod"
+    out = tmp_path / "TILTED.MPF"
+    result = CliRunner().invoke(app, ["convert", str(src), "--to", "sinumerik", "--machine", "xyzac-trt", "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    assert "TRAORI" in out.read_text(encoding="latin-1")
+    machine = load_machine("xyzac-trt")
+    want = from_toolpath(parse_program(src), machine)
+    back = parse_program(out)
+    assert back.dialect == "sinumerik"
+    got = from_toolpath(back.with_frames({"G54": np.eye(4)}), machine)
+    np.testing.assert_allclose(got.tip, want.tip, atol=1e-4)  # 4 decimals written
+    np.testing.assert_allclose(np.einsum("ij,ij->i", got.axis, want.axis), 1.0, atol=1e-9)
+    refused = CliRunner().invoke(app, ["convert", str(src), "--to", "sinumerik", "--machine", "xyzac-trt", "--rtcp", "linuxcnc", "-o", str(out)])
+    assert refused.exit_code == 2 and "not one of siemens" in refused.output

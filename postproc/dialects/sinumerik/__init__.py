@@ -27,6 +27,7 @@ class SinumerikDialect(GcodeDialect):
     description = "Siemens SINUMERIK 840D (.MPF / .SPF): frames, R parameters, TRAORI"
     extensions = (".mpf", ".spf")
     controller = Sinumerik840D()
+    rtcp_modes = ("siemens",)  # convert --to sinumerik writes TRAORI programs (postproc.fivex.emit)
 
     def sniff(self, head: str) -> bool:
         return _SNIFF.search(head) is not None

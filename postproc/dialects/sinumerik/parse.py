@@ -23,6 +23,11 @@ from . import frames, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _FRAME_CODES = set(translate.FRAME_NAMES)
+# Settable frames beyond G54-G57 (group 8, Fundamentals "Settable zero offset G54 to G57, G505
+# to G599, G53, G500, SUPA, G153"): G500 and G505..G599 as work-offset numbers of their own
+# (the G-code reader's are 1..9); their values are in the controller, not in the program.
+_SETTABLE_BASE = 100
+_SETTABLE = {500.0: _SETTABLE_BASE, **{float(g): _SETTABLE_BASE + g - 500 for g in range(505, 600)}}
 
 
 class _MappedLines(LineIndex):
@@ -75,9 +80,11 @@ class SinumerikParser(GcodeParser):
                 self.plane = gc
             elif gc in (70.0, 700.0, 71.0, 710.0):
                 self.to_mm = 25.4 if gc in (70.0, 700.0) else 1.0
+            elif gc in _SETTABLE:
+                state["wcs"] = float(_SETTABLE[gc])
         mine = [gc for gc in gcodes if gc in _FRAME_CODES]
         if not mine:
-            return super()._apply_gcodes(gcodes, state, values, start)
+            return super()._apply_gcodes([gc for gc in gcodes if gc not in _SETTABLE], state, values, start)
         if len(mine) > 1 or len(gcodes) > 1:
             raise self._error_at(start, "a frame instruction (TRANS, ROT, ...) takes a block of its own (840D Fundamentals, \"Frames\")")
         xyz, rpl = values[[_AX["X"], _AX["Y"], _AX["Z"]]], values[_AX["R"]]
@@ -96,6 +103,29 @@ class SinumerikParser(GcodeParser):
         identity = np.allclose(self.frame, np.eye(4), atol=0.0, rtol=0.0)
         self.tilts.append((self._when(start), None if identity else self.frame.copy()))
         return True, False
+
+    def _resolve_blocks(self, t: dict) -> Toolpath:
+        """Programs the G-code interpreter runs block by block (cutter compensation, cycles):
+        its work-offset tables know G54-G57 only, so G500 / G505.. there are refused."""
+        settable = t["wcs"] >= _SETTABLE_BASE
+        if settable.any():
+            raise self._error_at(int(t["offset"][np.argmax(settable)]), "G500 / G505..G599 in a program with cutter radius compensation "
+                                 "(G41/G42) or a cycle are not read yet: use G54..G57")
+        return super()._resolve_blocks(t)
+
+    def _work_offsets(self, t: dict, rows: np.ndarray, wcs: np.ndarray) -> np.ndarray:
+        """G54-G57 as the G-code reader names them; G500, G505.. by their own names, unknown
+        (the program cannot set them: no G10 in Sinumerik)."""
+        siemens = wcs[rows] >= _SETTABLE_BASE
+        frame_idx = np.zeros(len(rows), np.int32)
+        frame_idx[~siemens] = super()._work_offsets(t, rows[~siemens], wcs)
+        names = []
+        for w in np.unique(wcs[rows][siemens]):
+            names.append(f"G{500 + w - _SETTABLE_BASE}")
+            frame_idx[wcs[rows] == w] = self.builder.frame_index(names[-1], None)
+        if names:
+            self.notes.append(f"settable frame(s) {', '.join(names)} are the controller's (not in the program): positions are relative to them")
+        return frame_idx
 
     def _back_to_file(self, tp: Toolpath) -> Toolpath:
         """Offsets of the rewritten main text -> the file's; the file itself as source 0."""
