@@ -28,8 +28,10 @@ _EXTERN = re.compile(r"(?im)^[ \t]*EXTERN[ \t]+([A-Za-z_][A-Za-z0-9_]*)")
 _PROC = re.compile(r"(?i)^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?")
 _TOKEN = re.compile(r"\s*(==|<>|<=|>=|<|>|\+|-|\*|/|\(|\)|,|#\d+|\d+\.?\d*|\.\d+|\$?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?)")
 _OPS = {"==": " EQ ", "<>": " NE ", "<=": " LE ", ">=": " GE ", "<": " LT ", ">": " GT ", "(": "[", ")": "]"}
-_WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD ", "DIV": " / "}
-_FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN", "ROUND", "TRUNC"}
+_WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD "}
+# TRUNC (towards zero) and ROUND (half away from zero) are not LinuxCNC's FIX (floor) and
+# ROUND: left out, so an expression using them is unknown rather than off by one.
+_FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN"}
 _KEYWORDS = {"EXTERN", "PROC", "DEF", "IF", "ELSE", "ENDIF", "WHILE", "ENDWHILE", "FOR", "ENDFOR", "REPEAT", "UNTIL", "RET", "MSG",
              "GOTOF", "GOTOB", "GOTO", "LOOP", "ENDLOOP", "SUPA", "TRAORI", "TRAFOOF"}
 
@@ -60,11 +62,11 @@ def expression(text: str) -> str:
         elif up in _WORD_OPS:
             out.append(_WORD_OPS[up])
         elif up in _FUNCS:
-            out.append({"TRUNC": "FIX"}.get(up, up))
+            out.append(up)
         elif tok[0] == "#":
             out.append(tok)  # an R parameter the sinumerik dialect has already written as a # parameter
-        elif up == "NOT":
-            raise ValueError("NOT is not evaluated")
+        elif up in ("NOT", "DIV"):
+            raise ValueError(f"{up} is not evaluated")  # DIV: the 840D's integer division (7 DIV 3 = 2), not LinuxCNC's /
         elif tok[0].isalpha() or tok[0] in "_$":
             # a variable; system variables ($AA_IM[X], $P_...) are the machine's: unknown here
             out.append(f"#<{'_sys' + re.sub(r'[^A-Za-z0-9_]', '_', tok) if tok[0] == '$' else tok}>")

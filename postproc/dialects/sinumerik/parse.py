@@ -104,6 +104,18 @@ class SinumerikParser(GcodeParser):
         self.tilts.append((self._when(start), None if identity else self.frame.copy()))
         return True, False
 
+    def _resolve(self, t: dict) -> Toolpath:
+        """The G-code reader's modal resolution, after refusing an axis block that comes
+        before any G0/G1/G2/G3: the 840D then moves in the group-1 reset mode, which is
+        machine data (MD 20150 $MC_GCODE_RESET_VALUES), not in the program."""
+        motion_known = np.maximum.accumulate(np.where(~np.isnan(t["motion"]), np.arange(len(t["motion"])), -1)) >= 0
+        has_axis = ~np.isnan(t["values"][:, :6]).all(axis=1) & ~t["nonmotion"]
+        bad = has_axis & ~motion_known
+        if bad.any():
+            raise self._error_at(int(t["offset"][np.argmax(bad)]), "axis words before any G0 / G1 / G2 / G3: the motion mode at the "
+                                 "program start is the controller's reset value (machine data 20150), not in the program")
+        return super()._resolve(t)
+
     def _resolve_blocks(self, t: dict) -> Toolpath:
         """Programs the G-code interpreter runs block by block (cutter compensation, cycles):
         its work-offset tables know G54-G57 only, so G500 / G505.. there are refused."""

@@ -33,7 +33,9 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
+from lark.exceptions import LarkError
 
+from ...parse.grammar import grammar
 from ..gcode import siemens
 
 # Frame instructions -> internal G codes (no Sinumerik or ISO G code uses 9990-9997).
@@ -97,8 +99,11 @@ def expression(text: str) -> str:
     return siemens.expression(_R_PARAM.sub(lambda m: f"#{R_BASE + int(m.group(1))}", text))
 
 
-def _split_items(code: str) -> list[tuple[int, int]]:
-    """(start, end) of the blank-separated items of a block (blanks inside brackets or quotes kept)."""
+_WORD_OPS = {"DIV", "MOD", "AND", "OR", "XOR", "NOT", "B_AND", "B_OR", "B_XOR", "B_NOT"}
+
+
+def _pieces(code: str) -> list[tuple[int, int]]:
+    """(start, end) of the blank-separated pieces of a block (blanks inside brackets or quotes kept)."""
     items, depth, quote, start = [], 0, False, None
     for i, ch in enumerate(code):
         if ch == '"':
@@ -116,6 +121,21 @@ def _split_items(code: str) -> list[tuple[int, int]]:
     return items
 
 
+def _split_items(code: str) -> list[tuple[int, int]]:
+    """(start, end) of the items of a block: blank-separated pieces, joined again where a blank
+    sits inside an assignment or expression (``X = 7 DIV 3``, ``R1 = R2 + 1``)."""
+    items: list[list[int]] = []
+    for a, b in _pieces(code):
+        piece, prev = code[a:b], code[items[-1][0] : items[-1][1]] if items else ""
+        joins = items and (prev[-1] in "=+-*/<>(," or piece[0] in "=+*/<>)" or piece.upper() in _WORD_OPS
+                           or prev.upper().rsplit(None, 1)[-1] in _WORD_OPS)
+        if joins:
+            items[-1][1] = b
+        else:
+            items.append([a, b])
+    return [(a, b) for a, b in items]
+
+
 def _rewrite_item(item: str, at: int, frame: bool) -> str:
     """One item of a block in the reader's syntax (``at``: its offset in the file, for refusals)."""
     m = _ITEM.match(item)
@@ -129,14 +149,31 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
         raise Refusal(at, _REFUSED[name])
     r_param = re.fullmatch(r"R(\d+)", name)
     if r_param:
-        return f"#{R_BASE + int(r_param.group(1))}={expression(value)}"
+        return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
     if name == "CR" or (frame and name == "RPL"):
         name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
     elif len(name) > 1 or name.startswith("_") or name.startswith("$"):
         return item  # a DEF variable's or system variable's assignment: the flow reader's (gcode.siemens)
     if _NUMBER.match(value.strip()):
         return f"{name}{item[len(m.group('name')):]}"
-    return f"{name.strip()}{expression(value)}"
+    if value.strip().startswith('"'):
+        if name == "T":  # a tool chosen by name: its length is the controller's (D), positions are the tool tip's
+            return " " * len(item)
+        raise Refusal(at, f"{m.group('name')}= takes a text value here, which is not read")
+    return f"{name.strip()}{_value(value)}"
+
+
+def _value(text: str) -> str:
+    """The reader's form of an address value: the expression, or a parameter that is never set
+    (the target is then flagged, its note naming the expression) where it cannot be read
+    (IC(), ATAN2, POT, DIV, system variables' functions)."""
+    try:
+        out = expression(text)
+        grammar("gcode").parse(f"o1 if {out}")  # a function the reader lacks (ATAN2, POT, TRUNC) fails here
+        return out
+    except (ValueError, LarkError):
+        shown = re.sub(r"[<>\s]+", " ", text.strip())[:40]
+        return f"[#<_not read: {shown}>]"
 
 
 def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
