@@ -63,6 +63,8 @@ def expression(text: str) -> str:
             out.append(_WORD_OPS[up])
         elif up in _FUNCS:
             out.append(up)
+        elif up in ("TRUE", "FALSE"):
+            out.append("1" if up == "TRUE" else "0")  # the 840D's BOOL constants
         elif tok[0] == "#":
             out.append(tok)  # an R parameter the sinumerik dialect has already written as a # parameter
         elif up in ("NOT", "DIV"):
