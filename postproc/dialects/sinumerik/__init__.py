@@ -15,7 +15,7 @@ import re
 
 from ...ir import SourceDoc, Toolpath
 from ..gcode import GcodeDialect
-from .controller import Sinumerik840D
+from .controller import SINUMERIK_840D
 
 # Words no other G-code dialect writes at the start of a block (the head is upper case).
 _SNIFF = re.compile(r"(?m)^[ \t]*(?:N\d+[ \t]+)?(?:A?TRANS|A?ROT|A?SCALE|A?MIRROR|TRAORI|TRAFOOF|CYCLE800|CYCLE832|G500|G710|G700|SUPA|"
@@ -26,7 +26,7 @@ class SinumerikDialect(GcodeDialect):
     name = "sinumerik"
     description = "Siemens SINUMERIK 840D (.MPF / .SPF): frames, R parameters, TRAORI"
     extensions = (".mpf", ".spf")
-    controller = Sinumerik840D()
+    controller = SINUMERIK_840D
     rtcp_modes = ("siemens",)  # convert --to sinumerik writes TRAORI programs (postproc.fivex.emit)
 
     def sniff(self, head: str) -> bool:
@@ -36,9 +36,6 @@ class SinumerikDialect(GcodeDialect):
         from .parse import SinumerikParser  # the reader pulls in lark and the grammar: loaded when a program is read
 
         return SinumerikParser(sources[0]).parse()
-
-    def inexact_interpolation(self, tp: Toolpath) -> str | None:
-        return self.controller.inexact_interpolation(tp)
 
 
 SINUMERIK = SinumerikDialect()

@@ -1,8 +1,7 @@
 """What a SINUMERIK 840D does with a part program, beyond the language.
 
-Written with the method names of ``Dialect``'s controller part (the base class
-``postproc.controller.Controller`` when it is on main); a machine tool has no robot
-configuration data, so the posture methods keep the defaults (nothing stated).
+A ``postproc.controller.Controller``: a machine tool has no robot configuration data, so
+configuration data never apply; what the 840D states here is its interpolation mode.
 
 Rotary-axis solution rules (SINUMERIK 840D sl Function Manual "Special functions",
 F2 "Multi-axis transformations", "Orientation programming" / "Singular positions"):
@@ -21,6 +20,7 @@ import re
 
 import numpy as np
 
+from ...controller import Controller
 from ...ir import Toolpath
 
 # Continuous-path mode: G64 and the smoothing modes G641..G645 leave the programmed corner
@@ -29,21 +29,12 @@ from ...ir import Toolpath
 _CONTINUOUS = re.compile(r"(?im)^[^;\n]*\bG64[1-5]?\b")
 
 
-class Sinumerik840D:
-    maker = "Siemens"
-    name = "SINUMERIK 840D sl"
+class Sinumerik840D(Controller):
+    name = "Siemens SINUMERIK 840D sl"
+    maker = None  # a CNC: it drives no robot maker's arms
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         return np.zeros(len(tp), bool)  # no robot configuration data in a part program
-
-    def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
-
-    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
-        return []
-
-    def stated_loads(self, tp: Toolpath):
-        return None
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         """``file:line: why`` at the first G64 / G641..G645 block: the 840D then rounds the
@@ -57,5 +48,5 @@ class Sinumerik840D:
                 return f"{doc.path}:{line}: continuous-path mode (G64 / G641..G645): the 840D rounds the corners between blocks"
         return None
 
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        return np.ones(len(tp), bool)  # a Sinumerik arc ends at its programmed end point
+
+SINUMERIK_840D = Sinumerik840D()
