@@ -47,10 +47,10 @@ CYCLE_CHECK_AFTER = 1_000
 # a plain CAM file of 10^6 lines never runs them.
 _FLOW = re.compile(r"(?m)^[ \t]*(?:/[ \t]*)?(?:n[ \t]*\d+[ \t]*)?o[ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b")
 _M98 = re.compile(r"m[ \t]*9[89](?!\d)")
-_FLOW_WORDS = ("sub", "call", "if", "while", "do", "repeat", "proc", "extern", "def", "for")
+_FLOW_WORDS = ("sub", "call", "if", "while", "do", "repeat", "proc", "extern", "def", "for", "goto")
 _OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat", "for": "endfor"}
 _LOOPS = ("while", "do", "repeat", "for")
-_SIEMENS_FLOW = re.compile(r"(?m)^[ \t]*(?:proc|extern|def|if|while|for|repeat)[ \t]")
+_SIEMENS_FLOW = re.compile(r"(?m)^[ \t]*(?:n\d+[ \t]+)?(?:proc|extern|def|if|while|for|repeat|goto[fbc]?)[ \t]")  # N20 IF ...: block numbers too
 
 
 _CALL = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*call\b")

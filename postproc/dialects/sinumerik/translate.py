@@ -47,7 +47,8 @@ R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
 _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw>AMIRROR|ASCALE|ATRANS|AROT|MIRROR|SCALE|TRANS|ROT)\b", re.IGNORECASE)
 # A block that may need rewriting: an '=' (outside a comparison), an R parameter, a frame word,
 # or a word refused below. Plain CAM blocks (G1 X.. Y..) never match and are not looked at.
-_CANDIDATE = re.compile(r"(?im)^[^;\n]*(?:=|\bR\d|\b(?:A?MIRROR|A?SCALE|A?TRANS|A?ROT|CIP)\b)")
+_CANDIDATE = re.compile(r"(?im)^(?:[^;\n]*(?:=|\bR\d|\b(?:A?MIRROR|A?SCALE|A?TRANS|A?ROT|CIP)\b)"
+                        r"|[ \t]*(?:N\d+[ \t]+)?(?:[A-Z_]\w*:|CASE\b|[ABC]SPLINE\b))")
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
 _REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
             "A3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
@@ -56,6 +57,16 @@ _REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc
             "I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
+# Statements refused with their reason (840D "Job Planning": program jumps, CASE, arrays;
+# "Fundamentals": spline interpolation): the positions after them depend on what is not run.
+_NOT_READ = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?:(?P<label>[A-Za-z_]\w*:)(?!=)|(?P<case>CASE\b)|(?P<spline>[ABC]SPLINE\b)"
+                       r"|(?P<array>[A-Za-z_]\w*\[[^\]]*\][ \t]*=))")
+_NOT_READ_WHY = {"label": "jump labels (NAME:) and GOTO / GOTOF / GOTOB / GOTOC are not followed yet: the blocks after a jump are not known",
+                 "case": "CASE ... OF ... GOTOF is a program jump, not followed yet",
+                 "spline": "spline interpolation (ASPLINE / BSPLINE / CSPLINE) is not modelled: the path between the points is the controller's",
+                 "array": "array elements and axis-indexed settings (NAME[...]=) are not read yet"}
+# Addresses that do not move the tool (smoothing distances, spindle positioning): read past.
+_IGNORED = {"ADIS", "ADISPOS", "SPOS", "SPOSA"}
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
 _R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
 
@@ -127,7 +138,7 @@ def _split_items(code: str) -> list[tuple[int, int]]:
     items: list[list[int]] = []
     for a, b in _pieces(code):
         piece, prev = code[a:b], code[items[-1][0] : items[-1][1]] if items else ""
-        joins = items and (prev[-1] in "=+-*/<>(," or piece[0] in "=+*/<>)" or piece.upper() in _WORD_OPS
+        joins = items and (prev[-1] in "=+-*/<>(," or piece[0] in "=+*/<>)" or piece.strip("+-*/<>=") == "" or piece.upper() in _WORD_OPS
                            or prev.upper().rsplit(None, 1)[-1] in _WORD_OPS)
         if joins:
             items[-1][1] = b
@@ -152,8 +163,11 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
         return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
     if name == "CR" or (frame and name == "RPL"):
         name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
+    elif name in _IGNORED:
+        return " " * len(item)
     elif len(name) > 1 or name.startswith("_") or name.startswith("$"):
-        return item  # a DEF variable's or system variable's assignment: the flow reader's (gcode.siemens)
+        raise Refusal(at, f"{m.group('name')}=: an address or variable set inside a motion block is not read "
+                          "(an extra axis, a path setting, or a variable: set variables in a block of their own)")
     if _NUMBER.match(value.strip()):
         return f"{name}{item[len(m.group('name')):]}"
     if value.strip().startswith('"'):
@@ -180,6 +194,10 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     """The edits (start, end in the line, new text) that put a block of the file (offset
     ``start``) in the reader's syntax; none for a block it reads as it is."""
     code = line.partition(";")[0]
+    not_read = _NOT_READ.match(code)
+    if not_read:
+        word = next(k for k in not_read.groupdict() if not_read.group(k))
+        raise Refusal(start + not_read.start(word), _NOT_READ_WHY[word])
     frame = _FRAME_LINE.match(code)
     if siemens.classify(code) is not None and not frame and not re.match(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?R\d+[ \t]*=", code):
         # a Siemens statement (DEF, IF, FOR, a variable's assignment, a call): R parameters in it read as # parameters
