@@ -47,8 +47,30 @@ R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
 _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw>AMIRROR|ASCALE|ATRANS|AROT|MIRROR|SCALE|TRANS|ROT)\b", re.IGNORECASE)
 # A block that may need rewriting: an '=' (outside a comparison), an R parameter, a frame word,
 # or a word refused below. Plain CAM blocks (G1 X.. Y..) never match and are not looked at.
-_CANDIDATE = re.compile(r"(?im)^(?:[^;\n]*(?:=|\bR\d|\b(?:A?MIRROR|A?SCALE|A?TRANS|A?ROT|CIP)\b)"
-                        r"|[ \t]*(?:N\d+[ \t]+)?(?:[A-Z_]\w*:|CASE\b|[ABC]SPLINE\b))")
+# What may need rewriting: an '=' or a label's ':', an R parameter, a frame or refused word.
+# Found with byte masks and str.find (a regular expression over 10^6 lines costs seconds):
+# plain CAM blocks (N.. G1 X.. Y..) have none and are never looked at.
+_KEYWORDS = ("TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE")
+_ALNUM = np.zeros(256, bool)
+_ALNUM[[*range(48, 58), *range(65, 91), *range(97, 123), 95]] = True
+
+
+def candidate_lines(text: str, raw: np.ndarray, line_starts: np.ndarray) -> np.ndarray:
+    """Start offsets of the lines that may need rewriting."""
+    hit = (raw == ord("=")) | (raw == ord(":"))
+    if len(raw) > 1:
+        r_param = ((raw[:-1] | 0x20) == ord("r")) & (raw[1:] >= 48) & (raw[1:] <= 57)  # R<digit> not inside a word
+        r_param &= ~_ALNUM[np.r_[0, raw[:-2]]]
+        hit[:-1] |= r_param
+    found = [np.nonzero(hit)[0]]
+    upper = text.upper()
+    for word in _KEYWORDS:
+        at = upper.find(word)
+        while at >= 0:
+            found.append(np.array([at]))
+            at = upper.find(word, at + 1)
+    positions = np.concatenate(found)
+    return np.unique(line_starts[np.searchsorted(line_starts, positions, side="right") - 1])
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
 _REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
             "A3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
@@ -92,17 +114,21 @@ class OffsetMap:
 
     def __call__(self, offsets):
         offsets = np.asarray(offsets, dtype=np.int64)
+        out = offsets.copy()
         if not len(self.new_start):
-            return offsets
-        k = np.searchsorted(self.new_start, offsets, side="right") - 1
-        k0 = np.maximum(k, 0)
-        inside = (k >= 0) & (offsets < self.new_end[k0])
-        same_length = (self.new_end - self.new_start)[k0] == (self.old_end - self.old_start)[k0]
-        # inside an edit of the same length (CR= -> R =) characters keep their places; else its start
-        within = np.where(same_length, self.old_start[k0] + offsets - self.new_start[k0], self.old_start[k0])
-        after = self.old_end[k0] + (offsets - self.new_end[k0])
-        out = np.where(k < 0, offsets, np.where(inside, within, after))
-        return np.where(offsets < 0, offsets, out)
+            return out
+        tail = offsets >= self.new_end[-1]  # after the last edit (most of a program): one shift
+        out[tail] += self.old_end[-1] - self.new_end[-1]
+        rest = (offsets >= self.new_start[0]) & ~tail  # before the first edit (and -1, no offset): unchanged
+        if rest.any():
+            o = offsets[rest]
+            k = np.searchsorted(self.new_start, o, side="right") - 1
+            inside = o < self.new_end[k]
+            same_length = (self.new_end - self.new_start)[k] == (self.old_end - self.old_start)[k]
+            # inside an edit of the same length (CR= -> R =) characters keep their places; else its start
+            within = np.where(same_length, self.old_start[k] + o - self.new_start[k], self.old_start[k])
+            out[rest] = np.where(inside, within, self.old_end[k] + (o - self.new_end[k]))
+        return out
 
 
 def expression(text: str) -> str:
@@ -219,8 +245,9 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
 def rewrite(text: str) -> tuple[str, OffsetMap]:
     """The whole file in the reader's syntax and the offset map back (identity where nothing is rewritten)."""
     pieces, anchors, pos, shift = [], [], 0, 0
-    for m in _CANDIDATE.finditer(text):
-        line_start = m.start()
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    line_starts = np.concatenate([[0], np.nonzero(raw == 10)[0] + 1])
+    for line_start in candidate_lines(text, raw, line_starts).tolist():
         end = text.find("\n", line_start)
         line = text[line_start : len(text) if end < 0 else end].rstrip("\r")
         for a, b, new in line_edits(line, line_start):
