@@ -94,7 +94,8 @@ def test_sniffing_by_extension_and_content(tmp_path):
     ("G0 X0\nSCALE X2 Y2\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
     ("G0 X0\nN20 MIRROR X0\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
     ("G0 X0\nG3 X10 Y0 AR=90 F10\n", 2, 11, "AR="),
-    ("TRAORI\nG1 X1 A3=0 B3=0 C3=1 F10\n", 2, 7, "vector"),
+    ("TRAORI\nG1 X1 A3=0 B3=0 C3=1 F10\nG2 X2 Y1 I1 J0 A3=0 B3=1 C3=1\n", 3, 10, "arc centre) and A3= B3= C3="),
+    ("G1 X1 F10\nORIMKS\n", 2, 1, "ORIMKS"),
     ("G0 X0\nG1 X1 R5 F10\n", 2, 7, "not an address word"),
     ("G0 X0\nTRANS X1 G1\n", 2, 1, "block of its own"),
 ])
@@ -119,6 +120,16 @@ def test_refused_with_file_line_and_column(tmp_path, text, line, column, why):
 def test_rotation_order_and_composition_by_hand(tmp_path, frame, expected):
     tp, _ = _read(tmp_path, f"G17 G90\n{frame}\nG0 X1 Y2 Z3\n")
     np.testing.assert_allclose(tp.base_poses()[0, :3, 3], expected, atol=1e-12)
+
+
+def test_words_that_do_not_move_the_tool_are_read_past(tmp_path):
+    """SOFT, FFWON, ORIWKS, CYCLE832(...), COMPCAD: how the 840D moves, not where; CYCLE832 and
+    COMPCAD leave the exact path, which the controller's rules name."""
+    tp, path = _read(tmp_path, "G54 G71\nSOFT FFWON ORIWKS\nCYCLE832(0.01, 112101)\nG1 X1 Y2 Z3 F100\nCOMPCAD\nG1 X2\nM30\n")
+    np.testing.assert_allclose(tp.position, [(1, 2, 3), (2, 2, 3)])
+    assert emit_texts(tp, tp)[0].encode("latin-1") == path.read_bytes()
+    assert dialects.of(tp).controller.inexact_interpolation(tp).endswith(f"{path}:3: continuous-path mode or compressor (G64 / G641..G645, "
+                                                                          "COMPCAD, CYCLE832): the 840D leaves the programmed corners")
 
 
 def test_frame_reset_keeps_reading(tmp_path):
@@ -169,6 +180,23 @@ def test_impeller_gives_the_tool_path_rs274_recorded(tmp_path):
     assert len(canon) == len(path.tip) > 600
     np.testing.assert_allclose(path.tip, canon[:, :3], atol=6e-4)  # rs274 prints 4 decimals
     np.testing.assert_allclose(path.angles, canon[:, 3:], atol=6e-4)
+
+
+def test_orientation_vectors_give_the_same_tool_path(tmp_path):
+    """A3= B3= C3= under TRAORI (ORIWKS, the default: vectors in the workpiece frame): the
+    impeller with its tool axes written as vectors instead of A / C angles gives the same tips
+    and tool axes (7 decimals written), and comes back byte-identical."""
+    machine = load_machine("xyzac-trt")
+    angles_text = impeller_in_sinumerik()
+    tp, _ = _read(tmp_path, angles_text, "ANGLES.MPF")
+    ref = from_toolpath(tp.with_frames({"G54": np.eye(4)}), machine)
+    rows = iter(ref.axis)
+    vectors_text = re.sub(r" A(\S+) C(\S+)", lambda m: " A3={:.7f} B3={:.7f} C3={:.7f}".format(*next(rows)), angles_text)
+    tv, path = _read(tmp_path, vectors_text, "VECTORS.MPF")
+    assert tv.orientation_kind == "axis" and emit_texts(tv, tv)[0].encode("latin-1") == path.read_bytes()
+    got = from_toolpath(tv.with_frames({"G54": np.eye(4)}), machine)
+    np.testing.assert_allclose(got.tip, ref.tip, atol=1e-12)
+    np.testing.assert_allclose(got.axis, ref.axis, atol=2e-7)
 
 
 # ------------------------------------------------------------------ compensate, convert

@@ -26,7 +26,7 @@ from ...ir import Toolpath
 # Continuous-path mode: G64 and the smoothing modes G641..G645 leave the programmed corner
 # (Fundamentals, "Continuous-path mode G64, G641, G642, G643, G644, G645"); G60 / G9 / G601 /
 # G602 / G603 stop exactly at the block end.
-_CONTINUOUS = re.compile(r"(?im)^[^;\n]*\bG64[1-5]?\b")
+_CONTINUOUS = re.compile(r"(?im)^[^;\n]*(?:\bG64[1-5]?\b|\bCOMP(?:CAD|CURV|ON)\b|\bCYCLE832[ \t]*\()")
 
 
 class Sinumerik840D(Controller):
@@ -37,15 +37,17 @@ class Sinumerik840D(Controller):
         return np.zeros(len(tp), bool)  # no robot configuration data in a part program
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
-        """``file:line: why`` at the first G64 / G641..G645 block: the 840D then rounds the
-        corners between blocks (Fundamentals, "Continuous-path mode"), which the path
+        """``file:line: why`` at the first G64 / G641..G645 block, compressor (COMPON, COMPCAD,
+        COMPCURV) or CYCLE832 (which sets them): the 840D then rounds the corners between
+        blocks or fits a curve through them (Fundamentals, "Continuous-path mode"; Job
+        Planning, "NC block compression"), which the path
         prediction does not model; None where the program never asks for it (the reset
         value of the group, machine data 20150, is the machine's: not in the program)."""
         for doc in tp.sources:
             m = _CONTINUOUS.search(doc.text)
             if m:
                 line = doc.text.count("\n", 0, m.start()) + 1
-                return f"{doc.path}:{line}: continuous-path mode (G64 / G641..G645): the 840D rounds the corners between blocks"
+                return f"{doc.path}:{line}: continuous-path mode or compressor (G64 / G641..G645, COMPCAD, CYCLE832): the 840D leaves the programmed corners"
         return None
 
 

@@ -86,9 +86,13 @@ class SinumerikParser(GcodeParser):
                 self.to_mm = 25.4 if gc in (70.0, 700.0) else 1.0
             elif gc in _SETTABLE:
                 state["wcs"] = float(_SETTABLE[gc])
+            elif gc == translate.VECTOR_CODE:
+                # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
+                # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
+                state["tlo"] = 43.5
         mine = [gc for gc in gcodes if gc in _FRAME_CODES]
         if not mine:
-            return super()._apply_gcodes([gc for gc in gcodes if gc not in _SETTABLE], state, values, start)
+            return super()._apply_gcodes([gc for gc in gcodes if gc not in _SETTABLE and gc != translate.VECTOR_CODE], state, values, start)
         if len(mine) > 1 or len(gcodes) > 1:
             raise self._error_at(start, "a frame instruction (TRANS, ROT, ...) takes a block of its own (840D Fundamentals, \"Frames\")")
         xyz, rpl = values[[_AX["X"], _AX["Y"], _AX["Z"]]], values[_AX["R"]]

@@ -42,6 +42,8 @@ from ..gcode import siemens
 FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0, "SCALE": 9994.0, "ASCALE": 9995.0,
                "MIRROR": 9996.0, "AMIRROR": 9997.0}
 FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
+VECTOR_CODE = 9998.0  # marks a block with A3= B3= C3= (tool orientation vector) for parse.py
+_VECTOR = {"A3": "I", "B3": "J", "C3": "K"}  # the reader's tool-axis words (G43.5 I J K)
 R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
 
 _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw>AMIRROR|ASCALE|ATRANS|AROT|MIRROR|SCALE|TRANS|ROT)\b", re.IGNORECASE)
@@ -50,7 +52,7 @@ _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw
 # What may need rewriting: an '=' or a label's ':', an R parameter, a frame or refused word.
 # Found with byte masks and str.find (a regular expression over 10^6 lines costs seconds):
 # plain CAM blocks (N.. G1 X.. Y..) have none and are never looked at.
-_KEYWORDS = ("TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE")
+_KEYWORDS = ("TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE", "SOFT", "BRISK", "FFWO", "ORI", "STOPRE", "COMP", "CYCLE832")
 _ALNUM = np.zeros(256, bool)
 _ALNUM[[*range(48, 58), *range(65, 91), *range(97, 123), 95]] = True
 
@@ -73,9 +75,6 @@ def candidate_lines(text: str, raw: np.ndarray, line_starts: np.ndarray) -> np.n
     return np.unique(line_starts[np.searchsorted(line_starts, positions, side="right") - 1])
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
 _REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
-            "A3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
-            "B3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
-            "C3": "A3= B3= C3= (tool orientation as a vector) are not read yet: write the orientation as rotary-axis angles",
             "I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
@@ -89,6 +88,13 @@ _NOT_READ_WHY = {"label": "jump labels (NAME:) and GOTO / GOTOF / GOTOB / GOTOC 
                  "array": "array elements and axis-indexed settings (NAME[...]=) are not read yet"}
 # Addresses that do not move the tool (smoothing distances, spindle positioning): read past.
 _IGNORED = {"ADIS", "ADISPOS", "SPOS", "SPOSA"}
+# Words and cycles that set how the 840D moves, not where to (Fundamentals: "Acceleration
+# behavior" SOFT / BRISK, "Feedforward control" FFWON / FFWOF, "Orientation reference" ORIWKS,
+# the default, which is how vectors are read here; compressor COMPCAD / COMPCURV / COMPON / COMPOF
+# and CYCLE832 are named by the controller's inexact_interpolation): read past. ORIMKS (vectors
+# in machine coordinates) is refused.
+_PASSIVE = re.compile(r"(?i)(?<![\w$])(?:SOFT|BRISK|FFWON|FFWOF|ORIWKS|STOPRE|COMPCAD|COMPCURV|COMPON|COMPOF|CYCLE832[ \t]*\([^)\n]*\))(?!\w)")
+_ORIMKS = re.compile(r"(?i)(?<![\w$])ORIMKS(?!\w)")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
 _R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
 
@@ -187,7 +193,9 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
     r_param = re.fullmatch(r"R(\d+)", name)
     if r_param:
         return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
-    if name == "CR" or (frame and name == "RPL"):
+    if name in _VECTOR:
+        name = _VECTOR[name].ljust(len(m.group("name")))  # "A3=0" -> "I =0": the number keeps its place
+    elif name == "CR" or (frame and name == "RPL"):
         name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
     elif name in _IGNORED:
         return " " * len(item)
@@ -220,6 +228,15 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     """The edits (start, end in the line, new text) that put a block of the file (offset
     ``start``) in the reader's syntax; none for a block it reads as it is."""
     code = line.partition(";")[0]
+    orimks = _ORIMKS.search(code)
+    if orimks:
+        raise Refusal(start + orimks.start(), "ORIMKS (tool orientation vectors in machine coordinates) is not read: use ORIWKS")
+    passive = [(m.start(), m.end(), " " * (m.end() - m.start())) for m in _PASSIVE.finditer(code)]
+    if passive:  # blanked (same length: every other character keeps its place), then the rest of the block as ever
+        blanked = code
+        for a, b, blank in passive:
+            blanked = blanked[:a] + blank + blanked[b:]
+        return sorted(passive + [e for e in line_edits(blanked, start) if not any(a <= e[0] < b for a, b, _ in passive)])
     not_read = _NOT_READ.match(code)
     if not_read:
         word = next(k for k in not_read.groupdict() if not_read.group(k))
@@ -234,11 +251,21 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
         word = f"G{FRAME_CODES[frame.group('kw').upper()]:g}"
         edits.append((frame.start("kw"), frame.end("kw"), word.ljust(frame.end("kw") - frame.start("kw"))))
         pos = frame.end("kw")
+    vector = None
     for a, b in _split_items(code[pos:]):
         old = code[pos + a : pos + b]
         new = _rewrite_item(old, start + pos + a, bool(frame))
         if new != old:
             edits.append((pos + a, pos + b, new))
+        if old[:2].upper() in _VECTOR and old[2:].lstrip().startswith("="):
+            vector = pos + a if vector is None else vector
+        elif vector is not None or old[:1].upper() in "IJK" and not old[1:2].isalpha():
+            centre = old[:1].upper() in "IJK" and not old[1:2].isalpha()
+            if centre and any(code[pos + x : pos + x + 2].upper() in _VECTOR for x, _ in _split_items(code[pos:])):
+                raise Refusal(start + pos + a, "I J K (an arc centre) and A3= B3= C3= (the tool orientation) in one block are not read")
+    if vector is not None:
+        edits.insert(0, (vector, vector, f"G{VECTOR_CODE:g} "))  # the orientation vector's block: parse.py turns G43.5-like reading on
+        edits.sort(key=lambda e: (e[0], e[1]))
     return edits
 
 
