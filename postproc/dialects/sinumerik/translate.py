@@ -21,10 +21,16 @@ What is rewritten:
 - ``CR=`` -> ``R=`` (the G-code reader's arc radius: the same rule, the short arc for a positive
   radius, the long one for a negative);
 - a frame instruction's keyword -> an internal G code (``FRAME_CODES``) that ``parse.py``
-  takes back; ``RPL=`` -> ``R=`` (the plane rotation's angle).
-What is refused with its position (a ``ParseError`` from the reader's line index): ``AR=``,
-``CIP``, ``A3= B3= C3=`` orientation vectors, ``ORIMKS``/``ORIWKS``-dependent vector motion,
-and an R parameter used as an address word.
+  takes back; ``RPL=`` -> ``R=`` (the plane rotation's angle);
+- ``A3= B3= C3=`` (tool orientation vector, ORIWKS) -> the reader's tool-axis words ``I J K``,
+  the block marked with ``VECTOR_CODE``;
+- words that set how the 840D moves, not where (SOFT, FFWON, ORIWKS, CYCLE832(...), ...) ->
+  blanks of the same length.
+What is refused with its position (``Refusal``, a ``ParseError`` once the reader has it):
+``AR=``, ``CIP``, ``ORIMKS``, an arc's I J K with A3= in one block, jumps and labels, CASE,
+splines, array elements, other addresses set in a motion block, and an R parameter used as
+an address word. An expression the reader cannot evaluate (IC(), ATAN2, POT, DIV, TRUNC, system
+variables) becomes a parameter that is never set: the target is flagged, never guessed.
 """
 
 from __future__ import annotations
