@@ -132,6 +132,50 @@ def test_words_that_do_not_move_the_tool_are_read_past(tmp_path):
                                                                           "COMPCAD, CYCLE832): the 840D leaves the programmed corners")
 
 
+JUMPS = """G1 X0 Y0 Z0 F100
+N10 R1=30 R2=10 R4=3
+N20 GOTOF MIDDLE
+N30 X=999
+N40 AGAIN: X=R1
+N50 R1=R1+R2 R4=R4-1
+N60 IF R4>0 GOTOB AGAIN
+N70 GOTOF 90
+N80 X=999
+N90 GOTOC NOWHERE
+N100 GOTO FINISH
+N110 X=999
+N120 FINISH: M30
+MIDDLE: Y=1
+GOTOB AGAIN
+"""
+
+
+def test_jumps_by_hand(tmp_path):
+    """Job Planning, "Program jumps to jump markers": GOTOF searches towards the end, GOTOB
+    towards the start, GOTO forward then back, GOTOC without the alarm; a target is a label
+    or a block number. By hand: MIDDLE (Y1), AGAIN three times (X 30, 40, 50: R4 3 -> 0),
+    N90's GOTOC falls through, GOTO FINISH ends; no X999 is run."""
+    tp, path = _read(tmp_path, JUMPS)
+    np.testing.assert_allclose(tp.position, [(0, 0, 0), (0, 1, 0), (30, 1, 0), (40, 1, 0), (50, 1, 0)])
+    assert tp.line.tolist() == [1, 14, 5, 5, 5] and tp.resolved.all()
+    assert emit_texts(tp, tp)[0].encode("latin-1") == path.read_bytes()
+
+
+@pytest.mark.parametrize("change, line, why", [
+    (("GOTOC NOWHERE", "GOTOF NOWHERE"), 10, "GOTOF NOWHERE: no jump label or block number NOWHERE after this block"),
+    (("MIDDLE: Y=1", "AGAIN: Y=1"), 14, "jump label AGAIN is defined twice"),
+])
+def test_jump_refusals(tmp_path, change, line, why):
+    with pytest.raises(ParseError) as exc:
+        _read(tmp_path, JUMPS.replace(*change))
+    assert exc.value.line == line and why in exc.value.message
+
+
+def test_a_jump_on_an_unknown_condition_is_not_taken_and_flags(tmp_path):
+    tp, _ = _read(tmp_path, "G1 X0 Y0 Z0 F100\nBACK: G1 X1\nIF $AA_IW[X] > 0 GOTOB BACK\nG1 X2\nM30\n")
+    assert tp.position[:, 0].tolist() == [0, 1, 2] and tp.resolved.tolist() == [True, True, False]
+
+
 def test_frame_reset_keeps_reading(tmp_path):
     tp, _ = _read(tmp_path, "G0 X0 Y0 Z0\nSCALE\nMIRROR\nG1 X1 F10\n")
     np.testing.assert_allclose(tp.base_poses()[:, :3, 3], [(0, 0, 0), (1, 0, 0)])

@@ -19,7 +19,7 @@ from __future__ import annotations
 import re
 
 _STATEMENT = re.compile(
-    r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<kw>EXTERN|PROC|DEF|IF|ELSE|ENDIF|WHILE|ENDWHILE|FOR|ENDFOR|REPEAT|UNTIL|RET|MSG|GOTOF|GOTOB|GOTO|LOOP|ENDLOOP)\b(?P<rest>[^;\n]*)",
+    r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<kw>EXTERN|PROC|DEF|IF|ELSE|ENDIF|WHILE|ENDWHILE|FOR|ENDFOR|REPEAT|UNTIL|RET|MSG|GOTOF|GOTOB|GOTOC|GOTO|LOOP|ENDLOOP)\b(?P<rest>[^;\n]*)",
     re.IGNORECASE)
 _ASSIGN = re.compile(r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<name>[A-Za-z_][A-Za-z0-9_]{1,})[ \t]*=(?![=])(?P<expr>[^;\n]*)")
 _CALL = re.compile(r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<name>[A-Za-z_][A-Za-z0-9_]{2,})[ \t]*(?:\((?P<args>[^;\n]*)\))?[ \t]*(?:;[^\n]*)?$")
@@ -33,7 +33,29 @@ _WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD "}
 # ROUND: left out, so an expression using them is unknown rather than off by one.
 _FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN"}
 _KEYWORDS = {"EXTERN", "PROC", "DEF", "IF", "ELSE", "ENDIF", "WHILE", "ENDWHILE", "FOR", "ENDFOR", "REPEAT", "UNTIL", "RET", "MSG",
-             "GOTOF", "GOTOB", "GOTO", "LOOP", "ENDLOOP", "SUPA", "TRAORI", "TRAFOOF"}
+             "GOTOF", "GOTOB", "GOTOC", "GOTO", "LOOP", "ENDLOOP", "SUPA", "TRAORI", "TRAFOOF"}
+
+
+# A jump label heading a block ("N40 LOOP_START: X=R1"; Job Planning, "Program jumps to jump
+# markers"): its name; and a jump "GOTOF LABEL" / "IF cond GOTOB N100" (direction, target).
+LABEL = re.compile(r"^(?P<head>[ \t]*(?:[Nn](?P<n>\d+)[ \t]+)?)(?P<name>[A-Za-z_]\w*):(?!=)")
+_JUMP = re.compile(r"(?i)^(?P<cond>.*?)\b(?P<kw>GOTO[FBC]?)[ \t]+(?P<target>[A-Za-z_0-9]+)[ \t]*$")
+_BLOCK_NUMBER = re.compile(r"^[ \t]*[Nn](\d+)\b")
+
+
+def label_of(line: str) -> tuple[str | None, int | None, int]:
+    """(jump label, block number, length of the label prefix to blank) of a block."""
+    m = LABEL.match(line)
+    if m:
+        return m.group("name").lower(), int(m.group("n")) if m.group("n") else None, m.end()
+    n = _BLOCK_NUMBER.match(line)
+    return None, int(n.group(1)) if n else None, 0
+
+
+def jump(kw: str, rest: str) -> tuple[str, str, str] | None:
+    """(condition or '', GOTOF/GOTOB/GOTO/GOTOC, target) of a jump statement, or None."""
+    m = _JUMP.match(f"{kw} {rest}" if kw.upper().startswith("GOTO") else rest)
+    return (m.group("cond").strip(), m.group("kw").upper(), m.group("target")) if m else None
 
 
 def is_siemens(path: str, text: str) -> bool:

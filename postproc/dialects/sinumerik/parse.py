@@ -24,6 +24,7 @@ from . import frames, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
+_LABEL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w*:(?!=)")
 _FRAME_CODES = set(translate.FRAME_NAMES)
 # Settable frames beyond G54-G57 (group 8, Fundamentals "Settable zero offset G54 to G57, G505
 # to G599, G53, G500, SUPA, G153"): G500 and G505..G599 as work-offset numbers of their own
@@ -63,7 +64,7 @@ class SinumerikParser(GcodeParser):
         self.to_mm = 1.0
 
     def parse(self) -> Toolpath:
-        if _CALL.search(self.text):  # a subprogram or cycle call (CYCLE800(...), SETAL(1)): run by the flow reader, which knows calls
+        if _CALL.search(self.text) or _LABEL.search(self.text):  # a call (CYCLE800(...)) or a jump label: the flow reader knows them
             return self._back_to_file(self._parse_flow())
         return self._back_to_file(super().parse())
 

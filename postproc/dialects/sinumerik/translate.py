@@ -86,10 +86,9 @@ _REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc
             "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
 # Statements refused with their reason (840D "Job Planning": program jumps, CASE, arrays;
 # "Fundamentals": spline interpolation): the positions after them depend on what is not run.
-_NOT_READ = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?:(?P<label>[A-Za-z_]\w*:)(?!=)|(?P<case>CASE\b)|(?P<spline>[ABC]SPLINE\b)"
+_NOT_READ = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?:[A-Za-z_]\w*:(?!=)[ \t]*)?(?:(?P<case>CASE\b)|(?P<spline>[ABC]SPLINE\b)"
                        r"|(?P<array>[A-Za-z_]\w*\[[^\]]*\][ \t]*=))")
-_NOT_READ_WHY = {"label": "jump labels (NAME:) and GOTO / GOTOF / GOTOB / GOTOC are not followed yet: the blocks after a jump are not known",
-                 "case": "CASE ... OF ... GOTOF is a program jump, not followed yet",
+_NOT_READ_WHY = {"case": "CASE ... OF ... GOTOF is a program jump, not followed yet",
                  "spline": "spline interpolation (ASPLINE / BSPLINE / CSPLINE) is not modelled: the path between the points is the controller's",
                  "array": "array elements and axis-indexed settings (NAME[...]=) are not read yet"}
 # Addresses that do not move the tool (smoothing distances, spindle positioning): read past.
