@@ -77,3 +77,8 @@ def test_generated_programs_are_accepted():
     rng = random.Random("valid-sinumerik")
     verdicts = [judge(generated(rng)) for _ in range(30)]
     assert verdicts.count("accepted") == len(verdicts)
+
+
+def test_found_by_fuzzing():
+    """Inputs the fuzzer found crashing the reader once (a control character that str.split takes for a blank)."""
+    assert judge(b"N10 G54 G17 G71 G0\nR1=37.736\n\x1d RAORI\nG1 X74.173 Y=R1+0 Z-6.56 F276\nM30\n") in ("accepted", "refused")

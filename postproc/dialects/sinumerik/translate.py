@@ -176,7 +176,7 @@ def _split_items(code: str) -> list[tuple[int, int]]:
     for a, b in _pieces(code):
         piece, prev = code[a:b], code[items[-1][0] : items[-1][1]] if items else ""
         joins = items and (prev[-1] in "=+-*/<>(," or piece[0] in "=+*/<>)" or piece.strip("+-*/<>=") == "" or piece.upper() in _WORD_OPS
-                           or prev.upper().rsplit(None, 1)[-1] in _WORD_OPS)
+                           or (prev.upper().split() or [""])[-1] in _WORD_OPS)
         if joins:
             items[-1][1] = b
         else:
