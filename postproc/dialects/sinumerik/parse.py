@@ -25,6 +25,22 @@ from . import frames, translate
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
 _LABEL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w*:(?!=)")
+
+
+def _calls_or_labels(text: str) -> bool:
+    """True where a block calls a subprogram or cycle or carries a jump label: only the lines
+    with a '(' or ':' are matched (a regular expression over 10^6 CAM lines costs a second)."""
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    hits = np.nonzero((raw == ord("(")) | (raw == ord(":")))[0]
+    if not len(hits):
+        return False
+    starts = np.concatenate([[0], np.nonzero(raw == 10)[0] + 1])
+    for start in np.unique(starts[np.searchsorted(starts, hits, side="right") - 1]).tolist():
+        end = text.find("\n", start)
+        line = text[start : len(text) if end < 0 else end]
+        if _CALL.match(line) or _LABEL.match(line):
+            return True
+    return False
 _FRAME_CODES = set(translate.FRAME_NAMES)
 # Settable frames beyond G54-G57 (group 8, Fundamentals "Settable zero offset G54 to G57, G505
 # to G599, G53, G500, SUPA, G153"): G500 and G505..G599 as work-offset numbers of their own
@@ -64,7 +80,7 @@ class SinumerikParser(GcodeParser):
         self.to_mm = 1.0
 
     def parse(self) -> Toolpath:
-        if _CALL.search(self.text) or _LABEL.search(self.text):  # a call (CYCLE800(...)) or a jump label: the flow reader knows them
+        if _calls_or_labels(self.text):  # a call (CYCLE800(...)) or a jump label: the flow reader knows them
             return self._back_to_file(self._parse_flow())
         return self._back_to_file(super().parse())
 
