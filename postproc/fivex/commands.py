@@ -82,10 +82,12 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if input_axes not in (None, "tip", "machine"):
         raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
     target = dialects.get(to, "--to")
-    if target.rtcp_modes:  # a language that writes its own five-axis programs (Klartext M128)
+    modes = getattr(target, "rtcp_modes", MODES)  # a language with one RTCP form (sinumerik: TRAORI) takes it by default
+    rtcp = modes[0] if rtcp is None and len(modes) == 1 else rtcp
+    if target.machine_program and rtcp not in modes:
+        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(modes)} (needed with --to {to})")
+    if target.five_axis_modes:  # a language that writes its own five-axis programs (Klartext M128)
         return _convert_own(program, target, output, machine, rtcp, dialect, input_axes, tool, frames, tools)
-    if target.machine_program and rtcp not in MODES:
-        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(MODES)} (needed with --to gcode)")
     tp = parse_program(program, dialect)
     if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
         tp = tp.with_frames(frames, tools)
@@ -117,8 +119,8 @@ def _convert_own(program: Path, target, output: Path, machine, rtcp: str | None,
     from .emit import solve
     from .program import from_toolpath
 
-    if rtcp not in target.rtcp_modes:
-        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(target.rtcp_modes)} (needed with --to {target.name})")
+    if rtcp not in target.five_axis_modes:
+        raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(target.five_axis_modes)} (needed with --to {target.name})")
     tp = parse_program(program, dialect)
     if frames or tools:
         tp = tp.with_frames(frames, tools)

@@ -48,17 +48,8 @@ class HeidenhainDialect(Dialect):
         sign = "" if text.startswith("-") else "+"
         return f" {field.upper()}{sign}{text}"  # Klartext writes the sign: X+10
 
-    # controller rules: delegated to the TNC (postproc.controller.Controller once merged)
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        return self.controller.conf_applies(tp)
-
-    def branch_from_conf(self, robot, solutions, conf):
-        return self.controller.branch_from_conf(robot, solutions, conf)
-
-    def inexact_interpolation(self, tp: Toolpath) -> str | None:
-        return self.controller.inexact_interpolation(tp)
-
-    rtcp_modes = MODES  # convert --to heidenhain --machine M --rtcp tcpm
+    rtcp_modes = MODES  # convert --to heidenhain --machine M [--rtcp tcpm]: the one mode, the default
+    five_axis_modes = MODES  # written here (five_axis_text), not by the G-code emitter
 
     def five_axis_text(self, name, letters, tip, angles, rapid, feed, lines, header, tool=1) -> str:
         return tcpm_text(name, letters, tip, angles, rapid, feed, lines, header, tool)

@@ -16,33 +16,24 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...controller import Controller
 from ...ir import Toolpath
 
 
-class TncController:
-    """Heidenhain TNC 640 rules for Klartext programs (methods as ``Dialect``'s controller ones)."""
+class TncController(Controller):
+    """Heidenhain TNC 640 rules for Klartext programs."""
 
-    maker = "Heidenhain"
+    maker = None  # a CNC: no robot maker
     name = "Heidenhain TNC 640"
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """No robot configuration data: a CNC program never selects a robot posture."""
         return np.zeros(len(tp), bool)
 
-    def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Robot branches do not apply (a TNC drives machine axes)."""
-        return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
-
     def rotary_solution(self, programmed_deg: np.ndarray) -> np.ndarray:
         """(N, 2) the rotary axis positions the TNC turns to under M128 / FUNCTION TCPM AXIS POS:
         the programmed ones (TNC 640 manual, "M128"; M126 changes the way, not the end angle)."""
         return np.asarray(programmed_deg, dtype=float).copy()
-
-    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
-        return []
-
-    def stated_loads(self, tp: Toolpath):
-        return None
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         """CYCL DEF 32 TOLERANCE with T > 0 lets the TNC smooth the path within T (TNC 640
@@ -51,9 +42,6 @@ class TncController:
             if "CYCL DEF 32 TOLERANCE" in note:
                 return f"{tp.sources[0].path}:{note.split(':')[0].removeprefix('line ')}: CYCL DEF 32 TOLERANCE lets the TNC leave the programmed path"
         return None
-
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        return np.ones(len(tp.kind), dtype=bool)
 
 
 TNC = TncController()
