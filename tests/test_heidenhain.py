@@ -277,3 +277,17 @@ def test_real_programs(row):
 def test_real_programs_are_listed():
     assert len(REAL) >= 5 and {r["file"].split("__", 1)[1] for r in REAL} == set(REAL_EXPECTED)
     assert all(len(r["commit"]) == 40 and r["licence"] for r in REAL)
+
+
+def test_tcpm_state_per_target_and_mixed_programs_flagged():
+    """M128 acts from its block to M129 (TNC 640 manual, M128): kept per target in
+    extras["heidenhain.tcpm"]; rotary moves outside it in a program that uses it are flagged."""
+    tp = read("BEGIN PGM A MM\nL X+0 Y+0 Z+50 A+0 C+0 R0 FMAX\nM128\nL X+10 A-20 C+30 F500\nM129\nL Z+80 A-20 C+30 FMAX\nEND PGM A MM\n")
+    assert tp.extras["heidenhain.tcpm"].tolist() == [False, True, False]
+    assert tp.resolved.tolist() == [True, True, False]
+    assert any("without M128" in n for n in tp.notes)
+
+
+def test_m128_in_a_motion_block_acts_on_it():
+    tp = read("BEGIN PGM A MM\nL X+10 Y+0 Z+5 A-20 C+30 R0 FMAX M128\nL X+12 F200 M129\nL Z+50 FMAX\nEND PGM A MM\n")
+    assert tp.extras["heidenhain.tcpm"].tolist() == [True, True, False]

@@ -49,6 +49,7 @@ from .words import PathWords, WordError, read_words
 _PLAIN_LINE = re.compile(r"[ \t]*(?:\d+[ \t]+)?L(?P<words>(?:[ \t]+[XYZABC][+-]?(?:\d+\.?\d*|\.\d+))+)(?:[ \t]+(?P<comp>R0|RL|RR))?"
                          r"(?:[ \t]+(?:(?P<fmax>FMAX)|F(?P<feed>\d+\.?\d*)))?[ \t]*\r?")
 MAX_BLOCKS_RUN = 50_000_000  # a loop that never ends is refused at its jump, not run forever
+_COLUMNS = 14  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C, TCPM on
 _AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
 _R = FIELDS.index("r")
 _PATH = re.compile(r"(LN|LP|L|CC|CR|CT|CP|C)(?![A-Z])", re.IGNORECASE)
@@ -100,7 +101,7 @@ class KlartextReader:
         self.numbers = None  # every number of the text, scanned once when a plain run needs it
         self.segments: list[tuple[np.ndarray, np.ndarray]] = []  # (rows table, cells) read in bulk, in order with the rows
         self.rows_before = 0  # rows already moved into segments
-        self.rows: list[tuple] = []  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C
+        self.rows: list[tuple] = []  # per target: the _COLUMNS
         self.cells: list[tuple] = []  # per number read: row, field, value, start, end (-1: not a plain number)
         self.cycle_defined = 0  # line of the last machining cycle defined (CYCL DEF n, not 7/19/32/9)
         self.cycl7_line = 0
@@ -151,7 +152,7 @@ class KlartextReader:
         pick = _ranges(lo, hi)
         num_start, num_end, value = nums.start[pick], nums.end[pick], nums.value[pick]
         letter = self.raw[num_start - 1]
-        table = np.empty((n, 13))
+        table = np.empty((n, _COLUMNS))
         cells = []
         first_row = self.rows_all()
         unknown_rows = np.zeros(n, bool)
@@ -179,6 +180,7 @@ class KlartextReader:
         table[:, 3] = self.tool
         table[:, 4] = self._frame_index()
         table[:, 6] = ws
+        table[:, 13] = self.tcpm
         compensated = np.zeros(n, bool)
         cs, _ = self.plain.span("comp")
         cs = cs[rows]
@@ -515,6 +517,8 @@ class KlartextReader:
         if words.comp is not None:
             self.comp, self.comp_line = words.comp, line
         machine_datum = any(n in (91, 92) for n, _ in words.m)
+        if any(n == 128 for n, _ in words.m):
+            self.tcpm = True  # M128 acts from the start of its block, M129 at its end (TNC 640 manual, M functions)
         if kind == "CC":
             self.set_pole(words, at)
             return self.m_functions(words, line, at)
@@ -748,21 +752,21 @@ class KlartextReader:
 
     def _flush(self) -> None:
         if self.rows or self.cells:
-            self.segments.append((np.array(self.rows, float).reshape(-1, 13), np.array(self.cells, float).reshape(-1, 5)))
+            self.segments.append((np.array(self.rows, float).reshape(-1, _COLUMNS), np.array(self.cells, float).reshape(-1, 5)))
             self.rows_before += len(self.rows)
             self.rows, self.cells = [], []
 
     def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
         r = self.rows_all()
         p = self.pos
-        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5]))
+        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm))
         for f, v in vals.items():
             self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
 
     # ------------------------------------------------------------- IR
     def build(self) -> Toolpath:
         self._flush()
-        table = np.concatenate([t for t, _ in self.segments]) if self.segments else np.zeros((0, 13))
+        table = np.concatenate([t for t, _ in self.segments]) if self.segments else np.zeros((0, _COLUMNS))
         cells = np.concatenate([c for _, c in self.segments]) if self.segments else np.zeros((0, 5))
         n = len(table)
         kind = table[:, 0].astype(np.int8)
@@ -791,7 +795,19 @@ class KlartextReader:
         tp = self.b.build(orientation=False)
         ext = tp.ext.copy()
         ext[:, :3] = table[:, 10:13]
-        return replace(tp, position=table[:, 7:10].copy(), ext=ext)
+        tcpm = table[:, 13].astype(bool)
+        resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
+        return replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras={"heidenhain.tcpm": tcpm})
+
+    def _mixed_tcpm(self, tcpm: np.ndarray, angles: np.ndarray, lines: np.ndarray) -> np.ndarray:
+        """(N,) targets with rotary positions but without M128 / TCPM in a program that uses it
+        elsewhere: there X Y Z are not the tool tip (TNC 640 manual, M128), and a five-axis
+        reading takes one meaning for the whole program: flagged, with a note."""
+        mixed = ~tcpm & tcpm.any() & (np.nan_to_num(angles) != 0.0).any(axis=1)
+        if mixed.any():
+            self.b.notes.append(f"line {int(lines[np.argmax(mixed)])}: rotary axes turned without M128 / FUNCTION TCPM in a program that uses it elsewhere: "
+                                "X Y Z there are not the tool tip; not read as five-axis")
+        return mixed
 
 
 def _carried(given: np.ndarray, before: float) -> np.ndarray:
