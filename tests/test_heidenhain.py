@@ -291,3 +291,23 @@ def test_tcpm_state_per_target_and_mixed_programs_flagged():
 def test_m128_in_a_motion_block_acts_on_it():
     tp = read("BEGIN PGM A MM\nL X+10 Y+0 Z+5 A-20 C+30 R0 FMAX M128\nL X+12 F200 M129\nL Z+50 FMAX\nEND PGM A MM\n")
     assert tp.extras["heidenhain.tcpm"].tolist() == [True, True, False]
+
+
+def test_plane_spatial_tilts_the_frame_and_leaves_the_rotary_solution_open():
+    """PLANE SPATIAL SPA SPB SPC: rotations about the fixed X, then Y, then Z axes (TNC 640
+    manual, "PLANE SPATIAL", tilting sequence A-B-C), about the datum shifted by Cycle 7.
+    By hand: SPB+90 turns the tilted X axis onto -Z and the tool axis onto +X, so the tilted
+    point (10, 0, 5) is (5, 0, -10) from the datum, (105, 0, -10) from the preset with the
+    shift X+100. The rotary positions are the TNC's choice (SEQ): the targets stay flagged."""
+    tp = read("BEGIN PGM A MM\nCYCL DEF 7.0 DATUM SHIFT\nCYCL DEF 7.1 X+100\nPLANE SPATIAL SPA+0 SPB+90 SPC+0 STAY\n"
+              "L X+10 Y+0 Z+5 R0 FMAX\nPLANE RESET STAY\nL X+0 Y+0 Z+50 FMAX\nEND PGM A MM\n").with_frames({"PRESET": np.eye(4)})
+    np.testing.assert_allclose(tp.base_positions(), [[105, 0, -10], [100, 0, 50]], atol=1e-12)
+    np.testing.assert_allclose(tp.frames[tp.frame[0]][:3, 2], [1, 0, 0], atol=1e-12)  # the tilted tool axis
+    assert tp.resolved.tolist() == [False, True]
+
+
+def test_plane_spatial_turns_in_the_order_a_b_c():
+    """SPA+90 then SPC+90 about the fixed axes: Z -> -Y (about X) -> +X (about Z); the other
+    order would leave the tool axis on -Y."""
+    tp = read("BEGIN PGM A MM\nPLANE SPATIAL SPA+90 SPB+0 SPC+90 STAY\nL X+0 Y+0 Z+5 R0 FMAX\nEND PGM A MM\n")
+    np.testing.assert_allclose(tp.frames[tp.frame[0]][:3, 2], [1, 0, 0], atol=1e-12)

@@ -96,6 +96,7 @@ class KlartextReader:
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
+        self.tilt: np.ndarray | None = None  # its rotation where the text gives it (PLANE SPATIAL)
         self.tcpm = False
         self.notes: dict[str, None] = {}
         self.numbers = None  # every number of the text, scanned once when a plain run needs it
@@ -358,6 +359,7 @@ class KlartextReader:
             if sub and sub != "0":
                 angles = [float(v) for v in re.findall(r"[ABC]\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)]
                 self.tilt_line = line if any(a != 0.0 for a in angles) else 0
+                self.tilt = None  # axis or spatial angles, as the machine parameters say: not read
             return None
         if number in (8, 10, 11, 26):
             if sub and sub != "0":
@@ -402,14 +404,36 @@ class KlartextReader:
 
     def plane(self, s: str, at: int, line: int):
         up = s.upper()
+        self.tilt = None
         if up.startswith("PLANE RESET"):
             self.tilt_line = 0
         else:
             self.tilt_line = line
+            if up.startswith("PLANE SPATIAL"):
+                self.tilt = self._spatial(s, at)
         if re.search(r"\b(MOVE|TURN)\b", up):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
             self.unresolved_row(line, at, f"line {line}: PLANE ... MOVE/TURN positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): not read")
         return None
+
+    def _spatial(self, s: str, at: int) -> np.ndarray | None:
+        """The tilted plane's orientation in the untilted workpiece system: SPA about X, then
+        SPB about Y, then SPC about Z, all about the fixed axes (TNC 640 manual, "PLANE
+        SPATIAL": tilting sequence A-B-C), so R = Rz(SPC) Ry(SPB) Rx(SPA); None where an
+        angle is not determined by the text."""
+        angles = []
+        for key in ("SPA", "SPB", "SPC"):
+            m = re.search(rf"{key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
+            if m is None:
+                raise self.error(at, f"PLANE SPATIAL needs {key} (all three spatial angles)")
+            angles.append(self.value(m.group(1), at + m.start(1))[0])
+        if any(math.isnan(a) for a in angles):
+            return None
+        a, b, c = np.radians(angles)
+        rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
+        ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
+        rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
+        return rz @ ry @ rx
 
     def function(self, s: str, at: int, line: int):
         up = re.sub(r"\s+", " ", s.upper())
@@ -708,7 +732,18 @@ class KlartextReader:
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
+        """The frame of the next target: the preset, the datum shift on it, a PLANE SPATIAL
+        tilt about the shifted datum (TNC 640 manual: Cycle 7 before tilting shifts in the
+        untilted system)."""
         name, transform = self.frame
+        if self.tilt_line and self.tilt is not None:
+            tilt = np.eye(4)
+            tilt[:3, :3] = self.tilt
+            if name == "PRESET":
+                transform = tilt  # on the preset itself
+            elif transform is not None:
+                transform = transform @ tilt  # else: on a shift the text does not give, still unknown
+            name = f"{name}+PLANE SPATIAL@line{self.tilt_line}"
         return 0 if name == "PRESET" else self.b.frame_index(name, transform, False)
 
     def _tangent(self, k, start, arc):
