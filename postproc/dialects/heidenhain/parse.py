@@ -20,6 +20,10 @@ Rules, each from the TNC 640 User's Manual (Klartext programming), by section:
   workpiece preset, incremental from the shift in force; #n (datum table) is on the control.
 - "Tool call": TOOL CALL n Z S DL DR; the tool length is in the control's tool table (TOOL
   DEF n L R in the program defines it, TNC 4xx programs), DL is added to it.
+- "PLANE SPATIAL": the working plane turned by SPA about X, then SPB about Y, then SPC about Z
+  (fixed axes), about the datum in force: a frame; its rotary solution (SEQ, MOVE/TURN/STAY)
+  is the TNC's, so its targets stay flagged. Cycle 19's angles are axis or spatial angles as
+  the machine parameters say: flagged.
 - "Miscellaneous functions for rotary axes": M128 / FUNCTION TCPM keep the tool tip at the
   programmed X Y Z while the rotary axes turn (rotary words are axis positions with AXIS POS);
   M126 takes the shortest way round (the end angle is the programmed one).
