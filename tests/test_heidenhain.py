@@ -311,3 +311,20 @@ def test_plane_spatial_turns_in_the_order_a_b_c():
     order would leave the tool axis on -Y."""
     tp = read("BEGIN PGM A MM\nPLANE SPATIAL SPA+90 SPB+0 SPC+90 STAY\nL X+0 Y+0 Z+5 R0 FMAX\nEND PGM A MM\n")
     np.testing.assert_allclose(tp.frames[tp.frame[0]][:3, 2], [1, 0, 0], atol=1e-12)
+
+
+@pytest.mark.parametrize("text,line,column,words", [
+    ("BEGIN PGM A MM\nL X+20 Y+20 R0 F500 M103 F20\nEND PGM A MM\n", 2, 26, "second F"),
+    ("BEGIN PGM A INCH\nL X+1 Y+2 F20\nEND PGM A INCH\n", 2, 12, "INCH"),
+])
+def test_feeds_not_read_are_refused(text, line, column, words):
+    """M103 F.. scales the plunging feed (TNC 410 / 4xx manuals, M103); an INCH program's feed
+    unit is not read: both refused at the word, never guessed."""
+    with pytest.raises(ParseError) as err:
+        read(text)
+    assert (err.value.line, err.value.column) == (line, column) and words in str(err.value), str(err.value)
+
+
+def test_inch_positions_in_mm():
+    tp = read("BEGIN PGM A INCH\nL X+1 Y+2 Z+0.5 R0 FMAX\nEND PGM A INCH\n")
+    np.testing.assert_allclose(tp.position, [[25.4, 50.8, 12.7]])

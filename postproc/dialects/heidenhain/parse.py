@@ -8,7 +8,8 @@ Rules, each from the TNC 640 User's Manual (Klartext programming), by section:
 - "Path contours - polar coordinates": LP PR PA / CP PA DR about the pole CC, PA from the
   +X axis (tool axis Z), counterclockwise positive; IPR / IPA incremental; CP keeps the
   distance from the pole.
-- "Feed rate F": F is modal; FMAX (rapid traverse) acts only in its own block.
+- "Feed rate F": F is modal; FMAX (rapid traverse) acts only in its own block; M103 F (a
+  plunging feed factor) and F in an INCH program (its unit) are refused.
 - "Radius compensation": RL/RR move the tool by its radius beside the contour; the path then
   depends on the tool table's radius, which the text does not give: such targets are read
   as programmed and flagged unresolved (never guessed).
@@ -176,6 +177,8 @@ class KlartextReader:
         fs = fs[rows]
         feed = np.full(n, np.nan)
         has_feed = fs >= 0
+        if has_feed.any() and math.isnan(self.feed_scale):
+            raise self.error(int(fs[has_feed][0]), "F in an INCH program: its unit is not read (give the program in MM)")
         feed[has_feed] = nums.value[np.searchsorted(nums.start, fs[has_feed])] * self.feed_scale
         feed = _carried(feed, self.feed)
         rapid = self.plain.present("fmax")[rows]
@@ -314,8 +317,8 @@ class KlartextReader:
             return "end"
         unit = up.split()[-1]
         if unit == "INCH":
-            # TNC 640 manual, "Programming fundamentals": INCH programs; feed in 1/10 inch/min ("Feed rate F")
-            self.scale, self.feed_scale = 25.4, 2.54
+            # positions in inches; the feed's inch unit is not read (refused at the first F: feed_scale NaN)
+            self.scale, self.feed_scale = 25.4, math.nan
         elif unit != "MM":
             raise self.error(at + len(blk.text.lstrip()) - len(unit), "BEGIN PGM needs the unit MM or INCH at its end")
         return None
@@ -533,6 +536,8 @@ class KlartextReader:
                     self.unresolved_row(line, where, f"line {line}: M{number} runs the machining cycle defined at line {self.cycle_defined}: its moves are not read")
             elif number in (91, 92):
                 pass  # handled on the motion (machine datum)
+            elif number == 103:
+                raise self.error(where, "M103 F: the TNC lowers the plunging feed by a factor (TNC manual, M103): not read")
             elif number == 140:
                 raise self.error(where, "M140 retracts along the tool axis to a distance the text does not give (MB): not read")
         return None
@@ -576,6 +581,8 @@ class KlartextReader:
             key, where = words.feed_other
             raise self.error(where, f"{key}: a feed from the tool table or per revolution / tooth, which the text does not give in mm/min")
         if words.feed is not None:
+            if math.isnan(self.feed_scale):
+                raise self.error(words.feed.start, "F in an INCH program: its unit is not read (give the program in MM)")
             self.feed = self.value(words.feed.text, words.feed.start)[0] * self.feed_scale
 
     def cartesian(self, words: PathWords, vals, spans, at: int) -> bool:

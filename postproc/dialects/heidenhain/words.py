@@ -74,6 +74,8 @@ def read_words(text: str, start: int, base: int) -> PathWords:
             else:
                 out.feed_other = (key, base + m.start("fmax"))
         elif m.group("f"):
+            if out.feed is not None:  # M103 F20 (a plunging feed factor) or a second feed
+                raise WordError(base + m.start("f"), "a second F in one block (M103 F.. feed factor?) is not read")
             out.feed = _word("F", False, m, "fval", base)
         elif m.group("comp"):
             out.comp = m.group("comp").upper()
