@@ -26,17 +26,21 @@ import re
 import numpy as np
 
 from ...ir import FIELDS, NF, Kind, SourceDoc, Toolpath
-from ...parse.common import Builder, LineIndex
-from .jobfile import JobFile, Position, read_job
+from ...parse.common import Builder, LineIndex, scan_numbers
+from ...parse.line_shapes import LineShapes
+from .jobfile import NUM, JobFile, PositionState, as_arrays, c_numbers, read_job, section_lines
 
-MOTION = re.compile(r"(MOVJ|MOVL|MOVC|MOVS)[ \t]+(\S+)(.*)")
+WORDS = ("MOVJ", "MOVL", "MOVC", "MOVS")
+MOTION = re.compile(r"(MOVJ|MOVL|MOVC|MOVS|IMOV)[ \t]+(\S+)(.*)")
+BULK_MOVE = re.compile(rf"(?P<word>MOV[JL]) (?P<name>C\d+)(?: (?P<vkey>VJ|V)=(?P<speed>{NUM}))?(?: PL=(?P<pl>\d))?\r?")
 TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+)|(\S+)")
-# Instructions that move positions or frames by amounts the job's text does not give.
-SHIFTING = {"SFTON", "SFTOF", "MSHIFT", "MFRAME", "IMOV", "CNVRT", "SETE", "GETE", "GETS", "SETTOOL"}
-CARTESIAN = {"ROBOT": 0, "BASE": 0, "USER": 1}
+# Instructions after which positions are moved by values the job's text does not give:
+# SFTON shifts every move until SFTOF; MFRAME redefines a user frame, SETTOOL a tool file.
+CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL": "tool"}
+CARTESIAN = ("ROBOT", "BASE", "USER")
 # RECTAN numbers -> IR fields: X Y Z, then Rx Ry Rz into C B A (o3 o2 o1)
-RECTAN_FIELDS = [FIELDS.index(f) for f in ("x", "y", "z", "o3", "o2", "o1")]
-JOINT_FIELDS = [FIELDS.index(f"j{i}") for i in range(1, 7)]
+RECTAN_FIELDS = np.array([FIELDS.index(f) for f in ("x", "y", "z", "o3", "o2", "o1")])
+JOINT_FIELDS = np.array([FIELDS.index(f"j{i}") for i in range(1, 7)])
 
 
 class InformParser:
@@ -46,137 +50,255 @@ class InformParser:
         self.lines = LineIndex(self.doc.text)
         self.builder = Builder("inform", "abc", list(sources))
         self.rows: list[dict] = []
-        self.notes: list[str] = []
 
     def parse(self) -> Toolpath:
-        job = read_job(self.doc.text, self.path, self.lines)
-        shifted_from = None
+        text = self.doc.text
+        self.raw = raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+        numbers = scan_numbers(text, raw=raw)
+        shapes = LineShapes(text, raw, self.lines.starts)
+        moves = self._bulk_moves(shapes, text)
+        job = read_job(text, self.path, self.lines, shapes, numbers, moves.line if moves is not None else np.zeros(0, np.int64))
+        self.job, self.table = job, as_arrays(job.positions)
+        self.played_in = played_frame(job)
+        self._slow_moves(job)
+        block = self._bulk_block(moves, numbers) if moves is not None and len(moves) else None
+        return self._build(block)
+
+    # ------------------------------------------------------------ bulk motions
+    def _bulk_moves(self, shapes: LineShapes, text: str):
+        """Plain MOVJ / MOVL lines after //INST (None where the job has instructions that
+        move positions, whose order the one-by-one reading follows)."""
+        if any(word in text for word in ("SFTON", "MFRAME", "SETTOOL")):
+            return None
+        _, inst_line = section_lines(text, self.lines)
+        if inst_line < 0:
+            return None
+        return shapes.match(BULK_MOVE, np.arange(inst_line + 1, len(self.lines.starts)))
+
+    def _bulk_block(self, moves, numbers) -> dict:
+        """The bulk motion lines as columns; those that are not a plain Cartesian target of this
+        job (a pulse position, an unknown name, ...) are read one by one instead."""
+        table, raw = self.table, self.raw
+        name_start, name_end = moves.span("name")
+        row = table.rows_of_numbers(c_numbers(raw, name_start, name_end))
+        state = np.where(row >= 0, table.state[np.maximum(row, 0)], 0)
+        clean_state = np.array([self._clean(s) for s in self.job.states])
+        clean = (row >= 0) & clean_state[state] & (table.count[np.maximum(row, 0)] == 6)
+        for k in np.nonzero(~clean)[0].tolist():  # one by one
+            line = int(moves.line[k])
+            start = int(moves.start[k])
+            end = int(self.lines.starts[line + 1]) - 1 if line + 1 < len(self.lines.starts) else len(self.doc.text)
+            text = self.doc.text[start:end].rstrip("\r")
+            self._motion(MOTION.match(text), line + 1, start, {})
+        keep = np.nonzero(clean)[0]
+        row, state = row[keep], state[keep]
+        n = len(keep)
+        values = np.full((n, NF), np.nan)
+        spans = np.full((n, NF, 3), -1, np.int64)
+        values[:, RECTAN_FIELDS] = table.values[row]
+        spans[:, RECTAN_FIELDS, 0] = 0
+        spans[:, RECTAN_FIELDS, 1:] = table.spans[row]
+        word_start, _ = moves.span("word")
+        word = raw[word_start[keep] + 3] == ord("J")
+        speed_start, _ = moves.span("speed")
+        vkey_start, vkey_end = moves.span("vkey")
+        is_v = (vkey_end - vkey_start == 1)[keep]
+        at = np.searchsorted(numbers.start, speed_start[keep])
+        speed = np.where(is_v & (speed_start[keep] >= 0), numbers.value[np.minimum(at, len(numbers.value) - 1)], np.nan)
+        pl_start, _ = moves.span("pl")
+        pl = np.where(pl_start[keep] >= 0, raw[pl_start[keep]].astype(np.int64) - 48, -1)
+        frames, tools, confs = self._state_columns()
+        return {"order": moves.start[keep], "line": moves.line[keep] + 1, "word": np.where(word, 0, 1), "pulse": np.zeros(n, bool),
+                "values": values, "spans": spans, "conf": confs[state], "speed": speed, "zone": np.where(pl == 0, 0.0, np.nan),
+                "tool": tools[state], "frame": frames[state], "name": _texts(self.doc.text, name_start[keep], name_end[keep])}
+
+    def _clean(self, state: PositionState) -> bool:
+        """A state whose positions the bulk path reads: Cartesian, with a tool, played where taught."""
+        if state.form != "RECTAN" or state.postype not in CARTESIAN or state.tool is None:
+            return False
+        if state.postype == "USER" and state.user is None:
+            return False
+        return self.played_in is None or self.played_in == _taught_in(state)
+
+    def _state_columns(self):
+        """Frame, tool and conf of every position state (for the bulk path)."""
+        states = self.job.states
+        frames = np.array([self.builder.frame_index(f"UF#({s.user})", None) if s.postype == "USER" and s.user is not None else 0 for s in states], np.int32)
+        tools = np.array([self.builder.tool_index(f"TOOL#({s.tool})", None) if s.tool is not None else 0 for s in states], np.int32)
+        confs = np.array([_conf(s.rconf) for s in states], dtype=float).reshape(-1, 4)
+        return frames, tools, confs
+
+    # ------------------------------------------------------------ one motion line at a time
+    def _slow_moves(self, job: JobFile) -> None:
+        changed: dict[str, int] = {}  # what an instruction changed -> its line
         for line, start, text in job.instructions:
-            word = text.split(None, 1)[0].upper() if text.strip() else ""
-            if word in SHIFTING:
-                shifted_from = line if word != "SFTOF" else None
-                self.notes.append(f"{self.path}, line {line}: {word} moves positions or frames by values the job does not give")
-                continue
+            indent = len(text) - len(text.lstrip())
+            text, start = text[indent:], start + indent
+            word = text.split(None, 1)[0].upper() if text else ""
+            if word in CHANGING:
+                if word == "SFTOF":
+                    changed.pop("shift", None)
+                else:
+                    changed[CHANGING[word]] = line
             match = MOTION.match(text)
             if match:
-                self._motion(job, match, line, start, shifted_from)
-        self._circles()
-        return self._build()
+                self._motion(match, line, start, dict(changed))
 
-    # ------------------------------------------------------------ one motion line
-    def _motion(self, job: JobFile, match: re.Match, line: int, start: int, shifted_from) -> None:
+    def _motion(self, match: re.Match, line: int, start: int, changed: dict[str, int]) -> None:
         word, name, tags = match.group(1), match.group(2), match.group(3)
-        row = {"word": word, "line": line, "start": start, "name": name, "resolved": True, "why": [],
+        row = {"word": WORDS.index(word) if word in WORDS else 1, "line": line, "order": start, "name": name, "why": [],
                "values": np.full(NF, np.nan), "spans": np.full((NF, 3), -1, np.int64), "conf": np.full(4, np.nan),
                "speed": np.nan, "zone": np.nan, "tool": 0, "frame": 0, "pulse": False}
         self._tags(row, tags, start + match.start(3))
-        if shifted_from is not None:
-            row["why"].append(f"shifted (SFTON on line {shifted_from})")
-        position = job.positions.get(name.upper())
-        if position is None:
+        if "shift" in changed:
+            row["why"].append(f"shifted by the SFTON on line {changed['shift']} (its amount is a variable's)")
+        if "tool" in changed:
+            row["why"].append(f"the tool file was rewritten by the SETTOOL on line {changed['tool']}")
+        position = self.table.row_of(name.upper())
+        if word == "IMOV":
+            row["why"].append(f"IMOV moves by the increment {name} holds, a variable the controller keeps")
+        elif re.fullmatch(r"(?:BC|EC)\d+", name, re.I):
+            row["why"].append(f"{name} moves base or station axes (not the robot's TCP)")
+        elif position is None or not name.upper().startswith("C"):
             what = "a position variable held by the controller" if re.fullmatch(r"L?P\d+|L?P\[.*\]", name, re.I) else "not a position of this job"
             row["why"].append(f"{name} is {what}")
-            row["tool"] = self.builder.tool_index("TOOL#(?)", None)
         else:
-            self._position(row, position)
+            self._position(row, int(position), changed)
+        if row["tool"] == 0 and not row["pulse"]:
+            row["tool"] = self.builder.tool_index("TOOL#(?)", None)
         self.rows.append(row)
 
     def _tags(self, row: dict, tags: str, offset: int) -> None:
         for tag in TAG.finditer(tags):
             key, value = tag.group(1), tag.group(2)
             if key == "V":
-                row["speed"] = float(value) if _is_number(value) else np.nan
+                row["speed"] = float(value) if re.fullmatch(NUM, value) else np.nan
             elif key == "PL":
                 if not value.isdigit():
                     row["why"].append(f"PL={value} is not a number")
                 row["zone"] = 0.0 if value == "0" else np.nan
+            elif key == "CR":
+                row["why"].append("CR= rounds the corner by a radius")
             elif tag.group(4):
                 row["why"].append(f"{tag.group(4)} {tag.group(5)} moves another axis group (external axes not read)")
             elif tag.group(6):
                 raise self.lines.error(self.path, offset + tag.start(6), f"'{tag.group(6)}': a motion tag postproc does not read (VJ=, V=, VR=, VE=, PL=, CR=, ACC=, DEC=, NWAIT, +MOVJ)")
-            if key == "CR":
-                row["why"].append("CR= rounds the corner by a radius")
 
-    def _position(self, row: dict, position: Position) -> None:
-        state = position.state
-        values, spans = position.values, position.spans
+    def _position(self, row: dict, position: int, changed: dict[str, int]) -> None:
+        table, name = self.table, row["name"]
+        state = self.job.states[int(table.state[position])]
+        count, values, spans = int(table.count[position]), table.values[position], table.spans[position]
         if state.tool is not None:
             row["tool"] = self.builder.tool_index(f"TOOL#({state.tool})", None)
-        else:
-            row["tool"] = self.builder.tool_index("TOOL#(?)", None)
-            row["why"].append(f"{position.name} has no ///TOOL")
-        if state.form == "PULSE" or state.postype == "PULSE":
+        if state.form == "PULSE":
             row["pulse"] = True
-            if len(values) != 6:
-                row["why"].append(f"{position.name} has {len(values)} axes, postproc reads six")
+            if count != 6:
+                row["why"].append(f"{name} has {count} axes, postproc reads six")
                 return
-            for field, value, (a, b) in zip(JOINT_FIELDS, values, spans):
-                row["spans"][field] = (0, a, b)
-            row["pulse_values"] = values
-            row["why"].append(f"{position.name} is in pulses: joint angles need the robot's pulse data")
+            row["spans"][JOINT_FIELDS, 0] = 0
+            row["spans"][JOINT_FIELDS, 1:] = spans
+            row["why"].append(f"{name} is in pulses: joint angles need the robot's pulse data")
             return
-        if state.form != "RECTAN" or state.postype not in CARTESIAN:
-            row["why"].append(f"{position.name}: ///POSTYPE {state.postype} positions are not read")
+        if state.postype not in CARTESIAN:
+            row["why"].append(f"{name}: ///POSTYPE {state.postype} positions are not read")
             return
-        if len(values) != 6:
-            raise self.lines.error(self.path, spans[0][0] if spans else 0, f"a ///RECTAN position has six numbers (X, Y, Z, Rx, Ry, Rz), this one {len(values)}")
-        for field, value, (a, b) in zip(RECTAN_FIELDS, values, spans):
-            row["values"][field] = value
-            row["spans"][field] = (0, a, b)
+        if count != 6:
+            raise self.lines.error(self.path, int(spans[0, 0]), f"a ///RECTAN position has six numbers (X, Y, Z, Rx, Ry, Rz), {name} has {count}")
+        if state.tool is None:
+            row["why"].append(f"{name} has no ///TOOL")
+        row["values"][RECTAN_FIELDS] = values
+        row["spans"][RECTAN_FIELDS, 0] = 0
+        row["spans"][RECTAN_FIELDS, 1:] = spans
         if state.postype == "USER":
             if state.user is None:
-                raise self.lines.error(self.path, spans[0][0], f"{position.name}: ///POSTYPE USER without ///USER n")
+                raise self.lines.error(self.path, int(spans[0, 0]), f"{name}: ///POSTYPE USER without ///USER n")
             row["frame"] = self.builder.frame_index(f"UF#({state.user})", None)
-        if state.rconf is not None:
-            flip, arm, side, r, t, s = state.rconf[:6]
-            row["conf"] = np.array([flip, arm, side, r + 2 * t + 4 * s], dtype=float)
+            if "user frame" in changed:
+                row["why"].append(f"the user frames were redefined by the MFRAME on line {changed['user frame']}")
+        if self.played_in is not None and self.played_in != _taught_in(state):
+            row["why"].append(f"a relative job played in {self.played_in} with {name} taught in {_taught_in(state)}")
+        row["conf"] = np.array(_conf(state.rconf), dtype=float)
 
-    # -------------------------------------------------------------- circles
-    def _circles(self) -> None:
-        """Three consecutive MOVC lines: straight to the first, then the circle through the
-        second to the third (INFORM manual, MOVC); any other run is refused."""
-        i = 0
-        while i < len(self.rows):
-            if self.rows[i]["word"] != "MOVC":
-                i += 1
-                continue
-            j = i
-            while j < len(self.rows) and self.rows[j]["word"] == "MOVC":
-                j += 1
-            if j - i != 3:
-                row = self.rows[i]
-                raise self.lines.error(self.path, row["start"], f"{j - i} consecutive MOVC lines: postproc reads a circle of exactly three (continued arcs follow controller rules it does not model)")
-            i = j
-
-    def _build(self) -> Toolpath:
+    # -------------------------------------------------------------- the IR
+    def _slow_block(self) -> dict | None:
         rows = self.rows
-        kinds, run = [], 0
-        for row in rows:
-            word = row["word"]
-            if word == "MOVS":
-                raise self.lines.error(self.path, row["start"], "MOVS (spline): the controller's spline through the points is not modelled; refused")
-            run = run + 1 if word == "MOVC" else 0
-            if word == "MOVC":  # runs are of three (_circles): straight to the first, then the circle
-                kinds.append((Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END)[(run - 1) % 3])
-            elif row["pulse"]:
-                kinds.append(Kind.ABSJ if word == "MOVJ" else Kind.LINEAR)
-            else:
-                kinds.append(Kind.JOINT if word == "MOVJ" else Kind.LINEAR)
+        if not rows:
+            return None
         for row in rows:
             if row["why"]:
-                row["resolved"] = False
-                self.notes.append(f"{self.path}, line {row['line']}: {'; '.join(row['why'])}")
-        n = len(rows)
-        self.builder.notes.extend(self.notes)
-        if n:
-            self.builder.add_block(
-                np.array([r["start"] for r in rows]), kind=np.array(kinds, np.int8), line=np.array([r["line"] for r in rows], np.int32),
-                file=np.zeros(n, np.int16), values=np.array([r["values"] for r in rows]), spans=np.array([r["spans"] for r in rows]),
-                conf=np.array([r["conf"] for r in rows]), speed=np.array([r["speed"] for r in rows]), zone=np.array([r["zone"] for r in rows]),
-                tool=np.array([r["tool"] for r in rows], np.int32), frame=np.array([r["frame"] for r in rows], np.int32),
-                resolved=np.array([r["resolved"] for r in rows]), name=np.array([r["name"] for r in rows], dtype=object))
+                self.builder.notes.append(f"{self.path}, line {row['line']}: {'; '.join(row['why'])}")
+        block = {key: np.array([r[key] for r in rows]) for key in ("order", "line", "word", "pulse", "values", "spans", "conf", "speed", "zone", "tool", "frame")}
+        block["name"] = np.array([r["name"] for r in rows], dtype=object)
+        block["resolved"] = np.array([not r["why"] for r in rows])
+        return block
+
+    def _build(self, bulk: dict | None) -> Toolpath:
+        blocks = [b for b in (bulk, self._slow_block()) if b is not None]
+        if not blocks:
+            return self.builder.build()
+        keys = ("order", "line", "word", "pulse", "values", "spans", "conf", "speed", "zone", "tool", "frame", "name", "resolved")
+        # (bulk rows are resolved: the others were read one by one)
+        if len(blocks) == 1:
+            cols = {key: blocks[0].get(key, np.ones(len(blocks[0]["order"]), bool)) for key in keys}
+        else:
+            cols = {key: np.concatenate([b[key] if key in b else np.ones(len(b["order"]), bool) for b in blocks]) for key in keys}
+        if len(cols["order"]) > 1 and not bool(np.all(cols["order"][1:] >= cols["order"][:-1])):
+            order = np.argsort(cols["order"], kind="stable")
+            cols = {key: value[order] for key, value in cols.items()}
+        kind = self._kinds(cols)
+        self.builder.add_block(cols["order"], kind=kind, line=cols["line"].astype(np.int32), file=np.zeros(len(kind), np.int16),
+                               values=cols["values"], spans=cols["spans"], conf=cols["conf"], speed=cols["speed"], zone=cols["zone"],
+                               tool=cols["tool"].astype(np.int32), frame=cols["frame"].astype(np.int32), resolved=cols["resolved"], name=cols["name"])
         return self.builder.build()
 
+    def _kinds(self, cols: dict) -> np.ndarray:
+        """MOVJ: joint (to a pulse position: a joint target); MOVL: linear; three MOVC: straight
+        to the first, then the circle through the second to the third (INFORM manual, MOVC)."""
+        word, pulse, order = cols["word"], cols["pulse"], cols["order"]
+        spline = np.nonzero(word == 3)[0]
+        if spline.size:
+            raise self.lines.error(self.path, int(order[spline[0]]), "MOVS (spline): the controller's spline through the points is not modelled; refused")
+        circ = word == 2
+        edges = np.diff(np.concatenate([[0], circ.astype(np.int8), [0]]))
+        run_start, run_end = np.nonzero(edges == 1)[0], np.nonzero(edges == -1)[0]
+        bad = np.nonzero(run_end - run_start != 3)[0]
+        if bad.size:
+            k = int(run_start[bad[0]])
+            raise self.lines.error(self.path, int(order[k]), f"{int(run_end[bad[0]] - k)} consecutive MOVC lines: postproc reads a circle of exactly three (continued arcs follow controller rules it does not model)")
+        kind = np.where(word == 0, np.where(pulse, Kind.ABSJ, Kind.JOINT), Kind.LINEAR).astype(np.int8)
+        for k, part in enumerate((Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END)):
+            kind[run_start + k] = part
+        return kind
 
-def _is_number(text: str) -> bool:
-    return re.fullmatch(r"[-+]?(?:\d+\.?\d*|\.\d+)", text) is not None
+
+def _texts(text: str, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """The texts of spans, as an object array."""
+    out = np.empty(len(start), dtype=object)
+    out[:] = [text[a:b] for a, b in zip(start.tolist(), end.tolist())]
+    return out
+
+
+def _conf(rconf) -> list[float]:
+    """IR conf [flip, arm, side, R + 2 T + 4 S] of an ///RCONF (NaN where none)."""
+    if rconf is None:
+        return [np.nan] * 4
+    flip, arm, side, r, t, s = rconf[:6]
+    return [flip, arm, side, r + 2 * t + 4 * s]
+
+
+def _taught_in(state: PositionState) -> str:
+    return f"USER {state.user}" if state.postype == "USER" else "ROBOT"
+
+
+def played_frame(job: JobFile) -> str | None:
+    """The frame a relative job (///ATTR with RJ) is played in (////FRAME BASE, ROBOT or
+    USER n; BASE is ROBOT without base axes), or None for a standard job."""
+    headers = {}
+    for _, _, text in job.inst_headers:
+        parts = text.lstrip("/").split(None, 1)
+        if parts:
+            headers[parts[0].upper()] = parts[1] if len(parts) > 1 else ""
+    if "RJ" not in {a.strip().upper() for a in headers.get("ATTR", "").split(",")}:
+        return None
+    frame = " ".join(headers.get("FRAME", "ROBOT").upper().split())
+    return "ROBOT" if frame == "BASE" else frame
