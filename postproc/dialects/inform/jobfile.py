@@ -144,7 +144,7 @@ def read_job(text: str, path: str, lines: LineIndex, shapes: LineShapes, numbers
     table = job.positions
     if len(bulk_pos):
         states = np.searchsorted(np.array(state_lines), bulk_pos, side="right") - 1
-        table.state[-1] = states  # _bulk_positions left a placeholder
+        table.state[0] = states  # _bulk_positions left a placeholder first
     return job
 
 
