@@ -174,3 +174,17 @@ def test_a_job_is_sniffed_from_its_content(tmp_path):
     path.write_bytes(SAMPLE.read_bytes())
     assert sniff(path).name == "inform"
     assert parse_program(path).dialect == "inform"
+
+
+def test_inform_to_inform_keeps_the_form_of_a_joint_move():
+    tool = np.eye(4)
+    tool[:3, 3] = [0, 0, 150]
+    tp = parse_program(SAMPLE).take(np.arange(1, 6)).with_frames(tools={"TOOL#(0)": tool})
+    text = write_program(tp, "inform", "copy")[0]
+    back = parse_program("COPY.JBI", data=text.encode("latin-1"))
+    # the straight move to the first MOVC point, then the circle's three MOVC from there (a
+    # zero-length MOVC to where the robot is: a run of MOVC is one circle)
+    assert back.kind.tolist() == [Kind.JOINT, Kind.LINEAR, Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.LINEAR]
+    assert back.conf[0].tolist() == tp.conf[0].tolist() == [1, 0, 0, 0]
+    np.testing.assert_allclose(back.position, tp.position[[0, 1, 1, 2, 3, 4]], atol=6e-4)
+    assert "///RCONF 1,0,0,0,0,0,0,0" in text

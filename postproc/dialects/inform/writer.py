@@ -5,8 +5,9 @@ the input places its targets in is applied: INFORM jobs cannot define a user fra
 with 3 decimals (the controller's 0.001 mm) and Rx Ry Rz with 4 (0.0001 deg). Tools are
 numbered in the order the input uses them (``///TOOL n``): the controller's tool files
 must hold them. A joint move to a Cartesian position takes the posture its ``///RCONF``
-form names, which no other language states in Yaskawa's terms: it is refused, as is a
-joint target (pulses need the robot's pulse data).
+form names, which no other language states in Yaskawa's terms: from an INFORM job it is
+written with the job's form, from any other language refused, as is a joint target
+(pulses need the robot's pulse data).
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ class InformWriter:
         self.frame_t = np.eye(4)
         self.tool_numbers: dict[str, int] = {}
         self.tool_number = 0
-        self.positions: list[tuple[int, str]] = []  # (tool number, numbers)
+        self.positions: list[tuple[int, tuple | None, str]] = []  # (tool number, ///RCONF form or None, numbers)
+        self.source = None  # the input's language (postproc.emit.writer.drive sets it)
         self.body: list[str] = []
         self.tags = ""
         self.speed_tag = ""
@@ -50,21 +52,27 @@ class InformWriter:
         # controller's parameters, so those points are reached too (no PL tag).
         self.tags = " PL=0" if mm == 0 else ""
 
-    def _position(self, pose: np.ndarray) -> str:
+    def _position(self, pose: np.ndarray, form: tuple | None = None) -> str:
         base = self.frame_t @ pose
         rz, ry, rx = matrix_to_abc(base[None, :3, :3])[0]  # R = Rz Ry Rx (KUKA A B C)
         numbers = [_fixed(v, 3) for v in base[:3, 3]] + [_fixed(v, 4) for v in (rx, ry, rz)]
-        self.positions.append((self.tool_number, ",".join(numbers)))
+        self.positions.append((self.tool_number, form, ",".join(numbers)))
         return f"C{len(self.positions) - 1:05d}"
 
-    def _move(self, word: str, pose: np.ndarray) -> None:
-        self.body.append(f"{word} {self._position(pose)}{self.speed_tag}{self.tags}")
+    def _move(self, word: str, pose: np.ndarray, form: tuple | None = None) -> None:
+        tags = self.speed_tag if word != "MOVJ" else ""  # V= is a TCP speed; VJ= (a % of joint speed) has no source
+        self.body.append(f"{word} {self._position(pose, form)}{tags}{self.tags}")
         self.last = pose
 
     def move_joint(self, pose, conf=None) -> None:
-        raise EmitError("a joint move to a Cartesian target: INFORM's MOVJ takes the posture from the position's ///RCONF form, "
-                        f"which the input does not state in Yaskawa's terms (target at {np.round(self.frame_t @ pose, 3)[:3, 3].tolist()} mm); "
-                        "write the move as a linear one in the input, or convert from an INFORM job")
+        known = self.source == "inform" and conf is not None and np.isfinite(conf).all()
+        if not known:
+            raise EmitError("a joint move to a Cartesian target: INFORM's MOVJ takes the posture from the position's ///RCONF form, "
+                            f"which the input does not state in Yaskawa's terms (target at {np.round(self.frame_t @ pose, 3)[:3, 3].tolist()} mm); "
+                            "write the move as a linear one in the input, or convert from an INFORM job")
+        flip, arm, side, turns = (int(v) for v in conf)
+        self._move("MOVJ", pose, (flip, arm, side, turns & 1, turns >> 1 & 1, turns >> 2 & 1, 0, 0))
+        self.last_was_circle = False
 
     def move_linear(self, pose, conf=None) -> None:
         self._move("MOVL", pose)
@@ -90,11 +98,14 @@ class InformWriter:
 
     def end(self) -> list[str]:
         pos = ["/JOB", f"//NAME {self.name}", "//POS", f"///NPOS {len(self.positions)},0,0,0,0,0", "///POSTYPE ROBOT", "///RECTAN"]
-        tool = None
-        for k, (number, numbers) in enumerate(self.positions):
+        tool = form_written = None
+        for k, (number, form, numbers) in enumerate(self.positions):
             if number != tool:
                 pos.append(f"///TOOL {number}")
                 tool = number
+            if form is not None and form != form_written:  # (a MOVL position keeps the form above it: MOVL does not use it)
+                pos.append("///RCONF " + ",".join(map(str, form)))
+                form_written = form
             pos.append(f"C{k:05d}={numbers}")
         inst = ["//INST", "///ATTR SC,RW", "///GROUP1 RB1", "NOP", *self.body, "END", ""]
         return ["\r\n".join(pos + inst)]
