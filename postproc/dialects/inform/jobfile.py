@@ -37,6 +37,7 @@ from ...parse.common import LineIndex, Numbers
 from ...parse.line_shapes import LineShapes
 
 NUM = r"[-+]?\d+(?:\.\d*)?"
+DIGITS = re.compile("[0-9]+")  # (str.isdigit also takes '³')
 # C00000= (robot), BC (base axes), EC (station axes), P / BP / EX (position variables saved
 # with the job); four or more digits (older files: C0000=)
 POSITION = re.compile(r"(C|BC|EC|P|BP|EX)(\d{4,})=")
@@ -191,17 +192,17 @@ class Positions:
 
     def rows_of_numbers(self, numbers: np.ndarray) -> np.ndarray:
         """Table rows of the bulk block's positions C<number> (-1 where none)."""
-        order = np.argsort(self.bulk_numbers, kind="stable")
-        at = np.minimum(np.searchsorted(self.bulk_numbers, numbers, sorter=order), max(len(order) - 1, 0))
-        if not len(order):
+        if not len(self.bulk_numbers):
             return np.full(len(numbers), -1, np.int64)
+        order = np.argsort(self.bulk_numbers, kind="stable")
+        at = np.minimum(np.searchsorted(self.bulk_numbers, numbers, sorter=order), len(order) - 1)
         return np.where(self.bulk_numbers[order[at]] == numbers, order[at], -1)
 
     def row_of(self, name: str) -> int | None:
         """The table row of a position name (C00012, or a C0012 of the same number), None if absent."""
         if name in self.index:
             return self.index[name]
-        if name[:1] == "C" and name[1:].isdigit():
+        if name[:1] == "C" and DIGITS.fullmatch(name[1:]):
             row = int(self.rows_of_numbers(np.array([int(name[1:])]))[0])
             return row if row >= 0 else None
         return None
@@ -249,12 +250,12 @@ def _pos_header(row: str, start: int, state: PositionState, path: str, lines: Li
         new.postype = rest.upper()
         new.form = "PULSE" if new.postype == "PULSE" else new.form
     elif word in ("TOOL", "USER"):
-        if not rest.isdigit():
+        if not DIGITS.fullmatch(rest):
             raise lines.error(path, start + row.find(rest), f"///{word} needs a number, got '{rest}'")
         setattr(new, word.lower(), int(rest))
     elif word == "RCONF":
         bits = rest.split(",")
-        if len(bits) < 6 or not all(b.strip().isdigit() for b in bits):
+        if len(bits) < 6 or not all(DIGITS.fullmatch(b.strip()) for b in bits):
             raise lines.error(path, start + row.find(rest), "///RCONF needs at least six whole numbers (flip, arm, front/back, R, T, S)")
         new.rconf = tuple(int(b) for b in bits)
     else:

@@ -37,6 +37,8 @@ TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(
 # Instructions after which positions are moved by values the job's text does not give:
 # SFTON shifts every move until SFTOF; MFRAME redefines a user frame, SETTOOL a tool file.
 CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL": "tool"}
+# Program flow: postproc lists each motion once, in the order of the text.
+FLOW = {"JUMP", "CALL", "WHILE", "FOR", "IFTHEN", "IFTHENEXP", "SWITCH", "RET"}
 CARTESIAN = ("ROBOT", "BASE", "USER")
 # RECTAN numbers -> IR fields: X Y Z, then Rx Ry Rz into C B A (o3 o2 o1)
 RECTAN_FIELDS = np.array([FIELDS.index(f) for f in ("x", "y", "z", "o3", "o2", "o1")])
@@ -81,9 +83,12 @@ class InformParser:
         table, raw = self.table, self.raw
         name_start, name_end = moves.span("name")
         row = table.rows_of_numbers(c_numbers(raw, name_start, name_end))
-        state = np.where(row >= 0, table.state[np.maximum(row, 0)], 0)
+        if not len(table.state):  # no positions: every move is read one by one (and names its missing position)
+            row = np.full(len(row), -1, np.int64)
+        at = np.maximum(row, 0)
+        state = np.where(row >= 0, table.state[at] if len(table.state) else 0, 0)
         clean_state = np.array([self._clean(s) for s in self.job.states])
-        clean = (row >= 0) & clean_state[state] & (table.count[np.maximum(row, 0)] == 6)
+        clean = (row >= 0) & clean_state[state] & ((table.count[at] if len(table.count) else 0) == 6)
         for k in np.nonzero(~clean)[0].tolist():  # one by one
             line = int(moves.line[k])
             start = int(moves.start[k])
@@ -135,6 +140,8 @@ class InformParser:
             indent = len(text) - len(text.lstrip())
             text, start = text[indent:], start + indent
             word = text.split(None, 1)[0].upper() if text else ""
+            if word in FLOW or " IF " in f" {text} ":
+                self.builder.notes.append(f"{self.path}, line {line}: {word}: program flow is not followed; each motion is listed once, in the order of the text")
             if word in CHANGING:
                 if word == "SFTOF":
                     changed.pop("shift", None)
@@ -174,7 +181,7 @@ class InformParser:
             if key == "V":
                 row["speed"] = float(value) if re.fullmatch(NUM, value) else np.nan
             elif key == "PL":
-                if not value.isdigit():
+                if not re.fullmatch("[0-9]+", value):
                     row["why"].append(f"PL={value} is not a number")
                 row["zone"] = 0.0 if value == "0" else np.nan
             elif key == "CR":
