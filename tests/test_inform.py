@@ -188,3 +188,18 @@ def test_inform_to_inform_keeps_the_form_of_a_joint_move():
     assert back.conf[0].tolist() == tp.conf[0].tolist() == [1, 0, 0, 0]
     np.testing.assert_allclose(back.position, tp.position[[0, 1, 1, 2, 3, 4]], atol=6e-4)
     assert "///RCONF 1,0,0,0,0,0,0,0" in text
+
+
+def test_pulse_positions_take_their_angles_from_the_robot_pulse_data():
+    """angle = (pulse - zero) / pulses per degree; C00000 of the sample is 0,0,0,0,-45000,0:
+    B = -45000 / 910 deg with the GP25 file's (estimated) figures."""
+    from postproc.dialects.inform.pulses import pulses_of_angles, with_pulse_joints
+
+    robot = postproc.load_robot("gp25")
+    tp = parse_program(SAMPLE)
+    assert not tp.resolved[0] and np.isnan(tp.joints[0]).all()
+    placed = with_pulse_joints(tp, robot)
+    np.testing.assert_allclose(placed.joints[0], [0, 0, 0, 0, -45000 / 910.0, 0])
+    assert placed.resolved[0] and np.isnan(placed.values[0, 7:13]).all()  # the pulses are never rewritten
+    assert pulses_of_angles(robot, placed.joints[:1]).tolist() == [[0, 0, 0, 0, -45000, 0]]
+    assert emit_texts(placed, placed)[0] == tp.sources[0].text
