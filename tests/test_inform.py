@@ -203,3 +203,9 @@ def test_pulse_positions_take_their_angles_from_the_robot_pulse_data():
     assert placed.resolved[0] and np.isnan(placed.values[0, 7:13]).all()  # the pulses are never rewritten
     assert pulses_of_angles(robot, placed.joints[:1]).tolist() == [[0, 0, 0, 0, -45000, 0]]
     assert emit_texts(placed, placed)[0] == tp.sources[0].text
+
+
+def test_search_and_increment_tags_leave_the_target_unplaced():
+    tp = parse_program("t.jbi", data=_job("MOVL C00000 V=10 UNTIL IN#(1)=ON\nIMOV P001 V=20 UF#(1)\nMOVL C00000 V=10\n"))
+    assert tp.resolved.tolist() == [False, False, True]
+    assert any("UNTIL" in n for n in tp.notes) and any("IMOV" in n for n in tp.notes)

@@ -33,7 +33,7 @@ from .jobfile import NUM, JobFile, PositionState, as_arrays, c_numbers, read_job
 WORDS = ("MOVJ", "MOVL", "MOVC", "MOVS")
 MOTION = re.compile(r"(MOVJ|MOVL|MOVC|MOVS|IMOV)[ \t]+(\S+)(.*)")
 BULK_MOVE = re.compile(rf"(?P<word>MOV[JL]) (?P<name>C\d+)(?: (?P<vkey>VJ|V)=(?P<speed>{NUM}))?(?: PL=(?P<pl>\d))?\r?")
-TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+)|(\S+)")
+TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+)|(UF#\(\d+\)|BF|RF|TF|UNTIL\b.*)|(\S+)")
 # Instructions after which positions are moved by values the job's text does not give:
 # SFTON shifts every move until SFTOF; MFRAME redefines a user frame, SETTOOL a tool file.
 CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL": "tool"}
@@ -189,7 +189,10 @@ class InformParser:
             elif tag.group(4):
                 row["why"].append(f"{tag.group(4)} {tag.group(5)} moves another axis group (external axes not read)")
             elif tag.group(6):
-                raise self.lines.error(self.path, offset + tag.start(6), f"'{tag.group(6)}': a motion tag postproc does not read (VJ=, V=, VR=, VE=, PL=, CR=, ACC=, DEC=, NWAIT, +MOVJ)")
+                coordinate = not tag.group(6).startswith("UNTIL")
+                row["why"].append(f"{tag.group(6).split()[0]}: " + ("the increment's coordinate system (IMOV)" if coordinate else "a search move stops where an input comes"))
+            elif tag.group(7):
+                raise self.lines.error(self.path, offset + tag.start(7), f"'{tag.group(7)}': a motion tag postproc does not read (VJ=, V=, VR=, VE=, PL=, CR=, ACC=, DEC=, NWAIT, +MOVJ, UF#(n), BF, RF, TF, UNTIL)")
 
     def _position(self, row: dict, position: int, changed: dict[str, int]) -> None:
         table, name = self.table, row["name"]
