@@ -209,3 +209,11 @@ def test_search_and_increment_tags_leave_the_target_unplaced():
     tp = parse_program("t.jbi", data=_job("MOVL C00000 V=10 UNTIL IN#(1)=ON\nIMOV P001 V=20 UF#(1)\nMOVL C00000 V=10\n"))
     assert tp.resolved.tolist() == [False, False, True]
     assert any("UNTIL" in n for n in tp.notes) and any("IMOV" in n for n in tp.notes)
+
+
+def test_a_job_ends_at_its_end():
+    with pytest.raises(ParseError, match="no END"):
+        parse_program("t.jbi", data=_job("MOVL C00000 V=10\n").replace(b"END\n", b""))
+    with pytest.raises(ParseError, match="after the END on line 14") as info:
+        parse_program("t.jbi", data=_job("END\nMOVL C00000 V=10\n"))
+    assert info.value.line == 15

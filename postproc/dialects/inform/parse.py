@@ -61,10 +61,24 @@ class InformParser:
         moves = self._bulk_moves(shapes, text)
         job = read_job(text, self.path, self.lines, shapes, numbers, moves.line if moves is not None else np.zeros(0, np.int64))
         self.job, self.table = job, as_arrays(job.positions)
+        self._require_end(job, moves.line if moves is not None else np.zeros(0, np.int64))
         self.played_in = played_frame(job)
         self._slow_moves(job)
         block = self._bulk_block(moves, numbers) if moves is not None and len(moves) else None
         return self._build(block)
+
+    def _require_end(self, job: JobFile, bulk_lines: np.ndarray) -> None:
+        """A job ends at its END (INFORM manual, END): a job without one is cut short, and
+        nothing may follow it (the controller never runs it)."""
+        ends = [(line, start) for line, start, text in job.instructions if text.strip().upper() == "END"]
+        if not ends:
+            raise self.lines.error(self.path, len(self.doc.text), "no END: the job is cut short (an INFORM job ends with END)")
+        end_line = ends[0][0]
+        after = [start for line, start, text in job.instructions if line > end_line and text.strip()]
+        late = bulk_lines[bulk_lines + 1 > end_line]
+        if after or late.size:
+            at = min(after + [int(self.lines.starts[late[0]])] if late.size else after)
+            raise self.lines.error(self.path, at, f"after the END on line {end_line}: the controller never runs it")
 
     # ------------------------------------------------------------ bulk motions
     def _bulk_moves(self, shapes: LineShapes, text: str):
