@@ -48,6 +48,11 @@ def test_sample_reads_as_the_manual_says():
     # V= mm/s; VJ= gives no TCP speed; PL=0 stops at the point, PL=3 an unknown rounding
     np.testing.assert_array_equal(tp.speed, [np.nan, np.nan, 100, 100, 100, 250.5])
     np.testing.assert_array_equal(tp.zone, [np.nan, 0, np.nan, np.nan, 0, np.nan])
+    # INFORM's own columns: the positioning level, VJ, the pulses of the pulse position
+    assert tp.extras["inform.pl"].tolist() == [-1, 0, -1, -1, 0, 3]
+    np.testing.assert_array_equal(tp.extras["inform.vj"], [25, 50, np.nan, np.nan, np.nan, np.nan])
+    np.testing.assert_array_equal(tp.extras["inform.pulses"][0], [0, 0, 0, 0, -45000, 0])
+    assert np.isnan(tp.extras["inform.pulses"][1:]).all()
     # tool 0 is in the controller's tool file: unknown; the pulse target needs pulse data
     assert tp.tool_names[tp.tool[1]] == "TOOL#(0)" and not tp.tool_known[tp.tool[1]]
     assert not tp.resolved[0] and tp.resolved[1:].all()

@@ -31,6 +31,9 @@ from ...parse.line_shapes import LineShapes
 from .jobfile import NUM, JobFile, PositionState, as_arrays, c_numbers, read_job, section_lines
 
 WORDS = ("MOVJ", "MOVL", "MOVC", "MOVS")
+# The columns of a block of targets (bulk or read one by one) before they become the IR.
+COLUMNS = ("order", "line", "word", "pulse", "values", "spans", "conf", "speed", "zone", "tool", "frame", "name", "resolved",
+           "inform.pl", "inform.vj", "inform.pulses")
 MOTION = re.compile(r"(MOVJ|MOVL|MOVC|MOVS|IMOV)[ \t]+(\S+)(.*)")
 BULK_MOVE = re.compile(rf"(?P<word>MOV[JL]) (?P<name>C\d+)(?: (?P<vkey>VJ|V)=(?P<speed>{NUM}))?(?: PL=(?P<pl>\d))?\r?")
 TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+)|(UF#\(\d+\)|BF|RF|TF|UNTIL\b.*)|(\S+)")
@@ -40,6 +43,9 @@ CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL
 # Program flow: postproc lists each motion once, in the order of the text.
 FLOW = {"JUMP", "CALL", "WHILE", "FOR", "IFTHEN", "IFTHENEXP", "SWITCH", "RET"}
 CARTESIAN = ("ROBOT", "BASE", "USER")
+# What only INFORM has, per target (Toolpath.extras): the positioning level PL (-1: none
+# written), the joint speed VJ (% of the maximum), the encoder pulses of a pulse position.
+EXTRAS = (("inform.pl", np.int8, -1, ()), ("inform.vj", float, np.nan, ()), ("inform.pulses", float, np.nan, (6,)))
 # RECTAN numbers -> IR fields: X Y Z, then Rx Ry Rz into C B A (o3 o2 o1)
 RECTAN_FIELDS = np.array([FIELDS.index(f) for f in ("x", "y", "z", "o3", "o2", "o1")])
 JOINT_FIELDS = np.array([FIELDS.index(f"j{i}") for i in range(1, 7)])
@@ -51,6 +57,8 @@ class InformParser:
         self.path = self.doc.path
         self.lines = LineIndex(self.doc.text)
         self.builder = Builder("inform", "abc", list(sources))
+        for name, dtype, fill, shape in EXTRAS:
+            self.builder.declare_extra(name, dtype, fill, shape)
         self.rows: list[dict] = []
 
     def parse(self) -> Toolpath:
@@ -126,10 +134,12 @@ class InformParser:
         speed = np.where(is_v & (speed_start[keep] >= 0), numbers.value[np.minimum(at, len(numbers.value) - 1)], np.nan)
         pl_start, _ = moves.span("pl")
         pl = np.where(pl_start[keep] >= 0, raw[pl_start[keep]].astype(np.int64) - 48, -1)
+        joint_speed = np.where(~is_v & (speed_start[keep] >= 0), numbers.value[np.minimum(at, len(numbers.value) - 1)], np.nan)
         frames, tools, confs = self._state_columns()
         return {"order": moves.start[keep], "line": moves.line[keep] + 1, "word": np.where(word, 0, 1), "pulse": np.zeros(n, bool),
                 "values": values, "spans": spans, "conf": confs[state], "speed": speed, "zone": np.where(pl == 0, 0.0, np.nan),
-                "tool": tools[state], "frame": frames[state], "name": _texts(self.doc.text, name_start[keep], name_end[keep])}
+                "tool": tools[state], "frame": frames[state], "name": _texts(self.doc.text, name_start[keep], name_end[keep]),
+                "inform.pl": pl.astype(np.int8), "inform.vj": joint_speed, "inform.pulses": np.full((n, 6), np.nan)}
 
     def _clean(self, state: PositionState) -> bool:
         """A state whose positions the bulk path reads: Cartesian, with a tool, played where taught."""
@@ -169,7 +179,8 @@ class InformParser:
         word, name, tags = match.group(1), match.group(2), match.group(3)
         row = {"word": WORDS.index(word) if word in WORDS else 1, "line": line, "order": start, "name": name, "why": [],
                "values": np.full(NF, np.nan), "spans": np.full((NF, 3), -1, np.int64), "conf": np.full(4, np.nan),
-               "speed": np.nan, "zone": np.nan, "tool": 0, "frame": 0, "pulse": False}
+               "speed": np.nan, "zone": np.nan, "tool": 0, "frame": 0, "pulse": False,
+               "inform.pl": -1, "inform.vj": np.nan, "inform.pulses": np.full(6, np.nan)}
         self._tags(row, tags, start + match.start(3))
         if "shift" in changed:
             row["why"].append(f"shifted by the SFTON on line {changed['shift']} (its amount is a variable's)")
@@ -192,11 +203,13 @@ class InformParser:
     def _tags(self, row: dict, tags: str, offset: int) -> None:
         for tag in TAG.finditer(tags):
             key, value = tag.group(1), tag.group(2)
-            if key == "V":
-                row["speed"] = float(value) if re.fullmatch(NUM, value) else np.nan
+            if key in ("V", "VJ"):
+                row["speed" if key == "V" else "inform.vj"] = float(value) if re.fullmatch(NUM, value) else np.nan
             elif key == "PL":
-                if not re.fullmatch("[0-9]+", value):
-                    row["why"].append(f"PL={value} is not a number")
+                if re.fullmatch("[0-8]", value):
+                    row["inform.pl"] = int(value)
+                else:
+                    row["why"].append(f"PL={value}: not a positioning level 0..8")
                 row["zone"] = 0.0 if value == "0" else np.nan
             elif key == "CR":
                 row["why"].append("CR= rounds the corner by a radius")
@@ -221,6 +234,7 @@ class InformParser:
                 return
             row["spans"][JOINT_FIELDS, 0] = 0
             row["spans"][JOINT_FIELDS, 1:] = spans
+            row["inform.pulses"] = values
             row["why"].append(f"{name} is in pulses: joint angles need the robot's pulse data")
             return
         if state.postype not in CARTESIAN:
@@ -251,7 +265,7 @@ class InformParser:
         for row in rows:
             if row["why"]:
                 self.builder.notes.append(f"{self.path}, line {row['line']}: {'; '.join(row['why'])}")
-        block = {key: np.array([r[key] for r in rows]) for key in ("order", "line", "word", "pulse", "values", "spans", "conf", "speed", "zone", "tool", "frame")}
+        block = {key: np.array([r[key] for r in rows]) for key in COLUMNS if key not in ("name", "resolved")}
         block["name"] = np.array([r["name"] for r in rows], dtype=object)
         block["resolved"] = np.array([not r["why"] for r in rows])
         return block
@@ -260,8 +274,7 @@ class InformParser:
         blocks = [b for b in (bulk, self._slow_block()) if b is not None]
         if not blocks:
             return self.builder.build()
-        keys = ("order", "line", "word", "pulse", "values", "spans", "conf", "speed", "zone", "tool", "frame", "name", "resolved")
-        # (bulk rows are resolved: the others were read one by one)
+        keys = COLUMNS  # (bulk rows are resolved: the others were read one by one)
         if len(blocks) == 1:
             cols = {key: blocks[0].get(key, np.ones(len(blocks[0]["order"]), bool)) for key in keys}
         else:
@@ -272,7 +285,8 @@ class InformParser:
         kind = self._kinds(cols)
         self.builder.add_block(cols["order"], kind=kind, line=cols["line"].astype(np.int32), file=np.zeros(len(kind), np.int16),
                                values=cols["values"], spans=cols["spans"], conf=cols["conf"], speed=cols["speed"], zone=cols["zone"],
-                               tool=cols["tool"].astype(np.int32), frame=cols["frame"].astype(np.int32), resolved=cols["resolved"], name=cols["name"])
+                               tool=cols["tool"].astype(np.int32), frame=cols["frame"].astype(np.int32), resolved=cols["resolved"], name=cols["name"],
+                               **{name: cols[name] for name, *_ in EXTRAS})
         return self.builder.build()
 
     def _kinds(self, cols: dict) -> np.ndarray:

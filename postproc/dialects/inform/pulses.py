@@ -9,7 +9,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...errors import InputError
-from ...ir import F_JOINT, Kind, Toolpath
+from ...ir import Kind, Toolpath
 
 
 def pulse_data(robot) -> tuple[np.ndarray, np.ndarray]:
@@ -36,13 +36,12 @@ def with_pulse_joints(tp: Toolpath, robot) -> Toolpath:
     only want was the pulse data) have their joint angles from ``robot``'s pulse data and are
     placed. Their text numbers stay pulses: the IR's values stay empty, so nothing rewrites them.
     A target unresolved for another reason (a note besides the pulses) stays so."""
-    rows = np.nonzero((tp.kind == Kind.ABSJ) & (tp.spans[:, F_JOINT, 1] >= 0).all(axis=1))[0]
+    pulses = tp.extras["inform.pulses"]
+    rows = np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(pulses).any(axis=1))[0]
     if not rows.size:
         return tp
-    texts = [tp.sources[int(f)].text for f in tp.file[rows]]
-    pulses = np.array([[float(text[a:b]) for a, b in tp.spans[r, F_JOINT, 1:].tolist()] for r, text in zip(rows.tolist(), texts)])
     joints, resolved = tp.joints.copy(), tp.resolved.copy()
-    joints[rows] = angles_of_pulses(robot, pulses)
+    joints[rows] = angles_of_pulses(robot, pulses[rows])
     only_pulses = np.array([_only_the_pulses(tp, int(r)) for r in rows], dtype=bool)
     resolved[rows[only_pulses]] = True
     notes = tuple(n for n in tp.notes if not any(n.endswith(f"line {tp.line[r]}: {tp.target_name[r]} is in pulses: joint angles need the robot's pulse data") for r in rows[only_pulses]))
