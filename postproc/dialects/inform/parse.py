@@ -28,7 +28,7 @@ import numpy as np
 from ...ir import FIELDS, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, scan_numbers
 from ...parse.line_shapes import LineShapes
-from .jobfile import NUM, JobFile, PositionState, as_arrays, c_numbers, read_job, section_lines
+from .jobfile import DIGITS, NUM, JobFile, PositionState, as_arrays, c_numbers, read_job, section_lines
 
 WORDS = ("MOVJ", "MOVL", "MOVC", "MOVS")
 # The columns of a block of targets (bulk or read one by one) before they become the IR.
@@ -36,7 +36,7 @@ COLUMNS = ("order", "line", "word", "pulse", "values", "spans", "conf", "speed",
            "inform.pl", "inform.vj", "inform.pulses")
 MOTION = re.compile(r"(MOVJ|MOVL|MOVC|MOVS|IMOV)[ \t]+(\S+)(.*)")
 BULK_MOVE = re.compile(rf"(?P<word>MOV[JL]) (?P<name>C\d+)(?: (?P<vkey>VJ|V)=(?P<speed>{NUM}))?(?: PL=(?P<pl>\d))?\r?")
-TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+)|(UF#\(\d+\)|BF|RF|TF|UNTIL\b.*)|(\S+)")
+TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(\S+).*|(UF#\(\d+\)|BF|RF|TF|UNTIL\b.*|(?:BC|EC)\d+)|(\S+)")
 # Instructions after which positions are moved by values the job's text does not give:
 # SFTON shifts every move until SFTOF; MFRAME redefines a user frame, SETTOOL a tool file.
 CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL": "tool"}
@@ -177,6 +177,7 @@ class InformParser:
 
     def _motion(self, match: re.Match, line: int, start: int, changed: dict[str, int]) -> None:
         word, name, tags = match.group(1), match.group(2), match.group(3)
+        tags = tags.split("//", 1)[0]  # an inline comment
         row = {"word": WORDS.index(word) if word in WORDS else 1, "line": line, "order": start, "name": name, "why": [],
                "values": np.full(NF, np.nan), "spans": np.full((NF, 3), -1, np.int64), "conf": np.full(4, np.nan),
                "speed": np.nan, "zone": np.nan, "tool": 0, "frame": 0, "pulse": False,
@@ -192,13 +193,20 @@ class InformParser:
         elif re.fullmatch(r"(?:BC|EC)\d+", name, re.I):
             row["why"].append(f"{name} moves base or station axes (not the robot's TCP)")
         elif position is None or not name.upper().startswith("C"):
-            what = "a position variable held by the controller" if re.fullmatch(r"L?P\d+|L?P\[.*\]", name, re.I) else "not a position of this job"
-            row["why"].append(f"{name} is {what}")
+            row["why"].append(self._unknown_position(name))
         else:
             self._position(row, int(position), changed)
         if row["tool"] == 0 and not row["pulse"]:
             row["tool"] = self.builder.tool_index("TOOL#(?)", None)
         self.rows.append(row)
+
+    def _unknown_position(self, name: str) -> str:
+        """Why a move to ``name`` (not a C position of this job) is not placed."""
+        if not re.fullmatch(r"L?P\d+|L?P\[.*\]", name, re.I):
+            return f"{name} is not a position of this job"
+        number = name[1:] if name[:1].upper() == "P" and DIGITS.fullmatch(name[1:]) else None
+        saved = number is not None and any(k[:1] == "P" and DIGITS.fullmatch(k[1:]) and int(k[1:]) == int(number) for k in self.table.index)
+        return f"{name} is a position variable held by the controller" + (" (the job saves a value of it, which any job may change before this one runs)" if saved else "")
 
     def _tags(self, row: dict, tags: str, offset: int) -> None:
         for tag in TAG.finditer(tags):
@@ -216,8 +224,7 @@ class InformParser:
             elif tag.group(4):
                 row["why"].append(f"{tag.group(4)} {tag.group(5)} moves another axis group (external axes not read)")
             elif tag.group(6):
-                coordinate = not tag.group(6).startswith("UNTIL")
-                row["why"].append(f"{tag.group(6).split()[0]}: " + ("the increment's coordinate system (IMOV)" if coordinate else "a search move stops where an input comes"))
+                row["why"].append(_why_tag(tag.group(6)))
             elif tag.group(7):
                 raise self.lines.error(self.path, offset + tag.start(7), f"'{tag.group(7)}': a motion tag postproc does not read (VJ=, V=, VR=, VE=, PL=, CR=, ACC=, DEC=, NWAIT, +MOVJ, UF#(n), BF, RF, TF, UNTIL)")
 
@@ -307,6 +314,15 @@ class InformParser:
         for k, part in enumerate((Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END)):
             kind[run_start + k] = part
         return kind
+
+
+def _why_tag(tag: str) -> str:
+    """Why a target with this tag is not placed."""
+    if tag.startswith("UNTIL"):
+        return "UNTIL: a search move stops where an input comes"
+    if tag[:2] in ("BC", "EC"):
+        return f"{tag}: base or station axes move with the robot (not read)"
+    return f"{tag}: the increment's coordinate system (IMOV)"
 
 
 def _texts(text: str, start: np.ndarray, end: np.ndarray) -> np.ndarray:
