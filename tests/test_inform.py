@@ -106,16 +106,21 @@ def test_position_variables_and_shifts_are_unresolved():
 
 
 def test_form_of_a_tool_down_pose_is_written_by_hand():
-    """GP25, S L U R T = 0 and B = -90: the flange points down in front of the robot, the
-    elbow above the line L -> B, B below 0: ///RCONF 1 (no flip), 0 (upper arm), 0 (front)."""
+    """GP25, S L U R T = 0 and B = -90: the flange points down in front of the robot, R at 0
+    (-90 < R <= 90: flip, NX100 operator's manual 3.9 "Manipulator Types"), the elbow above
+    the line L -> B: ///RCONF 0 (flip), 0 (upper arm), 0 (front), R T S below 180."""
     robot = postproc.load_robot("gp25")
     q = np.array([[0.0, 0.0, 0.0, 0.0, -90.0, 0.0]])
     np.testing.assert_allclose(kin.fk(robot, q)[0], [[1, 0, 0, 945], [0, -1, 0, 0], [0, 0, -1, 860], [0, 0, 0, 1]], atol=1e-9)
-    assert form_of_joints(robot, q).tolist() == [[1, 0, 0, 0]]
+    assert form_of_joints(robot, q).tolist() == [[0, 0, 0, 0]]
+    # the same pose with the wrist turned over (R 180, B +90, T 180): no flip, R and T >= 180
+    turned = np.array([[0.0, 0.0, 0.0, 180.0, 90.0, 180.0]])
+    np.testing.assert_allclose(kin.fk(robot, turned)[0], kin.fk(robot, q)[0], atol=1e-9)
+    assert form_of_joints(robot, turned).tolist() == [[1, 0, 0, 1 + 2]]
     # L tilted 60 deg back and U raised 120 deg: the upper arm points backwards, the wrist
-    # centre is behind the S axis (back); B = 30 >= 0 (flip); R = 190 >= 180 (bit 0 of the turns)
+    # centre is behind the S axis (rear); R = 190: no flip (90 < R <= 270) and R >= 180
     form = form_of_joints(robot, np.array([[0.0, -60.0, 120.0, 190.0, 30.0, 0.0]]))[0]
-    assert (form[0], form[2], form[3]) == (0, 1, 1)
+    assert (form[0], form[2], form[3]) == (1, 1, 1)
 
 
 def test_each_form_selects_its_own_solution():

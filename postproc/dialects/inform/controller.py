@@ -21,13 +21,15 @@ class YaskawaController(Controller):
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """The form (``///RCONF``) of a Cartesian position decides the posture of a joint move
         (MOVJ) to it; MOVL / MOVC interpolate from the current posture and cannot change form
-        on the way (DX100 operator's manual, "type" of a position: the form is used for joint
-        interpolation to a Cartesian position)."""
+        on the way (NX100 / DX100 operator's manual 3.9 "Manipulator Types": the type selects
+        one of the solutions when the robot moves to an XYZ position; a straight or circular
+        path is driven from where the robot is)."""
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf).any(axis=1)
 
     def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """The solution with the written form: flip, upper/lower arm, front/back and the
-        R, T, S turns (data transmission function manual, ///RCONF; see form.py)."""
+        """The solution with the written form: flip, upper/lower arm, front/rear and the
+        R, T, S turns (DX100 "Interface with an easy offline teaching system" 4.1 RCONF, NX100
+        operator's manual 3.9 "Manipulator Types"; see form.py)."""
         q, branch = super().branch_from_conf(robot, solutions, conf)
         has = ~np.isnan(conf).any(axis=1)
         if has.any():

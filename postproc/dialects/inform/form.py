@@ -1,16 +1,21 @@
-"""Yaskawa's form (figure) of a robot posture, as ``///RCONF`` writes it, and the IK
-solution a form selects.
+"""Yaskawa's form (figure, "type") of a robot posture, as ``///RCONF`` writes it, and the
+IK solution a form selects.
 
-``///RCONF l,m,n,o,p,q,...`` (DX100 / YRC1000 data transmission function manual, job
-data, position data "RCONF"; the operator's manual's "Type" of a Cartesian position):
-- l: 0 flip, 1 no flip: the B axis at or above 0 deg, or below;
-- m: 0 upper arm (elbow up), 1 lower arm (elbow down): which side of the line from the L
-  axis to the wrist centre (B axis) the U axis is on, in the arm's own sense;
-- n: 0 front, 1 back: the wrist centre in front of or behind the S axis;
-- o, p, q: 0 where the R, T, S axis angle is below 180 deg in magnitude, 1 where it is 180
-  or more (which turn of a joint whose range exceeds a turn).
+``///RCONF l,m,n,o,p,q,...`` (DX100 "Interface with an easy offline teaching system",
+4.1 job data format, RCONF; the types are described in the NX100 / DX100 operator's
+manual, "Manipulator Types", 3.9):
+- l: 0 flip, 1 no flip. It is the R axis's position: flip where -90 < R <= 90 (or
+  270 < R <= 360, -360 < R <= -270), no flip where 90 < R <= 270 (or -270 < R <= -90);
+- m: 0 upper arm, 1 lower arm: the type the L and U axes make (elbow up or down), here
+  which side of the line from the L axis to the wrist centre (B axis) the U axis is on, in
+  the arm's own sense;
+- n: 0 front, 1 rear: the wrist centre in front of or behind the S axis;
+- o, p, q: 0 where the R, T, S axis angle is below 180 deg, 1 where it is 180 or more, in
+  magnitude (which turn of a joint whose range exceeds a turn: with the flip bit, R in
+  -90..90 against 270..360).
 The IR keeps them as conf = [l, m, n, o + 2 p + 4 q].
 """
+
 
 from __future__ import annotations
 
@@ -30,7 +35,10 @@ def form_of_joints(robot, q_deg: np.ndarray) -> np.ndarray:
     # Elbow (U axis) in the arm plane, relative to the L axis at (a1, 0).
     elbow_f, elbow_u = opw.c2 * np.sin(phi[:, 1]), opw.c2 * np.cos(phi[:, 1])
     side_of_line = (forward - opw.a1) * elbow_u - up * elbow_f  # > 0: U left of L -> wrist
-    flip = (q[:, 4] < 0).astype(float)  # 0 flip (B >= 0), 1 no flip
+    r = q[:, 3]
+    no_flip = np.mod(r + 90.0, 360.0) > 180.0  # R in (90, 270] + k 360: the "B position" of the manual's figure
+    no_flip |= np.mod(r + 90.0, 360.0) == 0.0  # R = -90 (+ k 360) is no flip too
+    flip = no_flip.astype(float)  # 0 flip, 1 no flip
     arm = (side_of_line <= 0).astype(float)
     side = (forward < 0).astype(float)
     turns = sum((np.abs(q[:, j]) >= 180.0) * (1 << k) for k, j in enumerate(TURN_JOINTS))
