@@ -227,3 +227,11 @@ def test_a_job_ends_at_its_end():
     with pytest.raises(ParseError, match="after the END on line 14") as info:
         parse_program("t.jbi", data=_job("END\nMOVL C00000 V=10\n"))
     assert info.value.line == 15
+
+
+def test_base_frame_of_a_robot_on_a_base_axis_is_not_the_robot_frame():
+    pos = "///TOOL 0\n///POSTYPE BASE\n///RECTAN\nC00000=1000.000,0.000,500.000,180.0000,0.0000,0.0000\n"
+    alone = parse_program("t.jbi", data=_job("MOVL C00000 V=10\n", pos))
+    riding = parse_program("t.jbi", data=_job("MOVL C00000 V=10\n", pos).replace(b"///GROUP1 RB1", b"///GROUP1 RB1,BS1"))
+    assert alone.resolved.tolist() == [True] and riding.resolved.tolist() == [False]
+    assert any("base axis (BS1)" in n for n in riding.notes)

@@ -71,6 +71,7 @@ class InformParser:
         self.job, self.table = job, as_arrays(job.positions)
         self._require_end(job, moves.line if moves is not None else np.zeros(0, np.int64))
         self.played_in = played_frame(job)
+        self.on_base_axis = on_base_axis(job)
         self._slow_moves(job)
         block = self._bulk_block(moves, numbers) if moves is not None and len(moves) else None
         return self._build(block)
@@ -144,6 +145,8 @@ class InformParser:
     def _clean(self, state: PositionState) -> bool:
         """A state whose positions the bulk path reads: Cartesian, with a tool, played where taught."""
         if state.form != "RECTAN" or state.postype not in CARTESIAN or state.tool is None:
+            return False
+        if state.postype == "BASE" and self.on_base_axis:
             return False
         if state.postype == "USER" and state.user is None:
             return False
@@ -260,6 +263,8 @@ class InformParser:
             row["frame"] = self.builder.frame_index(f"UF#({state.user})", None)
             if "user frame" in changed:
                 row["why"].append(f"the user frames were redefined by the MFRAME on line {changed['user frame']}")
+        if state.postype == "BASE" and self.on_base_axis:
+            row["why"].append(f"{name} is in the base frame of a robot on a base axis ({self.on_base_axis}): the robot's place on it is not read")
         if self.played_in is not None and self.played_in != _taught_in(state):
             row["why"].append(f"a relative job played in {self.played_in} with {name} taught in {_taught_in(state)}")
         row["conf"] = np.array(_conf(state.rconf), dtype=float)
@@ -342,6 +347,18 @@ def _conf(rconf) -> list[float]:
 
 def _taught_in(state: PositionState) -> str:
     return f"USER {state.user}" if state.postype == "USER" else "ROBOT"
+
+
+def on_base_axis(job: JobFile) -> str | None:
+    """The base axis group (BS1, ...) the job's robot rides on, from ///GROUPn; None where none:
+    then the base frame is the robot frame (DX100 offline teaching interface, 4.3.1.3)."""
+    for _, _, text in job.inst_headers:
+        parts = text.lstrip("/").split(None, 1)
+        if parts and parts[0].upper().startswith("GROUP") and len(parts) > 1:
+            found = [g.strip() for g in parts[1].split(",") if g.strip().upper().startswith("BS")]
+            if found:
+                return found[0]
+    return None
 
 
 def played_frame(job: JobFile) -> str | None:
