@@ -1,0 +1,285 @@
+"""Fanuc TP (.ls ASCII listing) -> Toolpath, with the span of every number read.
+
+The controller's rules it follows (R-30iB Operator's Manual, chapters "Program
+structure", "Motion instructions" and "Position data"):
+
+- A program is ``/PROG name``, ``/ATTR``, (``/APPL``), ``/MN`` (the statements), ``/POS``
+  (the positions P[n]) and ``/END``.
+- A motion ``J|L|C|A P[n] speed FINE|CNTk [options]`` goes to P[n] as /POS gives it, in
+  the user frame and tool numbered by the position's own ``UF``/``UT`` (the controller stops
+  with an alarm where they differ from UFRAME_NUM / UTOOL_NUM in force: refused here).
+- ``C P[via]`` + ``: P[end] ...`` on the continuation line is a circle through the start,
+  via and end. ``A`` (arc through consecutive A points) is read point by point: its points
+  are exact, the path between them is a circle through three of them, which postproc does
+  not predict (``inexact_interpolation`` says where).
+- Values the program does not hold are unknown: PR[n] targets, ``Offset,PR[n]``,
+  ``Tool_Offset``, ``INC``, ``Skip`` and user frames / tools (set on the pendant, or by
+  ``UFRAME[n]=PR[m]``) leave the target unresolved with a note (``--frame UFRAME[n]=...``
+  and ``--tool UTOOL[n]=...`` give frames and tools).
+- Joint positions: J3 as the controller writes it is the forearm's angle to the
+  horizontal (the J2/J3 interaction); the robot files' J3 is relative to the upper arm,
+  so the IR's j3 is J3 + J2 (an offset on the j3 number: the text keeps J3).
+"""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+
+from ...errors import ParseError
+from ...frames import abc_to_quat_wxyz
+from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex
+from .positions import Position, PositionError, read_positions
+from .statements import Statement, StatementError, statements
+
+DIALECT = "fanuc"
+_SECTION = re.compile(r"^[ \t]*/(PROG|ATTR|APPL|MN|POS|END)\b[^\n]*$", re.MULTILINE)
+_TARGET = r"(P|PR)\[[ \t]*(\d+|[A-Z]+\[\d+\])[ \t]*(?::[^\]\n]*)?\]"
+_MOTION = re.compile(rf"[ \t]*([JLCA])[ \t]+{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
+_VIA_END = re.compile(rf"[ \t]*\r?\n[ \t]*:[ \t]*{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
+_SPEED = re.compile(r"[ \t]*(\d+\.?\d*|\.\d+|R\[\d+\]|max_speed)[ \t]*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)?", re.IGNORECASE)
+_TERM = re.compile(r"[ \t]+(FINE|CNT[ \t]*(\d+|R\[\d+\]))", re.IGNORECASE)
+_FRAME_NUM = re.compile(r"[ \t]*(UFRAME_NUM|UTOOL_NUM)[ \t]*=[ \t]*(\S+)[ \t]*$", re.IGNORECASE)
+_FRAME_SET = re.compile(r"[ \t]*(UFRAME|UTOOL)\[[ \t]*(\d+)[ \t]*\][ \t]*=", re.IGNORECASE)
+_FLOW = re.compile(r"[ \t]*(?:JMP|IF|CALL|SELECT|FOR|RUN)\b", re.IGNORECASE)
+# Motion options (R-30iB manual, "Motion instruction options"), in the order tried: those
+# that change where the robot goes by what the program does not hold (the reason), Wjnt
+# (WRIST: the wrist joints interpolate, the target is exact, the path is not), and those
+# that move neither target nor path (None: acceleration, output timing, corner region,
+# path mode, arc / spot / weave process tags).
+WRIST = "Wjnt"
+_OPTIONS = [(re.compile(p, re.IGNORECASE), why) for p, why in (
+    (r"Tool_Offset(?:[ \t]*,[ \t]*PR\[[^\]]*\])?", "Tool_Offset adds a position register's value (set outside the program)"),
+    (r"Offset(?:[ \t]*,[ \t]*PR\[[^\]]*\])?", "Offset adds a position register's value (set outside the program)"),
+    (r"VOFFSET(?:[ \t]*,[ \t]*VR\[[^\]]*\])?", "VOFFSET adds a vision register's value (set by the camera)"),
+    (r"INC\b", "INC moves by the position as an increment from where the robot is"),
+    (r"Skip[ \t]*,[ \t]*LBL\[[^\]]*\](?:[ \t]*,[ \t]*\S+)?", "Skip stops the motion where a condition turns true"),
+    (r"Wjnt\b", WRIST),
+    (r"ACC[ \t]*(?:\d+|R\[\d+\])", None),
+    (r"(?:TB|TA)[ \t]+[\d.]+sec[ \t]*,[ \t]*(?:CALL[ \t]+\w+(?:\([^)]*\))?|\S+)", None),
+    (r"DB[ \t]+[\d.]+mm[ \t]*,[ \t]*(?:CALL[ \t]+\w+(?:\([^)]*\))?|\S+)", None),
+    (r"(?:PTH|COORD|BREAK)\b", None),
+    (r"(?:CR|RT_LD|AP_LD)[ \t]*\d+", None),
+    (r"Arc[ \t]*(?:Start|End)[ \t]*\[[^\]]*\]", None),
+    (r"Weave[ \t]*\w*[ \t]*\[[^\]]*\]", None),
+    (r"Spot[ \t]*\[[^\]]*\]", None),
+)]
+SPEED_TO_MM_S = {"MM/SEC": 1.0, "CM/MIN": 10.0 / 60.0, "INCH/MIN": 25.4 / 60.0}
+J2, J3 = 8, 9  # fields of the joint numbers J2 and J3
+
+
+def parse_ls(sources: list[SourceDoc]) -> Toolpath:
+    doc = sources[0]
+    lines = LineIndex(doc.text)
+    try:
+        return _Reader(doc, lines).read()
+    except (PositionError, StatementError) as exc:
+        raise lines.error(doc.path, exc.offset, str(exc)) from None
+
+
+class _Reader:
+    def __init__(self, doc: SourceDoc, lines: LineIndex):
+        self.doc, self.text, self.lines = doc, doc.text, lines
+        self.builder = Builder(DIALECT, "wpr", [doc])
+        self.rows: list[dict] = []
+        self.notes: list[str] = []
+        self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
+        self.utool: int | None = None
+        self.redefined: dict[str, int] = {}  # UFRAME[n] / UTOOL[n] -> line of its last assignment
+        self.wrist_joint_lines: list[int] = []  # lines of motions with Wjnt
+
+    def error(self, offset: int, why: str) -> ParseError:
+        return self.lines.error(self.doc.path, offset, why)
+
+    def read(self) -> Toolpath:
+        sections = self._sections()
+        self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else {}
+        flow = False
+        for st in statements(self.text, *sections["MN"]):
+            flow |= self._statement(st)
+        if flow:
+            self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
+        self._add_rows()
+        self.builder.notes.extend(self.notes)
+        tp = self.builder.build(orientation=False)
+        has = ~np.isnan(tp.values[:, 3:6]).any(axis=1)
+        orientation = np.full((len(tp), 4), np.nan)
+        orientation[has] = wpr_to_quat(tp.values[has, 3:6])
+        from dataclasses import replace
+
+        return replace(tp, orientation=orientation)
+
+    def _sections(self) -> dict[str, tuple[int, int]]:
+        found = [(m.group(1).upper(), m.start(), m.end()) for m in _SECTION.finditer(self.text)]
+        names = [f[0] for f in found]
+        if not names or names[0] != "PROG" or self.text[: found[0][1]].strip():
+            raise self.error(0, "not a Fanuc TP listing: it must start with '/PROG name'")
+        for needed in ("MN", "END"):
+            if needed not in names:
+                raise self.error(len(self.text), f"no /{needed} section: the listing is incomplete")
+        if names.count("MN") > 1 or names.count("POS") > 1:
+            raise self.error(found[names.index("MN", 1) if names.count("MN") > 1 else names.index("POS", names.index("POS") + 1)][1], "a section is given twice")
+        end_at = found[names.index("END")]
+        rest = self.text[end_at[2] :].strip()
+        if rest:
+            raise self.error(end_at[2] + self.text[end_at[2] :].index(rest[0]), "text after /END: the controller reads nothing there")
+        out = {}
+        for k, (name, _, head_end) in enumerate(found):
+            nxt = found[k + 1][1] if k + 1 < len(found) else len(self.text)
+            out[name] = (head_end, nxt)
+        return out
+
+    # ---------------------------------------------------------------- statements
+    def _statement(self, st: Statement) -> bool:
+        """Read one statement; True where it changes the flow (jump, call)."""
+        body = st.text
+        stripped = body.strip()
+        if not stripped or stripped.startswith(("!", "//")):
+            return False
+        m = _MOTION.match(body)
+        if m:
+            self._motion(st, m)
+            return False
+        m = _FRAME_NUM.match(body)
+        if m:
+            value = m.group(2)
+            number = int(value) if value.isdigit() else None  # UFRAME_NUM=R[1]: not known from the text
+            if m.group(1).upper() == "UFRAME_NUM":
+                self.uframe = number if number is not None else -1
+            else:
+                self.utool = number if number is not None else -1
+            return False
+        m = _FRAME_SET.match(body)
+        if m:
+            self.redefined[f"{m.group(1).upper()}[{int(m.group(2))}]"] = int(self.lines.line(st.start))
+            return False
+        return bool(_FLOW.match(body))
+
+    def _motion(self, st: Statement, m: re.Match) -> None:
+        motion = m.group(1).upper()
+        rest = m.group(4)
+        rest_at = st.start + m.start(4)
+        if motion == "C":
+            end = _VIA_END.match(rest)
+            if end is None:
+                raise self.error(rest_at, "a C motion gives its end point on the next line (': P[n] speed FINE|CNT'): none here")
+            self._target(st, "C", m.group(2), m.group(3), st.start + m.start(2), end.group(3), rest_at + end.start(3), Kind.CIRC_VIA)
+            self._target(st, "C", end.group(1), end.group(2), rest_at + end.start(1), end.group(3), rest_at + end.start(3), Kind.CIRC_END)
+            return
+        kind = {"J": Kind.JOINT, "L": Kind.LINEAR, "A": Kind.LINEAR}[motion]
+        self._target(st, motion, m.group(2), m.group(3), st.start + m.start(2), rest, rest_at, kind)
+
+    def _target(self, st: Statement, motion: str, reg: str, number: str, at: int, rest: str, rest_at: int, kind: Kind) -> None:
+        line = int(self.lines.line(at))
+        speed_m = _SPEED.match(rest)
+        if speed_m is None:
+            raise self.error(rest_at, f"a {motion} motion needs its speed (e.g. 100%, 500mm/sec) after the position")
+        term = _TERM.match(rest, speed_m.end())
+        if term is None:
+            raise self.error(rest_at + speed_m.end(), "a motion needs FINE or CNTn after its speed")
+        unknown = self._options(rest[term.end() :], rest_at + term.end(), line)
+        row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
+               "notes": unknown}
+        if reg.upper() == "PR" or not number.isdigit():
+            row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
+            row["pos"] = None
+            self.rows.append(row)
+            return
+        pos = self.positions.get(int(number))
+        if pos is None:
+            raise self.error(at, f"P[{number}] is not in /POS: the controller has no value for it")
+        self._check_frame_numbers(pos, at)
+        row["pos"] = pos
+        row["frame"] = self._frame(pos.uf if pos.uf is not None else self.uframe, "UFRAME")
+        row["tool"] = self._frame(pos.ut if pos.ut is not None else self.utool, "UTOOL")
+        if pos.other_groups:
+            row["notes"] = row["notes"] + [f"P[{number}] also moves group {', '.join(map(str, pos.other_groups))} (a positioner or rail), which postproc does not model"]
+        if pos.joint and kind == Kind.JOINT:
+            row["kind"] = Kind.ABSJ
+        elif pos.joint:
+            row["notes"] = row["notes"] + [f"a {motion} motion to a joint position P[{number}]: postproc reads joint positions for J motions only"]
+        self.rows.append(row)
+
+    def _options(self, text: str, at: int, line: int) -> list[str]:
+        """Why the options after FINE/CNT make the target unknown (none: [])."""
+        why = []
+        pos = 0
+        while True:
+            gap = re.compile(r"[ \t\r\n]*").match(text, pos)
+            pos = gap.end()
+            if pos >= len(text):
+                return why
+            for pattern, reason in _OPTIONS:
+                m = pattern.match(text, pos)
+                if m:
+                    break
+            else:
+                raise self.error(at + pos, f"motion option '{text[pos:].split()[0]}' is not one postproc reads (R-30iB manual, 'Motion instruction options')")
+            if reason == WRIST:
+                self.wrist_joint_lines.append(line)
+            elif reason is not None:
+                why.append(reason)
+            pos = m.end()
+
+    def _check_frame_numbers(self, pos: Position, at: int) -> None:
+        for what, have, want in (("UFRAME_NUM", self.uframe, pos.uf), ("UTOOL_NUM", self.utool, pos.ut)):
+            if have is not None and have >= 0 and want is not None and have != want:
+                raise self.error(at, f"P[{pos.number}] is taught in {what[:-4]} {want} but {what}={have} is in force: the controller stops with a frame mismatch alarm")
+
+    # -------------------------------------------------------------------- rows
+    def _add_rows(self) -> None:
+        n = len(self.rows)
+        values = np.full((n, NF), np.nan)
+        spans = np.full((n, NF, 3), -1, dtype=np.int64)
+        offset = np.zeros((n, NF))
+        conf = np.full((n, 4), np.nan)
+        resolved = np.ones(n, dtype=bool)
+        frame = np.zeros(n, dtype=np.int32)
+        tool = np.zeros(n, dtype=np.int32)
+        for i, row in enumerate(self.rows):
+            pos: Position | None = row["pos"]
+            if pos is not None:
+                values[i] = pos.values
+                spans[i, :, 1:] = pos.spans
+                spans[i, :, 0] = np.where(pos.spans[:, 0] >= 0, 0, -1)
+                conf[i] = pos.conf
+                if pos.joint:
+                    offset[i, J3] = pos.values[J2]  # J2/J3 interaction: the robot file's J3 = J3 + J2
+                    values[i, J3] += pos.values[J2]
+                frame[i], tool[i] = row["frame"], row["tool"]
+            if row["notes"] or pos is None:
+                resolved[i] = False
+                where = f"{self.doc.path}:{row['line']}"
+                self.notes.extend(f"{where}: {why}" for why in row["notes"])
+        self.builder.add_block(np.array([r["order"] for r in self.rows], dtype=np.int64), kind=np.array([r["kind"] for r in self.rows], dtype=np.int8),
+                               line=np.array([r["line"] for r in self.rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
+                               speed=np.array([r["speed"] for r in self.rows]), zone=np.array([r["zone"] for r in self.rows]), resolved=resolved,
+                               frame=frame, tool=tool, name=np.array([f"P[{r['pos'].number}]" if r["pos"] is not None else "" for r in self.rows], dtype=object))
+
+    def _frame(self, number: int | None, table: str) -> int:
+        """Index of user frame / tool ``number`` (0: world / faceplate, known); None or -1:
+        the number in force is not known from the program."""
+        add = self.builder.frame_index if table == "UFRAME" else self.builder.tool_index
+        if number == 0:
+            return 0
+        if number is None or number < 0:
+            return add(f"{table}_NUM", None)
+        name = f"{table}[{number}]"
+        since = self.redefined.get(name)
+        return add(name if since is None else f"{name}@line{since}", None)  # set by UFRAME[n]=... at that line
+
+
+def _speed(m: re.Match) -> float:
+    """mm/s of a TCP speed (NaN: %, sec, deg/sec or a register: no TCP speed from the text)."""
+    unit = (m.group(2) or "").upper()
+    if unit not in SPEED_TO_MM_S or not m.group(1)[0].isdigit() and m.group(1)[0] != ".":
+        return np.nan
+    return float(m.group(1)) * SPEED_TO_MM_S[unit]
+
+
+def wpr_to_quat(wpr_deg: np.ndarray) -> np.ndarray:
+    """Fanuc W, P, R (deg; rotations about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W), R-30iB
+    manual "Cartesian coordinates") -> quaternions w, x, y, z: KUKA's A, B, C reversed."""
+    return abc_to_quat_wxyz(np.asarray(wpr_deg)[:, ::-1])
