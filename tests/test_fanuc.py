@@ -1,0 +1,159 @@
+"""Fanuc TP (.ls) reading, writing back and the R-30iB's configuration rules.
+
+No open interpreter of TP exists to judge the reading: every expected value below was
+written by hand from the R-30iB Operator's Manual's rules ("Program structure", "Motion
+instructions", "Position data", "Configuration"), as the comments say.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import postproc
+from postproc import kinematics as kin
+from postproc.dialects import sniff
+from postproc.dialects.fanuc.controller import CONTROLLER, config_text, fanuc_config
+from postproc.errors import InputError, ParseError
+from postproc.ir import Kind
+from postproc.programs import emit_texts, parse_program
+
+SAMPLE = Path(__file__).parent / "data" / "fanuc_sample.ls"
+
+
+@pytest.fixture(scope="module")
+def sample():
+    return parse_program(SAMPLE)
+
+
+def test_sample_targets_as_the_manual_reads_them(sample):
+    tp = sample
+    # Motion lines 3..9 of /MN (file lines 11..18): J P[1]; L P[2]; C P[3] with its end P[4]
+    # on the continuation line; L PR[1]; L P[2] Offset,PR[2]; J P[5] (a joint position).
+    assert tp.kind.tolist() == [Kind.JOINT, Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.LINEAR, Kind.LINEAR, Kind.ABSJ]
+    assert tp.line.tolist() == [11, 12, 14, 15, 16, 17, 18]
+    np.testing.assert_array_equal(tp.position[[0, 1, 2, 3, 5]], [[900, 0, 300], [950, 100, 250], [1000, 150, 250], [1050, 100, 250], [950, 100, 250]])
+    # W P R are rotations about the fixed X, Y, Z: W = 180 is Rx(180): quaternion (0, 1, 0, 0);
+    # W 180, R 90: Rz(90) Rx(180), the tool down and its x along base y.
+    np.testing.assert_allclose(tp.orientation[0], [0, 1, 0, 0], atol=1e-12)
+    np.testing.assert_allclose(tp.orientation[1], [0, np.sqrt(0.5), np.sqrt(0.5), 0], atol=1e-12)
+    # PR[1] and the register offset are set outside the program: unresolved, with notes.
+    assert tp.resolved.tolist() == [True, True, True, True, False, False, True]
+    assert np.isnan(tp.position[4]).all()
+    assert any("PR[1]" in n for n in tp.notes) and any("Offset" in n for n in tp.notes)
+    # Speeds: 500mm/sec; 100mm/sec on both points of the C motion; 600cm/min = 100 mm/s; % is no TCP speed.
+    np.testing.assert_allclose(tp.speed, [np.nan, 500, 100, 100, 100, 100, np.nan])
+    # FINE is an exact stop (zone 0); CNT is a rounding the controller sizes (NaN mm).
+    np.testing.assert_array_equal(np.isnan(tp.zone), [False, True, False, False, False, True, False])
+    # 'N U T, 0, 0, 0': arm code 0, turns 0.
+    np.testing.assert_array_equal(tp.conf[0], [0, 0, 0, 0])
+    # Joint position P[5]: J3 = -10 is the forearm to the horizontal; the robot files' J3 is
+    # relative to the upper arm: -10 + J2 (20) = 10.
+    np.testing.assert_array_equal(tp.joints[6], [10, 20, 10, 0, -80, 0])
+    assert tp.target_name[:2] == ("P[1]", "P[2]")
+
+
+def test_every_number_has_its_span(sample):
+    text = sample.sources[0].text
+    for row in (0, 3):
+        for field, want in zip(range(6), sample.values[row, :6]):
+            _, s, e = sample.spans[row, field]
+            assert float(text[s:e]) == want
+
+
+def test_unchanged_emit_is_byte_identical(sample):
+    assert emit_texts(sample, sample)[0] == SAMPLE.read_text(encoding="latin-1")
+
+
+def test_compensated_numbers_are_written_in_place(sample):
+    moved = sample.with_positions(sample.position + np.array([0.5, -0.25, 0.125]))
+    text = emit_texts(sample, moved)[0]
+    back = parse_program(SAMPLE, "fanuc", text.encode("latin-1"))
+    ok = ~np.isnan(sample.position[:, 0])
+    np.testing.assert_allclose(back.position[ok], moved.position[ok], atol=1e-6)
+    assert "X =   900.5" in text or "X = 900.5" in text or "900.5" in text
+
+
+def test_sniffing(tmp_path):
+    assert sniff(SAMPLE).name == "fanuc"
+    as_txt = tmp_path / "prog.txt"
+    as_txt.write_bytes(SAMPLE.read_bytes())
+    assert sniff(as_txt).name == "fanuc"  # by content: /PROG and /MN
+    gcode = tmp_path / "part.txt"
+    gcode.write_text("G1 X10 Y20 F100\nM30\n")
+    assert sniff(gcode).name == "gcode"
+
+
+def _variant(tmp_path, old: str, new: str) -> Path:
+    text = SAMPLE.read_text(encoding="latin-1")
+    assert old in text
+    path = tmp_path / "v.ls"
+    path.write_bytes(text.replace(old, new, 1).encode("latin-1"))
+    return path
+
+
+@pytest.mark.parametrize("old, new, line, why", [
+    ("   9:J P[5] 50% FINE", "   9:J P[6] 50% FINE", 18, "P[6] is not in /POS"),
+    ("   2:  UTOOL_NUM=0 ;", "   2:  UTOOL_NUM=3 ;", 11, "frame mismatch"),
+    ("CNT100    ;", "CNT100 Frobnicate    ;", 12, "motion option 'Frobnicate'"),
+    ("   6:C P[3]    \n    :  P[4] 100mm/sec FINE    ;", "   6:C P[3] 100mm/sec FINE ;", 14, "end point"),
+    ("/END\n", "/END\nJ P[1]\n", 51, "after /END"),
+    ("	X =  1000.000  mm,", "	X =  1000.000  mm,	X = 1 mm,", 35, "given twice"),
+])
+def test_refusals_name_file_line_and_column(tmp_path, old, new, line, why):
+    path = _variant(tmp_path, old, new)
+    with pytest.raises(ParseError) as exc:
+        parse_program(path)
+    assert exc.value.line == line and why in str(exc.value), str(exc.value)
+    assert exc.value.column >= 1
+
+
+def test_frames_and_tools_by_number(tmp_path):
+    """UF 1 / UT 2 are set on the pendant: unknown until given (--frame UFRAME[1]=...); a
+    UFRAME[1]=PR[3] assignment makes the frame after it another unknown one."""
+    path = _variant(tmp_path, "   3:J P[1] 100% FINE    ;", "   3:J P[1] 100% FINE    ;\n    :  UFRAME[1]=PR[3] ;")
+    text = path.read_text().replace("UF : 0, UT : 0,		CONFIG : 'N U T, 0, 0, 0',\n	X =   950", "UF : 1, UT : 2,		CONFIG : 'N U T, 0, 0, 0',\n	X =   950")
+    text = text.replace("   1:  UFRAME_NUM=0 ;\n   2:  UTOOL_NUM=0 ;\n", "")
+    path.write_text(text)
+    with pytest.raises(ParseError):  # the continuation line above is not a statement of its own
+        parse_program(path)
+    path.write_text(text.replace("\n    :  UFRAME[1]=PR[3] ;", "\n   4:  UFRAME[1]=PR[3] ;"))
+    tp = parse_program(path)
+    assert "UFRAME[1]@line10" in tp.frame_names and "UTOOL[2]" in tp.tool_names
+    rows = tp.target_name.index("P[2]")
+    assert not tp.placed()[rows]
+    placed = tp.with_frames({"UFRAME[1]@line10": np.eye(4)}, {"UTOOL[2]": np.eye(4)})
+    assert placed.placed()[rows]
+
+
+# ----------------------------------------------------------------- configuration
+
+@pytest.fixture(scope="module")
+def m20ia():
+    return postproc.load_robot("fanuc_m20ia")
+
+
+def test_home_posture_is_n_u_t(m20ia):
+    # The home posture (J5 = -90, the tool down) is 'N U T, 0, 0, 0' (manual, "Configuration"),
+    # and the faceplate is then at X 985 (150 + 835), Z 940 (790 + 250 - 100) in the world frame.
+    q = np.array([[0, 0, 0, 0, -90, 0]], float)
+    assert config_text(fanuc_config(m20ia, q)[0]) == "N U T, 0, 0, 0"
+    np.testing.assert_allclose(kin.fk(m20ia, q)[0, :3, 3], [985, 0, 940], atol=1e-9)
+    # J5 > 0 flips the wrist; J6 = 200 is turn 1, J4 = -190 turn -1; behind J1: J1 = 180 with the arm forward -> B.
+    q = np.array([[0, 0, 0, -190, 30, 200]], float)
+    assert config_text(fanuc_config(m20ia, q)[0]) == "F U T, -1, 0, 1"
+
+
+def test_branch_from_conf_gives_back_the_joints(m20ia):
+    rng = np.random.default_rng(3)
+    lo, hi = m20ia.lower_deg, m20ia.upper_deg
+    q = rng.uniform(lo * 0.9, hi * 0.9, size=(300, 6))
+    q[:, 2] = rng.uniform(-170, 170, 300)  # J3's range (458 deg) holds poses twice; CONFIG names no J3 turn: IK gives J3 in (-180, 180]
+    poses = kin.fk(m20ia, q)
+    sols = kin.ik(m20ia, poses)
+    got, branch = CONTROLLER.branch_from_conf(m20ia, sols, fanuc_config(m20ia, q))
+    ok = branch >= 0
+    assert ok.mean() > 0.95  # the rest lie within 1e-9 of a boundary or a singular wrist
+    np.testing.assert_allclose(got[ok], q[ok], atol=1e-6)
