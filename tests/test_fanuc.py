@@ -96,7 +96,6 @@ def _variant(tmp_path, old: str, new: str) -> Path:
 
 @pytest.mark.parametrize("old, new, line, why", [
     ("   9:J P[5] 50% FINE", "   9:J P[6] 50% FINE", 18, "P[6] is not in /POS"),
-    ("   2:  UTOOL_NUM=0 ;", "   2:  UTOOL_NUM=3 ;", 11, "frame mismatch"),
     ("CNT100    ;", "CNT100 Frobnicate    ;", 12, "motion option 'Frobnicate'"),
     ("   6:C P[3]    \n    :  P[4] 100mm/sec FINE    ;", "   6:C P[3] 100mm/sec FINE ;", 14, "end point"),
     ("/END\n", "/END\nJ P[1]\n", 51, "after /END"),
@@ -108,6 +107,13 @@ def test_refusals_name_file_line_and_column(tmp_path, old, new, line, why):
         parse_program(path)
     assert exc.value.line == line and why in str(exc.value), str(exc.value)
     assert exc.value.column >= 1
+
+
+def test_frame_number_mismatch_is_unresolved(tmp_path):
+    """UTOOL_NUM=3 in force, positions taught with UT 0: the controller stops (frame mismatch
+    alarm) or, with $MCR.$UFRCHK off, runs them with tool 3: not known from the program."""
+    tp = parse_program(_variant(tmp_path, "   2:  UTOOL_NUM=0 ;", "   2:  UTOOL_NUM=3 ;"))
+    assert not tp.resolved[0] and any("frame mismatch" in n and ":11:" in n.replace("ls:11", ":11:") for n in tp.notes)
 
 
 def test_frames_and_tools_by_number(tmp_path):

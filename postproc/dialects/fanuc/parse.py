@@ -190,8 +190,8 @@ class _Reader:
         pos = self.positions.get(int(number))
         if pos is None:
             raise self.error(at, f"P[{number}] is not in /POS: the controller has no value for it")
-        self._check_frame_numbers(pos, at)
         row["pos"] = pos
+        row["notes"] = row["notes"] + self._frame_mismatch(pos)
         row["frame"] = self._frame(pos.uf if pos.uf is not None else self.uframe, "UFRAME")
         row["tool"] = self._frame(pos.ut if pos.ut is not None else self.utool, "UTOOL")
         if pos.other_groups:
@@ -223,10 +223,17 @@ class _Reader:
                 why.append(reason)
             pos = m.end()
 
-    def _check_frame_numbers(self, pos: Position, at: int) -> None:
+    def _frame_mismatch(self, pos: Position) -> list[str]:
+        """Why the target's frame is not known where the position's UF / UT differ from the
+        numbers in force: the controller then stops with a frame mismatch alarm, unless
+        $MCR.$UFRCHK (a system variable, not in the program) turns the check off and it runs
+        the position in the frame in force."""
+        out = []
         for what, have, want in (("UFRAME_NUM", self.uframe, pos.uf), ("UTOOL_NUM", self.utool, pos.ut)):
             if have is not None and have >= 0 and want is not None and have != want:
-                raise self.error(at, f"P[{pos.number}] is taught in {what[:-4]} {want} but {what}={have} is in force: the controller stops with a frame mismatch alarm")
+                out.append(f"P[{pos.number}] is taught in {what[:-4]} {want} but {what}={have} is in force: the controller stops with a "
+                           "frame mismatch alarm (or, with $MCR.$UFRCHK off, runs it in the other frame)")
+        return out
 
     # -------------------------------------------------------------------- rows
     def _add_rows(self) -> None:
