@@ -122,10 +122,7 @@ def test_frames_and_tools_by_number(tmp_path):
     path = _variant(tmp_path, "   3:J P[1] 100% FINE    ;", "   3:J P[1] 100% FINE    ;\n    :  UFRAME[1]=PR[3] ;")
     text = path.read_text().replace("UF : 0, UT : 0,		CONFIG : 'N U T, 0, 0, 0',\n	X =   950", "UF : 1, UT : 2,		CONFIG : 'N U T, 0, 0, 0',\n	X =   950")
     text = text.replace("   1:  UFRAME_NUM=0 ;\n   2:  UTOOL_NUM=0 ;\n", "")
-    path.write_text(text)
-    with pytest.raises(ParseError):  # the continuation line above is not a statement of its own
-        parse_program(path)
-    path.write_text(text.replace("\n    :  UFRAME[1]=PR[3] ;", "\n   4:  UFRAME[1]=PR[3] ;"))
+    path.write_text(text)  # (a statement without its number: the ASCII loader numbers it)
     tp = parse_program(path)
     assert "UFRAME[1]@line10" in tp.frame_names and "UTOOL[2]" in tp.tool_names
     rows = tp.target_name.index("P[2]")

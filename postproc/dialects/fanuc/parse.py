@@ -39,8 +39,11 @@ _SECTION = re.compile(r"^[ \t]*/(PROG|ATTR|APPL|MN|POS|END)\b[^\n]*$", re.MULTIL
 _TARGET = r"(P|PR)\[[ \t]*(\d+|[A-Z]+\[\d+\])[ \t]*(?::[^\]\n]*)?\]"
 _MOTION = re.compile(rf"[ \t]*([JLCA])[ \t]+{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
 _VIA_END = re.compile(rf"[ \t]*\r?\n[ \t]*:[ \t]*{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
-_SPEED = re.compile(r"[ \t]*(\d+\.?\d*|\.\d+|R\[\d+\]|max_speed)[ \t]*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)?", re.IGNORECASE)
-_TERM = re.compile(r"[ \t]+(FINE|CNT[ \t]*(\d+|R\[\d+\]))", re.IGNORECASE)
+_REGISTER = r"R\[[ \t]*\d+[ \t]*(?::[^\]\n]*)?\]"  # R[n] or R[n:comment]
+# A speed: a number, a register or a weld schedule's speed (WELD_SPEED), then its unit.
+_SPEED = re.compile(rf"[ \t]*(\d+\.?\d*|\.\d+|{_REGISTER}|max_speed|WELD_SPEED)[ \t]*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)?", re.IGNORECASE)
+_TERM = re.compile(rf"[ \t]+(FINE|CNT[ \t]*(\d+|{_REGISTER}))", re.IGNORECASE)
+_BAD_FRAME = re.compile(r"[ \t]*(UFRAME|UTOOL)[ \t]*=", re.IGNORECASE)
 _FRAME_NUM = re.compile(r"[ \t]*(UFRAME_NUM|UTOOL_NUM)[ \t]*=[ \t]*(\S+)[ \t]*$", re.IGNORECASE)
 _FRAME_SET = re.compile(r"[ \t]*(UFRAME|UTOOL)\[[ \t]*(\d+)[ \t]*\][ \t]*=", re.IGNORECASE)
 _FLOW = re.compile(r"[ \t]*(?:JMP|IF|CALL|SELECT|FOR|RUN)\b", re.IGNORECASE)
@@ -60,7 +63,8 @@ _OPTIONS = [(re.compile(p, re.IGNORECASE), why) for p, why in (
     (r"ACC[ \t]*(?:\d+|R\[\d+\])", None),
     (r"(?:TB|TA)[ \t]+[\d.]+sec[ \t]*,[ \t]*(?:CALL[ \t]+\w+(?:\([^)]*\))?|\S+)", None),
     (r"DB[ \t]+[\d.]+mm[ \t]*,[ \t]*(?:CALL[ \t]+\w+(?:\([^)]*\))?|\S+)", None),
-    (r"(?:PTH|COORD|BREAK)\b", None),
+    (r"COORD\b", "COORD moves the target with another motion group (a positioner), which postproc does not model"),
+    (r"(?:PTH|BREAK)\b", None),
     (r"(?:CR|RT_LD|AP_LD)[ \t]*\d+", None),
     (r"Arc[ \t]*(?:Start|End)[ \t]*\[[^\]]*\]", None),
     (r"Weave[ \t]*\w*[ \t]*\[[^\]]*\]", None),
@@ -151,6 +155,8 @@ class _Reader:
             else:
                 self.utool = number if number is not None else -1
             return False
+        if _BAD_FRAME.match(body):
+            raise self.error(st.start, "not a TP statement: UFRAME_NUM=n / UTOOL_NUM=n select a frame, UFRAME[n]=... / UTOOL[n]=... set one")
         m = _FRAME_SET.match(body)
         if m:
             self.redefined[f"{m.group(1).upper()}[{int(m.group(2))}]"] = int(self.lines.line(st.start))
@@ -195,11 +201,11 @@ class _Reader:
         row["frame"] = self._frame(pos.uf if pos.uf is not None else self.uframe, "UFRAME")
         row["tool"] = self._frame(pos.ut if pos.ut is not None else self.utool, "UTOOL")
         if pos.other_groups:
-            row["notes"] = row["notes"] + [f"P[{number}] also moves group {', '.join(map(str, pos.other_groups))} (a positioner or rail), which postproc does not model"]
+            row["notes"] = row["notes"] + [f"the position also moves group {', '.join(map(str, pos.other_groups))} (a positioner or rail), which postproc does not model"]
         if pos.joint and kind == Kind.JOINT:
             row["kind"] = Kind.ABSJ
         elif pos.joint:
-            row["notes"] = row["notes"] + [f"a {motion} motion to a joint position P[{number}]: postproc reads joint positions for J motions only"]
+            row["notes"] = row["notes"] + [f"a {motion} motion to a joint position: postproc reads joint positions for J motions only"]
         self.rows.append(row)
 
     def _options(self, text: str, at: int, line: int) -> list[str]:
@@ -245,6 +251,7 @@ class _Reader:
         resolved = np.ones(n, dtype=bool)
         frame = np.zeros(n, dtype=np.int32)
         tool = np.zeros(n, dtype=np.int32)
+        reasons: dict[str, list[int]] = {}  # why a target is unresolved -> the lines of those targets
         for i, row in enumerate(self.rows):
             pos: Position | None = row["pos"]
             if pos is not None:
@@ -258,8 +265,11 @@ class _Reader:
                 frame[i], tool[i] = row["frame"], row["tool"]
             if row["notes"] or pos is None:
                 resolved[i] = False
-                where = f"{self.doc.path}:{row['line']}"
-                self.notes.extend(f"{where}: {why}" for why in row["notes"])
+                for why in row["notes"]:
+                    reasons.setdefault(why, []).append(row["line"])
+        for why, lines in reasons.items():  # one note per reason: a welding program repeats one on every line
+            more = f" (and {len(lines) - 1} more targets, the last at line {lines[-1]})" if len(lines) > 1 else ""
+            self.notes.append(f"{self.doc.path}:{lines[0]}: {why}{more}")
         self.builder.add_block(np.array([r["order"] for r in self.rows], dtype=np.int64), kind=np.array([r["kind"] for r in self.rows], dtype=np.int8),
                                line=np.array([r["line"] for r in self.rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
                                speed=np.array([r["speed"] for r in self.rows]), zone=np.array([r["zone"] for r in self.rows]), resolved=resolved,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-_START = re.compile(r"[ \t]*\d+[ \t]*:")
+_START = re.compile(r"[ \t]*\d*[ \t]*:")  # the ASCII loader takes statements without their numbers too
 _CONTINUE = re.compile(r"[ \t]*:")
 
 
