@@ -15,7 +15,7 @@ import pytest
 import postproc
 from postproc import kinematics as kin
 from postproc.dialects import sniff
-from postproc.dialects.fanuc.controller import CONTROLLER, config_text, fanuc_config
+from postproc.dialects.fanuc.controller import R30IB, config_text, fanuc_config
 from postproc.errors import InputError, ParseError
 from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
@@ -53,6 +53,22 @@ def test_sample_targets_as_the_manual_reads_them(sample):
     # relative to the upper arm: -10 + J2 (20) = 10.
     np.testing.assert_array_equal(tp.joints[6], [10, 20, 10, 0, -80, 0])
     assert tp.target_name[:2] == ("P[1]", "P[2]")
+    # CNT values as written (-1: FINE), kept in Toolpath.extras.
+    np.testing.assert_array_equal(tp.extras["fanuc.cnt"], [-1, 100, -1, -1, -1, 50, -1])
+    assert tp.take([1, 5]).extras["fanuc.cnt"].tolist() == [100, 50]
+
+
+def test_orientations_are_written_back_as_w_p_r(sample):
+    """A new orientation is written as W P R near the numbers there (rotation_forms 'wpr')."""
+    from postproc.frames import abc_to_quat_wxyz
+
+    turned = abc_to_quat_wxyz(np.array([[95.0, 0.0, 180.0]]))  # R 95 (about Z), W 180
+    rows = np.array([1, 5])  # P[2] is the target of both lines: one number, one value (else SharedNumberError)
+    orientation = sample.orientation.copy()
+    orientation[rows] = turned
+    text = emit_texts(sample, sample.with_orientations(orientation))[0]
+    back = parse_program(SAMPLE, "fanuc", text.encode("latin-1"))
+    np.testing.assert_allclose(back.values[1, 3:6], [180, 0, 95], atol=1e-9)
 
 
 def test_every_number_has_its_span(sample):
@@ -156,7 +172,7 @@ def test_branch_from_conf_gives_back_the_joints(m20ia):
     q[:, 2] = rng.uniform(-170, 170, 300)  # J3's range (458 deg) holds poses twice; CONFIG names no J3 turn: IK gives J3 in (-180, 180]
     poses = kin.fk(m20ia, q)
     sols = kin.ik(m20ia, poses)
-    got, branch = CONTROLLER.branch_from_conf(m20ia, sols, fanuc_config(m20ia, q))
+    got, branch = R30IB.branch_from_conf(m20ia, sols, fanuc_config(m20ia, q))
     ok = branch >= 0
     assert ok.mean() > 0.95  # the rest lie within 1e-9 of a boundary or a singular wrist
     np.testing.assert_allclose(got[ok], q[ok], atol=1e-6)

@@ -53,10 +53,10 @@ def truth_and_model(m20ia):
 def run_on(truth, tp):
     """Where the true robot's TCP goes when the controller runs the program: each target's
     joints by the nominal IK, the CONFIG's solution ('N U T, 0, 0, 0')."""
-    from postproc.dialects.fanuc.controller import CONTROLLER
+    from postproc.dialects.fanuc.controller import R30IB
 
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
-    q, branch = CONTROLLER.branch_from_conf(truth.robot, kin.ik(truth.robot, flange), tp.conf)
+    q, branch = R30IB.branch_from_conf(truth.robot, kin.ik(truth.robot, flange), tp.conf)
     assert (branch >= 0).all()
     out = np.zeros((len(tp), 3))
     for t in np.unique(tp.tool):

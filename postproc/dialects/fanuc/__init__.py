@@ -3,11 +3,9 @@ are in ``controller.py`` (the R-30iB's)."""
 
 from __future__ import annotations
 
-import numpy as np
-
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
-from .controller import CONTROLLER, fanuc_config
+from .controller import R30IB, fanuc_config
 
 
 class FanucDialect(Dialect):
@@ -17,7 +15,7 @@ class FanucDialect(Dialect):
     extensions = (".ls",)
     comment_pattern = r"/(?:PROG|ATTR|APPL)[^\n]*|[ \t]*\d+:[ \t]*(?:!|//)[^\n]*"
     motion_words = "J, L, C or A motions"
-    controller = CONTROLLER
+    controller = R30IB  # the rules compensation asks (controller.py)
 
     def sniff(self, head: str) -> bool:
         return "/PROG" in head and ("/MN" in head or "/ATTR" in head)
@@ -26,25 +24,6 @@ class FanucDialect(Dialect):
         from .parse import parse_ls  # (here, as the other languages: the parser loads only when a program is read)
 
         return parse_ls(sources)
-
-    # The controller's rules (controller.py).
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        return self.controller.conf_applies(tp)
-
-    def branch_from_conf(self, robot, solutions, conf):
-        return self.controller.branch_from_conf(robot, solutions, conf)
-
-    def payloads(self, tp: Toolpath):
-        return self.controller.payloads(tp)
-
-    def stated_loads(self, tp: Toolpath):
-        return self.controller.stated_loads(tp)
-
-    def inexact_interpolation(self, tp: Toolpath):
-        return self.controller.inexact_interpolation(tp)
-
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        return self.controller.arc_ends_at_target(tp)
 
     arm_conf_column = 0  # the arm code (flip, up, front); columns 1-3 are turn numbers
 

@@ -2,8 +2,7 @@
 CONFIG selects, which motions follow it, where the path between targets is not the
 straight line or circle the prediction assumes.
 
-Written with the method names of ``postproc.controller.Controller`` (the Dialect
-delegates to it). Configuration data of a Cartesian position, R-30iB Operator's Manual,
+Configuration data of a Cartesian position, R-30iB Operator's Manual,
 "Configuration" (position data): ``CONFIG : 'F|N U|D T|B, t4, t5, t6'``:
 - F / N: the wrist flipped or not: here J5 > 0 is flipped (the home posture with the tool
   down, J5 = -90, is 'N');
@@ -19,11 +18,10 @@ import re
 
 import numpy as np
 
+from ...controller import Controller
 from ...ir import Kind, Toolpath
 from ...kinematics import opw_angles, within_limits, wrist_centre_in_arm_plane
 
-MAKER = "Fanuc"
-NAME = "Fanuc R-30iB"
 TURN_JOINTS = (3, 4, 5)  # J4, J5, J6 (0-based)
 
 
@@ -48,9 +46,9 @@ def config_text(conf: np.ndarray) -> str:
     return arm + "".join(f", {int(t)}" for t in conf[1:4])
 
 
-class FanucController:
-    maker = MAKER
-    name = NAME
+class FanucController(Controller):
+    name = "Fanuc R-30iB"
+    maker = "Fanuc"
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """A J motion to a Cartesian position takes the joint solution its CONFIG names (arm
@@ -85,11 +83,9 @@ class FanucController:
         return best, idx
 
     def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
-        """PAYLOAD[n] schedules live on the controller, not in the program: none stated."""
+        """PAYLOAD[n] selects a payload schedule set on the controller (R-30iB manual, "Payload
+        setting"): the program states no mass."""
         return []
-
-    def stated_loads(self, tp: Toolpath):
-        return None
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         """The first A (arc through consecutive points) or Wjnt motion: between its targets the
@@ -104,8 +100,5 @@ class FanucController:
                 return f"{tp.sources[0].path}:{line}: an A (arc) or Wjnt motion: the controller's path between these targets is not a straight line"
         return None
 
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        return np.ones(len(tp.kind), dtype=bool)
 
-
-CONTROLLER = FanucController()
+R30IB = FanucController()

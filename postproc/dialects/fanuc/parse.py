@@ -28,7 +28,6 @@ import re
 import numpy as np
 
 from ...errors import ParseError
-from ...frames import abc_to_quat_wxyz
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .positions import Position, PositionError, read_positions
@@ -72,6 +71,7 @@ _OPTIONS = [(re.compile(p, re.IGNORECASE), why) for p, why in (
 )]
 SPEED_TO_MM_S = {"MM/SEC": 1.0, "CM/MIN": 10.0 / 60.0, "INCH/MIN": 25.4 / 60.0}
 J2, J3 = 8, 9  # fields of the joint numbers J2 and J3
+CNT = "fanuc.cnt"  # Toolpath.extras column
 
 
 def parse_ls(sources: list[SourceDoc]) -> Toolpath:
@@ -87,6 +87,9 @@ class _Reader:
     def __init__(self, doc: SourceDoc, lines: LineIndex):
         self.doc, self.text, self.lines = doc, doc.text, lines
         self.builder = Builder(DIALECT, "wpr", [doc])
+        # CNT n of each motion (-1: FINE; NaN: CNT R[n], set outside the program): the corner
+        # rounding the controller sizes from it (R-30iB manual, "Positioning path")
+        self.builder.declare_extra(CNT, float, np.nan)
         self.rows: list[dict] = []
         self.notes: list[str] = []
         self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
@@ -107,13 +110,7 @@ class _Reader:
             self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
         self._add_rows()
         self.builder.notes.extend(self.notes)
-        tp = self.builder.build(orientation=False)
-        has = ~np.isnan(tp.values[:, 3:6]).any(axis=1)
-        orientation = np.full((len(tp), 4), np.nan)
-        orientation[has] = wpr_to_quat(tp.values[has, 3:6])
-        from dataclasses import replace
-
-        return replace(tp, orientation=orientation)
+        return self.builder.build()
 
     def _sections(self) -> dict[str, tuple[int, int]]:
         found = [(m.group(1).upper(), m.start(), m.end()) for m in _SECTION.finditer(self.text)]
@@ -186,8 +183,9 @@ class _Reader:
         if term is None:
             raise self.error(rest_at + speed_m.end(), "a motion needs FINE or CNTn after its speed")
         unknown = self._options(rest[term.end() :], rest_at + term.end(), line)
+        cnt = term.group(2)
         row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
-               "notes": unknown}
+               "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
             row["pos"] = None
@@ -273,7 +271,7 @@ class _Reader:
         self.builder.add_block(np.array([r["order"] for r in self.rows], dtype=np.int64), kind=np.array([r["kind"] for r in self.rows], dtype=np.int8),
                                line=np.array([r["line"] for r in self.rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
                                speed=np.array([r["speed"] for r in self.rows]), zone=np.array([r["zone"] for r in self.rows]), resolved=resolved,
-                               frame=frame, tool=tool, name=np.array([f"P[{r['pos'].number}]" if r["pos"] is not None else "" for r in self.rows], dtype=object))
+                               frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in self.rows], dtype=float)}, name=np.array([f"P[{r['pos'].number}]" if r["pos"] is not None else "" for r in self.rows], dtype=object))
 
     def _frame(self, number: int | None, table: str) -> int:
         """Index of user frame / tool ``number`` (0: world / faceplate, known); None or -1:
@@ -295,8 +293,3 @@ def _speed(m: re.Match) -> float:
         return np.nan
     return float(m.group(1)) * SPEED_TO_MM_S[unit]
 
-
-def wpr_to_quat(wpr_deg: np.ndarray) -> np.ndarray:
-    """Fanuc W, P, R (deg; rotations about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W), R-30iB
-    manual "Cartesian coordinates") -> quaternions w, x, y, z: KUKA's A, B, C reversed."""
-    return abc_to_quat_wxyz(np.asarray(wpr_deg)[:, ::-1])
