@@ -176,3 +176,18 @@ def test_branch_from_conf_gives_back_the_joints(m20ia):
     ok = branch >= 0
     assert ok.mean() > 0.95  # the rest lie within 1e-9 of a boundary or a singular wrist
     np.testing.assert_allclose(got[ok], q[ok], atol=1e-6)
+
+
+def test_the_one_pass_reading_of_pos_equals_the_block_reading(tmp_path):
+    """The controller's own Cartesian layout is read in one pass (positions._canonical); it
+    must give what the block-by-block reader gives."""
+    from postproc.dialects.fanuc import positions
+
+    text = SAMPLE.read_text(encoding="latin-1").replace("P[5]{", "P[9]{")  # any P numbers
+    cartesian = text[: text.index("P[9]{")] + "/END\n"  # the joint position P[9] is not of that layout
+    start, end = cartesian.index("/POS") + 5, cartesian.index("/END")
+    fast, slow = positions._canonical(cartesian, start, end), positions.read_blocks(cartesian, start, end)
+    assert fast is not None and fast.row_of == slow.row_of
+    for field in ("values", "spans", "joint", "uf", "ut", "conf"):
+        np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
+    assert positions._canonical(text, text.index("/POS") + 5, text.index("/END")) is None  # a joint position: block by block

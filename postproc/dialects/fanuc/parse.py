@@ -30,7 +30,7 @@ import numpy as np
 from ...errors import ParseError
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
-from .positions import Position, PositionError, read_positions
+from .positions import Positions, PositionError, read_positions
 from .statements import Statement, StatementError, statements
 
 DIALECT = "fanuc"
@@ -102,7 +102,7 @@ class _Reader:
 
     def read(self) -> Toolpath:
         sections = self._sections()
-        self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else {}
+        self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
         flow = False
         for st in statements(self.text, *sections["MN"]):
             flow |= self._statement(st)
@@ -188,21 +188,23 @@ class _Reader:
                "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
-            row["pos"] = None
+            row["pos"] = -1
             self.rows.append(row)
             return
-        pos = self.positions.get(int(number))
-        if pos is None:
+        k = self.positions.row_of.get(int(number))
+        if k is None:
             raise self.error(at, f"P[{number}] is not in /POS: the controller has no value for it")
-        row["pos"] = pos
-        row["notes"] = row["notes"] + self._frame_mismatch(pos)
-        row["frame"] = self._frame(pos.uf if pos.uf is not None else self.uframe, "UFRAME")
-        row["tool"] = self._frame(pos.ut if pos.ut is not None else self.utool, "UTOOL")
-        if pos.other_groups:
-            row["notes"] = row["notes"] + [f"the position also moves group {', '.join(map(str, pos.other_groups))} (a positioner or rail), which postproc does not model"]
-        if pos.joint and kind == Kind.JOINT:
+        table = self.positions
+        uf, ut = int(table.uf[k]), int(table.ut[k])
+        row["pos"], row["number"] = k, int(number)
+        row["notes"] = row["notes"] + self._frame_mismatch(int(number), uf, ut)
+        row["frame"] = self._frame(uf if uf >= 0 else self.uframe, "UFRAME")
+        row["tool"] = self._frame(ut if ut >= 0 else self.utool, "UTOOL")
+        if table.groups[k]:
+            row["notes"] = row["notes"] + [f"the position also moves group {', '.join(map(str, table.groups[k]))} (a positioner or rail), which postproc does not model"]
+        if table.joint[k] and kind == Kind.JOINT:
             row["kind"] = Kind.ABSJ
-        elif pos.joint:
+        elif table.joint[k]:
             row["notes"] = row["notes"] + [f"a {motion} motion to a joint position: postproc reads joint positions for J motions only"]
         self.rows.append(row)
 
@@ -227,51 +229,51 @@ class _Reader:
                 why.append(reason)
             pos = m.end()
 
-    def _frame_mismatch(self, pos: Position) -> list[str]:
+    def _frame_mismatch(self, number: int, uf: int, ut: int) -> list[str]:
         """Why the target's frame is not known where the position's UF / UT differ from the
         numbers in force: the controller then stops with a frame mismatch alarm, unless
         $MCR.$UFRCHK (a system variable, not in the program) turns the check off and it runs
         the position in the frame in force."""
         out = []
-        for what, have, want in (("UFRAME_NUM", self.uframe, pos.uf), ("UTOOL_NUM", self.utool, pos.ut)):
-            if have is not None and have >= 0 and want is not None and have != want:
-                out.append(f"P[{pos.number}] is taught in {what[:-4]} {want} but {what}={have} is in force: the controller stops with a "
+        for what, have, want in (("UFRAME_NUM", self.uframe, uf), ("UTOOL_NUM", self.utool, ut)):
+            if have is not None and have >= 0 and want >= 0 and have != want:
+                out.append(f"P[{number}] is taught in {what[:-4]} {want} but {what}={have} is in force: the controller stops with a "
                            "frame mismatch alarm (or, with $MCR.$UFRCHK off, runs it in the other frame)")
         return out
 
     # -------------------------------------------------------------------- rows
     def _add_rows(self) -> None:
-        n = len(self.rows)
+        rows, table = self.rows, self.positions
+        n = len(rows)
+        pidx = np.array([r["pos"] for r in rows], dtype=np.int64)
+        has = pidx >= 0
+        k = pidx[has]
         values = np.full((n, NF), np.nan)
         spans = np.full((n, NF, 3), -1, dtype=np.int64)
         offset = np.zeros((n, NF))
         conf = np.full((n, 4), np.nan)
-        resolved = np.ones(n, dtype=bool)
-        frame = np.zeros(n, dtype=np.int32)
-        tool = np.zeros(n, dtype=np.int32)
+        values[has], conf[has] = table.values[k], table.conf[k]
+        spans[has, :, 1:] = table.spans[k]
+        spans[has, :, 0] = np.where(table.spans[k, :, 0] >= 0, 0, -1)  # every number is in the one file
+        joint = np.zeros(n, dtype=bool)
+        joint[has] = table.joint[k]
+        offset[joint, J3] = values[joint, J2]  # J2/J3 interaction: the robot file's J3 = J3 + J2 (the text keeps J3)
+        values[joint, J3] += values[joint, J2]
+        frame = np.array([r.get("frame", 0) for r in rows], dtype=np.int32)
+        tool = np.array([r.get("tool", 0) for r in rows], dtype=np.int32)
+        resolved = has & np.array([not r["notes"] for r in rows], dtype=bool)
         reasons: dict[str, list[int]] = {}  # why a target is unresolved -> the lines of those targets
-        for i, row in enumerate(self.rows):
-            pos: Position | None = row["pos"]
-            if pos is not None:
-                values[i] = pos.values
-                spans[i, :, 1:] = pos.spans
-                spans[i, :, 0] = np.where(pos.spans[:, 0] >= 0, 0, -1)
-                conf[i] = pos.conf
-                if pos.joint:
-                    offset[i, J3] = pos.values[J2]  # J2/J3 interaction: the robot file's J3 = J3 + J2
-                    values[i, J3] += pos.values[J2]
-                frame[i], tool[i] = row["frame"], row["tool"]
-            if row["notes"] or pos is None:
-                resolved[i] = False
-                for why in row["notes"]:
-                    reasons.setdefault(why, []).append(row["line"])
+        for r in rows:
+            for why in r["notes"]:
+                reasons.setdefault(why, []).append(r["line"])
         for why, lines in reasons.items():  # one note per reason: a welding program repeats one on every line
             more = f" (and {len(lines) - 1} more targets, the last at line {lines[-1]})" if len(lines) > 1 else ""
             self.notes.append(f"{self.doc.path}:{lines[0]}: {why}{more}")
-        self.builder.add_block(np.array([r["order"] for r in self.rows], dtype=np.int64), kind=np.array([r["kind"] for r in self.rows], dtype=np.int8),
-                               line=np.array([r["line"] for r in self.rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
-                               speed=np.array([r["speed"] for r in self.rows]), zone=np.array([r["zone"] for r in self.rows]), resolved=resolved,
-                               frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in self.rows], dtype=float)}, name=np.array([f"P[{r['pos'].number}]" if r["pos"] is not None else "" for r in self.rows], dtype=object))
+        self.builder.add_block(np.array([r["order"] for r in rows], dtype=np.int64), kind=np.array([r["kind"] for r in rows], dtype=np.int8),
+                               line=np.array([r["line"] for r in rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
+                               speed=np.array([r["speed"] for r in rows], dtype=float), zone=np.array([r["zone"] for r in rows], dtype=float),
+                               resolved=resolved, frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in rows], dtype=float)},
+                               name=np.array([f"P[{r['number']}]" if r["pos"] >= 0 else "" for r in rows], dtype=object))
 
     def _frame(self, number: int | None, table: str) -> int:
         """Index of user frame / tool ``number`` (0: world / faceplate, known); None or -1:

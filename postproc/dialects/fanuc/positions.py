@@ -39,18 +39,25 @@ ARM_CODE_BITS = {"F": 4, "N": 0, "D": 2, "U": 0, "B": 1, "T": 0}  # conf[0] = 4 
 
 
 @dataclass(frozen=True)
-class Position:
-    """One P[n] of /POS: values (NF,) NaN where absent, spans (NF, 2) offsets (-1 none)."""
+class Positions:
+    """Every P[n] of /POS, one row each: values (P, NF) NaN where absent, spans (P, NF, 2)
+    offsets (-1 none), joint (P,) (joint representation, not Cartesian), uf / ut (P,) the
+    position's user frame and tool numbers (-1: 'F', the one selected when it runs), conf
+    (P, 4) arm code and turns of J4 J5 J6 (NaN: no CONFIG), groups: the other motion groups
+    (GP2 ...) each position also moves."""
 
-    number: int
-    start: int  # offset of 'P[' in the file
+    row_of: dict[int, int]  # P number -> row
     values: np.ndarray
     spans: np.ndarray
-    joint: bool  # joint representation (J1 ..), not Cartesian
-    uf: int | None  # None: 'F' (the frame selected when it runs)
-    ut: int | None
-    conf: np.ndarray  # (4,) arm code, turns of J4 J5 J6; NaN where no CONFIG
-    other_groups: tuple[int, ...]  # GP2 ... also moved by this position
+    joint: np.ndarray
+    uf: np.ndarray
+    ut: np.ndarray
+    conf: np.ndarray
+    groups: tuple[tuple[int, ...], ...]
+
+    @classmethod
+    def empty(cls) -> "Positions":
+        return _table([])
 
 
 class PositionError(ValueError):
@@ -61,10 +68,18 @@ class PositionError(ValueError):
         self.offset = offset
 
 
-def read_positions(text: str, start: int, end: int) -> dict[int, Position]:
-    """Every P[n] of text[start:end] (the /POS section) by number; a malformed one or a
-    number given twice is a PositionError at its place."""
-    out: dict[int, Position] = {}
+def read_positions(text: str, start: int, end: int) -> Positions:
+    """Every P[n] of text[start:end] (the /POS section); a malformed one or a number given
+    twice is a PositionError at its place. Listings where every position has the controller's
+    own Cartesian layout are read in one pass (``_canonical``), others block by block."""
+    table = _canonical(text, start, end)
+    return table if table is not None else read_blocks(text, start, end)
+
+
+def read_blocks(text: str, start: int, end: int) -> Positions:
+    """``read_positions`` block by block (any layout the section allows)."""
+    rows: list[tuple] = []
+    seen: dict[int, int] = {}
     pos = start
     for m in _BLOCK.finditer(text, start, end):
         gap = text[pos : m.start()].strip()
@@ -72,16 +87,66 @@ def read_positions(text: str, start: int, end: int) -> dict[int, Position]:
             raise PositionError(pos + text[pos : m.start()].index(gap[0]), "not a position: /POS holds P[n]{ ... }; entries only")
         pos = m.end()
         number = int(m.group(1))
-        if number in out:
+        if number in seen:
             raise PositionError(m.start(), f"P[{number}] is given twice in /POS: the controller keeps one value per position")
-        out[number] = _position(text, m, number)
+        seen[number] = len(rows)
+        rows.append(_position(text, m, number))
     rest = text[pos:end].strip()
     if rest:
         raise PositionError(pos + text[pos:end].index(rest[0]), "not a position: /POS holds P[n]{ ... }; entries only (an unclosed '{' or a missing ';'?)")
-    return out
+    return _table(rows)
 
 
-def _position(text: str, m: re.Match, number: int) -> Position:
+def _table(rows: list[tuple]) -> Positions:
+    """Positions from (number, values, spans, joint, uf, ut, conf, groups) rows."""
+    n = len(rows)
+    return Positions({r[0]: k for k, r in enumerate(rows)},
+                     np.array([r[1] for r in rows]).reshape(n, NF), np.array([r[2] for r in rows], dtype=np.int64).reshape(n, NF, 2),
+                     np.array([r[3] for r in rows], dtype=bool), np.array([r[4] for r in rows], dtype=np.int64), np.array([r[5] for r in rows], dtype=np.int64),
+                     np.array([r[6] for r in rows]).reshape(n, 4), tuple(r[7] for r in rows))
+
+
+_SEP = r"[ \t]*,[ \t]*"
+_CANONICAL = re.compile(
+    # P[n(:label)]{ GP1: UF : u, UT : t, CONFIG : 'F U T, a, b, c', X = .. mm, .. R = .. deg };  as the controller lists it
+    rf"[ \t]*P\[[ \t]*(\d+)[ \t]*(?::[^\]\n]*)?\][ \t]*\{{[ \t]*\r?\n[ \t]*GP1[ \t]*:[ \t]*\r?\n"
+    rf"[ \t]*UF[ \t]*:[ \t]*(\d+){_SEP}UT[ \t]*:[ \t]*(\d+){_SEP}CONFIG[ \t]*:[ \t]*'[ \t]*([NF])[ \t]+([UD])[ \t]+([TB])"
+    rf"{_SEP}(-?\d+){_SEP}(-?\d+){_SEP}(-?\d+)[ \t]*'[ \t]*,[ \t]*\r?\n"
+    rf"[ \t]*X[ \t]*=[ \t]*({NUMBER})[ \t]*mm{_SEP}Y[ \t]*=[ \t]*({NUMBER})[ \t]*mm{_SEP}Z[ \t]*=[ \t]*({NUMBER})[ \t]*mm[ \t]*,[ \t]*\r?\n"
+    rf"[ \t]*W[ \t]*=[ \t]*({NUMBER})[ \t]*deg{_SEP}P[ \t]*=[ \t]*({NUMBER})[ \t]*deg{_SEP}R[ \t]*=[ \t]*({NUMBER})[ \t]*deg[ \t]*\r?\n"
+    r"[ \t]*\}[ \t]*;[ \t]*\r?(?:\n|$)")
+_NUMBER_GROUPS = slice(10, 16)  # groups of X Y Z W P R in _CANONICAL
+
+
+def _canonical(text: str, start: int, end: int) -> Positions | None:
+    """The positions of a /POS section that is nothing but canonical Cartesian blocks (blank
+    lines between), read with one regular expression; None where any text is not one."""
+    matches = list(_CANONICAL.finditer(text, start, end))
+    if not matches:
+        return None
+    regs = np.array([m.regs for m in matches], dtype=np.int64)  # (P, groups + 1, 2) spans of every group
+    gaps_start = np.concatenate([[start], regs[:, 0, 1]])
+    gaps_end = np.concatenate([regs[:, 0, 0], [end]])
+    if any(text[a:b].strip() for a, b in zip(gaps_start.tolist(), gaps_end.tolist()) if b > a):
+        return None  # something else between the blocks: read block by block (and name it)
+    groups = [m.groups() for m in matches]
+    numbers = np.array([g[0] for g in groups], dtype=np.int64)
+    if len(np.unique(numbers)) < len(numbers):
+        return None  # a number given twice: the block reader names it
+    n = len(matches)
+    values = np.full((n, NF), np.nan)
+    values[:, 0:6] = np.array([g[9:15] for g in groups], dtype=float)
+    spans = np.full((n, NF, 2), -1, dtype=np.int64)
+    spans[:, 0:6] = regs[:, 10:16]
+    code = np.array([[ARM_CODE_BITS[g[k].upper()] for k in (3, 4, 5)] for g in groups]).sum(axis=1)
+    conf = np.column_stack([code, np.array([g[6:9] for g in groups], dtype=float)])
+    uf = np.array([g[1] for g in groups], dtype=np.int64)
+    ut = np.array([g[2] for g in groups], dtype=np.int64)
+    return Positions(dict(zip(numbers.tolist(), range(n))), values, spans, np.zeros(n, bool), uf, ut, conf, ((),) * n)
+
+
+def _position(text: str, m: re.Match, number: int) -> tuple:
+    """(number, values, spans, joint, uf, ut, conf, other groups) of one block."""
     body_start = m.start(2)
     body = m.group(2)
     groups = list(_GROUP.finditer(body))
@@ -115,5 +180,5 @@ def _position(text: str, m: re.Match, number: int) -> Position:
         conf[:] = [sum(ARM_CODE_BITS[(g or d).upper()] for g, d in zip(c.group(1, 2, 3), "NUT")), *turns]
     elif cart.all():
         raise PositionError(base, f"P[{number}] is Cartesian without CONFIG: the controller cannot tell which arm posture it is")
-    uf, ut = (None if v.upper() == "F" else int(v) for v in ft.group(1, 2))
-    return Position(number, m.start(), values, spans, bool(joint.all()), uf, ut, conf, tuple(int(g.group(1)) for g in groups[1:]))
+    uf, ut = (-1 if v.upper() == "F" else int(v) for v in ft.group(1, 2))
+    return number, values, spans, bool(joint.all()), uf, ut, conf, tuple(int(g.group(1)) for g in groups[1:])
