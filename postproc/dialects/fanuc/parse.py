@@ -188,7 +188,8 @@ class _Reader:
                "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
-            row["pos"] = -1
+            row["pos"] = -1  # a register is used in the frame and tool selected when it runs
+            row["frame"], row["tool"] = self._frame(self.uframe, "UFRAME"), self._frame(self.utool, "UTOOL")
             self.rows.append(row)
             return
         k = self.positions.row_of.get(int(number))
