@@ -68,3 +68,21 @@ def test_rapid_to_fanuc_through_the_cli(tmp_path):
     np.testing.assert_allclose(back.speed, [100, 250])
     text = out.read_text()
     assert "L P[1] 100mm/sec CNT100" in text and "L P[2] 250mm/sec FINE" in text
+
+
+def test_configuration_data_stay_within_one_language(tmp_path):
+    """A Fanuc input's CONFIG is written back by --to fanuc; no other language's writer gets
+    it (ABB's confdata [cf1, cf4, cf6, cfx] are other numbers: RAPID gets its placeholder
+    with ConfJ\\Off / ConfL\\Off, as for any input without confdata)."""
+    from pathlib import Path
+
+    sample = Path(__file__).parent / "data" / "fanuc_sample.ls"
+    text = sample.read_text(encoding="latin-1").replace("CONFIG : 'N U T, 0, 0, 0',\n\tX =   900", "CONFIG : 'F D T, 1, 0, -1',\n\tX =   900")
+    src = tmp_path / "in.ls"
+    src.write_text(text)
+    tp = parse_program(src)
+    placed = tp.take(tp.resolved)  # PR[1] and the Offset,PR[2] target cannot be written
+    fanuc = write_program(placed, "fanuc", "again")[0]
+    assert "CONFIG : 'F D T, 1, 0, -1'" in fanuc and "is written where" not in fanuc  # every CONFIG from the input
+    rapid = write_program(placed, "rapid", "again")[0]
+    assert "[0,0,0,0]" in rapid and "ConfJ\\Off;" in rapid and "[4,1,0,-1]" not in rapid and "[6,1,0,-1]" not in rapid

@@ -5,8 +5,9 @@ User frames and tools are numbered in the order they come (0: the world frame an
 faceplate); their values are set on the controller, not in a TP program, so each is
 written as a remark with its X Y Z W P R for the person who sets it. A Cartesian position
 needs a CONFIG, which only the robot's joints determine: where the input gives none the
-position gets 'N U T, 0, 0, 0' and the program says so in a remark (J motions take it;
-L and C motions keep the posture the robot is in: controller.py).
+position gets 'N U T, 0, 0, 0' and the program says so in a remark where a J motion takes it
+(L and C motions keep the posture the robot is in: controller.py). A Fanuc input's CONFIG is
+kept (postproc.programs.write_program hands on configuration data within one language only).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ import numpy as np
 from ...emit.writer import legal_name
 from ...errors import EmitError
 from ...frames import matrix_to_abc
+from .controller import config_text
 
 PLACEHOLDER = "N U T, 0, 0, 0"
 MAX_FRAMES, MAX_TOOLS = 9, 10  # UFRAME[1..9], UTOOL[1..10] on an R-30iB (manual, "Setting a user frame", "Setting a tool frame")
@@ -86,26 +88,30 @@ class FanucWriter:
         return f"{self.mm_s:.0f}mm/sec" if np.isfinite(self.mm_s) and self.mm_s >= 1 else "100mm/sec"
 
     def _position(self, pose: np.ndarray, conf=None) -> str:
+        """A Cartesian P[n] with the CONFIG of a Fanuc input (``conf``: arm code, turns), else the placeholder."""
         n = len([p for p in self.pos if p.startswith("P[")]) + 1
-        self.placeholders += 1
+        given = conf is not None and np.isfinite(conf).all()
+        self.placeholders += not given
         xyz, wpr = pose[:3, 3], _wpr(pose)
-        self.pos += [f"P[{n}]{{", "   GP1:", f"\tUF : {self.uf}, UT : {self.ut},\t\tCONFIG : '{PLACEHOLDER}',",
+        self.pos += [f"P[{n}]{{", "   GP1:", f"\tUF : {self.uf}, UT : {self.ut},\t\tCONFIG : '{config_text(conf) if given else PLACEHOLDER}',",
                      f"\tX = {_num(xyz[0])}  mm,\tY = {_num(xyz[1])}  mm,\tZ = {_num(xyz[2])}  mm,",
                      f"\tW = {_num(wpr[0])} deg,\tP = {_num(wpr[1])} deg,\tR = {_num(wpr[2])} deg", "};"]
         return f"P[{n}]"
 
     def move_joint(self, pose, conf=None) -> None:
-        self._statement(f"J {self._position(pose)} 100% {self.term}")
-        if not any(r.startswith("CONFIG") for r in self.remarks):
-            self.remarks.append(f"CONFIG '{PLACEHOLDER}' is written for every position (the input gives no Fanuc configuration): "
+        """A J motion: the controller takes the position's CONFIG (controller.py)."""
+        before = self.placeholders
+        self._statement(f"J {self._position(pose, conf)} 100% {self.term}")
+        if self.placeholders > before and not any(r.startswith("CONFIG") for r in self.remarks):
+            self.remarks.append(f"CONFIG '{PLACEHOLDER}' is written where the input gives no Fanuc configuration: "
                                 "J motions take it; check their postures")
 
     def move_linear(self, pose, conf=None) -> None:
-        self._statement(f"L {self._position(pose)} {self._linear_speed()} {self.term}")
+        self._statement(f"L {self._position(pose, conf)} {self._linear_speed()} {self.term}")
 
     def move_circular(self, via, end, conf=None) -> None:
-        via_p = self._position(via)
-        end_p = self._position(end)
+        via_p = self._position(via, conf)
+        end_p = self._position(end, conf)
         self.mn.append(f"{len(self.mn) + 1:4d}:C {via_p}    ")
         self.mn.append(f"    :  {end_p} {self._linear_speed()} {self.term} ;")
 
