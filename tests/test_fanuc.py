@@ -191,3 +191,22 @@ def test_the_one_pass_reading_of_pos_equals_the_block_reading(tmp_path):
     for field in ("values", "spans", "joint", "uf", "ut", "conf"):
         np.testing.assert_array_equal(getattr(fast, field), getattr(slow, field), err_msg=field)
     assert positions._canonical(text, text.index("/POS") + 5, text.index("/END")) is None  # a joint position: block by block
+
+
+@pytest.mark.parametrize("old, new", [("   4:L P[2:\"approach\"]", "   4:A P[2:\"approach\"]"), ("500mm/sec CNT100    ;", "500mm/sec CNT100 Wjnt    ;")])
+def test_arc_and_wrist_joint_motions_are_named_as_inexact(tmp_path, old, new):
+    """A (an arc through consecutive points) and Wjnt (wrist joints interpolated) leave the
+    straight line between targets (manual, "Circular arc motion", "Wrist joint"): the
+    targets are exact, the first such line is named (compensate notes it, --max-deviation refuses)."""
+    assert R30IB.inexact_interpolation(parse_program(SAMPLE)) is None
+    tp = parse_program(_variant(tmp_path, old, new))
+    assert tp.resolved[1] and R30IB.inexact_interpolation(tp).startswith(f"{tmp_path / 'v.ls'}:12: ")
+
+
+def test_joint_positions_are_written_back_with_the_controllers_j3(tmp_path, sample):
+    """The IR's j3 is J3 + J2; a new joint value is written as J3 = j3 - J2 (the J2/J3 interaction)."""
+    joints = sample.joints.copy()
+    joints[6, 2] = 25.0  # forearm 5 degrees above the horizontal with J2 = 20
+    text = emit_texts(sample, sample.with_joints(joints))[0]
+    assert "J3=   5.000 deg" in text  # in the number's own width and decimals
+    np.testing.assert_allclose(parse_program(SAMPLE, "fanuc", text.encode("latin-1")).joints[6], [10, 20, 25, 0, -80, 0])
