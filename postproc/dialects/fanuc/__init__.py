@@ -6,12 +6,13 @@ from __future__ import annotations
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import R30IB, fanuc_config
+from .parse import parse_ls
+from .writer import FanucWriter
 
 
 class FanucDialect(Dialect):
     name = "fanuc"
     description = "Fanuc TP program, ASCII listing (.ls: /PROG, /MN, /POS)"
-    controller_maker = "Fanuc"
     extensions = (".ls",)
     comment_pattern = r"/(?:PROG|ATTR|APPL)[^\n]*|[ \t]*\d+:[ \t]*(?:!|//)[^\n]*"
     motion_words = "J, L, C or A motions"
@@ -21,8 +22,6 @@ class FanucDialect(Dialect):
         return "/PROG" in head and ("/MN" in head or "/ATTR" in head)
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import parse_ls  # (here, as the other languages: the parser loads only when a program is read)
-
         return parse_ls(sources)
 
     arm_conf_column = 0  # the arm code (flip, up, front); columns 1-3 are turn numbers
@@ -31,8 +30,6 @@ class FanucDialect(Dialect):
         return fanuc_config(robot, q_deg)
 
     def new_writer(self, name: str):
-        from .writer import FanucWriter
-
         return FanucWriter(name)
 
 
