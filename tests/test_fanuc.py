@@ -210,3 +210,17 @@ def test_joint_positions_are_written_back_with_the_controllers_j3(tmp_path, samp
     text = emit_texts(sample, sample.with_joints(joints))[0]
     assert "J3=   5.000 deg" in text  # in the number's own width and decimals
     np.testing.assert_allclose(parse_program(SAMPLE, "fanuc", text.encode("latin-1")).joints[6], [10, 20, 25, 0, -80, 0])
+
+
+def test_continuation_lines_process_tags_and_via_options():
+    """Welding listings continue a motion on ': ...' lines (Arc Start[6], Arc End[6]) and give
+    options on a C motion's via line (Tool_Offset,PR[28]): read as the manual's "Motion
+    instruction options"; an option on the end line leaves the via point unknown too (which
+    point the controller applies it to is not determined here)."""
+    path = Path(__file__).parent / "data" / "fanuc_weld_tags.ls"
+    tp = parse_program(path)
+    assert tp.kind.tolist() == [Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.CIRC_VIA, Kind.CIRC_END]
+    assert tp.line.tolist() == [4, 7, 8, 10, 11]
+    assert tp.resolved.tolist() == [True, False, True, False, False]  # WELD_SPEED is a speed; Tool_Offset on the via line, then on the end line
+    assert np.isnan(tp.speed[1:3]).all() and tp.zone[2] == 0
+    assert emit_texts(tp, tp)[0] == path.read_text(encoding="latin-1")

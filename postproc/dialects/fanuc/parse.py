@@ -37,11 +37,13 @@ DIALECT = "fanuc"
 _SECTION = re.compile(r"^[ \t]*/(PROG|ATTR|APPL|MN|POS|END)\b[^\n]*$", re.MULTILINE)
 _TARGET = r"(P|PR)\[[ \t]*(\d+|[A-Z]+\[\d+\])[ \t]*(?::[^\]\n]*)?\]"
 _MOTION = re.compile(rf"[ \t]*([JLCA])[ \t]+{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
-_VIA_END = re.compile(rf"[ \t]*\r?\n[ \t]*:[ \t]*{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
+# C P[via] [options]  then, on the continuation line,  : P[end] speed FINE|CNT [options]
+_VIA_END = re.compile(rf"([^\n]*)\n[ \t]*:[ \t]*{_TARGET}(.*)", re.DOTALL | re.IGNORECASE)
+_GAP = re.compile(r"(?:[ \t\r]|\n[ \t]*:?)*")  # between options: blanks, and the ':' of a continuation line
 _REGISTER = r"R\[[ \t]*\d+[ \t]*(?::[^\]\n]*)?\]"  # R[n] or R[n:comment]
 # A speed: a number, a register or a weld schedule's speed (WELD_SPEED), then its unit.
 _SPEED = re.compile(rf"[ \t]*(\d+\.?\d*|\.\d+|{_REGISTER}|max_speed|WELD_SPEED)[ \t]*(%|mm/sec|cm/min|inch/min|deg/sec|msec|sec)?", re.IGNORECASE)
-_TERM = re.compile(rf"[ \t]+(FINE|CNT[ \t]*(\d+|{_REGISTER}))", re.IGNORECASE)
+_TERM = re.compile(rf"[ \t]*(FINE|CNT[ \t]*(\d+|{_REGISTER}))", re.IGNORECASE)
 _BAD_FRAME = re.compile(r"[ \t]*(UFRAME|UTOOL)[ \t]*=", re.IGNORECASE)
 _FRAME_NUM = re.compile(r"[ \t]*(UFRAME_NUM|UTOOL_NUM)[ \t]*=[ \t]*(\S+)[ \t]*$", re.IGNORECASE)
 _FRAME_SET = re.compile(r"[ \t]*(UFRAME|UTOOL)\[[ \t]*(\d+)[ \t]*\][ \t]*=", re.IGNORECASE)
@@ -168,13 +170,16 @@ class _Reader:
             end = _VIA_END.match(rest)
             if end is None:
                 raise self.error(rest_at, "a C motion gives its end point on the next line (': P[n] speed FINE|CNT'): none here")
-            self._target(st, "C", m.group(2), m.group(3), st.start + m.start(2), end.group(3), rest_at + end.start(3), Kind.CIRC_VIA)
-            self._target(st, "C", end.group(1), end.group(2), rest_at + end.start(1), end.group(3), rest_at + end.start(3), Kind.CIRC_END)
+            via_options = self._options(end.group(1), rest_at, int(self.lines.line(rest_at)))  # e.g. Tool_Offset,PR[28] on the via point
+            self._target(st, "C", m.group(2), m.group(3), st.start + m.start(2), end.group(4), rest_at + end.start(4), Kind.CIRC_VIA, via_options)
+            self._target(st, "C", end.group(2), end.group(3), rest_at + end.start(2), end.group(4), rest_at + end.start(4), Kind.CIRC_END)
             return
         kind = {"J": Kind.JOINT, "L": Kind.LINEAR, "A": Kind.LINEAR}[motion]
         self._target(st, motion, m.group(2), m.group(3), st.start + m.start(2), rest, rest_at, kind)
 
-    def _target(self, st: Statement, motion: str, reg: str, number: str, at: int, rest: str, rest_at: int, kind: Kind) -> None:
+    def _target(self, st: Statement, motion: str, reg: str, number: str, at: int, rest: str, rest_at: int, kind: Kind, own: list[str] = ()) -> None:
+        """One target row; ``rest``: the speed, FINE/CNT and options that follow it (a C
+        motion's via point shares its end's; ``own``: why its own options make it unknown)."""
         line = int(self.lines.line(at))
         speed_m = _SPEED.match(rest)
         if speed_m is None:
@@ -182,7 +187,7 @@ class _Reader:
         term = _TERM.match(rest, speed_m.end())
         if term is None:
             raise self.error(rest_at + speed_m.end(), "a motion needs FINE or CNTn after its speed")
-        unknown = self._options(rest[term.end() :], rest_at + term.end(), line)
+        unknown = list(own) + self._options(rest[term.end() :], rest_at + term.end(), line)
         cnt = term.group(2)
         row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
                "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown}
@@ -214,8 +219,7 @@ class _Reader:
         why = []
         pos = 0
         while True:
-            gap = re.compile(r"[ \t\r\n]*").match(text, pos)
-            pos = gap.end()
+            pos = _GAP.match(text, pos).end()
             if pos >= len(text):
                 return why
             for pattern, reason in _OPTIONS:
