@@ -16,7 +16,7 @@ import postproc
 from postproc import kinematics as kin
 from postproc.dialects import sniff
 from postproc.dialects.fanuc.controller import R30IB, config_text, fanuc_config
-from postproc.errors import InputError, ParseError
+from postproc.errors import ParseError
 from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
 

@@ -14,8 +14,6 @@ Configuration data of a Cartesian position, R-30iB Operator's Manual,
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from ...controller import Controller
@@ -88,17 +86,14 @@ class FanucController(Controller):
         return []
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
-        """The first A (arc through consecutive points) or Wjnt motion: between its targets the
-        controller leaves the straight line the prediction assumes (R-30iB manual, "Circular
-        arc motion", "Wrist joint motion option")."""
-        if not len(tp):
+        """The first A (arc through consecutive points) or Wjnt motion (``extras["fanuc.off_line"]``,
+        set by the parser): between its targets the controller leaves the straight line the
+        prediction assumes (R-30iB manual, "Circular arc motion", "Wrist joint motion option")."""
+        off_line = tp.extras.get("fanuc.off_line")
+        if off_line is None or not off_line.any():
             return None
-        lines = tp.sources[0].text.split("\n")
-        pattern = re.compile(r"^[ \t]*\d+[ \t]*:[ \t]*(A[ \t]+P|[^;]*\bWjnt\b)", re.IGNORECASE)
-        for line in sorted(set(tp.line[tp.kind == Kind.LINEAR].tolist())):
-            if 0 < line <= len(lines) and pattern.match(lines[line - 1]):
-                return f"{tp.sources[0].path}:{line}: an A (arc) or Wjnt motion: the controller's path between these targets is not a straight line"
-        return None
+        row = int(np.argmax(off_line))
+        return f"{tp.sources[int(tp.file[row])].path}:{tp.line[row]}: an A (arc) or Wjnt motion: the controller's path between these targets is not a straight line"
 
 
 R30IB = FanucController()

@@ -73,7 +73,8 @@ _OPTIONS = [(re.compile(p, re.IGNORECASE), why) for p, why in (
 )]
 SPEED_TO_MM_S = {"MM/SEC": 1.0, "CM/MIN": 10.0 / 60.0, "INCH/MIN": 25.4 / 60.0}
 J2, J3 = 8, 9  # fields of the joint numbers J2 and J3
-CNT = "fanuc.cnt"  # Toolpath.extras column
+CNT = "fanuc.cnt"  # Toolpath.extras columns
+OFF_LINE = "fanuc.off_line"
 
 
 def parse_ls(sources: list[SourceDoc]) -> Toolpath:
@@ -92,12 +93,14 @@ class _Reader:
         # CNT n of each motion (-1: FINE; NaN: CNT R[n], set outside the program): the corner
         # rounding the controller sizes from it (R-30iB manual, "Positioning path")
         self.builder.declare_extra(CNT, float, np.nan)
+        # True where the controller leaves the straight line or circle to the target: an A
+        # motion (an arc through consecutive points) or the Wjnt option (controller.py)
+        self.builder.declare_extra(OFF_LINE, bool, False)
         self.rows: list[dict] = []
         self.notes: list[str] = []
         self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
         self.utool: int | None = None
         self.redefined: dict[str, int] = {}  # UFRAME[n] / UTOOL[n] -> line of its last assignment
-        self.wrist_joint_lines: list[int] = []  # lines of motions with Wjnt
 
     def error(self, offset: int, why: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, why)
@@ -188,9 +191,11 @@ class _Reader:
         if term is None:
             raise self.error(rest_at + speed_m.end(), "a motion needs FINE or CNTn after its speed")
         unknown = list(own) + self._options(rest[term.end() :], rest_at + term.end(), line)
+        wrist = WRIST in unknown
+        unknown = [why for why in unknown if why != WRIST]
         cnt = term.group(2)
         row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
-               "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown}
+               "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown, "off_line": wrist or motion == "A"}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
             row["pos"] = -1  # a register is used in the frame and tool selected when it runs
@@ -215,7 +220,7 @@ class _Reader:
         self.rows.append(row)
 
     def _options(self, text: str, at: int, line: int) -> list[str]:
-        """Why the options after FINE/CNT make the target unknown (none: [])."""
+        """Why the options after FINE/CNT make the target unknown (none: []; WRIST for Wjnt)."""
         why = []
         pos = 0
         while True:
@@ -228,10 +233,8 @@ class _Reader:
                     break
             else:
                 raise self.error(at + pos, f"motion option '{text[pos:].split()[0]}' is not one postproc reads (R-30iB manual, 'Motion instruction options')")
-            if reason == WRIST:
-                self.wrist_joint_lines.append(line)
-            elif reason is not None:
-                why.append(reason)
+            if reason is not None:
+                why.append(reason)  # (WRIST too: the caller takes it out)
             pos = m.end()
 
     def _frame_mismatch(self, number: int, uf: int, ut: int) -> list[str]:
@@ -277,7 +280,7 @@ class _Reader:
         self.builder.add_block(np.array([r["order"] for r in rows], dtype=np.int64), kind=np.array([r["kind"] for r in rows], dtype=np.int8),
                                line=np.array([r["line"] for r in rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
                                speed=np.array([r["speed"] for r in rows], dtype=float), zone=np.array([r["zone"] for r in rows], dtype=float),
-                               resolved=resolved, frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in rows], dtype=float)},
+                               resolved=resolved, frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in rows], dtype=float), OFF_LINE: np.array([r["off_line"] for r in rows], dtype=bool)},
                                name=np.array([f"P[{r['number']}]" if r["pos"] >= 0 else "" for r in rows], dtype=object))
 
     def _frame(self, number: int | None, table: str) -> int:
