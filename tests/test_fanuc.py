@@ -224,3 +224,10 @@ def test_continuation_lines_process_tags_and_via_options():
     assert tp.resolved.tolist() == [True, False, True, False, False]  # WELD_SPEED is a speed; Tool_Offset on the via line, then on the end line
     assert np.isnan(tp.speed[1:3]).all() and tp.zone[2] == 0
     assert emit_texts(tp, tp)[0] == path.read_text(encoding="latin-1")
+
+
+def test_extended_axes_of_group_1_leave_the_target_unknown(tmp_path):
+    """E1 in group 1 is an axis integrated with the arm (a rail moves its base): not modelled."""
+    tp = parse_program(_variant(tmp_path, "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\nP[2",
+                                "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg,\n\tE1=   250.000  mm\n};\nP[2"))
+    assert not tp.resolved[0] and tp.resolved[1] and tp.ext[0, 0] == 250 and any("extended axes" in n for n in tp.notes)

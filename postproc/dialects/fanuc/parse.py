@@ -28,7 +28,7 @@ import re
 import numpy as np
 
 from ...errors import ParseError
-from ...ir import NF, Kind, SourceDoc, Toolpath
+from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .positions import Positions, PositionError, read_positions
 from .statements import Statement, StatementError, statements
@@ -213,6 +213,8 @@ class _Reader:
         row["tool"] = self._frame(ut if ut >= 0 else self.utool, "UTOOL")
         if table.groups[k]:
             row["notes"] = row["notes"] + [f"the position also moves group {', '.join(map(str, table.groups[k]))} (a positioner or rail), which postproc does not model"]
+        if not np.isnan(table.values[k, F_EXT]).all():
+            row["notes"] = row["notes"] + ["the position moves extended axes E1.. of group 1 (a rail or a turntable integrated with the arm), which postproc does not model"]
         if table.joint[k] and kind == Kind.JOINT:
             row["kind"] = Kind.ABSJ
         elif table.joint[k]:
