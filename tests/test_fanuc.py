@@ -231,3 +231,28 @@ def test_extended_axes_of_group_1_leave_the_target_unknown(tmp_path):
     tp = parse_program(_variant(tmp_path, "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\nP[2",
                                 "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg,\n\tE1=   250.000  mm\n};\nP[2"))
     assert not tp.resolved[0] and tp.resolved[1] and tp.ext[0, 0] == 250 and any("extended axes" in n for n in tp.notes)
+
+
+def test_untaught_positions_other_groups_and_point_logic_blocks(tmp_path):
+    """Shapes of real cell backups: a position never taught ('********', the controller has no
+    value), a position of other groups only (a servo gun's), a TB ...,P-SPS point logic block
+    closed by '------ ;'. Read; a motion to the first two is unresolved with the reason."""
+    text = SAMPLE.read_text(encoding="latin-1")
+    text = text.replace("   9:J P[5] 50% FINE    ;", "   9:J P[6] 100% CNT0 ACC100 TB   0.00sec,P-SPS    ;\n      1:  DO[1]=ON ;\n       ------ ;\n  10:L P[7] 100mm/sec FINE    ;")
+    text = text.replace("/END", "P[6]{\n   GP1:\n\tUF : F, UT : F,\t\tCONFIG : 'N D B, 0, 0, 0',\n\tX = ********  mm,\tY = ********  mm,\tZ = ********  mm,\n"
+                                "\tW = ******** deg,\tP = ******** deg,\tR = ******** deg\n};\nP[7]{\n   GP2:\n\tUF : F, UT : F,\n\tJ1=   300.000  mm\n};\n/END")
+    path = tmp_path / "cell.ls"
+    path.write_text(text)
+    tp = parse_program(path)
+    assert emit_texts(tp, tp)[0] == text
+    assert tp.target_name[-2:] == ("P[6]", "P[7]") and not tp.resolved[-2:].any() and np.isnan(tp.position[-2:]).all()
+    assert any("never taught" in n for n in tp.notes) and any("no group 1" in n for n in tp.notes)
+
+
+@pytest.mark.parametrize("old, new, why", [("CONFIG : 'N U T, 0, 0, 0',\n\tX =   900", "KONFIG : 'N U T, 0, 0, 0',\n\tX =   900", "German"),
+                                           ("\tX =   900.000  mm,\tY =     0.000  mm,\tZ =   300.000  mm,\n\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000",
+                                            "\tRX =   900.000  mm,\tRY =     0.000  mm,\tRZ =   300.000  mm,\n\tRW =   180.000 deg,\tRP =     0.000 deg,\tRR =     0.000", "RX .. RR")])
+def test_listings_in_words_postproc_does_not_read_are_refused_with_the_reason(tmp_path, old, new, why):
+    with pytest.raises(ParseError, match=why) as exc:
+        parse_program(_variant(tmp_path, old, new))
+    assert exc.value.line in (22, 23)

@@ -30,7 +30,7 @@ import numpy as np
 from ...errors import ParseError
 from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
-from .positions import Positions, PositionError, read_positions
+from .positions import NO_GROUP_1, UNTAUGHT, PositionError, Positions, read_positions
 from .statements import Statement, StatementError, statements
 
 DIALECT = "fanuc"
@@ -211,7 +211,11 @@ class _Reader:
         row["notes"] = row["notes"] + self._frame_mismatch(int(number), uf, ut)
         row["frame"] = self._frame(uf if uf >= 0 else self.uframe, "UFRAME")
         row["tool"] = self._frame(ut if ut >= 0 else self.utool, "UTOOL")
-        if table.groups[k]:
+        if table.state[k] == UNTAUGHT:
+            row["notes"] = row["notes"] + ["the position was never taught ('********'): the controller has no value for it and stops"]
+        elif table.state[k] == NO_GROUP_1:
+            row["notes"] = row["notes"] + ["the position holds no group 1 (robot) value: it moves other groups only"]
+        elif table.groups[k]:
             row["notes"] = row["notes"] + [f"the position also moves group {', '.join(map(str, table.groups[k]))} (a positioner or rail), which postproc does not model"]
         if not np.isnan(table.values[k, F_EXT]).all():
             row["notes"] = row["notes"] + ["the position moves extended axes E1.. of group 1 (a rail or a turntable integrated with the arm), which postproc does not model"]

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 _START = re.compile(r"[ \t]*\d*[ \t]*:")  # the ASCII loader takes statements without their numbers too
 _CONTINUE = re.compile(r"[ \t]*:")
+_BLOCK_END = re.compile(r"[ \t]*-+[ \t]*;[ \t]*\r?$")  # '------ ;' closes a point logic block (TB ...,P-SPS): no instruction
 
 
 @dataclass(frozen=True)
@@ -38,7 +39,7 @@ def statements(text: str, start: int, end: int) -> list[Statement]:
         nl = text.find("\n", pos, end)
         line_end = end if nl < 0 else nl
         line = text[pos:line_end]
-        if line.strip():
+        if line.strip() and not (open_at < 0 and _BLOCK_END.match(line)):
             head = _START.match(line) if open_at < 0 else _CONTINUE.match(line)
             if head is None:
                 why = "a statement is not closed by ';' before this line" if open_at >= 0 else "not a numbered statement ('  N:instruction ;')"
