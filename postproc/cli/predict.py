@@ -50,7 +50,7 @@ def predict_cmd(
     error_model, _ = load_model(model)
     for note in check_model_fits(tp, error_model, str(model), None, allow_mismatch):
         err.print(f"note: {note} (--allow-model-mismatch)")
-    rows, predicted = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
+    rows, predicted, why = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
                                           force_n=None if force is None else floats(force, 3, "--force"),
                                           start_joints=None if start_joints is None else floats(start_joints, 6, "--start-joints"))
     goal = _intended_positions(goal_tp, tp, rows, frames, tools, intended)
@@ -58,9 +58,9 @@ def predict_cmd(
     where = [f"{tp.sources[int(tp.file[r])].path}:{int(tp.line[r])}" for r in rows]
     unreached = np.isnan(error)
     if json_out:
-        out.print_json(json.dumps(_as_json(where, predicted, goal, error)))
+        out.print_json(json.dumps(_as_json(where, predicted, goal, error, why)))
     else:
-        _print_summary(error, where, unreached, model, intended or program)
+        _print_summary(error, where, why, model, intended or program)
     if unreached.any():
         raise typer.Exit(1)
 
@@ -77,18 +77,18 @@ def _intended_positions(goal_tp, tp, rows: np.ndarray, frames, tools, intended) 
     return goal_tp.base_poses()[goal_rows, :3, 3]
 
 
-def _as_json(where: list[str], predicted: np.ndarray, goal: np.ndarray, error: np.ndarray) -> list[dict]:
+def _as_json(where: list[str], predicted: np.ndarray, goal: np.ndarray, error: np.ndarray, why: list) -> list[dict]:
     def xyz(v):
         return None if np.isnan(v).any() else [round(float(c), 6) for c in v]
 
-    return [{"target": w, "predicted_xyz": xyz(p), "intended_xyz": xyz(g), "error_mm": None if np.isnan(e) else round(float(e), 6)}
-            for w, p, g, e in zip(where, predicted, goal, error)]
+    return [{"target": w, "predicted_xyz": xyz(p), "intended_xyz": xyz(g), "error_mm": None if np.isnan(e) else round(float(e), 6),
+             "unreached": reason} for w, p, g, e, reason in zip(where, predicted, goal, error, why)]
 
 
-def _print_summary(error: np.ndarray, where: list[str], unreached: np.ndarray, model: Path, intended: Path) -> None:
-    for w in np.array(where)[unreached][:50]:
-        err.print(f"{w}: the controller cannot reach this target by its rules on the model's robot", highlight=False)
-    reached = error[~unreached]
+def _print_summary(error: np.ndarray, where: list[str], why: list, model: Path, intended: Path) -> None:
+    for w, reason in [(w, reason) for w, reason in zip(where, why) if reason is not None][:50]:
+        err.print(f"{w}: {reason}", highlight=False)
+    reached = error[~np.isnan(error)]
     if not len(reached):
         return
     worst = int(np.nanargmax(error))
