@@ -6,8 +6,11 @@ structure", "Motion instructions" and "Position data"):
 - A program is ``/PROG name``, ``/ATTR``, (``/APPL``), ``/MN`` (the statements), ``/POS``
   (the positions P[n]) and ``/END``.
 - A motion ``J|L|C|A P[n] speed FINE|CNTk [options]`` goes to P[n] as /POS gives it, in
-  the user frame and tool numbered by the position's own ``UF``/``UT`` (the controller stops
-  with an alarm where they differ from UFRAME_NUM / UTOOL_NUM in force: refused here).
+  the user frame and tool numbered by the position's own ``UF``/``UT``. Where they differ
+  from UFRAME_NUM / UTOOL_NUM in force the controller stops with a frame mismatch alarm, or
+  runs it in the other frame when $MCR.$UFRCHK is off: the target is unresolved. Where the
+  program sets no number in force, the position's own are taken: the frame check
+  ($MCR.$UFRCHK, on by default) lets it run in no other frame.
 - ``C P[via]`` + ``: P[end] ...`` on the continuation line is a circle through the start,
   via and end. ``A`` (arc through consecutive A points) is read point by point: its points
   are exact, the path between them is a circle through three of them, which postproc does
