@@ -49,7 +49,7 @@ EXPECTED = {
 
 
 def _roots() -> list[Path]:
-    shared = Path(os.environ.get("POSTPROC_SHARED", HERE.parents[1].parent / "shared"))
+    shared = Path(os.environ.get("POSTPROC_SHARED", HERE.parent.parent / "shared"))  # ../shared beside the checkout
     roots = [shared / "corpus" / "real" / "fanuc"]
     if os.environ.get("POSTPROC_CORPUS"):
         roots.insert(0, Path(os.environ["POSTPROC_CORPUS"]) / "fanuc")
