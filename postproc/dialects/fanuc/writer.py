@@ -85,7 +85,13 @@ class FanucWriter:
         self.mn.append(f"{len(self.mn) + 1:4d}:{text} ;")
 
     def _linear_speed(self) -> str:
-        return f"{self.mm_s:.0f}mm/sec" if np.isfinite(self.mm_s) and self.mm_s >= 1 else "100mm/sec"
+        """The TCP speed in whole mm/sec (as the pendant takes it, at least 1); 100mm/sec, said
+        in a remark, where the input gives none."""
+        if np.isfinite(self.mm_s):
+            return f"{max(1, round(self.mm_s))}mm/sec"
+        if not any(r.startswith("speed") for r in self.remarks):
+            self.remarks.append("speeds the input does not give are written as 100mm/sec")
+        return "100mm/sec"
 
     def _position(self, pose: np.ndarray, conf=None) -> str:
         """A Cartesian P[n] with the CONFIG of a Fanuc input (``conf``: arm code, turns), else the placeholder."""
