@@ -19,7 +19,7 @@ from ..program_check import check_model_fits
 from ..program_content import require_program
 from ..programs import parse_program
 from .app import app, err, handles_errors, out
-from .common import floats, named_frames
+from .common import FORCE_OPTION, FRAME_OPTION, START_JOINTS_OPTION, TEMP_OPTION, TOOL_OPTION, floats, named_frames
 
 
 @app.command("predict")
@@ -30,11 +30,11 @@ def predict_cmd(
     model: Path = typer.Option(..., "--model", help="Model JSON: a validation model, or a simulated robot's truth (simulate --truth)."),
     intended: Optional[Path] = typer.Option(None, "--intended", help="The program whose targets are where the TCP should go (the program before compensation); default: PROGRAM's own targets."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Language of PROGRAM and --intended (default: from the extension or content)."),
-    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the programs use but do not define, mm and KUKA A,B,C degrees. Repeatable."),
-    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the programs use but do not define. Repeatable."),
-    start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts."),
-    temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (for a model effect that uses it)."),
-    force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (for a model effect that uses it)."),
+    frame: Optional[list[str]] = FRAME_OPTION,
+    tool: Optional[list[str]] = TOOL_OPTION,
+    start_joints: Optional[str] = START_JOINTS_OPTION,
+    temp: Optional[float] = TEMP_OPTION,
+    force: Optional[str] = FORCE_OPTION,
     allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Predict although the program's robot, tool or payload differ from the model's (printed as notes)."),
     json_out: bool = typer.Option(False, "--json", help="Per-target predictions as JSON on standard output."),
 ):
