@@ -1,0 +1,305 @@
+"""URScript program -> Toolpath.
+
+Statements are read in text order (URScript manual, "The URScript Programming Language"):
+variable assignments that hold constant poses or joint lists, ``set_tcp``, the motion
+functions ``movej``, ``movel``, ``movep``, ``movec``, ``servoj`` and the blocks ``def`` /
+``thread`` / ``if`` / ``elif`` / ``else`` / ``while`` ... ``end``. Every number a target
+takes from the text keeps its span; units are SI (m, rad, m/s) and the IR's are mm and
+degrees (``scale``). What the text does not determine (a target computed at run time, a
+posture after a block the program may or may not run) leaves the target unresolved with a
+note naming its line: compensation refuses it, never guesses.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ...ir import F_JOINT, F_ORI, F_POS, NF, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex
+from .lexer import code_mask, matching, split_arguments, statements, strip
+from .poses import M_TO_MM, RAD_TO_DEG, rotvec_to_quat
+from .values import Evaluator, Unknown, Value
+
+_HEAD = re.compile(
+    r"""[ \t]*(?:
+      (?P<def>def|thread)[ \t]+(?P<fname>\w+)
+    | (?P<block>if|while|elif)\b
+    | (?P<else>else)[ \t]*:
+    | (?P<end>end)\b
+    | (?P<move>movej|movel|movep|movec|servoj)[ \t]*\(
+    | (?P<tcp>set_tcp)[ \t]*\(
+    | (?:(?:global|local)[ \t]+)?(?P<var>[A-Za-z_]\w*)[ \t]*=(?!=)
+    )""",
+    re.VERBOSE,
+)
+
+# Positional parameters of each motion function (URScript manual, "movej", "movel", "movep",
+# "movec", "servoj"), and the defaults of a, v, r where the call leaves them out.
+PARAMETERS = {
+    "movej": ("q", "a", "v", "t", "r"),
+    "movel": ("pose", "a", "v", "t", "r"),
+    "movep": ("pose", "a", "v", "r"),
+    "movec": ("pose_via", "pose_to", "a", "v", "r", "mode"),
+    "servoj": ("q", "a", "v", "t", "lookahead_time", "gain"),
+}
+DEFAULTS = {"movej": {"a": 1.4, "v": 1.05, "r": 0.0}, "movel": {"a": 1.2, "v": 0.25, "r": 0.0}, "movep": {"a": 1.2, "v": 0.25, "r": 0.0},
+            "movec": {"a": 1.2, "v": 0.25, "r": 0.0}, "servoj": {"r": 0.0}}
+INSTALLATION_TCP = "<installation TCP>"  # the TCP before any set_tcp: the robot's installation sets it, not the script
+
+
+@dataclass
+class _Block:
+    kind: str  # def, thread, if, while
+    line: int
+    name: str = ""
+    moved: bool = False  # a motion ran inside it
+    joint_target: bool = False  # a joint target inside it set the posture (from there on in the block)
+    assigned: set = field(default_factory=set)
+
+
+class UrParser:
+    """One pass over the statements of one .script file."""
+
+    def __init__(self, sources: list[SourceDoc]):
+        self.doc = sources[0]
+        self.sources = sources
+        self.mask = code_mask(self.doc.text)
+        self.lines = LineIndex(self.doc.text)
+        self.evaluator = Evaluator(self.mask, self._where)
+        self.builder = Builder("urscript", "rotvec", list(sources), tool_names=[INSTALLATION_TCP], tools=[np.eye(4)], tool_known=[False])
+        self.env: dict = {}
+        self.stack: list[_Block] = []
+        self.tool = 0
+        self.posture_doubt: str | None = None  # why the joints the robot is in are not known from the text here
+        self.rows: list[dict] = []
+        self.notes: list[str] = []
+        self.noted_blocks: set[int] = set()
+
+    def _where(self, offset: int) -> str:
+        line = int(self.lines.line(offset))
+        return f"line {line}, column {offset - int(self.lines.starts[line - 1]) + 1}"
+
+    def parse(self) -> Toolpath:
+        found = statements(self.mask)
+        for start, end, line in zip(found.start.tolist(), found.end.tolist(), found.line.tolist()):
+            self._statement(start, end, line)
+        if self.stack:
+            raise self.lines.error(self.doc.path, len(self.doc.text), f"'{self.stack[-1].kind}' of line {self.stack[-1].line} has no 'end'")
+        return self._build()
+
+    # ------------------------------------------------------------- statements
+    def _statement(self, start: int, end: int, line: int) -> None:
+        head = _HEAD.match(self.mask, start, end)
+        if head is None:
+            return  # another call or statement: it moves nothing (motions are only the functions above)
+        kind = head.lastgroup if head.lastgroup != "fname" else "def"
+        if head.group("def"):
+            self.stack.append(_Block(head.group("def"), line, head.group("fname")))
+        elif head.group("block"):
+            self._open(head.group("block"), line, start)
+        elif head.group("else"):
+            self._open("else", line, start)
+        elif head.group("end"):
+            self._close(start)
+        elif head.group("move"):
+            self._motion(head.group("move"), head.end() - 1, end, line)
+        elif head.group("tcp"):
+            self._set_tcp(head.end() - 1, end, line)
+        elif kind == "var":
+            self._assign(head.group("var"), head.end(), end)
+
+    def _open(self, word: str, line: int, start: int) -> None:
+        if word in ("elif", "else"):
+            if not self.stack or self.stack[-1].kind != "if":
+                raise self.lines.error(self.doc.path, start, f"'{word}' without an 'if'")
+            self._leave(self.stack[-1])  # the branch before may or may not have run
+            self.stack[-1].joint_target = False
+            return
+        self.stack.append(_Block(word, line))
+
+    def _close(self, start: int) -> None:
+        if not self.stack:
+            raise self.lines.error(self.doc.path, start, "'end' without a block to close")
+        block = self.stack.pop()
+        if block.kind in ("if", "while"):
+            self._leave(block)
+        for name in block.assigned:  # set inside a block that may not run: unknown after it
+            self.env[name] = Unknown(f"'{name}' is set inside the {block.kind} of line {block.line}, which may or may not run")
+        if self.stack:
+            self.stack[-1].assigned |= block.assigned if block.kind in ("if", "while") else set()
+            self.stack[-1].moved |= block.moved
+
+    def _leave(self, block: _Block) -> None:
+        """After an if or while whose runs the text does not fix, the joints are those before it
+        or those its motions left: unknown, if it moved, until the next joint target."""
+        if block.moved:
+            self.posture_doubt = f"after the {block.kind} of line {block.line} (which may or may not run its motions) the robot's joints are not known until the next joint target"
+
+    def _assign(self, name: str, start: int, end: int) -> None:
+        value = self.evaluator.evaluate(start, end, self.env)
+        if isinstance(value, Value) and re.search(rf"\b{re.escape(name)}\b", self.mask[start:end]):
+            value = Unknown(f"'{name}' is computed from itself at {self._where(start)}")
+        self.env[name] = value
+        if self.stack and self.stack[-1].kind in ("if", "while", "else"):
+            self.stack[-1].assigned.add(name)
+
+    def _set_tcp(self, opener: int, end: int, line: int) -> None:
+        close = matching(self.mask, opener)
+        args = split_arguments(self.mask, opener + 1, close)
+        value = self.evaluator.evaluate(*args[0], self.env) if len(args) == 1 else Unknown(f"set_tcp at line {line} takes one pose")
+        name = f"set_tcp@{line}" if not isinstance(value, Value) or not value.name else value.name
+        if isinstance(value, Value) and value.is_pose:
+            self.tool = self.builder.tool_index(name, value.transform())
+        else:
+            self.tool = self.builder.tool_index(name, None)
+            self.notes.append(f"line {line}: the TCP is not known from the text ({value.reason if isinstance(value, Unknown) else 'a joint list'}): give it with --tool {name}=X,Y,Z,A,B,C")
+
+    # ----------------------------------------------------------------- motions
+    def _motion(self, function: str, opener: int, end: int, line: int) -> None:
+        close = matching(self.mask, opener)
+        if close < 0 or close >= end:
+            raise self.lines.error(self.doc.path, opener, f"{function}( is not closed")
+        positional, named = self._arguments(function, opener, close)
+        options = {**DEFAULTS[function], **{k: self._number(*v) for k, v in named.items() if k in ("a", "v", "r", "t")}}
+        for k, key in enumerate(PARAMETERS[function]):
+            if k < len(positional) and key in ("a", "v", "r", "t"):
+                options[key] = self._number(*positional[k])
+        targets = PARAMETERS[function][:2] if function == "movec" else PARAMETERS[function][:1]
+        spans = [named[key] if key in named else positional[k] if k < len(positional) else None for k, key in enumerate(targets)]
+        if any(s is None for s in spans):
+            raise self.lines.error(self.doc.path, opener, f"{function} without its {' and '.join(targets)}")
+        kinds = (Kind.CIRC_VIA, Kind.CIRC_END) if function == "movec" else (None,)
+        for k, span in enumerate(spans):
+            self._target(function, kinds[k], span, options, line, order=opener * 2 + k)
+        if self.stack:
+            self.stack[-1].moved = True
+
+    def _arguments(self, function, opener, close):
+        positional, named = [], {}
+        for s, e in split_arguments(self.mask, opener + 1, close):
+            m = re.match(r"\s*(\w+)\s*=(?!=)", self.mask[s:e])
+            if m:
+                named[m.group(1)] = (s + m.end(), e)
+            elif named:
+                raise self.lines.error(self.doc.path, s, f"a positional argument of {function} after a named one")
+            else:
+                positional.append((s, e))
+        unknown = set(named) - set(PARAMETERS[function])
+        if unknown:
+            raise self.lines.error(self.doc.path, opener, f"{function} has no parameter {', '.join(sorted(unknown))}")
+        return positional, named
+
+    def _number(self, start: int, end: int) -> float:
+        start, end = strip(self.mask, start, end)
+        try:
+            return float(self.mask[start:end])
+        except ValueError:
+            return np.nan  # a variable or expression: not known from the text
+
+    def _target(self, function, kind, span, options, line, order):
+        value = self.evaluator.evaluate(*span, self.env)
+        row = {"order": order, "line": line, "tool": self.tool, "speed": np.nan, "zone": options["r"] * M_TO_MM, "resolved": True, "name": "", "frame": 0,
+               "values": np.full(NF, np.nan), "spans": np.full((NF, 3), -1, dtype=np.int64), "scale": np.ones(NF), "qnear": np.full(6, np.nan),
+               "function": function, "accel": options.get("a", np.nan), "blend": options["r"], "time": options.get("t", 0.0)}
+        if isinstance(value, Unknown):
+            row["resolved"] = False
+            row["kind"] = kind if kind is not None else (Kind.ABSJ if function in ("servoj", "movej") else Kind.LINEAR)
+            self.notes.append(f"line {line}: {function} target not known from the text: {value.reason}")
+            self.rows.append(row)
+            return
+        if function in ("movej", "servoj"):
+            if function == "servoj" and value.is_pose:
+                raise self.lines.error(self.doc.path, int(span[0]), "servoj takes joint positions, not a pose")
+            row["kind"] = Kind.JOINT if value.is_pose else Kind.ABSJ
+        else:
+            if not value.is_pose:
+                raise self.lines.error(self.doc.path, int(span[0]), f"{function} takes a pose p[...], not a joint list (URScript manual, '{function}')")
+            row["kind"] = kind if kind is not None else Kind.LINEAR
+            row["speed"] = options.get("v", np.nan)
+        row["name"] = value.name
+        fields = np.r_[F_POS, 3:6] if value.is_pose else np.arange(F_JOINT.start, F_JOINT.stop)
+        scale = np.r_[[M_TO_MM] * 3, [1.0] * 3] if value.is_pose else np.full(6, RAD_TO_DEG)
+        row["values"][fields] = value.numbers * scale
+        row["scale"][fields] = scale
+        row["spans"][fields, 1:] = value.spans
+        row["spans"][fields, 0] = np.where(value.spans[:, 0] >= 0, 0, -1)
+        if value.is_pose:
+            row["frame"] = self.builder.frame_index(value.frame_name, value.frame)
+            if value.qnear is not None:
+                row["qnear"] = value.qnear * RAD_TO_DEG
+            self._posture_rule(row, line)
+        else:
+            self._joint_target()
+        self.rows.append(row)
+
+    def _joint_target(self) -> None:
+        """A joint target sets the joints: the posture is known again from here (inside a
+        loop only for the rest of the loop body's run)."""
+        if self.stack and self.stack[-1].kind in ("while", "if", "else"):
+            self.stack[-1].joint_target = True
+        self.posture_doubt = None if not self._loop_doubt() else self.posture_doubt
+
+    def _loop_doubt(self) -> str | None:
+        """Why a pose target here has unknown joints: inside a while loop (its first run comes
+        from before it, the next from its own end) before any joint target of its body; in a
+        function or thread (it runs where it is called)."""
+        for block in self.stack:
+            if block.kind in ("def", "thread") and (block is not self.stack[0] or block.kind == "thread"):
+                return f"inside {block.kind} {block.name} (line {block.line}): it runs where it is called, from joints the text does not fix there"
+        for block in reversed(self.stack):
+            if block.joint_target:
+                return None
+            if block.kind == "while":
+                return f"inside the while of line {block.line} before any joint target of its body: each run starts from where the previous one ended"
+        return None
+
+    def _posture_rule(self, row: dict, line: int) -> None:
+        """movel/movep/movec and movej to a pose take the inverse-kinematics solution nearest the
+        current joints (URScript manual, "movel", "get_inverse_kin": qnear defaults to the
+        current joints): where those are not known from the text the target is unresolved."""
+        if not np.isnan(row["qnear"]).any():
+            row["resolved"] = False  # the solution nearest qnear: a rule compensation cannot take yet
+            self.notes.append(f"line {line}: get_inverse_kin(..., qnear=...) takes the solution nearest qnear; postproc does not compensate by that rule yet")
+            return
+        doubt = self._loop_doubt() or self.posture_doubt
+        if doubt is not None:
+            row["resolved"] = False
+            self.notes.append(f"line {line}: the posture is not known: {doubt}")
+
+    # ------------------------------------------------------------------ result
+    def _build(self) -> Toolpath:
+        rows = self.rows
+        n = len(rows)
+        stack = {k: np.array([r[k] for r in rows]) if n else np.zeros((0,)) for k in ("order", "line", "tool", "speed", "zone", "resolved", "frame", "kind")}
+        values = np.array([r["values"] for r in rows]).reshape(n, NF)
+        self.builder.add_block(stack["order"].astype(np.int64), kind=stack["kind"].astype(np.int8), line=stack["line"].astype(np.int32), values=values,
+                               spans=np.array([r["spans"] for r in rows]).reshape(n, NF, 3), scale=np.array([r["scale"] for r in rows]).reshape(n, NF),
+                               speed=stack["speed"].astype(float), zone=stack["zone"].astype(float), tool=stack["tool"].astype(np.int32),
+                               frame=stack["frame"].astype(np.int32), resolved=stack["resolved"].astype(bool), name=np.array([r["name"] for r in rows], dtype=object))
+        self.builder.notes.extend(dict.fromkeys(self.notes))
+        tp = self.builder.build(orientation=False)
+        orientation = np.full((n, 4), np.nan)
+        has = ~np.isnan(tp.values[:, 3:6]).any(axis=1)
+        if has.any():
+            orientation[has] = rotvec_to_quat(tp.values[has, 3:6])
+        extras = {"urscript.qnear_deg": np.array([r["qnear"] for r in rows]).reshape(n, 6),
+                  "urscript.accel": np.array([r["accel"] for r in rows], dtype=float),
+                  "urscript.blend_m": np.array([r["blend"] for r in rows], dtype=float),
+                  "urscript.time_s": np.array([r["time"] for r in rows], dtype=float),
+                  "urscript.process_move": np.array([r["function"] == "movep" for r in rows], dtype=bool)}
+        return _with_extras(tp, orientation, extras)
+
+
+def _with_extras(tp: Toolpath, orientation: np.ndarray, extras: dict) -> Toolpath:
+    from dataclasses import replace
+
+    fields = {"orientation": orientation}
+    if "extras" in Toolpath.__dataclass_fields__:
+        fields["extras"] = extras
+    return replace(tp, **fields)
+
+
+__all__ = ["UrParser", "F_ORI"]
