@@ -53,8 +53,7 @@ class UrController:
 
 
 def _extra(tp: Toolpath, key: str):
-    extras = getattr(tp, "extras", None)
-    return None if extras is None else extras.get(key)
+    return tp.extras.get(key)
 
 
 __all__ = ["UrController", "Kind"]

@@ -17,10 +17,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...ir import F_JOINT, F_ORI, F_POS, NF, Kind, SourceDoc, Toolpath
+from ...ir import F_JOINT, F_POS, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .lexer import code_mask, matching, split_arguments, statements, strip
-from .poses import M_TO_MM, RAD_TO_DEG, rotvec_to_quat
+from .poses import M_TO_MM, RAD_TO_DEG
 from .values import Evaluator, Unknown, Value
 
 _HEAD = re.compile(
@@ -203,7 +203,7 @@ class UrParser:
         value = self.evaluator.evaluate(*span, self.env)
         row = {"order": order, "line": line, "tool": self.tool, "speed": np.nan, "zone": options["r"] * M_TO_MM, "resolved": True, "name": "", "frame": 0,
                "values": np.full(NF, np.nan), "spans": np.full((NF, 3), -1, dtype=np.int64), "scale": np.ones(NF), "qnear": np.full(6, np.nan),
-               "function": function, "accel": options.get("a", np.nan), "blend": options["r"], "time": options.get("t", 0.0)}
+               "function": function, "accel": options.get("a", np.nan), "blend": options["r"], "time": options.get("t", 0.0), "process": function == "movep"}
         if isinstance(value, Unknown):
             row["resolved"] = False
             row["kind"] = kind if kind is not None else (Kind.ABSJ if function in ("servoj", "movej") else Kind.LINEAR)
@@ -271,35 +271,28 @@ class UrParser:
 
     # ------------------------------------------------------------------ result
     def _build(self) -> Toolpath:
-        rows = self.rows
-        n = len(rows)
-        stack = {k: np.array([r[k] for r in rows]) if n else np.zeros((0,)) for k in ("order", "line", "tool", "speed", "zone", "resolved", "frame", "kind")}
-        values = np.array([r["values"] for r in rows]).reshape(n, NF)
-        self.builder.add_block(stack["order"].astype(np.int64), kind=stack["kind"].astype(np.int8), line=stack["line"].astype(np.int32), values=values,
-                               spans=np.array([r["spans"] for r in rows]).reshape(n, NF, 3), scale=np.array([r["scale"] for r in rows]).reshape(n, NF),
-                               speed=stack["speed"].astype(float), zone=stack["zone"].astype(float), tool=stack["tool"].astype(np.int32),
-                               frame=stack["frame"].astype(np.int32), resolved=stack["resolved"].astype(bool), name=np.array([r["name"] for r in rows], dtype=object))
+        rows, n = self.rows, len(self.rows)
+
+        def column(key, dtype, shape=()):
+            return np.array([r[key] for r in rows], dtype=dtype).reshape((n,) + shape)
+
+        for name, (dtype, fill, shape) in EXTRAS.items():
+            self.builder.declare_extra(name, dtype, fill, shape)
+        self.builder.add_block(column("order", np.int64), kind=column("kind", np.int8), line=column("line", np.int32), values=column("values", float, (NF,)),
+                               spans=column("spans", np.int64, (NF, 3)), scale=column("scale", float, (NF,)), speed=column("speed", float),
+                               zone=column("zone", float), tool=column("tool", np.int32), frame=column("frame", np.int32),
+                               resolved=column("resolved", bool), name=column("name", object),
+                               **{name: column(key, dtype, shape) for (name, (dtype, _, shape)), key in zip(EXTRAS.items(), EXTRA_KEYS)})
         self.builder.notes.extend(dict.fromkeys(self.notes))
-        tp = self.builder.build(orientation=False)
-        orientation = np.full((n, 4), np.nan)
-        has = ~np.isnan(tp.values[:, 3:6]).any(axis=1)
-        if has.any():
-            orientation[has] = rotvec_to_quat(tp.values[has, 3:6])
-        extras = {"urscript.qnear_deg": np.array([r["qnear"] for r in rows]).reshape(n, 6),
-                  "urscript.accel": np.array([r["accel"] for r in rows], dtype=float),
-                  "urscript.blend_m": np.array([r["blend"] for r in rows], dtype=float),
-                  "urscript.time_s": np.array([r["time"] for r in rows], dtype=float),
-                  "urscript.process_move": np.array([r["function"] == "movep" for r in rows], dtype=bool)}
-        return _with_extras(tp, orientation, extras)
+        return self.builder.build()
 
 
-def _with_extras(tp: Toolpath, orientation: np.ndarray, extras: dict) -> Toolpath:
-    from dataclasses import replace
-
-    fields = {"orientation": orientation}
-    if "extras" in Toolpath.__dataclass_fields__:
-        fields["extras"] = extras
-    return replace(tp, **fields)
-
-
-__all__ = ["UrParser", "F_ORI"]
+# The language's own per-target columns (Toolpath.extras): dtype, fill, shape; and the row key each is read from.
+EXTRAS = {
+    "urscript.qnear_deg": (float, np.nan, (6,)),  # get_inverse_kin's qnear (degrees), NaN where none
+    "urscript.accel": (float, np.nan, ()),  # a= as written (m/s^2 or rad/s^2), NaN where not a number
+    "urscript.blend_m": (float, np.nan, ()),  # r= blend radius, m
+    "urscript.time_s": (float, np.nan, ()),  # t= move time, s (0: not given)
+    "urscript.process_move": (bool, False, ()),  # movep: constant tool speed
+}
+EXTRA_KEYS = ("qnear", "accel", "blend", "time", "process")
