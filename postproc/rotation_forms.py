@@ -110,7 +110,10 @@ def _rotvec_to_quat(numbers: Numbers) -> np.ndarray:
 def _rotvec_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     """Rotation vector (radians); of its spellings (the angle plus whole turns about the same
     axis, all one rotation to the controller) the one nearest ``near``, the shortest without."""
-    plain = Rotation.from_matrix(rot).as_rotvec()
+    plain = np.full((len(rot), 3), np.nan)
+    some = ~np.isnan(rot).any(axis=(1, 2))  # rows without a rotation stay NaN
+    if some.any():
+        plain[some] = Rotation.from_matrix(rot[some]).as_rotvec()
     angle = np.linalg.norm(plain, axis=1, keepdims=True)
     given = np.nan_to_num(near)
     # A (near) zero rotation has no axis of its own: the old numbers' axis spells it.

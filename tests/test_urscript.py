@@ -1,0 +1,131 @@
+"""URScript (.script): reading, spans, the controller's rules, writing back.
+
+No open URScript interpreter exists to judge the reading: every expected position below is
+worked out by hand from the URScript manual's rules (Universal Robots, "The URScript
+Programming Language", e-Series 5.x): poses p[x, y, z, rx, ry, rz] in metres with a rotation
+vector in radians ("Data types: pose"); joint lists in radians ("movej"); pose_trans(F, X)
+= F . X ("pose_trans"); pose_add: P1 + P2, R1 . R2 ("pose_add"); comments from # to the end
+of the line and strings in quotes are not code ("Syntax").
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from postproc import dialects
+from postproc.errors import InputError, ParseError
+from postproc.ir import Kind
+from postproc.programs import emit_texts, parse_program
+
+CELL = Path(__file__).parent / "corpus" / "urscript" / "cell.script"
+
+
+@pytest.fixture(scope="module")
+def cell():
+    return parse_program(CELL)
+
+
+def test_the_cell_program_is_read_by_the_manuals_rules(cell):
+    assert cell.dialect == "urscript" and cell.orientation_kind == "rotvec"
+    assert cell.line.tolist() == [7, 8, 10, 12, 13, 14, 14, 15, 16]  # the comment's and the string's movel are no motion
+    assert cell.kind.tolist() == [Kind.ABSJ, Kind.LINEAR, Kind.LINEAR, Kind.LINEAR, Kind.LINEAR, Kind.CIRC_VIA, Kind.CIRC_END, Kind.LINEAR, Kind.JOINT]
+    # Joint list in radians -> degrees.
+    np.testing.assert_allclose(cell.joints[0], np.degrees([0, -1.5708, 1.5708, -1.5708, -1.5708, 0]))
+    tcp = cell.base_positions()
+    # p[0.4, -0.2, 0.3, ...] m; the two-line movel; pose_trans(plane, p[0.2, 0.1, 0.3]) with plane
+    # 0.1 m along x turned 90 deg about z: (0.1 - 0.1, 0 + 0.2, 0.3); pose_add: (0.41, 0.02, 0.23).
+    expected = [[400, -200, 300], [500, -200, 300], [0, 200, 300], [410, 20, 230], [450, 50, 200], [500, 0, 200], [500, -100, 200], [400, -100, 250]]
+    np.testing.assert_allclose(tcp[1:], expected, atol=1e-3)  # 1.5708 is pi/2 within 4e-6 rad: < 1 um here
+    # The TCP set_tcp gives: 0.15 m along the flange's z.
+    np.testing.assert_allclose(cell.tools[cell.tool[1]][:3, 3], [0, 0, 150])
+    assert cell.frame_names[cell.frame[3]] == "plane" and cell.target_name[0] == "home"
+    # The rotation vector (0, 3.1416, 0) is a half turn about y: the tool points down.
+    np.testing.assert_allclose(cell.base_poses()[1][:3, 2], [0, 0, -1], atol=1e-4)
+    assert cell.speed[1] == 0.25 and cell.speed[2] == 0.1 and cell.zone[2] == 2.0
+    np.testing.assert_allclose(cell.extras["urscript.blend_m"], [0, 0, 0.002, 0, 0, 0, 0, 0.001, 0])
+    assert cell.extras["urscript.process_move"].tolist() == [False] * 7 + [True, False]
+    assert cell.placed().all()
+
+
+def test_every_number_has_its_span_and_the_unchanged_program_is_the_same_bytes(cell):
+    text = cell.sources[0].text
+    spans = cell.spans[1, :3]
+    assert [text[s:e] for _, s, e in spans] == ["0.4", "-0.2", "0.3"]
+    assert [text[s:e] for _, s, e in cell.spans[3, :6]] == ["0.2", "0.1", "0.3", "0", "3.1416", "0"]  # the literal, not the frame's
+    assert emit_texts(cell, cell)[0] == text
+
+
+def test_compensated_numbers_are_written_back_in_metres_and_radians(cell):
+    moved = cell.with_positions(cell.position + np.array([1.0, 0.0, -0.5]))
+    text = emit_texts(cell, moved)[0]
+    assert "movel(p[0.401, -0.2, 0.2995, 0, 3.1416, 0], a=1.2, v=0.25)" in text
+    joints = cell.joints.copy()
+    joints[0, 0] = 10.0
+    assert "home = [0.174533, -1.5708," in emit_texts(cell, cell.with_joints(joints))[0]
+
+
+def test_a_turned_orientation_is_written_as_the_rotation_vector_nearest_the_old_one(cell):
+    from scipy.spatial.transform import Rotation
+
+    turn = Rotation.from_rotvec([0.0, 0.0, 0.01])
+    quats = cell.orientation.copy()
+    has = ~np.isnan(quats).any(axis=1)
+    old = Rotation.from_quat(quats[has][:, [1, 2, 3, 0]])
+    quats[has] = (old * turn).as_quat()[:, [3, 0, 1, 2]]
+    written = parse_program_text(emit_texts(cell, cell.with_orientations(quats))[0])
+    back = Rotation.from_quat(written.orientation[has][:, [1, 2, 3, 0]])
+    assert np.degrees((back.inv() * old * turn).magnitude()).max() < 1e-4
+    # (0, 3.1416, 0) is just past a half turn: the nearest spelling keeps its numbers, not (0, -3.1416, 0)'s
+    assert np.all(written.values[1, 4] > 3.0)
+
+
+def parse_program_text(text: str):
+    return dialects.get("urscript").parse("<text>.script", text.encode("latin-1"))
+
+
+def test_targets_the_text_does_not_fix_are_unresolved_with_a_note():
+    tp = parse_program_text("def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  movel(p[x, 0, 0.3, 0, 3.14, 0])\n  if digital_in(0):\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n  end\n"
+                            "  movel(p[0.5, 0, 0.3, 0, 3.14, 0])\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  movel(p[0.5, 0, 0.3, 0, 3.14, 0])\n"
+                            "  while True:\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n    movej([0, -1.5, 1.5, 0, 0, 0])\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n  end\nend\n")
+    assert tp.resolved.tolist() == [True, False, True, False, True, True, False, True, True]
+    notes = "\n".join(tp.notes)
+    assert "line 3: movel target not known from the text: value 1 of the pose at line 3, column 11 ('x') is not a number" in notes
+    assert "line 7: the posture is not known: after the if of line 4" in notes
+    assert "line 11: the posture is not known: inside the while of line 10 before any joint target" in notes
+
+
+def test_the_tcp_before_any_set_tcp_is_the_installations_and_unknown():
+    tp = parse_program_text("movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n")
+    assert tp.tool_names[tp.tool[0]] == "<installation TCP>" and not tp.placed()[0]
+    given = tp.with_frames(tools={"<installation TCP>": np.eye(4)})
+    assert given.placed()[0]
+
+
+@pytest.mark.parametrize("text, where, message", [
+    ("movel(p[0.4, 0, 0.3, 0, 3.14, 0]\n", (1, 6), "movel( is not closed"),
+    ("def p():\n  movel([0, 0, 0, 0, 0, 0])\nend\n", (2, 9), "movel takes a pose"),
+    ("def p():\n  movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n", (3, 1), "'def' of line 1 has no 'end'"),
+    ("movel(p[0.4, 0, 0.3, 0, 3.14, 0], b=1)\n", (1, 6), "movel has no parameter b"),
+    ("end\n", (1, 1), "'end' without a block"),
+])
+def test_refusals_name_the_line_and_column(text, where, message):
+    with pytest.raises(ParseError, match=re.escape(message)) as caught:
+        parse_program_text(text)
+    assert (caught.value.line, caught.value.column) == where
+
+
+def test_sniffing_tells_urscript_from_krl_and_rapid(tmp_path):
+    program = tmp_path / "prog.txt"
+    program.write_bytes(CELL.read_bytes())
+    assert dialects.sniff(program).name == "urscript"
+    assert dialects.sniff(tmp_path / "x.script", b"").name == "urscript"
+    krl = tmp_path / "k.txt"
+    krl.write_bytes(b"DEF k( )\nPTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\nEND\n")
+    assert dialects.sniff(krl).name == "krl"
+    rapid = tmp_path / "r.txt"
+    rapid.write_bytes(b"MODULE m\nPROC main()\nMoveL p10, v100, fine, tool0;\nENDPROC\nENDMODULE\n")
+    assert dialects.sniff(rapid).name == "rapid"
