@@ -129,3 +129,19 @@ def test_sniffing_tells_urscript_from_krl_and_rapid(tmp_path):
     rapid = tmp_path / "r.txt"
     rapid.write_bytes(b"MODULE m\nPROC main()\nMoveL p10, v100, fine, tool0;\nENDPROC\nENDMODULE\n")
     assert dialects.sniff(rapid).name == "rapid"
+
+
+@pytest.mark.parametrize("source", ["rapid/milling_wobj.mod", "rapid/circles.mod", "rapid/absj_home.mod", "krl/circ_arcs.src"])
+def test_convert_to_urscript_reads_back_the_same_poses(source):
+    from postproc.programs import write_program
+
+    original = parse_program(Path(__file__).parent / "corpus" / source)
+    text = write_program(original, "urscript", "converted")[0]
+    back = parse_program_text(text)
+    assert len(back) == len(original) and back.kind.tolist() == original.kind.tolist()
+    cart = original.kind != Kind.ABSJ
+    np.testing.assert_allclose(back.base_poses()[cart][:, :3, 3], original.base_poses()[cart][:, :3, 3], atol=1e-3)  # 7 decimals of a metre
+    np.testing.assert_allclose(back.base_poses()[cart][:, :3, :3], original.base_poses()[cart][:, :3, :3], atol=1e-6)
+    np.testing.assert_allclose(back.tools[back.tool][cart], original.tools[original.tool][cart], atol=1e-3)
+    np.testing.assert_allclose(back.joints[~cart], original.joints[~cart], atol=1e-5)
+    assert emit_texts(back, back)[0] == text

@@ -11,6 +11,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import UrController
 from .parse import UrParser
+from .writer import UrWriter
 
 _MOTION_CALL = re.compile(r"\b(?:MOVEJ|MOVEL|MOVEP|MOVEC|SERVOJ)[ \t]*\(")
 
@@ -52,6 +53,9 @@ class UrScriptDialect(Dialect):
 
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
         return self.controller.arc_ends_at_target(tp)
+
+    def new_writer(self, name: str):
+        return UrWriter(name)
 
 
 URSCRIPT = UrScriptDialect()
