@@ -246,7 +246,7 @@ def _conf(lang, robot, tp: Toolpath, r: int, poses: np.ndarray) -> np.ndarray:
         return conf
     inv_tool = np.linalg.inv(tp.tools[tp.tool[r]])
     end_flange = (tp.base_poses()[r] @ inv_tool)[None]
-    q_end, branch = lang.branch_from_conf(robot, kin.ik(robot, end_flange), tp.conf[r][None])
+    q_end, branch = lang.controller.branch_from_conf(robot, kin.ik(robot, end_flange), tp.conf[r][None])
     if branch[0] < 0:
         return conf
     q, b = kin.select_branch(robot, kin.ik(robot, poses @ inv_tool), np.repeat(branch, k), np.repeat(q_end, k, axis=0))

@@ -276,7 +276,7 @@ def compensate(
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
     Targets outside the region the model was measured in fail unless ``allow_extrapolation``.
     ``detail``: the report also carries the per-target vectors of ``PathDetail``.
-    ``controller``: the rules of the controller that runs the program (a ``Dialect``:
+    ``controller``: the rules of the controller that runs the program (a ``postproc.controller.Controller``:
     ``conf_applies``, ``branch_from_conf``, ``inexact_interpolation``, ``arc_ends_at_target``);
     ``postproc.compensate.compensate`` takes those of the program's language by default."""
     if scheme not in _SCHEMES:

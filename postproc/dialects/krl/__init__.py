@@ -9,6 +9,7 @@ import numpy as np
 
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
+from .controller import KRC
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -16,7 +17,7 @@ CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA
 class KrlDialect(Dialect):
     name = "krl"
     description = "KUKA KRL (.src with its .dat and $config.dat)"
-    controller_maker = "KUKA"
+    controller = KRC
     extensions = (".src", ".sub")
     comment_pattern = r"[;&][^\n]*"  # comments and the &ACCESS / &REL header lines
     motion_words = "PTP, LIN, CIRC, SPTP, SLIN, SCIRC or their _REL forms"
@@ -69,36 +70,6 @@ class KrlDialect(Dialect):
 
         return KrlParser(sources).parse()
 
-    def branch_from_conf(self, robot, solutions, conf):
-        """KSS: a target's Status and Turn pick the branch (KUKA System Software 8, 'S and T')."""
-        from ...kinematics import select_by_kuka_status
-
-        q, branch = super().branch_from_conf(robot, solutions, conf)
-        has = ~np.isnan(conf[:, :2]).any(axis=1)
-        if has.any():
-            q[has], branch[has] = select_by_kuka_status(robot, solutions[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
-        return q, branch
-
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        """S and T count for PTP motions only; LIN, CIRC (and KSS 8 SLIN/SCIRC) ignore them
-        and keep the current posture (KUKA System Software 8.x operating and programming
-        manual, 'Status and Turn')."""
-        from ...ir import Kind
-
-        return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
-
-    def stated_loads(self, tp: Toolpath):
-        from .loads import stated_loads
-
-        return stated_loads(tp)
-
-    def payloads(self, tp: Toolpath):
-        """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
-        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""
-        from .loads import load_masses
-
-        return load_masses(tp)
-
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "{", 1)  # {X .., S .., T ..}
 
@@ -106,21 +77,6 @@ class KrlDialect(Dialect):
         from .placing import set_base
 
         return set_base(text, new_frame, path)
-
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
-        import re
-
-        from ...ir import Kind
-
-        ca = re.compile(r"\bCA\b", re.IGNORECASE)
-        ends = np.ones(len(tp.kind), dtype=bool)
-        arcs = np.nonzero(tp.kind == Kind.CIRC_END)[0]  # only arcs' lines are read (a long program has few)
-        if arcs.size:
-            lines = [doc.text.split("\n") for doc in tp.sources]
-            ends[arcs] = [not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
-                          for f, n in zip(tp.file[arcs].tolist(), tp.line[arcs].tolist())]
-        return ends
 
     def stream_rules(self):
         from .stream import RULES
