@@ -32,6 +32,12 @@ class Controller:
         where the program gives none (the caller then follows the path)."""
         return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
 
+    def branch_of_targets(self, robot, solutions: np.ndarray, tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``branch_from_conf`` for the targets ``rows`` of ``tp`` (``solutions`` their IK): a
+        controller whose rule reads more of a target than its configuration data (URScript's
+        get_inverse_kin qnear: six joint values) overrides this; the default reads ``tp.conf``."""
+        return self.branch_from_conf(robot, solutions, tp.conf[rows])
+
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """(N,) True where the controller takes the target's configuration data as written
         (it then selects the branch); elsewhere the robot keeps the posture it is in

@@ -4,7 +4,8 @@ The program: set_tcp, a movej to joint values, then movel targets along a short 
 path. The controller is modelled here, independently of postproc.posture, as the URScript
 manual states it ("movel": the inverse kinematics nearest the current joints): each movel
 target on the IK solution nearest the previous joints, a per-point loop as a controller steps.
-Started in each of two configurations (the movej sets it), the compensated program lands
+Started in each of two configurations (the movej sets it: joint values, or get_inverse_kin with
+qnear as PolyScope writes a MoveJ waypoint), the compensated program lands
 within 0.05 mm of the programmed TCP positions.
 """
 
@@ -20,6 +21,7 @@ import postproc
 from helpers import FRAME_AND_COMPLIANCE, TOOL, truth_and_fit
 from postproc import kinematics as kin
 from postproc.compensate import compensate
+from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
 from postproc.sim import Cylinder
 
@@ -48,22 +50,38 @@ def truth_and_model(robot):
                          poses=lambda q, rng: _in_every_configuration(robot, q, rng))
 
 
-def _program(robot, q_start, path):
-    """set_tcp, movej to q_start (radians), movel to the TCP poses of a joint-space path (m, rotation vectors)."""
+def _pose(t):
+    x, y, z = t[:3, 3] / 1000.0
+    r = Rotation.from_matrix(t[:3, :3]).as_rotvec()
+    return f"p[{x:.6f}, {y:.6f}, {z:.6f}, {r[0]:.6f}, {r[1]:.6f}, {r[2]:.6f}]"
+
+
+def _program(robot, q_start, path, polyscope=False):
+    """set_tcp, a movej that sets the posture, movel to the TCP poses of a joint-space path (m,
+    rotation vectors). The movej: to joint values q_start (radians); or, as PolyScope writes a
+    MoveJ waypoint inside its ``while (True):`` loop, movej(get_inverse_kin(Waypoint_1_p,
+    qnear=Waypoint_1_q)) with Waypoint_1_q = q_start (the solution nearest it)."""
     q_path = q_start + np.arange(1, N_LIN + 1)[:, None] * STEP
     tcp = kin.fk(robot, q_path, tool=TOOL)
-    rotvec = Rotation.from_matrix(tcp[:, :3, :3]).as_rotvec()
-    lines = ["def pocket():", f"  set_tcp(p[0, 0, {TOOL[2] / 1000:g}, 0, 0, 0])", "  movej([" + ", ".join(f"{v:.6f}" for v in np.radians(q_start)) + "], a=1.4, v=1.05)"]
-    for pose, r in zip(tcp, rotvec):
-        x, y, z = pose[:3, 3] / 1000.0
-        lines.append(f"  movel(p[{x:.6f}, {y:.6f}, {z:.6f}, {r[0]:.6f}, {r[1]:.6f}, {r[2]:.6f}], a=1.2, v=0.1)")
-    path.write_text("\n".join(lines + ["end"]) + "\n")
+    q_text = "[" + ", ".join(f"{v:.6f}" for v in np.radians(q_start)) + "]"
+    lines = ["def pocket():", f"  set_tcp(p[0, 0, {TOOL[2] / 1000:g}, 0, 0, 0])"]
+    if polyscope:
+        lines += [f"  global Waypoint_1_p={_pose(kin.fk(robot, q_start[None], tool=TOOL)[0])}", f"  global Waypoint_1_q={q_text}", "  while (True):",
+                  '    $ 1 "Robot Program"', "    movej(get_inverse_kin(Waypoint_1_p, qnear=Waypoint_1_q), a=1.3962634015954636, v=1.0471975511965976)"]
+    else:
+        lines.append(f"  movej({q_text}, a=1.4, v=1.05)")
+    lines += [f"    movel({_pose(t)}, a=1.2, v=0.1)" for t in tcp]
+    path.write_text("\n".join(lines + (["  end"] if polyscope else []) + ["end"]) + "\n")
     return path
 
 
 def _run_on_true_robot(robot, truth, tp):
-    """The controller: the movej's joints, then each movel on the IK solution nearest the previous joints."""
-    q_prev = tp.joints[0]
+    """The controller: the movej's joints (or the solution of its pose nearest qnear), then each
+    movel on the IK solution nearest the previous joints."""
+    if tp.kind[0] == Kind.ABSJ:
+        q_prev = tp.joints[0]
+    else:
+        q_prev = kin.select_nearest(robot, kin.ik(robot, tp.flange_poses()[:1]), tp.extras["urscript.qnear_deg"][:1])[0][0]
     flange = tp.base_poses()[1:] @ np.linalg.inv(tp.tools[tp.tool[1:]])
     reached = []
     for sols in kin.ik(robot, flange):
@@ -75,15 +93,16 @@ def _run_on_true_robot(robot, truth, tp):
     return true.predict_prepared(true.prepare(q_deg=np.array(reached)))
 
 
-@pytest.mark.parametrize("other", [False, True])
-def test_the_compensated_program_lands_on_the_true_robot(robot, truth_and_model, tmp_path, other):
+@pytest.mark.parametrize("branch, polyscope", [(4, False), (5, False), (0, True)])
+def test_the_compensated_program_lands_on_the_true_robot(robot, truth_and_model, tmp_path, branch, polyscope):
+    """Branch 4 is Q_START itself, 5 its pose with the elbow down (the posture nearest all-zero
+    joints), 0 with the wrist flipped as well: only the rule that the movej's qnear selects
+    the solution finds the joints the controller takes there."""
     truth, model = truth_and_model
-    q_start = Q_START
-    if other:  # the same start pose in another configuration (wrist flipped): the movej sets it
-        sols = kin.ik(robot, kin.fk(robot, Q_START[None]))[0]
-        q_start = sols[5]
-        assert not np.isnan(q_start).any() and np.abs(q_start - Q_START).max() > 30.0
-    tp = parse_program(_program(robot, q_start, tmp_path / "pocket.script"))
+    q_start = kin.ik(robot, kin.fk(robot, Q_START[None]))[0, branch]
+    assert not np.isnan(q_start).any()
+    tp = parse_program(_program(robot, q_start, tmp_path / "pocket.script", polyscope))
+    assert tp.placed().all()
     goal = tp.base_poses()[1:, :3, 3]
     as_written = np.sqrt(np.mean(np.sum((_run_on_true_robot(robot, truth, tp) - goal) ** 2, axis=1)))
     new, report = compensate(tp, model)
@@ -92,7 +111,7 @@ def test_the_compensated_program_lands_on_the_true_robot(robot, truth_and_model,
     out.write_text(emit_texts(tp, new)[0], encoding="latin-1")
     written = parse_program(out)
     rms = float(np.sqrt(np.mean(np.sum((_run_on_true_robot(robot, truth, written) - goal) ** 2, axis=1))))
-    print(f"configuration {int(other)}: true TCP RMS {as_written:.4f} mm as written, {rms:.4f} mm compensated")
+    print(f"branch {branch}{' (PolyScope qnear)' if polyscope else ''}: true TCP RMS {as_written:.4f} mm as written, {rms:.4f} mm compensated")
     assert as_written > 0.3 and rms <= 0.05, f"true RMS {as_written:.4f} mm as written, {rms:.4f} mm compensated"
     # only numbers changed: the same lines, in metres and radians
     assert [line.split("[")[0] for line in out.read_text().splitlines()] == [line.split("[")[0] for line in tp.sources[0].text.splitlines()]

@@ -225,7 +225,7 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray,
     by_conf = controller.conf_applies(tp) & cartesian
     anchor_q = np.full((n, 6), np.nan)
     if by_conf.any():
-        anchor_q[by_conf] = controller.branch_from_conf(robot, sols.all(np.nonzero(by_conf)[0]), tp.conf[by_conf])[0]
+        anchor_q[by_conf] = controller.branch_of_targets(robot, sols.all(np.nonzero(by_conf)[0]), tp, np.nonzero(by_conf)[0])[0]
     joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
     anchor_q[joint_targets] = tp.joints[joint_targets]
     carried = posture.carry(robot, sols, by_conf | joint_targets, anchor_q, start_q, lines=tp.line)

@@ -261,8 +261,7 @@ class UrParser:
         current joints (URScript manual, "movel", "get_inverse_kin": qnear defaults to the
         current joints): where those are not known from the text the target is unresolved."""
         if not np.isnan(row["qnear"]).any():
-            row["resolved"] = False  # the solution nearest qnear: a rule compensation cannot take yet
-            self.notes.append(f"line {line}: get_inverse_kin(..., qnear=...) takes the solution nearest qnear; postproc does not compensate by that rule yet")
+            self._joint_target()  # get_inverse_kin(x, qnear=q): the solution nearest q, whatever the joints were
             return
         doubt = self._loop_doubt() or self.posture_doubt
         if doubt is not None:
