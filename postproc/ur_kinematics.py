@@ -26,7 +26,7 @@ _ACOS_SLACK = 1e-10  # cosines beyond +-1 by less than this are rounding at the 
 def is_ur_geometry(robot) -> bool:
     """True for a DH table of the UR shape (see the module's docstring)."""
     a, d = np.asarray(robot.a_mm, float), np.asarray(robot.d_mm, float)
-    return (np.allclose(robot.alpha_deg, UR_ALPHA_DEG, atol=1e-9) and np.allclose(a[[0, 3, 4, 5]], 0.0, atol=1e-9)
+    return bool(np.allclose(robot.alpha_deg, UR_ALPHA_DEG, atol=1e-9) and np.allclose(a[[0, 3, 4, 5]], 0.0, atol=1e-9)
             and np.allclose(d[[1, 2]], 0.0, atol=1e-9) and abs(a[1]) > 0 and abs(a[2]) > 0)
 
 
@@ -93,7 +93,7 @@ def ik(robot, poses: np.ndarray) -> np.ndarray:
     q1w = np.broadcast_to(q1[:, :, None], q5.shape)
     t16 = _inverse(_dh(q1w, d[0], a[0], alpha[0])) @ t[:, None, None]
     t14 = t16 @ _inverse(_dh(np.nan_to_num(q6), d[5], a[5], alpha[5])) @ _inverse(_dh(q5, d[4], a[4], alpha[4]))
-    p13 = t14[..., :3, 3] - d[3] * t14[..., :3, 1]  # frame 4's origin is d4 along frame 3's z = frame 4's -y... see below
+    p13 = t14[..., :3, 3] - d[3] * t14[..., :3, 1]  # frame 4's origin is d4 along frame 3's z, which is frame 4's y (alpha4 = 90)
     x, y = p13[..., 0], p13[..., 1]
     q3_mag = _acos((x**2 + y**2 - a[1] ** 2 - a[2] ** 2) / (2.0 * a[1] * a[2]))
     q3 = np.stack([q3_mag, -q3_mag], axis=3)  # (N, 2, 2, 2 elbow)
