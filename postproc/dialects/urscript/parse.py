@@ -94,6 +94,9 @@ class UrParser:
     def _statement(self, start: int, end: int, line: int) -> None:
         head = _HEAD.match(self.mask, start, end)
         if head is None:
+            first, _ = strip(self.mask, start, end)
+            if not (self.mask[first].isalpha() or self.mask[first] in "_$"):
+                raise self.lines.error(self.doc.path, first, f"'{self.mask[first]}' cannot start a URScript statement (a template to be filled in, not a program?)")
             return  # another call or statement: it moves nothing (motions are only the functions above)
         kind = head.lastgroup if head.lastgroup != "fname" else "def"
         if head.group("def"):
