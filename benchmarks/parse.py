@@ -66,7 +66,19 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["urscript"] = make_urscript(folder, n)
     return out
+
+
+def make_urscript(folder: Path, n: int) -> Path:
+    """A URScript program: set_tcp, one movej to joints, then movel to literal poses (m, rad)."""
+    path = folder / "big.script"
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n")
+        for i in range(n - 4):
+            fh.write(f"  movel(p[{0.8 + (i % 400) * 0.0005:.6f}, {-0.2 + ((i // 400) % 400) * 0.001:.6f}, {0.3 + (i % 7) * 0.000125:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n")
+        fh.write("end\n")
+    return path
 
 
 def measure(path: str) -> None:

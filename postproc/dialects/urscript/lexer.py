@@ -13,6 +13,7 @@ import re
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 _BLANKED = re.compile(r'#[^\n]*|"[^"\n]*"|\'[^\'\n]*\'')
 
@@ -40,23 +41,44 @@ class Statements:
 
 def statements(mask: str) -> Statements:
     """The non-blank logical statements of a masked text: a line, joined with the lines after
-    it while a round or square bracket it opened is open (vectorised over the lines)."""
+    it while a round or square bracket it opened is open."""
     raw = np.frombuffer(mask.encode("latin-1"), dtype=np.uint8)
     newlines = np.nonzero(raw == 10)[0]
-    line_start = np.concatenate([[0], newlines + 1])
-    line_end = np.concatenate([newlines, [len(raw)]])
-    depth_step = np.isin(raw, (40, 91)).astype(np.int64) - np.isin(raw, (41, 93)).astype(np.int64)
-    depth = np.cumsum(depth_step)
-    depth_at_end = np.where(line_end > 0, depth[np.maximum(line_end - 1, 0)] if len(depth) else 0, 0)
-    # A line ends a statement where no bracket it opened is still open.
+    line_start = np.concatenate([[0], newlines + 1]).astype(np.int64)
+    line_end = np.concatenate([newlines, [len(raw)]]).astype(np.int64)
+    delta, visible = _line_facts(raw, line_start, line_end)
+    depth_at_end = np.cumsum(delta)
     ends_statement = _statement_ends(depth_at_end) if depth_at_end.any() else np.ones(len(line_start), dtype=bool)
     first = np.concatenate([[0], np.nonzero(ends_statement[:-1])[0] + 1])
     last = np.nonzero(ends_statement)[0]
     if len(last) < len(first):
         last = np.concatenate([last, [len(line_start) - 1]])
-    start, end = line_start[first], line_end[last]
-    keep = ~_blank_spans(raw, start, end)
-    return Statements(start[keep], end[keep], (first + 1)[keep])
+    seen = np.concatenate([[0], np.cumsum(visible)])
+    keep = seen[last + 1] - seen[first] > 0  # a statement of blank lines is none
+    return Statements(line_start[first][keep], line_end[last][keep], (first + 1)[keep])
+
+
+@njit(cache=True)
+def _line_facts(raw, line_start, line_end):
+    """Per line: opening minus closing brackets ( [ ) ], and whether it has a visible character
+    (one compiled pass over the text)."""
+    n = len(line_start)
+    delta = np.zeros(n, np.int64)
+    visible = np.zeros(n, np.int64)
+    for i in range(n):
+        d = 0
+        v = 0
+        for j in range(line_start[i], line_end[i]):
+            c = raw[j]
+            if c == 40 or c == 91:
+                d += 1
+            elif c == 41 or c == 93:
+                d -= 1
+            if c > 32:
+                v = 1
+        delta[i] = d
+        visible[i] = v
+    return delta, visible
 
 
 def _statement_ends(depth_at_end: np.ndarray) -> np.ndarray:
@@ -70,12 +92,6 @@ def _statement_ends(depth_at_end: np.ndarray) -> np.ndarray:
         else:
             base = d
     return ends
-
-
-def _blank_spans(raw: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
-    """(S,) True where raw[start:end] holds only blanks (vectorised)."""
-    visible = np.cumsum(np.concatenate([[0], (raw > 32).astype(np.int64)]))
-    return visible[end] - visible[start] == 0
 
 
 def split_arguments(mask: str, start: int, end: int) -> list[tuple[int, int]]:

@@ -19,6 +19,7 @@ import numpy as np
 
 from ...ir import F_JOINT, F_POS, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
+from . import bulk
 from .lexer import code_mask, matching, split_arguments, statements, strip
 from .poses import M_TO_MM, RAD_TO_DEG
 from .values import Evaluator, Unknown, Value
@@ -70,13 +71,15 @@ class UrParser:
         self.lines = LineIndex(self.doc.text)
         self.evaluator = Evaluator(self.mask, self._where)
         self.builder = Builder("urscript", "rotvec", list(sources), tool_names=[INSTALLATION_TCP], tools=[np.eye(4)], tool_known=[False])
+        for name, (dtype, fill, shape) in EXTRAS.items():
+            self.builder.declare_extra(name, dtype, fill, shape)
         self.env: dict = {}
         self.stack: list[_Block] = []
         self.tool = 0
         self.posture_doubt: str | None = None  # why the joints the robot is in are not known from the text here
         self.rows: list[dict] = []
         self.notes: list[str] = []
-        self.noted_blocks: set[int] = set()
+        self.flushed = 0  # bulk lines before this offset are taken
 
     def _where(self, offset: int) -> str:
         line = int(self.lines.line(offset))
@@ -84,8 +87,16 @@ class UrParser:
 
     def parse(self) -> Toolpath:
         found = statements(self.mask)
-        for start, end, line in zip(found.start.tolist(), found.end.tolist(), found.line.tolist()):
+        lines_of_end = self.lines.line(np.maximum(found.end - 1, found.start))
+        one_line = found.start[lines_of_end == found.line]
+        self.bulk = bulk.find(self.mask, self.lines.starts)
+        keep = _members(self.bulk.start, one_line)  # a bulk line inside a longer statement is not one
+        self.bulk = bulk.BulkLines(*(getattr(self.bulk, f)[keep] for f in bulk.BulkLines.__dataclass_fields__))
+        own = ~_members(found.start, self.bulk.start)
+        for start, end, line in zip(found.start[own].tolist(), found.end[own].tolist(), found.line[own].tolist()):
+            self._flush(start)
             self._statement(start, end, line)
+        self._flush(len(self.mask) + 1)
         if self.stack:
             raise self.lines.error(self.doc.path, len(self.doc.text), f"'{self.stack[-1].kind}' of line {self.stack[-1].line} has no 'end'")
         return self._build()
@@ -159,6 +170,22 @@ class UrParser:
         else:
             self.tool = self.builder.tool_index(name, None)
             self.notes.append(f"line {line}: the TCP is not known from the text ({value.reason if isinstance(value, Unknown) else 'a joint list'}): give it with --tool {name}=X,Y,Z,A,B,C")
+
+    def _flush(self, before: int) -> None:
+        """The bulk lines (bulk.py) before offset ``before`` not yet taken, under the state now."""
+        sel = self.bulk.between(self.flushed, before)
+        self.flushed = before
+        if sel.stop == sel.start:
+            return
+        self._add_rows()  # the statements' targets before these first: blocks arrive in program order
+        doubt = self._loop_doubt() or self.posture_doubt
+        if doubt is not None:
+            first, last = int(self.bulk.line[sel.start]), int(self.bulk.line[sel.stop - 1])
+            self.notes.append(f"{f'line {first}' if first == last else f'lines {first}-{last}'}: the posture is not known: {doubt}")
+        block = bulk.rows(self.bulk, sel, self.tool, doubt is None)
+        self.builder.add_block(block.pop("order"), **block)
+        if self.stack:
+            self.stack[-1].moved = True
 
     # ----------------------------------------------------------------- motions
     def _motion(self, function: str, opener: int, end: int, line: int) -> None:
@@ -272,21 +299,32 @@ class UrParser:
             self.notes.append(f"line {line}: the posture is not known: {doubt}")
 
     # ------------------------------------------------------------------ result
-    def _build(self) -> Toolpath:
+    def _add_rows(self) -> None:
+        """The targets of the statements read since the last call, as one builder block."""
         rows, n = self.rows, len(self.rows)
+        if not n:
+            return
 
         def column(key, dtype, shape=()):
             return np.array([r[key] for r in rows], dtype=dtype).reshape((n,) + shape)
 
-        for name, (dtype, fill, shape) in EXTRAS.items():
-            self.builder.declare_extra(name, dtype, fill, shape)
         self.builder.add_block(column("order", np.int64), kind=column("kind", np.int8), line=column("line", np.int32), values=column("values", float, (NF,)),
                                spans=column("spans", np.int64, (NF, 3)), scale=column("scale", float, (NF,)), speed=column("speed", float),
                                zone=column("zone", float), tool=column("tool", np.int32), frame=column("frame", np.int32),
                                resolved=column("resolved", bool), name=column("name", object),
                                **{name: column(key, dtype, shape) for (name, (dtype, _, shape)), key in zip(EXTRAS.items(), EXTRA_KEYS)})
+        self.rows = []
+
+    def _build(self) -> Toolpath:
+        self._add_rows()
         self.builder.notes.extend(dict.fromkeys(self.notes))
         return self.builder.build()
+
+
+def _members(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
+    """(len(values),) True where the value is in ``sorted_set`` (ascending; np.isin sorts both)."""
+    at = np.minimum(np.searchsorted(sorted_set, values), max(len(sorted_set) - 1, 0))
+    return (sorted_set[at] == values) if len(sorted_set) else np.zeros(len(values), bool)
 
 
 # The language's own per-target columns (Toolpath.extras): dtype, fill, shape; and the row key each is read from.
