@@ -17,7 +17,6 @@ _MOTION_CALL = re.compile(r"\b(?:MOVEJ|MOVEL|MOVEP|MOVEC|SERVOJ)[ \t]*\(")
 class UrScriptDialect(Dialect):
     name = "urscript"
     description = "Universal Robots URScript (.script)"
-    controller_maker = "Universal Robots"
     extensions = (".script", ".urscript")
     comment_pattern = r"#[^\n]*"
     motion_words = "movej, movel, movep, movec or servoj"

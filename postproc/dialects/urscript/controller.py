@@ -13,7 +13,7 @@ from ...kinematics import select_nearest
 
 
 class UrController(Controller):
-    maker = "Universal Robots"
+    maker = "Universal"  # as robot files' descriptions name the maker: their first word (program_check)
     name = "Universal Robots CB3 / e-Series controller"
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
