@@ -96,6 +96,7 @@ def test_targets_the_text_does_not_fix_are_unresolved_with_a_note():
     assert "line 3: movel target not known from the text: value 1 of the pose at line 3, column 11 ('x') is not a number" in notes
     assert "line 7: the posture is not known: after the if of line 4" in notes
     assert "line 11: the posture is not known: inside the while of line 10 before any joint target" in notes
+    assert "line 10: the while loop runs a number of times the text does not fix: its motions are listed once" in notes
 
 
 def test_the_tcp_before_any_set_tcp_is_the_installations_and_unknown():

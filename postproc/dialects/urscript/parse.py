@@ -140,6 +140,8 @@ class UrParser:
         block = self.stack.pop()
         if block.kind in ("if", "while"):
             self._leave(block)
+        if block.kind == "while" and block.moved:
+            self.notes.append(f"line {block.line}: the while loop runs a number of times the text does not fix: its motions are listed once")
         for name in block.assigned:  # set inside a block that may not run: unknown after it
             self.env[name] = Unknown(f"'{name}' is set inside the {block.kind} of line {block.line}, which may or may not run")
         if self.stack:
