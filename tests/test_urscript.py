@@ -146,3 +146,22 @@ def test_convert_to_urscript_reads_back_the_same_poses(source):
     np.testing.assert_allclose(back.tools[back.tool][cart], original.tools[original.tool][cart], atol=1e-3)
     np.testing.assert_allclose(back.joints[~cart], original.joints[~cart], atol=1e-5)
     assert emit_texts(back, back)[0] == text
+
+
+def test_a_function_runs_where_it_is_called():
+    """A def beside top-level statements is a function (URScript manual, "Functions"): its body
+    does not run where it is written; after a call of it that moves or sets the TCP, the joints
+    and the TCP are the ones it left, which the text does not fix here."""
+    tp = parse_program_text("def sub():\n  set_tcp(p[0, 0, 0.1, 0, 0, 0])\n  movel(p[0.4, 0, 0.3, 0, 3.14, 0])\nend\n"
+                            "set_tcp(p[0, 0, 0.2, 0, 0, 0])\nmovej([0, -1.57, 1.57, 0, 0, 0])\nmovel(p[0.5, 0, 0.3, 0, 3.14, 0])\n"
+                            "sub()\nmovel(p[0.6, 0, 0.3, 0, 3.14, 0])\n")
+    assert tp.line.tolist() == [3, 6, 7, 9]
+    assert tp.resolved.tolist() == [False, True, True, False]
+    np.testing.assert_allclose(tp.tools[tp.tool[2]][:3, 3], [0, 0, 200])  # the def's set_tcp did not run at line 2
+    assert tp.tool_names[tp.tool[3]] == "TCP after sub()@8" and not tp.placed()[3]
+    notes = "\n".join(tp.notes)
+    assert "line 3: the posture is not known: inside def sub (line 1): it runs where it is called" in notes
+    assert "line 9: the posture is not known: after the call of sub (line 1) at line 8" in notes
+    # PolyScope's form: one def and nothing else at the top level is the program itself
+    program = parse_program_text("def prog():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  movel(p[0.5, 0, 0.3, 0, 3.14, 0])\nend\n")
+    assert program.resolved.all()

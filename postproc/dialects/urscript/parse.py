@@ -59,6 +59,9 @@ class _Block:
     moved: bool = False  # a motion ran inside it
     joint_target: bool = False  # a joint target inside it set the posture (from there on in the block)
     assigned: set = field(default_factory=set)
+    program: bool = False  # the def the controller runs as the program (see ``program_def``)
+    sets_tcp: bool = False
+    before: tuple = ()  # a function's (TCP, posture doubt) at its definition, restored after it: its body runs where it is called
 
 
 class UrParser:
@@ -80,6 +83,8 @@ class UrParser:
         self.rows: list[dict] = []
         self.notes: list[str] = []
         self.flushed = 0  # bulk lines before this offset are taken
+        self.functions: dict[str, _Block] = {}  # the program's functions and threads read so far
+        self.program_at = -1
 
     def _where(self, offset: int) -> str:
         line = int(self.lines.line(offset))
@@ -93,6 +98,7 @@ class UrParser:
         keep = _members(self.bulk.start, one_line)  # a bulk line inside a longer statement is not one
         self.bulk = bulk.BulkLines(*(getattr(self.bulk, f)[keep] for f in bulk.BulkLines.__dataclass_fields__))
         own = ~_members(found.start, self.bulk.start)
+        self.program_at = program_def(self.mask, found.start[own], found.end[own], self.bulk.start)
         for start, end, line in zip(found.start[own].tolist(), found.end[own].tolist(), found.line[own].tolist()):
             self._flush(start)
             self._statement(start, end, line)
@@ -108,10 +114,11 @@ class UrParser:
             first, _ = strip(self.mask, start, end)
             if not (self.mask[first].isalpha() or self.mask[first] in "_$"):
                 raise self.lines.error(self.doc.path, first, f"'{self.mask[first]}' cannot start a URScript statement (a template to be filled in, not a program?)")
-            return  # another call or statement: it moves nothing (motions are only the functions above)
+            self._call(start, end, line)  # another call or statement: it moves only through a function of the program
+            return
         kind = head.lastgroup if head.lastgroup != "fname" else "def"
         if head.group("def"):
-            self.stack.append(_Block(head.group("def"), line, head.group("fname")))
+            self.stack.append(_Block(head.group("def"), line, head.group("fname"), program=start == self.program_at, before=(self.tool, self.posture_doubt)))
         elif head.group("block"):
             self._open(head.group("block"), line, start)
         elif head.group("else"):
@@ -142,11 +149,31 @@ class UrParser:
             self._leave(block)
         if block.kind == "while" and block.moved:
             self.notes.append(f"line {block.line}: the while loop runs a number of times the text does not fix: its motions are listed once")
-        for name in block.assigned:  # set inside a block that may not run: unknown after it
-            self.env[name] = Unknown(f"'{name}' is set inside the {block.kind} of line {block.line}, which may or may not run")
+        function = block.kind in ("def", "thread") and not block.program
+        for name in block.assigned:  # set inside a block that may not run (or runs where it is called): unknown after it
+            where = f"{block.kind} {block.name} (line {block.line}), which runs where it is called" if function else f"the {block.kind} of line {block.line}, which may or may not run"
+            self.env[name] = Unknown(f"'{name}' is set inside {where}")
+        if function:
+            self.functions[block.name] = block
+            self.tool, self.posture_doubt = block.before  # its body ran nothing here
         if self.stack:
             self.stack[-1].assigned |= block.assigned if block.kind in ("if", "while") else set()
             self.stack[-1].moved |= block.moved
+
+    def _call(self, start: int, end: int, line: int) -> None:
+        """A call of one of the program's functions (or ``run`` of a thread) that moves or sets
+        the TCP: after it the joints (or the TCP) are those it left, which this single pass over
+        the text does not follow."""
+        called = _CALL.match(self.mask, start, end)
+        block = self.functions.get(called.group(1)) if called else None
+        if block is None:
+            return
+        if block.moved:
+            self.posture_doubt = f"after the call of {block.name} (line {block.line}) at line {line} the robot's joints are not known until the next joint target"
+        if block.sets_tcp:
+            name = f"TCP after {block.name}()@{line}"
+            self.tool = self.builder.tool_index(name, None)
+            self.notes.append(f"line {line}: {block.name} (line {block.line}) sets the TCP: give the one in force after it with --tool '{name}=X,Y,Z,A,B,C'")
 
     def _leave(self, block: _Block) -> None:
         """After an if or while whose runs the text does not fix, the joints are those before it
@@ -159,7 +186,7 @@ class UrParser:
         if isinstance(value, Value) and re.search(rf"\b{re.escape(name)}\b", self.mask[start:end]):
             value = Unknown(f"'{name}' is computed from itself at {self._where(start)}")
         self.env[name] = value
-        if self.stack and self.stack[-1].kind in ("if", "while", "else"):
+        if self.stack and not self.stack[-1].program:
             self.stack[-1].assigned.add(name)
 
     def _set_tcp(self, opener: int, end: int, line: int) -> None:
@@ -167,6 +194,9 @@ class UrParser:
         args = split_arguments(self.mask, opener + 1, close)
         value = self.evaluator.evaluate(*args[0], self.env) if len(args) == 1 else Unknown(f"set_tcp at line {line} takes one pose")
         name = f"set_tcp@{line}" if not isinstance(value, Value) or not value.name else value.name
+        if self.stack:
+            for block in self.stack:
+                block.sets_tcp = True
         if isinstance(value, Value) and value.is_pose:
             self.tool = self.builder.tool_index(name, value.transform())
         else:
@@ -279,7 +309,7 @@ class UrParser:
         from before it, the next from its own end) before any joint target of its body; in a
         function or thread (it runs where it is called)."""
         for block in self.stack:
-            if block.kind in ("def", "thread") and (block is not self.stack[0] or block.kind == "thread"):
+            if block.kind in ("def", "thread") and not block.program:
                 return f"inside {block.kind} {block.name} (line {block.line}): it runs where it is called, from joints the text does not fix there"
         for block in reversed(self.stack):
             if block.joint_target:
@@ -321,6 +351,43 @@ class UrParser:
         self._add_rows()
         self.builder.notes.extend(dict.fromkeys(self.notes))
         return self.builder.build()
+
+
+_CALL = re.compile(r"[ \t]*(?:run[ \t]+)?([A-Za-z_]\w*)[ \t]*\(")
+_OPENS = re.compile(r"[ \t]*(?:(def|thread)[ \t]+(\w+)|(if|while)\b|(end)\b)")
+
+
+def program_def(mask: str, starts: np.ndarray, ends: np.ndarray, bulk_starts: np.ndarray) -> int:
+    """Offset of the def the controller runs as the program, or -1: a file whose top level is one
+    def (and at most calls of it) is that def (PolyScope saves a program so; the controller runs
+    it when the file is sent); otherwise the top-level statements are the program and every def
+    is a function that runs where it is called. One pass over the statements that are not bulk
+    lines (those are motions: at top level they make the file a program of statements)."""
+    depth, top_defs, spans, others = 0, [], [], []
+    for start, end in zip(starts.tolist(), ends.tolist()):
+        m = _OPENS.match(mask, start, end)
+        opener = m and (m.group(1) or m.group(3))
+        if depth == 0 and m and m.group(1) == "def":
+            top_defs.append((start, m.group(2)))
+        elif depth == 0 and not (m and m.group(1)) and mask[start:end].strip():
+            others.append(mask[start:end].strip())
+        if opener:
+            depth += 1
+            if depth == 1:
+                spans.append([start, len(mask)])
+        elif m and m.group(4):
+            depth = max(depth - 1, 0)
+            if depth == 0 and spans:
+                spans[-1][1] = end
+    if len(top_defs) != 1:
+        return -1
+    name = top_defs[0][1]
+    if any(not re.fullmatch(rf"{re.escape(name)}[ \t]*\([ \t]*\)", other) for other in others):
+        return -1
+    inside = np.zeros(len(bulk_starts), bool)
+    for lo, hi in spans:
+        inside |= (bulk_starts >= lo) & (bulk_starts < hi)
+    return top_defs[0][0] if inside.all() else -1
 
 
 def _members(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
