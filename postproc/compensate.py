@@ -33,6 +33,11 @@ def compensate(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -
     return core.compensate(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
 
 
+def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> tuple:
+    """``core.predicted_positions`` by ``controller``'s rules, by default those of ``tp``'s language."""
+    return core.predicted_positions(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+
+
 def reference_postures(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> Reference:
     """``core.reference_postures`` by ``controller``'s rules, by default those of ``tp``'s language."""
     return core.reference_postures(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)

@@ -19,8 +19,10 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import EmitError, InputError, ParseError
 from ..controller import GENERIC, Controller
+from ..emit.insert import insert_points
+from ..emit.splice import splice
+from ..errors import EmitError, InputError, ParseError
 from ..ir import SourceDoc, Toolpath
 from . import bom
 
@@ -100,8 +102,6 @@ class Dialect:
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
         """New text of every source file, in ``original.sources`` order (unchanged ones as they were)."""
-        from ..emit.splice import splice
-
         return splice(original, modified, self.insert_field)
 
     def files(self, original: Toolpath, texts: list[str], output: Path) -> dict[Path, str]:
@@ -146,8 +146,6 @@ class Dialect:
     def insert_points(self, tp: Toolpath, points: list) -> tuple[list[SourceDoc], list[str]]:
         """New sources with new targets (``postproc.emit.insert.NewPoint``) written before the
         motions they subdivide, the language's way, and each new point's name."""
-        from ..emit.insert import insert_points
-
         return insert_points(self, tp, points)
 
     def place_workpiece(self, text: str, frame_name: str, new_frame: np.ndarray, path: str) -> str:

@@ -8,8 +8,14 @@ from pathlib import Path
 import numpy as np
 
 from ...ir import SourceDoc, Toolpath
+from ...kinematics import kuka_status_turn
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
 from .controller import KRC
+from .modules import module_docs
+from .parse import KrlParser
+from .placing import set_base
+from .stream import RULES
+from .writer import KrlWriter
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -61,26 +67,18 @@ class KrlDialect(Dialect):
     def module_sources(self, program, paths) -> list[SourceDoc]:
         """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
         functions), or folders of them (modules.py)."""
-        from .modules import module_docs
-
         return module_docs(program, paths) if paths else []
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import KrlParser
-
         return KrlParser(sources).parse()
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "{", 1)  # {X .., S .., T ..}
 
     def place_workpiece(self, text, frame_name, new_frame, path):
-        from .placing import set_base
-
         return set_base(text, new_frame, path)
 
     def stream_rules(self):
-        from .stream import RULES
-
         return RULES
 
     def insert_field(self, source: int, field: str, text: str) -> str:
@@ -106,23 +104,17 @@ class KrlDialect(Dialect):
 
     def conf_of_joints(self, robot, q_deg):
         """S and T of new points (LIN ignores them; a PTP to the point later would take them)."""
-        from ...kinematics import kuka_status_turn
-
         status, turn = kuka_status_turn(robot, q_deg)
         return np.column_stack([status, turn, np.full((len(status), 2), np.nan)])
 
     def set_conf_text(self, text: str, conf) -> str:
         """The S and T components of a copied aggregate set to ``conf`` (left out where absent)."""
-        import re
-
         for name, value in (("S", conf[0]), ("T", conf[1])):
             if np.isfinite(value):
                 text = re.sub(rf"([{{,][ \t]*){name}[ \t]+\d+", lambda m: f"{m.group(1)}{name} {int(value)}", text, count=1, flags=re.IGNORECASE)
         return text
 
     def new_writer(self, name: str):
-        from .writer import KrlWriter
-
         return KrlWriter(name)
 
     def new_program_paths(self, output: Path) -> list[Path]:

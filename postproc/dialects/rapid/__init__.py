@@ -3,14 +3,20 @@
 from __future__ import annotations
 
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import InputError
 from ...ir import SourceDoc, Toolpath
+from ...kinematics import abb_confdata
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
 from .controller import IRC5
+from .parse import parse_modules
+from .placing import set_work_object
+from .targets import set_robtarget_conf
+from .writer import RapidWriter
 
 
 class RapidDialect(Dialect):
@@ -47,16 +53,12 @@ class RapidDialect(Dialect):
         return docs
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import parse_modules
-
         return parse_modules(sources)
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "[", 2)  # [[x,y,z],[q],[conf],[ext]]
 
     def place_workpiece(self, text, frame_name, new_frame, path):
-        from .placing import set_work_object
-
         return set_work_object(text, frame_name, new_frame, path)
 
     def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
@@ -76,25 +78,17 @@ class RapidDialect(Dialect):
     statement_end = ";"
 
     def conf_of_joints(self, robot, q_deg):
-        from ...kinematics import abb_confdata
-
         return abb_confdata(robot, q_deg).astype(float)
 
     def set_conf_text(self, text: str, conf) -> str:
-        from .targets import set_robtarget_conf
-
         return set_robtarget_conf(text, conf)
 
     def new_writer(self, name: str):
-        from .writer import RapidWriter
-
         return RapidWriter(name)
 
 
 def _pgf_modules(path: Path, data: bytes) -> list[str]:
     """The module file names a RobotWare program file lists (<Program><Module>x.mod</Module>...)."""
-    import xml.etree.ElementTree as ET
-
     try:
         root = ET.fromstring(data)
     except ET.ParseError as exc:
