@@ -165,3 +165,21 @@ def test_a_function_runs_where_it_is_called():
     # PolyScope's form: one def and nothing else at the top level is the program itself
     program = parse_program_text("def prog():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  movel(p[0.5, 0, 0.3, 0, 3.14, 0])\nend\n")
     assert program.resolved.all()
+
+
+def test_a_while_loop_whose_passes_the_text_fixes_is_run_pass_by_pass():
+    """``i = 0`` / ``while i < 3:`` / ... / ``i = i + 1``: three passes (URScript manual, "Flow of
+    control"), one row per executed motion in execution order, the passes sharing the numbers."""
+    text = ("def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  i = 0\n  while (i < 3):\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n"
+            "    j = 1\n    while j <= 2:\n      movel(p[0.45, 0, 0.3, 0, 3.14, 0], v=0.1)\n      j = j + 1\n    end\n"
+            "    movej([0, -1.5, 1.5, 0, 0, 0])\n    i = i + 1\n  end\n  movel(p[0.5, 0, 0.3, 0, 3.14, 0])\nend\n")
+    tp = parse_program_text(text)
+    assert tp.line.tolist() == [2] + [5, 8, 8, 11] * 3 + [14]
+    assert tp.resolved.all()
+    assert "line 4: the while loop runs 3 times (i from 0 while i < 3): its motions are listed per pass" in tp.notes
+    assert "line 7: the while loop runs 2 times (j from 1 while j <= 2): its motions are listed per pass" in tp.notes
+    assert emit_texts(tp, tp)[0] == text
+    # a counter changed otherwise, or a way out of the body: the count is not the text's
+    for body in ("    i = i + 2\n", "    if x:\n      break\n    end\n    i = i + 1\n"):
+        once = parse_program_text(f"def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  i = 0\n  while i < 3:\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n{body}  end\nend\n")
+        assert once.line.tolist() == [2, 5] and not once.resolved[1]

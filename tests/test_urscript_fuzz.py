@@ -20,7 +20,7 @@ CORPUS = Path(__file__).parent / "corpus" / "urscript"
 SEEDS = [p.read_bytes() for p in sorted(CORPUS.rglob("*script"))]
 TOKENS = ["movel(", "movej(", "movep(", "movec(", "servoj(", "set_tcp(", "p[", "[", "]", "(", ")", ",", "=", "a=", "v=", "r=",
           "t=", "qnear=", "get_inverse_kin(", "pose_trans(", "pose_add(", "def f():", "thread t():", "end", "if x:", "elif y:",
-          "else:", "while True:", "global ", "local ", "#", '"', "'", "$ 1 \"x\"", "\n", "\r\n", "\t", "-", ".", "0", "1e308", "{", "}"]
+          "else:", "while True:", "i = 0\n", "while i < 3:", "i = i + 1\n", "break", "global ", "local ", "#", '"', "'", "$ 1 \"x\"", "\n", "\r\n", "\t", "-", ".", "0", "1e308", "{", "}"]
 NUMBERS = ["0", "-0", "0.0", ".5", "-.5", "1e-3", "1E+2", "3.1416", "-1.5708", "0.25", "12"]
 MUTATIONS = ("delete lines", "duplicate a line", "swap lines", "flip a character", "insert a token", "truncate")
 

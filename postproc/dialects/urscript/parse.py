@@ -19,7 +19,7 @@ import numpy as np
 
 from ...ir import F_JOINT, F_POS, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
-from . import bulk
+from . import bulk, loops
 from .lexer import code_mask, matching, split_arguments, statements, strip
 from .poses import M_TO_MM, RAD_TO_DEG
 from .values import Evaluator, Unknown, Value
@@ -62,6 +62,8 @@ class _Block:
     program: bool = False  # the def the controller runs as the program (see ``program_def``)
     sets_tcp: bool = False
     before: tuple = ()  # a function's (TCP, posture doubt) at its definition, restored after it: its body runs where it is called
+    counted: loops.CountedLoop | None = None  # a while whose passes the text fixes (run pass by pass)
+    body: tuple = ()  # (first statement index, offset) of a counted loop's body
 
 
 class UrParser:
@@ -82,8 +84,9 @@ class UrParser:
         self.posture_doubt: str | None = None  # why the joints the robot is in are not known from the text here
         self.rows: list[dict] = []
         self.notes: list[str] = []
-        self.flushed = 0  # bulk lines before this offset are taken
         self.functions: dict[str, _Block] = {}  # the program's functions and threads read so far
+        self.scalars: dict[str, int | None] = {}  # integer variables the text fixes (loop counters)
+        self.seq = 0  # program order of the next target (passes of a loop repeat offsets)
         self.program_at = -1
 
     def _where(self, offset: int) -> str:
@@ -99,16 +102,29 @@ class UrParser:
         self.bulk = bulk.BulkLines(*(getattr(self.bulk, f)[keep] for f in bulk.BulkLines.__dataclass_fields__))
         own = ~_members(found.start, self.bulk.start)
         self.program_at = program_def(self.mask, found.start[own], found.end[own], self.bulk.start)
-        for start, end, line in zip(found.start[own].tolist(), found.end[own].tolist(), found.line[own].tolist()):
-            self._flush(start)
-            self._statement(start, end, line)
-        self._flush(len(self.mask) + 1)
+        self.own_start, self.own_end, self.own_line = found.start[own], found.end[own], found.line[own]
+        self._run(0, len(self.own_start), 0, len(self.mask) + 1)
         if self.stack:
             raise self.lines.error(self.doc.path, len(self.doc.text), f"'{self.stack[-1].kind}' of line {self.stack[-1].line} has no 'end'")
         return self._build()
 
+    def _run(self, first: int, last: int, lo: int, hi: int) -> None:
+        """The statements ``first``..``last``-1 and the bulk lines in [lo, hi) in text order; a
+        counted loop's body again for each further pass before its 'end'."""
+        cursor = lo
+        for i in range(first, last):
+            start, end, line = int(self.own_start[i]), int(self.own_end[i]), int(self.own_line[i])
+            self._flush(cursor, start)
+            cursor = start
+            block = self.stack[-1] if self.stack else None
+            if block is not None and block.counted is not None and block.counted.end_index == i:
+                for _ in range(block.counted.passes - 1):
+                    self._run(block.body[0], i, block.body[1], start)
+            self._statement(start, end, line, i)
+        self._flush(cursor, hi)
+
     # ------------------------------------------------------------- statements
-    def _statement(self, start: int, end: int, line: int) -> None:
+    def _statement(self, start: int, end: int, line: int, index: int = -1) -> None:
         head = _HEAD.match(self.mask, start, end)
         if head is None:
             first, _ = strip(self.mask, start, end)
@@ -120,7 +136,7 @@ class UrParser:
         if head.group("def"):
             self.stack.append(_Block(head.group("def"), line, head.group("fname"), program=start == self.program_at, before=(self.tool, self.posture_doubt)))
         elif head.group("block"):
-            self._open(head.group("block"), line, start)
+            self._open(head.group("block"), line, start, end, index)
         elif head.group("else"):
             self._open("else", line, start)
         elif head.group("end"):
@@ -132,19 +148,27 @@ class UrParser:
         elif kind == "var":
             self._assign(head.group("var"), head.end(), end)
 
-    def _open(self, word: str, line: int, start: int) -> None:
+    def _open(self, word: str, line: int, start: int, end: int = -1, index: int = -1) -> None:
         if word in ("elif", "else"):
             if not self.stack or self.stack[-1].kind != "if":
                 raise self.lines.error(self.doc.path, start, f"'{word}' without an 'if'")
             self._leave(self.stack[-1])  # the branch before may or may not have run
             self.stack[-1].joint_target = False
             return
-        self.stack.append(_Block(word, line))
+        counted = loops.counted(self.mask, self.own_start, self.own_end, index, self.scalars) if word == "while" and index >= 0 else None
+        self.stack.append(_Block(word, line, counted=counted, body=(index + 1, end)))
+        if counted is not None:
+            self.notes.append(f"line {line}: the while loop runs {counted.passes} times ({counted.counter} from {counted.first} while {counted.limit}): its motions are listed per pass")
 
     def _close(self, start: int) -> None:
         if not self.stack:
             raise self.lines.error(self.doc.path, start, "'end' without a block to close")
         block = self.stack.pop()
+        if block.counted is not None:  # run pass by pass: what follows is straight-line
+            if self.stack:
+                self.stack[-1].moved |= block.moved
+                self.stack[-1].assigned |= block.assigned
+            return
         if block.kind in ("if", "while"):
             self._leave(block)
         if block.kind == "while" and block.moved:
@@ -153,6 +177,7 @@ class UrParser:
         for name in block.assigned:  # set inside a block that may not run (or runs where it is called): unknown after it
             where = f"{block.kind} {block.name} (line {block.line}), which runs where it is called" if function else f"the {block.kind} of line {block.line}, which may or may not run"
             self.env[name] = Unknown(f"'{name}' is set inside {where}")
+            self.scalars[name] = None
         if function:
             self.functions[block.name] = block
             self.tool, self.posture_doubt = block.before  # its body ran nothing here
@@ -186,6 +211,7 @@ class UrParser:
         if isinstance(value, Value) and re.search(rf"\b{re.escape(name)}\b", self.mask[start:end]):
             value = Unknown(f"'{name}' is computed from itself at {self._where(start)}")
         self.env[name] = value
+        self.scalars[name] = _next_scalar(self.mask, name, start, end, self.scalars.get(name))
         if self.stack and not self.stack[-1].program:
             self.stack[-1].assigned.add(name)
 
@@ -203,10 +229,9 @@ class UrParser:
             self.tool = self.builder.tool_index(name, None)
             self.notes.append(f"line {line}: the TCP is not known from the text ({value.reason if isinstance(value, Unknown) else 'a joint list'}): give it with --tool {name}=X,Y,Z,A,B,C")
 
-    def _flush(self, before: int) -> None:
-        """The bulk lines (bulk.py) before offset ``before`` not yet taken, under the state now."""
-        sel = self.bulk.between(self.flushed, before)
-        self.flushed = before
+    def _flush(self, lo: int, hi: int) -> None:
+        """The bulk lines (bulk.py) starting in [lo, hi), under the state now."""
+        sel = self.bulk.between(lo, hi)
         if sel.stop == sel.start:
             return
         self._add_rows()  # the statements' targets before these first: blocks arrive in program order
@@ -215,7 +240,9 @@ class UrParser:
             first, last = int(self.bulk.line[sel.start]), int(self.bulk.line[sel.stop - 1])
             self.notes.append(f"{f'line {first}' if first == last else f'lines {first}-{last}'}: the posture is not known: {doubt}")
         block = bulk.rows(self.bulk, sel, self.tool, doubt is None)
-        self.builder.add_block(block.pop("order"), **block)
+        del block["order"]
+        self.builder.add_block(np.arange(self.seq, self.seq + sel.stop - sel.start), **block)
+        self.seq += sel.stop - sel.start
         if self.stack:
             self.stack[-1].moved = True
 
@@ -235,7 +262,8 @@ class UrParser:
             raise self.lines.error(self.doc.path, opener, f"{function} without its {' and '.join(targets)}")
         kinds = (Kind.CIRC_VIA, Kind.CIRC_END) if function == "movec" else (None,)
         for k, span in enumerate(spans):
-            self._target(function, kinds[k], span, options, line, order=opener * 2 + k)
+            self._target(function, kinds[k], span, options, line, order=self.seq)
+            self.seq += 1
         if self.stack:
             self.stack[-1].moved = True
 
@@ -314,7 +342,7 @@ class UrParser:
         for block in reversed(self.stack):
             if block.joint_target:
                 return None
-            if block.kind == "while":
+            if block.kind == "while" and block.counted is None:
                 return f"inside the while of line {block.line} before any joint target of its body: each run starts from where the previous one ended"
         return None
 
@@ -388,6 +416,17 @@ def program_def(mask: str, starts: np.ndarray, ends: np.ndarray, bulk_starts: np
     for lo, hi in spans:
         inside |= (bulk_starts >= lo) & (bulk_starts < hi)
     return top_defs[0][0] if inside.all() else -1
+
+
+def _next_scalar(mask: str, name: str, start: int, end: int, value: int | None) -> int | None:
+    """The integer ``name`` holds after ``name = <mask[start:end]>``: a literal, or the value it
+    held plus one (``name = name + 1``); None for anything else."""
+    literal = loops.INT_LITERAL.match(mask, start, end)
+    if literal:
+        return int(literal.group(1))
+    if value is not None and re.fullmatch(rf"[ \t]*{re.escape(name)}[ \t]*\+[ \t]*1[ \t]*\r?", mask[start:end]):
+        return value + 1
+    return None
 
 
 def _members(values: np.ndarray, sorted_set: np.ndarray) -> np.ndarray:
