@@ -183,3 +183,18 @@ def test_a_while_loop_whose_passes_the_text_fixes_is_run_pass_by_pass():
     for body in ("    i = i + 2\n", "    if x:\n      break\n    end\n    i = i + 1\n"):
         once = parse_program_text(f"def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  i = 0\n  while i < 3:\n    movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n{body}  end\nend\n")
         assert once.line.tolist() == [2, 5] and not once.resolved[1]
+
+
+def test_motions_without_targets_and_modes_that_leave_the_path():
+    """speedl moves the robot with no target: the joints after it are unknown; under force_mode
+    (and conveyor tracking, path offsets) the robot does not go to the programmed targets
+    (URScript manual, "speedl", "force_mode", "end_force_mode")."""
+    tp = parse_program_text("def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  speedl([0, 0, -0.01, 0, 0, 0], 0.5, 2)\n"
+                            "  movel(p[0.4, 0, 0.3, 0, 3.14, 0])\n  movej([0, -1.57, 1.57, 0, 0, 0])\n"
+                            "  force_mode(p[0, 0, 0, 0, 0, 0], [0, 0, 1, 0, 0, 0], [0, 0, 10, 0, 0, 0], 2, [0.1, 0.1, 0.1, 0.3, 0.3, 0.3])\n"
+                            "  movel(p[0.4, 0, 0.2, 0, 3.14, 0])\n  end_force_mode()\n  movel(p[0.4, 0, 0.3, 0, 3.14, 0])\nend\n")
+    assert tp.line.tolist() == [2, 4, 5, 7, 9]
+    assert tp.resolved.tolist() == [True, False, True, False, True]
+    notes = "\n".join(tp.notes)
+    assert "line 4: the posture is not known: after speedl at line 3" in notes
+    assert "line 7: force_mode (line 6) is in force: the robot does not go to the programmed target" in notes

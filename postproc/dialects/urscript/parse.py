@@ -85,6 +85,7 @@ class UrParser:
         self.rows: list[dict] = []
         self.notes: list[str] = []
         self.functions: dict[str, _Block] = {}  # the program's functions and threads read so far
+        self.mode: tuple[str, int] | None = None  # force mode, conveyor tracking or a path offset in force (and its line)
         self.scalars: dict[str, int | None] = {}  # integer variables the text fixes (loop counters)
         self.seq = 0  # program order of the next target (passes of a loop repeat offsets)
         self.program_at = -1
@@ -134,7 +135,7 @@ class UrParser:
             return
         kind = head.lastgroup if head.lastgroup != "fname" else "def"
         if head.group("def"):
-            self.stack.append(_Block(head.group("def"), line, head.group("fname"), program=start == self.program_at, before=(self.tool, self.posture_doubt)))
+            self.stack.append(_Block(head.group("def"), line, head.group("fname"), program=start == self.program_at, before=(self.tool, self.posture_doubt, self.mode)))
         elif head.group("block"):
             self._open(head.group("block"), line, start, end, index)
         elif head.group("else"):
@@ -180,7 +181,7 @@ class UrParser:
             self.scalars[name] = None
         if function:
             self.functions[block.name] = block
-            self.tool, self.posture_doubt = block.before  # its body ran nothing here
+            self.tool, self.posture_doubt, self.mode = block.before  # its body ran nothing here
         if self.stack:
             self.stack[-1].assigned |= block.assigned if block.kind in ("if", "while") else set()
             self.stack[-1].moved |= block.moved
@@ -190,7 +191,14 @@ class UrParser:
         the TCP: after it the joints (or the TCP) are those it left, which this single pass over
         the text does not follow."""
         called = _CALL.match(self.mask, start, end)
-        block = self.functions.get(called.group(1)) if called else None
+        name = called.group(1) if called else ""
+        if name in MOVES_OTHERWISE:
+            self.posture_doubt = f"after {name} at line {line} (a motion without a target) the robot's joints are not known until the next joint target"
+        elif name in MODES:
+            self.mode = (name, line)
+        elif name in MODE_ENDS and self.mode is not None and MODES[self.mode[0]] == name:
+            self.mode = None
+        block = self.functions.get(name)
         if block is None:
             return
         if block.moved:
@@ -236,10 +244,13 @@ class UrParser:
             return
         self._add_rows()  # the statements' targets before these first: blocks arrive in program order
         doubt = self._loop_doubt() or self.posture_doubt
-        if doubt is not None:
+        why = None if doubt is None else f"the posture is not known: {doubt}"
+        if self.mode is not None:
+            why = f"{self.mode[0]} (line {self.mode[1]}) is in force: the robot does not go to the programmed target"
+        if why is not None:
             first, last = int(self.bulk.line[sel.start]), int(self.bulk.line[sel.stop - 1])
-            self.notes.append(f"{f'line {first}' if first == last else f'lines {first}-{last}'}: the posture is not known: {doubt}")
-        block = bulk.rows(self.bulk, sel, self.tool, doubt is None)
+            self.notes.append(f"{f'line {first}' if first == last else f'lines {first}-{last}'}: {why}")
+        block = bulk.rows(self.bulk, sel, self.tool, why is None)
         del block["order"]
         self.builder.add_block(np.arange(self.seq, self.seq + sel.stop - sel.start), **block)
         self.seq += sel.stop - sel.start
@@ -310,6 +321,7 @@ class UrParser:
             row["kind"] = kind if kind is not None else Kind.LINEAR
             row["speed"] = options.get("v", np.nan)
         row["name"] = value.name
+        self._mode_rule(row, line)
         fields = np.r_[F_POS, 3:6] if value.is_pose else np.arange(F_JOINT.start, F_JOINT.stop)
         scale = np.r_[[M_TO_MM] * 3, [1.0] * 3] if value.is_pose else np.full(6, RAD_TO_DEG)
         row["values"][fields] = value.numbers * scale
@@ -346,6 +358,14 @@ class UrParser:
                 return f"inside the while of line {block.line} before any joint target of its body: each run starts from where the previous one ended"
         return None
 
+    def _mode_rule(self, row: dict, line: int) -> None:
+        """Under force_mode, conveyor tracking or a path offset the controller moves off the
+        programmed targets (manual, "force_mode", "track_conveyor_linear", "path_offset_enable"):
+        what it reaches is not known from the text."""
+        if self.mode is not None:
+            row["resolved"] = False
+            self.notes.append(f"line {line}: {self.mode[0]} (line {self.mode[1]}) is in force: the robot does not go to the programmed target")
+
     def _posture_rule(self, row: dict, line: int) -> None:
         """movel/movep/movec and movej to a pose take the inverse-kinematics solution nearest the
         current joints (URScript manual, "movel", "get_inverse_kin": qnear defaults to the
@@ -381,6 +401,13 @@ class UrParser:
         return self.builder.build()
 
 
+# Built-in functions that move the robot without a target (URScript manual, module "motion"):
+# after them the joints are not known from the text.
+MOVES_OTHERWISE = frozenset({"speedj", "speedl", "servoc", "direct_torque", "freedrive_mode", "teach_mode"})
+# Modes under which motions leave their programmed targets, and the call that ends each.
+MODES = {"force_mode": "end_force_mode", "track_conveyor_linear": "end_conveyor_tracking", "track_conveyor_circular": "end_conveyor_tracking",
+         "path_offset_enable": "path_offset_disable"}
+MODE_ENDS = frozenset(MODES.values())
 _CALL = re.compile(r"[ \t]*(?:run[ \t]+)?([A-Za-z_]\w*)[ \t]*\(")
 _OPENS = re.compile(r"[ \t]*(?:(def|thread)[ \t]+(\w+)|(if|while)\b|(end)\b)")
 
