@@ -48,3 +48,19 @@ def test_singularity_margins_of_a_ur_arm():
     np.testing.assert_allclose(wrist, [0.0, 90.0], atol=1e-9)
     np.testing.assert_allclose(elbow, [0.0, 90.0], atol=1e-9)
     assert shoulder[1] > 100.0
+
+
+@pytest.mark.parametrize("name, d1, a2, a3, d4, d5, d6", [
+    ("ur10e", 0.1807, -0.6127, -0.57155, 0.17415, 0.11985, 0.11655),  # Universal Robots' DH page, UR10e
+    ("ur5e", 0.1625, -0.425, -0.3922, 0.1333, 0.0997, 0.0996),  # the same page, UR5e
+])
+def test_the_robot_files_hold_the_published_dh_and_their_zero_pose(name, d1, a2, a3, d4, d5, d6):
+    """At all-zero joints a UR arm lies stretched along -x: the flange at (a2 + a3, -(d4 + d6),
+    d1 - d5), its z axis along -y (the published table's geometry, worked out by hand)."""
+    robot = postproc.load_robot(name)
+    np.testing.assert_allclose(robot.d_mm, np.array([d1, 0, 0, d4, d5, d6]) * 1000.0)
+    np.testing.assert_allclose(robot.a_mm, np.array([0, a2, a3, 0, 0, 0]) * 1000.0)
+    pose = kin.fk(robot, np.zeros((1, 6)))[0]
+    np.testing.assert_allclose(pose[:3, 3], np.array([a2 + a3, -(d4 + d6), d1 - d5]) * 1000.0, atol=1e-9)
+    np.testing.assert_allclose(pose[:3, 2], [0, -1, 0], atol=1e-12)
+    assert robot.estimates["stiffness"] and robot.sources["kinematics"].startswith("Universal Robots")
