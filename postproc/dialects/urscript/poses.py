@@ -5,7 +5,8 @@ their arguments are constants (``pose_trans``, ``pose_add``). Vectorised over ro
 from __future__ import annotations
 
 import numpy as np
-from ...frames import make_transform, matrix_to_quat_wxyz
+
+from ...frames import make_transform
 from ...rotation_forms import form
 
 M_TO_MM = 1000.0
@@ -35,8 +36,3 @@ def pose_add_frame(constant: np.ndarray) -> np.ndarray | None:
     if not np.allclose(constant[:3, :3], np.eye(3), atol=1e-15, rtol=0):
         return None
     return make_transform(np.eye(3)[None], constant[None, :3, 3])[0]
-
-
-def transform_quat(transform: np.ndarray) -> np.ndarray:
-    """(N, 4, 4) -> (N, 4) the rotations as quaternions w, x, y, z."""
-    return matrix_to_quat_wxyz(np.asarray(transform)[:, :3, :3])
