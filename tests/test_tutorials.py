@@ -1,4 +1,4 @@
-"""Every command of the tutorials (docs/tutorials/*.md) runs as written, in one fresh shell
+"""Every command of the tutorials (docs/tutorials/*.md, and pages marked with ``CHECKED``) runs as written, in one fresh shell
 per page, and every output line the page shows is what the command prints.
 
 A page's ```console blocks hold ``$ command`` lines (a here-document's lines belong to its
@@ -17,7 +17,9 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = sorted((ROOT / "docs" / "tutorials").glob("*.md"))
+CHECKED = "<!-- checked by tests/test_tutorials.py -->"  # a how-to page outside docs/tutorials asks for the same check
+PAGES = sorted((ROOT / "docs" / "tutorials").glob("*.md")) + sorted(
+    p for p in (ROOT / "docs").rglob("*.md") if p.parent.name != "tutorials" and CHECKED in p.read_text(encoding="utf-8"))
 _BLOCK = re.compile(r"```console\n(.*?)```", re.DOTALL)
 _HEREDOC = re.compile(r"<<\s*'?(\w+)'?")
 _NEEDS = re.compile(r"<!-- needs: ([\w\- ]+) -->")  # programs a page needs (skipped without them)
