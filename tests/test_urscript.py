@@ -198,3 +198,11 @@ def test_motions_without_targets_and_modes_that_leave_the_path():
     notes = "\n".join(tp.notes)
     assert "line 4: the posture is not known: after speedl at line 3" in notes
     assert "line 7: force_mode (line 6) is in force: the robot does not go to the programmed target" in notes
+
+
+def test_crlf_line_ends_read_the_same_and_round_trip(cell):
+    text = cell.sources[0].text.replace("\n", "\r\n")
+    crlf = parse_program_text(text)
+    assert crlf.line.tolist() == cell.line.tolist()
+    np.testing.assert_allclose(crlf.base_positions()[1:], cell.base_positions()[1:])
+    assert emit_texts(crlf, crlf)[0] == text
