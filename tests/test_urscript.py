@@ -206,3 +206,20 @@ def test_crlf_line_ends_read_the_same_and_round_trip(cell):
     assert crlf.line.tolist() == cell.line.tolist()
     np.testing.assert_allclose(crlf.base_positions()[1:], cell.base_positions()[1:])
     assert emit_texts(crlf, crlf)[0] == text
+
+
+def test_a_variable_holding_a_number_gives_a_pose_its_number_and_span():
+    text = "def p():\n  global z_safe = 0.25\n  movej([0, -1.57, 1.57, 0, 0, 0])\n  movel(p[0.4, 0, z_safe, 0, 3.14, 0])\n  movel(p[0.5, 0, z_safe, 0, 3.14, 0])\nend\n"
+    tp = parse_program_text(text)
+    assert tp.resolved.all()
+    np.testing.assert_allclose(tp.position[1:, 2], [250.0, 250.0])
+    s, e = tp.spans[1, 2, 1:]
+    assert text[s:e] == "0.25" and tp.spans[2, 2, 1] == s  # both targets take the assignment's number
+    one = emit_texts(tp, tp.with_positions(tp.position + np.array([0.0, 0.0, 1.0])))[0]
+    assert "global z_safe = 0.251" in one  # both targets need the same new value: written once
+    from postproc.errors import SharedNumberError
+
+    moved = tp.position.copy()
+    moved[2, 2] += 2.0
+    with pytest.raises(SharedNumberError):  # two different values for one number: refused
+        emit_texts(tp, tp.with_positions(moved))

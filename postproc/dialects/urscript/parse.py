@@ -215,7 +215,7 @@ class UrParser:
             self.posture_doubt = f"after the {block.kind} of line {block.line} (which may or may not run its motions) the robot's joints are not known until the next joint target"
 
     def _assign(self, name: str, start: int, end: int) -> None:
-        value = self.evaluator.evaluate(start, end, self.env)
+        value = self.evaluator.evaluate(start, end, self.env, scalar=True)
         if isinstance(value, Value) and re.search(rf"\b{re.escape(name)}\b", self.mask[start:end]):
             value = Unknown(f"'{name}' is computed from itself at {self._where(start)}")
         self.env[name] = value

@@ -44,6 +44,15 @@ class Value:
 
 
 @dataclass(frozen=True)
+class Scalar:
+    """A variable holding one number literal (``global z_safe = 0.25``): a pose or joint list
+    that names it takes the number and its span (write-back rewrites the assignment)."""
+
+    number: float
+    span: tuple[int, int]
+
+
+@dataclass(frozen=True)
 class Unknown:
     reason: str
 
@@ -55,9 +64,13 @@ class Evaluator:
         self.mask = mask
         self.where = where  # offset -> 'line L, column C' for reasons
 
-    def evaluate(self, start: int, end: int, env: dict) -> Value | Unknown:
+    def evaluate(self, start: int, end: int, env: dict, scalar: bool = False) -> Value | Scalar | Unknown:
+        """The value of mask[start:end]; a number literal is a Scalar only where ``scalar``
+        (the right side of an assignment), elsewhere a pose or joint list is wanted."""
         start, end = strip(self.mask, start, end)
         text = self.mask[start:end]
+        if scalar and start < end and _NUMBER.match(self.mask, start, end):
+            return Scalar(float(text), (start, end))
         if text.startswith("p[") or text.startswith("p ["):
             opener = self.mask.index("[", start)
             return self._literal(opener, end, env, is_pose=True)
@@ -69,6 +82,8 @@ class Evaluator:
                 return Unknown(f"'{text}' is not set to a constant before {self.where(start)}")
             if isinstance(held, Value):
                 return Value(held.is_pose, held.numbers, held.spans, held.frame, held.frame_name, text, held.qnear)
+            if isinstance(held, Scalar):
+                return Unknown(f"'{text}' at {self.where(start)} is a number, not a pose or joint list")
             return held
         call = _CALL.match(text)
         if call and matching(self.mask, start + call.end() - 1) == end - 1:
@@ -85,6 +100,10 @@ class Evaluator:
         numbers, spans = np.full(6, np.nan), np.full((6, 2), -1, dtype=np.int64)
         for k, (s, e) in enumerate(items):
             s, e = strip(self.mask, s, e)
+            held = env.get(self.mask[s:e]) if _NAME.match(self.mask, s, e) else None
+            if isinstance(held, Scalar):  # a variable holding a number literal: its number, its span
+                numbers[k], spans[k] = held.number, held.span
+                continue
             if s == e or not _NUMBER.match(self.mask, s, e):
                 return Unknown(f"value {k + 1} of the {'pose' if is_pose else 'joint list'} at {self.where(s)} ('{_short(self.mask[s:e])}') is not a number")
             numbers[k] = float(self.mask[s:e])
