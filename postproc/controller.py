@@ -26,6 +26,12 @@ class Controller:
     #: name it first (None: any maker's, or a CNC)
     maker: str | None = None
 
+    #: True where the posture before the program's first joint target (or configuration data
+    #: that apply) may be assumed, with a note (nearest all-zero joints); False where the
+    #: controller's rule reads the joints the robot starts in (URScript: the nearest IK
+    #: solution), so compensation refuses those targets without --start-joints
+    start_posture_assumed: bool = True
+
     def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joints (N, 6) and branch (N,) the controller takes for each target from the
         configuration data the program gives (``conf`` (N, 4), NaN where none); NaN and -1

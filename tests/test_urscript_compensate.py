@@ -115,3 +115,18 @@ def test_the_compensated_program_lands_on_the_true_robot(robot, truth_and_model,
     assert as_written > 0.3 and rms <= 0.05, f"true RMS {as_written:.4f} mm as written, {rms:.4f} mm compensated"
     # only numbers changed: the same lines, in metres and radians
     assert [line.split("[")[0] for line in out.read_text().splitlines()] == [line.split("[")[0] for line in tp.sources[0].text.splitlines()]
+
+
+def test_before_any_joint_target_the_start_joints_must_be_given(robot, truth_and_model, tmp_path):
+    """movel takes the solution nearest the current joints: before the program's first joint
+    target those are the robot's at the start, which the program does not state. Compensation
+    refuses those targets, and takes them with the start joints given (--start-joints)."""
+    _, model = truth_and_model
+    path = _program(robot, Q_START, tmp_path / "pocket.script")
+    lines = path.read_text().splitlines()
+    path.write_text("\n".join(line for line in lines if "movej" not in line) + "\n")
+    tp = parse_program(path)
+    _, report = compensate(tp, model)
+    assert report.failed.all() and all("--start-joints" in why for _, why in report.failures())
+    _, report = compensate(tp, model, start_joints=Q_START)
+    assert not report.failed.any(), report.failures()

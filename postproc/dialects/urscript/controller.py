@@ -15,6 +15,9 @@ from ...kinematics import select_nearest
 class UrController(Controller):
     maker = "Universal"  # as robot files' descriptions name the maker: their first word (program_check)
     name = "Universal Robots CB3 / e-Series controller"
+    # A pose target takes the solution nearest the current joints: before the program's first
+    # joint target those are the robot's at the start, which the program does not state.
+    start_posture_assumed = False
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """(N,) True where the program itself picks the target's IK solution:
