@@ -125,6 +125,14 @@ def _rotvec_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return np.where(np.isnan(near).any(axis=1, keepdims=True), plain, best)
 
 
+def _wpr_to_quat(numbers: Numbers) -> np.ndarray:
+    return abc_to_quat_wxyz(numbers[:, ::-1])  # W P R about the fixed X Y Z: Rz(R) Ry(P) Rx(W), KUKA's A B C reversed
+
+
+def _wpr_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    return _abc_from_matrix(rot, near[:, ::-1])[:, ::-1]
+
+
 def _axis_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return rot[:, :, 2].copy()
 
@@ -135,6 +143,8 @@ FORMS: dict[str, RotationForm] = {
         RotationForm("quat", 4, "quaternion q1..q4 = w, x, y, z (ABB RAPID)", quat_wxyz_to_matrix,
                      lambda rot, near: _quat_from_quat(matrix_to_quat_wxyz(rot), near), _quat_to_quat, _quat_from_quat),
         RotationForm("abc", 3, "A, B, C degrees: R = Rz(A) Ry(B) Rx(C) (KUKA)", abc_to_matrix, _abc_from_matrix, abc_to_quat_wxyz),
+        RotationForm("wpr", 3, "W, P, R degrees about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W) (Fanuc)",
+                     lambda wpr: abc_to_matrix(wpr[:, ::-1]), _wpr_from_matrix, _wpr_to_quat),
         RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
         RotationForm("rotvec", 3, "rotation vector rx, ry, rz, radians: axis times angle (Universal Robots URScript)",
                      lambda numbers: Rotation.from_rotvec(numbers).as_matrix(), _rotvec_from_matrix, _rotvec_to_quat),
