@@ -82,6 +82,7 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["urscript"] = make_urscript(folder, n)
     out["fanuc"] = make_fanuc(folder, n)
     out["sinumerik"] = make_sinumerik(folder, n)
     out["inform"] = make_inform(folder, n)
@@ -99,6 +100,17 @@ def make_sinumerik(folder: Path, n: int) -> Path:
         for i in range(n - len(header) - 2):
             fh.write(f"N{80 + i} X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f} A{(i % 90) * 0.25:.3f} C{(i % 360) * 0.5:.3f}\n")
         fh.write("TRAFOOF\nM30\n")
+    return path
+
+
+def make_urscript(folder: Path, n: int) -> Path:
+    """A URScript program: set_tcp, one movej to joints, then movel to literal poses (m, rad)."""
+    path = folder / "big.script"
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n")
+        for i in range(n - 4):
+            fh.write(f"  movel(p[{0.8 + (i % 400) * 0.0005:.6f}, {-0.2 + ((i // 400) % 400) * 0.001:.6f}, {0.3 + (i % 7) * 0.000125:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n")
+        fh.write("end\n")
     return path
 
 
