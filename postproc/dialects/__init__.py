@@ -12,16 +12,19 @@ from pathlib import Path
 from ..errors import InputError
 from ..ir import Toolpath
 from .base import Dialect, read_head
+from .fanuc import FANUC
 from .gcode import GCODE
 from .heidenhain import HEIDENHAIN
+from .inform import INFORM
 from .krl import KRL
 from .rapid import RAPID
 from .sinumerik import SINUMERIK
+from .urscript import URSCRIPT
 
 # A module-level table on purpose: a toolpath names its dialect (Toolpath.dialect) and
 # every stage, forked workers included, resolves it here. Built-ins are fixed at import;
 # plugin dialects are added only by ``register`` (postproc.plugins.load_plugins), idempotently.
-REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, KRL, SINUMERIK, HEIDENHAIN, GCODE)}  # sniffing tries them in this order (BEGIN PGM before G-code's M3)
+REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, URSCRIPT, KRL, FANUC, INFORM, SINUMERIK, HEIDENHAIN, GCODE)}  # sniffing tries them in this order (BEGIN PGM before G-code's M3)
 BUILTIN: frozenset[str] = frozenset(REGISTRY)
 
 
