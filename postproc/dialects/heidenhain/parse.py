@@ -632,7 +632,9 @@ class KlartextReader:
                 raise self.error(at, "C needs a pole CC before it")
             centre = self.pole
             r_start, r_end = np.hypot(*(start[:2] - centre)), np.hypot(*(self.pos[:2] - centre))
-            if abs(r_start - r_end) > 0.016:  # TNC 640 machine parameter circleDeviation default 0.016 mm... refused beyond
+            # The TNC refuses a circle whose end is off it by more than a machine parameter's bound;
+            # that bound is not in the text: this reader's own 0.016 mm (CAM posts round to 3 decimals)
+            if abs(r_start - r_end) > 0.016:
                 raise self.error(at, f"end point is {r_end:.4f} mm from the pole, start {r_start:.4f} mm: not on one circle")
             vals[F_ARC.start], vals[F_ARC.start + 1] = centre
             return ("C", centre, words.dr)
