@@ -42,21 +42,18 @@ from dataclasses import replace
 import numpy as np
 
 from ...errors import ParseError
-from ...ir import F_ARC, F_EXT, FIELDS, Kind, SourceDoc, Toolpath
-from ...parse.common import Builder, LineIndex, _ranges, scan_numbers
-from ...parse.line_shapes import LineMatches, LineShapes
+from ...ir import F_ARC, FIELDS, Kind, SourceDoc, Toolpath
+from ...parse.common import Builder, LineIndex
+from ...parse.line_shapes import LineMatches
 from .blocks import Block, PlainRun, split_blocks
+from .bulk import BulkReading
+from .contours import Contours
+from .cycles import StateBlocks
+from .fields import AXES, COLUMNS
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, WordError, read_words
 
-# One plain L block alone on its line (block number, absolute plain numbers, no M, no comment):
-# digit runs only through \d+ / \d* so that lines of one shape match alike (line_shapes.py).
-_PLAIN_LINE = re.compile(r"[ \t]*(?:\d+[ \t]+)?L(?P<words>(?:[ \t]+[XYZABC][+-]?(?:\d+\.?\d*|\.\d+))+)(?:[ \t]+(?P<comp>R0|RL|RR))?"
-                         r"(?:[ \t]+(?:(?P<fmax>FMAX)|F(?P<feed>\d+\.?\d*)))?[ \t]*\r?")
 MAX_BLOCKS_RUN = 50_000_000  # a loop that never ends is refused at its jump, not run forever
-_COLUMNS = 14  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C, TCPM on
-_AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
-_R = FIELDS.index("r")
 _PATH = re.compile(r"(LN|LP|L|CC|CR|CT|CP|C)(?![A-Z])", re.IGNORECASE)
 _REFUSED_STATEMENTS = {
     "APPR": "approach contour (APPR): the path the TNC builds depends on the tool radius; not read",
@@ -72,7 +69,7 @@ _REFUSED_STATEMENTS = {
 }
 
 
-class KlartextReader:
+class KlartextReader(BulkReading, Contours, StateBlocks):
     """One run of a Klartext program: the state the TNC keeps, block by block."""
 
     def __init__(self, doc: SourceDoc, dialect: str = "heidenhain"):
@@ -107,7 +104,7 @@ class KlartextReader:
         self.numbers = None  # every number of the text, scanned once when a plain run needs it
         self.segments: list[tuple[np.ndarray, np.ndarray]] = []  # (rows table, cells) read in bulk, in order with the rows
         self.rows_before = 0  # rows already moved into segments
-        self.rows: list[tuple] = []  # per target: the _COLUMNS
+        self.rows: list[tuple] = []  # per target: the COLUMNS
         self.cells: list[tuple] = []  # per number read: row, field, value, start, end (-1: not a plain number)
         self.cycle_defined = 0  # line of the last machining cycle defined (CYCL DEF n, not 7/19/32/9)
         self.cycl7_line = 0
@@ -126,90 +123,6 @@ class KlartextReader:
 
     def error(self, offset: int, message: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, message)
-
-    def _plain_lines(self) -> np.ndarray:
-        """(lines,) True where the line is one plain L block (the bulk of CAM output), found by
-        shape (postproc.parse.line_shapes: one regular expression run per distinct line shape)."""
-        raw = np.frombuffer(self.text.encode("latin-1"), np.uint8)
-        starts = np.concatenate([[0], np.nonzero(raw == 10)[0] + 1]).astype(np.int64)
-        flags = np.zeros(len(starts), bool)
-        if len(raw) == 0:
-            return flags
-        self.raw = raw
-        self.plain = LineShapes(self.text, raw, starts).match(_PLAIN_LINE)
-        flags[self.plain.line] = True
-        self.plain_row = np.full(len(starts), -1, np.int64)
-        self.plain_row[self.plain.line] = np.arange(len(self.plain))
-        return flags
-
-    def plain_run(self, run: PlainRun) -> None:
-        """Lines run.first..run.end-1, each a plain L block, read at once: their numbers from one
-        vectorised scan of the text, the modal axes and feed carried forward as the TNC does
-        (the same reading as path_block gives them one by one)."""
-        if self.numbers is None:
-            self.numbers = scan_numbers(self.text, letter_prefix=True, raw=self.raw)
-        rows = self.plain_row[run.first:run.end]
-        n = len(rows)
-        ws, we = (a[rows] for a in self.plain.span("words"))
-        nums = self.numbers
-        lo, hi = np.searchsorted(nums.start, ws), np.searchsorted(nums.start, we)
-        count = hi - lo
-        owner = np.repeat(np.arange(n), count)
-        pick = _ranges(lo, hi)
-        num_start, num_end, value = nums.start[pick], nums.end[pick], nums.value[pick]
-        letter = self.raw[num_start - 1]
-        table = np.empty((n, _COLUMNS))
-        cells = []
-        first_row = self.rows_all()
-        unknown_rows = np.zeros(n, bool)
-        for col, ch in enumerate(b"XYZABC"):
-            sel = letter == ch
-            r, v = owner[sel], value[sel] * (self.scale if col < 3 else 1.0)
-            given = np.full(n, np.nan)
-            given[r] = v
-            table[:, 7 + col] = _carried(given, self.pos[col])
-            if self.unknown[col]:  # from a parameter the text does not determine, until the axis is given
-                known_from = int(r[0]) if len(r) else n
-                unknown_rows[:known_from] = True
-                self.unknown[col] = known_from == n
-            cells.append(np.c_[r + first_row, np.full(len(r), _AXES[chr(ch)]), v, num_start[sel], num_end[sel]])
-        fs, _ = self.plain.span("feed")
-        fs = fs[rows]
-        feed = np.full(n, np.nan)
-        has_feed = fs >= 0
-        if has_feed.any() and math.isnan(self.feed_scale):
-            raise self.error(int(fs[has_feed][0]), "F in an INCH program: its unit is not read (give the program in MM)")
-        feed[has_feed] = nums.value[np.searchsorted(nums.start, fs[has_feed])] * self.feed_scale
-        feed = _carried(feed, self.feed)
-        rapid = self.plain.present("fmax")[rows]
-        table[:, 0] = np.where(rapid, int(Kind.RAPID), int(Kind.LINEAR))
-        table[:, 1] = np.arange(run.first, run.end) + 1
-        table[:, 2] = np.where(rapid, np.nan, feed)
-        table[:, 3] = self.tool
-        table[:, 4] = self._frame_index()
-        table[:, 6] = ws
-        table[:, 13] = self.tcpm
-        compensated = np.zeros(n, bool)
-        cs, _ = self.plain.span("comp")
-        cs = cs[rows]
-        if (cs >= 0).any() or self.comp != "R0":  # R0 / RL / RR from the block that states it on
-            for i in range(n):
-                if cs[i] >= 0:
-                    self.comp, self.comp_line = self.text[cs[i]:cs[i] + 2], run.first + i + 1
-                if self.comp != "R0":
-                    compensated[i] = not self._state_resolved(run.first + i + 1, False)  # with its note
-        table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)
-        if unknown_rows.any():
-            self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
-        if self.tilt_line:
-            self._state_resolved(run.first + 1, False)  # the note
-        self.pos[:] = table[-1, 7:13]
-        self.feed = float(feed[-1])
-        if n > 1:
-            self.line_start, self.tangent = tuple(table[-2, 7:9]), "line"
-        else:
-            self.line_start, self.tangent = tuple(self.line_start), "line"
-        self.add_segment(table, np.concatenate(cells))
 
     def _require_frame(self) -> None:
         """A program opens with BEGIN PGM and closes with END PGM (TNC 640 manual,
@@ -321,138 +234,6 @@ class KlartextReader:
             self.scale, self.feed_scale = 25.4, math.nan
         elif unit != "MM":
             raise self.error(at + len(blk.text.lstrip()) - len(unit), "BEGIN PGM needs the unit MM or INCH at its end")
-        return None
-
-    def tool_def(self, s: str, at: int):
-        m = re.match(r"TOOL DEF\s+(\d+)(.*)$", s, re.IGNORECASE)
-        if not m:
-            return None  # TOOL DEF "name" / TOOL DEF without data: pre-selection only
-        length = re.search(r"\bL\s*([+-]?(?:\d+\.?\d*|\.\d+))", m.group(2), re.IGNORECASE)
-        if length:  # TNC 4xx: TOOL DEF n L.. R.. defines the tool in the program
-            self.b.tool_index(f"T{m.group(1)}", _along_z(float(length.group(1)) * self.scale))
-        return None
-
-    def tool_call(self, s: str, at: int, line: int):
-        m = re.match(r"TOOL CALL\s*(\d+|\"[^\"]*\")?\s*([XYZ])?(.*)$", s, re.IGNORECASE)
-        if not m:
-            raise self.error(at, "TOOL CALL needs a tool number or name and the tool axis")
-        if m.group(2) and m.group(2).upper() != "Z":
-            raise self.error(at + m.start(2), f"tool axis {m.group(2).upper()}: only tool axis Z (working plane XY) is read")
-        if m.group(1) is None:
-            return None  # TOOL CALL Z: sets the tool axis only
-        name = f"T{m.group(1)}" if m.group(1)[0] != '"' else m.group(1).strip('"')
-        rest = m.group(3)
-        dl = re.search(r"\bDL\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
-        if re.search(r"\bDL\s*[+-]?\s*Q", rest, re.IGNORECASE):
-            raise self.error(at, "DL from a Q parameter is not read")
-        base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
-        if dl and float(dl.group(1)) != 0.0:
-            delta = float(dl.group(1)) * self.scale
-            known = bool(self.b.tool_known[base])
-            # DL is added to the tool table's length (TNC 640 manual, "Tool call: delta values")
-            self.tool = self.b.tool_index(f"{name}+DL{dl.group(1)}@line{line}", self.b.tools[base] @ _along_z(delta), known)
-        else:
-            self.tool = base
-        return None
-
-    def cycle_def(self, s: str, at: int, line: int):
-        m = re.match(r"CYCLE?\s+DEF\s+(\d+)(?:\.(\d+))?\s*(.*)$", s, re.IGNORECASE)
-        if not m:
-            raise self.error(at, "CYCL DEF needs a cycle number")
-        number, sub, rest = int(m.group(1)), m.group(2), m.group(3)
-        if number == 7:
-            return self.datum_shift(sub, rest, at + m.start(3), line)
-        if number == 19:
-            if sub and sub != "0":
-                angles = [float(v) for v in re.findall(r"[ABC]\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)]
-                self.tilt_line = line if any(a != 0.0 for a in angles) else 0
-                self.tilt = None  # axis or spatial angles, as the machine parameters say: not read
-            return None
-        if number in (8, 10, 11, 26):
-            if sub and sub != "0":
-                raise self.error(at, f"coordinate transformation cycle {number} (mirror / rotation / scaling) is not read")
-            return None
-        if number == 32:  # TOLERANCE: the TNC smooths the path within T (TNC 640 manual, Cycle 32)
-            if sub == "1" and re.search(r"T\s*\+?0*\.?0*[1-9]", rest):
-                self.tolerance_line = self.tolerance_line or line
-            return None
-        if number == 9:  # dwell
-            return None
-        self.cycle_defined = line  # a machining cycle: its moves run at CYCL CALL / M99 / M89
-        return None
-
-    def datum_shift(self, sub: str | None, rest: str, at: int, line: int):
-        if sub in (None, "0"):
-            self.cycl7_line = line
-            return None
-        table = re.match(r"\s*#", rest)
-        if table:
-            self.frame = (f"PRESET+datum table {rest.strip()}@line{line}", None)
-            return None
-        words = list(re.finditer(r"(I?)([XYZ])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", rest, re.IGNORECASE))
-        if not words:
-            raise self.error(at, "datum shift: X, Y or Z and its value expected")
-        for w in words:
-            k = "XYZ".index(w.group(2).upper())
-            v = self.value(w.group(3), at + w.start(3))[0] * self.scale  # NaN: from a value the text does not give
-            self.shift[k] = self.shift[k] + v if w.group(1) else v
-        if np.isnan(self.shift).any():
-            self.frame = (f"PRESET+CYCL7@line{self.cycl7_line or line}(from Q parameters the text does not determine)", None)
-            return None
-        shown = " ".join(f"{a}{v:+g}" for a, v in zip("XYZ", self.shift / self.scale))
-        name = f"PRESET+CYCL7@line{self.cycl7_line or line}({shown})"  # one frame per shift value (a loop may shift again)
-        self.frame = (name, _translation(self.shift)) if self.shift.any() else ("PRESET", None)
-        return None
-
-    def cycle_call(self, at: int, line: int):
-        if self.cycle_defined:
-            self.unresolved_row(line, at, f"line {line}: CYCL CALL runs the machining cycle defined at line {self.cycle_defined}: its moves are not read")
-        return None
-
-    def plane(self, s: str, at: int, line: int):
-        up = s.upper()
-        self.tilt = None
-        if up.startswith("PLANE RESET"):
-            self.tilt_line = 0
-        else:
-            self.tilt_line = line
-            if up.startswith("PLANE SPATIAL"):
-                self.tilt = self._spatial(s, at)
-        if re.search(r"\b(MOVE|TURN)\b", up):
-            # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
-            self.unresolved_row(line, at, f"line {line}: PLANE ... MOVE/TURN positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): not read")
-        return None
-
-    def _spatial(self, s: str, at: int) -> np.ndarray | None:
-        """The tilted plane's orientation in the untilted workpiece system: SPA about X, then
-        SPB about Y, then SPC about Z, all about the fixed axes (TNC 640 manual, "PLANE
-        SPATIAL": tilting sequence A-B-C), so R = Rz(SPC) Ry(SPB) Rx(SPA); None where an
-        angle is not determined by the text."""
-        angles = []
-        for key in ("SPA", "SPB", "SPC"):
-            m = re.search(rf"{key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
-            if m is None:
-                raise self.error(at, f"PLANE SPATIAL needs {key} (all three spatial angles)")
-            angles.append(self.value(m.group(1), at + m.start(1))[0])
-        if any(math.isnan(a) for a in angles):
-            return None
-        a, b, c = np.radians(angles)
-        rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-        ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
-        rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
-        return rz @ ry @ rx
-
-    def function(self, s: str, at: int, line: int):
-        up = re.sub(r"\s+", " ", s.upper())
-        if up.startswith("FUNCTION RESET TCPM"):
-            self.tcpm = False
-        elif up.startswith("FUNCTION TCPM"):
-            if "AXIS SPAT" in up:
-                raise self.error(at, "FUNCTION TCPM ... AXIS SPAT: rotary words as spatial angles are not read (AXIS POS is)")
-            self.tcpm = True
-            self.notes["FUNCTION TCPM: rotary words are axis positions, X Y Z the tool tip (TNC 640 manual, FUNCTION TCPM)"] = None
-        else:
-            raise self.error(at, f"'{' '.join(up.split()[:2])}' is not read")
         return None
 
     def call_label(self, s: str, at: int):
@@ -587,7 +368,7 @@ class KlartextReader:
 
     def cartesian(self, words: PathWords, vals, spans, at: int) -> bool:
         moved = False
-        for letter, k in _AXES.items():
+        for letter, k in AXES.items():
             w = words.words.get(letter)
             if w is None:
                 continue
@@ -608,118 +389,6 @@ class KlartextReader:
             if extra in words.words:
                 raise self.error(words.words[extra].start, f"{extra} is not read in this block")
         return moved
-
-    def set_pole(self, words: PathWords, at: int) -> None:
-        got = False
-        for letter, i in (("X", 0), ("Y", 1)):
-            w = words.words.get(letter)
-            if w is not None:
-                v, _ = self.value(w.text, w.start)
-                v *= self.scale
-                self.pole[i] = self.pole[i] + v if w.incremental else v
-                got = True
-        if not got:
-            self.pole = self.pos[:2].copy()  # CC without coordinates: the last programmed position
-        if np.isnan(self.pole).any():
-            raise self.error(at, "pole CC not determined (no position before it)")
-        self.polar = [math.nan, math.nan]
-
-    def circle(self, kind: str, words: PathWords, start, vals, spans, at: int):
-        if words.dr is None and kind != "CT":
-            raise self.error(at, f"{kind} needs DR+ or DR- (direction of rotation)")
-        if kind == "C":
-            if np.isnan(self.pole).any():
-                raise self.error(at, "C needs a pole CC before it")
-            centre = self.pole
-            r_start, r_end = np.hypot(*(start[:2] - centre)), np.hypot(*(self.pos[:2] - centre))
-            # The TNC refuses a circle whose end is off it by more than a machine parameter's bound;
-            # that bound is not in the text: this reader's own 0.016 mm (CAM posts round to 3 decimals)
-            if abs(r_start - r_end) > 0.016:
-                raise self.error(at, f"end point is {r_end:.4f} mm from the pole, start {r_start:.4f} mm: not on one circle")
-            vals[F_ARC.start], vals[F_ARC.start + 1] = centre
-            return ("C", centre, words.dr)
-        if kind == "CR":
-            w = words.words.get("R")
-            if w is None:
-                raise self.error(at, "CR needs R (the radius)")
-            r, _ = self.value(w.text, w.start)
-            vals[_R] = r * self.scale
-            if w.plain:
-                spans[_R] = (0, w.start, w.end)
-            centre = self._radius_centre(start[:2], self.pos[:2], r * self.scale, words.dr == "+", w.start)
-            return ("CR", centre, words.dr)
-        # CT: tangent to the previous element
-        if isinstance(self.tangent, str):  # after a plain L block: its direction
-            d = start[:2] - np.array(self.line_start)
-            self.tangent = d / np.hypot(*d) if np.hypot(*d) > 0 else None
-        if self.tangent is None or np.isnan(self.tangent).any():
-            raise self.error(at, "CT needs a contour element before it (its tangent)")
-        d = self.tangent
-        chord = self.pos[:2] - start[:2]
-        cross = d[0] * chord[1] - d[1] * chord[0]
-        if abs(cross) < 1e-12:
-            raise self.error(at, "CT end point on the tangent: no circle")
-        normal = np.array([-d[1], d[0]])
-        t = (chord @ chord) / (2.0 * (normal @ chord))
-        centre = start[:2] + t * normal
-        vals[F_ARC.start], vals[F_ARC.start + 1] = centre
-        return ("CT", centre, "+" if cross > 0 else "-")
-
-    def _radius_centre(self, a, b, r: float, ccw: bool, at: int) -> np.ndarray:
-        """Centre of the CR arc: R+ the arc of at most 180 degrees, R- the longer one (TNC 640
-        manual, "Circular path CR with defined radius"), left of the chord for DR+ and R+."""
-        chord = b - a
-        half = np.hypot(*chord) / 2.0
-        if half == 0.0 or abs(r) < half - 1e-9:
-            raise self.error(at, f"radius {abs(r):g} mm is shorter than half the chord ({half:.4f} mm): no such circle")
-        u = chord / (2.0 * half)
-        left = np.array([-u[1], u[0]])
-        side = 1.0 if ccw == (r > 0) else -1.0
-        return (a + b) / 2.0 + side * math.sqrt(max(r * r - half * half, 0.0)) * left
-
-    def polar_move(self, kind: str, words: PathWords, start, vals, spans, at: int) -> bool:
-        if np.isnan(self.pole).any():
-            raise self.error(at, f"{kind} needs a pole CC before it")
-        pr, pa = self.polar
-        if kind == "CP":
-            pr = float(np.hypot(*(start[:2] - self.pole)))  # CP keeps the distance from the pole
-            if math.isnan(pa):
-                pa = math.degrees(math.atan2(start[1] - self.pole[1], start[0] - self.pole[0]))
-        for letter in ("PR", "PA"):
-            w = words.words.get(letter)
-            if w is None:
-                continue
-            v, _ = self.value(w.text, w.start)
-            if letter == "PR":
-                if kind == "CP":
-                    raise self.error(w.start, "CP takes no PR (its radius is the distance from the pole)")
-                v *= self.scale
-                pr = pr + v if w.incremental else v
-            else:
-                if w.incremental and math.isnan(pa):
-                    pa = math.degrees(math.atan2(start[1] - self.pole[1], start[0] - self.pole[0]))
-                pa = pa + v if w.incremental else v
-        if math.isnan(pr) or math.isnan(pa):
-            raise self.error(at, f"{kind}: polar radius PR and angle PA not both known")
-        self.polar = [pr, pa]
-        self.pos[0] = self.pole[0] + pr * math.cos(math.radians(pa))
-        self.pos[1] = self.pole[1] + pr * math.sin(math.radians(pa))
-        vals[0], vals[1] = self.pos[0], self.pos[1]
-        for letter in ("Z", "A", "B", "C"):
-            w = words.words.get(letter)
-            if w is not None:
-                v, _ = self.value(w.text, w.start)
-                i = "XYZABC".index(letter)
-                v *= self.scale if i < 3 else 1.0
-                self.pos[i] = self.pos[i] + v if w.incremental else v
-                vals[_AXES[letter]] = self.pos[i]
-                if w.plain and not w.incremental:
-                    spans[_AXES[letter]] = (0, w.start, w.end)
-        if kind == "CP":
-            if words.dr is None:
-                raise self.error(at, "CP needs DR+ or DR-")
-            vals[F_ARC.start], vals[F_ARC.start + 1] = self.pole
-        return True
 
     def unresolved_row(self, line: int, at: int, note: str) -> None:
         self.notes[note] = None
@@ -759,19 +428,6 @@ class KlartextReader:
             name = f"{name}+PLANE SPATIAL@line{self.tilt_line}"
         return 0 if name == "PRESET" else self.b.frame_index(name, transform, False)
 
-    def _tangent(self, k, start, arc):
-        if arc is None:
-            d = self.pos[:2] - start[:2]
-            n = np.hypot(*d)
-            return d / n if n > 0 else self.tangent
-        centre = arc[1] if arc != "CP" else self.pole
-        radial = self.pos[:2] - centre
-        ccw = k == Kind.ARC_CCW
-        t = np.array([-radial[1], radial[0]]) if ccw else np.array([radial[1], -radial[0]])
-        n = np.hypot(*t)
-        return t / n if n > 0 else self.tangent
-
-    # ------------------------------------------------------------- IR
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
         """False (with a note) where the modal state leaves the position to what the text does not give."""
         resolved = True
@@ -800,7 +456,7 @@ class KlartextReader:
 
     def _flush(self) -> None:
         if self.rows or self.cells:
-            self.segments.append((np.array(self.rows, float).reshape(-1, _COLUMNS), np.array(self.cells, float).reshape(-1, 5)))
+            self.segments.append((np.array(self.rows, float).reshape(-1, COLUMNS), np.array(self.cells, float).reshape(-1, 5)))
             self.rows_before += len(self.rows)
             self.rows, self.cells = [], []
 
@@ -814,7 +470,7 @@ class KlartextReader:
     # ------------------------------------------------------------- IR
     def build(self) -> Toolpath:
         self._flush()
-        table = np.concatenate([t for t, _ in self.segments]) if self.segments else np.zeros((0, _COLUMNS))
+        table = np.concatenate([t for t, _ in self.segments]) if self.segments else np.zeros((0, COLUMNS))
         cells = np.concatenate([c for _, c in self.segments]) if self.segments else np.zeros((0, 5))
         n = len(table)
         kind = table[:, 0].astype(np.int8)
@@ -856,25 +512,6 @@ class KlartextReader:
             self.b.notes.append(f"line {int(lines[np.argmax(mixed)])}: rotary axes turned without M128 / FUNCTION TCPM in a program that uses it elsewhere: "
                                 "X Y Z there are not the tool tip; not read as five-axis")
         return mixed
-
-
-def _carried(given: np.ndarray, before: float) -> np.ndarray:
-    """Modal values: each NaN takes the last given value before it (``before`` at the start)."""
-    idx = np.where(np.isnan(given), -1, np.arange(len(given)))
-    np.maximum.accumulate(idx, out=idx)
-    return np.where(idx >= 0, given[np.maximum(idx, 0)], before)
-
-
-def _along_z(length: float) -> np.ndarray:
-    t = np.eye(4)
-    t[2, 3] = length
-    return t
-
-
-def _translation(v) -> np.ndarray:
-    t = np.eye(4)
-    t[:3, 3] = v
-    return t
 
 
 def read_klartext(doc: SourceDoc) -> Toolpath:
