@@ -1,0 +1,224 @@
+"""The code of VAL3 programs (.pgx): the motions they execute, in order, with the places
+of their arguments.
+
+A .pgx is XML holding ``<Program name="...">`` elements whose ``<Code><![CDATA[ ... ]]>``
+is the VAL3 source (VAL3 reference manual, "Programs"). postproc follows the statements
+from ``begin`` to ``end``: ``movej``/``movel``/``movec`` with points, tools and motion
+descriptors from the data file (or ``appro(point, {x,y,z,rx,ry,rz})`` of one), and
+``call program()`` into another program of the application. What makes the motions
+depend on the run (a motion inside ``if``/``while``/``for``/``do``/``switch``, a call with
+arguments, an assignment or ``link`` to a point, frame or tool, a motion instruction
+postproc does not model) is a ParseError at its place: nothing is guessed.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass, field
+
+from ...errors import ParseError
+from ...parse.common import LineIndex
+
+_PROGRAM = re.compile(r"<Program\b[^>]*?\bname\s*=\s*\"(\w+)\"[^>]*>", re.IGNORECASE)
+_CODE = re.compile(r"<Code\s*>\s*<!\[CDATA\[(.*?)\]\]>", re.DOTALL | re.IGNORECASE)
+_LINE = re.compile(r"[^\n]*")
+_WORD = re.compile(r"[ \t]*([A-Za-z_]\w*)")
+_MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
+_OTHER_MOTION = re.compile(r"\b(?!(?:movej|movel|movec)\b)(move\w+|alterMove\w*|alterBegin|alterEnd|link|setFrame)\s*\(")
+_CALL = re.compile(r"[ \t]*call[ \t]+(\w+)[ \t]*\(([^)]*)\)")
+_ASSIGN = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[^\]]*\])?[ \t]*(?:\.[ \t]*\w+[ \t]*)*=(?!=)")
+_REF = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[ \t]*(\d+)[ \t]*\])?[ \t]*$")
+_APPRO = re.compile(r"[ \t]*appro[ \t]*\((.*)\)[ \t]*$", re.DOTALL)
+_LITERAL = re.compile(r"[ \t]*\{([^{}]*)\}[ \t]*$")
+
+OPENS = {"if": "endIf", "while": "endWhile", "for": "endFor", "do": "until", "switch": "endSwitch"}
+CLOSES = {v: k for k, v in OPENS.items()}
+GEOMETRY = ("pointRx", "pointRs", "jointRx", "jointRs", "frame", "tool", "trsf", "mdesc")
+
+
+@dataclass(frozen=True)
+class Ref:
+    """A data element named in the code: ``name[key]`` (key 0 where no index is written)."""
+
+    name: str
+    key: int
+    offset: int  # where the argument starts in the program's file
+
+    @property
+    def label(self) -> str:
+        return f"{self.name}[{self.key}]"
+
+
+@dataclass(frozen=True)
+class PointArg:
+    ref: Ref
+    approach: tuple[float, ...] | None = None  # appro(point, {x, y, z, rx, ry, rz}): the trsf
+
+
+@dataclass(frozen=True)
+class Motion:
+    word: str  # movej, movel or movec
+    file: int  # the program's source index
+    offset: int  # the statement's offset in that file
+    points: tuple[PointArg, ...]  # one, or movec's via and target
+    tool: Ref
+    mdesc: Ref
+
+
+@dataclass
+class Programs:
+    """Every program of the application's sources: name -> (source index, code start, code end)."""
+
+    code: dict[str, tuple[int, int, int]] = field(default_factory=dict)
+
+
+def find_programs(texts: list[tuple[int, str]]) -> Programs:
+    """The programs in the given (source index, .pgx text) pairs."""
+    found = Programs()
+    for index, text in texts:
+        starts = list(_PROGRAM.finditer(text))
+        for i, m in enumerate(starts):
+            end = starts[i + 1].start() if i + 1 < len(starts) else len(text)
+            code = _CODE.search(text, m.end(), end)
+            if code:
+                found.code.setdefault(m.group(1), (index, code.start(1), code.end(1)))
+    return found
+
+
+def called_programs(text: str) -> list[str]:
+    """Names of the programs a .pgx text calls (``call name(...)``), in order, once each."""
+    return list(dict.fromkeys(m.group(1) for m in re.finditer(r"\bcall[ \t]+(\w+)[ \t]*\(", text)))
+
+
+class CodeReader:
+    """Walks the programs from one entry program, calls followed, and lists its motions."""
+
+    def __init__(self, paths: list[str], texts: list[str], programs: Programs, types: dict[str, str]):
+        self.paths, self.texts, self.programs, self.types = paths, texts, programs, types
+        self.lines = {i: LineIndex(t) for i, t in enumerate(texts) if t is not None}
+        self.motions: list[Motion] = []
+
+    def error(self, file: int, offset: int, message: str) -> ParseError:
+        return self.lines[file].error(self.paths[file], offset, message)
+
+    def run(self, name: str, stack: tuple[str, ...] = (), where: tuple[int, int] | None = None) -> list[Motion]:
+        if name not in self.programs.code:
+            if where is None:
+                raise ParseError(self.paths[0], 1, 1, f"no program '{name}' in this file")
+            raise self.error(*where, f"program '{name}' is not in the application's folder ({name}.pgx): its motions are not known")
+        if name in stack:
+            raise self.error(*where, f"'{name}' calls itself (through {' -> '.join(stack)}): how often it runs is not known from the text")
+        file, start, end = self.programs.code[name]
+        depth: list[tuple[str, int]] = []
+        text = self.texts[file]
+        for m in _LINE.finditer(text, start, end):
+            line = _strip_comment(m.group(0))
+            if line.strip():
+                self._statement(file, m.start(), line, depth, stack + (name,))
+        return self.motions
+
+    def _statement(self, file: int, offset: int, line: str, depth: list, stack: tuple[str, ...]) -> None:
+        first = _WORD.match(line)
+        word = first.group(1) if first else ""
+        if word in OPENS:
+            depth.append((word, offset + first.start(1)))
+            return
+        if word in CLOSES or word in ("else", "case", "default", "begin", "end"):
+            if word in CLOSES and depth:
+                depth.pop()
+            return
+        call = _CALL.match(line)
+        if call:
+            self._inside_block(file, offset, depth, "call")
+            if call.group(2).strip():
+                raise self.error(file, offset + call.start(2), f"call {call.group(1)}(...) with arguments: the motions may depend on them")
+            self.run(call.group(1), stack, (file, offset + call.start(1)))
+            return
+        assign = _ASSIGN.match(line)
+        if assign and self.types.get(assign.group(1)) in GEOMETRY:
+            raise self.error(file, offset + assign.start(1), f"{assign.group(1)} ({self.types[assign.group(1)]}) is assigned at run time: the motions do not go to the data file's values")
+        for other in _OTHER_MOTION.finditer(line):
+            raise self.error(file, offset + other.start(1), f"{other.group(1)}() is not modelled by postproc (the motions or frames it makes are not known from the data)")
+        for motion in _MOTION.finditer(line):
+            self._inside_block(file, offset, depth, motion.group(1))
+            self.motions.append(self._motion(file, offset, line, motion))
+
+    def _inside_block(self, file: int, offset: int, depth: list, what: str) -> None:
+        if depth:
+            block, at = depth[-1]
+            raise self.error(file, offset, f"{what} inside '{block}' (line {int(self.lines[file].line(at))}): whether and how often it runs is not known from the text")
+
+    def _motion(self, file: int, offset: int, line: str, m: re.Match) -> Motion:
+        args = _arguments(line, m.end())
+        if args is None:
+            raise self.error(file, offset + m.start(), f"{m.group(1)}( is not closed on its line")
+        want = 4 if m.group(1) == "movec" else 3
+        if len(args) != want:
+            raise self.error(file, offset + m.start(), f"{m.group(1)} takes {want} arguments, this one has {len(args)}")
+        points = tuple(self._point(file, offset, text, start) for text, start in args[:-2])
+        tool = self._ref(file, offset, *args[-2], "tool")
+        mdesc = self._ref(file, offset, *args[-1], "motion descriptor")
+        return Motion(m.group(1), file, offset + m.start(), points, tool, mdesc)
+
+    def _ref(self, file: int, offset: int, text: str, start: int, what: str) -> Ref:
+        m = _REF.match(text)
+        if not m:
+            raise self.error(file, offset + start + _lead(text), f"this {what} is computed at run time: only a variable of the data file (name or name[index]) is known from the text")
+        return Ref(m.group(1), int(m.group(2) or 0), offset + start + m.start(1))
+
+    def _point(self, file: int, offset: int, text: str, start: int) -> PointArg:
+        appro = _APPRO.match(text)
+        if not appro:
+            return PointArg(self._ref(file, offset, text, start, "point"))
+        inner = _arguments(appro.group(1) + ")", 0)
+        if inner is None or len(inner) != 2:
+            raise self.error(file, offset + start + _lead(text), "appro(point, trsf) with other arguments")
+        literal = _LITERAL.match(inner[1][0])
+        numbers = _numbers(literal.group(1)) if literal else None
+        if numbers is None:
+            raise self.error(file, offset + start + appro.start(1) + inner[1][1] + _lead(inner[1][0]), "appro's trsf is computed at run time: only a literal {x, y, z, rx, ry, rz} is known from the text")
+        ref = self._ref(file, offset, inner[0][0], start + appro.start(1) + inner[0][1], "point")
+        return PointArg(ref, numbers)
+
+
+def _strip_comment(line: str) -> str:
+    """The line without its // comment (outside a string), same offsets."""
+    quoted = False
+    for i, ch in enumerate(line):
+        if ch == '"':
+            quoted = not quoted
+        elif not quoted and line.startswith("//", i):
+            return line[:i]
+    return line
+
+
+def _lead(text: str) -> int:
+    return len(text) - len(text.lstrip())
+
+
+def _arguments(line: str, start: int) -> list[tuple[str, int]] | None:
+    """The top-level comma-separated arguments from ``start`` (just after '(') to the
+    matching ')': (text, offset in ``line``) each; None where the parenthesis is not closed."""
+    args, level, begin = [], 0, start
+    for i in range(start, len(line)):
+        ch = line[i]
+        if ch in "([{":
+            level += 1
+        elif ch in ")]}":
+            if level == 0:
+                args.append((line[begin:i], begin))
+                return args if any(a.strip() for a, _ in args) else []
+            level -= 1
+        elif ch == "," and level == 0:
+            args.append((line[begin:i], begin))
+            begin = i + 1
+    return None
+
+
+def _numbers(text: str) -> tuple[float, ...] | None:
+    parts = text.split(",")
+    try:
+        values = tuple(float(p) for p in parts)
+    except ValueError:
+        return None
+    return values if len(values) == 6 else None

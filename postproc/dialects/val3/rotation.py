@@ -1,0 +1,46 @@
+"""Stäubli's Rx, Ry, Rz: successive rotations about x, then the new y', then the new z''.
+
+VAL3 reference manual, "trsf" type: the orientation of a trsf is "Rx, Ry, Rz" in degrees,
+rotations about the moving axes in the order x, y', z'', so R = Rx(rx) Ry(ry) Rz(rz).
+Checked against a published converter: RoboDK's ``Pose_2_TxyzRxyz`` (used by its VAL3
+post) reads ry = asin(R[0, 2]), rx = atan2(-R[1, 2], R[2, 2]), rz = atan2(-R[0, 1], R[0, 0]),
+which is exactly this product (tests/test_val3.py checks both ways).
+
+R = Rx Ry Rz is the transpose of KUKA's Rz(A) Ry(B) Rx(C) taken at A = -rz, B = -ry,
+C = -rx, so the conversions reuse postproc.frames' vectorised ABC ones.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ...frames import abc_to_matrix, abc_to_quat_wxyz, matrix_to_abc
+
+
+def rxyz_to_matrix(rxyz_deg: np.ndarray) -> np.ndarray:
+    """(N, 3) Rx, Ry, Rz in degrees -> (N, 3, 3) = Rx(rx) Ry(ry) Rz(rz)."""
+    r = np.asarray(rxyz_deg, dtype=float)
+    return np.swapaxes(abc_to_matrix(-r[..., ::-1]), -1, -2)
+
+
+def rxyz_to_quat_wxyz(rxyz_deg: np.ndarray) -> np.ndarray:
+    """(N, 3) Rx, Ry, Rz in degrees -> unit quaternions w, x, y, z (w >= 0)."""
+    q = abc_to_quat_wxyz(-np.asarray(rxyz_deg, dtype=float)[..., ::-1])
+    q[..., 1:] *= -1.0  # the transpose's quaternion is the conjugate
+    return q
+
+
+def matrix_to_rxyz(rot: np.ndarray) -> np.ndarray:
+    """(N, 3, 3) -> Rx, Ry, Rz in degrees, Ry in [-90, 90]; at Ry = ±90 Rx is 0."""
+    abc = matrix_to_abc(np.swapaxes(np.asarray(rot, dtype=float), -1, -2))
+    return -abc[..., ::-1] + 0.0  # + 0.0: no '-0'
+
+
+def trsf_matrix(values: np.ndarray) -> np.ndarray:
+    """(N, 6) x, y, z (mm), Rx, Ry, Rz (deg) -> (N, 4, 4)."""
+    values = np.asarray(values, dtype=float).reshape(-1, 6)
+    out = np.zeros((len(values), 4, 4))
+    out[:, :3, :3] = rxyz_to_matrix(values[:, 3:6])
+    out[:, :3, 3] = values[:, :3]
+    out[:, 3, 3] = 1.0
+    return out
