@@ -110,7 +110,7 @@ def _app(tmp_path, code: str, points: str = "", extra: str = "") -> Path:
 
 
 @pytest.mark.parametrize("code, line, column, words", [
-    ("  for i = 0 to 2\n    movel(pA[0], tTip, mFast)\n  endFor\n", 6, 1, "inside 'for' (line 5)"),
+    ("  for i = 0 to 2\n    movel(pA[0], tTip, mFast)\n  endFor\n", 6, 5, "inside 'for' (line 5)"),
     ("  pA[0].trsf.x = 3\n  movel(pA[0], tTip, mFast)\n", 5, 3, "assigned at run time"),
     ("  movel(pA[7], tTip, mFast)\n", 5, 9, "no such element"),
     ("  movel(pZ, tTip, mFast)\n", 5, 9, "no such variable"),

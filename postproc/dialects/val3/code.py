@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 from ...errors import ParseError
 from ...parse.common import LineIndex
+from .data import index_text
 
 _PROGRAM = re.compile(r"<Program\b[^>]*?\bname\s*=\s*\"(\w+)\"[^>]*>", re.IGNORECASE)
 _CODE = re.compile(r"<Code\s*>\s*<!\[CDATA\[(.*?)\]\]>", re.DOTALL | re.IGNORECASE)
@@ -25,9 +26,11 @@ _LINE = re.compile(r"[^\n]*")
 _WORD = re.compile(r"[ \t]*([A-Za-z_]\w*)")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
 _OTHER_MOTION = re.compile(r"\b(?!(?:movej|movel|movec)\b)(move\w+|alterMove\w*|alterBegin|alterEnd|link|setFrame)\s*\(")
+_TASK = re.compile(r"\b(taskCreate|taskCreateSync)\b")
 _CALL = re.compile(r"[ \t]*call[ \t]+(\w+)[ \t]*\(([^)]*)\)")
 _ASSIGN = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[^\]]*\])?[ \t]*(?:\.[ \t]*\w+[ \t]*)*=(?!=)")
-_REF = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[ \t]*(\d+)[ \t]*\])?[ \t]*$")
+_ASSIGN_LINE = re.compile(r"^" + _ASSIGN.pattern, re.MULTILINE)
+_REF = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[ \t]*(\d+(?:[ \t]*,[ \t]*\d+)*)[ \t]*\])?[ \t]*$")
 _APPRO = re.compile(r"[ \t]*appro[ \t]*\((.*)\)[ \t]*$", re.DOTALL)
 _LITERAL = re.compile(r"[ \t]*\{([^{}]*)\}[ \t]*$")
 
@@ -41,7 +44,7 @@ class Ref:
     """A data element named in the code: ``name[key]`` (key 0 where no index is written)."""
 
     name: str
-    key: int
+    key: str  # "0" where no index is written; "1,2" in a two-dimensional array
     offset: int  # where the argument starts in the program's file
 
     @property
@@ -97,6 +100,7 @@ class CodeReader:
         self.paths, self.texts, self.programs, self.types = paths, texts, programs, types
         self.lines = {i: LineIndex(t) for i, t in enumerate(texts) if t is not None}
         self.motions: list[Motion] = []
+        self._touched: dict[str, bool] = {}
 
     def error(self, file: int, offset: int, message: str) -> ParseError:
         return self.lines[file].error(self.paths[file], offset, message)
@@ -129,7 +133,9 @@ class CodeReader:
             return
         call = _CALL.match(line)
         if call:
-            self._inside_block(file, offset, depth, "call")
+            if call.group(1) in self.programs.code and not self._touches(call.group(1), ()):
+                return  # a program that neither moves nor changes a point, frame or tool
+            self._inside_block(file, offset + _lead(line), depth, "call")
             if call.group(2).strip():
                 raise self.error(file, offset + call.start(2), f"call {call.group(1)}(...) with arguments: the motions may depend on them")
             self.run(call.group(1), stack, (file, offset + call.start(1)))
@@ -137,11 +143,29 @@ class CodeReader:
         assign = _ASSIGN.match(line)
         if assign and self.types.get(assign.group(1)) in GEOMETRY:
             raise self.error(file, offset + assign.start(1), f"{assign.group(1)} ({self.types[assign.group(1)]}) is assigned at run time: the motions do not go to the data file's values")
+        task = _TASK.search(line)
+        if task:
+            raise self.error(file, offset + task.start(1), f"{task.group(1)} runs a program as a task beside this one: when its motions run, and in which order with these, is not known from the text")
         for other in _OTHER_MOTION.finditer(line):
             raise self.error(file, offset + other.start(1), f"{other.group(1)}() is not modelled by postproc (the motions or frames it makes are not known from the data)")
         for motion in _MOTION.finditer(line):
-            self._inside_block(file, offset, depth, motion.group(1))
+            self._inside_block(file, offset + motion.start(), depth, motion.group(1))
             self.motions.append(self._motion(file, offset, line, motion))
+
+    def _touches(self, name: str, seen: tuple[str, ...]) -> bool:
+        """True where program ``name`` (or one it calls) may move the arm or change the
+        data motions use: a motion, a task, an assignment to a point, frame, tool or
+        descriptor, or a call into a program that is not in the application."""
+        if name in seen:
+            return False  # already being looked at higher up
+        if name not in self._touched:
+            file, start, end = self.programs.code[name]
+            code = "\n".join(_strip_comment(line) for line in self.texts[file][start:end].split("\n"))
+            direct = bool(_MOTION.search(code) or _OTHER_MOTION.search(code) or _TASK.search(code)) or any(
+                self.types.get(m.group(1)) in GEOMETRY for m in _ASSIGN_LINE.finditer(code))
+            callees = [m.group(1) for m in re.finditer(r"\bcall[ \t]+(\w+)", code)]
+            self._touched[name] = direct or any(c not in self.programs.code or self._touches(c, seen + (name,)) for c in callees)
+        return self._touched[name]
 
     def _inside_block(self, file: int, offset: int, depth: list, what: str) -> None:
         if depth:
@@ -164,7 +188,7 @@ class CodeReader:
         m = _REF.match(text)
         if not m:
             raise self.error(file, offset + start + _lead(text), f"this {what} is computed at run time: only a variable of the data file (name or name[index]) is known from the text")
-        return Ref(m.group(1), int(m.group(2) or 0), offset + start + m.start(1))
+        return Ref(m.group(1), index_text(m.group(2) or "0"), offset + start + m.start(1))
 
     def _point(self, file: int, offset: int, text: str, start: int) -> PointArg:
         appro = _APPRO.match(text)

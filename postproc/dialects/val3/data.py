@@ -19,7 +19,13 @@ from ...parse.common import LineIndex
 
 _TAG = re.compile(r"<(Data|Value)\b((?:[^>\"]|\"[^\"]*\")*?)(/?)>|</Data\s*>|<!--.*?-->", re.DOTALL)
 _ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
-_FATHER = re.compile(r"^(\w+)\[(\d+)\]$")
+_FATHER = re.compile(r"^(\w+)\[([\d\s,]+)\]$")
+_INDEX = re.compile(r"\d+(?:\s*,\s*\d+)*$")
+
+
+def index_text(text: str) -> str:
+    """An element index as the data file's keys write it: "3", "1,2"."""
+    return ",".join(part.strip() for part in text.split(","))
 
 
 @dataclass
@@ -28,7 +34,7 @@ class Element:
 
     datum: str  # the variable's name
     type: str  # pointRx, jointRx, frame, tool, mdesc, ...
-    key: int
+    key: str  # "3", or "1,2" in a two-dimensional array
     attrs: dict[str, tuple[str, int, int]]
     offset: int  # where the <Value tag starts
 
@@ -36,13 +42,14 @@ class Element:
     def name(self) -> str:
         return f"{self.datum}[{self.key}]"
 
-    def father(self) -> tuple[str, int] | None:
-        """(name, index) the element is linked to, None where it states none."""
+    def father(self) -> tuple[str, str] | None:
+        """(name, index) the element is linked to ("" as index where the text is not
+        name[index]), None where it states none."""
         if "fatherId" not in self.attrs:
             return None
         text = self.attrs["fatherId"][0].strip()
         m = _FATHER.match(text)
-        return (m.group(1), int(m.group(2))) if m else (text, -1)
+        return (m.group(1), index_text(m.group(2))) if m else (text, "")
 
 
 @dataclass
@@ -52,19 +59,31 @@ class Database:
     path: str
     text: str
     types: dict[str, str]
-    elements: dict[tuple[str, int], Element]
+    elements: dict[tuple[str, str], Element]
     lines: LineIndex
+    sizes: dict[str, str]
+
+    def element(self, name: str, key: str) -> Element | None:
+        """The element ``name[key]``; one the file declares (``size``) but writes no <Value>
+        for has every field at its default (Stäubli Robotics Suite writes
+        ``<Data name="jHome" type="jointRx" size="1"></Data>`` for a jointRx of zeros);
+        None where the variable or the index does not exist."""
+        found = self.elements.get((name, key))
+        size = self.sizes.get(name, "1")
+        if found is None and name in self.types and key.isdigit() and size.isdigit() and int(key) < int(size):
+            return Element(name, self.types[name], key, {}, -1)
+        return found
 
     def error(self, offset: int, message: str) -> ParseError:
         return self.lines.error(self.path, offset, message)
 
 
 def read_database(path: str, text: str) -> Database:
-    """The variables of a .dtx; a Value outside a Data, or a key that is not a whole number,
-    is a ParseError at its place."""
+    """The variables of a .dtx; a Value outside a Data is a ParseError at its place."""
     lines = LineIndex(text)
     types: dict[str, str] = {}
-    elements: dict[tuple[str, int], Element] = {}
+    sizes: dict[str, str] = {}
+    elements: dict[tuple[str, str], Element] = {}
     current: tuple[str, str] | None = None
     for m in _TAG.finditer(text):
         tag = m.group(1)
@@ -78,12 +97,13 @@ def read_database(path: str, text: str) -> Database:
                 raise lines.error(path, m.start(), "a <Data> without a name")
             name, kind = attrs["name"][0], attrs.get("type", ("", 0, 0))[0]
             types[name] = kind
+            sizes[name] = attrs.get("size", ("1", 0, 0))[0].strip()
             current = None if m.group(3) else (name, kind)
             continue
         if current is None:
             raise lines.error(path, m.start(), "a <Value> outside a <Data> element")
         key_text = attrs.get("key", ("0", 0, 0))[0]
-        if not key_text.isdigit():
-            raise lines.error(path, attrs["key"][1] if "key" in attrs else m.start(), f"key '{key_text}' is not an element index")
-        elements[(current[0], int(key_text))] = Element(current[0], current[1], int(key_text), attrs, m.start())
-    return Database(path, text, types, elements, lines)
+        # an array's index ("3", "1,2"), or a collection's key, any text (VAL3 s7 collections)
+        key = index_text(key_text) if _INDEX.match(key_text.strip()) else key_text
+        elements[(current[0], key)] = Element(current[0], current[1], key, attrs, m.start())
+    return Database(path, text, types, elements, lines, sizes)

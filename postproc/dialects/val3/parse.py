@@ -30,6 +30,9 @@ CONFIG = {
     "elbow": {"epositive": 1.0, "enegative": -1.0, "esame": 0.0, "efree": 2.0},
     "wrist": {"wpositive": 1.0, "wnegative": -1.0, "wsame": 0.0, "wfree": 2.0},
 }
+# mdesc defaults (VAL3 reference manual, "mdesc": accel 100, vel 100, decel 100, tvel 99999,
+# rvel 9999, blend off, leave 50, reach 50); Stäubli Robotics Suite writes no field at its default.
+MDESC_LEAVE = 50.0
 ROOTS = {"world": "frame", "flange": "tool"}  # the roots of the frame and tool trees
 MAX_CHAIN = 64
 
@@ -53,6 +56,8 @@ def _program_name(doc: SourceDoc) -> str:
     from pathlib import Path
 
     names = find_programs([(0, doc.text)]).code
+    if not names and "<programList" in doc.text:
+        raise ParseError(doc.path, 1, 1, "a VAL3 s6 program file (<programList>, CS8 controllers before VAL3 s7): postproc reads the s7 and later format (<Programs>); open it in Stäubli Robotics Suite 2013 or later to convert it")
     stem = Path(doc.path).stem
     if stem in names:
         return stem
@@ -86,7 +91,8 @@ class _Assembler:
             kind[r] = Kind.ABSJ if element.type == "jointRx" else k
             line[r] = int(self.reader_line(motion))
             file[r], names = motion.file, names + [point.ref.label]
-            insert_at[r] = (self.data_index, element.offset + len("<Value"))
+            if element.offset >= 0:  # a field left out can be added to the element's <Value>
+                insert_at[r] = (self.data_index, element.offset + len("<Value"))
             attrs, columns = (JOINT_ATTRS, range(7, 13)) if element.type == "jointRx" else (POSE_ATTRS, range(0, 6))
             for attr, col in zip(attrs, columns):
                 text = element.attrs.get(attr)
@@ -135,7 +141,7 @@ class _Assembler:
         return LineIndex(self.sources[file].text).error(self.sources[file].path, offset, message)
 
     def _element(self, file: int, ref, types: tuple[str, ...]) -> Element:
-        element = self.db.elements.get((ref.name, ref.key))
+        element = self.db.element(ref.name, ref.key)
         if element is None:
             what = "has no such element" if ref.name in self.db.types else "has no such variable"
             raise self._code_error(file, ref.offset, f"{ref.label}: the data file {self.db.path} {what} (local variables and parameters are set at run time)")
@@ -167,11 +173,11 @@ class _Assembler:
         transform, seen = np.eye(4), 0
         while True:
             father = element.father()
-            if father is None or father[1] < 0:
+            if father is None or not father[1]:
                 return None
             if father[0] == root:
-                return transform if father[1] == 0 else None
-            parent = self.db.elements.get(father)
+                return transform if father[1] == "0" else None
+            parent = self.db.element(*father)
             seen += 1
             if parent is None or parent.type != ROOTS[root] or seen > MAX_CHAIN:
                 return None
@@ -181,29 +187,30 @@ class _Assembler:
     def _frame(self, point: Element) -> int:
         father = point.father()
         name = "<no fatherId>" if father is None else f"{father[0]}[{father[1]}]"
-        if father is not None and father[0] == "world" and father[1] == 0:
+        if father == ("world", "0"):
             return 0
         return self.builder.frame_index(name, self._chain(point, "world"))
 
     def _tool(self, motion: Motion) -> int:
         ref = motion.tool
-        if ref.name == "flange" and ref.key == 0:
+        if ref.name == "flange" and ref.key == "0":
             return 0
         element = self._element(motion.file, ref, ("tool",))
         chain = self._chain(element, "flange")
         return self.builder.tool_index(ref.label, None if chain is None else chain @ self._pose(element))
 
     def _mdesc(self, motion: Motion) -> tuple[float, float]:
-        """(speed mm/s: the descriptor's tmax, zone mm: 0 with blend off, its leave distance
-        with a blend, NaN where the descriptor does not say)."""
+        """(speed: the descriptor's tmax in mm/s, NaN where it is left at its default 99999, no
+        limit; zone: 0 with blend off, the default; the leave distance, default 50 mm, with
+        blend joint or Cartesian)."""
         element = self._element(motion.file, motion.mdesc, ("mdesc",))
         speed = self._number(element.attrs["tmax"]) if "tmax" in element.attrs else np.nan
-        blend = element.attrs.get("blend", (None,))[0]
-        if blend == "off":
+        blend = element.attrs.get("blend", ("off",))
+        if blend[0] not in ("off", "joint", "Cartesian"):
+            raise self.db.error(blend[1], f"blend='{blend[0]}' is not off, joint or Cartesian")
+        if blend[0] == "off":
             return speed, 0.0
-        if blend is None or "leave" not in element.attrs:
-            return speed, np.nan
-        return speed, self._number(element.attrs["leave"])
+        return speed, self._number(element.attrs["leave"]) if "leave" in element.attrs else MDESC_LEAVE
 
 
 def _kinds(motion: Motion) -> tuple[int, ...]:
