@@ -26,6 +26,9 @@ _LINE = re.compile(r"[^\n]*")
 _WORD = re.compile(r"[ \t]*([A-Za-z_]\w*)")
 _MOTION = re.compile(r"\b(movej|movel|movec)\s*\(")
 _OTHER_MOTION = re.compile(r"\b(?!(?:movej|movel|movec)\b)(move\w+|alterMove\w*|alterBegin|alterEnd|link|setFrame)\s*\(")
+_NAME_REF = r"([A-Za-z_]\w*)[ \t]*(?:\[[ \t]*(\d+)[ \t]*\])?"
+# the bulk of a program: one movej / movel to a named point, nothing else on the line
+_PLAIN = re.compile(rf"[ \t]*(?:([A-Za-z_]\w*)[ \t]*=[ \t]*)?(movej|movel)[ \t]*\([ \t]*{_NAME_REF}[ \t]*,[ \t]*{_NAME_REF}[ \t]*,[ \t]*{_NAME_REF}[ \t]*\)[ \t]*\r?$")
 _TASK = re.compile(r"\b(taskCreate|taskCreateSync)\b")
 _CALL = re.compile(r"[ \t]*call[ \t]+(\w+)[ \t]*\(([^)]*)\)")
 _ASSIGN = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[^\]]*\])?[ \t]*(?:\.[ \t]*\w+[ \t]*)*=(?!=)")
@@ -116,10 +119,20 @@ class CodeReader:
         depth: list[tuple[str, int]] = []
         text = self.texts[file]
         for m in _LINE.finditer(text, start, end):
+            plain = None if depth else _PLAIN.match(m.group(0))
+            if plain and self.types.get(plain.group(1)) not in GEOMETRY:
+                self.motions.append(self._plain(file, m.start(), plain))
+                continue
             line = _strip_comment(m.group(0))
             if line.strip():
                 self._statement(file, m.start(), line, depth, stack + (name,))
         return self.motions
+
+    @staticmethod
+    def _plain(file: int, offset: int, m: re.Match) -> Motion:
+        """A plain motion line (``_PLAIN``), its references straight from the match."""
+        refs = [Ref(m.group(g), m.group(g + 1) or "0", offset + m.start(g)) for g in (3, 5, 7)]
+        return Motion(m.group(2), file, offset + m.start(2), (PointArg(refs[0]),), refs[1], refs[2])
 
     def _statement(self, file: int, offset: int, line: str, depth: list, stack: tuple[str, ...]) -> None:
         first = _WORD.match(line)
@@ -207,6 +220,8 @@ class CodeReader:
 
 def _strip_comment(line: str) -> str:
     """The line without its // comment (outside a string), same offsets."""
+    if "//" not in line:
+        return line
     quoted = False
     for i, ch in enumerate(line):
         if ch == '"':

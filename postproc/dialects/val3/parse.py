@@ -17,7 +17,7 @@ import numpy as np
 
 from ...errors import ParseError
 from ...ir import NF, Kind, SourceDoc, Toolpath
-from ...parse.common import Builder
+from ...parse.common import Builder, LineIndex
 from .code import CodeReader, Motion, PointArg, find_programs
 from .data import Database, Element, read_database
 from .rotation import rxyz_to_quat_wxyz, trsf_matrix
@@ -74,58 +74,76 @@ class _Assembler:
         self.builder = Builder("val3", "rxyz", list(sources))
         self.builder.frame_names[0], self.builder.tool_names[0] = "world[0]", "flange[0]"
         self.notes: list[str] = []
+        self._frames: dict[tuple[str, str] | None, int] = {}  # fatherId -> frame index
+        self._tools: dict[str, int] = {}
+        self._mdescs: dict[str, tuple[float, float]] = {}
 
     def toolpath(self, motions: list[Motion]) -> Toolpath:
         rows = [(m, p, k) for m in motions for k, p in zip(_kinds(m), m.points)]
         n = len(rows)
-        values, spans = np.full((n, NF), np.nan), np.full((n, NF, 3), -1, np.int64)
-        position, rotation = np.zeros((n, 3)), np.zeros((n, 3))
-        offset = np.zeros((n, NF))
-        conf, speed, zone = np.full((n, 4), np.nan), np.full(n, np.nan), np.full(n, np.nan)
-        kind, line, file = np.zeros(n, np.int8), np.zeros(n, np.int32), np.zeros(n, np.int16)
-        frame, tool, resolved = np.zeros(n, np.int32), np.zeros(n, np.int32), np.ones(n, bool)
-        insert_at, names = np.full((n, 2), -1, np.int64), []
-        approach = np.full((n, 6), np.nan)
+        # Per-row Python lists, turned into arrays once: a million targets take one pass.
+        kind, file, offset_of, names = [0] * n, [0] * n, [0] * n, [""] * n
+        frame, tool, speed, zone, insert = [0] * n, [0] * n, [np.nan] * n, [np.nan] * n, [-1] * n
+        conf, resolved, approach = [(np.nan,) * 3] * n, [True] * n, {}
+        cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
         for r, (motion, point, k) in enumerate(rows):
             element = self._element(motion.file, point.ref, ("pointRx", "jointRx") if motion.word == "movej" else ("pointRx",))
             kind[r] = Kind.ABSJ if element.type == "jointRx" else k
-            line[r] = int(self.reader_line(motion))
-            file[r], names = motion.file, names + [point.ref.label]
+            file[r], offset_of[r], names[r] = motion.file, motion.offset, point.ref.label
             if element.offset >= 0:  # a field left out can be added to the element's <Value>
-                insert_at[r] = (self.data_index, element.offset + len("<Value"))
-            attrs, columns = (JOINT_ATTRS, range(7, 13)) if element.type == "jointRx" else (POSE_ATTRS, range(0, 6))
-            for attr, col in zip(attrs, columns):
+                insert[r] = element.offset + len("<Value")
+            attrs = JOINT_ATTRS if element.type == "jointRx" else POSE_ATTRS
+            first = 7 if element.type == "jointRx" else 0
+            for c, attr in enumerate(attrs):
                 text = element.attrs.get(attr)
                 if text is not None:
-                    values[r, col] = self._number(text)
-                    spans[r, col] = (self.data_index, text[1], text[2])
+                    cells.append((r, first + c, self._number(text), text[1], text[2]))
             if element.type == "pointRx":
-                pose = np.nan_to_num(values[r, :6])  # an attribute left out is 0
-                position[r], rotation[r] = pose[:3], pose[3:6]
-                conf[r, :3] = self._config(element)
+                conf[r] = self._config(element)
                 frame[r] = self._frame(element)
                 if point.approach is not None:
                     approach[r] = point.approach
             tool[r] = self._tool(motion)
             speed[r], zone[r] = self._mdesc(motion)
-            if motion.word == "movej" and element.type == "pointRx" and not _definite(conf[r]):
+            if motion.word == "movej" and element.type == "pointRx" and not all(abs(v) == 1.0 for v in conf[r]):
                 resolved[r] = False
                 self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': same/free follow the current position), give shoulder, elbow and wrist")
-        joints = values[:, 7:13].copy()
+        values, spans = np.full((n, NF), np.nan), np.full((n, NF, 3), -1, np.int64)
+        if cells:
+            r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cells))
+            values[r_, c_] = v_
+            spans[r_, c_] = np.column_stack([np.full(len(r_), self.data_index), s_, e_])
+        kind, file = np.array(kind, np.int8), np.array(file, np.int16)
         cart = kind != Kind.ABSJ
+        pose = np.nan_to_num(values[:, :6])  # an attribute left out is 0
+        position, rotation = pose[:, :3].copy(), pose[:, 3:6]
+        joints = np.where(cart[:, None], np.nan, np.nan_to_num(values[:, 7:13]))
         orientation = np.full((n, 4), np.nan)
         if cart.any():
             orientation[cart] = rxyz_to_quat_wxyz(rotation[cart])
-        approached = ~np.isnan(approach).any(axis=1)
-        if approached.any():
-            position, orientation, offset = _approach(position, rotation, approach, approached, offset)
+        offset = np.zeros((n, NF))
+        if approach:
+            trsf = np.full((n, 6), np.nan)
+            trsf[list(approach)] = list(approach.values())
+            position, orientation, offset = _approach(position, rotation, trsf, ~np.isnan(trsf).any(axis=1), offset)
         position[~cart], orientation[~cart] = np.nan, np.nan
-        joints[~cart] = np.where(np.isnan(joints[~cart]), 0.0, joints[~cart])
+        conf_array = np.full((n, 4), np.nan)
+        conf_array[:, :3] = np.array(conf, dtype=float).reshape(n, 3)
+        insert_at = np.column_stack([np.where(np.array(insert) >= 0, self.data_index, -1), insert]).astype(np.int64).reshape(n, 2)
         self.builder.notes.extend(self.notes)
-        self.builder.add_block(np.arange(n), kind=kind, line=line, file=file, values=values, spans=spans, conf=conf, speed=speed, zone=zone,
-                               tool=tool, frame=frame, resolved=resolved, name=np.array(names + [""], dtype=object)[:n], insert_at=insert_at, offset=offset)
+        self.builder.add_block(np.arange(n), kind=kind, line=self._lines(file, np.array(offset_of, np.int64)), file=file, values=values, spans=spans,
+                               conf=conf_array, speed=np.array(speed, float), zone=np.array(zone, float), tool=np.array(tool, np.int32),
+                               frame=np.array(frame, np.int32), resolved=np.array(resolved, bool), name=_object_array(names), insert_at=insert_at, offset=offset)
         tp = self.builder.build(orientation=False)
         return replace(tp, position=position, orientation=orientation, joints=joints)
+
+    def _lines(self, file: np.ndarray, offsets: np.ndarray) -> np.ndarray:
+        """1-based line of each motion statement in its own file."""
+        lines = np.zeros(len(file), np.int32)
+        for f in np.unique(file).tolist():
+            mine = file == f
+            lines[mine] = LineIndex(self.sources[f].text).line(offsets[mine])
+        return lines
 
     # ------------------------------------------------------------- lookups
     def reader_line(self, motion: Motion) -> int:
@@ -136,8 +154,6 @@ class _Assembler:
         return f"{self.sources[motion.file].path}:{self.reader_line(motion)}"
 
     def _code_error(self, file: int, offset: int, message: str) -> ParseError:
-        from ...parse.common import LineIndex
-
         return LineIndex(self.sources[file].text).error(self.sources[file].path, offset, message)
 
     def _element(self, file: int, ref, types: tuple[str, ...]) -> Element:
@@ -155,15 +171,15 @@ class _Assembler:
         except ValueError:
             raise self.db.error(text[1], f"'{text[0]}' is not a number") from None
 
-    def _config(self, element: Element) -> np.ndarray:
-        out = np.full(3, np.nan)
+    def _config(self, element: Element) -> tuple[float, float, float]:
+        out = [np.nan, np.nan, np.nan]
         for i, (attr, words) in enumerate(CONFIG.items()):
             text = element.attrs.get(attr)
             if text is not None:
                 if text[0] not in words:
                     raise self.db.error(text[1], f"{attr}='{text[0]}' is not one of {', '.join(words)}")
                 out[i] = words[text[0]]
-        return out
+        return tuple(out)
 
     def _pose(self, element: Element) -> np.ndarray:
         return trsf_matrix(np.array([self._number(element.attrs[a]) if a in element.attrs else 0.0 for a in POSE_ATTRS]))[0]
@@ -186,12 +202,22 @@ class _Assembler:
 
     def _frame(self, point: Element) -> int:
         father = point.father()
+        if father not in self._frames:
+            self._frames[father] = self._new_frame(point, father)
+        return self._frames[father]
+
+    def _new_frame(self, point: Element, father) -> int:
         name = "<no fatherId>" if father is None else f"{father[0]}[{father[1]}]"
         if father == ("world", "0"):
             return 0
         return self.builder.frame_index(name, self._chain(point, "world"))
 
     def _tool(self, motion: Motion) -> int:
+        if motion.tool.label not in self._tools:
+            self._tools[motion.tool.label] = self._new_tool(motion)
+        return self._tools[motion.tool.label]
+
+    def _new_tool(self, motion: Motion) -> int:
         ref = motion.tool
         if ref.name == "flange" and ref.key == "0":
             return 0
@@ -200,6 +226,11 @@ class _Assembler:
         return self.builder.tool_index(ref.label, None if chain is None else chain @ self._pose(element))
 
     def _mdesc(self, motion: Motion) -> tuple[float, float]:
+        if motion.mdesc.label not in self._mdescs:
+            self._mdescs[motion.mdesc.label] = self._new_mdesc(motion)
+        return self._mdescs[motion.mdesc.label]
+
+    def _new_mdesc(self, motion: Motion) -> tuple[float, float]:
         """(speed: the descriptor's tmax in mm/s, NaN where it is left at its default 99999, no
         limit; zone: 0 with blend off, the default; the leave distance, default 50 mm, with
         blend joint or Cartesian)."""
@@ -213,12 +244,14 @@ class _Assembler:
         return speed, self._number(element.attrs["leave"]) if "leave" in element.attrs else MDESC_LEAVE
 
 
+def _object_array(items: list) -> np.ndarray:
+    out = np.empty(len(items), dtype=object)
+    out[:] = items
+    return out
+
+
 def _kinds(motion: Motion) -> tuple[int, ...]:
     return {"movej": (Kind.JOINT,), "movel": (Kind.LINEAR,), "movec": (Kind.CIRC_VIA, Kind.CIRC_END)}[motion.word]
-
-
-def _definite(conf: np.ndarray) -> bool:
-    return bool(np.all(np.abs(conf[:3]) == 1.0))
 
 
 def _config_text(element: Element) -> str:
