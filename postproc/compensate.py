@@ -1,10 +1,10 @@
 """Pre-compensation of a program, the public entry (see ``postproc.compensation.core``).
 
 The core imports no language: it asks the controller object it is given for the rules it
-needs (a ``Dialect``: ``conf_applies``, ``branch_from_conf``, ``inexact_interpolation``,
-``arc_ends_at_target``). This module, on the floor of the programs, gives it the rules of
-the language the toolpath was read in (``Toolpath.dialect``) where the caller names no
-controller, so ``compensate(tp, model)`` works as it always has.
+needs (a ``postproc.controller.Controller``: ``conf_applies``, ``branch_from_conf``,
+``inexact_interpolation``, ``arc_ends_at_target``). This module, on the floor of the programs,
+gives it the controller of the language the toolpath was read in (``Dialect.controller`` of
+``Toolpath.dialect``) where the caller names none, so ``compensate(tp, model)`` works as it always has.
 """
 
 from __future__ import annotations
@@ -30,9 +30,14 @@ from .ir import Toolpath
 def compensate(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> tuple[Toolpath, Report]:
     """``core.compensate`` (its options) by ``controller``'s rules, by default those of the
     language ``tp`` was read in."""
-    return core.compensate(tp, model, controller=dialects.of(tp) if controller is None else controller, **options)
+    return core.compensate(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+
+
+def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> tuple:
+    """``core.predicted_positions`` by ``controller``'s rules, by default those of ``tp``'s language."""
+    return core.predicted_positions(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
 
 
 def reference_postures(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> Reference:
     """``core.reference_postures`` by ``controller``'s rules, by default those of ``tp``'s language."""
-    return core.reference_postures(tp, model, controller=dialects.of(tp) if controller is None else controller, **options)
+    return core.reference_postures(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)

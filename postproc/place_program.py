@@ -60,7 +60,7 @@ def problem_from_program(tp: Toolpath, robot: RobotModel, *, force_tool=None, pa
     eng = None if engagement is None else np.asarray(engagement, dtype=float)[rows]
     force, normal = forces_along(local, cutting, params=params, force_tool=force_tool, engagement=eng)
     weights = comp.step_weights(local[:, :3, 3], cutting)
-    applies = dialects.of(tp).conf_applies(tp)[rows]
+    applies = dialects.of(tp).controller.conf_applies(tp)[rows]
     return PlacementProblem(
         robot=robot, local_tcp=local, flange_T_tcp=tp.tools[tp.tool[rows]], force_local=force, normal_local=normal,
         weights=weights, conf=tp.conf[rows], dialect=tp.dialect, conf_applies=applies,

@@ -51,7 +51,7 @@ def _anchor_branches(problem, sols: np.ndarray, anchors: np.ndarray):
     flat = sols[:, anchors].reshape(-1, 8, 6)
     if problem.conf_mode == "keep":
         want = np.tile(problem.conf[anchors], (m, 1))
-        q, idx = dialects.get(problem.dialect).branch_from_conf(problem.robot, flat, want)
+        q, idx = dialects.get(problem.dialect).controller.branch_from_conf(problem.robot, flat, want)
         return q.reshape(m, a, 6), idx.reshape(m, a)
     # rederive: the first branch with the program's arm configuration (turns follow the path)
     codes = arm_codes(problem.dialect, problem.robot, flat.reshape(-1, 6)).reshape(-1, 8)
