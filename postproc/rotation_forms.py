@@ -101,6 +101,24 @@ def _abc_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return np.where(pick[:, None], candidates[1], candidates[0])
 
 
+def _rxyz_to_matrix(numbers: Numbers) -> np.ndarray:
+    """Stäubli Rx, Ry, Rz (degrees, about the moving x, y', z''): R = Rx Ry Rz, the transpose of
+    KUKA's Rz(A) Ry(B) Rx(C) at A = -Rz, B = -Ry, C = -Rx."""
+    return np.swapaxes(abc_to_matrix(-np.asarray(numbers, dtype=float)[:, ::-1]), -1, -2)
+
+
+def _rxyz_to_quat(numbers: Numbers) -> np.ndarray:
+    q = abc_to_quat_wxyz(-np.asarray(numbers, dtype=float)[:, ::-1])
+    q[:, 1:] *= -1.0  # the transpose's quaternion is the conjugate
+    return q
+
+
+def _rxyz_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    """Rx, Ry, Rz of ``rot``, the triple nearest ``near`` (through KUKA's, of the transpose)."""
+    near = np.asarray(near, dtype=float)
+    return -_abc_from_matrix(np.swapaxes(rot, -1, -2), -near[:, ::-1])[:, ::-1] + 0.0  # + 0.0: no '-0'
+
+
 def _axis_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return rot[:, :, 2].copy()
 
@@ -111,6 +129,7 @@ FORMS: dict[str, RotationForm] = {
         RotationForm("quat", 4, "quaternion q1..q4 = w, x, y, z (ABB RAPID)", quat_wxyz_to_matrix,
                      lambda rot, near: _quat_from_quat(matrix_to_quat_wxyz(rot), near), _quat_to_quat, _quat_from_quat),
         RotationForm("abc", 3, "A, B, C degrees: R = Rz(A) Ry(B) Rx(C) (KUKA)", abc_to_matrix, _abc_from_matrix, abc_to_quat_wxyz),
+        RotationForm("rxyz", 3, "Rx, Ry, Rz degrees about the moving axes: R = Rx Ry Rz (Stäubli VAL3)", _rxyz_to_matrix, _rxyz_from_matrix, _rxyz_to_quat),
         RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
         RotationForm("none", 0, "no orientation (three-axis G-code)", None, lambda rot, near: np.zeros((len(rot), 0))),
     )

@@ -30,6 +30,7 @@ from postproc.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz
 from postproc.errors import InputError, ParseError
 from postproc.frames import quat_wxyz_to_matrix
 from postproc.ir import Kind
+from postproc.model_io import save_model
 from postproc.programs import emit_texts, parse_program, write_program
 from postproc.sim import Cylinder
 
@@ -235,11 +236,9 @@ def test_compensated_cell_lands_on_the_simulated_true_robot(tmp_path, tx2_truth)
 
 
 def test_cli_compensate_writes_program_and_data_together(tmp_path, tx2_truth):
-    from postproc.model_io import save_model
-
     robot, _, model = tx2_truth
     path = _cell_program(tmp_path, robot)
-    save_model(model, tmp_path / "model.json")
+    save_model(tmp_path / "model.json", model)
     out = tmp_path / "out"
     out.mkdir()
     result = runner.invoke(app, ["compensate", str(path), "--model", str(tmp_path / "model.json"), "-o", str(out / "start.pgx")])

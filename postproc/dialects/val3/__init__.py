@@ -11,21 +11,24 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
+import numpy as np
+
 from ...errors import InputError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect, read_bytes
 from .code import called_programs
-from .controller import Val3Controller, config_of_joints
+from .controller import CS9, config_of_joints
+from .parse import parse_application
+from .writer import Val3Writer
 
 
 class Val3Dialect(Dialect):
     name = "val3"
     description = "Stäubli VAL3 program (.pgx) with its application's data (.dtx), or the project (.pjx: its start program)"
-    controller_maker = "Stäubli"
     extensions = (".pgx", ".pjx")
     comment_pattern = r"//[^\n]*"
     motion_words = "movej, movel or movec"
-    controller = Val3Controller()
+    controller = CS9
 
     def sniff(self, head: str) -> bool:
         return "STAUBLI.COM/ROBOTICS/VAL3" in head
@@ -57,8 +60,6 @@ class Val3Dialect(Dialect):
         return docs
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import parse_application
-
         return parse_application(sources)
 
     def travels_with_program(self, doc: SourceDoc) -> bool:
@@ -69,38 +70,15 @@ class Val3Dialect(Dialect):
         name = {"o1": "rx", "o2": "ry", "o3": "rz"}.get(field, field)
         return f' {name}="{text}"' if name in ("x", "y", "z", "rx", "ry", "rz", "j1", "j2", "j3", "j4", "j5", "j6") else None
 
-    # ------------------------------------------------------------- controller
-    def conf_applies(self, tp):
-        return self.controller.conf_applies(tp)
-
-    def branch_from_conf(self, robot, solutions, conf):
-        return self.controller.branch_from_conf(robot, solutions, conf)
-
-    def payloads(self, tp):
-        return self.controller.payloads(tp)
-
-    def stated_loads(self, tp):
-        return self.controller.stated_loads(tp)
-
-    def inexact_interpolation(self, tp):
-        return self.controller.inexact_interpolation(tp)
-
-    def arc_ends_at_target(self, tp):
-        return self.controller.arc_ends_at_target(tp)
-
     arm_conf_column = 0
 
     def conf_of_joints(self, robot, q_deg):
-        import numpy as np
-
         out = np.full((len(q_deg), 4), np.nan)
         out[:, :3] = config_of_joints(robot, q_deg)
         return out
 
     # ---------------------------------------------------------- new programs
     def new_writer(self, name: str):
-        from .writer import Val3Writer
-
         return Val3Writer(name)
 
     def new_program_paths(self, output: Path) -> list[Path]:

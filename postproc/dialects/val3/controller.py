@@ -20,11 +20,12 @@ from __future__ import annotations
 import numpy as np
 
 from ... import kinematics as kin
+from ...controller import Controller
 from ...ir import Kind, Toolpath
 
 
-class Val3Controller:
-    """The rules of a Stäubli CS8 / CS9 controller running VAL3 (delegated to by the dialect)."""
+class Val3Controller(Controller):
+    """The rules of a Stäubli CS8 / CS9 controller running VAL3."""
 
     maker = "Stäubli"
     name = "Stäubli CS9 (VAL3)"
@@ -56,12 +57,8 @@ class Val3Controller:
             q[open_rows[ok]], branch[open_rows[ok]] = cand[ok], b
         return q, branch
 
-    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
-        """None: a VAL3 tool carries no mass (the payload is set by instructions at run time)."""
-        return []
-
-    def stated_loads(self, tp: Toolpath):
-        return None
+    # payloads / stated_loads: the base class's none. A VAL3 tool carries no mass (VAL3
+    # reference manual, "tool": a geometric transformation and an I/O link only).
 
     def inexact_interpolation(self, tp: Toolpath) -> str | None:
         """``file:line: why`` of the first motion whose descriptor blends (blend joint or
@@ -75,9 +72,6 @@ class Val3Controller:
         how = "does not state its blend" if np.isnan(tp.zone[r]) else f"blends (leave {tp.zone[r]:g} mm)"
         return f"{tp.sources[int(tp.file[r])].path}:{int(tp.line[r])}: the motion descriptor {how}: the arm leaves the exact path near the point"
 
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        return np.ones(len(tp.kind), dtype=bool)
-
 
 def config_of_joints(robot, q_deg: np.ndarray) -> np.ndarray:
     """(N, 3) shoulder, elbow, wrist codes (1: righty / epositive / wpositive, -1: lefty /
@@ -88,3 +82,6 @@ def config_of_joints(robot, q_deg: np.ndarray) -> np.ndarray:
     elbow = np.where(q[:, 2] >= 0, 1.0, -1.0)
     wrist = np.where(q[:, 4] >= 0, 1.0, -1.0)
     return np.column_stack([shoulder, elbow, wrist])
+
+
+CS9 = Val3Controller()

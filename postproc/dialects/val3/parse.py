@@ -12,6 +12,7 @@ manual, "frame" and "tool" types: each is defined relative to the one it is link
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 
@@ -20,7 +21,7 @@ from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .code import CodeReader, Motion, PointArg, find_programs
 from .data import Database, Element, read_database
-from .rotation import rxyz_to_quat_wxyz, trsf_matrix
+from .rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz, trsf_matrix
 
 POSE_ATTRS = ("x", "y", "z", "rx", "ry", "rz")  # -> FIELDS x y z o1 o2 o3
 JOINT_ATTRS = ("j1", "j2", "j3", "j4", "j5", "j6")  # -> FIELDS j1..j6
@@ -53,8 +54,6 @@ def parse_application(sources: list[SourceDoc]) -> Toolpath:
 
 
 def _program_name(doc: SourceDoc) -> str:
-    from pathlib import Path
-
     names = find_programs([(0, doc.text)]).code
     if not names and "<programList" in doc.text:
         raise ParseError(doc.path, 1, 1, "a VAL3 s6 program file (<programList>, CS8 controllers before VAL3 s7): postproc reads the s7 and later format (<Programs>); open it in Stäubli Robotics Suite 2013 or later to convert it")
@@ -262,8 +261,6 @@ def _approach(position, rotation, approach, rows, offset):
     """appro(p, t) = p . t (VAL3 reference manual, "appro": t is expressed in the point's
     own axes): the position is p's plus R_p t's translation, a constant added to p's numbers
     (``offset``); the orientation is R_p R_t."""
-    from .rotation import matrix_to_rxyz, rxyz_to_matrix
-
     position, offset = position.copy(), offset.copy()
     r_point = rxyz_to_matrix(rotation[rows])
     shift = np.einsum("nij,nj->ni", r_point, approach[rows, :3])
