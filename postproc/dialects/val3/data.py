@@ -7,20 +7,33 @@ wrist`` (the point's config), ``fatherId="fTable[0]"`` (the frame or tool it is 
 ``j1``..``j6`` (jointRx), ``accel vel decel tmax rmax blend leave reach`` (mdesc). The
 texts are read with regular expressions, not an XML parser, because every number's offset
 in the file is needed to write it back in place (an XML parser gives none).
+
+A data file of a long program holds a <Value> per point: their numbers are read in one
+vectorised pass (``NUMERIC``: value and span of each), their words (config, fatherId) in
+another; an element's other attributes are read when asked for (``Element.attrs``).
 """
 
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
 
 from ...errors import ParseError
-from ...parse.common import LineIndex
+from ...parse.common import LineIndex, scan_numbers
 
 _TAG = re.compile(r"<(Data|Value)\b((?:[^>\"]|\"[^\"]*\")*?)(/?)>|</Data\s*>|<!--.*?-->", re.DOTALL)
 _ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
 _FATHER = re.compile(r"^(\w+)\[([\d\s,]+)\]$")
 _INDEX = re.compile(r"\d+(?:\s*,\s*\d+)*$")
+_KEY = re.compile(r"\s+key\s*=\s*\"([^\"]*)\"")
+#: the numeric fields read in bulk, in this column order (x..rz -> FIELDS 0..5, j1..j6 -> 7..12)
+NUMERIC = ("x", "y", "z", "rx", "ry", "rz", "j1", "j2", "j3", "j4", "j5", "j6")
+_NUMERIC_ATTR = re.compile(r"\s(x|y|z|rx|ry|rz|j[1-6])=\"")
+WORDS = ("shoulder", "elbow", "wrist", "fatherId")
+_WORD_ATTR = re.compile(r"\s(shoulder|elbow|wrist|fatherId)=\"([^\"]*)\"")
 
 
 def index_text(text: str) -> str:
@@ -30,31 +43,42 @@ def index_text(text: str) -> str:
 
 @dataclass
 class Element:
-    """One element of a data array: its attributes as (text, start, end) in the file."""
+    """One element of a data array. ``attrs``: its attributes as (text, start, end) in the file."""
 
     datum: str  # the variable's name
     type: str  # pointRx, jointRx, frame, tool, mdesc, ...
     key: str  # "3", or "1,2" in a two-dimensional array
-    attrs: dict[str, tuple[str, int, int]]
-    offset: int  # where the <Value tag starts
+    offset: int  # where the <Value tag starts (-1: declared without a <Value>, all defaults)
+    source: str = field(default="", repr=False)  # the file's text
+    inner: tuple[int, int] = (0, 0)  # the tag's attributes: text[inner[0]:inner[1]]
+    tag: int = -1  # index into the database's bulk tables
 
     @property
     def name(self) -> str:
         return f"{self.datum}[{self.key}]"
+
+    @cached_property
+    def attrs(self) -> dict[str, tuple[str, int, int]]:
+        start, end = self.inner  # (match offsets are the file's: finditer is given pos, endpos)
+        return {a.group(1): (a.group(2), a.start(2), a.end(2)) for a in _ATTR.finditer(self.source, start, end)}
 
     def father(self) -> tuple[str, str] | None:
         """(name, index) the element is linked to ("" as index where the text is not
         name[index]), None where it states none."""
         if "fatherId" not in self.attrs:
             return None
-        text = self.attrs["fatherId"][0].strip()
-        m = _FATHER.match(text)
-        return (m.group(1), index_text(m.group(2))) if m else (text, "")
+        return parse_father(self.attrs["fatherId"][0])
+
+
+def parse_father(text: str) -> tuple[str, str]:
+    m = _FATHER.match(text.strip())
+    return (m.group(1), index_text(m.group(2))) if m else (text.strip(), "")
 
 
 @dataclass
 class Database:
-    """Every element of the .dtx by (name, key), and each variable's type."""
+    """Every element of the .dtx by (name, key), each variable's type and size, and the
+    bulk tables of the <Value> tags (row = ``Element.tag``)."""
 
     path: str
     text: str
@@ -62,6 +86,10 @@ class Database:
     elements: dict[tuple[str, str], Element]
     lines: LineIndex
     sizes: dict[str, str]
+    numbers: np.ndarray  # (T, 12) NUMERIC fields, NaN where the tag has none
+    spans: np.ndarray  # (T, 12, 2) their start, end; -1 where none
+    complete: np.ndarray  # (T,) every NUMERIC attribute of the tag was read as a number
+    words: list[dict[str, str]]  # per tag: WORDS attributes it has
 
     def element(self, name: str, key: str) -> Element | None:
         """The element ``name[key]``; one the file declares (``size``) but writes no <Value>
@@ -71,7 +99,7 @@ class Database:
         found = self.elements.get((name, key))
         size = self.sizes.get(name, "1")
         if found is None and name in self.types and key.isdigit() and size.isdigit() and int(key) < int(size):
-            return Element(name, self.types[name], key, {}, -1)
+            return Element(name, self.types[name], key, -1)
         return found
 
     def error(self, offset: int, message: str) -> ParseError:
@@ -84,6 +112,8 @@ def read_database(path: str, text: str) -> Database:
     types: dict[str, str] = {}
     sizes: dict[str, str] = {}
     elements: dict[tuple[str, str], Element] = {}
+    starts: list[int] = []
+    ends: list[int] = []
     current: tuple[str, str] | None = None
     for m in _TAG.finditer(text):
         tag = m.group(1)
@@ -91,19 +121,73 @@ def read_database(path: str, text: str) -> Database:
             if m.group(0).startswith("</"):
                 current = None
             continue
-        attrs = {a.group(1): (a.group(2), m.start(2) + a.start(2), m.start(2) + a.end(2)) for a in _ATTR.finditer(m.group(2))}
         if tag == "Data":
+            attrs = dict(_ATTR.findall(m.group(2)))
             if "name" not in attrs:
                 raise lines.error(path, m.start(), "a <Data> without a name")
-            name, kind = attrs["name"][0], attrs.get("type", ("", 0, 0))[0]
-            types[name] = kind
-            sizes[name] = attrs.get("size", ("1", 0, 0))[0].strip()
-            current = None if m.group(3) else (name, kind)
+            types[attrs["name"]] = attrs.get("type", "")
+            sizes[attrs["name"]] = attrs.get("size", "1").strip()
+            current = None if m.group(3) else (attrs["name"], attrs.get("type", ""))
             continue
         if current is None:
             raise lines.error(path, m.start(), "a <Value> outside a <Data> element")
-        key_text = attrs.get("key", ("0", 0, 0))[0]
+        key_match = _KEY.match(m.group(2))
+        key_text = key_match.group(1) if key_match else dict(_ATTR.findall(m.group(2))).get("key", "0")
         # an array's index ("3", "1,2"), or a collection's key, any text (VAL3 s7 collections)
         key = index_text(key_text) if _INDEX.match(key_text.strip()) else key_text
-        elements[(current[0], key)] = Element(current[0], current[1], key, attrs, m.start())
-    return Database(path, text, types, elements, lines, sizes)
+        elements[(current[0], key)] = Element(current[0], current[1], key, m.start(), text, (m.start(2), m.end(2)), len(starts))
+        starts.append(m.start(2))
+        ends.append(m.end(2))
+    numbers, spans, complete = _numeric_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
+    words = _word_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
+    return Database(path, text, types, elements, lines, sizes, numbers, spans, complete, words)
+
+
+def _owner(positions: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """The tag each position lies in (-1: in none)."""
+    tag = np.searchsorted(starts, positions, side="right") - 1
+    inside = (tag >= 0) & (positions < ends[np.maximum(tag, 0)])
+    return np.where(inside, tag, -1)
+
+
+def _numeric_table(text: str, starts: np.ndarray, ends: np.ndarray):
+    """(T, 12) values and (T, 12, 2) spans of every tag's NUMERIC attributes, and (T,) True
+    where each NUMERIC attribute the tag writes was read whole as a number."""
+    t = len(starts)
+    numbers, spans = np.full((t, len(NUMERIC)), np.nan), np.full((t, len(NUMERIC), 2), -1, np.int64)
+    column = {name: i for i, name in enumerate(NUMERIC)}
+    written = np.zeros(t, np.int64)
+    names, at = [], []
+    for m in _NUMERIC_ATTR.finditer(text):
+        names.append(column[m.group(1)])
+        at.append(m.end())  # where the value starts
+    if not at or not t:
+        return numbers, spans, np.ones(t, bool)
+    at, names = np.array(at, np.int64), np.array(names, np.int64)
+    owner = _owner(at, starts, ends)
+    np.add.at(written, owner[owner >= 0], 1)
+    found = scan_numbers(text)
+    # a number that is an attribute's whole value: it starts right after '="' and ends at '"'
+    slot = np.searchsorted(found.start, at)
+    ok = (owner >= 0) & (slot < len(found.start))
+    slot = np.minimum(slot, max(len(found.start) - 1, 0))
+    raw = np.frombuffer(text.encode("latin-1"), dtype=np.uint8)
+    ok &= (found.start[slot] == at) & (raw[np.minimum(found.end[slot], len(raw) - 1)] == ord('"')) & ~np.isnan(found.value[slot])
+    rows, cols = owner[ok], names[ok]
+    numbers[rows, cols] = found.value[slot[ok]]
+    spans[rows, cols, 0], spans[rows, cols, 1] = found.start[slot[ok]], found.end[slot[ok]]
+    read = np.zeros(t, np.int64)
+    np.add.at(read, rows, 1)
+    return numbers, spans, read == written
+
+
+def _word_table(text: str, starts: np.ndarray, ends: np.ndarray) -> list[dict[str, str]]:
+    """Per tag, its config words and fatherId."""
+    words: list[dict[str, str]] = [{} for _ in range(len(starts))]
+    matches = [(m.start(), m.group(1), m.group(2)) for m in _WORD_ATTR.finditer(text)]
+    if matches and len(starts):
+        owner = _owner(np.array([p for p, _, _ in matches], np.int64), starts, ends)
+        for tag, (_, name, value) in zip(owner.tolist(), matches):
+            if tag >= 0:
+                words[tag][name] = value
+    return words

@@ -20,7 +20,7 @@ from ...errors import ParseError
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .code import CodeReader, Motion, PointArg, find_programs
-from .data import Database, Element, read_database
+from .data import Database, Element, parse_father, read_database
 from .rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz, trsf_matrix
 
 POSE_ATTRS = ("x", "y", "z", "rx", "ry", "rz")  # -> FIELDS x y z o1 o2 o3
@@ -85,18 +85,22 @@ class _Assembler:
         frame, tool, speed, zone, insert = [0] * n, [0] * n, [np.nan] * n, [np.nan] * n, [-1] * n
         conf, resolved, approach = [(np.nan,) * 3] * n, [True] * n, {}
         cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
+        bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
         for r, (motion, point, k) in enumerate(rows):
             element = self._element(motion.file, point.ref, ("pointRx", "jointRx") if motion.word == "movej" else ("pointRx",))
             kind[r] = Kind.ABSJ if element.type == "jointRx" else k
             file[r], offset_of[r], names[r] = motion.file, motion.offset, point.ref.label
             if element.offset >= 0:  # a field left out can be added to the element's <Value>
                 insert[r] = element.offset + len("<Value")
-            attrs = JOINT_ATTRS if element.type == "jointRx" else POSE_ATTRS
-            first = 7 if element.type == "jointRx" else 0
-            for c, attr in enumerate(attrs):
-                text = element.attrs.get(attr)
-                if text is not None:
-                    cells.append((r, first + c, self._number(text), text[1], text[2]))
+            if element.tag >= 0 and self.db.complete[element.tag]:
+                bulk.append((r, element.tag, element.type == "jointRx"))  # numbers from the data's tables, below
+            else:  # an element declared without a <Value>, or one whose numbers need a closer look
+                attrs = JOINT_ATTRS if element.type == "jointRx" else POSE_ATTRS
+                first = 7 if element.type == "jointRx" else 0
+                for c, attr in enumerate(attrs):
+                    text = element.attrs.get(attr)
+                    if text is not None:
+                        cells.append((r, first + c, self._number(text), text[1], text[2]))
             if element.type == "pointRx":
                 conf[r] = self._config(element)
                 frame[r] = self._frame(element)
@@ -112,6 +116,8 @@ class _Assembler:
             r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cells))
             values[r_, c_] = v_
             spans[r_, c_] = np.column_stack([np.full(len(r_), self.data_index), s_, e_])
+        if bulk:
+            self._gather(bulk, values, spans)
         kind, file = np.array(kind, np.int8), np.array(file, np.int16)
         cart = kind != Kind.ABSJ
         pose = np.nan_to_num(values[:, :6])  # an attribute left out is 0
@@ -135,6 +141,17 @@ class _Assembler:
                                frame=np.array(frame, np.int32), resolved=np.array(resolved, bool), name=_object_array(names), insert_at=insert_at, offset=offset)
         tp = self.builder.build(orientation=False)
         return replace(tp, position=position, orientation=orientation, joints=joints)
+
+    def _gather(self, bulk: list[tuple[int, int, bool]], values: np.ndarray, spans: np.ndarray) -> None:
+        """Numbers and spans of the rows' elements from the data file's bulk tables."""
+        rows, tags, joint = (np.array(col) for col in zip(*bulk))
+        for sel, fields, table in ((~joint, slice(0, 6), slice(0, 6)), (joint, slice(7, 13), slice(6, 12))):
+            if sel.any():
+                r, t = rows[sel], tags[sel]
+                values[r, fields] = self.db.numbers[t, table]
+                found = self.db.spans[t, table]
+                spans[r, fields, 0] = np.where(found[..., 0] >= 0, self.data_index, -1)
+                spans[r, fields, 1:] = found
 
     def _lines(self, file: np.ndarray, offsets: np.ndarray) -> np.ndarray:
         """1-based line of each motion statement in its own file."""
@@ -171,13 +188,14 @@ class _Assembler:
             raise self.db.error(text[1], f"'{text[0]}' is not a number") from None
 
     def _config(self, element: Element) -> tuple[float, float, float]:
+        given = self.db.words[element.tag] if element.tag >= 0 else {}
         out = [np.nan, np.nan, np.nan]
         for i, (attr, words) in enumerate(CONFIG.items()):
-            text = element.attrs.get(attr)
-            if text is not None:
-                if text[0] not in words:
+            if attr in given:
+                if given[attr] not in words:
+                    text = element.attrs[attr]
                     raise self.db.error(text[1], f"{attr}='{text[0]}' is not one of {', '.join(words)}")
-                out[i] = words[text[0]]
+                out[i] = words[given[attr]]
         return tuple(out)
 
     def _pose(self, element: Element) -> np.ndarray:
@@ -200,7 +218,7 @@ class _Assembler:
             element = parent
 
     def _frame(self, point: Element) -> int:
-        father = point.father()
+        father = None if point.tag < 0 or "fatherId" not in self.db.words[point.tag] else parse_father(self.db.words[point.tag]["fatherId"])
         if father not in self._frames:
             self._frames[father] = self._new_frame(point, father)
         return self._frames[father]
