@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 from ...errors import ParseError
 from ...parse.common import LineIndex
@@ -42,8 +43,7 @@ CLOSES = {v: k for k, v in OPENS.items()}
 GEOMETRY = ("pointRx", "pointRs", "jointRx", "jointRs", "frame", "tool", "trsf", "mdesc")
 
 
-@dataclass(frozen=True)
-class Ref:
+class Ref(NamedTuple):
     """A data element named in the code: ``name[key]`` (key 0 where no index is written)."""
 
     name: str
@@ -55,14 +55,12 @@ class Ref:
         return f"{self.name}[{self.key}]"
 
 
-@dataclass(frozen=True)
-class PointArg:
+class PointArg(NamedTuple):
     ref: Ref
     approach: tuple[float, ...] | None = None  # appro(point, {x, y, z, rx, ry, rz}): the trsf
 
 
-@dataclass(frozen=True)
-class Motion:
+class Motion(NamedTuple):
     word: str  # movej, movel or movec
     file: int  # the program's source index
     offset: int  # the statement's offset in that file
