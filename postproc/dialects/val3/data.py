@@ -25,6 +25,7 @@ from ...errors import ParseError
 from ...parse.common import LineIndex, scan_numbers
 
 _TAG = re.compile(r"<(Data|Value)\b((?:[^>\"]|\"[^\"]*\")*?)(/?)>|</Data\s*>|<!--.*?-->", re.DOTALL)
+_FAST_TAG = re.compile(r"<(Data|Value)\b([^>]*?)(/?)>|</Data\s*>|<!--.*?-->", re.DOTALL)
 _ATTR = re.compile(r"([\w:]+)\s*=\s*\"([^\"]*)\"")
 _FATHER = re.compile(r"^(\w+)\[([\d\s,]+)\]$")
 _INDEX = re.compile(r"\d+(?:\s*,\s*\d+)*$")
@@ -115,7 +116,10 @@ def read_database(path: str, text: str) -> Database:
     starts: list[int] = []
     ends: list[int] = []
     current: tuple[str, str] | None = None
-    for m in _TAG.finditer(text):
+    # The bulk of a data file is <Value .../> tags with no '>' inside their quotes: those are
+    # found by a plain pattern; a file with any other (a quoted '>') is read tag by tag.
+    pattern = _FAST_TAG if _plain_tags(text) else _TAG
+    for m in pattern.finditer(text):
         tag = m.group(1)
         if tag is None:  # </Data> or a comment
             if m.group(0).startswith("</"):
@@ -131,16 +135,21 @@ def read_database(path: str, text: str) -> Database:
             continue
         if current is None:
             raise lines.error(path, m.start(), "a <Value> outside a <Data> element")
-        key_match = _KEY.match(m.group(2))
+        key_match = _KEY.match(text, m.start(2))
         key_text = key_match.group(1) if key_match else dict(_ATTR.findall(m.group(2))).get("key", "0")
         # an array's index ("3", "1,2"), or a collection's key, any text (VAL3 s7 collections)
-        key = index_text(key_text) if _INDEX.match(key_text.strip()) else key_text
+        key = key_text if key_text.isdigit() else index_text(key_text) if _INDEX.match(key_text.strip()) else key_text
         elements[(current[0], key)] = Element(current[0], current[1], key, m.start(), text, (m.start(2), m.end(2)), len(starts))
         starts.append(m.start(2))
         ends.append(m.end(2))
     numbers, spans, complete = _numeric_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
     words = _word_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
     return Database(path, text, types, elements, lines, sizes, numbers, spans, complete, words)
+
+
+def _plain_tags(text: str) -> bool:
+    """True where no quoted attribute value holds a '>' (so a tag ends at its first '>')."""
+    return re.search(r'=\s*"[^"]*>', text) is None
 
 
 def _owner(positions: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

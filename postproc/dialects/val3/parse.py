@@ -75,6 +75,8 @@ class _Assembler:
         self.notes: list[str] = []
         self._frames: dict[tuple[str, str] | None, int] = {}  # fatherId -> frame index
         self._tools: dict[str, int] = {}
+        self._configs: dict[tuple, tuple[float, float, float]] = {}  # the words written -> codes
+        self._fathers: dict[str | None, tuple[str, str] | None] = {}  # fatherId text -> (name, index)
         self._mdescs: dict[str, tuple[float, float]] = {}
 
     def toolpath(self, motions: list[Motion]) -> Toolpath:
@@ -189,6 +191,12 @@ class _Assembler:
 
     def _config(self, element: Element) -> tuple[float, float, float]:
         given = self.db.words[element.tag] if element.tag >= 0 else {}
+        written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
+        if written not in self._configs:
+            self._configs[written] = self._config_of(element, given)
+        return self._configs[written]
+
+    def _config_of(self, element: Element, given: dict[str, str]) -> tuple[float, float, float]:
         out = [np.nan, np.nan, np.nan]
         for i, (attr, words) in enumerate(CONFIG.items()):
             if attr in given:
@@ -218,7 +226,10 @@ class _Assembler:
             element = parent
 
     def _frame(self, point: Element) -> int:
-        father = None if point.tag < 0 or "fatherId" not in self.db.words[point.tag] else parse_father(self.db.words[point.tag]["fatherId"])
+        text = None if point.tag < 0 else self.db.words[point.tag].get("fatherId")
+        if text not in self._fathers:
+            self._fathers[text] = None if text is None else parse_father(text)
+        father = self._fathers[text]
         if father not in self._frames:
             self._frames[father] = self._new_frame(point, father)
         return self._frames[father]
