@@ -260,7 +260,8 @@ def test_convert_krl_to_val3_and_back_gives_the_same_poses(tmp_path):
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in out.parent.iterdir()) == ["part.dtx", "part.pgx", "part.pjx"]
     back = parse_program(out)
-    assert back.kind.tolist() == original.kind.tolist()
+    assert back.kind.tolist() == original.kind.tolist() and back.resolved.all()  # ssame esame wsame: the posture it is in
+    assert not VAL3.controller.conf_applies(back).any()
     cart = original.kind != Kind.ABSJ
     np.testing.assert_allclose(back.base_poses()[cart], original.base_poses()[cart], atol=1e-5)
     np.testing.assert_allclose(back.tools[back.tool[cart]], original.tools[original.tool[cart]], atol=1e-6)

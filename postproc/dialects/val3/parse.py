@@ -110,9 +110,9 @@ class _Assembler:
                     approach[r] = point.approach
             tool[r] = self._tool(motion)
             speed[r], zone[r] = self._mdesc(motion)
-            if motion.word == "movej" and element.type == "pointRx" and not all(abs(v) == 1.0 for v in conf[r]):
+            if motion.word == "movej" and element.type == "pointRx" and not _fixed_posture(conf[r]):
                 resolved[r] = False
-                self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': same/free follow the current position), give shoulder, elbow and wrist")
+                self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': free lets the controller choose, same keeps the current value), give shoulder, elbow and wrist, or ssame, esame and wsame")
         values, spans = np.full((n, NF), np.nan), np.full((n, NF, 3), -1, np.int64)
         if cells:
             r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cells))
@@ -270,6 +270,12 @@ class _Assembler:
         if blend[0] == "off":
             return speed, 0.0
         return speed, self._number(element.attrs["leave"]) if "leave" in element.attrs else MDESC_LEAVE
+
+
+def _fixed_posture(conf: tuple[float, float, float]) -> bool:
+    """True where a movej's posture follows from the point's config: all three named (the
+    controller takes them) or all three 'same' (the arm keeps the one it is in)."""
+    return all(abs(v) == 1.0 for v in conf) or all(v == 0.0 for v in conf)
 
 
 def _object_array(items: list) -> np.ndarray:
