@@ -116,21 +116,16 @@ class CodeReader:
         file, start, end = self.programs.code[name]
         depth: list[tuple[str, int]] = []
         text = self.texts[file]
+        motions, types, plain_line = self.motions, self.types, _PLAIN.match
         for m in _LINE.finditer(text, start, end):
-            plain = None if depth else _PLAIN.match(m.group(0))
-            if plain and self.types.get(plain.group(1)) not in GEOMETRY:
-                self.motions.append(self._plain(file, m.start(), plain))
+            plain = None if depth else plain_line(text, m.start(), m.end())
+            if plain and types.get(plain.group(1)) not in GEOMETRY:
+                motions.append(_plain(file, plain))
                 continue
             line = _strip_comment(m.group(0))
             if line.strip():
                 self._statement(file, m.start(), line, depth, stack + (name,))
-        return self.motions
-
-    @staticmethod
-    def _plain(file: int, offset: int, m: re.Match) -> Motion:
-        """A plain motion line (``_PLAIN``), its references straight from the match."""
-        refs = [Ref(m.group(g), m.group(g + 1) or "0", offset + m.start(g)) for g in (3, 5, 7)]
-        return Motion(m.group(2), file, offset + m.start(2), (PointArg(refs[0]),), refs[1], refs[2])
+        return motions
 
     def _statement(self, file: int, offset: int, line: str, depth: list, stack: tuple[str, ...]) -> None:
         first = _WORD.match(line)
@@ -214,6 +209,13 @@ class CodeReader:
             raise self.error(file, offset + start + appro.start(1) + inner[1][1] + _lead(inner[1][0]), "appro's trsf is computed at run time: only a literal {x, y, z, rx, ry, rz} is known from the text")
         ref = self._ref(file, offset, inner[0][0], start + appro.start(1) + inner[0][1], "point")
         return PointArg(ref, numbers)
+
+
+def _plain(file: int, m: re.Match) -> Motion:
+    """A plain motion line (``_PLAIN``, matched in the file's text), its references straight from the match."""
+    _, word, point, point_key, tool, tool_key, mdesc, mdesc_key = m.groups()
+    return Motion(word, file, m.start(2), (PointArg(Ref(point, point_key or "0", m.start(3))),),
+                  Ref(tool, tool_key or "0", m.start(5)), Ref(mdesc, mdesc_key or "0", m.start(7)))
 
 
 def _strip_comment(line: str) -> str:

@@ -78,13 +78,17 @@ def parse_father(text: str) -> tuple[str, str]:
 
 @dataclass
 class Database:
-    """Every element of the .dtx by (name, key), each variable's type and size, and the
-    bulk tables of the <Value> tags (row = ``Element.tag``)."""
+    """Every <Value> of the .dtx (a tag) by (name, key), each variable's type and size, and
+    the bulk tables of the tags (row = ``Element.tag``)."""
 
     path: str
     text: str
     types: dict[str, str]
-    elements: dict[tuple[str, str], Element]
+    index: dict[tuple[str, str], int]  # (name, key) -> tag
+    tag_type: list[str]  # per tag: the type of its variable
+    offsets: list[int]  # per tag: where its <Value starts
+    starts: list[int]  # per tag: where its attributes start
+    ends: list[int]  # and end
     lines: LineIndex
     sizes: dict[str, str]
     numbers: np.ndarray  # (T, 12) NUMERIC fields, NaN where the tag has none
@@ -97,11 +101,21 @@ class Database:
         for has every field at its default (Stäubli Robotics Suite writes
         ``<Data name="jHome" type="jointRx" size="1"></Data>`` for a jointRx of zeros);
         None where the variable or the index does not exist."""
-        found = self.elements.get((name, key))
+        tag = self.index.get((name, key))
+        if tag is not None:
+            return Element(name, self.tag_type[tag], key, self.offsets[tag], self.text, (self.starts[tag], self.ends[tag]), tag)
         size = self.sizes.get(name, "1")
-        if found is None and name in self.types and key.isdigit() and size.isdigit() and int(key) < int(size):
+        if name in self.types and key.isdigit() and size.isdigit() and int(key) < int(size):
             return Element(name, self.types[name], key, -1)
-        return found
+        return None
+
+    def element_at(self, tag: int) -> Element:
+        name, key = self._names[tag]
+        return Element(name, self.tag_type[tag], key, self.offsets[tag], self.text, (self.starts[tag], self.ends[tag]), tag)
+
+    @cached_property
+    def _names(self) -> dict[int, tuple[str, str]]:
+        return {tag: name_key for name_key, tag in self.index.items()}
 
     def error(self, offset: int, message: str) -> ParseError:
         return self.lines.error(self.path, offset, message)
@@ -112,7 +126,9 @@ def read_database(path: str, text: str) -> Database:
     lines = LineIndex(text)
     types: dict[str, str] = {}
     sizes: dict[str, str] = {}
-    elements: dict[tuple[str, str], Element] = {}
+    index: dict[tuple[str, str], int] = {}  # (name, key) -> tag
+    tag_type: list[str] = []
+    offsets: list[int] = []  # where each <Value starts
     starts: list[int] = []
     ends: list[int] = []
     current: tuple[str, str] | None = None
@@ -139,12 +155,14 @@ def read_database(path: str, text: str) -> Database:
         key_text = key_match.group(1) if key_match else dict(_ATTR.findall(m.group(2))).get("key", "0")
         # an array's index ("3", "1,2"), or a collection's key, any text (VAL3 s7 collections)
         key = key_text if key_text.isdigit() else index_text(key_text) if _INDEX.match(key_text.strip()) else key_text
-        elements[(current[0], key)] = Element(current[0], current[1], key, m.start(), text, (m.start(2), m.end(2)), len(starts))
+        index[(current[0], key)] = len(starts)
+        tag_type.append(current[1])
+        offsets.append(m.start())
         starts.append(m.start(2))
         ends.append(m.end(2))
     numbers, spans, complete = _numeric_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
     words = _word_table(text, np.array(starts, np.int64), np.array(ends, np.int64))
-    return Database(path, text, types, elements, lines, sizes, numbers, spans, complete, words)
+    return Database(path, text, types, index, tag_type, offsets, starts, ends, lines, sizes, numbers, spans, complete, words)
 
 
 def _plain_tags(text: str) -> bool:

@@ -74,10 +74,10 @@ class _Assembler:
         self.builder.frame_names[0], self.builder.tool_names[0] = "world[0]", "flange[0]"
         self.notes: list[str] = []
         self._frames: dict[tuple[str, str] | None, int] = {}  # fatherId -> frame index
-        self._tools: dict[str, int] = {}
+        self._tools: dict[tuple[str, str], int] = {}
         self._configs: dict[tuple, tuple[float, float, float]] = {}  # the words written -> codes
         self._fathers: dict[str | None, tuple[str, str] | None] = {}  # fatherId text -> (name, index)
-        self._mdescs: dict[str, tuple[float, float]] = {}
+        self._mdescs: dict[tuple[str, str], tuple[float, float]] = {}
 
     def toolpath(self, motions: list[Motion]) -> Toolpath:
         rows = [(m, p, k) for m in motions for k, p in zip(_kinds(m), m.points)]
@@ -88,7 +88,24 @@ class _Assembler:
         conf, resolved, approach = [(np.nan,) * 3] * n, [True] * n, {}
         cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
         bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
+        index, tag_type, complete, offsets, words = self.db.index, self.db.tag_type, self.db.complete, self.db.offsets, self.db.words
         for r, (motion, point, k) in enumerate(rows):
+            tag = index.get((point.ref.name, point.ref.key))
+            if tag is not None and complete[tag] and point.approach is None and (tag_type[tag] == "pointRx" or (tag_type[tag] == "jointRx" and motion.word == "movej")):
+                # the bulk of a program: a data point read whole, nothing composed with it
+                joint = tag_type[tag] == "jointRx"
+                kind[r] = Kind.ABSJ if joint else k
+                file[r], offset_of[r], names[r], insert[r] = motion.file, motion.offset, point.ref.label, offsets[tag] + len("<Value")
+                bulk.append((r, tag, joint))
+                if not joint:
+                    conf[r] = self._config_words(tag)
+                    frame[r] = self._frame_of(tag)
+                tool[r] = self._tool(motion)
+                speed[r], zone[r] = self._mdesc(motion)
+                if motion.word == "movej" and not joint and not _fixed_posture(conf[r]):
+                    self._unfixed(motion, point, self.db.element(point.ref.name, point.ref.key))
+                    resolved[r] = False
+                continue
             element = self._element(motion.file, point.ref, ("pointRx", "jointRx") if motion.word == "movej" else ("pointRx",))
             kind[r] = Kind.ABSJ if element.type == "jointRx" else k
             file[r], offset_of[r], names[r] = motion.file, motion.offset, point.ref.label
@@ -112,7 +129,7 @@ class _Assembler:
             speed[r], zone[r] = self._mdesc(motion)
             if motion.word == "movej" and element.type == "pointRx" and not _fixed_posture(conf[r]):
                 resolved[r] = False
-                self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': free lets the controller choose, same keeps the current value), give shoulder, elbow and wrist, or ssame, esame and wsame")
+                self._unfixed(motion, point, element)
         values, spans = np.full((n, NF), np.nan), np.full((n, NF, 3), -1, np.int64)
         if cells:
             r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cells))
@@ -143,6 +160,25 @@ class _Assembler:
                                frame=np.array(frame, np.int32), resolved=np.array(resolved, bool), name=_object_array(names), insert_at=insert_at, offset=offset)
         tp = self.builder.build(orientation=False)
         return replace(tp, position=position, orientation=orientation, joints=joints)
+
+    def _unfixed(self, motion: Motion, point: PointArg, element: Element) -> None:
+        self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': free lets the controller choose, same keeps the current value), give shoulder, elbow and wrist, or ssame, esame and wsame")
+
+    def _config_words(self, tag: int) -> tuple[float, float, float]:
+        given = self.db.words[tag]
+        written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
+        if written not in self._configs:
+            self._configs[written] = self._config_of(self.db.element_at(tag), given)
+        return self._configs[written]
+
+    def _frame_of(self, tag: int) -> int:
+        text = self.db.words[tag].get("fatherId")
+        if text not in self._fathers:
+            self._fathers[text] = None if text is None else parse_father(text)
+        father = self._fathers[text]
+        if father not in self._frames:
+            self._frames[father] = self._new_frame(self.db.element_at(tag), father)
+        return self._frames[father]
 
     def _gather(self, bulk: list[tuple[int, int, bool]], values: np.ndarray, spans: np.ndarray) -> None:
         """Numbers and spans of the rows' elements from the data file's bulk tables."""
@@ -241,9 +277,10 @@ class _Assembler:
         return self.builder.frame_index(name, self._chain(point, "world"))
 
     def _tool(self, motion: Motion) -> int:
-        if motion.tool.label not in self._tools:
-            self._tools[motion.tool.label] = self._new_tool(motion)
-        return self._tools[motion.tool.label]
+        key = (motion.tool.name, motion.tool.key)
+        if key not in self._tools:
+            self._tools[key] = self._new_tool(motion)
+        return self._tools[key]
 
     def _new_tool(self, motion: Motion) -> int:
         ref = motion.tool
@@ -254,9 +291,10 @@ class _Assembler:
         return self.builder.tool_index(ref.label, None if chain is None else chain @ self._pose(element))
 
     def _mdesc(self, motion: Motion) -> tuple[float, float]:
-        if motion.mdesc.label not in self._mdescs:
-            self._mdescs[motion.mdesc.label] = self._new_mdesc(motion)
-        return self._mdescs[motion.mdesc.label]
+        key = (motion.mdesc.name, motion.mdesc.key)
+        if key not in self._mdescs:
+            self._mdescs[key] = self._new_mdesc(motion)
+        return self._mdescs[key]
 
     def _new_mdesc(self, motion: Motion) -> tuple[float, float]:
         """(speed: the descriptor's tmax in mm/s, NaN where it is left at its default 99999, no
