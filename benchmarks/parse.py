@@ -66,8 +66,23 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["sinumerik"] = make_sinumerik(folder, n)
     out["val3 (.pgx + .dtx)"] = make_val3(folder, n)
     return out
+
+
+def make_sinumerik(folder: Path, n: int) -> Path:
+    """A SINUMERIK 840D five-axis CAM program: a header with a settable frame, R parameters and
+    programmable frames (the reader's slow path), then numbered TRAORI blocks."""
+    path = folder / "BIG.MPF"
+    header = ["; postproc benchmark", "N10 G54 G17 G71 G90 G94", "N20 R1=12.5 R2=-7", "N30 TRANS X=R1 Y=R2", "N40 AROT Z30", "N50 TRAORI",
+              "N60 G0 X0 Y0 Z50 A0 C0", "N70 G1 F1500"]
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("\n".join(header) + "\n")
+        for i in range(n - len(header) - 2):
+            fh.write(f"N{80 + i} X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f} A{(i % 90) * 0.25:.3f} C{(i % 360) * 0.5:.3f}\n")
+        fh.write("TRAFOOF\nM30\n")
+    return path
 
 
 def make_val3(folder: Path, n: int) -> Path:

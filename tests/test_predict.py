@@ -66,4 +66,4 @@ def test_an_unreachable_target_exits_1_naming_its_line(cell, tmp_path):
     far = tmp_path / "far.src"
     far.write_text(POCKET.replace("X 1150, Y 200", "X 4150, Y 200"))
     r = _predict(far, "--model", cell / "truth.json")
-    assert r.exit_code == 1 and "far.src:7" in r.output
+    assert r.exit_code == 1 and "far.src:7: out of reach" in r.output

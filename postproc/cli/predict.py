@@ -19,7 +19,7 @@ from ..program_check import check_model_fits
 from ..program_content import require_program
 from ..programs import parse_program
 from .app import app, err, handles_errors, out
-from .common import floats, named_frames
+from .common import FORCE_OPTION, FRAME_OPTION, START_JOINTS_OPTION, TEMP_OPTION, TOOL_OPTION, floats, named_frames
 
 
 @app.command("predict")
@@ -30,11 +30,11 @@ def predict_cmd(
     model: Path = typer.Option(..., "--model", help="Model JSON: a validation model, or a simulated robot's truth (simulate --truth)."),
     intended: Optional[Path] = typer.Option(None, "--intended", help="The program whose targets are where the TCP should go (the program before compensation); default: PROGRAM's own targets."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Language of PROGRAM and --intended (default: from the extension or content)."),
-    frame: Optional[list[str]] = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the programs use but do not define, mm and KUKA A,B,C degrees. Repeatable."),
-    tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the programs use but do not define. Repeatable."),
-    start_joints: Optional[str] = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts."),
-    temp: Optional[float] = typer.Option(None, "--temp", help="Cell temperature, degC (for a model effect that uses it)."),
-    force: Optional[str] = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (for a model effect that uses it)."),
+    frame: Optional[list[str]] = FRAME_OPTION,
+    tool: Optional[list[str]] = TOOL_OPTION,
+    start_joints: Optional[str] = START_JOINTS_OPTION,
+    temp: Optional[float] = TEMP_OPTION,
+    force: Optional[str] = FORCE_OPTION,
     allow_mismatch: bool = typer.Option(False, "--allow-model-mismatch", help="Predict although the program's robot, tool or payload differ from the model's (printed as notes)."),
     json_out: bool = typer.Option(False, "--json", help="Per-target predictions as JSON on standard output."),
 ):
@@ -50,7 +50,7 @@ def predict_cmd(
     error_model, _ = load_model(model)
     for note in check_model_fits(tp, error_model, str(model), None, allow_mismatch):
         err.print(f"note: {note} (--allow-model-mismatch)")
-    rows, predicted = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
+    rows, predicted, why = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
                                           force_n=None if force is None else floats(force, 3, "--force"),
                                           start_joints=None if start_joints is None else floats(start_joints, 6, "--start-joints"))
     goal = _intended_positions(goal_tp, tp, rows, frames, tools, intended)
@@ -58,9 +58,9 @@ def predict_cmd(
     where = [f"{tp.sources[int(tp.file[r])].path}:{int(tp.line[r])}" for r in rows]
     unreached = np.isnan(error)
     if json_out:
-        out.print_json(json.dumps(_as_json(where, predicted, goal, error)))
+        out.print_json(json.dumps(_as_json(where, predicted, goal, error, why)))
     else:
-        _print_summary(error, where, unreached, model, intended or program)
+        _print_summary(error, where, why, model, intended or program)
     if unreached.any():
         raise typer.Exit(1)
 
@@ -77,18 +77,18 @@ def _intended_positions(goal_tp, tp, rows: np.ndarray, frames, tools, intended) 
     return goal_tp.base_poses()[goal_rows, :3, 3]
 
 
-def _as_json(where: list[str], predicted: np.ndarray, goal: np.ndarray, error: np.ndarray) -> list[dict]:
+def _as_json(where: list[str], predicted: np.ndarray, goal: np.ndarray, error: np.ndarray, why: list) -> list[dict]:
     def xyz(v):
         return None if np.isnan(v).any() else [round(float(c), 6) for c in v]
 
-    return [{"target": w, "predicted_xyz": xyz(p), "intended_xyz": xyz(g), "error_mm": None if np.isnan(e) else round(float(e), 6)}
-            for w, p, g, e in zip(where, predicted, goal, error)]
+    return [{"target": w, "predicted_xyz": xyz(p), "intended_xyz": xyz(g), "error_mm": None if np.isnan(e) else round(float(e), 6),
+             "unreached": reason} for w, p, g, e, reason in zip(where, predicted, goal, error, why)]
 
 
-def _print_summary(error: np.ndarray, where: list[str], unreached: np.ndarray, model: Path, intended: Path) -> None:
-    for w in np.array(where)[unreached][:50]:
-        err.print(f"{w}: the controller cannot reach this target by its rules on the model's robot", highlight=False)
-    reached = error[~unreached]
+def _print_summary(error: np.ndarray, where: list[str], why: list, model: Path, intended: Path) -> None:
+    for w, reason in [(w, reason) for w, reason in zip(where, why) if reason is not None][:50]:
+        err.print(f"{w}: {reason}", highlight=False)
+    reached = error[~np.isnan(error)]
     if not len(reached):
         return
     worst = int(np.nanargmax(error))

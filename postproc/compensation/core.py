@@ -742,16 +742,19 @@ def _scatter(n, rows, fill, values, dtype):
 
 
 def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller, frames: dict | None = None, tools: dict | None = None,
-                        start_joints=None, temp_c: float | None = None, force_n=None) -> tuple[np.ndarray, np.ndarray]:
+                        start_joints=None, temp_c: float | None = None, force_n=None) -> tuple[np.ndarray, np.ndarray, list]:
     """Where ``model`` puts the TCP when ``controller`` runs the program as written: the
-    program rows of its Cartesian targets and (M, 3) TCP positions in the robot base frame,
-    mm, on the postures the controller's rules give (NaN where it cannot reach a target).
-    Run with a validation model (or a simulated robot's truth), it tells where a compensated
-    program will cut before it runs."""
+    program rows of its Cartesian targets, (M, 3) TCP positions in the robot base frame, mm,
+    on the postures the controller's rules give (NaN where it cannot reach a target), and
+    for each target why not (None where it can). Run with a validation model (or a simulated
+    robot's truth), it tells where a compensated program will cut before it runs."""
     _require_usable_model(model)
     _require_process_inputs(model, temp_c, force_n)
     if frames or tools:
         tp = tp.with_frames(frames, tools)
     _refuse_unplaced(tp)
     problem = _Problem.of(tp, model, controller, temp_c, force_n, start_joints)
-    return problem.rows, problem.plant.actual(problem.q_ref, problem.rows, problem.order_q)
+    positions = problem.plant.actual(problem.q_ref, problem.rows, problem.order_q)
+    why = [None if not np.isnan(p).any() else _POSTURE_TEXT.get(int(code), "out of reach or outside the joint limits")
+           for p, code in zip(positions, problem.posture_problem)]
+    return problem.rows, positions, why
