@@ -274,3 +274,26 @@ def test_a_data_file_must_be_found(tmp_path):
     (tmp_path / "start.pgx").write_text((DEMO / "start.pgx").read_text())
     with pytest.raises(InputError, match="data file"):
         parse_program(tmp_path / "start.pgx")
+
+
+def test_a_field_the_data_leaves_out_is_written_when_it_changes(tmp_path):
+    """pNoZ writes no y and no z (they are 0): moved, it gets the attributes it lacked."""
+    point = '    <Data name="pNoZ" type="pointRx" size="1">\n      <Value key="0" x="500" rx="180" fatherId="world[0]" />\n    </Data>\n'
+    path = _app(tmp_path, "  movel(pNoZ, tTip, mFast)\n", point)
+    tp = parse_program(path)
+    assert tp.position[0].tolist() == [500, 0, 0] and np.isnan(tp.values[0, 1:3]).all()
+    moved = tp.with_positions(tp.position + [[0.25, -1.5, 2.0]])
+    texts = emit_texts(tp, moved)
+    assert '<Value y="-1.500" z="2.000" key="0" x="500.25" rx="180" fatherId="world[0]" />' in texts[1]
+    (tmp_path / "demo.dtx").write_text(texts[1])
+    np.testing.assert_allclose(parse_program(path).position, moved.position, atol=1e-9)
+
+
+def test_a_point_shared_by_two_motions_that_would_need_two_values_is_refused(tmp_path):
+    from postproc.errors import SharedNumberError
+
+    tp = parse_program(DEMO / "start.pgx")  # pA[0]: movel to it, then movel to appro(pA[0], ...)
+    position = tp.position.copy()
+    position[2, 0] += 0.5  # the first use moves, the second does not
+    with pytest.raises(SharedNumberError, match="demo.dtx"):
+        emit_texts(tp, tp.with_positions(position))
