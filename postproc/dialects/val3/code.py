@@ -30,6 +30,7 @@ _OTHER_MOTION = re.compile(r"\b(?!(?:movej|movel|movec)\b)(move\w+|alterMove\w*|
 _NAME_REF = r"([A-Za-z_]\w*)[ \t]*(?:\[[ \t]*(\d+)[ \t]*\])?"
 # the bulk of a program: one movej / movel to a named point, nothing else on the line
 _PLAIN = re.compile(rf"[ \t]*(?:([A-Za-z_]\w*)[ \t]*=[ \t]*)?(movej|movel)[ \t]*\([ \t]*{_NAME_REF}[ \t]*,[ \t]*{_NAME_REF}[ \t]*,[ \t]*{_NAME_REF}[ \t]*\)[ \t]*\r?$")
+_PLAIN_LINES = re.compile("^" + _PLAIN.pattern.replace("\\r?$", "(?=\\r?$)"), re.MULTILINE)  # the same lines, found in a text
 _TASK = re.compile(r"\b(taskCreate|taskCreateSync)\b")
 _CALL = re.compile(r"[ \t]*call[ \t]+(\w+)[ \t]*\(([^)]*)\)")
 _ASSIGN = re.compile(r"[ \t]*([A-Za-z_]\w*)[ \t]*(?:\[[^\]]*\])?[ \t]*(?:\.[ \t]*\w+[ \t]*)*=(?!=)")
@@ -102,6 +103,7 @@ class CodeReader:
         self.lines = {i: LineIndex(t) for i, t in enumerate(texts) if t is not None}
         self.motions: list[Motion] = []
         self._touched: dict[str, bool] = {}
+        self._refs: dict[tuple, Ref] = {}  # (name, index) of a tool or descriptor -> its Ref at first use
 
     def error(self, file: int, offset: int, message: str) -> ParseError:
         return self.lines[file].error(self.paths[file], offset, message)
@@ -116,16 +118,26 @@ class CodeReader:
         file, start, end = self.programs.code[name]
         depth: list[tuple[str, int]] = []
         text = self.texts[file]
-        motions, types, plain_line = self.motions, self.types, _PLAIN.match
+        motions, types, refs = self.motions, self.types, self._refs
+        at = start  # where the text not yet read starts
+        # Runs of plain motion lines are matched in one pass; what lies between them is read
+        # statement by statement (blocks, calls, anything else), in program order.
+        for plain in _PLAIN_LINES.finditer(text, start, end):
+            self._lines(file, text, at, plain.start(), depth, stack + (name,))
+            if depth or types.get(plain.group(1)) in GEOMETRY:
+                self._lines(file, text, plain.start(), plain.end(), depth, stack + (name,))
+            else:
+                motions.append(_plain(file, plain, refs))
+            at = plain.end()
+        self._lines(file, text, at, end, depth, stack + (name,))
+        return motions
+
+    def _lines(self, file: int, text: str, start: int, end: int, depth: list, stack: tuple[str, ...]) -> None:
+        """Read the statements of text[start:end] one line at a time."""
         for m in _LINE.finditer(text, start, end):
-            plain = None if depth else plain_line(text, m.start(), m.end())
-            if plain and types.get(plain.group(1)) not in GEOMETRY:
-                motions.append(_plain(file, plain))
-                continue
             line = _strip_comment(m.group(0))
             if line.strip():
-                self._statement(file, m.start(), line, depth, stack + (name,))
-        return motions
+                self._statement(file, m.start(), line, depth, stack)
 
     def _statement(self, file: int, offset: int, line: str, depth: list, stack: tuple[str, ...]) -> None:
         first = _WORD.match(line)
@@ -211,11 +223,18 @@ class CodeReader:
         return PointArg(ref, numbers)
 
 
-def _plain(file: int, m: re.Match) -> Motion:
-    """A plain motion line (``_PLAIN``, matched in the file's text), its references straight from the match."""
+def _plain(file: int, m: re.Match, refs: dict) -> Motion:
+    """A plain motion line (``_PLAIN``, matched in the file's text), its references straight
+    from the match. A tool or descriptor is one Ref per name, at its first use (where an
+    error about it is reported: the first motion that uses it)."""
     _, word, point, point_key, tool, tool_key, mdesc, mdesc_key = m.groups()
-    return Motion(word, file, m.start(2), (PointArg(Ref(point, point_key or "0", m.start(3))),),
-                  Ref(tool, tool_key or "0", m.start(5)), Ref(mdesc, mdesc_key or "0", m.start(7)))
+    tool_ref = refs.get((tool, tool_key))
+    if tool_ref is None:
+        tool_ref = refs[(tool, tool_key)] = Ref(tool, tool_key or "0", m.start(5))
+    mdesc_ref = refs.get((mdesc, mdesc_key))
+    if mdesc_ref is None:
+        mdesc_ref = refs[(mdesc, mdesc_key)] = Ref(mdesc, mdesc_key or "0", m.start(7))
+    return Motion(word, file, m.start(2), (PointArg(Ref(point, point_key or "0", m.start(3))),), tool_ref, mdesc_ref)
 
 
 def _strip_comment(line: str) -> str:
