@@ -75,12 +75,14 @@ class _Assembler:
         self.notes: list[str] = []
         self._frames: dict[tuple[str, str] | None, int] = {}  # fatherId -> frame index
         self._tools: dict[tuple[str, str], int] = {}
+        self._tool_of_ref: dict = {}  # Ref -> tool index
+        self._mdesc_of_ref: dict = {}  # Ref -> (speed, zone)
         self._configs: dict[tuple, tuple[float, float, float]] = {}  # the words written -> codes
         self._fathers: dict[str | None, tuple[str, str] | None] = {}  # fatherId text -> (name, index)
         self._mdescs: dict[tuple[str, str], tuple[float, float]] = {}
 
     def toolpath(self, motions: list[Motion]) -> Toolpath:
-        rows = [(m, p, k) for m in motions for k, p in zip(_kinds(m), m.points)]
+        rows = [(m, p, k) for m in motions for k, p in zip(KINDS[m.word], m.points)]
         n = len(rows)
         # Per-row Python lists, turned into arrays once: a million targets take one pass.
         kind, file, offset_of, names = [0] * n, [0] * n, [0] * n, [""] * n
@@ -88,7 +90,8 @@ class _Assembler:
         conf, resolved, approach = [(np.nan,) * 3] * n, [True] * n, {}
         cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
         bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
-        index, tag_type, complete, offsets, words = self.db.index, self.db.tag_type, self.db.complete, self.db.offsets, self.db.words
+        index, tag_type, complete, offsets = self.db.index, self.db.tag_type, self.db.complete, self.db.offsets
+        tools, mdescs = self._tool_of_ref, self._mdesc_of_ref  # by reference: most motions share a few
         for r, (motion, point, k) in enumerate(rows):
             tag = index.get((point.ref.name, point.ref.key))
             if tag is not None and complete[tag] and point.approach is None and (tag_type[tag] == "pointRx" or (tag_type[tag] == "jointRx" and motion.word == "movej")):
@@ -100,8 +103,8 @@ class _Assembler:
                 if not joint:
                     conf[r] = self._config_words(tag)
                     frame[r] = self._frame_of(tag)
-                tool[r] = self._tool(motion)
-                speed[r], zone[r] = self._mdesc(motion)
+                tool[r] = tools[motion.tool] if motion.tool in tools else self._tool(motion)
+                speed[r], zone[r] = mdescs[motion.mdesc] if motion.mdesc in mdescs else self._mdesc(motion)
                 if motion.word == "movej" and not joint and not _fixed_posture(conf[r]):
                     self._unfixed(motion, point, self.db.element(point.ref.name, point.ref.key))
                     resolved[r] = False
@@ -280,6 +283,7 @@ class _Assembler:
         key = (motion.tool.name, motion.tool.key)
         if key not in self._tools:
             self._tools[key] = self._new_tool(motion)
+        self._tool_of_ref[motion.tool] = self._tools[key]
         return self._tools[key]
 
     def _new_tool(self, motion: Motion) -> int:
@@ -294,6 +298,7 @@ class _Assembler:
         key = (motion.mdesc.name, motion.mdesc.key)
         if key not in self._mdescs:
             self._mdescs[key] = self._new_mdesc(motion)
+        self._mdesc_of_ref[motion.mdesc] = self._mdescs[key]
         return self._mdescs[key]
 
     def _new_mdesc(self, motion: Motion) -> tuple[float, float]:
@@ -322,8 +327,7 @@ def _object_array(items: list) -> np.ndarray:
     return out
 
 
-def _kinds(motion: Motion) -> tuple[int, ...]:
-    return {"movej": (Kind.JOINT,), "movel": (Kind.LINEAR,), "movec": (Kind.CIRC_VIA, Kind.CIRC_END)}[motion.word]
+KINDS = {"movej": (Kind.JOINT,), "movel": (Kind.LINEAR,), "movec": (Kind.CIRC_VIA, Kind.CIRC_END)}
 
 
 def _config_text(element: Element) -> str:
