@@ -129,13 +129,15 @@ def test_what_the_text_does_not_determine_is_refused_with_its_place(tmp_path, co
     assert err.value.path.endswith("start.pgx")
 
 
-def test_movej_without_a_definite_config_is_unresolved_and_compensate_refuses(tmp_path):
+def test_movej_without_a_definite_config_is_unresolved_and_compensate_refuses(tmp_path, tx2_truth):
     point = '    <Data name="pFree" type="pointRx" size="1">\n      <Value key="0" x="500" z="100" rx="180" shoulder="sfree" elbow="epositive" wrist="wpositive" fatherId="world[0]" />\n    </Data>\n'
     path = _app(tmp_path, "  movej(pFree, tTip, mFast)\n  movel(pA[0], tTip, mFast)\n", point)
     tp = parse_program(path)
-    assert tp.resolved.tolist() == [False, True] and "sfree" in tp.notes[0] and "start.pgx:5" in tp.notes[0]
+    assert tp.resolved.tolist() == [False, True] and "sfree" in tp.notes[0] and tp.notes[0].startswith(f"{path}:5:3: movej to pFree[0]")
     result = runner.invoke(app, ["inspect", str(path), "--json"])
     assert result.exit_code == 0 and '"resolved": false' in result.output
+    with pytest.raises(InputError, match=r"start\.pgx:5:3: movej to pFree\[0\] with config \{sfree, epositive, wpositive\}"):
+        compensate(tp, tx2_truth[2])
 
 
 def test_config_words_from_joints_and_branch_selection():

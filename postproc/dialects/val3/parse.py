@@ -208,7 +208,10 @@ class _Assembler:
         return text.count("\n", 0, motion.offset) + 1
 
     def where(self, motion: Motion) -> str:
-        return f"{self.sources[motion.file].path}:{self.reader_line(motion)}"
+        """file:line:column of a motion statement."""
+        text = self.sources[motion.file].text
+        column = motion.offset - text.rfind("\n", 0, motion.offset)
+        return f"{self.sources[motion.file].path}:{self.reader_line(motion)}:{column}"
 
     def _code_error(self, file: int, offset: int, message: str) -> ParseError:
         return LineIndex(self.sources[file].text).error(self.sources[file].path, offset, message)
