@@ -22,6 +22,22 @@ import time
 from pathlib import Path
 
 
+def make_fanuc(folder: Path, n: int) -> Path:
+    """A Fanuc TP listing of about ``n`` lines: L motions in /MN, their positions in /POS (7 lines a target)."""
+    path = folder / "big.ls"
+    count = max((n - 8) // 7, 1)
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("/PROG  BIG\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n")
+        fh.writelines(f"{i + 1:4d}:L P[{i + 1}] 100mm/sec CNT50    ;\n" for i in range(count))
+        fh.write("/POS\n")
+        for i in range(count):
+            fh.write(f"P[{i + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                     f"\tX = {800 + (i % 400) * 0.5:9.3f}  mm,\tY = {-200 + (i // 400) % 400:9.3f}  mm,\tZ = {300 + (i % 7) * 0.125:9.3f}  mm,\n"
+                     "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\n")
+        fh.write("/END\n")
+    return path
+
+
 def make_programs(folder: Path, n: int) -> dict[str, Path]:
     out = {}
     rapid = folder / "big.mod"
@@ -66,6 +82,8 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["urscript"] = make_urscript(folder, n)
+    out["fanuc"] = make_fanuc(folder, n)
     out["sinumerik"] = make_sinumerik(folder, n)
     out["val3 (.pgx + .dtx)"] = make_val3(folder, n)
     return out
@@ -82,6 +100,17 @@ def make_sinumerik(folder: Path, n: int) -> Path:
         for i in range(n - len(header) - 2):
             fh.write(f"N{80 + i} X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f} A{(i % 90) * 0.25:.3f} C{(i % 360) * 0.5:.3f}\n")
         fh.write("TRAFOOF\nM30\n")
+    return path
+
+
+def make_urscript(folder: Path, n: int) -> Path:
+    """A URScript program: set_tcp, one movej to joints, then movel to literal poses (m, rad)."""
+    path = folder / "big.script"
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n")
+        for i in range(n - 4):
+            fh.write(f"  movel(p[{0.8 + (i % 400) * 0.0005:.6f}, {-0.2 + ((i // 400) % 400) * 0.001:.6f}, {0.3 + (i % 7) * 0.000125:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n")
+        fh.write("end\n")
     return path
 
 

@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .dh import forward_dh, opw_forward
+from .ur_kinematics import is_ur_geometry
 from .errors import RobotFileError, UnknownRobotError
 
 REQUIRED_UNITS = {"length": "mm", "angle": "deg", "mass": "kg", "stiffness": "N*m/rad"}
@@ -79,7 +80,7 @@ class RobotModel:
 
     @property
     def has_analytic_ik(self) -> bool:
-        return self.opw is not None
+        return self.opw is not None or is_ur_geometry(self)
 
 
 def available_robots() -> list[str]:

@@ -9,7 +9,7 @@ from postproc.frames import abc_to_matrix, matrix_to_quat_wxyz
 from postproc.parse.common import Builder
 
 
-@pytest.mark.parametrize("name", ["quat", "abc"])
+@pytest.mark.parametrize("name", ["quat", "abc", "wpr"])
 def test_numbers_read_back_as_the_same_rotation(name):
     notation = rotation_forms.form(name)
     rot = abc_to_matrix(np.array([[10.0, 20.0, 30.0], [-170.0, 89.0, 5.0], [179.0, -45.0, -179.5]]))
