@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 import shutil
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -27,11 +28,11 @@ from postproc.dialects import sniff
 from postproc.dialects.val3 import VAL3
 from postproc.dialects.val3.controller import config_of_joints
 from postproc.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz
-from postproc.errors import InputError, ParseError
+from postproc.errors import InputError, ParseError, SharedNumberError
 from postproc.frames import quat_wxyz_to_matrix
 from postproc.ir import Kind
 from postproc.model_io import save_model
-from postproc.programs import emit_texts, parse_program, write_program
+from postproc.programs import emit_texts, parse_program
 from postproc.sim import Cylinder
 
 DEMO = Path(__file__).parent / "data" / "val3_demo"
@@ -204,8 +205,6 @@ def tx2_truth():
 
 def _run_on(truth, tp, q_ref):
     """Where the true robot's TCP goes (controller: nominal IK, the branch of q_ref)."""
-    from dataclasses import replace
-
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
     q, _ = kin.select_nearest(truth.robot, kin.ik(truth.robot, flange), q_ref)
     m = replace(truth, tool_mm=tp.tools[tp.tool[0]][:3, 3])
@@ -292,8 +291,6 @@ def test_a_field_the_data_leaves_out_is_written_when_it_changes(tmp_path):
 
 
 def test_a_point_shared_by_two_motions_that_would_need_two_values_is_refused(tmp_path):
-    from postproc.errors import SharedNumberError
-
     tp = parse_program(DEMO / "start.pgx")  # pA[0]: movel to it, then movel to appro(pA[0], ...)
     position = tp.position.copy()
     position[2, 0] += 0.5  # the first use moves, the second does not

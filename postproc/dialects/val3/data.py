@@ -33,7 +33,6 @@ _KEY = re.compile(r"\s+key\s*=\s*\"([^\"]*)\"")
 #: the numeric fields read in bulk, in this column order (x..rz -> FIELDS 0..5, j1..j6 -> 7..12)
 NUMERIC = ("x", "y", "z", "rx", "ry", "rz", "j1", "j2", "j3", "j4", "j5", "j6")
 _NUMERIC_ATTR = re.compile(r"\s(x|y|z|rx|ry|rz|j[1-6])=\"")
-WORDS = ("shoulder", "elbow", "wrist", "fatherId")
 _WORD_ATTR = re.compile(r"\s(shoulder|elbow|wrist|fatherId)=\"([^\"]*)\"")
 
 
