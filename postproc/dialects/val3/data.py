@@ -93,7 +93,7 @@ class Database:
     numbers: np.ndarray  # (T, 12) NUMERIC fields, NaN where the tag has none
     spans: np.ndarray  # (T, 12, 2) their start, end; -1 where none
     complete: np.ndarray  # (T,) every NUMERIC attribute of the tag was read as a number
-    words: list[dict[str, str]]  # per tag: WORDS attributes it has
+    words: list[dict[str, str]]  # per tag: its config words and fatherId
 
     def element(self, name: str, key: str) -> Element | None:
         """The element ``name[key]``; one the file declares (``size``) but writes no <Value>
