@@ -83,64 +83,70 @@ class _Assembler:
 
     def toolpath(self, motions: list[Motion]) -> Toolpath:
         rows = [(m, p, k) for m in motions for k, p in zip(KINDS[m.word], m.points)]
-        n = len(rows)
-        # Per-row Python lists, turned into arrays once: a million targets take one pass.
-        kind, file, offset_of, names = [0] * n, [0] * n, [0] * n, [""] * n
-        frame, tool, speed, zone, insert = [0] * n, [0] * n, [np.nan] * n, [np.nan] * n, [-1] * n
-        conf, resolved, approach = [(np.nan,) * 3] * n, [True] * n, {}
-        cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
-        bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
-        index, tag_type, complete, offsets = self.db.index, self.db.tag_type, self.db.complete, self.db.offsets
-        tools, mdescs = self._tool_of_ref, self._mdesc_of_ref  # by reference: most motions share a few
+        cols = _Rows(len(rows))
         for r, (motion, point, k) in enumerate(rows):
-            tag = index.get((point.ref.name, point.ref.key))
-            if tag is not None and complete[tag] and point.approach is None and (tag_type[tag] == "pointRx" or (tag_type[tag] == "jointRx" and motion.word == "movej")):
-                # the bulk of a program: a data point read whole, nothing composed with it
-                joint = tag_type[tag] == "jointRx"
-                kind[r] = Kind.ABSJ if joint else k
-                file[r], offset_of[r], names[r], insert[r] = motion.file, motion.offset, point.ref.label, offsets[tag] + len("<Value")
-                bulk.append((r, tag, joint))
-                if not joint:
-                    conf[r] = self._config_words(tag)
-                    frame[r] = self._frame_of(tag)
-                tool[r] = tools[motion.tool] if motion.tool in tools else self._tool(motion)
-                speed[r], zone[r] = mdescs[motion.mdesc] if motion.mdesc in mdescs else self._mdesc(motion)
-                if motion.word == "movej" and not joint and not _fixed_posture(conf[r]):
-                    self._unfixed(motion, point, self.db.element(point.ref.name, point.ref.key))
-                    resolved[r] = False
-                continue
-            element = self._element(motion.file, point.ref, ("pointRx", "jointRx") if motion.word == "movej" else ("pointRx",))
-            kind[r] = Kind.ABSJ if element.type == "jointRx" else k
-            file[r], offset_of[r], names[r] = motion.file, motion.offset, point.ref.label
-            if element.offset >= 0:  # a field left out can be added to the element's <Value>
-                insert[r] = element.offset + len("<Value")
-            if element.tag >= 0 and self.db.complete[element.tag]:
-                bulk.append((r, element.tag, element.type == "jointRx"))  # numbers from the data's tables, below
-            else:  # an element declared without a <Value>, or one whose numbers need a closer look
-                attrs = JOINT_ATTRS if element.type == "jointRx" else POSE_ATTRS
-                first = 7 if element.type == "jointRx" else 0
-                for c, attr in enumerate(attrs):
-                    text = element.attrs.get(attr)
-                    if text is not None:
-                        cells.append((r, first + c, self._number(text), text[1], text[2]))
-            if element.type == "pointRx":
-                conf[r] = self._config(element)
-                frame[r] = self._frame(element)
-                if point.approach is not None:
-                    approach[r] = point.approach
-            tool[r] = self._tool(motion)
-            speed[r], zone[r] = self._mdesc(motion)
-            if motion.word == "movej" and element.type == "pointRx" and not _fixed_posture(conf[r]):
-                resolved[r] = False
-                self._unfixed(motion, point, element)
+            if not self._bulk_row(cols, r, motion, point, k):
+                self._element_row(cols, r, motion, point, k)
+        return self._build(cols)
+
+    def _bulk_row(self, cols: "_Rows", r: int, motion: Motion, point: PointArg, k: int) -> bool:
+        """The bulk of a program: a data point read whole, nothing composed with it (its numbers
+        come from the data's tables in ``_build``). False where the row needs ``_element_row``."""
+        tag = self.db.index.get((point.ref.name, point.ref.key))
+        if tag is None or not self.db.complete[tag] or point.approach is not None:
+            return False
+        joint = self.db.tag_type[tag] == "jointRx"
+        if not (joint and motion.word == "movej" or self.db.tag_type[tag] == "pointRx"):
+            return False
+        cols.kind[r] = Kind.ABSJ if joint else k
+        cols.file[r], cols.offset[r], cols.name[r], cols.insert[r] = motion.file, motion.offset, point.ref.label, self.db.offsets[tag] + len("<Value")
+        cols.bulk.append((r, tag, joint))
+        if not joint:
+            cols.conf[r], cols.frame[r] = self._config_words(tag), self._frame_of(tag)
+        cols.tool[r] = self._tool_of_ref[motion.tool] if motion.tool in self._tool_of_ref else self._tool(motion)
+        cols.speed[r], cols.zone[r] = self._mdesc_of_ref[motion.mdesc] if motion.mdesc in self._mdesc_of_ref else self._mdesc(motion)
+        if motion.word == "movej" and not joint and not _fixed_posture(cols.conf[r]):
+            self._unfixed(motion, point, self.db.element(point.ref.name, point.ref.key))
+            cols.resolved[r] = False
+        return True
+
+    def _element_row(self, cols: "_Rows", r: int, motion: Motion, point: PointArg, k: int) -> None:
+        """A row through its element: a declared element without a <Value>, an appro(), or one
+        whose numbers the bulk pass did not read whole (their errors are raised here)."""
+        element = self._element(motion.file, point.ref, ("pointRx", "jointRx") if motion.word == "movej" else ("pointRx",))
+        cols.kind[r] = Kind.ABSJ if element.type == "jointRx" else k
+        cols.file[r], cols.offset[r], cols.name[r] = motion.file, motion.offset, point.ref.label
+        if element.offset >= 0:  # a field left out can be added to the element's <Value>
+            cols.insert[r] = element.offset + len("<Value")
+        if element.tag >= 0 and self.db.complete[element.tag]:
+            cols.bulk.append((r, element.tag, element.type == "jointRx"))
+        else:
+            first = 7 if element.type == "jointRx" else 0
+            for c, attr in enumerate(JOINT_ATTRS if element.type == "jointRx" else POSE_ATTRS):
+                text = element.attrs.get(attr)
+                if text is not None:
+                    cols.cells.append((r, first + c, self._number(text), text[1], text[2]))
+        if element.type == "pointRx":
+            cols.conf[r], cols.frame[r] = self._config(element), self._frame(element)
+            if point.approach is not None:
+                cols.approach[r] = point.approach
+        cols.tool[r] = self._tool(motion)
+        cols.speed[r], cols.zone[r] = self._mdesc(motion)
+        if motion.word == "movej" and element.type == "pointRx" and not _fixed_posture(cols.conf[r]):
+            cols.resolved[r] = False
+            self._unfixed(motion, point, element)
+
+    def _build(self, cols: "_Rows") -> Toolpath:
+        """The Toolpath of the rows: numbers and spans, poses in their frames, appro() applied."""
+        n = len(cols.kind)
         values, spans = np.full((n, NF), np.nan), np.full((n, NF, 3), -1, np.int64)
-        if cells:
-            r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cells))
+        if cols.cells:
+            r_, c_, v_, s_, e_ = (np.array(col) for col in zip(*cols.cells))
             values[r_, c_] = v_
             spans[r_, c_] = np.column_stack([np.full(len(r_), self.data_index), s_, e_])
-        if bulk:
-            self._gather(bulk, values, spans)
-        kind, file = np.array(kind, np.int8), np.array(file, np.int16)
+        if cols.bulk:
+            self._gather(cols.bulk, values, spans)
+        kind, file = np.array(cols.kind, np.int8), np.array(cols.file, np.int16)
         cart = kind != Kind.ABSJ
         pose = np.nan_to_num(values[:, :6])  # an attribute left out is 0
         position, rotation = pose[:, :3].copy(), pose[:, 3:6]
@@ -149,18 +155,20 @@ class _Assembler:
         if cart.any():
             orientation[cart] = rxyz_to_quat_wxyz(rotation[cart])
         offset = np.zeros((n, NF))
-        if approach:
+        if cols.approach:
             trsf = np.full((n, 6), np.nan)
-            trsf[list(approach)] = list(approach.values())
+            trsf[list(cols.approach)] = list(cols.approach.values())
             position, orientation, offset = _approach(position, rotation, trsf, ~np.isnan(trsf).any(axis=1), offset)
         position[~cart], orientation[~cart] = np.nan, np.nan
-        conf_array = np.full((n, 4), np.nan)
-        conf_array[:, :3] = np.array(conf, dtype=float).reshape(n, 3)
-        insert_at = np.column_stack([np.where(np.array(insert) >= 0, self.data_index, -1), insert]).astype(np.int64).reshape(n, 2)
+        conf = np.full((n, 4), np.nan)
+        conf[:, :3] = np.array(cols.conf, dtype=float).reshape(n, 3)
+        insert = np.array(cols.insert, np.int64)
+        insert_at = np.column_stack([np.where(insert >= 0, self.data_index, -1), insert]).reshape(n, 2)
         self.builder.notes.extend(self.notes)
-        self.builder.add_block(np.arange(n), kind=kind, line=self._lines(file, np.array(offset_of, np.int64)), file=file, values=values, spans=spans,
-                               conf=conf_array, speed=np.array(speed, float), zone=np.array(zone, float), tool=np.array(tool, np.int32),
-                               frame=np.array(frame, np.int32), resolved=np.array(resolved, bool), name=_object_array(names), insert_at=insert_at, offset=offset)
+        self.builder.add_block(np.arange(n), kind=kind, line=self._lines(file, np.array(cols.offset, np.int64)), file=file, values=values, spans=spans,
+                               conf=conf, speed=np.array(cols.speed, float), zone=np.array(cols.zone, float), tool=np.array(cols.tool, np.int32),
+                               frame=np.array(cols.frame, np.int32), resolved=np.array(cols.resolved, bool), name=_object_array(cols.name),
+                               insert_at=insert_at, offset=offset)
         tp = self.builder.build(orientation=False)
         return replace(tp, position=position, orientation=orientation, joints=joints)
 
@@ -328,6 +336,18 @@ def _object_array(items: list) -> np.ndarray:
     out = np.empty(len(items), dtype=object)
     out[:] = items
     return out
+
+
+class _Rows:
+    """Per-row Python lists, turned into arrays once (a million targets take one pass)."""
+
+    def __init__(self, n: int):
+        self.kind, self.file, self.offset, self.name = [0] * n, [0] * n, [0] * n, [""] * n
+        self.frame, self.tool, self.speed, self.zone = [0] * n, [0] * n, [np.nan] * n, [np.nan] * n
+        self.insert, self.conf, self.resolved = [-1] * n, [(np.nan,) * 3] * n, [True] * n
+        self.approach: dict[int, tuple[float, ...]] = {}  # row -> appro()'s trsf
+        self.cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
+        self.bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
 
 
 KINDS = {"movej": (Kind.JOINT,), "movel": (Kind.LINEAR,), "movec": (Kind.CIRC_VIA, Kind.CIRC_END)}
