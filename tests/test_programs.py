@@ -14,7 +14,9 @@ from postproc.errors import EmitError, InputError, ParseError
 from postproc.programs import emit_texts, parse_program
 
 CORPUS = Path(__file__).parent / "corpus"
-HOME_MADE = [p for p in CORPUS.rglob("*") if p.is_file() and p.suffix != ".md" and p.relative_to(CORPUS).parts[0] not in ("real", "fivex")]  # real/: test_real_corpus.py; fivex/: test_fivex_*.py
+# The first three languages' corpus; real/: test_real_corpus.py, fivex/: test_fivex_*.py, and each later
+# language's folder (real programs, licences, refusals among them) its own test_<language>_corpus.py.
+HOME_MADE = [p for p in CORPUS.rglob("*") if p.is_file() and p.suffix != ".md" and p.relative_to(CORPUS).parts[0] in ("gcode", "krl", "rapid")]
 PROGRAMS = sorted(p for p in HOME_MADE if p.suffix.lower() != ".dat")
 runner = CliRunner()
 
@@ -219,7 +221,7 @@ def test_dialect_sniffing_and_override(tmp_path):
     odd.write_bytes(text)
     assert parse_program(odd).dialect == "gcode"
     with pytest.raises(InputError, match="--dialect"):
-        parse_program(odd, "fanuc")
+        parse_program(odd, "no-such")
     rapid = tmp_path / "program.txt"
     rapid.write_bytes((CORPUS / "rapid" / "circles.mod").read_bytes())
     assert parse_program(rapid).dialect == "rapid"
