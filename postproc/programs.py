@@ -26,6 +26,12 @@ def sniff(path: str | Path, data: bytes | None = None) -> str:
     return dialects.sniff(path, data).name
 
 
+def language_of(tp: Toolpath):
+    """The language ``tp`` was read in (its parser, writer and controller rules), for the
+    steps below the languages that are handed it (``postproc.subdivide``)."""
+    return dialects.of(tp)
+
+
 def parse_program(path: str | Path, dialect: str | None = None, data: bytes | None = None, modules=()) -> Toolpath:
     """Parse a program file (or ``data`` read from it, e.g. standard input) into a Toolpath;
     ``modules``: other modules' files (or folders of them) whose global data it uses (KRL)."""

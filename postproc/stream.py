@@ -59,7 +59,8 @@ from pathlib import Path
 import numpy as np
 
 from . import dialects
-from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report, compensate, reference_postures
+from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report, compensate, reference_postures, request_for
+from .compensation.request import CompensationRequest
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
@@ -653,20 +654,34 @@ class StreamResult:
     outputs: list[Path]
 
 
-def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
-                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, tune_malloc: bool = False,
-                        **options) -> StreamResult:
-    """Compensate the program at ``path`` into ``output`` chunk by chunk (module docstring).
+def stream_request(request: CompensationRequest, *, chunk_lines: int = CHUNK_LINES, progress=lambda msg: None,
+                   workers: int | None = None, tune_malloc: bool = False) -> StreamResult:
+    """Compensate ``request``'s one program into its output chunk by chunk (module docstring),
+    the program checked against the model first (``request.model_check()``).
     ``workers``: processes that compensate, emit and check chunks while this one reads the
     next (None: one per core up to WORKERS_MAX; 0: all in this process). Raises
     StreamFallback (nothing written) when the program cannot be streamed; a
     CompensationError (nothing written) whose ``failures`` list the targets that failed.
     ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
     CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
-    path, output = Path(path), Path(output)
-    options = dict(options)
-    model_check = options.pop("model_check", None)  # (model path, --robot, --allow-model-mismatch), as postproc.batch
-    lang, rules = stream_rules_for(path, dialect, model)
+    return _stream(request, request.model_check(), chunk_lines, progress, workers, tune_malloc)
+
+
+def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
+                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, tune_malloc: bool = False,
+                        **options) -> StreamResult:
+    """``stream_request`` in keyword form: ``options`` as ``compensate``'s, and ``model_check``
+    (model path, --robot, --allow-model-mismatch) to check the program against the model."""
+    model_check = options.pop("model_check", None)
+    request = request_for(model, programs=(str(path),), output=str(output), dialect=dialect, in_place=in_place, **options)
+    return _stream(request, model_check, chunk_lines, progress, workers, tune_malloc)
+
+
+def _stream(request: CompensationRequest, model_check: tuple | None, chunk_lines: int, progress, workers: int | None,
+            tune_malloc: bool) -> StreamResult:
+    path, output, model = Path(request.programs[0]), Path(request.output), request.machine.model
+    options = request.solver_options()
+    lang, rules = stream_rules_for(path, request.dialect, model)
     if tune_malloc:
         _keep_freed_memory()
     try:
@@ -677,7 +692,8 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     with fh:
         program, first = _open(path, lang, rules, fh)
         with _pool(workers, warm=(model, options, program, first)) as (pool, slots):
-            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots, model_check)
+            return _run(program, first, fh, model, options, progress, chunk_lines, output, request.in_place, pool, workers, slots,
+                        model_check)
 
 
 def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,

@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from .. import dialects
+from ..errors import InputError
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
 from ..files import write_all as write_bytes
@@ -99,6 +100,16 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     outputs = target.new_program_paths(Path(output))
     write_all(dict(zip(outputs, texts)), encoding="latin-1")
     return [f"{len(path.tip)} targets written to {', '.join(map(str, outputs))} (tool axis -> TCP z opposite; rotation about it from the base x axis)"]
+
+
+def compensate_five_request(request) -> list[str]:
+    """``compensate_five_program`` of a ``CompensationRequest`` whose machine is a five-axis
+    target (``postproc.targets.FiveAxisTarget``): one program, ``-o``, ``--grid``, ``--input-axes``."""
+    if len(request.programs) != 1 or request.output is None or request.output == "-":
+        raise InputError("five-axis compensation takes one program and -o OUT")
+    return compensate_five_program(Path(request.programs[0]), Path(request.machine.source), Path(request.output), request.grid,
+                                   request.input_axes, dialect=request.dialect, frames=dict(request.frames) or None,
+                                   tools=dict(request.tools) or None)
 
 
 def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
