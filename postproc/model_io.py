@@ -20,7 +20,7 @@ from .errormodel import ErrorModel
 from .errors import InputError, ModelFileError
 from .identify import FitResult
 from .measurements import write_text_atomic
-from .plugins import check_model_plugins, plugin_document
+from .plugin_records import check_model_plugins, plugin_document
 from .robots import load_robot
 
 FORMAT = "postproc-model"
