@@ -38,11 +38,11 @@ def __getattr__(name: str):
     # pull in compensation, the dialects and the program writers (about 1.5 s), which a
     # plain `import postproc` should not pay for.
     if name == "post":
-        from .cam.post import post
+        from .cam.post import post  # lazily: compensation, languages and writers load on first use
 
         return post
     if name == "suggest_poses":
-        from .suggest import suggest_poses
+        from .suggest import suggest_poses  # lazily: as post
 
         return suggest_poses
     raise AttributeError(f"module 'postproc' has no attribute {name!r}")

@@ -21,6 +21,7 @@ a sub-step is a segmented exclusive running minimum over the sub-steps that cove
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -169,7 +170,6 @@ def _engagement_at_targets(samples, target_sample, cutting, s_idx, dx, dy, befor
 
 def load_stock(path) -> trimesh.Trimesh:
     """A stock mesh from a file trimesh reads (STL, OBJ, PLY, ...), in the workpiece frame, mm."""
-    from pathlib import Path
 
     try:
         mesh = trimesh.load(str(path), force="mesh")

@@ -26,7 +26,8 @@ from enum import IntEnum
 
 import numpy as np
 
-from .frames import make_transform, quat_wxyz_to_matrix
+from .errors import InputError
+from .frames import make_transform, matrix_to_abc, quat_wxyz_to_matrix
 
 
 class Kind(IntEnum):
@@ -147,7 +148,6 @@ class Toolpath:
     def with_frames(self, frames: dict | None = None, tools: dict | None = None) -> "Toolpath":
         """A copy where frames and tools the program leaves undefined are given by name
         (base_T_frame, flange_T_tcp as 4x4); an unknown name is an error naming the known ones."""
-        from .errors import InputError
 
         new_frames, new_tools = self.frames.copy(), self.tools.copy()
         frame_known = np.ones(len(self.frames), bool) if self.frame_known is None else self.frame_known.copy()
@@ -197,7 +197,6 @@ class Toolpath:
 
     def with_orientations(self, orientation: np.ndarray) -> "Toolpath":
         """A copy with new target orientations (N, 4) quaternion w, x, y, z (emitted in the dialect's notation)."""
-        from .frames import matrix_to_abc
 
         orientation = np.asarray(orientation, dtype=float)
         values = self.values.copy()

@@ -181,6 +181,7 @@ def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool 
 
 def _refine(problem: PlacementProblem, start: np.ndarray, start_mm: float, axes, z_mm: float):
     """Bounded Nelder-Mead within one grid step of the start (and inside the search box)."""
+    # Deferred: scipy.optimize is slow to import and the command line imports placement at start-up.
     from scipy.optimize import minimize
 
     steps = np.array([np.diff(a).min() if len(a) > 1 else 0.0 for a in axes])

@@ -11,7 +11,10 @@ from pathlib import Path
 import numpy as np
 
 from . import dialects
+from .arcs import check_words
 from .emit.load_plan import carried_loads
+from .emit.readback import positions_read_back
+from .emit.splice import TOLERANCE
 from .emit.writer import drive
 from .errors import EmitError, OutputCheckError, OutputError
 from .files import write_all
@@ -80,8 +83,6 @@ def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: 
     Where only absolute position numbers changed, they are read back on their own instead
     (``emit.readback``: the same answer without the whole re-parse); anything else, or any
     doubt, takes the whole re-parse."""
-    from .emit.readback import positions_read_back
-    from .emit.splice import TOLERANCE
 
     tol = TOLERANCE[F_POS] * (1 + 1e-6)
     if positions_read_back(original, modified, texts, rows, tol):
@@ -98,7 +99,6 @@ def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: 
             f"{original.sources[int(original.file[i])].path}, line {original.line[i]}: the new text reads back as "
             f"{np.round(back.position[i], 4).tolist()}, not the compensated {np.round(modified.position[i], 4).tolist()}; nothing was written"
         )
-    from .arcs import check_words
 
     check_words(original, modified, back, rows)  # G2/G3 centre words as compensated
 

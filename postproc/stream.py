@@ -45,10 +45,12 @@ Both paths give byte-identical output on a program both can take
 
 from __future__ import annotations
 
+import ctypes
 import mmap
 import multiprocessing
 import os
 import pickle
+import sys
 from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -57,14 +59,24 @@ from itertools import chain
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from . import dialects
-from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report, compensate, reference_postures, request_for
+from .compensate import (
+    PATH_TOLERANCE_MM,
+    CompensationError,
+    Reference,
+    Report,
+    compensate,
+    reference_postures,
+    request_for,
+)
 from .compensation.request import CompensationRequest
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
 from .program_check import check_model_fits
+from .programs import check_texts, refuse_overwrite
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
 CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
@@ -391,7 +403,6 @@ class _Meta:
 def _finish(model, options: dict, task: _Task) -> tuple[bytes, Report, tuple, list[str] | None]:
     """Compensate, emit and re-parse check one chunk: (its own new text, the report, the notes,
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
-    from .programs import check_texts
 
     options = dict(options)
     if task.reference is None:
@@ -699,7 +710,6 @@ def _stream(request: CompensationRequest, model_check: tuple | None, chunk_lines
 def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,
          pool, workers: int, slots, model_check: tuple | None = None) -> StreamResult:
     """``compensate_streamed`` once the program is open and the workers (if any) started."""
-    from .programs import refuse_overwrite
 
     lang, rules = program.lang, program.rules
     job = _Job(program, model, options, progress, model_check)
@@ -735,7 +745,6 @@ def _keep_freed_memory() -> None:
     the peak stays that of the chunks in flight. A process-wide malloc setting (mallopt):
     made in each worker (our own processes) and, when asked, in the calling process; nothing
     where the C library has none."""
-    import ctypes
 
     try:
         mallopt = ctypes.CDLL(None).mallopt
@@ -760,14 +769,12 @@ def _worker_start(baton: _Baton, slots: "_Slots | None", warm: tuple | None = No
     one torch thread (a forked child whose parent already ran torch's thread pool, a learned
     predictor, hangs in its first parallel torch operation; the workers are the parallelism;
     torch is not imported for a model without one); the warm-up (``_warm_up``)."""
-    import sys
 
     global _WORKER_BATON, _WORKER_SLOTS
     _WORKER_BATON, _WORKER_SLOTS = baton, slots
     _keep_freed_memory()
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
-    from threadpoolctl import threadpool_limits
 
     threadpool_limits(1, user_api="blas")  # for this worker's life: a second BLAS thread only spins on the thin products here
     if warm is not None:

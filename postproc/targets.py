@@ -1,14 +1,12 @@
 """The two things a program is compensated for, behind ``compensation.machine.Machine``:
 a robot under the error model ``postproc fit`` wrote (``RobotTarget``), and a calibrated
-five-axis machine file (``FiveAxisTarget``). ``load_target`` tells them apart by the
-file's content: a JSON model document, or a TOML file with a ``[machine]`` table.
+five-axis machine file (``FiveAxisTarget``). ``postproc.target_file.load_target`` reads
+either from a file, by its content.
 """
 
 from __future__ import annotations
 
-import tomllib
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Mapping
 
 import numpy as np
@@ -16,13 +14,9 @@ import numpy as np
 from . import kinematics
 from .compensation.request import OPTION
 from .errormodel import ErrorModel
-from .errors import ModelFileError
 from .fivex import kinematics as five_kinematics
-from .fivex.compensate import actual_tip
 from .fivex.machine import Machine as FiveAxisMachine
-from .fivex.machine import load_machine
 from .ir import Toolpath
-from .model_io import FORMAT, load_model
 from .programs import emit_texts, parse_program
 
 # What a five-axis machine's compensation uses; the rest of the request is the robot's.
@@ -83,7 +77,7 @@ class FiveAxisTarget(_ProgramsByDialect):
         return five_kinematics.ik(self.nominal, poses[:, :3, 3], poses[:, :3, 2]).axes
 
     def predict(self, commands: np.ndarray) -> np.ndarray:
-        return actual_tip(self.machine, None, np.asarray(commands, dtype=float))
+        return five_kinematics.fk(self.machine, np.asarray(commands, dtype=float))[0]  # the calibrated axes (no grid)
 
 
 def _poses(tip: np.ndarray, axis: np.ndarray) -> np.ndarray:
@@ -91,29 +85,3 @@ def _poses(tip: np.ndarray, axis: np.ndarray) -> np.ndarray:
     out = np.zeros((len(tip), 4, 4))
     out[:, :3, 3], out[:, :3, 2], out[:, 3, 3] = tip, axis, 1.0
     return out
-
-
-def load_target(path: str | Path) -> RobotTarget | FiveAxisTarget:
-    """The robot model or the five-axis machine the file at ``path`` holds, by its content."""
-    path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise ModelFileError(f"{path}: cannot read model file ({exc.strerror})") from None
-    except UnicodeDecodeError as exc:
-        raise ModelFileError(f"{path}: not a model file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
-    if text.lstrip().startswith("{"):  # a JSON document: load_model names what is wrong with it
-        return RobotTarget(load_model(path)[0], str(path))
-    if _is_machine_toml(text) or path.suffix.lower() == ".toml":  # a broken .toml: load_machine names the key
-        machine = load_machine(path)
-        return FiveAxisTarget(machine, load_machine(machine.name), str(path))
-    raise ModelFileError(f"{path}: neither a model file from 'postproc fit' (JSON, format '{FORMAT}') "
-                         "nor a five-axis machine file (TOML with a [machine] table)")
-
-
-def _is_machine_toml(text: str) -> bool:
-    try:
-        return isinstance(tomllib.loads(text).get("machine"), dict)
-    except tomllib.TOMLDecodeError:
-        return False
-

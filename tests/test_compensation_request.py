@@ -25,7 +25,8 @@ from postproc.errors import InputError, ModelFileError
 from postproc.model_io import save_model
 from postproc.programs import parse_program
 from postproc.stream import compensate_streamed, stream_request
-from postproc.targets import FiveAxisTarget, RobotTarget, load_target
+from postproc.target_file import load_target
+from postproc.targets import FiveAxisTarget, RobotTarget
 
 runner = CliRunner()
 HERE = Path(__file__).parent

@@ -22,11 +22,20 @@ from ..measurements import write_text_atomic
 from ..plugin_option import with_plugins
 from ..program_check import check_model_fits
 from ..program_content import require_program
-from ..programs import check_texts, emit_texts, files_for, language_of, parse_program, refuse_overwrite, refuse_stdout, write_set
+from ..programs import (
+    check_texts,
+    emit_texts,
+    files_for,
+    language_of,
+    parse_program,
+    refuse_overwrite,
+    refuse_stdout,
+    write_set,
+)
 from ..progress import ProgressLine
 from ..stream import StreamFallback, stream_request, wants_stream
 from ..subdivide import subdivide_request
-from ..targets import FiveAxisTarget, load_target
+from ..targets import FiveAxisTarget
 from .app import app, err, handles_errors, out
 from .common import check_output_folder, floats, named_frames
 
@@ -66,6 +75,9 @@ def compensate_cmd(
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
+    # Deferred import: reading a model loads scipy.optimize (slow to import); `postproc --version` must stay fast.
+    from ..target_file import load_target
+
     request = CompensationRequest(
         load_target(model), programs=tuple(programs), output=output, out_dir=out_dir, jobs=jobs, scheduler=scheduler,
         dialect=dialect, data=tuple(data or ()), in_place=in_place, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp,

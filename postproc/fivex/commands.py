@@ -4,13 +4,20 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from .. import dialects
-from ..errors import InputError
+from ..errors import InputError, JobError
+from ..files import write_all as write_bytes
+from ..programs import emit_texts, parse_program, write_program
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
-from ..files import write_all as write_bytes
+from .emit import MODES, emit
+from .kinematics import fk
 from .machine import load_machine, machine_toml
+from .offsets import to_machine
 from .probes import read_probes
+from .program import ROTARY_FIELD, from_toolpath, to_robot_toolpath
 
 
 def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, axis: str | None = None, method: str = "seed003",
@@ -68,11 +75,6 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
                  tools: dict | None = None) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
-    from ..programs import write_program
-    from ..errors import InputError
-    from ..programs import parse_program
-    from .emit import MODES, emit
-    from .program import from_toolpath, to_robot_toolpath
 
     machine = load_machine(machine_name)
     if input_axes not in (None, "tip", "machine"):
@@ -117,15 +119,11 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
                             tools: dict | None = None) -> list[str]:
     """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
     for the real machine; the written text is read back and checked before it is kept."""
-    import numpy as np
-
-    from ..errors import JobError
-    from ..programs import emit_texts, parse_program
+    # Deferred import: the error grid loads scipy.interpolate (slow to import); the CLI imports this module at start.
     from .compensate import actual_tip, compensate_five, controller_axes
     from .errormap import load_grid
-    from .kinematics import fk
-    from .offsets import to_machine
-    from .program import ROTARY_FIELD
+
+
 
     true = load_machine(machine_file)
     controller = load_machine(controller_name or true.name)

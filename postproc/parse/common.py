@@ -6,8 +6,10 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
 from ..errors import ParseError
+from ..frames import abc_to_quat_wxyz
 from ..ir import FIELDS, NF, Kind, SourceDoc, Toolpath
 from . import scan_kernel
 
@@ -53,7 +55,6 @@ def parse_statement(parser, text: str, lines: "LineIndex", path: str, start: int
 
     ``start`` is the statement's offset in the file, so lark's position inside the
     statement becomes the file's line and column."""
-    from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
     try:
         return parser.parse(text)
@@ -198,7 +199,6 @@ class Builder:
 
     def _orientations(self, values: np.ndarray) -> np.ndarray:
         """(N, 4) unit quaternions from the orientation numbers in the dialect's notation (NaN where none)."""
-        from ..frames import abc_to_quat_wxyz
 
         if self.orientation_kind == "quat":
             orientation = values[:, 3:7].copy()
