@@ -22,6 +22,22 @@ import time
 from pathlib import Path
 
 
+def make_fanuc(folder: Path, n: int) -> Path:
+    """A Fanuc TP listing of about ``n`` lines: L motions in /MN, their positions in /POS (7 lines a target)."""
+    path = folder / "big.ls"
+    count = max((n - 8) // 7, 1)
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("/PROG  BIG\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n")
+        fh.writelines(f"{i + 1:4d}:L P[{i + 1}] 100mm/sec CNT50    ;\n" for i in range(count))
+        fh.write("/POS\n")
+        for i in range(count):
+            fh.write(f"P[{i + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                     f"\tX = {800 + (i % 400) * 0.5:9.3f}  mm,\tY = {-200 + (i // 400) % 400:9.3f}  mm,\tZ = {300 + (i % 7) * 0.125:9.3f}  mm,\n"
+                     "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\n")
+        fh.write("/END\n")
+    return path
+
+
 def make_programs(folder: Path, n: int) -> dict[str, Path]:
     out = {}
     rapid = folder / "big.mod"
@@ -66,7 +82,23 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["fanuc"] = make_fanuc(folder, n)
+    out["sinumerik"] = make_sinumerik(folder, n)
     return out
+
+
+def make_sinumerik(folder: Path, n: int) -> Path:
+    """A SINUMERIK 840D five-axis CAM program: a header with a settable frame, R parameters and
+    programmable frames (the reader's slow path), then numbered TRAORI blocks."""
+    path = folder / "BIG.MPF"
+    header = ["; postproc benchmark", "N10 G54 G17 G71 G90 G94", "N20 R1=12.5 R2=-7", "N30 TRANS X=R1 Y=R2", "N40 AROT Z30", "N50 TRAORI",
+              "N60 G0 X0 Y0 Z50 A0 C0", "N70 G1 F1500"]
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("\n".join(header) + "\n")
+        for i in range(n - len(header) - 2):
+            fh.write(f"N{80 + i} X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f} A{(i % 90) * 0.25:.3f} C{(i % 360) * 0.5:.3f}\n")
+        fh.write("TRAFOOF\nM30\n")
+    return path
 
 
 def measure(path: str) -> None:

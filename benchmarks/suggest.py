@@ -83,8 +83,13 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False) -> dict:
+def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False,
+              noise_draws: int = 1) -> dict:
     """Per N: validation and true errors (whole workspace) or true errors at the targets (region).
+    ``noise_draws``: the candidates measured that many times (independent noise); the suggested
+    design's error is the mean of its fits on each (the expected error, as random's curve is a
+    mean over draws: one noise realisation scatters a curve by about +-10 % of N), random draw d
+    uses measurement d modulo that count.
     ``theory`` (region): also the noise-only prediction of random designs (THEORY_DRAWS per N, on
     a grid to 4 x the largest N) and the lower bound on N x variance no design from the candidates beats."""
     robot = postproc.load_robot("kr160_r1570")
@@ -100,6 +105,8 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
         q_cand = np.round(sample_poses(robot, tool, 1500, Cylinder(), rng), JOINT_DECIMALS)
         cands = Candidates(q_deg=q_cand, ids=tuple(f"s{i + 1}" for i in range(len(q_cand))), source="<benchmark>")
         measured = simulate(truth, q_cand, rng, noise_mm=NOISE)
+        noise_rng = np.random.default_rng(500 + s)  # its own stream: the other draws stay those of a run with one
+        measurements = [measured] + [simulate(truth, q_cand, noise_rng, noise_mm=NOISE) for _ in range(noise_draws - 1)]
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
         val = simulate(truth, q_eval, rng, noise_mm=NOISE)
         true_eval = truth.predict_prepared(truth.prepare(q_deg=q_eval))
@@ -110,11 +117,12 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
             suggestion = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
             pick = suggestion.chosen
             out["theory_suggested"][s, k] = suggestion.expected_rms_mm
-            pred = fitted_at(robot, tool, measured.subset(pick), q_eval)
-            out["suggested"][s, k], out["suggested_val"][s, k] = rms(pred - true_eval), rms(pred - val.measured_mm)
+            preds = [fitted_at(robot, tool, m.subset(pick), q_eval) for m in measurements]
+            out["suggested"][s, k] = np.mean([rms(p - true_eval) for p in preds])
+            out["suggested_val"][s, k] = np.mean([rms(p - val.measured_mm) for p in preds])
             for d in range(draws):
                 rand = rng.choice(len(q_cand), n, replace=False)
-                pred = fitted_at(robot, tool, measured.subset(rand), q_eval)
+                pred = fitted_at(robot, tool, measurements[d % noise_draws].subset(rand), q_eval)
                 out["random"][s, k, d], out["random_val"][s, k, d] = rms(pred - true_eval), rms(pred - val.measured_mm)
             say(f"{'region' if region else 'workspace'} (random share {share:g}) seed {s + 1}/{seeds} N {n}: true error suggested "
                 f"{out['suggested'][s, k]:.4f} random {np.mean(out['random'][s, k][:draws]) if draws else float('nan'):.4f} mm "
@@ -277,6 +285,8 @@ def main():
     parser.add_argument("--ur10-seeds", type=int, default=2)
     parser.add_argument("--figure", type=Path, default=Path("docs/suggest-poses.png"))
     parser.add_argument("--output", type=Path, default=Path("benchmarks/results/suggest.txt"))
+    parser.add_argument("--noise-draws", type=int, default=1, help="Measure the candidates this many times (independent noise) and score the "
+                        "suggested design by the mean of its fits (its expected error; random's curve is already a mean over draws).")
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
     parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
     parser.add_argument("--figure-only", action="store_true", help="Only redraw the figure from the raw arrays of the last full run (--output's .npz).")
@@ -306,10 +316,11 @@ def main():
     if not args.pass_only:
         runs["whole"] = simulated(args.seeds, None)
     for name, box in (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE)):
-        runs[name] = simulated(args.seeds, box, theory=True)
-        runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0)  # the same truths and candidates; random designs as above
+        runs[name] = simulated(args.seeds, box, theory=True, noise_draws=args.noise_draws)
+        runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)  # the same truths and candidates; random designs as above
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds)
-    lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
+    lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
+             + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
              + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
              f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2, greedy + exchange; "

@@ -5,10 +5,10 @@ asks (its robot model, solver options, frames, tools and process forces).
 ``compensate(tp, model, **options)`` is the older keyword form: it builds the request.
 
 The core imports no language: it asks the controller object it is given for the rules it
-needs (a ``Dialect``: ``conf_applies``, ``branch_from_conf``, ``inexact_interpolation``,
-``arc_ends_at_target``). This module, on the floor of the programs, gives it the rules of
-the language the toolpath was read in (``Toolpath.dialect``) where the caller names no
-controller.
+needs (a ``postproc.controller.Controller``: ``conf_applies``, ``branch_from_conf``,
+``inexact_interpolation``, ``arc_ends_at_target``). This module, on the floor of the programs,
+gives it the controller of the language the toolpath was read in (``Dialect.controller`` of
+``Toolpath.dialect``) where the caller names none.
 """
 
 from __future__ import annotations
@@ -81,7 +81,7 @@ def compensate_with(request: CompensationRequest, tp: Toolpath, *, controller=No
     language ``tp`` was read in). ``forces``: ``process_forces(request, tp)`` where the caller
     has it already; ``run``: ``progress``, ``reference``, ``detail`` (``core.compensate``)."""
     forces = process_forces(request, tp) if forces is None else forces
-    return core.compensate(tp, _error_model(request), controller=dialects.of(tp) if controller is None else controller,
+    return core.compensate(tp, _error_model(request), controller=dialects.of(tp).controller if controller is None else controller,
                            force_per_target=forces.per_target, **request.solver_options(), **run)
 
 
@@ -91,9 +91,14 @@ def compensate(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -
     return compensate_with(request_for(model, **options), tp, controller=controller, **run)
 
 
+def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> tuple:
+    """``core.predicted_positions`` by ``controller``'s rules, by default those of ``tp``'s language."""
+    return core.predicted_positions(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+
+
 def reference_postures(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> Reference:
     """``core.reference_postures`` by ``controller``'s rules, by default those of ``tp``'s language."""
-    return core.reference_postures(tp, model, controller=dialects.of(tp) if controller is None else controller, **options)
+    return core.reference_postures(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
 
 
 def _error_model(request: CompensationRequest) -> ErrorModel:

@@ -26,8 +26,9 @@ from enum import IntEnum
 
 import numpy as np
 
+from . import rotation_forms
 from .errors import InputError
-from .frames import make_transform, matrix_to_abc, quat_wxyz_to_matrix
+from .frames import make_transform, quat_wxyz_to_matrix
 
 
 class Kind(IntEnum):
@@ -74,7 +75,7 @@ class Toolpath:
     file: np.ndarray
     position: np.ndarray
     orientation: np.ndarray
-    orientation_kind: str  # "quat" (RAPID), "abc" (KRL, degrees in o1..o3), "axis" (G-code tool axis i, j, k) or "none"
+    orientation_kind: str  # the notation of the orientation numbers: a name in postproc.rotation_forms.FORMS ("quat" RAPID, "abc" KRL, "axis" G-code tool axis, "none", ...)
     joints: np.ndarray
     ext: np.ndarray
     conf: np.ndarray
@@ -120,6 +121,11 @@ class Toolpath:
     # (position as programmed, not resolved). None when the program has no G41/G42.
     ccomp: np.ndarray | None = field(repr=False, default=None)
 
+    # What only some languages state, per target: {"<dialect>.<what>": (N, ...) array}, e.g. a
+    # Fanuc CNT value or a UR blend radius. A new language keeps its own here instead of adding
+    # a field to the core; ``take`` slices them with the rest.
+    extras: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
                   "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp")
 
@@ -129,7 +135,8 @@ class Toolpath:
         if rows.dtype == bool:
             rows = np.nonzero(rows)[0]
         picked = {k: getattr(self, k)[rows] for k in self.PER_TARGET if getattr(self, k) is not None}
-        return replace(self, **picked, target_name=tuple(self.target_name[i] for i in rows.tolist()))
+        extras = {name: column[rows] for name, column in self.extras.items()}
+        return replace(self, **picked, extras=extras, target_name=tuple(self.target_name[i] for i in rows.tolist()))
 
     def __len__(self) -> int:
         return self.kind.shape[0]
@@ -197,17 +204,12 @@ class Toolpath:
 
     def with_orientations(self, orientation: np.ndarray) -> "Toolpath":
         """A copy with new target orientations (N, 4) quaternion w, x, y, z (emitted in the dialect's notation)."""
-
         orientation = np.asarray(orientation, dtype=float)
+        notation = rotation_forms.form(self.orientation_kind)
         values = self.values.copy()
-        if self.orientation_kind == "quat":
-            values[:, F_ORI] = np.where(np.isnan(self.values[:, F_ORI]), np.nan, orientation)
-        elif self.orientation_kind == "axis":
-            axis = quat_wxyz_to_matrix(orientation)[:, :, 2]
-            values[:, 3:6] = np.where(np.isnan(self.values[:, 3:6]), np.nan, axis)
-        elif self.orientation_kind == "abc":
-            abc = matrix_to_abc(quat_wxyz_to_matrix(orientation))
-            values[:, 3:6] = np.where(np.isnan(self.values[:, 3:6]), np.nan, abc)
+        ori = slice(3, 3 + notation.width)
+        if notation.width:
+            values[:, ori] = np.where(np.isnan(self.values[:, ori]), np.nan, notation.numbers(orientation))
         return replace(self, orientation=orientation, values=values)
 
     def with_joints(self, joints: np.ndarray) -> "Toolpath":

@@ -38,10 +38,10 @@ def problem_from_program(tp: Toolpath, robot: RobotModel, *, force_tool=None, pa
     eng = None if engagement is None else np.asarray(engagement, dtype=float)[rows]
     force, normal = forces_along(local, cutting, params=params, force_tool=force_tool, engagement=eng)
     weights = comp.step_weights(local[:, :3, 3], cutting)
-    applies = dialects.of(tp).conf_applies(tp)[rows]
+    applies = dialects.of(tp).controller.conf_applies(tp)[rows]
     return PlacementProblem(
         robot=robot, local_tcp=local, flange_T_tcp=tp.tools[tp.tool[rows]], force_local=force, normal_local=normal,
-        weights=weights, conf=tp.conf[rows], controller=dialects.of(tp), conf_applies=applies,
+        weights=weights, conf=tp.conf[rows], language=dialects.of(tp), conf_applies=applies,
         compliance=comp.joint_compliance(robot, model),
         line=tp.line[rows], arm=_arm_configuration(tp, rows, applies), singular_deg=singular_deg, conf_mode=conf_mode,
     )
@@ -114,7 +114,7 @@ def placed_conf(problem: PlacementProblem, frame: np.ndarray) -> np.ndarray:
     conf = np.full((len(q), 4), np.nan)
     has = problem.conf_applies & (reason == 0)
     if has.any():
-        conf[has] = problem.controller.conf_of_joints(problem.robot, q[has])
+        conf[has] = problem.language.conf_of_joints(problem.robot, q[has])
     return conf
 
 

@@ -40,7 +40,7 @@ class PlacementProblem:
     normal_local: np.ndarray  # (P, 3) surface normal, workpiece frame
     weights: np.ndarray  # (P,) eq. 2 step weights (0 off the cut)
     conf: np.ndarray  # (P, 4) the program's configuration data, NaN where none
-    controller: object  # the rules of the controller that runs the program (branch_from_conf, conf_of_joints, arm_conf_column)
+    language: object  # the program's language: its controller's rules (controller.branch_from_conf) and its configuration-data notation (conf_of_joints, arm_conf_column)
     conf_applies: np.ndarray  # (P,) True where the controller takes the configuration data (the dialect's rule)
     compliance: np.ndarray  # (6,) joint compliance, rad/(N*m)
     line: np.ndarray  # (P,) program lines

@@ -74,7 +74,7 @@ def _maker(tp: Toolpath, robot, model_path: str) -> list[str]:
     """A KRL program is for a KUKA robot, a RAPID program for an ABB one: a model of another
     maker's robot is for another robot. Robot files whose description names no known maker
     are not judged."""
-    want = dialects.of(tp).controller_maker
+    want = dialects.of(tp).controller.maker
     words = robot.description.split()
     maker = words[0] if words and words[0] in _MAKERS else None
     if want is None or maker is None or maker == want:
@@ -107,7 +107,7 @@ def _payload(tp: Toolpath, model, model_path: str) -> list[str]:
         return []  # the prediction does not change with the load: nothing to compare
     stated = [e.stated_payload_kg for e in model.effects if e.stated_payload_kg is not None]
     out = []
-    for mass, where in dialects.of(tp).payloads(tp):
+    for mass, where in dialects.of(tp).controller.payloads(tp):
         if not stated:
             out.append(f"{where}: the program's payload is {mass:g} kg; the model {model_path} has {', '.join(gravity)} "
                        "(its prediction depends on the load) but does not state the payload it was fitted at: "

@@ -6,6 +6,7 @@ module only strings the steps together.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -129,5 +130,7 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
         raise EmitError(f"--arc-tol must be > 0 mm, got {arc_tol_mm}")
     source = dialects.of(tp)  # emit imports no language: the input's rules are given to it here
     # the program's own load, or --tool-load's; helices as straight moves within arc_tol_mm
-    loads = carried_loads(tp, tool_load, source.stated_loads(tp))
+    loads = carried_loads(tp, tool_load, source.controller.stated_loads(tp))
+    if source is not lang:  # one controller's configuration data mean nothing to another's (ABB cfx is no Fanuc CONFIG): not carried
+        tp = replace(tp, conf=np.full_like(tp.conf, np.nan))
     return drive(writer, tp, name, loads=loads, arc_tol_mm=arc_tol_mm, source=source)

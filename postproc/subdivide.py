@@ -26,13 +26,20 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import arcs
+from . import arcs, rotation_forms
 from . import kinematics as kin
-from .compensate import RUN_OPTIONS, ProcessForces, Report, compensate, process_forces, request_for
+from .compensate import (
+    RUN_OPTIONS,
+    ProcessForces,
+    Report,
+    compensate,
+    process_forces,
+    request_for,
+)
 from .compensation.request import CompensationRequest
 from .emit.insert import NewPoint
 from .errors import EmitError, OutputCheckError
-from .frames import abc_to_quat_wxyz, invert_transform, make_transform, matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
+from .frames import invert_transform, make_transform
 from .ir import F_ARC, F_EXT, Kind, Toolpath
 from .posture import interpolate_poses
 from .programs import language_of
@@ -78,7 +85,7 @@ def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOL
 def _subdivided(tp: Toolpath, model, tolerance_mm: float, lang, options: dict) -> Subdivided:
     added_rows: list[int] = []
     for round_ in range(MAX_ROUNDS + 1):
-        new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, controller=lang, **options)
+        new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, controller=lang.controller, **options)
         over, arcs_over = _segments_over(tp, report, tolerance_mm), _arcs_over(tp, report, tolerance_mm)
         others = report.failed & ~np.isin(np.arange(len(tp)), np.r_[over, arcs_over])
         if not (len(over) or len(arcs_over)) or others.any() or round_ == MAX_ROUNDS:
@@ -248,20 +255,10 @@ def _require_inherited(tp: Toolpath, r: int, local: np.ndarray, orientation: boo
 def _orientation_values(tp: Toolpath, r: int, rot: np.ndarray, like: np.ndarray) -> np.ndarray:
     """Orientation numbers (K, 4) in the program's notation, each close to the end target's."""
     out = like.copy()
-    end = tp.values[r, 3:7]
-    if tp.orientation_kind == "quat":
-        q = matrix_to_quat_wxyz(rot)
-        q *= np.where(np.einsum("ij,j->i", q, np.nan_to_num(end)) < 0, -1.0, 1.0)[:, None]
-        out[:, :4] = q
-    elif tp.orientation_kind == "abc":
-        abc = matrix_to_abc(rot)
-        other = np.column_stack([abc[:, 0] + 180.0, 180.0 - abc[:, 1], abc[:, 2] + 180.0])  # the same rotation
-        ref = np.nan_to_num(end[:3])
-        cands = [ref + (c - ref + 180.0) % 360.0 - 180.0 for c in (abc, other)]
-        pick = np.abs(cands[1] - ref).sum(axis=1) < np.abs(cands[0] - ref).sum(axis=1)
-        out[:, :3] = np.where(pick[:, None], cands[1], cands[0])
-    elif tp.orientation_kind == "axis":
-        out[:, :3] = rot[:, :, 2]
+    notation = rotation_forms.form(tp.orientation_kind)
+    if notation.width:
+        near = np.repeat(tp.values[r, 3:3 + notation.width][None], len(rot), axis=0)
+        out[:, :notation.width] = notation.numbers_from_matrix(rot, near)
     return np.where(np.isnan(like), np.nan, out)
 
 
@@ -274,7 +271,7 @@ def _conf(lang, robot, tp: Toolpath, r: int, poses: np.ndarray) -> np.ndarray:
         return conf
     inv_tool = np.linalg.inv(tp.tools[tp.tool[r]])
     end_flange = (tp.base_poses()[r] @ inv_tool)[None]
-    q_end, branch = lang.branch_from_conf(robot, kin.ik(robot, end_flange), tp.conf[r][None])
+    q_end, branch = lang.controller.branch_from_conf(robot, kin.ik(robot, end_flange), tp.conf[r][None])
     if branch[0] < 0:
         return conf
     q, b = kin.select_branch(robot, kin.ik(robot, poses @ inv_tool), np.repeat(branch, k), np.repeat(q_end, k, axis=0))
@@ -355,10 +352,10 @@ def _check_split_arcs(placed: Toolpath, longer_placed: Toolpath, points: list[Ne
 
 def _pose_from_values(placed: Toolpath, p: NewPoint) -> np.ndarray:
     v = p.values  # as the parser reads the numbers (postproc.parse.common)
-    if placed.orientation_kind == "quat" and not np.isnan(v[3:7]).any():
-        rot = quat_wxyz_to_matrix(v[None, 3:7])[0]
-    elif placed.orientation_kind == "abc" and not np.isnan(v[3:6]).any():
-        rot = quat_wxyz_to_matrix(abc_to_quat_wxyz(v[None, 3:6]))[0]
+    notation = rotation_forms.form(placed.orientation_kind)
+    numbers = v[3:3 + notation.width]
+    if notation.to_matrix is not None and not np.isnan(numbers).any():
+        rot = notation.to_matrix(numbers[None])[0]
     else:
         rot = placed.target_poses()[p.row][:3, :3]
     position = np.where(np.isnan(v[0:3]), placed.position[p.row], v[0:3])  # left out: kept from before

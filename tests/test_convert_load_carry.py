@@ -89,7 +89,7 @@ def test_krl_loads_to_rapid_one_tooldata_per_load(tmp_path):
     assert moves[0].endswith(f", {tool}\\WObj:=X_1000__Y_0__Z_500__A_0__B_0__C_0;") and f"{tool}_2\\WObj" in moves[1]
     assert "placeholder" not in out.read_text()
     tp = parse_program(out)
-    assert [m for m, _ in dialects.of(tp).payloads(tp)] == [12.5, 4.0]
+    assert [m for m, _ in dialects.of(tp).controller.payloads(tp)] == [12.5, 4.0]
 
 
 def test_krl_to_krl_keeps_each_load_where_it_applies(tmp_path):

@@ -45,7 +45,7 @@ def _convert(tmp_path, to, *extra, text=GCODE, name="part.ngc"):
 
 def _payloads(path):
     tp = parse_program(path)
-    return [mass for mass, _ in dialects.of(tp).payloads(tp)]
+    return [mass for mass, _ in dialects.of(tp).controller.payloads(tp)]
 
 
 def test_rapid_tooldata_carries_the_given_load_and_no_placeholder(tmp_path):

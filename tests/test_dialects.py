@@ -41,8 +41,8 @@ def test_a_krl_program_spans_its_dat_and_the_robots_config_dat(tmp_path):
 
 
 def test_unknown_dialect_names_list_the_known_ones():
-    with pytest.raises(InputError, match="--to: 'fanuc' is not one of rapid, krl, gcode"):
-        dialects.get("fanuc", "--to")
+    with pytest.raises(InputError, match="--to: 'no-such' is not one of rapid, krl, .*gcode"):  # every registered name, in sniffing order
+        dialects.get("no-such", "--to")
 
 
 @pytest.fixture(scope="module")
@@ -65,20 +65,20 @@ def _conf_as_written(name, robot, q):
 @pytest.mark.parametrize("name", ["krl", "rapid"])
 def test_configuration_data_pick_the_programs_branch(name, kr160_solutions):
     robot, q, sols = kr160_solutions
-    got, branch = dialects.get(name).branch_from_conf(robot, sols, _conf_as_written(name, robot, q))
+    got, branch = dialects.get(name).controller.branch_from_conf(robot, sols, _conf_as_written(name, robot, q))
     np.testing.assert_allclose(got, q, atol=1e-6)
     assert (branch >= 0).all()
     # Another branch's data give another posture: the data decide, not the nearest solution.
     flipped_q = sols[np.arange(2), (branch + 1) % 8]
     usable = ~np.isnan(flipped_q).any(axis=1)
-    flipped, _ = dialects.get(name).branch_from_conf(robot, sols[usable], _conf_as_written(name, robot, flipped_q[usable]))
+    flipped, _ = dialects.get(name).controller.branch_from_conf(robot, sols[usable], _conf_as_written(name, robot, flipped_q[usable]))
     assert not np.allclose(flipped, q[usable], atol=1e-3)
 
 
 def test_without_configuration_data_no_branch_is_chosen(kr160_solutions):
     robot, _, sols = kr160_solutions
     for name in dialects.names():
-        q, branch = dialects.get(name).branch_from_conf(robot, sols, np.full((2, 4), np.nan))
+        q, branch = dialects.get(name).controller.branch_from_conf(robot, sols, np.full((2, 4), np.nan))
         assert np.isnan(q).all() and (branch == -1).all(), name
 
 
@@ -90,3 +90,12 @@ def test_a_rapid_program_file_names_its_missing_or_malformed_parts(tmp_path):
     pgf.write_text("<Program>\n  <Module>Main.mod</Module>\n")
     with pytest.raises(InputError, match=r"cell.pgf:3:1: not a RAPID program file"):
         dialects.get("rapid").parse(pgf)
+
+
+
+def test_each_language_names_the_controller_that_runs_it():
+    from postproc.controller import Controller
+
+    makers = {name: dialects.get(name).controller.maker for name in ("rapid", "krl", "gcode")}
+    assert makers == {"rapid": "ABB", "krl": "KUKA", "gcode": None}
+    assert all(isinstance(dialects.get(name).controller, Controller) for name in dialects.names())

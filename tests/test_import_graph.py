@@ -151,7 +151,7 @@ def test_no_import_circle():
 BELOW_LANGUAGES = ("postproc.compensation", "postproc.emit", "postproc.parse", "postproc.kinematics", "postproc.posture",
                    "postproc.errormodel", "postproc.effects", "postproc.fast_model", "postproc.identify", "postproc.diagnose",
                    "postproc.sim", "postproc.learn", "postproc.robots", "postproc.dh", "postproc.ir", "postproc.arcs",
-                   "postproc.segments", "postproc.frames", "postproc.errors")
+                   "postproc.segments", "postproc.frames", "postproc.errors", "postproc.controller", "postproc.rotation_forms")
 
 
 def _reached(graph: dict[str, dict[str, str]], start: str) -> dict[str, list[str]]:

@@ -130,7 +130,37 @@ def test_krl_lin_ignores_status_and_turn_ptp_follows_them(tmp_path):
     src.write_text("DEF p( )\nPTP {X 1000, Y 0, Z 1200, A 0, B 90, C 0, S 2, T 10}\nLIN {X 1000, Y 50, Z 1200, A 0, B 90, C 0, S 6, T 2}\n"
                    "PTP {X 1000, Y 80, Z 1200, A 0, B 90, C 0}\nEND\n")
     tp = parse_program(src)
-    assert dialects.of(tp).conf_applies(tp).tolist() == [True, False, False]
+    assert dialects.of(tp).controller.conf_applies(tp).tolist() == [True, False, False]
+
+
+def test_compensation_asks_the_controller_it_is_given(robot, tmp_path):
+    """The KRC takes the PTP's Status/Turn; a user's controller that takes no configuration data
+    leaves the robot in the posture it starts from (the same program, another posture)."""
+    from postproc.compensate import reference_postures
+    from postproc.controller import Controller
+    from postproc.effects import EffectSum
+    from postproc.errormodel import ErrorModel
+
+    class KeepsThePosture(Controller):
+        def conf_applies(self, tp):
+            return np.zeros(len(tp.kind), dtype=bool)
+
+    from postproc.frames import matrix_to_abc
+
+    start = np.array([0.0, -90.0, 90.0, 0.0, 30.0, 0.0])
+    flipped = start * np.array([1, 1, 1, 1, -1, 1]) + np.array([0, 0, 0, 180, 0, 180])  # the same pose, the wrist flipped
+    pose = kin.fk(robot, flipped[None])[0]
+    status, turn = kin.kuka_status_turn(robot, flipped[None])
+    x, y, z = pose[:3, 3]
+    a, b, c = matrix_to_abc(pose[None, :3, :3])[0]
+    src = tmp_path / "p.src"
+    src.write_text(f"DEF p( )\nPTP {{X {x:.4f}, Y {y:.4f}, Z {z:.4f}, A {a:.4f}, B {b:.4f}, C {c:.4f}, S {int(status[0])}, T {int(turn[0])}}}\nEND\n")
+    tp = parse_program(src)
+    model = ErrorModel.create(robot, np.zeros(3), EffectSum())
+    by_status = reference_postures(tp, model, start_joints=start)
+    kept = reference_postures(tp, model, start_joints=start, controller=KeepsThePosture())
+    assert np.allclose(by_status.q[0], flipped, atol=1e-3)  # Status and Turn name the flipped wrist
+    assert np.allclose(kept.q[0], start, atol=1e-3)  # the user's controller stays where it is
 
 
 def test_rapid_confl_off_lets_the_robot_choose(tmp_path):
@@ -143,7 +173,7 @@ def test_rapid_confl_off_lets_the_robot_choose(tmp_path):
                    f"    MoveJ {target}, v100, z1, tool0;\n    ConfJ \\Off;\n    MoveJ {target}, v100, z1, tool0;\n"
                    f"    ConfL\\On;\n    MoveL {target}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
     tp = parse_program(mod)
-    assert dialects.of(tp).conf_applies(tp).tolist() == [True, False, True, False, True]
+    assert dialects.of(tp).controller.conf_applies(tp).tolist() == [True, False, True, False, True]
 
 
 def test_a_straight_move_through_the_wrist_singularity_is_refused(robot, truth_and_model, tmp_path):

@@ -17,7 +17,7 @@ def _applies(tmp_path, text, name="p.mod"):
     path = tmp_path / name
     path.write_text(text)
     tp = parse_program(path)
-    return dialects.of(tp).conf_applies(tp).tolist(), tp
+    return dialects.of(tp).controller.conf_applies(tp).tolist(), tp
 
 
 def test_a_routine_written_after_confl_off_but_called_before_it_runs_with_confl_on(tmp_path):
@@ -43,7 +43,7 @@ def test_calls_across_modules_of_a_program_file(tmp_path):
     (tmp_path / "Work.mod").write_text(f"MODULE Work\n  PROC Work()\n    MoveJ {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
     (tmp_path / "cell.pgf").write_text('<?xml version="1.0" encoding="ISO-8859-1" ?>\n<Program>\n  <Module>Main.mod</Module>\n  <Module>Work.mod</Module>\n</Program>\n')
     tp = parse_program(tmp_path / "cell.pgf")
-    assert dialects.of(tp).conf_applies(tp).tolist() == [False]
+    assert dialects.of(tp).controller.conf_applies(tp).tolist() == [False]
 
 
 def test_a_routine_called_with_both_states_is_refused_with_its_line(tmp_path):

@@ -17,6 +17,7 @@ from . import diagnose  # noqa: F401  diagnose, ladder, similarity
 from . import data  # noqa: F401  import-ur10, simulate
 from . import suggest  # noqa: F401  suggest-poses
 from . import compensate  # noqa: F401
+from . import predict  # noqa: F401
 from . import programs  # noqa: F401  inspect, convert, roundtrip
 from . import fivex  # noqa: F401  rtcp-calibrate
 from . import cam  # noqa: F401  freecad-install-post

@@ -7,10 +7,20 @@ from typing import Optional
 
 import numpy as np
 
+import typer
+
 from ..errors import InputError, OutputError
 from ..frames import abc_to_matrix, make_transform
 from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
 from .app import err
+
+
+# Options several program commands take, declared once (typer reads only their metadata).
+FRAME_OPTION = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable.")
+TOOL_OPTION = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable.")
+START_JOINTS_OPTION = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data).")
+TEMP_OPTION = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal).")
+FORCE_OPTION = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load).")
 
 
 def floats(text: str, count: int, what: str) -> np.ndarray:

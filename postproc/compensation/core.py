@@ -276,7 +276,7 @@ def compensate(
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
     Targets outside the region the model was measured in fail unless ``allow_extrapolation``.
     ``detail``: the report also carries the per-target vectors of ``PathDetail``.
-    ``controller``: the rules of the controller that runs the program (a ``Dialect``:
+    ``controller``: the rules of the controller that runs the program (a ``postproc.controller.Controller``:
     ``conf_applies``, ``branch_from_conf``, ``inexact_interpolation``, ``arc_ends_at_target``);
     ``postproc.compensate.compensate`` takes those of the program's language by default."""
     if scheme not in _SCHEMES:
@@ -738,3 +738,22 @@ def _scatter(n, rows, fill, values, dtype):
     out = np.full(n, fill, dtype=dtype)
     out[rows] = values
     return out
+
+
+def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller, frames: dict | None = None, tools: dict | None = None,
+                        start_joints=None, temp_c: float | None = None, force_n=None) -> tuple[np.ndarray, np.ndarray, list]:
+    """Where ``model`` puts the TCP when ``controller`` runs the program as written: the
+    program rows of its Cartesian targets, (M, 3) TCP positions in the robot base frame, mm,
+    on the postures the controller's rules give (NaN where it cannot reach a target), and
+    for each target why not (None where it can). Run with a validation model (or a simulated
+    robot's truth), it tells where a compensated program will cut before it runs."""
+    _require_usable_model(model)
+    _require_process_inputs(model, temp_c, force_n)
+    if frames or tools:
+        tp = tp.with_frames(frames, tools)
+    _refuse_unplaced(tp)
+    problem = _Problem.of(tp, model, controller, temp_c, force_n, start_joints)
+    positions = problem.plant.actual(problem.q_ref, problem.rows, problem.order_q)
+    why = [None if not np.isnan(p).any() else _POSTURE_TEXT.get(int(code), "out of reach or outside the joint limits")
+           for p, code in zip(positions, problem.posture_problem)]
+    return problem.rows, positions, why

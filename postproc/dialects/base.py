@@ -2,8 +2,9 @@
 
 A dialect owns: recognising its files (``extensions``, ``sniff``), the set of files a
 program spans (``read_sources``), parsing them to the IR (``parse_sources``; frames,
-tools and bases are resolved there by the language's rules), the controller's
-configuration (IK branch) rules (``branch_from_conf``), and writing back: ``emit``
+tools and bases are resolved there by the language's rules), the controller that runs the
+language by default (``controller``: its rules live in ``postproc.controller.Controller``
+subclasses, one per controller, in the language's package), and writing back: ``emit``
 returns the new text of every file that must be written, keyed by path, so the caller
 writes one all-or-nothing set and cannot forget a file. The rest of postproc reaches a
 dialect only through this interface and the registry in ``postproc.dialects``.
@@ -18,6 +19,9 @@ from typing import Callable
 
 import numpy as np
 
+from ..controller import GENERIC, Controller
+from ..emit.insert import insert_points
+from ..emit.splice import splice
 from ..errors import EmitError, InputError, ParseError
 from ..ir import SourceDoc, Toolpath
 from . import bom
@@ -32,9 +36,9 @@ class Dialect:
     #: programs of this language drive machine axes (a CNC: five-axis emitters and machine
     #: kinematics apply), not a robot controller's Cartesian targets
     machine_program: bool = False
-    #: the robot maker whose controllers alone run this language, as robot files'
-    #: descriptions name it first (None: any maker's, or a CNC's)
-    controller_maker: str | None = None
+    #: the controller that runs this language's programs unless told otherwise: its rules
+    #: (configuration data, interpolation, loads) are what compensation asks (postproc.controller)
+    controller: Controller = GENERIC
     #: the program's speeds (as the IR keeps them) times this are mm/s (G-code feeds: mm/min)
     speed_to_mm_per_s: float = 1.0
     #: a regular expression of one comment (or header line) in the language
@@ -80,37 +84,6 @@ class Dialect:
             raise InputError(f"{program}: --data (other modules' data lists) is for KRL programs, not {self.name}")
         return []
 
-    # ------------------------------------------------------------- controller
-    def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Joints (N, 6) and branch (N,) the controller takes for each target from the
-        configuration data the program gives (``conf`` (N, 4), NaN where none); NaN and -1
-        where the program gives none (the caller then follows the path)."""
-        return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
-
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        """(N,) True where the controller takes the target's configuration data as written
-        (it then selects the branch); elsewhere the robot keeps the posture it is in
-        (see postproc.posture). Default: wherever the program gives configuration data."""
-        return ~np.isnan(tp.conf).all(axis=1)
-
-    def payloads(self, tp: Toolpath) -> list[tuple[float, str]]:
-        """(mass kg, 'FILE, line N') of every payload the program states (none by default)."""
-        return []
-
-    def stated_loads(self, tp: Toolpath):
-        """emit.load_plan.LoadPlan: the whole load each target carries where the program states
-        one, for ``convert`` to carry (None: the program states none, e.g. G-code)."""
-        return None
-
-    def inexact_interpolation(self, tp: Toolpath) -> str | None:
-        """``file:line: why`` where the program lets the controller leave the exact straight or
-        circular interpolation between targets (the path prediction assumes it), else None."""
-        return None
-
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        """(N,) False where a circular motion does not end at its end point (KRL's CA)."""
-        return np.ones(len(tp.kind), dtype=bool)
-
     # ---------------------------------------------------------------- writing
     def insert_field(self, source: int, field: str, text: str) -> str | None:
         """Text that adds a component a target leaves out (``LIN {X 1}`` without Y), or None
@@ -129,8 +102,6 @@ class Dialect:
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
         """New text of every source file, in ``original.sources`` order (unchanged ones as they were)."""
-        from ..emit.splice import splice
-
         return splice(original, modified, self.insert_field)
 
     def files(self, original: Toolpath, texts: list[str], output: Path) -> dict[Path, str]:
@@ -175,8 +146,6 @@ class Dialect:
     def insert_points(self, tp: Toolpath, points: list) -> tuple[list[SourceDoc], list[str]]:
         """New sources with new targets (``postproc.emit.insert.NewPoint``) written before the
         motions they subdivide, the language's way, and each new point's name."""
-        from ..emit.insert import insert_points
-
         return insert_points(self, tp, points)
 
     def place_workpiece(self, text: str, frame_name: str, new_frame: np.ndarray, path: str) -> str:

@@ -2,7 +2,7 @@
 
 A program that states its load (RAPID tooldata's tload and ``GripLoad``, KRL ``$LOAD`` /
 ``LOAD_DATA[n]`` / ``BAS(#TOOL, n)``) gets the same load in the new program, at the same
-targets: each dialect reads its statements (``Dialect.stated_loads``) into a ``LoadPlan``,
+targets: each dialect reads its statements (``Controller.stated_loads``) into a ``LoadPlan``,
 one ``LoadState`` per target. ``--tool-load`` may be given as well only where it is the
 load the program states (otherwise one of the two is wrong, and which is not ours to guess).
 """
@@ -126,7 +126,7 @@ def _agrees(given: ToolLoad, stated: ToolLoad) -> bool:
 
 def carried_loads(tp, given: ToolLoad | None, plan: LoadPlan | None) -> LoadPlan | None:
     """The load of each target of the new program: the program's own (``plan``, what its
-    language reads from it: ``Dialect.stated_loads``, given by the caller so that emit
+    language reads from it: ``Controller.stated_loads``, given by the caller so that emit
     imports no language) or ``given`` (``--tool-load``) on every tool; both: they must be
     the same load (else an InputError naming both); a partial load the program states needs
     ``given``."""

@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
+from .. import rotation_forms
 from ..errors import ParseError
-from ..frames import abc_to_quat_wxyz
 from ..ir import FIELDS, NF, Kind, SourceDoc, Toolpath
 from . import scan_kernel
 
@@ -102,6 +102,13 @@ class Builder:
     notes: list[str] = field(default_factory=list)
     tool_known: list[bool] = field(default_factory=lambda: [True])
     frame_known: list[bool] = field(default_factory=lambda: [True])
+    # A language's own per-target columns (Toolpath.extras): name -> (dtype, fill, shape of one
+    # row); a block gives one under its name, a block that does not gets the fill.
+    extra_columns: dict[str, tuple] = field(default_factory=dict)
+
+    def declare_extra(self, name: str, dtype, fill, shape: tuple = ()) -> None:
+        """A per-target column only this language has (``"<dialect>.<what>"``), kept in Toolpath.extras."""
+        self.extra_columns[name] = (dtype, fill, tuple(shape))
 
     @staticmethod
     def _register(names, values, known, name, transform, is_known):
@@ -173,6 +180,7 @@ class Builder:
             rotary_offset=cols["rotary_offset"],
             ccomp=cols["ccomp"],
             notes=tuple(self.notes),
+            extras={name: cols[name] for name in self.extra_columns},
         )
 
     def _columns(self) -> dict[str, np.ndarray | None]:
@@ -182,11 +190,11 @@ class Builder:
         # Program order is statement order; most programs arrive sorted and need no copy.
         perm = None if total < 2 or bool(np.all(order[1:] >= order[:-1])) else np.argsort(order, kind="stable")
         cols = {}
-        for key, (dtype, fill) in _COLUMN_DEFAULTS.items():
+        columns = {key: (dtype, fill, _COLUMN_SHAPES.get(key, ())) for key, (dtype, fill) in _COLUMN_DEFAULTS.items()}
+        for key, (dtype, fill, shape) in {**columns, **self.extra_columns}.items():
             if key in ("offset", "offset_span", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp") and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
-            shape = _COLUMN_SHAPES.get(key, ())
             parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
             if not parts:
                 col = np.full((0,) + shape, fill, dtype=dtype)
@@ -199,17 +207,7 @@ class Builder:
 
     def _orientations(self, values: np.ndarray) -> np.ndarray:
         """(N, 4) unit quaternions from the orientation numbers in the dialect's notation (NaN where none)."""
-
-        if self.orientation_kind == "quat":
-            orientation = values[:, 3:7].copy()
-            norm = np.linalg.norm(orientation, axis=1, keepdims=True)
-            return np.where(norm > 0, orientation / np.where(norm > 0, norm, 1), np.nan)
-        orientation = np.full((len(values), 4), np.nan)
-        if self.orientation_kind == "abc":
-            ok = ~np.isnan(values[:, 3:6]).any(axis=1)
-            if ok.any():
-                orientation[ok] = abc_to_quat_wxyz(values[ok, 3:6])
-        return orientation
+        return rotation_forms.form(self.orientation_kind).quaternions(values[:, 3:])
 
 
 # Per-target columns of the builder: dtype and the value a block that gives none gets.

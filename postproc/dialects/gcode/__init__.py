@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
+from .controller import CNC
 
 
 class GcodeDialect(Dialect):
@@ -11,6 +12,7 @@ class GcodeDialect(Dialect):
     description = "G-code (ISO, Fanuc, LinuxCNC, Siemens)"
     extensions = (".nc", ".ngc", ".gcode", ".tap", ".cnc", ".mpf", ".spf", ".iso", ".txt")
     machine_program = True
+    controller = CNC
     speed_to_mm_per_s = 1.0 / 60.0  # F words are mm/min (G94)
     comment_pattern = r"\([^)\n]*\)|;[^\n]*|%[^\n]*"
     motion_words = "G0, G1, G2, G3 or a canned cycle"

@@ -47,10 +47,10 @@ CYCLE_CHECK_AFTER = 1_000
 # a plain CAM file of 10^6 lines never runs them.
 _FLOW = re.compile(r"(?m)^[ \t]*(?:/[ \t]*)?(?:n[ \t]*\d+[ \t]*)?o[ \t]*(?:\d+|<[^>\n]*>)[ \t]*(?:sub|call|if|while|do|repeat)\b")
 _M98 = re.compile(r"m[ \t]*9[89](?!\d)")
-_FLOW_WORDS = ("sub", "call", "if", "while", "do", "repeat", "proc", "extern", "def", "for")
+_FLOW_WORDS = ("sub", "call", "if", "while", "do", "repeat", "proc", "extern", "def", "for", "goto")
 _OPENS = {"sub": "endsub", "if": "endif", "while": "endwhile", "do": "while", "repeat": "endrepeat", "for": "endfor"}
 _LOOPS = ("while", "do", "repeat", "for")
-_SIEMENS_FLOW = re.compile(r"(?m)^[ \t]*(?:proc|extern|def|if|while|for|repeat)[ \t]")
+_SIEMENS_FLOW = re.compile(r"(?m)^[ \t]*(?:n\d+[ \t]+)?(?:proc|extern|def|if|while|for|repeat|goto[fbc]?)[ \t]")  # N20 IF ...: block numbers too
 
 
 _CALL = re.compile(r"(?im)^[ \t]*(?:[Nn][ \t]*\d+[ \t]*)?[Oo][ \t]*<([^>\n]+)>[ \t]*call\b")
@@ -265,7 +265,7 @@ class Runner:
     def __init__(self, parser):
         self.parser = parser
         self.docs = [parser.doc] + (side_files(parser.doc) if Path(parser.doc.path).is_file() else [])
-        parser.siemens = self.siemens = siemens.is_siemens(parser.doc.path, parser.doc.text)
+        parser.siemens = self.siemens = parser.siemens or siemens.is_siemens(parser.doc.path, parser.doc.text)
         parser.params = Params(self.siemens)
         self.ints: set[str] = set()  # Siemens INT variables (a REAL assigned is rounded)
         self.joined = None
@@ -274,6 +274,8 @@ class Runner:
             bases = np.cumsum([0] + [len(t) for t in texts[:-1]]).astype(np.int64)
             parser.text = "".join(texts)
             parser.lines = self.joined = _JoinedLines(self.docs, bases, parser.text)
+        self.labels: dict[str, int] = {}  # Siemens jump label ("file index:name") -> line index
+        self.block_numbers: dict[int, list[int]] = {}  # Siemens N number -> line indices (jump targets)
         self.lines = self._read_lines()
         parser.trees = {ln.start: ln.tree for ln in self.lines if ln.tree is not None}
         self.shape = Structure(self.lines, self._error)
@@ -316,6 +318,11 @@ class Runner:
             if not line.strip() or line.strip() == "%":
                 continue
             doc = int(np.searchsorted(bases, start, side="right") - 1)
+            if self.siemens:
+                line = self._jump_marks(line, len(out), start, doc)
+                if not line.strip():
+                    out.append(Line(start, None, keyword="nop", doc=doc))  # a label alone: a jump target
+                    continue
             statement = siemens.classify(line) if self.siemens else None
             if statement is not None:
                 out.append(self._siemens_line(Line(start, None, doc=doc), statement, blocks))
@@ -326,6 +333,18 @@ class Runner:
             raise self._error(blocks[-1][2], f"{blocks[-1][0]} opened here is never closed")
         return out
 
+    def _jump_marks(self, line: str, index: int, start: int, doc: int) -> str:
+        """Records the block's jump label and N number (Siemens jump targets); the block without its label."""
+        label, number, end = siemens.label_of(line)
+        if label is not None:
+            key = f"{doc}:{label}"  # labels are per program file
+            if key in self.labels:
+                raise self._error(start, f"jump label {label.upper()} is defined twice in this program (the 840D refuses it)")
+            self.labels[key] = index
+        if number is not None:
+            self.block_numbers.setdefault(number, []).append(index)
+        return " " * end + line[end:]
+
     _SIEMENS_KW = {"IF": "if", "ELSE": "else", "ENDIF": "endif", "WHILE": "while", "ENDWHILE": "endwhile", "FOR": "for", "ENDFOR": "endfor",
                    "REPEAT": "do", "UNTIL": "until", "RET": "ret", "PROC": "proc", "DEF": "def", "ASSIGN": "assign", "CALL": "scall",
                    "EXTERN": "nop", "MSG": "nop"}
@@ -334,6 +353,13 @@ class Runner:
     def _siemens_line(self, ln: Line, statement, blocks: list) -> Line:
         """A SINUMERIK statement as an O-word line: IF/WHILE/FOR/REPEAT get a label of their own."""
         kw, extra = statement
+        goto = siemens.jump(kw, extra["rest"]) if kw in ("IF", "GOTOF", "GOTOB", "GOTO", "GOTOC") else None
+        if goto is not None:  # GOTOF LABEL, IF cond GOTOB N100 (one block: no ENDIF)
+            ln.keyword = "goto"
+            cond, extra["direction"], extra["target"] = goto
+            ln.extra = extra
+            ln.args = [self._expr(ln, cond)] if cond else []
+            return ln
         if kw not in self._SIEMENS_KW:
             raise self._error(ln.start, f"Siemens {kw} is not supported (jumps and endless loops are not unrolled)")
         ln.keyword, ln.extra = self._SIEMENS_KW[kw], extra
@@ -663,6 +689,41 @@ class Runner:
         return frame.return_to
 
     # ---- if / elseif / else
+    def _kw_goto(self, pc, ln, frames):
+        """SINUMERIK GOTOF / GOTOB / GOTO / GOTOC (Job Planning, "Program jumps to jump markers"):
+        GOTOF searches towards the end, GOTOB towards the start, GOTO forward then back, GOTOC
+        as GOTO without the alarm when the target is missing; the target is a label or a block
+        number. Under an undecidable condition, or backwards once the run is unsure, the jump
+        is not taken (each target listed once, flagged) rather than guessed."""
+        if ln.args:
+            cond = self._value(ln, ln.args[0], "IF condition of a jump")
+            if cond is None or not cond:
+                return pc + 1
+        direction, target = ln.extra["direction"], ln.extra["target"]
+        found = self._jump_target(pc, ln, direction, target)
+        if found is None:
+            if direction == "GOTOC":
+                return pc + 1
+            raise self._error(ln.start, f"{direction} {target}: no jump label or block number {target} "
+                                        f"{'after' if direction == 'GOTOF' else 'before' if direction == 'GOTOB' else 'in'} this block (840D alarm 14080)")
+        if found <= pc and self._unsure():
+            return pc + 1
+        return found
+
+    def _jump_target(self, pc: int, ln: Line, direction: str, target: str) -> int | None:
+        """Line index of a jump's target within the block's own file, or None."""
+        name = target.lower()
+        digits = name[1:] if name[:1] == "n" and name[1:].isdigit() else name
+        key = f"{ln.doc}:{name}"
+        candidates = [self.labels[key]] if key in self.labels else []
+        if digits.isdigit():
+            candidates += self.block_numbers.get(int(digits), [])
+        same_file = [i for i in candidates if self.lines[i].doc == ln.doc and i != pc]
+        forward = sorted(i for i in same_file if i > pc)
+        backward = sorted((i for i in same_file if i < pc), reverse=True)
+        order = {"GOTOF": forward, "GOTOB": backward}.get(direction, forward + backward)
+        return order[0] if order else None
+
     def _kw_if(self, pc, ln, frames):
         if self._unsure():
             return pc + 1

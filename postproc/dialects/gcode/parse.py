@@ -87,6 +87,8 @@ _UNMODELLED_AXES = frozenset("UVW")
 
 
 class GcodeParser:
+    tilt_word = "G68.2"  # names a tilted frame: "G54+G68.2@line12" (a dialect's own reader may say otherwise)
+
     def __init__(self, doc: SourceDoc):
         self.doc = doc
         self.text = doc.text
@@ -695,7 +697,7 @@ class GcodeParser:
                 continue
             for f in np.unique(frame_idx[sel]):
                 both = sel & (frame_idx == f)
-                name = f"{self.builder.frame_names[f]}+G68.2@line{self.lines.line(self.event_offsets.get(self.tilts[k][0], self.tilts[k][0]))}"
+                name = f"{self.builder.frame_names[f]}+{self.tilt_word}@line{self.lines.line(self.event_offsets.get(self.tilts[k][0], self.tilts[k][0]))}"
                 frame_idx[both] = self.builder.frame_index(name, self.builder.frames[f] @ tilt, self.builder.frame_known[f])
 
     def _tool_lengths(self, t: dict, rows: np.ndarray, tlo: np.ndarray, latched: dict | None = None) -> np.ndarray:

@@ -19,19 +19,43 @@ from __future__ import annotations
 import re
 
 _STATEMENT = re.compile(
-    r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<kw>EXTERN|PROC|DEF|IF|ELSE|ENDIF|WHILE|ENDWHILE|FOR|ENDFOR|REPEAT|UNTIL|RET|MSG|GOTOF|GOTOB|GOTO|LOOP|ENDLOOP)\b(?P<rest>[^;\n]*)",
+    r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<kw>EXTERN|PROC|DEF|IF|ELSE|ENDIF|WHILE|ENDWHILE|FOR|ENDFOR|REPEAT|UNTIL|RET|MSG|GOTOF|GOTOB|GOTOC|GOTO|LOOP|ENDLOOP)\b(?P<rest>[^;\n]*)",
     re.IGNORECASE)
 _ASSIGN = re.compile(r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<name>[A-Za-z_][A-Za-z0-9_]{1,})[ \t]*=(?![=])(?P<expr>[^;\n]*)")
 _CALL = re.compile(r"^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<name>[A-Za-z_][A-Za-z0-9_]{2,})[ \t]*(?:\((?P<args>[^;\n]*)\))?[ \t]*(?:;[^\n]*)?$")
 _DETECT = re.compile(r"(?im)^[ \t]*(?:PROC|EXTERN|DEF)[ \t]")
 _EXTERN = re.compile(r"(?im)^[ \t]*EXTERN[ \t]+([A-Za-z_][A-Za-z0-9_]*)")
 _PROC = re.compile(r"(?i)^\s*([A-Za-z_][A-Za-z0-9_]*)\s*(?:\((.*)\))?")
-_TOKEN = re.compile(r"\s*(==|<>|<=|>=|<|>|\+|-|\*|/|\(|\)|,|\d+\.?\d*|\.\d+|\$?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?)")
+_TOKEN = re.compile(r"\s*(==|<>|<=|>=|<|>|\+|-|\*|/|\(|\)|,|#\d+|\d+\.?\d*|\.\d+|\$?[A-Za-z_][A-Za-z0-9_]*(?:\[[^\]]*\])?)")
 _OPS = {"==": " EQ ", "<>": " NE ", "<=": " LE ", ">=": " GE ", "<": " LT ", ">": " GT ", "(": "[", ")": "]"}
-_WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD ", "DIV": " / "}
-_FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN", "ROUND", "TRUNC"}
+_WORD_OPS = {"AND": " AND ", "OR": " OR ", "XOR": " XOR ", "MOD": " MOD "}
+# TRUNC (towards zero) and ROUND (half away from zero) are not LinuxCNC's FIX (floor) and
+# ROUND: left out, so an expression using them is unknown rather than off by one.
+_FUNCS = {"SIN", "COS", "TAN", "ASIN", "ACOS", "ABS", "SQRT", "EXP", "LN"}
 _KEYWORDS = {"EXTERN", "PROC", "DEF", "IF", "ELSE", "ENDIF", "WHILE", "ENDWHILE", "FOR", "ENDFOR", "REPEAT", "UNTIL", "RET", "MSG",
-             "GOTOF", "GOTOB", "GOTO", "LOOP", "ENDLOOP", "SUPA", "TRAORI", "TRAFOOF"}
+             "GOTOF", "GOTOB", "GOTOC", "GOTO", "LOOP", "ENDLOOP", "SUPA", "TRAORI", "TRAFOOF"}
+
+
+# A jump label heading a block ("N40 LOOP_START: X=R1"; Job Planning, "Program jumps to jump
+# markers"): its name; and a jump "GOTOF LABEL" / "IF cond GOTOB N100" (direction, target).
+LABEL = re.compile(r"^(?P<head>[ \t]*(?:[Nn](?P<n>\d+)[ \t]+)?)(?P<name>[A-Za-z_]\w*):(?!=)")
+_JUMP = re.compile(r"(?i)^(?P<cond>.*?)\b(?P<kw>GOTO[FBC]?)[ \t]+(?P<target>[A-Za-z_0-9]+)[ \t]*$")
+_BLOCK_NUMBER = re.compile(r"^[ \t]*[Nn](\d+)\b")
+
+
+def label_of(line: str) -> tuple[str | None, int | None, int]:
+    """(jump label, block number, length of the label prefix to blank) of a block."""
+    m = LABEL.match(line)
+    if m:
+        return m.group("name").lower(), int(m.group("n")) if m.group("n") else None, m.end()
+    n = _BLOCK_NUMBER.match(line)
+    return None, int(n.group(1)) if n else None, 0
+
+
+def jump(kw: str, rest: str) -> tuple[str, str, str] | None:
+    """(condition or '', GOTOF/GOTOB/GOTO/GOTOC, target) of a jump statement, or None."""
+    m = _JUMP.match(f"{kw} {rest}" if kw.upper().startswith("GOTO") else rest)
+    return (m.group("cond").strip(), m.group("kw").upper(), m.group("target")) if m else None
 
 
 def is_siemens(path: str, text: str) -> bool:
@@ -60,9 +84,13 @@ def expression(text: str) -> str:
         elif up in _WORD_OPS:
             out.append(_WORD_OPS[up])
         elif up in _FUNCS:
-            out.append({"TRUNC": "FIX"}.get(up, up))
-        elif up == "NOT":
-            raise ValueError("NOT is not evaluated")
+            out.append(up)
+        elif up in ("TRUE", "FALSE"):
+            out.append("1" if up == "TRUE" else "0")  # the 840D's BOOL constants
+        elif tok[0] == "#":
+            out.append(tok)  # an R parameter the sinumerik dialect has already written as a # parameter
+        elif up in ("NOT", "DIV"):
+            raise ValueError(f"{up} is not evaluated")  # DIV: the 840D's integer division (7 DIV 3 = 2), not LinuxCNC's /
         elif tok[0].isalpha() or tok[0] in "_$":
             # a variable; system variables ($AA_IM[X], $P_...) are the machine's: unknown here
             out.append(f"#<{'_sys' + re.sub(r'[^A-Za-z0-9_]', '_', tok) if tok[0] == '$' else tok}>")

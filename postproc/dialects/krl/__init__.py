@@ -8,7 +8,14 @@ from pathlib import Path
 import numpy as np
 
 from ...ir import SourceDoc, Toolpath
+from ...kinematics import kuka_status_turn
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
+from .controller import KRC
+from .modules import module_docs
+from .parse import KrlParser
+from .placing import set_base
+from .stream import RULES
+from .writer import KrlWriter
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
 
@@ -16,7 +23,7 @@ CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA
 class KrlDialect(Dialect):
     name = "krl"
     description = "KUKA KRL (.src with its .dat and $config.dat)"
-    controller_maker = "KUKA"
+    controller = KRC
     extensions = (".src", ".sub")
     comment_pattern = r"[;&][^\n]*"  # comments and the &ACCESS / &REL header lines
     motion_words = "PTP, LIN, CIRC, SPTP, SLIN, SCIRC or their _REL forms"
@@ -60,71 +67,18 @@ class KrlDialect(Dialect):
     def module_sources(self, program, paths) -> list[SourceDoc]:
         """Other modules' data lists (.dat: their GLOBAL points) and modules (.src: their
         functions), or folders of them (modules.py)."""
-        from .modules import module_docs
-
         return module_docs(program, paths) if paths else []
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import KrlParser
-
         return KrlParser(sources).parse()
-
-    def branch_from_conf(self, robot, solutions, conf):
-        """KSS: a target's Status and Turn pick the branch (KUKA System Software 8, 'S and T')."""
-        from ...kinematics import select_by_kuka_status
-
-        q, branch = super().branch_from_conf(robot, solutions, conf)
-        has = ~np.isnan(conf[:, :2]).any(axis=1)
-        if has.any():
-            q[has], branch[has] = select_by_kuka_status(robot, solutions[has], conf[has, 0].astype(int), conf[has, 1].astype(int))
-        return q, branch
-
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        """S and T count for PTP motions only; LIN, CIRC (and KSS 8 SLIN/SCIRC) ignore them
-        and keep the current posture (KUKA System Software 8.x operating and programming
-        manual, 'Status and Turn')."""
-        from ...ir import Kind
-
-        return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
-
-    def stated_loads(self, tp: Toolpath):
-        from .loads import stated_loads
-
-        return stated_loads(tp)
-
-    def payloads(self, tp: Toolpath):
-        """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
-        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""
-        from .loads import load_masses
-
-        return load_masses(tp)
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "{", 1)  # {X .., S .., T ..}
 
     def place_workpiece(self, text, frame_name, new_frame, path):
-        from .placing import set_base
-
         return set_base(text, new_frame, path)
 
-    def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
-        import re
-
-        from ...ir import Kind
-
-        ca = re.compile(r"\bCA\b", re.IGNORECASE)
-        ends = np.ones(len(tp.kind), dtype=bool)
-        arcs = np.nonzero(tp.kind == Kind.CIRC_END)[0]  # only arcs' lines are read (a long program has few)
-        if arcs.size:
-            lines = [doc.text.split("\n") for doc in tp.sources]
-            ends[arcs] = [not ca.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
-                          for f, n in zip(tp.file[arcs].tolist(), tp.line[arcs].tolist())]
-        return ends
-
     def stream_rules(self):
-        from .stream import RULES
-
         return RULES
 
     def insert_field(self, source: int, field: str, text: str) -> str:
@@ -150,23 +104,17 @@ class KrlDialect(Dialect):
 
     def conf_of_joints(self, robot, q_deg):
         """S and T of new points (LIN ignores them; a PTP to the point later would take them)."""
-        from ...kinematics import kuka_status_turn
-
         status, turn = kuka_status_turn(robot, q_deg)
         return np.column_stack([status, turn, np.full((len(status), 2), np.nan)])
 
     def set_conf_text(self, text: str, conf) -> str:
         """The S and T components of a copied aggregate set to ``conf`` (left out where absent)."""
-        import re
-
         for name, value in (("S", conf[0]), ("T", conf[1])):
             if np.isfinite(value):
                 text = re.sub(rf"([{{,][ \t]*){name}[ \t]+\d+", lambda m: f"{m.group(1)}{name} {int(value)}", text, count=1, flags=re.IGNORECASE)
         return text
 
     def new_writer(self, name: str):
-        from .writer import KrlWriter
-
         return KrlWriter(name)
 
     def new_program_paths(self, output: Path) -> list[Path]:

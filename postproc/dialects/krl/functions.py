@@ -24,6 +24,7 @@ from lark import Token, Tree
 
 from ...parse.common import LineIndex, parse_statement
 from ...parse.grammar import grammar
+from .state import number
 
 _FCT = re.compile(r"^[ \t]*(?P<glob>GLOBAL[ \t]+)?DEFFCT[ \t]+[\w$]+(?:\[[^\]]*\])?[ \t]+(?P<name>[\w$]+)[ \t]*\((?P<params>[^)]*)\)(?P<body>.*?)^[ \t]*ENDFCT\b",
                   re.IGNORECASE | re.MULTILINE | re.DOTALL)
@@ -117,8 +118,6 @@ class Caller:
         return self._functions
 
     def __call__(self, node: Tree, lookup) -> float:
-        from .state import number
-
         name = str(node.children[0]).upper()
         args = [number(a.children[0], lookup, self) if isinstance(a, Tree) and a.children and a.children[0] is not None else float("nan")
                 for a in node.children[1:] if a is not None]
@@ -146,8 +145,6 @@ class Caller:
         return None
 
     def _run(self, fn: Function, env: dict[str, float]) -> float:
-        from .state import number
-
         def lookup(text):
             return env.get(text, float("nan")) if text else float("nan")
 

@@ -3,19 +3,26 @@
 from __future__ import annotations
 
 import re
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import InputError
 from ...ir import SourceDoc, Toolpath
+from ...kinematics import abb_confdata
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
+from .controller import IRC5
+from .parse import parse_modules
+from .placing import set_work_object
+from .targets import set_robtarget_conf
+from .writer import RapidWriter
 
 
 class RapidDialect(Dialect):
     name = "rapid"
     description = "ABB RAPID module, or a program file (.pgf) with its modules"
-    controller_maker = "ABB"
+    controller = IRC5
     extensions = (".mod", ".modx", ".prg", ".sys", ".pgf")
 
     def sniff(self, head: str) -> bool:
@@ -46,59 +53,12 @@ class RapidDialect(Dialect):
         return docs
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import parse_modules
-
         return parse_modules(sources)
-
-    def branch_from_conf(self, robot, solutions, conf):
-        """confdata cf1, cf4, cf6, cfx pick the branch (RAPID reference, 'confdata')."""
-        from ...kinematics import select_by_abb_conf
-
-        q, branch = super().branch_from_conf(robot, solutions, conf)
-        has = ~np.isnan(conf).any(axis=1)
-        if has.any():
-            q[has], branch[has] = select_by_abb_conf(robot, solutions[has], conf[has].astype(int))
-        return q, branch
-
-    def conf_applies(self, tp: Toolpath) -> np.ndarray:
-        """MoveJ follows its confdata unless ConfJ\\Off is in force; MoveL/MoveC unless
-        ConfL\\Off is (RAPID reference, 'ConfJ', 'ConfL': with \\Off the robot takes the
-        configuration nearest the current one). The switches are taken in the order of the
-        program's execution from main (postproc.dialects.rapid.confswitch: routines in the
-        order they are called; a motion reached both ways is an error)."""
-        from ...ir import Kind
-        from .confswitch import switch_states
-
-        has = ~np.isnan(tp.conf).any(axis=1)
-        states = switch_states(tp, {"CONFL": _switch_state(tp, "CONFL"), "CONFJ": _switch_state(tp, "CONFJ")})
-        lin_off, joint_off = states["CONFL"], states["CONFJ"]
-        joint = tp.kind == Kind.JOINT
-        return has & np.where(joint, ~joint_off, ~lin_off)
-
-    def stated_loads(self, tp: Toolpath):
-        from .loads import stated_loads
-
-        return stated_loads(tp)
-
-    def payloads(self, tp: Toolpath):
-        """The load (tload mass) of every tooldata the program's Cartesian targets use."""
-        from .targets import tool_masses
-
-        return tool_masses(tp)
-
-    def inexact_interpolation(self, tp):
-        """The first ``SingArea \\Wrist`` / ``\\LockAxis4``: from there MoveL/MoveC may move the wrist
-        off the programmed orientation between targets (RAPID technical reference, SingArea)."""
-        from .singarea import wrist_singularity_avoidance
-
-        return wrist_singularity_avoidance(tp)
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "[", 2)  # [[x,y,z],[q],[conf],[ext]]
 
     def place_workpiece(self, text, frame_name, new_frame, path):
-        from .placing import set_work_object
-
         return set_work_object(text, frame_name, new_frame, path)
 
     def output_paths(self, original: Toolpath, output: Path) -> list[Path]:
@@ -118,42 +78,17 @@ class RapidDialect(Dialect):
     statement_end = ";"
 
     def conf_of_joints(self, robot, q_deg):
-        from ...kinematics import abb_confdata
-
         return abb_confdata(robot, q_deg).astype(float)
 
     def set_conf_text(self, text: str, conf) -> str:
-        from .targets import set_robtarget_conf
-
         return set_robtarget_conf(text, conf)
 
     def new_writer(self, name: str):
-        from .writer import RapidWriter
-
         return RapidWriter(name)
-
-
-def _switch_state(tp: Toolpath, switch: str) -> np.ndarray:
-    """(N,) True where the last ``ConfL``/``ConfJ`` instruction before the target's line in
-    its own module's text was ``\\Off``."""
-    pattern = re.compile(rf"^[ \t]*{switch}[ \t]*\\(ON|OFF)[ \t]*;", re.IGNORECASE | re.MULTILINE)
-    off_now = np.zeros(len(tp.line), dtype=bool)
-    for f, doc in enumerate(tp.sources):
-        events = [(doc.text.count("\n", 0, m.start()) + 1, m.group(1).upper() == "OFF") for m in pattern.finditer(doc.text)]
-        mine = tp.file == f
-        if not events or not mine.any():
-            continue
-        lines = np.array([line for line, _ in events])
-        off = np.array([state for _, state in events])
-        last = np.searchsorted(lines, tp.line[mine], side="right") - 1
-        off_now[mine] = np.where(last >= 0, off[np.maximum(last, 0)], False)
-    return off_now
 
 
 def _pgf_modules(path: Path, data: bytes) -> list[str]:
     """The module file names a RobotWare program file lists (<Program><Module>x.mod</Module>...)."""
-    import xml.etree.ElementTree as ET
-
     try:
         root = ET.fromstring(data)
     except ET.ParseError as exc:

@@ -17,14 +17,14 @@ import numpy as np
 from lark import Token, Tree
 from numba import njit
 
-from ...frames import make_transform, quat_wxyz_to_matrix
+from ...frames import make_transform, matrix_to_quat_wxyz, quat_wxyz_to_matrix, rot_x, rot_y, rot_z
 from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
 from ...parse.grammar import grammar, literal_number
 from ...parse.line_shapes import LineShapes
 from . import counters
-from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .instructions import CIRCULAR_LAYOUT, LAYOUTS, LINEAR_LAYOUT, SEARCH_POINT, RuntimeFacts, check_calls
+from .loops import MAX_REPLAYED, Loop, element_key, evaluate, for_counter, loop_body_lines, planned_statements
 from .updates import Update, Updates, apply, update_fields
 
 NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?"
@@ -840,8 +840,6 @@ class RapidParser:
         """RelTool(p, dx, dy, dz [Rx] [Ry] [Rz]): offset and turn in the tool frame of p.
 
         The result is reported but not editable (its numbers mix through p's rotation)."""
-        from ...frames import matrix_to_quat_wxyz, rot_x, rot_y, rot_z
-
         args = node.children[1].children if len(node.children) > 1 else []
         if len(args) < 4:
             return empty

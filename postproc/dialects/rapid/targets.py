@@ -2,9 +2,13 @@
 
 from __future__ import annotations
 
+import re
+
 import numpy as np
 
 from ...errors import EmitError
+from ...ir import Kind
+from ..base import NUMBER
 
 
 def set_robtarget_conf(text: str, conf: np.ndarray) -> str:
@@ -35,10 +39,6 @@ def tool_masses(tp) -> list[tuple[float, str]]:
     each tooldata the Cartesian targets use (tooldata is [robhold, [[x,y,z],[q1..q4]], [mass,
     [cog], [aom], ix, iy, iz]]); each ``GripLoad NAME`` adds that loaddata's mass to the
     tool's; a motion's ``\\TLoad:=NAME`` is the whole load of that motion."""
-    import re
-
-    from ...ir import Kind
-
     used = {tp.tool_names[t].upper() for t in np.unique(tp.tool[tp.kind != Kind.ABSJ])}
     tools = [(mass, where) for name, mass, where in _declared(tp, "tooldata", 7) if name in used]
     loads = {name: mass for name, mass, _ in _declared(tp, "loaddata", 0)}
@@ -58,10 +58,6 @@ def tool_masses(tp) -> list[tuple[float, str]]:
 def _declared(tp, kind: str, index: int) -> list[tuple[str, float, str]]:
     """(NAME, number ``index`` of the value, 'FILE, line N (kind name)') of each declaration
     of ``kind`` (tooldata, loaddata) in the program's files."""
-    import re
-
-    from ..base import NUMBER
-
     out = []
     for doc in tp.sources:
         for m in re.finditer(rf"\b{kind}\s+(\w+)\s*:=\s*\[", doc.text, re.IGNORECASE):

@@ -1,0 +1,138 @@
+"""How languages write a target's orientation: one table of notations.
+
+A toolpath's ``orientation_kind`` names its form. The form reads the orientation numbers the
+text gives (``values[:, 3:3 + width]``, in the language's own units) into rotations and writes
+rotations back as numbers of the same notation, near the numbers already there (a rotation
+has several spellings in most notations: the one closest to what the program wrote is the
+one a reader expects, and keeps a compensated program's numbers small changes). Parsing,
+writing back and subdividing all go through this table, so a new language adds one entry
+here and nothing elsewhere.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from .errors import InputError
+from .frames import abc_to_matrix, abc_to_quat_wxyz, matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
+
+Numbers = np.ndarray  # (N, width) orientation numbers as the text gives them
+
+
+@dataclass(frozen=True)
+class RotationForm:
+    """One notation. ``to_matrix`` is None where the numbers do not fix a rotation (a tool
+    axis leaves the spin about it free); ``to_quat`` / ``from_quat`` are exact or faster
+    variants of the matrix functions where a notation has them."""
+
+    name: str
+    width: int  # how many numbers, from values[:, 3]
+    description: str
+    to_matrix: Callable[[Numbers], np.ndarray] | None  # (N, width) -> (N, 3, 3)
+    from_matrix: Callable[[np.ndarray, Numbers], Numbers] | None  # ((N, 3, 3), near (N, width), NaN rows: none) -> (N, width)
+    to_quat: Callable[[Numbers], np.ndarray] | None = None  # (N, width) -> (N, 4) w, x, y, z
+    from_quat: Callable[[np.ndarray, Numbers], Numbers] | None = None  # ((N, 4), near) -> (N, width)
+
+    def quaternions(self, numbers: Numbers) -> np.ndarray:
+        """(N, 4) unit quaternions of the rows that give all their numbers, NaN elsewhere."""
+        numbers = np.asarray(numbers, dtype=float)[:, : self.width]
+        out = np.full((len(numbers), 4), np.nan)
+        given = ~np.isnan(numbers).any(axis=1) if self.width else np.zeros(len(numbers), bool)
+        if self.to_matrix is None or not given.any():
+            return out
+        if self.to_quat is not None:
+            out[given] = self.to_quat(numbers[given])
+        else:
+            out[given] = matrix_to_quat_wxyz(self.to_matrix(numbers[given]))
+        return out
+
+    def numbers(self, quat: np.ndarray, near: Numbers | None = None) -> Numbers:
+        """(N, width) numbers of the rotations ``quat`` (N, 4), each spelled nearest ``near``."""
+        quat = np.asarray(quat, dtype=float)
+        near = _near(near, len(quat), self.width)
+        if self.from_quat is not None:
+            return self.from_quat(quat, near)
+        return self.from_matrix(quat_wxyz_to_matrix(quat), near)
+
+    def numbers_from_matrix(self, rot: np.ndarray, near: Numbers | None = None) -> Numbers:
+        """(N, width) numbers of the rotations ``rot`` (N, 3, 3), each spelled nearest ``near``."""
+        rot = np.asarray(rot, dtype=float)
+        near = _near(near, len(rot), self.width)
+        if self.from_matrix is not None:
+            return self.from_matrix(rot, near)
+        return self.from_quat(matrix_to_quat_wxyz(rot), near)
+
+
+def _near(near: Numbers | None, n: int, width: int) -> Numbers:
+    if near is None:
+        return np.full((n, width), np.nan)
+    return np.asarray(near, dtype=float)[:, :width]
+
+
+def wrap_near(angles_deg: np.ndarray, near_deg: np.ndarray) -> np.ndarray:
+    """``angles_deg`` moved by whole turns to within 180 degrees of ``near_deg`` (kept where near is NaN)."""
+    moved = near_deg + (angles_deg - near_deg + 180.0) % 360.0 - 180.0
+    return np.where(np.isnan(near_deg), angles_deg, moved)
+
+
+# ----------------------------------------------------------------- the notations
+
+def _quat_to_quat(numbers: Numbers) -> np.ndarray:
+    norm = np.linalg.norm(numbers, axis=1, keepdims=True)
+    return np.where(norm > 0, numbers / np.where(norm > 0, norm, 1), np.nan)
+
+
+def _quat_from_quat(quat: np.ndarray, near: Numbers) -> Numbers:
+    """The quaternion as given (exactly), its sign flipped where the one near points the other way."""
+    flip = np.einsum("ij,ij->i", quat, np.nan_to_num(near)) < 0
+    return np.where(flip[:, None], -quat, quat)
+
+
+def _abc_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    """KUKA A, B, C; of the two triples of one rotation (B and 180 - B) the one nearest ``near``,
+    each angle by whole turns nearest it; the canonical triple (B in [-90, 90]) without one."""
+    abc = matrix_to_abc(rot)
+    other = np.column_stack([abc[:, 0] + 180.0, 180.0 - abc[:, 1], abc[:, 2] + 180.0])
+    candidates = [wrap_near(c, near) for c in (abc, other)]
+    pick = np.abs(candidates[1] - near).sum(axis=1) < np.abs(candidates[0] - near).sum(axis=1)  # False where near is NaN
+    return np.where(pick[:, None], candidates[1], candidates[0])
+
+
+def _wpr_to_quat(numbers: Numbers) -> np.ndarray:
+    return abc_to_quat_wxyz(numbers[:, ::-1])  # W P R about the fixed X Y Z: Rz(R) Ry(P) Rx(W), KUKA's A B C reversed
+
+
+def _wpr_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    return _abc_from_matrix(rot, near[:, ::-1])[:, ::-1]
+
+
+def _axis_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    return rot[:, :, 2].copy()
+
+
+FORMS: dict[str, RotationForm] = {
+    form.name: form
+    for form in (
+        RotationForm("quat", 4, "quaternion q1..q4 = w, x, y, z (ABB RAPID)", quat_wxyz_to_matrix,
+                     lambda rot, near: _quat_from_quat(matrix_to_quat_wxyz(rot), near), _quat_to_quat, _quat_from_quat),
+        RotationForm("abc", 3, "A, B, C degrees: R = Rz(A) Ry(B) Rx(C) (KUKA)", abc_to_matrix, _abc_from_matrix, abc_to_quat_wxyz),
+        RotationForm("wpr", 3, "W, P, R degrees about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W) (Fanuc)",
+                     lambda wpr: abc_to_matrix(wpr[:, ::-1]), _wpr_from_matrix, _wpr_to_quat),
+        RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
+        RotationForm("none", 0, "no orientation (three-axis G-code)", None, lambda rot, near: np.zeros((len(rot), 0))),
+    )
+}
+
+
+def form(name: str) -> RotationForm:
+    """The notation called ``name`` (a toolpath's ``orientation_kind``)."""
+    try:
+        return FORMS[name]
+    except KeyError:
+        raise InputError(f"orientation notation '{name}' is not one of {', '.join(FORMS)}") from None
+
+
+__all__ = ["FORMS", "RotationForm", "form", "wrap_near"]
