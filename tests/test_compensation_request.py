@@ -16,6 +16,7 @@ from typer.testing import CliRunner
 import postproc
 from postproc.cam.post import post_request
 from postproc.cli import app
+from postproc.cli.compensate import _can_stream
 from postproc.compensate import compensate, compensate_with, request_for
 from postproc.compensation.machine import Machine
 from postproc.compensation.request import CompensationRequest
@@ -138,3 +139,13 @@ def test_cli_takes_a_machine_file_by_content(tmp_path):
                               "-o", str(tmp_path / "o.ngc"), "--input-axes", "tip", "--frame", "G54=0,0,0,0,0,0"])
     assert res.exit_code == 0, res.output
     assert "targets compensated for" in res.output and (tmp_path / "o.ngc").exists()
+
+
+def test_what_the_chunks_cannot_carry_is_compensated_whole(model):
+    """--subdivide and --force-file need the whole program: never the streamed way (which
+    would leave them out), whatever --stream says."""
+    robot = RobotTarget(model, "m.json")
+    base = {"programs": ("p.src",), "output": "o.src", "stream": "always"}
+    assert _can_stream(CompensationRequest(robot, **base))
+    assert not _can_stream(CompensationRequest(robot, subdivide=True, **base))
+    assert not _can_stream(CompensationRequest(robot, force_file=Path("f.csv"), **base))
