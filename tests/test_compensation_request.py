@@ -149,3 +149,14 @@ def test_what_the_chunks_cannot_carry_is_compensated_whole(model):
     assert _can_stream(CompensationRequest(robot, **base))
     assert not _can_stream(CompensationRequest(robot, subdivide=True, **base))
     assert not _can_stream(CompensationRequest(robot, force_file=Path("f.csv"), **base))
+
+
+def test_the_targets_read_and_write_programs(program, model, tmp_path):
+    robot, five = RobotTarget(model), load_target(MACHINE)
+    tp = robot.read_program(program)
+    assert robot.write_texts(tp, tp) == [KRL] and len(tp) == 12
+    ngc = tmp_path / "p.ngc"
+    ngc.write_text("G21 G90 G54\nG0 X0 Y0 Z5 A0 C0\nG1 X1 A0 C0 F100\nM2\n")
+    tp = five.read_program(ngc)
+    moved = tp.with_positions(tp.position + 1.0)
+    assert five.write_texts(tp, moved) == ["G21 G90 G54\nG0 X1 Y1 Z6 A0 C0\nG1 X2 A0 C0 F100\nM2\n"]
