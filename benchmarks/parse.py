@@ -82,8 +82,10 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
             fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
         fh.write("M2\n")
     out["gcode"] = gcode
+    out["urscript"] = make_urscript(folder, n)
     out["fanuc"] = make_fanuc(folder, n)
     out["sinumerik"] = make_sinumerik(folder, n)
+    out["inform"] = make_inform(folder, n)
     return out
 
 
@@ -99,6 +101,32 @@ def make_sinumerik(folder: Path, n: int) -> Path:
             fh.write(f"N{80 + i} X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f} A{(i % 90) * 0.25:.3f} C{(i % 360) * 0.5:.3f}\n")
         fh.write("TRAFOOF\nM30\n")
     return path
+
+
+def make_urscript(folder: Path, n: int) -> Path:
+    """A URScript program: set_tcp, one movej to joints, then movel to literal poses (m, rad)."""
+    path = folder / "big.script"
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write("def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n")
+        for i in range(n - 4):
+            fh.write(f"  movel(p[{0.8 + (i % 400) * 0.0005:.6f}, {-0.2 + ((i // 400) % 400) * 0.001:.6f}, {0.3 + (i % 7) * 0.000125:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n")
+        fh.write("end\n")
+    return path
+
+
+def make_inform(folder: Path, n: int) -> Path:
+    """A Yaskawa INFORM job: half its lines ///RECTAN positions, half the MOVL lines to them."""
+    count = max((n - 14) // 2, 1)
+    job = folder / "BIG.JBI"
+    with open(job, "w", encoding="latin-1") as fh:
+        fh.write(f"/JOB\r\n//NAME BIG\r\n//POS\r\n///NPOS {count},0,0,0,0,0\r\n///TOOL 0\r\n///POSTYPE ROBOT\r\n///RECTAN\r\n///RCONF 1,0,0,0,0,0,0,0\r\n")
+        for i in range(count):
+            fh.write(f"C{i:05d}={800 + (i % 400) * 0.5:.3f},{-200 + (i // 400) % 400:.3f},{300 + (i % 7) * 0.125:.3f},180.0000,0.0000,0.0000\r\n")
+        fh.write("//INST\r\n///DATE 2024/01/01 00:00\r\n///ATTR SC,RW\r\n///GROUP1 RB1\r\nNOP\r\n")
+        for i in range(count):
+            fh.write(f"MOVL C{i:05d} V=100.0 PL=0\r\n")
+        fh.write("END\r\n")
+    return job
 
 
 def measure(path: str) -> None:

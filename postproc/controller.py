@@ -26,11 +26,23 @@ class Controller:
     #: name it first (None: any maker's, or a CNC)
     maker: str | None = None
 
+    #: True where the posture before the program's first joint target (or configuration data
+    #: that apply) may be assumed, with a note (nearest all-zero joints); False where the
+    #: controller's rule reads the joints the robot starts in (URScript: the nearest IK
+    #: solution), so compensation refuses those targets without --start-joints
+    start_posture_assumed: bool = True
+
     def branch_from_conf(self, robot, solutions: np.ndarray, conf: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Joints (N, 6) and branch (N,) the controller takes for each target from the
         configuration data the program gives (``conf`` (N, 4), NaN where none); NaN and -1
         where the program gives none (the caller then follows the path)."""
         return np.full((len(conf), 6), np.nan), np.full(len(conf), -1)
+
+    def branch_of_targets(self, robot, solutions: np.ndarray, tp: Toolpath, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``branch_from_conf`` for the targets ``rows`` of ``tp`` (``solutions`` their IK): a
+        controller whose rule reads more of a target than its configuration data (URScript's
+        get_inverse_kin qnear: six joint values) overrides this; the default reads ``tp.conf``."""
+        return self.branch_from_conf(robot, solutions, tp.conf[rows])
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         """(N,) True where the controller takes the target's configuration data as written

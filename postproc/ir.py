@@ -209,7 +209,7 @@ class Toolpath:
         values = self.values.copy()
         ori = slice(3, 3 + notation.width)
         if notation.width:
-            values[:, ori] = np.where(np.isnan(self.values[:, ori]), np.nan, notation.numbers(orientation))
+            values[:, ori] = np.where(np.isnan(self.values[:, ori]), np.nan, notation.numbers(orientation, self.values[:, ori]))  # spelled near the text's own
         return replace(self, orientation=orientation, values=values)
 
     def with_joints(self, joints: np.ndarray) -> "Toolpath":

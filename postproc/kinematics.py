@@ -24,6 +24,7 @@ from .dh import run_chunked as _run_chunked
 from .dh import tool_transform as _tool_transform
 from .errors import KinematicsError
 from .robots import RobotModel
+from . import ur_kinematics
 
 # |sin(theta5)| below this is treated as the wrist singularity: theta4 and theta6 are then
 # only defined through their sum (or difference), and theta4 is set to 0.
@@ -209,8 +210,11 @@ def ik(robot: RobotModel, poses) -> np.ndarray:
     ``poses`` are flange poses base_T_flange (N, 4, 4) in mm. A branch with no solution
     (target out of reach for that arm configuration) is a row of NaN. Branch order:
     0-3 the four arm configurations (shoulder front/back x elbow), 4-7 the same with the
-    wrist flipped.
+    wrist flipped. A Universal Robots arm (no OPW parameters, UR geometry) is solved by
+    ``ur_kinematics.ik`` in the same branch order.
     """
+    if robot.opw is None and ur_kinematics.is_ur_geometry(robot):
+        return ur_kinematics.ik(robot, _as_poses(poses))
     p = _require_opw(robot)
     t = np.ascontiguousarray(_as_poses(poses), dtype=float)
     n = t.shape[0]
@@ -231,6 +235,8 @@ _NO_BRANCH = np.zeros(0, dtype=np.int64)
 def ik_branch(robot: RobotModel, poses, branch) -> np.ndarray:
     """The solution (N, 6) on one branch per pose (``branch`` (N,) in 0..7): bit for bit
     ``ik(robot, poses)[arange(N), branch]``, at about an eighth of its work."""
+    if robot.opw is None and ur_kinematics.is_ur_geometry(robot):
+        return ur_kinematics.ik(robot, _as_poses(poses))[np.arange(len(branch)), np.asarray(branch)]
     p = _require_opw(robot)
     t = np.ascontiguousarray(_as_poses(poses), dtype=float)
     want = np.ascontiguousarray(branch, dtype=np.int64)

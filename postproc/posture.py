@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import kinematics as kin
+from . import ur_kinematics
 
 MAX_STEP_DEG = 30.0  # a joint moving more than this between consecutive targets is a flip, not a path
 
@@ -220,7 +221,9 @@ def clearly_regular(robot, q_start: np.ndarray, q_end: np.ndarray, margins_start
 
 def singularity_margins(robot, q_deg: np.ndarray):
     """Distances (deg, deg, mm) of joints q (..., 6) from the wrist (axis 5 straight), elbow
-    (arm stretched) and shoulder (wrist centre on axis 1) singularities of an OPW arm."""
+    (arm stretched) and shoulder (wrist centre on axis 1) singularities of an OPW arm (of a UR arm: ``ur_kinematics.singularity_margins``)."""
+    if robot.opw is None and ur_kinematics.is_ur_geometry(robot):
+        return ur_kinematics.singularity_margins(robot, q_deg)
     p = robot.opw
     phi = np.deg2rad(p.signs * q_deg - p.offsets_deg)
     wrist = np.degrees(np.arcsin(np.minimum(np.abs(np.sin(phi[..., 4])), 1.0)))

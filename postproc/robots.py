@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from .dh import forward_dh, opw_forward
+from .ur_kinematics import is_ur_geometry
 from .errors import RobotFileError, UnknownRobotError
 
 REQUIRED_UNITS = {"length": "mm", "angle": "deg", "mass": "kg", "stiffness": "N*m/rad"}
@@ -76,10 +77,13 @@ class RobotModel:
     opw: OpwParameters | None
     sources: dict[str, str] = field(default_factory=dict)
     estimates: dict[str, bool] = field(default_factory=dict)
+    # Yaskawa encoder pulse data (robot file [pulses]): joint angle = (pulse - zero) / per_degree
+    pulses_per_deg: np.ndarray | None = None
+    zero_pulse: np.ndarray | None = None
 
     @property
     def has_analytic_ik(self) -> bool:
-        return self.opw is not None
+        return self.opw is not None or is_ur_geometry(self)
 
 
 def available_robots() -> list[str]:
@@ -191,7 +195,7 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
     except tomllib.TOMLDecodeError as exc:
         raise RobotFileError(path, "<syntax>", str(exc)) from exc
     r = _Reader(data, path)
-    r.check_keys(data, "", {"name", "description", "verified", "units", "kinematics", "opw", "limits", "masses", "stiffness"})
+    r.check_keys(data, "", {"name", "description", "verified", "units", "kinematics", "opw", "limits", "masses", "stiffness", "pulses"})
     name = r.string(data, "name", "")
     expected_stem = Path(path).stem
     if name != expected_stem:
@@ -208,6 +212,7 @@ def parse_robot_toml(text: str, path: str) -> RobotModel:
         sources[section] = r.string(table, "source", section)
         estimates[section] = r.boolean(table, "estimate", section, default=False)
     opw = _read_opw(r, sources)
+    fields.update(_read_pulses(r, sources, estimates))
     model = RobotModel(name=name, description=description, source_path=path, verified=verified,
                        opw=opw, sources=sources, estimates=estimates, **fields)
     if opw is not None:
@@ -288,6 +293,21 @@ def _read_opw(r: "_Reader", sources: dict) -> "OpwParameters | None":
     sources["opw"] = r.string(opw_table, "source", "opw")
     return OpwParameters(*(r.number(opw_table, key, "opw") for key in _OPW_KEYS),
                          signs=r.signs(opw_table, "signs", "opw"), offsets_deg=r.vector(opw_table, "offsets", "opw"))
+
+
+def _read_pulses(r: "_Reader", sources: dict, estimates: dict) -> dict:
+    """The optional [pulses] section: per_degree (pulses per degree, signed) and zero
+    (the pulse count at 0 deg) of each axis, as a Yaskawa controller converts them."""
+    table = r.section("pulses", required=False)
+    if table is None:
+        return {}
+    r.check_keys(table, "pulses", {"per_degree", "zero", "source", "estimate"})
+    sources["pulses"] = r.string(table, "source", "pulses")
+    estimates["pulses"] = r.boolean(table, "estimate", "pulses", default=False)
+    per_degree = r.vector(table, "per_degree", "pulses")
+    if np.any(np.abs(per_degree) < 1.0):
+        raise r.fail("pulses.per_degree", "pulses per degree must be at least 1 in magnitude (an encoder count, not degrees per pulse)")
+    return {"pulses_per_deg": per_degree, "zero_pulse": r.vector(table, "zero", "pulses")}
 
 
 def _check_opw_matches_dh(model: RobotModel, reader: _Reader) -> None:

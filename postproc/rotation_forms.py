@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 
 from .errors import InputError
 from .frames import abc_to_matrix, abc_to_quat_wxyz, matrix_to_abc, matrix_to_quat_wxyz, quat_wxyz_to_matrix
@@ -101,6 +102,29 @@ def _abc_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return np.where(pick[:, None], candidates[1], candidates[0])
 
 
+def _rotvec_to_quat(numbers: Numbers) -> np.ndarray:
+    xyzw = Rotation.from_rotvec(numbers).as_quat()
+    return xyzw[:, [3, 0, 1, 2]]
+
+
+def _rotvec_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    """Rotation vector (radians); of its spellings (the angle plus whole turns about the same
+    axis, all one rotation to the controller) the one nearest ``near``, the shortest without."""
+    plain = np.full((len(rot), 3), np.nan)
+    some = ~np.isnan(rot).any(axis=(1, 2))  # rows without a rotation stay NaN
+    if some.any():
+        plain[some] = Rotation.from_matrix(rot[some]).as_rotvec()
+    angle = np.linalg.norm(plain, axis=1, keepdims=True)
+    given = np.nan_to_num(near)
+    # A (near) zero rotation has no axis of its own: the old numbers' axis spells it.
+    near_norm = np.linalg.norm(given, axis=1, keepdims=True)
+    axis = np.where(angle > 1e-12, plain / np.where(angle > 1e-12, angle, 1.0), given / np.where(near_norm > 0, near_norm, 1.0))
+    turns = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
+    candidates = axis[:, None, :] * (angle[:, None, :] + 2.0 * np.pi * turns[None, :, None])
+    best = candidates[np.arange(len(rot)), np.argmin(np.linalg.norm(candidates - given[:, None, :], axis=2), axis=1)]
+    return np.where(np.isnan(near).any(axis=1, keepdims=True), plain, best)
+
+
 def _wpr_to_quat(numbers: Numbers) -> np.ndarray:
     return abc_to_quat_wxyz(numbers[:, ::-1])  # W P R about the fixed X Y Z: Rz(R) Ry(P) Rx(W), KUKA's A B C reversed
 
@@ -122,6 +146,8 @@ FORMS: dict[str, RotationForm] = {
         RotationForm("wpr", 3, "W, P, R degrees about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W) (Fanuc)",
                      lambda wpr: abc_to_matrix(wpr[:, ::-1]), _wpr_from_matrix, _wpr_to_quat),
         RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
+        RotationForm("rotvec", 3, "rotation vector rx, ry, rz, radians: axis times angle (Universal Robots URScript)",
+                     lambda numbers: Rotation.from_rotvec(numbers).as_matrix(), _rotvec_from_matrix, _rotvec_to_quat),
         RotationForm("none", 0, "no orientation (three-axis G-code)", None, lambda rot, near: np.zeros((len(rot), 0))),
     )
 }

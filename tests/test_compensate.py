@@ -227,9 +227,10 @@ def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
     bad_model.write_text(json.dumps(doc))
     result = runner.invoke(app, ["compensate", str(ngc), "--model", str(bad_model), "-o", str(tmp_path / "o3.ngc")])
     assert result.exit_code == 2 and "kr999" in result.stderr
-    ur10 = _fitted_on_simulated(postproc.load_robot("ur10"), "geometric", 60, postproc.sim.JointBox(), seed=1)
+    skewed = replace(postproc.load_robot("ur10"), alpha_deg=np.array([90.0, 0.0, 0.0, 90.0, 90.0, 0.0]))  # neither OPW nor UR-shaped
+    no_ik = replace(_fitted_on_simulated(postproc.load_robot("ur10"), "geometric", 60, postproc.sim.JointBox(), seed=1), robot=skewed)
     with pytest.raises(InputError, match="analytic IK"):
-        compensate(parse_program(rapid_program(tmp_path)), ur10)
+        compensate(parse_program(rapid_program(tmp_path)), no_ik)
     thermal = _fitted_on_simulated(model.robot, "geometric,thermal", 120, Cylinder(), seed=2)
     with pytest.raises(InputError, match="--temp"):
         compensate(parse_program(rapid_program(tmp_path)), thermal)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pinocchio as pin
 import pytest
@@ -66,8 +68,10 @@ def test_bad_shapes_raise_typed_errors():
         postproc.ik(robot, np.zeros((3, 3, 3)))
     with pytest.raises(postproc.KinematicsError, match="tool"):
         postproc.fk(robot, np.zeros((1, 6)), tool=[1.0, 2.0])
+    # neither ortho-parallel (no [opw]) nor of the UR shape (postproc.ur_kinematics): no analytic IK
+    skewed = replace(postproc.load_robot("ur10"), alpha_deg=np.array([90.0, 0.0, 0.0, 90.0, 90.0, 0.0]))
     with pytest.raises(postproc.KinematicsError, match="no \\[opw\\] section"):
-        postproc.ik(postproc.load_robot("ur10"), np.eye(4))
+        postproc.ik(skewed, np.eye(4))
 
 
 @pytest.mark.parametrize("name", ALL)

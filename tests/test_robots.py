@@ -11,7 +11,7 @@ import postproc
 from postproc.errors import RobotFileError, UnknownRobotError
 from postproc.robots import parse_robot_toml
 
-REQUIRED = {"kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10"}
+REQUIRED = {"kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10", "ur10e", "ur5e"}
 
 
 def test_all_required_robots_are_bundled_and_valid():

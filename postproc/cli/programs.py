@@ -102,7 +102,7 @@ def inspect_cmd(
 @with_plugins
 def convert_cmd(
     program: Path = typer.Argument(..., help="Program in any supported dialect."),
-    to: str = typer.Option(..., "--to", help="rapid or krl: the language of the new program (gcode: a five-axis G-code program, with --machine and --rtcp)."),
+    to: str = typer.Option(..., "--to", help="rapid, krl, fanuc or urscript: the language of the new program (gcode: a five-axis G-code program, with --machine and --rtcp)."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input: rapid, krl or gcode (default: from the extension or content)."),
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),

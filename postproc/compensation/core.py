@@ -105,7 +105,7 @@ class Report:
             reasons = []
             if self.posture is not None and self.posture[i]:
                 reasons.append(_POSTURE_TEXT[int(self.posture[i])])
-            if not self.within_limits[i] and (self.posture is None or self.posture[i] != POSTURE_CONF):
+            if not self.within_limits[i] and (self.posture is None or self.posture[i] not in (POSTURE_CONF, POSTURE_START)):
                 reasons.append("out of reach or outside the joint limits")
             if self.singular[i]:
                 reasons.append("near a singularity")
@@ -225,13 +225,15 @@ def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray,
     by_conf = controller.conf_applies(tp) & cartesian
     anchor_q = np.full((n, 6), np.nan)
     if by_conf.any():
-        anchor_q[by_conf] = controller.branch_from_conf(robot, sols.all(np.nonzero(by_conf)[0]), tp.conf[by_conf])[0]
+        anchor_q[by_conf] = controller.branch_of_targets(robot, sols.all(np.nonzero(by_conf)[0]), tp, np.nonzero(by_conf)[0])[0]
     joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
     anchor_q[joint_targets] = tp.joints[joint_targets]
     carried = posture.carry(robot, sols, by_conf | joint_targets, anchor_q, start_q, lines=tp.line)
     problem = np.zeros(n, dtype=int)
     problem[by_conf & np.isnan(anchor_q).any(axis=1)] = POSTURE_CONF
-    q = np.where(problem[:, None] == POSTURE_CONF, np.nan, carried.q)
+    if start_q is None and not getattr(controller, "start_posture_assumed", True):
+        problem[cartesian & (carried.set_by < 0)] = POSTURE_START  # the rule needs the joints the program starts from
+    q = np.where(problem[:, None] != 0, np.nan, carried.q)
     usable = ~np.isnan(q).any(axis=1) & kin.within_limits(robot, np.nan_to_num(q))
     branch = np.where(usable, carried.branch, -1)
     q[~usable] = np.nan
@@ -244,7 +246,10 @@ PATH_MIN_LENGTH_MM = 5.0  # shorter segments are not sampled for the path betwee
 # What may keep the controller from the posture its rules give (Report.posture):
 POSTURE_CONF = 1  # the configuration data match no IK solution of the nominal robot
 POSTURE_PATH = 3  # the straight line to the compensated target passes a singularity or leaves reach
+POSTURE_START = 4  # before any target that sets the posture, under a controller whose rule needs the start joints
 _POSTURE_TEXT = {
+    POSTURE_START: "the controller takes the IK solution nearest the joints the robot is in, and before this target the program "
+                   "sets none (no joint target yet): give the robot's joints at the start with --start-joints",
     POSTURE_CONF: "its configuration data match no IK solution of the nominal robot: the controller would stop there "
                   "(write the configuration the robot takes, or let it choose: KRL LIN, RAPID ConfL\\Off / ConfJ\\Off)",
     POSTURE_PATH: "the controller's straight line to the compensated target passes near a singularity or leaves reach on its posture",

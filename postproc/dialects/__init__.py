@@ -14,14 +14,16 @@ from ..ir import Toolpath
 from .base import Dialect, read_head
 from .fanuc import FANUC
 from .gcode import GCODE
+from .inform import INFORM
 from .krl import KRL
 from .rapid import RAPID
 from .sinumerik import SINUMERIK
+from .urscript import URSCRIPT
 
 # A module-level table on purpose: a toolpath names its dialect (Toolpath.dialect) and
 # every stage, forked workers included, resolves it here. Built-ins are fixed at import;
 # plugin dialects are added only by ``register`` (postproc.plugins.load_plugins), idempotently.
-REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, KRL, FANUC, SINUMERIK, GCODE)}  # sniffing tries them in this order
+REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, URSCRIPT, KRL, FANUC, INFORM, SINUMERIK, GCODE)}  # sniffing tries them in this order
 BUILTIN: frozenset[str] = frozenset(REGISTRY)
 
 

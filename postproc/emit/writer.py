@@ -45,6 +45,8 @@ def drive(w, tp: Toolpath, name: str = "converted", loads=None, arc_tol_mm: floa
     ``tp`` was read in (a ``Dialect``; its ``speed_to_mm_per_s`` and ``machine_program`` are
     used), given by the caller so that emit imports no language."""
     w.start(name)
+    if hasattr(w, "source"):  # a writer that takes the input's configuration data only in its own language's terms
+        w.source = source.name
     refuse_unknown_positions(tp)  # which axis, why, and how to give it
     refuse_unplaced(tp, source.machine_program)
     poses = tp.target_poses()
