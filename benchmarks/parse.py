@@ -86,6 +86,7 @@ def make_programs(folder: Path, n: int) -> dict[str, Path]:
     out["fanuc"] = make_fanuc(folder, n)
     out["sinumerik"] = make_sinumerik(folder, n)
     out["inform"] = make_inform(folder, n)
+    out["val3 (.pgx + .dtx)"] = make_val3(folder, n)
     return out
 
 
@@ -129,14 +130,34 @@ def make_inform(folder: Path, n: int) -> Path:
     return job
 
 
+def make_val3(folder: Path, n: int) -> Path:
+    """A Stäubli VAL3 application: n/2 movel lines in start.pgx, their points in the .dtx."""
+    app = folder / "val3"
+    app.mkdir()
+    count = max(n // 2 - 8, 1)
+    with open(app / "start.pgx", "w", encoding="latin-1") as fp, open(app / "big.dtx", "w", encoding="latin-1") as fd:
+        fp.write('<?xml version="1.0" encoding="utf-8"?>\n<Programs xmlns="http://www.staubli.com/robotics/VAL3/Program/2">\n'
+                 '  <Program name="start">\n    <Code><![CDATA[begin\n')
+        fd.write('<?xml version="1.0" encoding="utf-8"?>\n<Database xmlns="http://www.staubli.com/robotics/VAL3/Data/2">\n  <Datas>\n'
+                 '    <Data name="tTool" type="tool" size="1">\n      <Value key="0" z="200" fatherId="flange[0]" />\n    </Data>\n'
+                 '    <Data name="mCut" type="mdesc" size="1">\n      <Value key="0" tmax="100" blend="Cartesian" leave="0.5" reach="0.5" />\n    </Data>\n'
+                 f'    <Data name="pCut" type="pointRx" size="{count}">\n')
+        for i in range(count):
+            fp.write(f"  movel(pCut[{i}], tTool, mCut)\n")
+            fd.write(f'      <Value key="{i}" x="{800 + (i % 400) * 0.5:.3f}" y="{-200 + (i // 400) % 400:.3f}" z="{300 + (i % 7) * 0.125:.3f}" rx="180" ry="0" rz="0" fatherId="world[0]" />\n')
+        fp.write("end\n]]></Code>\n  </Program>\n</Programs>\n")
+        fd.write("    </Data>\n  </Datas>\n</Database>\n")
+    return app / "start.pgx"
+
+
 def measure(path: str) -> None:
     """Child process: parse and round-trip one program, print JSON."""
     from postproc.programs import emit_texts, parse_program
 
-    lines = sum(Path(d).read_bytes().count(b"\n") for d in [path] + ([str(Path(path).with_suffix(".dat"))] if Path(path).with_suffix(".dat").exists() else []))
     t0, c0 = time.perf_counter(), time.process_time()
     tp = parse_program(path)
     t_parse, cpu_parse = time.perf_counter() - t0, time.process_time() - c0
+    lines = sum(doc.text.count("\n") for doc in tp.sources)  # every file the program was read from (KRL's .dat, VAL3's .dtx)
     t0 = time.perf_counter()
     texts = emit_texts(tp, tp)
     t_emit = time.perf_counter() - t0

@@ -133,6 +133,24 @@ def _wpr_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return _abc_from_matrix(rot, near[:, ::-1])[:, ::-1]
 
 
+def _rxyz_to_matrix(numbers: Numbers) -> np.ndarray:
+    """Stäubli Rx, Ry, Rz (degrees, about the moving x, y', z''): R = Rx Ry Rz, the transpose of
+    KUKA's Rz(A) Ry(B) Rx(C) at A = -Rz, B = -Ry, C = -Rx."""
+    return np.swapaxes(abc_to_matrix(-np.asarray(numbers, dtype=float)[:, ::-1]), -1, -2)
+
+
+def _rxyz_to_quat(numbers: Numbers) -> np.ndarray:
+    q = abc_to_quat_wxyz(-np.asarray(numbers, dtype=float)[:, ::-1])
+    q[:, 1:] *= -1.0  # the transpose's quaternion is the conjugate
+    return q
+
+
+def _rxyz_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
+    """Rx, Ry, Rz of ``rot``, the triple nearest ``near`` (through KUKA's, of the transpose)."""
+    near = np.asarray(near, dtype=float)
+    return -_abc_from_matrix(np.swapaxes(rot, -1, -2), -near[:, ::-1])[:, ::-1] + 0.0  # + 0.0: no '-0'
+
+
 def _axis_from_matrix(rot: np.ndarray, near: Numbers) -> Numbers:
     return rot[:, :, 2].copy()
 
@@ -145,6 +163,7 @@ FORMS: dict[str, RotationForm] = {
         RotationForm("abc", 3, "A, B, C degrees: R = Rz(A) Ry(B) Rx(C) (KUKA)", abc_to_matrix, _abc_from_matrix, abc_to_quat_wxyz),
         RotationForm("wpr", 3, "W, P, R degrees about the fixed X, Y, Z: R = Rz(R) Ry(P) Rx(W) (Fanuc)",
                      lambda wpr: abc_to_matrix(wpr[:, ::-1]), _wpr_from_matrix, _wpr_to_quat),
+        RotationForm("rxyz", 3, "Rx, Ry, Rz degrees about the moving axes: R = Rx Ry Rz (Stäubli VAL3)", _rxyz_to_matrix, _rxyz_from_matrix, _rxyz_to_quat),
         RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
         RotationForm("rotvec", 3, "rotation vector rx, ry, rz, radians: axis times angle (Universal Robots URScript)",
                      lambda numbers: Rotation.from_rotvec(numbers).as_matrix(), _rotvec_from_matrix, _rotvec_to_quat),

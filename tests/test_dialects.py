@@ -41,7 +41,7 @@ def test_a_krl_program_spans_its_dat_and_the_robots_config_dat(tmp_path):
 
 
 def test_unknown_dialect_names_list_the_known_ones():
-    with pytest.raises(InputError, match="--to: 'no-such' is not one of rapid, urscript, krl, .*gcode"):  # every registered name, in sniffing order
+    with pytest.raises(InputError, match="--to: 'no-such' is not one of rapid, val3, urscript, krl, .*gcode"):  # every registered name, in sniffing order
         dialects.get("no-such", "--to")
 
 

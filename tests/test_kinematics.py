@@ -12,8 +12,8 @@ import postproc
 from postproc import kinematics as kin
 from postproc import pin_model
 
-ALL = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10"]
-OPW = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx"]
+ALL = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10", "tx2_90"]
+OPW = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "tx2_90"]
 
 
 def random_joints(robot, n, seed, margin=0.0):
@@ -168,9 +168,10 @@ def test_shoulder_singularity_and_reach_boundary(name):
     robot = postproc.load_robot(name)
     p = robot.opw
     # Wrist centre exactly on axis 1 (shoulder singularity): any q1 works, the solver must pick one.
+    # (With a lateral offset b, the nearest the wrist centre comes to axis 1 is b: there.)
     reach = np.hypot(p.c2 + np.hypot(p.a2, p.c3), 0.0)
     on_axis = np.eye(4)
-    on_axis[:3, 3] = [0.0, 0.0, p.c1 + 0.6 * reach + p.c4]
+    on_axis[:3, 3] = [0.0, p.b, p.c1 + 0.6 * reach + p.c4]
     sols = postproc.ik(robot, on_axis)[0]
     finite = ~np.isnan(sols).any(axis=-1)
     assert finite.any()

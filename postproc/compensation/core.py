@@ -411,7 +411,11 @@ def _refuse_unplaced(tp: Toolpath) -> None:
         if missing or missing_tools:
             hint = " Define " + ", ".join([f"frame {m} (--frame {m}=X,Y,Z,A,B,C)" for m in missing] + [f"tool {m} (--tool {m}=X,Y,Z,A,B,C)" for m in missing_tools]) + "."
         lines = ", ".join(str(v) for v in tp.line[i][:10])
-        raise InputError(f"targets on lines {lines} cannot be placed in the robot base frame (undefined point, frame or tool).{hint}")
+        # the reader's notes on those targets say why (a note starts with its file:line)
+        places = {f"{tp.sources[int(tp.file[j])].path}:{int(tp.line[j])}:" for j in i}
+        why = [n for n in tp.notes if any(n.startswith(p) for p in places)][:3]
+        raise InputError(f"targets on lines {lines} cannot be placed in the robot base frame (undefined point, frame or tool).{hint}"
+                         + "".join(f"\n  {n}" for n in why))
     if np.isnan(tp.orientation[np.nonzero(cart)[0]]).any():
         raise InputError("targets without an orientation (3-axis G-code) need one: convert the program for a robot first")
 

@@ -19,11 +19,12 @@ from .krl import KRL
 from .rapid import RAPID
 from .sinumerik import SINUMERIK
 from .urscript import URSCRIPT
+from .val3 import VAL3
 
 # A module-level table on purpose: a toolpath names its dialect (Toolpath.dialect) and
 # every stage, forked workers included, resolves it here. Built-ins are fixed at import;
 # plugin dialects are added only by ``register`` (postproc.plugins.load_plugins), idempotently.
-REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, URSCRIPT, KRL, FANUC, INFORM, SINUMERIK, GCODE)}  # sniffing tries them in this order
+REGISTRY: dict[str, Dialect] = {d.name: d for d in (RAPID, VAL3, URSCRIPT, KRL, FANUC, INFORM, SINUMERIK, GCODE)}  # sniffing tries them in this order (VAL3 before URScript: its code calls movej( too)
 BUILTIN: frozenset[str] = frozenset(REGISTRY)
 
 
