@@ -3,7 +3,6 @@
 from importlib.metadata import PackageNotFoundError, version
 
 from . import kinematics
-from .cam.post import post
 from .errors import InputError, JobError, KinematicsError, PostprocError, RobotFileError, UnknownRobotError
 from .kinematics import fk, gravity_torque, ik, jacobian
 from .robots import RobotModel, available_robots, load_robot
@@ -35,11 +34,15 @@ __all__ = [
 
 
 def __getattr__(name: str):
-    # postproc.suggest_poses (issue 32) is resolved on first use: postproc.suggest pulls in
-    # compensation, the dialects and the program writers (about 1.5 s), which a plain
-    # `import postproc` should not pay for.
+    # postproc.post and postproc.suggest_poses (issue 32) are resolved on first use: they
+    # pull in compensation, the dialects and the program writers (about 1.5 s), which a
+    # plain `import postproc` should not pay for.
+    if name == "post":
+        from .cam.post import post  # lazily: compensation, languages and writers load on first use
+
+        return post
     if name == "suggest_poses":
-        from .suggest import suggest_poses
+        from .suggest import suggest_poses  # lazily: as post
 
         return suggest_poses
     raise AttributeError(f"module 'postproc' has no attribute {name!r}")

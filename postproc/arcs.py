@@ -25,13 +25,15 @@ radius cannot give back (nearly a half circle: R decides the centre ill-conditio
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .errors import InputError
+from .emit.splice import TOLERANCE
+from .errors import InputError, OutputCheckError
 from .frames import invert_transform
 from .ir import F_ARC, Kind, Toolpath
+from .posture import interpolate_poses, near_singular
 
 # In-plane first and second axes and the normal axis of each plane, in program coordinates;
 # (first, second, normal) is right-handed, so counter-clockwise in (first, second) is G3.
@@ -219,7 +221,6 @@ class ArcFit:
         """``tp`` with the new arc words (only the words the arc uses)."""
         if not len(self.rows):
             return tp
-        from dataclasses import replace
 
         values = tp.values.copy()
         values[self.rows, F_ARC] = self.words
@@ -284,7 +285,6 @@ class _Interior:
 def _interior_poses(problem, arcs: Arcs, at: np.ndarray, positions_base: np.ndarray, fractions: np.ndarray) -> np.ndarray:
     """(M * K, 4, 4) poses at interior points: positions given (base frame), orientation
     interpolated from the arc's start to its end as the controller does."""
-    from .posture import interpolate_poses
 
     poses = interpolate_poses(problem.target[at - 1], problem.target[at], fractions)
     poses[..., :3, 3] = positions_base
@@ -375,7 +375,6 @@ def _radius_words(tp: Toolpath, arcs: Arcs, by_r: np.ndarray) -> np.ndarray:
 def _refuse_singular_arcs(tp: Toolpath, rows: np.ndarray, q: np.ndarray, robot) -> None:
     """The controller's arc may not pass near a wrist, elbow or shoulder singularity on the
     posture it is driven in (postproc.posture.near_singular at its samples)."""
-    from .posture import near_singular
 
     finite = ~np.isnan(q).any(axis=2)
     near = np.zeros(finite.shape, bool)
@@ -411,8 +410,6 @@ def _deviation(problem, sol, intended: Arcs, commanded: Arcs, at: np.ndarray) ->
 def check_words(original: Toolpath, modified: Toolpath, back: Toolpath, rows: np.ndarray) -> None:
     """The re-parsed output ``back`` gives every compensated arc of ``rows`` the centre words
     the compensation wrote (an omitted word reads as 0), within the writing tolerance."""
-    from .emit.splice import TOLERANCE
-    from .errors import OutputCheckError
 
     if modified.arc is None or not len(rows):
         return

@@ -16,11 +16,17 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from distributed import WorkerPlugin
+import numpy as np
+from distributed import Client, LocalCluster, WorkerPlugin, as_completed, get_worker
 
+from .compensate import CompensationError, compensate
+from .compensation.request import CompensationRequest
 from .errors import InputError, JobError, PostprocError
-from .plugins import loaded_plugin_files
+from .model_io import load_model
+from .plugins import load_plugins, loaded_plugin_files
+from .program_check import check_model_fits
 from .program_content import require_program
+from .programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, write_set
 
 PLUGIN_NAME = "postproc-model"
 
@@ -37,19 +43,12 @@ class ProgramResult:
 
 def compensate_file(program: str | Path, model, out_dir: str | Path, options: dict, dialect: str | None = None) -> ProgramResult:
     """Compensate one program file into out_dir; never raises for a bad program, reports it."""
-    import numpy as np
-
-    from .compensate import CompensationError, compensate
-    from .programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, write_set
-
     program = Path(program)
     try:
         tp = parse_program(program, dialect)
         require_program(tp)
         check = options.get("model_check")  # (model path, --robot, --allow-model-mismatch)
         if check is not None:
-            from .program_check import check_model_fits
-
             check_model_fits(tp, model, *check)
         new, rep = compensate(tp, model, **{k: v for k, v in options.items() if k != "model_check"})
         failures = rep.failures()
@@ -80,9 +79,6 @@ class ModelPlugin(WorkerPlugin):
         self.model = None
 
     def setup(self, worker=None):
-        from .model_io import load_model
-        from .plugins import load_plugins
-
         # The worker loads the same plugin files (and its own entry points) before the
         # model, which refuses a plugin that is missing or changed there.
         load_plugins(self.plugin_files)
@@ -93,8 +89,6 @@ class ModelPlugin(WorkerPlugin):
 
 
 def _task(program: str, out_dir: str, options: dict, dialect: str | None) -> ProgramResult:
-    from distributed import get_worker
-
     return compensate_file(program, get_worker().plugins[PLUGIN_NAME].model, out_dir, options, dialect)
 
 
@@ -109,13 +103,19 @@ def check_programs(programs: list[Path], out_dir: Path) -> None:
         seen[program.name] = program
 
 
+def run_batch_request(request: CompensationRequest, on_done=None) -> list[ProgramResult]:
+    """Compensate every program of ``request`` (several, ``out_dir``, ``jobs`` or ``scheduler``)
+    on a Dask cluster; results in the programs' order, ``on_done`` as in ``run_batch``."""
+    options = {**request.solver_options(), "model_check": request.model_check()}
+    return run_batch([Path(p) for p in request.programs], Path(request.machine.source), request.out_dir, options, jobs=request.jobs,
+                     scheduler=request.scheduler, dialect=request.dialect, on_done=on_done)
+
+
 def run_batch(programs: list[Path], model_path: Path, out_dir: Path, options: dict, *, jobs: int | None = None,
               scheduler: str | None = None, dialect: str | None = None, on_done=None) -> list[ProgramResult]:
     """Compensate every program on a Dask cluster; results in the programs' order.
 
     on_done(result) is called as each program finishes (for a progress display)."""
-    from distributed import Client, LocalCluster, as_completed
-
     check_programs(programs, out_dir)
     if scheduler is None:
         cluster = LocalCluster(n_workers=max(jobs or 1, 1), threads_per_worker=1, processes=True, dashboard_address=None)
@@ -139,8 +139,6 @@ def run_batch(programs: list[Path], model_path: Path, out_dir: Path, options: di
 
 
 def _connect(address: str):
-    from distributed import Client
-
     try:
         return Client(address, timeout="10s")
     except (OSError, TimeoutError) as exc:

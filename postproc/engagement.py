@@ -21,11 +21,14 @@ a sub-step is a segmented exclusive running minimum over the sub-steps that cove
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import trimesh
 
 from .errors import InputError
+from .forces import CUTTING_KINDS
+from .workpiece import workpiece_frame_index
 
 
 def block_stock(size_mm=(1000.0, 100.0, 100.0)) -> trimesh.Trimesh:
@@ -167,7 +170,6 @@ def _engagement_at_targets(samples, target_sample, cutting, s_idx, dx, dy, befor
 
 def load_stock(path) -> trimesh.Trimesh:
     """A stock mesh from a file trimesh reads (STL, OBJ, PLY, ...), in the workpiece frame, mm."""
-    from pathlib import Path
 
     try:
         mesh = trimesh.load(str(path), force="mesh")
@@ -183,9 +185,6 @@ def load_stock(path) -> trimesh.Trimesh:
 def program_engagement(tp, diameter: float, mesh: trimesh.Trimesh, cell: float | None = None) -> np.ndarray:
     """Engagement (N, 4) of every target of a program whose Cartesian targets share one
     workpiece frame, from the stock ``mesh`` in that frame (rows of non-cutting targets empty)."""
-    from .forces import CUTTING_KINDS
-    from .place_program import workpiece_frame_index
-
     _, rows = workpiece_frame_index(tp)
     local = tp.target_poses()[rows]
     cutting = np.isin(tp.kind[rows], CUTTING_KINDS)

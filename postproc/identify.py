@@ -11,6 +11,7 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from dataclasses import replace as _replace
 from types import SimpleNamespace
 from typing import Callable
 
@@ -26,6 +27,8 @@ from .frames import kabsch
 from .measurements import MeasurementSet
 from .predictor_plugins import PREDICTORS
 from .robots import RobotModel
+from .term_selection import select_terms as best_subset
+from .term_selection import term_labels
 from .threads import small_matrices
 
 RANK_TOL = 1e-7
@@ -351,7 +354,6 @@ def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: Measur
     the whole family, with cross-validation and a stability check (``postproc.term_selection``),
     on the residual of the model without the family linearised around its fit. Returns the
     family with the chosen terms and a note of how stable the choice was."""
-    from .term_selection import select_terms as best_subset, term_labels
 
     result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
     prep = result.model.prepare(meas)
@@ -385,9 +387,16 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
                   gp_options: dict | None = None, progress=None) -> ErrorModel:
     """Attach a data-driven predictor of the model's residual (a hybrid model; with no
     effects, a purely data-driven one). tr-gpr takes a source-region set as well."""
-    from dataclasses import replace as _replace
 
-    from .learn import FEATURES, GPRPredictor, GridPredictor, PSOBPPredictor, Residual, TrGPRPredictor
+    # Deferred: postproc.learn loads torch (seconds), needed only when a predictor is fitted.
+    from .learn import (
+        FEATURES,
+        GPRPredictor,
+        GridPredictor,
+        PSOBPPredictor,
+        Residual,
+        TrGPRPredictor,
+    )
     from .learn.features import features
 
     if kind not in FEATURES and kind not in PREDICTORS:

@@ -27,6 +27,7 @@ from enum import IntEnum
 import numpy as np
 
 from . import rotation_forms
+from .errors import InputError
 from .frames import make_transform, quat_wxyz_to_matrix
 
 
@@ -154,7 +155,6 @@ class Toolpath:
     def with_frames(self, frames: dict | None = None, tools: dict | None = None) -> "Toolpath":
         """A copy where frames and tools the program leaves undefined are given by name
         (base_T_frame, flange_T_tcp as 4x4); an unknown name is an error naming the known ones."""
-        from .errors import InputError
 
         new_frames, new_tools = self.frames.copy(), self.tools.copy()
         frame_known = np.ones(len(self.frames), bool) if self.frame_known is None else self.frame_known.copy()

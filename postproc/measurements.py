@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import MeasurementError
+from .files import write_all
 
 JOINTS = tuple(f"q{i}" for i in range(1, 7))
 MEASURED = ("mx", "my", "mz")
@@ -293,6 +294,5 @@ def write_measurements(path: str | Path, meas: MeasurementSet, decimals: int = 4
 
 def write_text_atomic(path: str | Path, text: str, encoding: str = "utf-8") -> None:
     """Write a whole file or nothing: a temp file in the same folder, renamed over the target."""
-    from .files import write_all
 
     write_all({Path(path): text.encode(encoding)})

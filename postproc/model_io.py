@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import math
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -20,7 +21,7 @@ from .errormodel import ErrorModel
 from .errors import InputError, ModelFileError
 from .identify import FitResult
 from .measurements import write_text_atomic
-from .plugins import check_model_plugins, plugin_document
+from .plugin_records import check_model_plugins, plugin_document
 from .robots import load_robot
 
 FORMAT = "postproc-model"
@@ -131,10 +132,10 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         raise fail("base_registration", "rotation must be 3x3 and translation_mm three numbers") from None
     if rot.shape != (3, 3) or trans.shape != (3,) or not np.allclose(rot @ rot.T, np.eye(3), atol=1e-6):
         raise fail("base_registration", "rotation must be a 3x3 rotation matrix and translation_mm three numbers")
-    from dataclasses import replace
 
     residual = None
     if doc.get("predictor") is not None:
+        # Deferred: postproc.learn loads torch (seconds), needed only for a model with a data-driven predictor.
         from .learn import Residual
 
         residual = Residual.from_state(doc["predictor"], source)

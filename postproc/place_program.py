@@ -18,33 +18,11 @@ from . import compliance as comp
 from . import dialects
 from .errors import EmitError, InputError
 from .forces import CUTTING_KINDS, CutParams, forces_along
-from .ir import Kind, Toolpath
+from .ir import Toolpath
 from .placement import PlacementProblem, placement_joints
 from .programs import parse_program
 from .robots import RobotModel
-
-
-def workpiece_frame_index(tp: Toolpath) -> tuple[int, np.ndarray]:
-    """The one frame every Cartesian target uses, and the rows of those targets."""
-    rows = np.nonzero(tp.kind != Kind.ABSJ)[0]
-    if not len(rows):
-        raise InputError(f"{tp.sources[0].path}: no Cartesian target to place")
-    bad = rows[np.isnan(tp.position[rows]).any(axis=1) | np.isnan(tp.orientation[rows]).any(axis=1)]
-    if len(bad):
-        raise InputError(f"{tp.sources[0].path}, line {tp.line[bad[0]]}: target without a position or orientation in its frame")
-    used = np.unique(tp.frame[rows])
-    if len(used) != 1:
-        names = ", ".join(tp.frame_names[i] for i in used)
-        line = tp.line[rows][np.nonzero(tp.frame[rows] != tp.frame[rows[0]])[0][0]]
-        raise InputError(f"{tp.sources[0].path}, line {line}: targets in several frames ({names}); placement moves one workpiece frame")
-    unresolved = rows[~tp.resolved[rows]]
-    if len(unresolved):
-        raise InputError(f"{tp.sources[0].path}, line {tp.line[unresolved[0]]}: target or tool cannot be evaluated from the program")
-    tools_unknown = tp.tool_known is not None and not tp.tool_known[tp.tool[rows]].all()
-    if tools_unknown:
-        i = rows[~tp.tool_known[tp.tool[rows]]][0]
-        raise InputError(f"{tp.sources[0].path}, line {tp.line[i]}: tool '{tp.tool_names[tp.tool[i]]}' is not defined in the program")
-    return int(used[0]), rows
+from .workpiece import workpiece_frame_index
 
 
 def problem_from_program(tp: Toolpath, robot: RobotModel, *, force_tool=None, params: CutParams | None = None,
@@ -63,7 +41,7 @@ def problem_from_program(tp: Toolpath, robot: RobotModel, *, force_tool=None, pa
     applies = dialects.of(tp).controller.conf_applies(tp)[rows]
     return PlacementProblem(
         robot=robot, local_tcp=local, flange_T_tcp=tp.tools[tp.tool[rows]], force_local=force, normal_local=normal,
-        weights=weights, conf=tp.conf[rows], dialect=tp.dialect, conf_applies=applies,
+        weights=weights, conf=tp.conf[rows], language=dialects.of(tp), conf_applies=applies,
         compliance=comp.joint_compliance(robot, model),
         line=tp.line[rows], arm=_arm_configuration(tp, rows, applies), singular_deg=singular_deg, conf_mode=conf_mode,
     )
@@ -136,7 +114,7 @@ def placed_conf(problem: PlacementProblem, frame: np.ndarray) -> np.ndarray:
     conf = np.full((len(q), 4), np.nan)
     has = problem.conf_applies & (reason == 0)
     if has.any():
-        conf[has] = dialects.get(problem.dialect).conf_of_joints(problem.robot, q[has])
+        conf[has] = problem.language.conf_of_joints(problem.robot, q[has])
     return conf
 
 

@@ -40,7 +40,7 @@ class PlacementProblem:
     normal_local: np.ndarray  # (P, 3) surface normal, workpiece frame
     weights: np.ndarray  # (P,) eq. 2 step weights (0 off the cut)
     conf: np.ndarray  # (P, 4) the program's configuration data, NaN where none
-    dialect: str
+    language: object  # the program's language: its controller's rules (controller.branch_from_conf) and its configuration-data notation (conf_of_joints, arm_conf_column)
     conf_applies: np.ndarray  # (P,) True where the controller takes the configuration data (the dialect's rule)
     compliance: np.ndarray  # (6,) joint compliance, rad/(N*m)
     line: np.ndarray  # (P,) program lines
@@ -181,6 +181,7 @@ def search(problem: PlacementProblem, xs, ys, thetas, z_mm: float, refine: bool 
 
 def _refine(problem: PlacementProblem, start: np.ndarray, start_mm: float, axes, z_mm: float):
     """Bounded Nelder-Mead within one grid step of the start (and inside the search box)."""
+    # Deferred: scipy.optimize is slow to import and the command line imports placement at start-up.
     from scipy.optimize import minimize
 
     steps = np.array([np.diff(a).min() if len(a) > 1 else 0.0 for a in axes])

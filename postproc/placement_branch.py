@@ -22,7 +22,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import dialects
 from . import kinematics as kin
 from .posture import MAX_STEP_DEG, singularity_margins
 
@@ -35,9 +34,10 @@ REASONS = ("feasible", "out of reach", "configuration data", *(f"joint {j} limit
            "wrist singularity margin", "elbow singularity margin", "shoulder singularity margin", "joint flip between targets")
 
 
-def arm_codes(dialect: str, robot, q: np.ndarray) -> np.ndarray:
-    """The arm-configuration code (ABB cfx, KUKA Status) of joints q (N, 6), -1 where q has NaN."""
-    lang = dialects.get(dialect)
+def arm_codes(language, robot, q: np.ndarray) -> np.ndarray:
+    """The arm-configuration code (ABB cfx, KUKA Status) of joints q (N, 6) in ``language``'s
+    notation (``arm_conf_column``, ``conf_of_joints``), -1 where q has NaN."""
+    lang = language
     out = np.full(len(q), -1)
     finite = ~np.isnan(q).any(axis=1)
     if finite.any() and lang.arm_conf_column is not None:
@@ -51,10 +51,10 @@ def _anchor_branches(problem, sols: np.ndarray, anchors: np.ndarray):
     flat = sols[:, anchors].reshape(-1, 8, 6)
     if problem.conf_mode == "keep":
         want = np.tile(problem.conf[anchors], (m, 1))
-        q, idx = dialects.get(problem.dialect).controller.branch_from_conf(problem.robot, flat, want)
+        q, idx = problem.language.controller.branch_from_conf(problem.robot, flat, want)
         return q.reshape(m, a, 6), idx.reshape(m, a)
     # rederive: the first branch with the program's arm configuration (turns follow the path)
-    codes = arm_codes(problem.dialect, problem.robot, flat.reshape(-1, 6)).reshape(-1, 8)
+    codes = arm_codes(problem.language, problem.robot, flat.reshape(-1, 6)).reshape(-1, 8)
     wanted = np.tile(problem.arm[anchors], m)
     match = codes == wanted[:, None]
     idx = np.where(match.any(axis=1), np.argmax(match, axis=1), -1)

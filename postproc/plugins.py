@@ -12,8 +12,9 @@ three ways, all loaded by ``load_plugins``:
 In a loaded module, every ``Effect`` subclass with a ``name`` defined there becomes an
 effect, every ``PluginPredictor`` subclass a predictor, every ``Dialect`` instance a
 dialect. Each gets a ``PluginRecord`` (its module, file and the sha256 of that file);
-the model file keeps the records of the plugins it uses (``plugin_document``) and
-``check_model_plugins`` refuses a model whose plugin is not loaded or has changed.
+the model file keeps the records of the plugins it uses and refuses a model whose plugin
+is not loaded or has changed (``plugin_records``, which model files import: it knows no
+language).
 """
 
 from __future__ import annotations
@@ -25,7 +26,6 @@ import inspect
 import os
 import shlex
 import sys
-from dataclasses import asdict, dataclass
 from pathlib import Path
 from types import ModuleType
 from typing import Iterable
@@ -34,38 +34,16 @@ from . import dialects as dialect_registry
 from . import effects as effect_registry
 from .dialects.base import Dialect
 from .effects.base import Effect
-from .errors import InputError, ModelFileError
+from .errors import InputError
 from . import predictor_plugins as predictor_registry
+from .plugin_records import ENV, HOW_TO_LOAD, RECORD_ATTR, PluginRecord, check_model_plugins, plugin_document, plugin_record  # noqa: F401  (callers take them from here too)
 from .predictor_plugins import PluginPredictor
 
-ENV = "POSTPROC_PLUGINS"
 GROUPS = {"effect": "postproc.effects", "predictor": "postproc.predictors", "dialect": "postproc.dialects"}
-RECORD_ATTR = "__postproc_plugin__"
-HOW_TO_LOAD = f"--plugins PATH (a .py file or a folder of them), the environment variable {ENV}, or an installed package's 'postproc.effects' entry point"
 
 
 class PluginError(InputError):
     """A plugin that cannot be loaded: missing path, a Python error in it, a name clash."""
-
-
-@dataclass(frozen=True)
-class PluginRecord:
-    """Where a plugin effect, predictor or dialect came from."""
-
-    kind: str  # effect, predictor or dialect
-    name: str
-    module: str
-    file: str | None
-    sha256: str | None  # of the file's bytes
-    origin: str  # --plugins, POSTPROC_PLUGINS, or entry point DIST
-
-    def as_dict(self) -> dict:
-        return asdict(self)
-
-
-def plugin_record(obj) -> PluginRecord | None:
-    """The record of a plugin class or dialect object; None for a built-in."""
-    return getattr(obj, RECORD_ATTR, None) if isinstance(getattr(obj, RECORD_ATTR, None), PluginRecord) else None
 
 
 # ----------------------------------------------------------------- loading
@@ -236,34 +214,3 @@ def plugin_arguments() -> str:
 
 def _registered() -> list:
     return [*effect_registry.CATALOG.values(), *predictor_registry.PREDICTORS.values(), *dialect_registry.REGISTRY.values()]
-
-
-# ------------------------------------------------------------ model files
-
-
-def plugin_document(model) -> dict:
-    """``{"plugins": [records]}`` for the plugin effects and predictor a model uses; {} when none."""
-    objs = [type(effect) for effect in model.effects]
-    if model.residual is not None:
-        objs.append(predictor_registry.PREDICTORS.get(model.residual.kind))
-    records = [plugin_record(obj) for obj in objs if obj is not None]
-    return {"plugins": [r.as_dict() for r in records if r is not None]} if any(records) else {}
-
-
-def check_model_plugins(doc: dict, source: str) -> None:
-    """Refuse a model whose plugin effects or predictor are not loaded, or not the source it was fitted with."""
-    recorded = doc.get("plugins", [])
-    if not isinstance(recorded, list) or not all(isinstance(r, dict) and {"kind", "name", "sha256"} <= set(r) for r in recorded):
-        raise ModelFileError(f"{source}: key 'plugins': must be a list of {{kind, name, module, file, sha256}}")
-    tables = {"effect": effect_registry.CATALOG, "predictor": predictor_registry.PREDICTORS}
-    for entry in recorded:
-        what = f"{entry['kind']} '{entry['name']}' (from {entry.get('file') or entry.get('module')})"
-        loaded = tables.get(entry["kind"], {}).get(entry["name"])
-        if loaded is None:
-            hint = f"--plugins {entry['file']} (or POSTPROC_PLUGINS)" if entry.get("file") else HOW_TO_LOAD
-            raise ModelFileError(f"{source}: the model uses the plugin {what}, which is not loaded: load it with {hint}")
-        record = plugin_record(loaded)
-        if record is None or record.sha256 != entry["sha256"]:
-            now = "a built-in" if record is None else f"{record.file or record.module}, sha256 {str(record.sha256)[:12]}"
-            raise ModelFileError(f"{source}: the plugin {what} has changed since the model was fitted (sha256 "
-                                 f"{str(entry['sha256'])[:12]} recorded, loaded: {now}); load the file it was fitted with, or fit again")

@@ -235,6 +235,7 @@ def singularity_margins(robot, q_deg: np.ndarray):
 def interpolate_poses(start: np.ndarray, end: np.ndarray, fractions: np.ndarray) -> np.ndarray:
     """Poses along straight segments (M, 4, 4) -> (M, K, 4, 4): position linear, orientation
     by the shortest rotation (slerp), as controllers interpolate LIN / MoveL."""
+    # Deferred: scipy.spatial is slow to import and the command line imports posture at start-up.
     from scipy.spatial.transform import Rotation
 
     m, k = len(start), len(fractions)

@@ -12,7 +12,10 @@ from pathlib import Path
 import numpy as np
 
 from . import dialects
+from .arcs import check_words
 from .emit.load_plan import carried_loads
+from .emit.readback import positions_read_back
+from .emit.splice import TOLERANCE
 from .emit.writer import drive
 from .errors import EmitError, OutputCheckError, OutputError
 from .files import write_all
@@ -25,6 +28,12 @@ DIALECTS = dialects.names()
 def sniff(path: str | Path, data: bytes | None = None) -> str:
     """The dialect name of a program from its extension, or from its content when that is unknown."""
     return dialects.sniff(path, data).name
+
+
+def language_of(tp: Toolpath):
+    """The language ``tp`` was read in (its parser, writer and controller rules), for the
+    steps below the languages that are handed it (``postproc.subdivide``)."""
+    return dialects.of(tp)
 
 
 def parse_program(path: str | Path, dialect: str | None = None, data: bytes | None = None, modules=()) -> Toolpath:
@@ -75,8 +84,6 @@ def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: 
     Where only absolute position numbers changed, they are read back on their own instead
     (``emit.readback``: the same answer without the whole re-parse); anything else, or any
     doubt, takes the whole re-parse."""
-    from .emit.readback import positions_read_back
-    from .emit.splice import TOLERANCE
 
     tol = TOLERANCE[F_POS] * (1 + 1e-6)
     if positions_read_back(original, modified, texts, rows, tol):
@@ -93,7 +100,6 @@ def check_texts(original: Toolpath, modified: Toolpath, texts: list[str], rows: 
             f"{original.sources[int(original.file[i])].path}, line {original.line[i]}: the new text reads back as "
             f"{np.round(back.position[i], 4).tolist()}, not the compensated {np.round(modified.position[i], 4).tolist()}; nothing was written"
         )
-    from .arcs import check_words
 
     check_words(original, modified, back, rows)  # G2/G3 centre words as compensated
 

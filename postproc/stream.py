@@ -45,10 +45,12 @@ Both paths give byte-identical output on a program both can take
 
 from __future__ import annotations
 
+import ctypes
 import mmap
 import multiprocessing
 import os
 import pickle
+import sys
 from collections import deque
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
@@ -57,13 +59,24 @@ from itertools import chain
 from pathlib import Path
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from . import dialects
-from .compensate import PATH_TOLERANCE_MM, CompensationError, Reference, Report, compensate, reference_postures
+from .compensate import (
+    PATH_TOLERANCE_MM,
+    CompensationError,
+    Reference,
+    Report,
+    compensate,
+    reference_postures,
+    request_for,
+)
+from .compensation.request import CompensationRequest
 from .errors import InputError
 from .files import write_all
 from .ir import SourceDoc, Toolpath
 from .program_check import check_model_fits
+from .programs import check_texts, refuse_overwrite
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
 CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
@@ -390,7 +403,6 @@ class _Meta:
 def _finish(model, options: dict, task: _Task) -> tuple[bytes, Report, tuple, list[str] | None]:
     """Compensate, emit and re-parse check one chunk: (its own new text, the report, the notes,
     the other files' texts). No text (and no check) where a target failed: nothing will be written."""
-    from .programs import check_texts
 
     options = dict(options)
     if task.reference is None:
@@ -653,20 +665,34 @@ class StreamResult:
     outputs: list[Path]
 
 
-def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
-                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, tune_malloc: bool = False,
-                        **options) -> StreamResult:
-    """Compensate the program at ``path`` into ``output`` chunk by chunk (module docstring).
+def stream_request(request: CompensationRequest, *, chunk_lines: int = CHUNK_LINES, progress=lambda msg: None,
+                   workers: int | None = None, tune_malloc: bool = False) -> StreamResult:
+    """Compensate ``request``'s one program into its output chunk by chunk (module docstring),
+    the program checked against the model first (``request.model_check()``).
     ``workers``: processes that compensate, emit and check chunks while this one reads the
     next (None: one per core up to WORKERS_MAX; 0: all in this process). Raises
     StreamFallback (nothing written) when the program cannot be streamed; a
     CompensationError (nothing written) whose ``failures`` list the targets that failed.
     ``tune_malloc``: also change this process's malloc thresholds (_keep_freed_memory; the
     CLI and the benchmarks do; a library caller's process keeps its own unless it asks)."""
-    path, output = Path(path), Path(output)
-    options = dict(options)
-    model_check = options.pop("model_check", None)  # (model path, --robot, --allow-model-mismatch), as postproc.batch
-    lang, rules = stream_rules_for(path, dialect, model)
+    return _stream(request, request.model_check(), chunk_lines, progress, workers, tune_malloc)
+
+
+def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect: str | None = None, chunk_lines: int = CHUNK_LINES,
+                        in_place: bool = False, progress=lambda msg: None, workers: int | None = None, tune_malloc: bool = False,
+                        **options) -> StreamResult:
+    """``stream_request`` in keyword form: ``options`` as ``compensate``'s, and ``model_check``
+    (model path, --robot, --allow-model-mismatch) to check the program against the model."""
+    model_check = options.pop("model_check", None)
+    request = request_for(model, programs=(str(path),), output=str(output), dialect=dialect, in_place=in_place, **options)
+    return _stream(request, model_check, chunk_lines, progress, workers, tune_malloc)
+
+
+def _stream(request: CompensationRequest, model_check: tuple | None, chunk_lines: int, progress, workers: int | None,
+            tune_malloc: bool) -> StreamResult:
+    path, output, model = Path(request.programs[0]), Path(request.output), request.machine.model
+    options = request.solver_options()
+    lang, rules = stream_rules_for(path, request.dialect, model)
     if tune_malloc:
         _keep_freed_memory()
     try:
@@ -677,13 +703,13 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
     with fh:
         program, first = _open(path, lang, rules, fh)
         with _pool(workers, warm=(model, options, program, first)) as (pool, slots):
-            return _run(program, first, fh, model, options, progress, chunk_lines, output, in_place, pool, workers, slots, model_check)
+            return _run(program, first, fh, model, options, progress, chunk_lines, output, request.in_place, pool, workers, slots,
+                        model_check)
 
 
 def _run(program: _Program, first: str, fh, model, options: dict, progress, chunk_lines: int, output: Path, in_place: bool,
          pool, workers: int, slots, model_check: tuple | None = None) -> StreamResult:
     """``compensate_streamed`` once the program is open and the workers (if any) started."""
-    from .programs import refuse_overwrite
 
     lang, rules = program.lang, program.rules
     job = _Job(program, model, options, progress, model_check)
@@ -719,7 +745,6 @@ def _keep_freed_memory() -> None:
     the peak stays that of the chunks in flight. A process-wide malloc setting (mallopt):
     made in each worker (our own processes) and, when asked, in the calling process; nothing
     where the C library has none."""
-    import ctypes
 
     try:
         mallopt = ctypes.CDLL(None).mallopt
@@ -744,14 +769,12 @@ def _worker_start(baton: _Baton, slots: "_Slots | None", warm: tuple | None = No
     one torch thread (a forked child whose parent already ran torch's thread pool, a learned
     predictor, hangs in its first parallel torch operation; the workers are the parallelism;
     torch is not imported for a model without one); the warm-up (``_warm_up``)."""
-    import sys
 
     global _WORKER_BATON, _WORKER_SLOTS
     _WORKER_BATON, _WORKER_SLOTS = baton, slots
     _keep_freed_memory()
     if "torch" in sys.modules:
         sys.modules["torch"].set_num_threads(1)
-    from threadpoolctl import threadpool_limits
 
     threadpool_limits(1, user_api="blas")  # for this worker's life: a second BLAS thread only spins on the thin products here
     if warm is not None:

@@ -26,14 +26,23 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from . import dialects, rotation_forms
+from . import arcs, rotation_forms
 from . import kinematics as kin
-from .compensate import Report, compensate
+from .compensate import (
+    RUN_OPTIONS,
+    ProcessForces,
+    Report,
+    compensate,
+    process_forces,
+    request_for,
+)
+from .compensation.request import CompensationRequest
 from .emit.insert import NewPoint
 from .errors import EmitError, OutputCheckError
 from .frames import invert_transform, make_transform
 from .ir import F_ARC, F_EXT, Kind, Toolpath
 from .posture import interpolate_poses
+from .programs import language_of
 from .segments import arc_at
 
 DEFAULT_TOLERANCE_MM = 0.02
@@ -52,13 +61,31 @@ class Subdivided:
     added: tuple[tuple[int, str], ...]  # (line in the new program's file, name or '') of each new target
 
 
-def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOLERANCE_MM, **options) -> Subdivided:
-    """Compensate ``tp`` (``options`` as ``compensate``), subdividing every straight segment whose
-    predicted path strays more than ``tolerance_mm`` from the intended line, and compensating again."""
-    lang = dialects.of(tp)
+def subdivide_request(request: CompensationRequest, tp: Toolpath, language, *, forces: ProcessForces | None = None,
+                      **run) -> Subdivided:
+    """Compensate ``tp`` as ``request`` asks, subdividing every straight segment and arc whose
+    predicted path strays more than ``request.max_deviation_mm`` (default
+    ``DEFAULT_TOLERANCE_MM``) from the intended one, and compensating again. ``language``:
+    the program's language (its ``insert_points``, ``parse_sources``, configuration rules);
+    ``run``: ``progress``, ``detail`` (``compensate``)."""
+    forces = process_forces(request, tp) if forces is None else forces
+    options = {**request.solver_options(), "force_per_target": forces.per_target, **run}
+    options.pop("max_deviation_mm")
+    return _subdivided(tp, request.machine.model, request.max_deviation_mm or DEFAULT_TOLERANCE_MM, language, options)
+
+
+def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOLERANCE_MM, *, language=None, **options) -> Subdivided:
+    """``subdivide_request`` in keyword form (``options`` as ``compensate``'s; ``language``
+    default: the one ``tp`` was read in)."""
+    run = {key: options.pop(key) for key in RUN_OPTIONS if key in options}
+    request = request_for(model, max_deviation_mm=tolerance_mm, **options)
+    return subdivide_request(request, tp, language_of(tp) if language is None else language, **run)
+
+
+def _subdivided(tp: Toolpath, model, tolerance_mm: float, lang, options: dict) -> Subdivided:
     added_rows: list[int] = []
     for round_ in range(MAX_ROUNDS + 1):
-        new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, **options)
+        new, report = compensate(tp, model, max_deviation_mm=tolerance_mm, controller=lang.controller, **options)
         over, arcs_over = _segments_over(tp, report, tolerance_mm), _arcs_over(tp, report, tolerance_mm)
         others = report.failed & ~np.isin(np.arange(len(tp)), np.r_[over, arcs_over])
         if not (len(over) or len(arcs_over)) or others.any() or round_ == MAX_ROUNDS:
@@ -66,8 +93,8 @@ def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOL
         placed = tp.with_frames(options.get("frames"), options.get("tools")) if options.get("frames") or options.get("tools") else tp
         circ = arcs_over[tp.kind[arcs_over] == Kind.CIRC_END]
         g2g3 = arcs_over[tp.kind[arcs_over] != Kind.CIRC_END]
-        points = (new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm))
-                  + arc_points(placed, model.robot, circ, pieces(report.path_mm[circ], tolerance_mm))
+        points = (new_points(placed, model.robot, over, pieces(report.path_mm[over], tolerance_mm), language=lang)
+                  + arc_points(placed, model.robot, circ, pieces(report.path_mm[circ], tolerance_mm), language=lang)
                   + gcode_arc_points(placed, g2g3, pieces(report.path_mm[g2g3], tolerance_mm)))
         sources, _ = lang.insert_points(tp, points)
         longer = lang.parse_sources(sources)
@@ -110,11 +137,11 @@ def pieces(deviation_mm: np.ndarray, tolerance_mm: float) -> np.ndarray:
     return np.clip(k, 2, MAX_PIECES).astype(int)
 
 
-def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list[NewPoint]:
+def new_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray, *, language=None) -> list[NewPoint]:
     """Targets evenly spaced on the intended straight segments into ``rows`` (``count[i]``
     pieces each), with orientation interpolated as the controller does, in each end
-    target's frame and notation."""
-    lang = dialects.of(tp)
+    target's frame and notation. ``language``: the program's (default: the one ``tp`` was read in)."""
+    lang = language_of(tp) if language is None else language
     base = tp.base_poses()
     points = []
     repeated = _runs_more_than_once(tp)
@@ -137,8 +164,6 @@ def gcode_arc_points(tp: Toolpath, rows: np.ndarray, count: np.ndarray) -> list[
     given the last piece's centre words (and end-point words where a full circle had none).
     A planar arc cannot follow an error across its plane; each piece's ends are compensated,
     so what is left shrinks with the square of the piece."""
-    from . import arcs
-
     geometry = arcs.geometry(tp)
     base = tp.base_poses()
     repeated = _runs_more_than_once(tp)
@@ -181,13 +206,13 @@ def _values_at(tp: Toolpath, r: int, poses: np.ndarray, t: np.ndarray, start: in
     return values
 
 
-def arc_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray) -> list[NewPoint]:
+def arc_points(tp: Toolpath, robot, rows: np.ndarray, count: np.ndarray, *, language=None) -> list[NewPoint]:
     """A circular motion into each end row of ``rows`` split into ``count[i]`` arcs of the
     same circle: copies of its statement (auxiliary point in the middle of each piece, end
     point at its end) written before it, and its own auxiliary point moved to the middle of
     the last piece (a named one declared anew). Orientation runs from start to end as the
-    controller interpolates it."""
-    lang = dialects.of(tp)
+    controller interpolates it. ``language``: the program's (default: the one ``tp`` was read in)."""
+    lang = language_of(tp) if language is None else language
     base = tp.base_poses()
     repeated = _runs_more_than_once(tp)
     points = []
@@ -310,8 +335,6 @@ def check_inserted(tp: Toolpath, longer: Toolpath, placed: Toolpath, points: lis
 def _check_split_arcs(placed: Toolpath, longer_placed: Toolpath, points: list[NewPoint], new_index, inserted, order) -> None:
     """Every piece of a split G2 / G3, as its words read back, lies on the arc it came from
     (its centre words are not targets, so the pose check above does not see them)."""
-    from . import arcs
-
     split = sorted({p.row for p in points if p.replaces and placed.kind[p.row] in (Kind.ARC_CW, Kind.ARC_CCW)})
     if not split:
         return

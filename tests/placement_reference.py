@@ -22,7 +22,6 @@ import itertools
 
 import numpy as np
 
-from postproc import dialects
 from postproc import kinematics as kin
 from postproc.posture import singularity_margins
 
@@ -45,7 +44,7 @@ def _in_limits(robot, q):
 
 
 def _keep_choice(problem, sols, p):
-    lang = dialects.get(problem.dialect)
+    lang = problem.language
     for b in range(8):
         if np.isnan(sols[b]).any():
             continue
@@ -58,7 +57,7 @@ def _keep_choice(problem, sols, p):
 
 
 def _rederive_choice(problem, sols, p):
-    lang = dialects.get(problem.dialect)
+    lang = problem.language
     for b in range(8):
         if not np.isnan(sols[b]).any() and lang.conf_of_joints(problem.robot, sols[b][None])[0][lang.arm_conf_column] == problem.arm[p]:
             return b, sols[b].copy()

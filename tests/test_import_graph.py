@@ -174,3 +174,24 @@ def test_compensation_and_physics_import_no_language():
         if any(module == floor or module.startswith(floor + ".") for floor in BELOW_LANGUAGES):
             bad += [" -> ".join(path) for target, path in _reached(graph, module).items() if target.startswith("postproc.dialects")]
     assert not bad, "below the languages, yet reaching one:\n" + "\n".join(sorted(bad)[:20])
+
+
+# Modules above the physics but below the programs' floor that once reached a language
+# (issue 27): model files through the plugin loader, engagement through place_program,
+# placement through placement_branch. They are handed what they need, or import a module
+# that knows no language (plugin_records, workpiece).
+NO_LANGUAGE_EITHER = ("postproc.model_io", "postproc.plugin_records", "postproc.engagement", "postproc.workpiece",
+                      "postproc.placement", "postproc.placement_branch")
+
+
+def test_model_files_engagement_and_placement_reach_no_language():
+    graph = import_graph()
+    bad = [" -> ".join(path) for module in NO_LANGUAGE_EITHER if module in graph
+           for target, path in _reached(graph, module).items() if target.startswith("postproc.dialects")]
+    assert not bad, "reaching a language:\n" + "\n".join(sorted(bad)[:20])
+
+
+def test_subdivide_is_handed_the_language():
+    """subdivide takes the program's language as an argument (compensate / the CLI resolve it)."""
+    graph = import_graph()
+    assert not [t for t in graph["postproc.subdivide"] if t.startswith("postproc.dialects")], graph["postproc.subdivide"]

@@ -14,6 +14,7 @@ import pytest
 from typer.testing import CliRunner
 
 from placement_reference import reference_cell
+from postproc import dialects
 from postproc import placement as pl
 from postproc import placement_branch as pb
 from postproc.cli import app
@@ -153,7 +154,7 @@ def test_written_program_reads_back_at_the_placed_poses(tmp_path):
     q, why = pl.placement_joints(problem, pl.placement_frames([[b["x"], b["y"], b["theta"]]], 1170.0)[0])
     assert (why == 0).all()
     assert doc["conf_written"] == len(original) and not np.array_equal(placed.conf, original.conf)
-    np.testing.assert_array_equal(placed.conf, robot_conf := np.asarray(pb.dialects.get("rapid").conf_of_joints(robot, q)))
+    np.testing.assert_array_equal(placed.conf, robot_conf := np.asarray(dialects.get("rapid").conf_of_joints(robot, q)))
     assert robot_conf.shape == (len(original), 4) and plot.stat().st_size > 20_000
 
 
@@ -218,7 +219,7 @@ def test_krl_placed_program_gets_the_new_status_and_turn(robot, face_st, tmp_pat
     frame = pl.placement_frames([[1200.0, -300.0, 90.0]], 1170.0)[0]
     q, why = pl.placement_joints(problem_from_program(placed, robot, force_tool=FORCE, conf_mode="keep"), frame)
     assert (why == 0).all()
-    status, turn = pb.dialects.get("krl").conf_of_joints(robot, q[:1])[0, :2]
+    status, turn = dialects.get("krl").conf_of_joints(robot, q[:1])[0, :2]
     assert (status, turn) == (2, 35) and tuple(placed.conf[0, :2]) == (status, turn)  # A2 < 0 now, A3 >= 0: T 37 -> 35
     changed = [a for a, b in zip(out.read_text().splitlines(), face_st.read_text().splitlines()) if a != b]
     assert len(changed) == 2 and changed[0].startswith("$BASE") and changed[1].endswith("S 2, T 35}")

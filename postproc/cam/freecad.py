@@ -26,7 +26,10 @@ import numpy as np
 
 from .. import dialects
 from ..coverage_text import describe_model, model_summary
+from ..emit.writer import TOOL_DOWN
 from ..errors import InputError, JobError, PostprocError
+from ..frames import abc_to_matrix, make_transform
+from ..programs import parse_program
 from .arcs import linearise_arc
 
 FREECAD_FEED_TO_MM_MIN = 60.0  # FreeCAD keeps feeds in mm/s (its internal velocity unit)
@@ -93,7 +96,6 @@ def _numbers(text: str, counts: tuple[int, ...], what: str) -> np.ndarray:
 
 def _transforms(items: list[str], option: str, rename=lambda name: name) -> dict:
     """'NAME=X,Y,Z[,A,B,C]' -> {name: 4x4} (KUKA A,B,C: R = Rz(A) Ry(B) Rx(C))."""
-    from ..frames import abc_to_matrix, make_transform
 
     out = {}
     for item in items:
@@ -236,8 +238,6 @@ def _prepare(request: dict):
 def planned_targets(request: dict):
     """The job's targets as the post reads them, placed in the robot base frame, before compensation
     (3-axis moves get the writer's tool-down orientation): what the compensated program must cut."""
-    from ..emit.writer import TOOL_DOWN
-    from ..programs import parse_program
 
     _, gcode, frames, tools = _prepare(request)
     tp = parse_program("-", "gcode", gcode.text.encode("latin-1"))
@@ -248,7 +248,8 @@ def planned_targets(request: dict):
 
 def run(request: dict) -> dict:
     """One post request (see the module docstring) -> its answer; raises PostprocError."""
-    from ..model_io import load_model  # as .post: the fitting stack, loaded only when a job is posted
+    # Deferred, as postproc.post: the fitting and compensation stack loads only when a job is posted.
+    from ..model_io import load_model
     from .post import post, write_programs
 
     args, gcode, frames, tools = _prepare(request)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import InputError
 from ..measurements import write_text_atomic
+from .freecad import help_text
 
 POST_FILE = "postproc_post.py"  # FreeCAD lists posts by their *_post.py file names: "postproc"
 
@@ -37,7 +38,6 @@ def default_macro_dir() -> tuple[Path, str]:
 
 def render_post(python: str | None = None) -> str:
     """The post module's text with postproc's Python and the options' help filled in."""
-    from .freecad import help_text
 
     template = resources.files("postproc.cam").joinpath("freecad_post.py").read_text(encoding="utf-8")
     python = python or sys.executable

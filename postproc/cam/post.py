@@ -13,12 +13,19 @@ from pathlib import Path
 
 import numpy as np
 
+from ..compensate import CompensationError, compensate_with
+from ..compensation.request import CompensationRequest
 from ..dialects import get as get_dialect
 from ..dialects import names as dialect_names
 from ..dialects import of as dialect_of
+from ..errormodel import ErrorModel
 from ..errors import InputError
 from ..ir import Kind, Toolpath
-
+from ..model_io import load_model
+from ..plugins import load_plugins
+from ..program_check import check_model_fits
+from ..programs import emit_texts, parse_program, sniff, write_program, write_texts
+from ..targets import RobotTarget
 
 
 def robot_languages() -> tuple[str, ...]:
@@ -61,21 +68,30 @@ def post(
     ``plugins``: paths of effect / predictor plugins a model file needs (as ``--plugins``;
     ``POSTPROC_PLUGINS`` and installed entry points are loaded as well).
     """
-    from ..compensate import CompensationError, compensate
-    from ..programs import write_program
-    from ..programs import parse_program
+    error_model = _model(model, plugins)
+    request = CompensationRequest(
+        RobotTarget(error_model, "the model" if isinstance(model, ErrorModel) else str(model)),
+        output=None if output is None else str(output), dialect=dialect, frames=frames or {}, tools=tools or {}, robot=robot,
+        tol_mm=tol_mm, max_iter=max_iter, scheme=scheme, temp_c=temp_c,
+        force_n=None if force_n is None else tuple(np.ravel(force_n).tolist()),
+        allow_mismatch=allow_model_mismatch, allow_extrapolation=allow_extrapolation)
+    return post_request(request, program, to)
 
+
+def post_request(request: CompensationRequest, program: str | bytes | Toolpath, to: str = "krl") -> dict[str, str]:
+    """``post`` of a ``CompensationRequest`` (its robot model, ``output``, ``dialect``,
+    frames, tools, ``robot``, solver options and ``allow_mismatch``)."""
     target = get_dialect(to, "--to")
     if to not in robot_languages():
         raise InputError(f"--to: '{to}' is not one of {', '.join(robot_languages())}"
                          + (" (five-axis machines: use 'postproc convert --to gcode --machine M --rtcp MODE')" if target.machine_program else ""))
-    error_model = _model(model, plugins)
-    if robot is not None and robot != error_model.robot.name:
-        raise InputError(f"--robot {robot} does not match the model's robot {error_model.robot.name}")
-    output = Path(output) if output is not None else Path("postproc" + target.extensions[0])
-    tp = program if isinstance(program, Toolpath) else _parse(program, dialect)
+    error_model = request.machine.model
+    if request.robot is not None and request.robot != error_model.robot.name:
+        raise InputError(f"--robot {request.robot} does not match the model's robot {error_model.robot.name}")
+    output = Path(request.output) if request.output is not None else Path("postproc" + target.extensions[0])
+    tp = program if isinstance(program, Toolpath) else _parse(program, request.dialect)
     _refuse_what_a_robot_cannot_run(tp)
-    tp = tp.with_frames(frames, tools)
+    tp = tp.with_frames(dict(request.frames) or None, dict(request.tools) or None)
     _require_placed(tp)
     # ``postproc convert``: a new robot program with every target (3-axis G-code gets the
     # writer's tool-down orientation), then parsed back, so that compensation edits
@@ -84,16 +100,12 @@ def post(
     converted = parse_program("-", to, texts[0].encode("latin-1"))  # "-": read nothing else from disk
     if len(converted) != len(tp):
         raise InputError(f"internal: the written program has {len(converted)} targets, the input {len(tp)}")
-    from ..program_check import check_model_fits
-
-    check_model_fits(converted, error_model, str(model) if not hasattr(model, "robot") else "the model", robot, allow_model_mismatch)
-    new, report = compensate(converted, error_model, tol_mm=tol_mm, max_iter=max_iter, scheme=scheme, temp_c=temp_c, force_n=force_n,
-                             allow_extrapolation=allow_extrapolation)
+    check_model_fits(converted, error_model, *request.model_check())
+    # The frames and tools are in ``converted`` already: compensate with the rest of the request.
+    new, report = compensate_with(replace(request, frames={}, tools={}), converted)
     report = replace(report, line=tp.line.copy())  # failures name the lines of the input
     if report.failed.any():
         raise CompensationError(f"{int(report.failed.sum())} target(s) cannot be compensated; nothing was written", report)
-    from ..programs import emit_texts
-
     out = {str(output): emit_texts(converted, new)[0]}
     # Every target is inline: the program's other files (KRL's .dat) are as the writer made them.
     out.update({str(path): text for path, text in zip(target.new_program_paths(output)[1:], texts[1:])})
@@ -102,34 +114,23 @@ def post(
 
 def write_programs(files: dict[str, str]) -> None:
     """Write the files of one program: each atomically, all encoded before any is written."""
-    from ..programs import write_texts
-
     write_texts(list(files.values()), list(files.keys()))
 
 
 def _model(model, plugins=()):
-    from ..errormodel import ErrorModel
-
     if isinstance(model, ErrorModel):
         return model
-    from ..model_io import load_model  # lazily, as above: the model and plugin machinery only when a path is given
-    from ..plugins import load_plugins
-
     load_plugins(plugins)  # the same three ways as the command line: the model file names what it needs
 
     return load_model(Path(model))[0]
 
 
 def _parse(program: str | bytes, dialect: str | None) -> Toolpath:
-    from ..programs import parse_program
-
     data = program.encode("latin-1") if isinstance(program, str) else bytes(program)
     return parse_program("-", dialect or _sniff(data), data)
 
 
 def _sniff(data: bytes) -> str:
-    from ..programs import sniff
-
     return sniff("-", data)
 
 

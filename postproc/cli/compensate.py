@@ -13,22 +13,31 @@ import typer
 from rich.table import Table
 
 from ..arcs import summary as arc_summary
-from ..compensate import CompensationError, compensate
+from ..compensate import CompensationError, compensate_with, process_forces
+from ..compensation.request import CompensationRequest
 from ..coverage_text import describe_model, model_summary
 from ..errors import InputError
-from ..fivex.commands import compensate_five_program
-from ..force_file import base_frame_forces, read_force_file
-from ..forces import load_cut_params, program_forces
+from ..fivex.commands import compensate_five_request
 from ..measurements import write_text_atomic
 from ..plugin_option import with_plugins
 from ..program_check import check_model_fits
 from ..program_content import require_program
-from ..programs import check_texts, emit_texts, files_for, parse_program, refuse_overwrite, refuse_stdout, write_set
+from ..programs import (
+    check_texts,
+    emit_texts,
+    files_for,
+    language_of,
+    parse_program,
+    refuse_overwrite,
+    refuse_stdout,
+    write_set,
+)
 from ..progress import ProgressLine
-from ..stream import StreamFallback, compensate_streamed, wants_stream
-from ..subdivide import DEFAULT_TOLERANCE_MM, compensate_subdivided
+from ..stream import StreamFallback, stream_request, wants_stream
+from ..subdivide import subdivide_request
+from ..targets import FiveAxisTarget
 from .app import app, err, handles_errors, out
-from .common import check_output_folder, floats, named_frames, refuse_unused
+from .common import check_output_folder, floats, named_frames
 
 
 @app.command("compensate")
@@ -66,71 +75,59 @@ def compensate_cmd(
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
-    if model.suffix == ".toml":
-        refuse_unused("by five-axis compensation (--model MACHINE.toml)", {
-            "--out-dir": out_dir is not None, "--jobs": jobs is not None, "--scheduler": scheduler is not None, "--in-place": in_place,
-            "--tol": tol != 0.01, "--max-iter": max_iter != 25, "--scheme": scheme != "broyden", "--temp": temp is not None,
-            "--force": force is not None, "--report": report is not None,
-            "--start-joints": start_joints is not None, "--cut": cut is not None, "--max-deviation": max_deviation is not None,
-            "--force-file": force_file is not None, "--subdivide": subdivide, "--robot": robot is not None, "--allow-model-mismatch": allow_mismatch,
-            "--allow-extrapolation (a machine's error grid is never extrapolated)": allow_extrapolation})
+    # Deferred import: reading a model loads scipy.optimize (slow to import); `postproc --version` must stay fast.
+    from ..target_file import load_target
 
-        if len(programs) != 1 or output is None:
-            raise InputError("five-axis compensation takes one program and -o OUT")
-        for line in compensate_five_program(Path(programs[0]), model, Path(output), grid, input_axes, dialect=dialect,
-                                            frames=named_frames(frame, "--frame"), tools=named_frames(tool, "--tool")):
+    request = CompensationRequest(
+        load_target(model), programs=tuple(programs), output=output, out_dir=out_dir, jobs=jobs, scheduler=scheduler,
+        dialect=dialect, data=tuple(data or ()), in_place=in_place, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp,
+        force_n=None if force is None else tuple(floats(force, 3, "--force")), force_file=force_file, cut=cut,
+        frames=named_frames(frame, "--frame") or {}, tools=named_frames(tool, "--tool") or {},
+        start_joints=None if start_joints is None else tuple(floats(start_joints, 6, "--start-joints")),
+        max_deviation_mm=max_deviation, subdivide=subdivide, stream=stream, report=report, robot=robot,
+        allow_mismatch=allow_mismatch, allow_extrapolation=allow_extrapolation, grid=grid, input_axes=input_axes)
+    if isinstance(request.machine, FiveAxisTarget):
+        for line in compensate_five_request(request):
             out.print(line)
         return
-    # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..model_io import load_model
-
-    refuse_unused("with a robot model (five-axis only: --model MACHINE.toml)", {"--grid": grid is not None, "--input-axes": input_axes is not None})
-    if tol <= 0 or max_iter < 1:
-        raise InputError("--tol must be > 0 and --max-iter >= 1")
-    if max_deviation is not None and not max_deviation > 0:
-        raise InputError(f"--max-deviation must be > 0 mm, got {max_deviation}")
     check_output_folder(report, "--report")
-    error_model, _ = load_model(model)
-    forces = None if force is None else floats(force, 3, "--force")
-    common = {"tol_mm": tol, "max_iter": max_iter, "scheme": scheme, "temp_c": temp, "force_n": forces,
-              "frames": named_frames(frame, "--frame"), "tools": named_frames(tool, "--tool"),
-              "start_joints": None if start_joints is None else floats(start_joints, 6, "--start-joints"),
-              "allow_extrapolation": allow_extrapolation}
-    if out_dir is not None or jobs is not None or scheduler is not None or len(programs) > 1:
-        if cut is not None or in_place or subdivide or force_file is not None or data:
-            raise InputError("--cut, --force-file, --in-place, --subdivide and --data work on one program at a time (not with --out-dir)")
-        options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
-        out.print(describe_model(model_summary(error_model)["model"]))
-        raise typer.Exit(_compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report))
-    program = programs[0]
-    if output is None:
-        raise InputError("compensate needs -o OUT (or --out-dir DIR for many programs)")
-    stream_options = {**common, "max_deviation_mm": max_deviation, "model_check": (str(model), robot, allow_mismatch)}
-    if cut is None and report is None and output != "-" and not data and _compensate_streamed(program, error_model, output, dialect, stream, in_place, stream_options):
+    if request.is_batch:
+        out.print(describe_model(model_summary(request.machine.model)["model"]))
+        raise typer.Exit(_compensate_batch(request))
+    if _can_stream(request) and _compensate_streamed(request):
         return
-    tp = _read_program(program, dialect, data)
+    _compensate_whole(request)
+
+
+def _compensate_whole(request: CompensationRequest) -> None:
+    """compensate PROGRAM -o OUT: the whole program read, compensated (subdivided with
+    --subdivide), checked and written."""
+    program, output, report, error_model = request.programs[0], request.output, request.report, request.machine.model
+    tp = _read_program(program, request.dialect, request.data)
     require_program(tp)  # an empty file, no DEF / MODULE, no motion: nothing is written
     to_stdout = output == "-"
-    _refuse_unsafe_output(tp, output, in_place)
+    _refuse_unsafe_output(tp, output, request.in_place)
     log = err if to_stdout else out
 
-    for note in check_model_fits(tp, error_model, str(model), robot, allow_mismatch):
+    for note in check_model_fits(tp, error_model, *request.model_check()):
         log.print(f"note: {note} (--allow-model-mismatch)")
+    forces = process_forces(request, tp)
+    for note in forces.notes:
+        log.print(f"note: {note}")
 
     with ProgressLine("compensating", console=err) as progress:
-        options = dict(common, force_per_target=_block_forces(cut, force_file, forces, tp, frame, tool, log), progress=progress,
-                       detail=_is_page(report))
+        run = {"forces": forces, "progress": progress, "detail": _is_page(report)}
         written, added = tp, ()
-        if subdivide:
-            sub = compensate_subdivided(tp, error_model, max_deviation or DEFAULT_TOLERANCE_MM, **options)
+        if request.subdivide:
+            sub = subdivide_request(request, tp, language_of(tp), **run)
             written, new, rep, added = sub.program, sub.compensated, sub.report, sub.added
         else:
-            new, rep = compensate(tp, error_model, max_deviation_mm=max_deviation, **options)
+            new, rep = compensate_with(request, tp, **run)
     summary = {**rep.summary(), **model_summary(error_model)}
 
     summary["arcs"] = arc_summary(written, rep.path_mm)  # the subdivided program when --subdivide added targets
     if _is_page(report):  # written also when targets fail: the page shows where
-        _write_page(report, rep, summary, error_model, program, model)
+        _write_page(report, rep, summary, error_model, program, Path(request.machine.source))
     elif report is not None:
         _write_point_report(report, rep, summary)
     failures = rep.failures_at(written)
@@ -141,10 +138,10 @@ def compensate_cmd(
         if len(failures) > 50:
             err.print(f"... and {len(failures) - 50} more")
         raise CompensationError(f"{len(failures)} target(s) cannot be compensated; nothing was written", rep)
-    _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, in_place, original=tp)
+    _write_compensated(written, new, np.nonzero(rep.compensated)[0], output, request.in_place, original=tp)
     if added:
         log.print(f"{len(added)} new target(s) subdivide straight segments and arcs (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
-    _print_compensation(summary, scheme, new.notes, log)
+    _print_compensation(summary, request.scheme, new.notes, log)
 
 
 def _print_compensation(summary: dict, scheme: str, notes, log) -> None:
@@ -174,29 +171,6 @@ def _print_arc_deviation(arcs: dict | None, log) -> None:
     if arcs is not None:
         log.print(f"circular motions ({arcs['arcs']}, CIRC / MoveC / G2 / G3): largest predicted distance from the intended arc "
                   f"{arcs['max_mm']:.4f} mm, on the arc into line {arcs['line']}")
-
-
-def _cut_forces(cut: Optional[Path], tp, frame, tool):
-    """--cut: the mechanistic force (N, 3) of every target in the base frame, None without it."""
-    if cut is None:
-        return None
-
-    placed = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool")) if (frame or tool) else tp
-    return program_forces(placed, params=load_cut_params(cut))
-
-
-def _block_forces(cut, force_file, forces, tp, frame, tool, log):
-    """The force of every target in the base frame from --cut or --force-file, None without them."""
-    if force_file is None:
-        return _cut_forces(cut, tp, frame, tool)
-
-    if cut is not None or forces is not None:
-        raise InputError("--force-file gives the force of every motion block: not with --force or --cut")
-    tool_frame, unlisted = read_force_file(force_file, tp)
-    if unlisted:
-        log.print(f"note: {unlisted} Cartesian target(s) have no row in {force_file}: no process force there")
-    placed = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool")) if (frame or tool) else tp
-    return base_frame_forces(placed, tool_frame)
 
 
 def _is_page(report: Optional[Path]) -> bool:
@@ -265,20 +239,13 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None
     refuse_overwrite(original, files, in_place)
     write_set(files, backup=in_place)
 
-def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect, options, report) -> int:
+def _compensate_batch(request: CompensationRequest) -> int:
     """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
 
     # Deferred import: it loads dask.distributed (slow to import); `postproc --version` must stay fast.
-    from ..batch import run_batch
+    from ..batch import run_batch_request
 
-    if out_dir is None or output is not None:
-        raise InputError("several programs take --out-dir DIR (not -o)")
-    if jobs is not None and scheduler is not None:
-        raise InputError("give --jobs N or --scheduler ADDRESS, not both")
-    if jobs is not None and jobs < 1:
-        raise InputError("--jobs must be at least 1")
-    if "-" in programs:
-        raise InputError("standard input (-) is for a single program with -o")
+    programs, out_dir, report = request.programs, request.out_dir, request.report
     finished = []
     with ProgressLine("compensating", console=err) as progress:
         progress("programs", 0, len(programs))
@@ -287,8 +254,7 @@ def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect
             finished.append(result)
             progress("programs", len(finished), len(programs))
 
-        results = run_batch([Path(p) for p in programs], model, out_dir, options, jobs=jobs, scheduler=scheduler, dialect=dialect,
-                            on_done=one_done)
+        results = run_batch_request(request, on_done=one_done)
     table = Table(title=f"compensate: {len(programs)} programs -> {out_dir}", show_edge=False)
     for col in ("program", "status", "targets", "RMS before (mm)", "RMS after (mm)", "message"):
         table.add_column(col, justify="right" if "RMS" in col or col == "targets" else "left")
@@ -307,15 +273,22 @@ def _compensate_batch(programs, model, output, out_dir, jobs, scheduler, dialect
     return 1 if failed else 0
 
 
-def _compensate_streamed(program: str, model, output: str, dialect, mode: str, in_place: bool, options: dict) -> bool:
+def _can_stream(request: CompensationRequest) -> bool:
+    """Whether the chunks can carry this request: no per-target forces, report, subdivision,
+    other modules' data, nor standard output (those need the whole program)."""
+    return (request.cut is None and request.force_file is None and request.report is None and not request.subdivide
+            and request.output != "-" and not request.data)
+
+
+def _compensate_streamed(request: CompensationRequest) -> bool:
     """compensate --stream: a long program in chunks (postproc.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
-    if not wants_stream(program, mode):
+    program, model = request.programs[0], request.machine.model
+    if not wants_stream(program, request.stream):
         return False
     try:
         with ProgressLine("compensating in chunks", console=err) as progress:
-            result = compensate_streamed(program, model, output, dialect=dialect, in_place=in_place, tune_malloc=True,
-                                         progress=progress, **options)
+            result = stream_request(request, tune_malloc=True, progress=progress)
     except StreamFallback as exc:
         err.print(f"note: the program is read whole, not in chunks: {exc}")
         return False
@@ -330,7 +303,7 @@ def _compensate_streamed(program: str, model, output: str, dialect, mode: str, i
     b, a = s["predicted_before"], s["predicted_after"]
     out.print(describe_model(model_summary(model)["model"]))
     if b["rms_mm"] is not None:
-        out.print(f"{s['compensated']} of {s['targets']} targets compensated ({options['scheme']}, {s['chunks']} chunks); predicted error RMS "
+        out.print(f"{s['compensated']} of {s['targets']} targets compensated ({request.scheme}, {s['chunks']} chunks); predicted error RMS "
                   f"{b['rms_mm']:.4f} -> {a['rms_mm']:.4f} mm, max {b['max_mm']:.4f} -> {a['max_mm']:.4f} mm; "
                   f"iterations median {s['iterations_median']:.0f}, max {s['iterations_max']}")
     if s["path"] is not None:

@@ -13,7 +13,6 @@ from ..compensate import predicted_positions
 from ..dialects import of as dialect_of
 from ..errors import InputError
 from ..ir import Kind
-from ..model_io import load_model
 from ..plugin_option import with_plugins
 from ..program_check import check_model_fits
 from ..program_content import require_program
@@ -47,6 +46,9 @@ def predict_cmd(
         raise InputError(f"{program}: predict runs robot programs (a five-axis machine's program: 'postproc compensate --model MACHINE.toml')")
     goal_tp = tp if intended is None else parse_program(intended, dialect)
     frames, tools = named_frames(frame, "--frame"), named_frames(tool, "--tool")
+    # Deferred import: it loads scipy.optimize (slow to import); `postproc --help` must stay fast.
+    from ..model_io import load_model
+
     error_model, _ = load_model(model)
     for note in check_model_fits(tp, error_model, str(model), None, allow_mismatch):
         err.print(f"note: {note} (--allow-model-mismatch)")

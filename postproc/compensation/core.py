@@ -287,8 +287,7 @@ def compensate(
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
-    if force_n is not None and force_per_target is not None:
-        raise InputError("give either a constant force (--force) or a force per target (--cut), not both")
+    # force_n and force_per_target never come together: CompensationRequest refuses it (request.py).
     _require_process_inputs(model, temp_c, force_n if force_per_target is None else force_per_target)
     arcs.refuse_uncompensable(tp)
     inexact = controller.inexact_interpolation(tp)

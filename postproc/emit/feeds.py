@@ -19,6 +19,7 @@ import re
 
 import numpy as np
 
+from ..arcs import PLANE_AXES, arc_rows, geometry
 from ..errors import EmitError
 from ..ir import Kind, Toolpath
 
@@ -91,7 +92,6 @@ def move_lengths(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
     """(N,) path length (mm) of each target's move from the target before it, in the machine
     frame (arcs along the arc), NaN where the start is not known; and (N,) True where only
     rotary axes (A B C) change."""
-    from ..arcs import arc_rows, geometry
 
     base = tp.base_positions()
     length = np.full(len(tp), np.nan)
@@ -121,7 +121,6 @@ def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
     runs from the programmed point too (rs274: its length from there, times F)."""
     if tp.ccomp is None or not (tp.ccomp == 1).any():
         return length
-    from ..arcs import PLANE_AXES
 
     own = tp.insert_at[:, 1] >= 0 if tp.insert_at is not None else np.ones(len(tp), bool)
     prog = tp.position.copy()

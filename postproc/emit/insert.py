@@ -21,6 +21,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..arcs import PLANE_AXES
 from ..errors import EmitError
 from ..ir import F_ARC, F_EXT, F_ORI, F_POS, FIELDS, Kind, SourceDoc, Toolpath
 from .splice import TOLERANCE, format_like
@@ -140,7 +141,6 @@ def _block_with(dialect, tp: Toolpath, p: NewPoint, fields: list[int], text: str
                if f not in fields and not np.isnan(p.values[f]) and (f < F_ARC.start or p.values[f] != 0.0)]
     # The axis normal to the plane, where the arc does not move it (Z of a planar G17 arc),
     # stays modal, as in the block.
-    from ..arcs import PLANE_AXES
 
     r = p.row
     normal = PLANE_AXES[int(tp.arc[r, 0])][2] if tp.arc is not None and int(tp.arc[r, 0]) in PLANE_AXES else -1

@@ -13,6 +13,7 @@ import re
 
 import numpy as np
 
+from ..arcs import arc_rows, geometry
 from ..errors import EmitError
 from ..frames import quat_wxyz_to_matrix
 from ..ir import Kind, Toolpath
@@ -153,7 +154,6 @@ def circular_moves(tp: Toolpath, poses: np.ndarray, arc_tol_mm: float | None = N
     no circle through three points can hold (a helix, a spiral) is refused with its place
     (writing its chord would cut a different path), or with ``arc_tol_mm`` written as
     straight moves (via None) whose chord error is at most that."""
-    from ..arcs import arc_rows, geometry  # (not at the top: postproc.arcs imports the IR and frames only, but keep the writer light)
 
     rows = arc_rows(tp)
     if not len(rows):

@@ -4,13 +4,21 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
+
 from .. import dialects
+from ..dialects.heidenhain.kinematics import tnc_kinematics
+from ..errors import InputError, JobError
+from ..files import write_all as write_bytes
+from ..programs import emit_texts, parse_program, write_program
 from .calibrate import Calibration, calibrate_machine
 from .controllers import heidenhain_csv, linuxcnc_trt, siemens_tc_carr
-from ..dialects.heidenhain.kinematics import tnc_kinematics
-from ..files import write_all as write_bytes
+from .emit import MODES, emit, solve
+from .kinematics import fk
 from .machine import load_machine, machine_toml
+from .offsets import to_machine
 from .probes import read_probes
+from .program import ROTARY_FIELD, from_toolpath, to_robot_toolpath
 
 
 def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, axis: str | None = None, method: str = "seed003",
@@ -72,11 +80,6 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
                  tools: dict | None = None) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
-    from ..programs import write_program
-    from ..errors import InputError
-    from ..programs import parse_program
-    from .emit import MODES, emit
-    from .program import from_toolpath, to_robot_toolpath
 
     machine = load_machine(machine_name)
     if input_axes not in (None, "tip", "machine"):
@@ -114,11 +117,6 @@ def _convert_own(program: Path, target, output: Path, machine, rtcp: str | None,
                  frames: dict | None, tools: dict | None) -> list[str]:
     """``convert --to LANG --rtcp MODE`` for a language with ``rtcp_modes``: the tips and the
     rotary positions the machine's inverse kinematics gives (emit.solve), written by the language."""
-    from ..errors import InputError
-    from ..programs import parse_program
-    from .emit import solve
-    from .program import from_toolpath
-
     if rtcp not in target.five_axis_modes:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(target.five_axis_modes)} (needed with --to {target.name})")
     tp = parse_program(program, dialect)
@@ -132,20 +130,26 @@ def _convert_own(program: Path, target, output: Path, machine, rtcp: str | None,
     return [f"{len(path.tip)} targets written to {output} ({rtcp} mode, machine {machine.name})"] + [f"note: {n}" for n in path.notes]
 
 
+def compensate_five_request(request) -> list[str]:
+    """``compensate_five_program`` of a ``CompensationRequest`` whose machine is a five-axis
+    target (``postproc.targets.FiveAxisTarget``): one program, ``-o``, ``--grid``, ``--input-axes``."""
+    if len(request.programs) != 1 or request.output is None or request.output == "-":
+        raise InputError("five-axis compensation takes one program and -o OUT")
+    return compensate_five_program(Path(request.programs[0]), Path(request.machine.source), Path(request.output), request.grid,
+                                   request.input_axes, dialect=request.dialect, frames=dict(request.frames) or None,
+                                   tools=dict(request.tools) or None)
+
+
 def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
                             controller_name: str | None = None, dialect: str | None = None, frames: dict | None = None,
                             tools: dict | None = None) -> list[str]:
     """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
     for the real machine; the written text is read back and checked before it is kept."""
-    import numpy as np
-
-    from ..errors import JobError
-    from ..programs import emit_texts, parse_program
+    # Deferred import: the error grid loads scipy.interpolate (slow to import); the CLI imports this module at start.
     from .compensate import actual_tip, compensate_five, controller_axes
     from .errormap import load_grid
-    from .kinematics import fk
-    from .offsets import to_machine
-    from .program import ROTARY_FIELD
+
+
 
     true = load_machine(machine_file)
     controller = load_machine(controller_name or true.name)

@@ -15,12 +15,13 @@ Feeds are mm/min of the tool tip; G93 (inverse time) blocks keep their time.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from .. import dialects
 from ..errors import InputError
+from ..frames import axis_to_quat_wxyz
 from ..ir import Kind, Toolpath
 from .kinematics import fk
 from .machine import Machine
@@ -173,9 +174,7 @@ def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     speeds the tool tip's mm/min (G93 blocks' times already turned into feeds), so every
     target is per minute (G94): the writer takes the G-code dialect's mm/min to mm/s.
     For writing a robot program from a five-axis one."""
-    from dataclasses import replace
 
-    from ..frames import axis_to_quat_wxyz
 
     quat = axis_to_quat_wxyz(-path.axis)
     speed = np.where(path.rapid, np.nan, path.feed)

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
+from threadpoolctl import threadpool_limits
 
 from .gp_lml import JITTER, optimize_theta
 
@@ -115,7 +116,6 @@ def fit_experts(Xs: np.ndarray, y: np.ndarray, members: list[np.ndarray], kernel
     """Yield the fitted expert of each member set, in order, fitting ``workers`` at a time
     (threads: LAPACK and NumPy release the GIL). Stopping the iteration (Ctrl-C) cancels the
     experts not started; at most ``workers`` are in memory being fitted at once."""
-    from threadpoolctl import threadpool_limits
 
     workers = workers or fit_workers()
     with threadpool_limits(limits=1), ThreadPoolExecutor(max_workers=workers) as pool:

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import psutil
+
 from ..errors import InputError
 
 GB = 1024**3
@@ -38,7 +40,6 @@ def lean_fit_bytes(n_points: int) -> int:
 
 def available_bytes() -> int:
     """Memory this process may still take: free memory, or the cgroup's limit if lower."""
-    import psutil
 
     free = int(psutil.virtual_memory().available)
     limit_file = Path("/sys/fs/cgroup/memory.max")

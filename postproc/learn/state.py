@@ -9,12 +9,14 @@ no circle.
 from __future__ import annotations
 
 import numpy as np
+from scipy.interpolate import RegularGridInterpolator
 
 from ..errors import InputError
 from ..predictor_plugins import PluginPredictor, state_of
 from ..predictor_plugins import from_state as plugin_from_state
 from .gp import GPRPredictor
 from .grid import GridPredictor
+from .local_gp import Regions
 from .nn import PSOBPPredictor
 
 
@@ -48,7 +50,6 @@ def base_estimator_from_state(state: dict):
         w = state.get("weights")
         return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w))
     if kind == "gpr-local":
-        from .local_gp import Regions
 
         regions = Regions(_inf_from_none(state["lo"], -np.inf), _inf_from_none(state["hi"], np.inf), np.asarray(state["margin"], dtype=float))
         return GPRPredictor(**state["params"]).restore_local(np.asarray(state["X"], dtype=float), np.asarray(state["y"], dtype=float), regions,
@@ -62,7 +63,6 @@ def base_estimator_from_state(state: dict):
         est.n_features_in_ = len(est.x_mean_)
         return est
     if kind == "grid":
-        from scipy.interpolate import RegularGridInterpolator
 
         est = GridPredictor(**state["params"])
         est.axes_ = [np.asarray(a) for a in state["axes"]]

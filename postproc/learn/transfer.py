@@ -31,6 +31,7 @@ from __future__ import annotations
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 
+from . import transfer_paper
 from .gp import GPRPredictor
 from .state import base_estimator_from_state, estimator_state
 
@@ -153,7 +154,6 @@ class TrGPRPredictor(RegressorMixin, BaseEstimator):
         ys = np.asarray(y_source, dtype=float)
         source_model = GPRPredictor(random_state=self.random_state).fit(Xs, ys)
         if self.variant == "paper":
-            from . import transfer_paper
 
             sigma = np.full(3, self.noise_mm)
             X_all, y_all, is_target, self.alignments_ = transfer_paper.align(X, y, Xs, ys, source_model, self.n_subspaces, sigma)

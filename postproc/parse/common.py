@@ -6,10 +6,11 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
+from .. import rotation_forms
 from ..errors import ParseError
 from ..ir import FIELDS, NF, Kind, SourceDoc, Toolpath
-from .. import rotation_forms
 from . import scan_kernel
 
 
@@ -54,7 +55,6 @@ def parse_statement(parser, text: str, lines: "LineIndex", path: str, start: int
 
     ``start`` is the statement's offset in the file, so lark's position inside the
     statement becomes the file's line and column."""
-    from lark.exceptions import LarkError, UnexpectedCharacters, UnexpectedInput
 
     try:
         return parser.parse(text)

@@ -10,6 +10,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 from .. import kinematics as kin
+from ..diagnose import grouped_findings
+from ..identify import Stats, nominal_model, residuals
 from ..structure import smooth_fit
 from . import figures
 from .partial_residual import partial_residual
@@ -40,14 +42,12 @@ figure { margin: 1em 0; } img { max-width: 100%; } figcaption { color: #555; fon
 def _nominal_stats(model, meas):
     """The nominal robot's error as ``postproc fit``, ``simulate`` and ``ladder`` print it:
     rigidly registered onto the data (6-DOF best fit), whatever the model's effects."""
-    from ..identify import Stats, nominal_model, residuals
 
     return Stats.of(residuals(nominal_model(model.robot, model.tool_mm, meas, registered=True), meas))
 
 
 def _findings(findings) -> str:
     """The findings' words, each group followed once by the command that acts on it, ready to copy."""
-    from ..diagnose import grouped_findings
 
     parts = []
     for texts, command in grouped_findings(findings):

@@ -1,0 +1,51 @@
+"""What a compensation target is, for the steps that compensate a program: a robot under
+its fitted error model, or a calibrated five-axis machine.
+
+``Machine`` is a protocol: the robot target and the five-axis target
+(``postproc.targets``) implement it, and ``postproc.targets.load_target`` returns the one
+a file holds, judged by its content (never by its suffix). This module imports nothing of
+the languages or of either target, so the request (``request.py``) can carry one.
+"""
+
+from __future__ import annotations
+
+from typing import Mapping, Protocol, runtime_checkable
+
+import numpy as np
+
+from ..ir import Toolpath
+
+
+@runtime_checkable
+class Machine(Protocol):
+    """A robot or a machine that programs are compensated for.
+
+    ``kind`` names it in messages ("robot", "five-axis machine"); ``source`` is the file it
+    was read from; ``takes`` holds the ``CompensationRequest`` fields its compensation
+    uses (any other field given is refused by the request, naming the option);
+    ``why_unused``: for some of the others, why (said with the refusal)."""
+
+    kind: str
+    source: str
+    takes: frozenset[str]
+    why_unused: Mapping[str, str]
+
+    def forward(self, commands: np.ndarray) -> np.ndarray:
+        """(N, 4, 4) poses the commanded axis values (N, dof) reach under the nominal kinematics."""
+        ...
+
+    def inverse(self, poses: np.ndarray) -> np.ndarray:
+        """(N, dof) commands that reach ``poses`` (N, 4, 4) under the nominal kinematics."""
+        ...
+
+    def predict(self, commands: np.ndarray) -> np.ndarray:
+        """(N, 3) mm: where the tool point really goes for ``commands`` under the error model."""
+        ...
+
+    def read_program(self, path, dialect: str | None = None, data: bytes | None = None) -> Toolpath:
+        """The program at ``path`` (``data``: its text already read) as a Toolpath."""
+        ...
+
+    def write_texts(self, tp: Toolpath, new: Toolpath) -> list[str]:
+        """The texts of ``tp``'s sources with the numbers of ``new`` spliced in."""
+        ...
