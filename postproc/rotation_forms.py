@@ -178,7 +178,7 @@ FORMS: dict[str, RotationForm] = {
         RotationForm("rxyz", 3, "Rx, Ry, Rz degrees about the moving axes: R = Rx Ry Rz (Stäubli VAL3)", _rxyz_to_matrix, _rxyz_from_matrix, _rxyz_to_quat),
         RotationForm("axis", 3, "tool axis i, j, k (G-code five-axis): the spin about it is free", None, _axis_from_matrix),
         RotationForm("rotvec", 3, "rotation vector rx, ry, rz, radians: axis times angle (Universal Robots URScript)",
-                     lambda numbers: Rotation.from_rotvec(numbers).as_matrix(), _rotvec_from_matrix, _rotvec_to_quat),
+                     lambda numbers: quat_wxyz_to_matrix(_rotvec_to_quat(numbers)), _rotvec_from_matrix, _rotvec_to_quat),
         RotationForm("none", 0, "no orientation (three-axis G-code)", None, lambda rot, near: np.zeros((len(rot), 0))),
     )
 }
