@@ -9,11 +9,19 @@ import numpy as np
 
 import typer
 
+from .. import dialects
 from ..errors import InputError, OutputError
 from ..frames import abc_to_matrix, make_transform
 from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
 from .app import err
 
+
+# The built-in languages, for help texts (plugin dialects load later, with the command's --plugins).
+LANGUAGES = ", ".join(dialects.names())
+ROBOT_LANGUAGES = ", ".join(name for name in dialects.names() if not dialects.get(name).machine_program)
+MACHINE_LANGUAGES = ", ".join(name for name in dialects.names() if dialects.get(name).machine_program)
+PROGRAM_FILES = "; ".join(f"{name} {'/'.join(dialects.get(name).extensions)}" for name in dialects.names())
+DIALECT_HELP = f"The program's language: {LANGUAGES} (default: from the extension or content)."
 
 # Options several program commands take, declared once (typer reads only their metadata).
 FRAME_OPTION = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable.")

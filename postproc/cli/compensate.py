@@ -37,7 +37,7 @@ from ..stream import StreamFallback, stream_request, wants_stream
 from ..subdivide import subdivide_request
 from ..targets import FiveAxisTarget
 from .app import app, err, handles_errors, out
-from .common import check_output_folder, floats, named_frames
+from .common import DIALECT_HELP, check_output_folder, floats, named_frames
 
 
 @app.command("compensate")
@@ -50,7 +50,7 @@ def compensate_cmd(
     out_dir: Optional[Path] = typer.Option(None, "--out-dir", help="Many programs: write each (same file name) into this folder."),
     jobs: Optional[int] = typer.Option(None, "--jobs", help="With --out-dir: local worker processes (Dask LocalCluster)."),
     scheduler: Optional[str] = typer.Option(None, "--scheduler", help="With --out-dir: address of an existing Dask scheduler (tcp://host:port)."),
-    dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
     in_place: bool = typer.Option(False, "--in-place", help="Allow OUT to be the program's own file(s); each replaced file is kept as NAME.bak."),
     tol: float = typer.Option(0.01, "--tol", help="Stop a point when its correction changes by less than this, mm."),
     max_iter: int = typer.Option(25, "--max-iter"),

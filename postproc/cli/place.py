@@ -22,7 +22,7 @@ from ..programs import parse_program
 from ..progress import ProgressLine
 from ..robots import load_robot
 from .app import app, err, handles_errors, out
-from .common import floats
+from .common import DIALECT_HELP, floats
 
 
 def _search_spec(text: str) -> list[tuple[float, float, float]]:
@@ -54,7 +54,7 @@ def place_cmd(
     refine: bool = typer.Option(True, "--refine/--no-refine", help="Bounded local refinement after the grid."),
     singular_margin: float = typer.Option(5.0, "--singular-margin", help="Minimum distance from wrist and elbow singularities, deg."),
     keep_conf: bool = typer.Option(False, "--keep-conf", help="Keep the program's configuration data (turn data included) at every placement; by default they are re-derived for the moved workpiece as a re-post would, keeping its arm configuration."),
-    dialect: Optional[str] = typer.Option(None, "--dialect"),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
 ):
     """Find the workpiece placement that minimises the force-induced normal error (seed 002)."""
     if (force is None) == (cut is None):

@@ -20,7 +20,7 @@ from ..frames import matrix_to_quat_wxyz
 from ..plugin_option import with_plugins
 from ..programs import emit_texts, parse_program, write_program, write_texts
 from .app import app, err, exit_code, handles_errors, out
-from .common import named_frames, refuse_unused
+from .common import DIALECT_HELP, MACHINE_LANGUAGES, PROGRAM_FILES, ROBOT_LANGUAGES, named_frames, refuse_unused
 
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
@@ -30,9 +30,9 @@ _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4:
 @handles_errors
 @with_plugins
 def inspect_cmd(
-    program: Path = typer.Argument(..., help="Program file (RAPID .mod/.modx/.prg/.sys, or a .pgf with its modules; KRL .src/.sub with its .dat, or a .dat alone; G-code .nc/.ngc/.gcode/.tap/.cnc/.mpf/.spf/.iso; other names by content)."),
+    program: Path = typer.Argument(..., help=f"Program file: {PROGRAM_FILES}; other names by content."),
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
-    dialect: Optional[str] = typer.Option(None, "--dialect", help="rapid, krl or gcode (default: from the extension or content)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
@@ -102,9 +102,9 @@ def inspect_cmd(
 @with_plugins
 def convert_cmd(
     program: Path = typer.Argument(..., help="Program in any supported dialect."),
-    to: str = typer.Option(..., "--to", help="rapid, krl, fanuc or urscript: the language of the new program (gcode: a five-axis G-code program, with --machine and --rtcp)."),
+    to: str = typer.Option(..., "--to", help=f"The language of the new program: {ROBOT_LANGUAGES}; or a five-axis machine's ({MACHINE_LANGUAGES}) with --machine and --rtcp."),
     output: Path = typer.Option(..., "-o", "--output", help="New program (KRL: the .src; its .dat is written beside it)."),
-    dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of the input: rapid, krl or gcode (default: from the extension or content)."),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
     machine: Optional[str] = typer.Option(None, "--machine", help="Five-axis machine (machines/ name or file): --to gcode, or a five-axis G-code input."),
     rtcp: Optional[str] = typer.Option(None, "--rtcp", help="With --to gcode: linuxcnc, fanuc (G43.4), siemens (TRAORI) or none (machine axes)."),
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis G-code input: tip (tool tip + rotary angles) or machine (machine axes)."),
@@ -139,7 +139,7 @@ def convert_cmd(
 @app.command("roundtrip")
 def roundtrip_cmd(
     programs: list[Path] = typer.Argument(..., help="Program files."),
-    dialect: Optional[str] = typer.Option(None, "--dialect"),
+    dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
 ):
     """Parse and re-emit programs unchanged; exit 0 only if every output is byte-identical."""
     status = 0
