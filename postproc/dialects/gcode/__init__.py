@@ -2,9 +2,15 @@
 
 from __future__ import annotations
 
+import re
+
+from ...errors import EmitError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import CNC
+from .interp import refuse_unwritable
+from .parse import GcodeParser
+from .stream import RULES
 
 
 class GcodeDialect(Dialect):
@@ -21,19 +27,13 @@ class GcodeDialect(Dialect):
         return any(tok in head for tok in ("G0", "G1", "G2", "G3", "M3", "M30", "M2"))
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import GcodeParser
-
         return GcodeParser(sources[0]).parse()
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
-        from .interp import refuse_unwritable
-
         refuse_unwritable(original, modified)  # canned-cycle and polar moves: refused by file:line:column, never left as they were
         return super().emit_texts(original, modified)
 
     def stream_rules(self):
-        from .stream import RULES
-
         return RULES
 
     def insert_field(self, source: int, field: str, text: str) -> str:
@@ -42,10 +42,6 @@ class GcodeDialect(Dialect):
     def clone_motion(self, text: str, where: str) -> str:
         """The block without its block number; a block that also changes tools, spindle,
         coolant or modes cannot be repeated."""
-        import re
-
-        from ...errors import EmitError
-
         body, _, comment = text.rstrip("\r\n").partition(";")
         body = re.sub(r"^\s*N\d+\s*", "", body, flags=re.IGNORECASE)
         words = re.findall(r"([A-Z])\s*([-+]?[\d.]+)", re.sub(r"\([^)]*\)", "", body).upper())

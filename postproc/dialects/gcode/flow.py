@@ -22,7 +22,7 @@ listed once, so each target is still reported with its line.
 from __future__ import annotations
 
 import re
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -286,8 +286,6 @@ class Runner:
 
     def finish(self, tp: Toolpath) -> Toolpath:
         """The toolpath with rows read from a sub's own file pointing into that file."""
-        from dataclasses import replace
-
         if self.joined is None or not len(tp):
             return replace(tp, sources=tuple(self.docs)) if self.joined is not None else tp
         bases, at = self.joined.bases, tp.insert_at[:, 1]

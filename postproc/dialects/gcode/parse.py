@@ -16,20 +16,23 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import replace
 
 import numpy as np
 from lark import Token, Tree
 
-from ...frames import make_transform
+from ...frames import axis_to_quat_wxyz, make_transform, rot_x, rot_z
 from ...ir import F_ARC, NF, Kind, SourceDoc, Toolpath
 from ...parse import scan_kernel
-from ...parse.common import Builder, LineIndex, parse_statement, scan_numbers
+from ...parse.common import Builder, LineIndex, _ranges, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
-from . import arcwords, flow, gwords, siemens
+from . import arcwords, flow, gwords, interp, siemens
 from .blockwords import AXES
 from .blockwords import Unknown as _Unknown
 from .canned import PLANE_AXES
+from .interp import needs_interpreter
+from .offsets import Offsets
 
 _AX = {c: i for i, c in enumerate(AXES)}
 MORE = "LPQ@^D"  # repeats, dwell / G10 P, peck, polar, D (cutter compensation diameter; refused in a cycle): words only the grammar reads (no spans)
@@ -124,8 +127,6 @@ class GcodeParser:
             lo = np.searchsorted(numbers.start, bulk_starts)
             hi = np.searchsorted(numbers.start, code_end)
             counts = hi - lo
-            from ...parse.common import _ranges
-
             idx = _ranges(lo, hi)
             row = np.repeat(np.arange(nb), counts)
             starts = numbers.start[idx]
@@ -425,8 +426,6 @@ class GcodeParser:
 
     def _tilt(self, values, start) -> None:
         """G68.2 X Y Z I J K (P0: Euler ZXZ): a tilted working plane until G69."""
-        from ...frames import rot_x, rot_z
-
         line = self.text[start : self.text.find("\n", start) if self.text.find("\n", start) >= 0 else len(self.text)]
         p = re.search(r"[Pp][ \t]*(\d+)", line)
         if p and p.group(1) != "0":
@@ -448,8 +447,6 @@ class GcodeParser:
     # -------------------------------------------------------------- modal state
     def _resolve(self, t: dict) -> Toolpath:
         """The targets of the block table ``t`` (program order) with every modal state applied."""
-        from .interp import needs_interpreter
-
         if needs_interpreter(t):
             return self._resolve_blocks(t)
         motion = _ffill(t["motion"], np.nan)
@@ -543,8 +540,6 @@ class GcodeParser:
         """The targets of a program read block by block (interp.py: canned cycles, G92,
         G10 L20 / R, G53, polar words). Targets the controller makes without axis words
         for them (cycle moves, polar ends) have no span and nowhere to insert one."""
-        from . import interp
-
         scale = np.where(_ffill(t["units"], 21.0) == 20.0, 25.4, 1.0)
         dist = _ffill(t["dist"], 90.0)
         mode, sets_mode = interp.modal_mode(t["motion"], t["canned"])
@@ -640,7 +635,6 @@ class GcodeParser:
         """Frame index of each target (``frame`` indexes the frame ``keys``, see interp.Offsets.key;
         -1 the machine frame), and False where the frame is not a number (an offset taken
         from a point that is not known)."""
-        from .offsets import Offsets
 
         ids, finite = np.zeros(len(keys) + 1, np.int32), np.ones(len(keys) + 1, bool)
         for k, key in enumerate(keys):
@@ -871,10 +865,6 @@ def _tool_axes(t: dict, rows: np.ndarray, tlo: np.ndarray, ir_values: np.ndarray
 def _with_modal_positions(tp: Toolpath, absolute: np.ndarray, ir_values: np.ndarray, axis_rows: np.ndarray) -> Toolpath:
     """Positions with modal axes (a block without X keeps the previous X), rotary axes as
     external axes, and tool-axis orientations."""
-    from dataclasses import replace
-
-    from ...frames import axis_to_quat_wxyz
-
     m = len(absolute)
     ext = np.full((m, 6), np.nan)
     ext[:, :3] = absolute[:, 3:6]

@@ -15,6 +15,7 @@ from .modules import module_docs
 from .parse import KrlParser
 from .placing import set_base
 from .stream import RULES
+from .tool_relative import held_and_moved, write_steps
 from .writer import KrlWriter
 
 CONFIG_DAT = "$config.dat"  # the robot's global data list (BASE_DATA, TOOL_DATA, global points)
@@ -58,7 +59,6 @@ class KrlDialect(Dialect):
 
     def emit_texts(self, original: Toolpath, modified: Toolpath) -> list[str]:
         """The splice, with LIN_REL / PTP_REL ... #TOOL steps written in the tool frame (tool_relative.py)."""
-        from .tool_relative import held_and_moved, write_steps  # (here, as base.emit_texts: it loads the numba splice kernels)
 
         held, steps = held_and_moved(original, modified)
         texts = super().emit_texts(original, held)
