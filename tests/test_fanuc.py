@@ -256,3 +256,13 @@ def test_listings_in_words_postproc_does_not_read_are_refused_with_the_reason(tm
     with pytest.raises(ParseError, match=why) as exc:
         parse_program(_variant(tmp_path, old, new))
     assert exc.value.line in (22, 23)
+
+
+def test_a_linear_motion_after_a_jump_keeps_a_posture_the_text_does_not_fix():
+    """JMP LBL[10] skips P[2] (CONFIG 'F U T'): the L to P[3] keeps P[1]'s posture when the robot
+    runs it, P[2]'s when read in text order. Not followed, so P[3] is unresolved (R-30iB manual,
+    "Branching instructions": JMP LBL transfers control to the label); the J motions are placed
+    (each CONFIG sets the posture)."""
+    tp = parse_program(Path(__file__).parent / "data" / "fanuc_jump.ls")
+    assert tp.resolved.tolist() == [True, True, False]
+    assert any("line 10" in note and "flow" in note for note in tp.notes)

@@ -51,6 +51,9 @@ _BAD_FRAME = re.compile(r"[ \t]*(UFRAME|UTOOL)[ \t]*=", re.IGNORECASE)
 _FRAME_NUM = re.compile(r"[ \t]*(UFRAME_NUM|UTOOL_NUM)[ \t]*=[ \t]*(\S+)[ \t]*$", re.IGNORECASE)
 _FRAME_SET = re.compile(r"[ \t]*(UFRAME|UTOOL)\[[ \t]*(\d+)[ \t]*\][ \t]*=", re.IGNORECASE)
 _FLOW = re.compile(r"[ \t]*(?:JMP|IF|CALL|SELECT|FOR|RUN)\b", re.IGNORECASE)
+# Where execution may arrive from elsewhere than the statement before: a label, the end of a loop
+# or of an IF block (R-30iB manual, "Branching instructions", "FOR/ENDFOR", "IF/ELSE/ENDIF")
+_FLOW_TARGET = re.compile(r"[ \t]*(?:LBL[ \t]*\[|ENDFOR\b|ELSE\b|ENDIF\b)", re.IGNORECASE)
 # Motion options (R-30iB manual, "Motion instruction options"), in the order tried: those
 # that change where the robot goes by what the program does not hold (the reason), Wjnt
 # (WRIST: the wrist joints interpolate, the target is exact, the path is not), and those
@@ -104,6 +107,10 @@ class _Reader:
         self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
         self.utool: int | None = None
         self.redefined: dict[str, int] = {}  # UFRAME[n] / UTOOL[n] -> line of its last assignment
+        # Line of the last jump, call or label since the last J motion to a taught position: the
+        # posture an L or C motion keeps is then the one of whichever motion ran before, which
+        # depends on the flow postproc does not follow (a J motion's CONFIG sets it again).
+        self.flow_line: int | None = None
 
     def error(self, offset: int, why: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, why)
@@ -113,9 +120,12 @@ class _Reader:
         self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
         flow = False
         for st in statements(self.text, *sections["MN"]):
-            flow |= self._statement(st)
+            if self._statement(st) or _FLOW_TARGET.match(st.text):
+                flow = True
+                self.flow_line = int(self.lines.line(st.start))
         if flow:
-            self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
+            self.notes.append(f"{self.doc.path}: the program jumps, calls or loops (JMP, LBL, IF, CALL, FOR, ...): targets are listed in text order; "
+                              "an L or C motion after such a statement, before the next J motion, is unresolved (its posture depends on the flow)")
         self._add_rows()
         self.builder.notes.extend(self.notes)
         return self.builder.build()
@@ -194,6 +204,11 @@ class _Reader:
         if term is None:
             raise self.error(rest_at + speed_m.end(), "a motion needs FINE or CNTn after its speed")
         unknown = list(own) + self._options(rest[term.end() :], rest_at + term.end(), line)
+        if kind != Kind.JOINT and self.flow_line is not None:
+            unknown.append(f"the posture the robot keeps here is that of the motion run before it, which depends on the jump, call or label at "
+                           f"line {self.flow_line} (postproc does not follow the program's flow)")
+        elif kind == Kind.JOINT and reg.upper() == "P" and number.isdigit():
+            self.flow_line = None  # its CONFIG sets the posture again
         wrist = WRIST in unknown
         unknown = [why for why in unknown if why != WRIST]
         cnt = term.group(2)
