@@ -42,6 +42,10 @@ TAG = re.compile(r"(VJ|V|VR|VE|PL|CR|ACC|DEC)=(\S+)|(NWAIT)|(\+MOV[JLCS])[ \t]+(
 CHANGING = {"SFTON": "shift", "SFTOF": "shift", "MFRAME": "user frame", "SETTOOL": "tool"}
 # Program flow: postproc lists each motion once, in the order of the text.
 FLOW = {"JUMP", "CALL", "WHILE", "FOR", "IFTHEN", "IFTHENEXP", "SWITCH", "RET"}
+# Where execution may arrive from elsewhere than the line before: a label (*NAME), the end or
+# the other branch of a block (INFORM manual, "JUMP", "*label", "WHILE/ENDWHILE", "IFTHEN/ELSE/ENDIF")
+FLOW_TARGETS = ("*", "ENDWHILE", "ENDFOR", "ELSE", "ELSEIFEXP", "ENDIF", "ENDSWITCH", "CASE", "DEFAULT")
+_HAS_FLOW = re.compile(r"^[ \t]*(?:JUMP|CALL|WHILE|FOR|IFTHEN|SWITCH|RET|\*)|\bIF\b", re.MULTILINE)
 CARTESIAN = ("ROBOT", "BASE", "USER")
 # What only INFORM has, per target (Toolpath.extras): the positioning level PL (-1: none
 # written), the joint speed VJ (% of the maximum), the encoder pulses of a pulse position.
@@ -93,8 +97,8 @@ class InformParser:
     def _bulk_moves(self, shapes: LineShapes, text: str):
         """Plain MOVJ / MOVL lines after //INST (None where the job has instructions that
         move positions, whose order the one-by-one reading follows)."""
-        if any(word in text for word in ("SFTON", "MFRAME", "SETTOOL")):
-            return None
+        if any(word in text for word in ("SFTON", "MFRAME", "SETTOOL")) or _HAS_FLOW.search(text, text.find("//INST")):
+            return None  # (a jump or a label: the one-by-one reading marks what the flow leaves open)
         _, inst_line = section_lines(text, self.lines)
         if inst_line < 0:
             return None
@@ -169,6 +173,9 @@ class InformParser:
             word = text.split(None, 1)[0].upper() if text else ""
             if word in FLOW or " IF " in f" {text} ":
                 self.builder.notes.append(f"{self.path}, line {line}: {word}: program flow is not followed; each motion is listed once, in the order of the text")
+                changed["flow"] = line
+            elif word.startswith(FLOW_TARGETS):
+                changed["flow"] = line
             if word in CHANGING:
                 if word == "SFTOF":
                     changed.pop("shift", None)
@@ -177,6 +184,8 @@ class InformParser:
             match = MOTION.match(text)
             if match:
                 self._motion(match, line, start, dict(changed))
+                if match.group(1) == "MOVJ" and not self.rows[-1]["why"]:
+                    changed.pop("flow", None)  # its form (RCONF) or its pulses set the posture again
 
     def _motion(self, match: re.Match, line: int, start: int, changed: dict[str, int]) -> None:
         word, name, tags = match.group(1), match.group(2), match.group(3)
@@ -190,6 +199,9 @@ class InformParser:
             row["why"].append(f"shifted by the SFTON on line {changed['shift']} (its amount is a variable's)")
         if "tool" in changed:
             row["why"].append(f"the tool file was rewritten by the SETTOOL on line {changed['tool']}")
+        if "flow" in changed and word != "MOVJ":
+            row["why"].append(f"the posture the robot keeps here is that of the motion run before it, which depends on the jump, call or label "
+                              f"on line {changed['flow']} (postproc does not follow the job's flow)")
         position = self.table.row_of(name.upper())
         if word == "IMOV":
             row["why"].append(f"IMOV moves by the increment {name} holds, a variable the controller keeps")
