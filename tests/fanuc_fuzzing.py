@@ -7,8 +7,7 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
-from postproc.errors import InputError, ParseError
-from postproc.programs import emit_texts, parse_program
+import fuzzing
 
 HERE = Path(__file__).parent
 NAME = "fuzz.ls"
@@ -16,7 +15,6 @@ TOKENS = ["J ", "L ", "C ", "A ", "P[1]", "PR[2]", " 100%", " 500mm/sec", " 60cm
           " Tool_Offset,PR[4]", " INC", " Wjnt", " ACC80", " COORD", ";", ":", "\n", "/POS", "/MN", "/END", "P[2]{", "};", "GP1:", "GP2:",
           "UF : 1, UT : 2,", "CONFIG : 'F D B, 1, 0, -1',", "X = 1.5 mm,", "J3= -10 deg,", "E1 = 5 mm", "UFRAME_NUM=3 ;", "UTOOL[1]=PR[1] ;",
           "!comment ;", "//L P[1] ;", "JMP LBL[1] ;", "IF R[1]=1,JMP LBL[2] ;", "CALL SUB ;", "\"", "'", "{", "}", "-", ".", "e5"]
-MUTATIONS = ("delete lines", "duplicate a line", "swap lines", "flip a character", "insert a token", "truncate")
 
 
 def number(rng: random.Random) -> str:
@@ -70,28 +68,8 @@ def seeds() -> list[bytes]:
 
 
 def mutate(rng: random.Random, data: bytes) -> bytes:
-    """``data`` with 0-4 mutations."""
-    for _ in range(rng.randint(0, 4)):
-        op = rng.choice(MUTATIONS)
-        lines = data.splitlines(keepends=True)
-        at_line = rng.randrange(len(lines)) if lines else 0
-        at = rng.randint(0, len(data))
-        if op == "delete lines":
-            data = b"".join(lines[:at_line] + lines[at_line + rng.randint(1, 3):])
-        elif op == "duplicate a line":
-            data = b"".join(lines[:at_line + 1] + lines[at_line:])
-        elif op == "swap lines" and len(lines) > 1:
-            other = rng.randrange(len(lines))
-            lines[at_line], lines[other] = lines[other], lines[at_line]
-            data = b"".join(lines)
-        elif op == "flip a character" and data:
-            at = min(at, len(data) - 1)
-            data = data[:at] + bytes([rng.randrange(256)]) + data[at + 1:]
-        elif op == "insert a token":
-            data = data[:at] + rng.choice(TOKENS).encode("latin-1") + data[at:]
-        elif op == "truncate":
-            data = data[:at]
-    return data
+    """``data`` with 0-4 of tests/fuzzing.py's mutations, TP tokens inserted."""
+    return fuzzing.mutate_with(rng, data, TOKENS)
 
 
 def make_program(rng: random.Random, seed_texts: list[bytes]) -> bytes:
@@ -99,18 +77,7 @@ def make_program(rng: random.Random, seed_texts: list[bytes]) -> bytes:
 
 
 def judge(data: bytes) -> str:
-    """'accepted' (and round-tripped byte-identically) or 'refused' (ParseError with a line
-    and column inside the text); AssertionError on a refusal without a usable position or a
-    changed text; any other exception is a crash and propagates."""
-    try:
-        tp = parse_program(NAME, "fanuc", data)
-    except ParseError as exc:
-        assert exc.path == NAME and 1 <= exc.line <= data.count(b"\n") + 1 and exc.column >= 1, f"refused without a usable position: {exc!r}"
-        assert str(exc).startswith(f"{NAME}:{exc.line}:{exc.column}: "), str(exc)
-        return "refused"
-    except InputError as exc:
-        assert NAME in str(exc), f"a refusal that does not name the file: {exc}"
-        return "refused"
-    texts = emit_texts(tp, tp)
-    assert len(texts) == 1 and texts[0].encode("latin-1") == data, "accepted, but parse + emit changed the text"
-    return "accepted"
+    """tests/fuzzing.py's judge of a .ls file: 'accepted' (round-tripped byte-identically) or
+    'refused' with a line and column (or naming the file); AssertionError otherwise."""
+    verdict = fuzzing.judge_file(NAME, "fanuc", data)
+    return "refused" if verdict == "refused-file" else verdict

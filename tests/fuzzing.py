@@ -258,6 +258,11 @@ MUTATIONS = ("delete lines", "duplicate a line", "swap lines", "flip a character
 
 def mutate(rng: random.Random, data: bytes, dialect: str) -> bytes:
     """``data`` with 0-4 mutations."""
+    return mutate_with(rng, data, TOKENS[dialect])
+
+
+def mutate_with(rng: random.Random, data: bytes, tokens) -> bytes:
+    """``data`` with 0-4 mutations, inserted tokens drawn from ``tokens`` (every language's fuzzer uses it)."""
     for _ in range(rng.randint(0, 4)):
         op = rng.choice(MUTATIONS)
         lines = data.splitlines(keepends=True)
@@ -275,7 +280,7 @@ def mutate(rng: random.Random, data: bytes, dialect: str) -> bytes:
             at = min(at, len(data) - 1)
             data = data[:at] + bytes([rng.randrange(256)]) + data[at + 1:]
         elif op == "insert a token":
-            data = data[:at] + rng.choice(TOKENS[dialect]).encode("latin-1") + data[at:]
+            data = data[:at] + rng.choice(tokens).encode("latin-1") + data[at:]
         elif op == "truncate":
             data = data[:at]
     return data
@@ -295,10 +300,14 @@ def programs(dialect: str, seeds: list[bytes]) -> st.SearchStrategy:
 # ------------------------------------------------------------------ the judge
 
 def judge(dialect: str, data: bytes) -> str:
+    """``judge_file`` under the dialect's usual file name."""
+    return judge_file(FILE_NAME[dialect], dialect, data)
+
+
+def judge_file(name: str, dialect: str, data: bytes) -> str:
     """'accepted' (and round-tripped), 'refused' (ParseError with file, line and column) or
     'refused-file' (InputError naming the file). Raises AssertionError on a wrong refusal or a
     changed text; any other exception is the parser's crash and propagates."""
-    name = FILE_NAME[dialect]
     try:
         tp = parse_program(name, dialect, data)
     except ParseError as exc:

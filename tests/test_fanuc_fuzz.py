@@ -7,7 +7,9 @@ from __future__ import annotations
 import random
 
 import fanuc_fuzzing as ff
+import fuzzing
 import pytest
+
 from postproc.programs import emit_texts
 
 
@@ -24,6 +26,6 @@ def test_unmutated_generated_programs_are_accepted():
 
 
 def test_the_judge_catches_a_changed_text(monkeypatch):
-    monkeypatch.setattr(ff, "emit_texts", lambda tp, new: [t[:-1] for t in emit_texts(tp, new)])
+    monkeypatch.setattr(fuzzing, "emit_texts", lambda tp, new: [t[:-1] for t in emit_texts(tp, new)])
     with pytest.raises(AssertionError, match="changed the text"):
         ff.judge(ff.program(random.Random(1)))

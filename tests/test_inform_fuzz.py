@@ -9,10 +9,8 @@ import os
 import random
 from pathlib import Path
 
+import fuzzing
 import pytest
-
-from postproc.errors import InputError, ParseError
-from postproc.programs import emit_texts, parse_program
 
 HERE = Path(__file__).parent
 NAME = "fuzz.jbi"
@@ -61,17 +59,7 @@ def mutate(rng: random.Random, data: bytes) -> bytes:
 
 
 def judge(data: bytes) -> str:
-    try:
-        tp = parse_program(NAME, "inform", data)
-    except ParseError as exc:
-        assert exc.path == NAME and 1 <= exc.line <= data.count(b"\n") + 1 and exc.column >= 1, f"refused without a usable position: {exc!r}"
-        assert str(exc).startswith(f"{NAME}:{exc.line}:{exc.column}: "), str(exc)
-        return "refused"
-    except InputError as exc:
-        assert NAME in str(exc), f"a refusal that does not name the file: {exc}"
-        return "refused-file"
-    assert emit_texts(tp, tp)[0].encode("latin-1") == data, "accepted, but parse + emit changed the text"
-    return "accepted"
+    return fuzzing.judge_file(NAME, "inform", data)
 
 
 def test_generated_jobs_are_accepted():

@@ -10,12 +10,9 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
+import fuzzing
 from hypothesis import HealthCheck, Phase, given, note, seed, settings
 from hypothesis import strategies as st
-
-import fuzzing
-from postproc.errors import InputError, ParseError
-from postproc.programs import emit_texts, parse_program
 
 NAME = "FUZZ.MPF"
 SEEDS = [p.read_bytes() for p in sorted((Path(__file__).parent / "corpus" / "sinumerik").glob("*.mpf"))]
@@ -51,17 +48,8 @@ def program(rng: random.Random) -> bytes:
 
 
 def judge(data: bytes) -> str:
-    """fuzzing.judge for a Sinumerik file: accepted and round-tripped, or refused with a position."""
-    try:
-        tp = parse_program(NAME, "sinumerik", data)
-    except ParseError as exc:
-        assert exc.path == NAME and 1 <= exc.line <= data.count(b"\n") + 1 and exc.column >= 1, f"refused without a usable position: {exc!r}"
-        return "refused"
-    except InputError as exc:
-        assert NAME in str(exc), f"a refusal that does not name the file: {exc}"
-        return "refused-file"
-    assert [t.encode("latin-1") for t in emit_texts(tp, tp)] == [data], "accepted, but parse + emit changed the text"
-    return "accepted"
+    """tests/fuzzing.py's judge of a Sinumerik file: accepted and round-tripped, or refused with a position."""
+    return fuzzing.judge_file(NAME, "sinumerik", data)
 
 
 @seed(20261127)

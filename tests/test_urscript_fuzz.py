@@ -8,12 +8,10 @@ from __future__ import annotations
 import random
 from pathlib import Path
 
+import fuzzing
 import pytest
 from hypothesis import HealthCheck, Phase, given, note, seed, settings
 from hypothesis import strategies as st
-
-from postproc.errors import InputError, ParseError
-from postproc.programs import emit_texts, parse_program
 
 NAME = "fuzz.script"
 CORPUS = Path(__file__).parent / "corpus" / "urscript"
@@ -22,21 +20,10 @@ TOKENS = ["movel(", "movej(", "movep(", "movec(", "servoj(", "set_tcp(", "p[", "
           "t=", "qnear=", "get_inverse_kin(", "pose_trans(", "pose_add(", "def f():", "thread t():", "end", "if x:", "elif y:",
           "else:", "while True:", "i = 0\n", "while i < 3:", "i = i + 1\n", "break", "global ", "local ", "#", '"', "'", "$ 1 \"x\"", "\n", "\r\n", "\t", "-", ".", "0", "1e308", "{", "}"]
 NUMBERS = ["0", "-0", "0.0", ".5", "-.5", "1e-3", "1E+2", "3.1416", "-1.5708", "0.25", "12"]
-MUTATIONS = ("delete lines", "duplicate a line", "swap lines", "flip a character", "insert a token", "truncate")
 
 
 def judge(data: bytes) -> str:
-    try:
-        tp = parse_program(NAME, "urscript", data)
-    except ParseError as exc:
-        assert exc.path == NAME and 1 <= exc.line <= data.count(b"\n") + 1 and exc.column >= 1, f"refused without a usable position: {exc!r}"
-        assert str(exc).startswith(f"{NAME}:{exc.line}:{exc.column}: "), str(exc)
-        return "refused"
-    except InputError as exc:
-        assert NAME in str(exc), f"a refusal that does not name the file: {exc}"
-        return "refused-file"
-    assert emit_texts(tp, tp)[0].encode("latin-1") == data, "accepted, but parse + emit changed the text"
-    return "accepted"
+    return fuzzing.judge_file(NAME, "urscript", data)
 
 
 def _numbers(rng, n):
@@ -72,25 +59,7 @@ def _program(rng) -> bytes:
 
 
 def _mutate(rng, data: bytes) -> bytes:
-    for _ in range(rng.randint(0, 4)):
-        op, lines = rng.choice(MUTATIONS), data.splitlines(keepends=True)
-        at_line, at = (rng.randrange(len(lines)) if lines else 0), rng.randint(0, len(data))
-        if op == "delete lines":
-            data = b"".join(lines[:at_line] + lines[at_line + rng.randint(1, 3):])
-        elif op == "duplicate a line":
-            data = b"".join(lines[:at_line + 1] + lines[at_line:])
-        elif op == "swap lines" and len(lines) > 1:
-            other = rng.randrange(len(lines))
-            lines[at_line], lines[other] = lines[other], lines[at_line]
-            data = b"".join(lines)
-        elif op == "flip a character" and data:
-            at = min(at, len(data) - 1)
-            data = data[:at] + bytes([rng.randrange(256)]) + data[at + 1:]
-        elif op == "insert a token":
-            data = data[:at] + rng.choice(TOKENS).encode("latin-1") + data[at:]
-        elif op == "truncate":
-            data = data[:at]
-    return data
+    return fuzzing.mutate_with(rng, data, TOKENS)
 
 
 def _example(rng) -> bytes:
