@@ -15,7 +15,7 @@ from ...ir import Kind
 from ...parse.common import _ranges, scan_numbers
 from ...parse.line_shapes import LineShapes
 from .blocks import PlainRun
-from .fields import AXES, COLUMNS
+from .fields import AXES, COLUMNS, SIDE
 
 # One plain L block alone on its line (block number, absolute plain numbers, no M, no comment):
 # digit runs only through \d+ / \d* so that lines of one shape match alike (line_shapes.py).
@@ -88,6 +88,8 @@ class BulkReading:
         table[:, 4] = self._frame_index()
         table[:, 6] = ws
         table[:, 13] = self.tcpm
+        table[:, 14] = SIDE[self.comp]
+        table[:, 15] = self.radius
         compensated = np.zeros(n, bool)
         cs, _ = self.plain.span("comp")
         cs = cs[rows]
@@ -95,6 +97,7 @@ class BulkReading:
             for i in range(n):
                 if cs[i] >= 0:
                     self.comp, self.comp_line = self.text[cs[i]:cs[i] + 2], run.first + i + 1
+                table[i, 14] = SIDE[self.comp]
                 if self.comp != "R0":
                     compensated[i] = not self._state_resolved(run.first + i + 1, False)  # with its note
         table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)

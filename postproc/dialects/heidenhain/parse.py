@@ -49,7 +49,8 @@ from .blocks import Block, PlainRun, split_blocks
 from .bulk import BulkReading
 from .contours import Contours
 from .cycles import StateBlocks
-from .fields import AXES, COLUMNS
+from .fields import AXES, COLUMNS, SIDE
+from . import radius_comp
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, WordError, read_words
 
@@ -95,6 +96,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.comp = "R0"
         self.comp_line = 0
         self.tool = 0
+        self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
+        self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
@@ -431,9 +434,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
         """False (with a note) where the modal state leaves the position to what the text does not give."""
         resolved = True
-        if self.comp in ("RL", "RR"):
+        if self.comp in ("RL", "RR") and math.isnan(self.radius):
             resolved = False
-            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give; those targets are read as programmed"] = None
+            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give "
+                       "(TOOL DEF n L.. R.. in the program gives it); those targets are read as programmed"] = None
         if self.tilt_line:
             resolved = False
             self.notes[f"line {self.tilt_line}: tilted working plane: positions are in the tilted plane, whose rotary-axis solution (SEQ+/SEQ-) is the TNC's: not read"] = None
@@ -463,7 +467,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
     def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
         r = self.rows_all()
         p = self.pos
-        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm))
+        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm,
+                          SIDE[self.comp], self.radius))
         for f, v in vals.items():
             self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
 
@@ -498,10 +503,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.b.notes.append(f"line {self.tolerance_line}: CYCL DEF 32 TOLERANCE: the TNC smooths the path within the tolerance")
         tp = self.b.build(orientation=False)
         ext = tp.ext.copy()
+        side, radius = table[:, 14], table[:, 15]
         ext[:, :3] = table[:, 10:13]
         tcpm = table[:, 13].astype(bool)
         resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
-        return replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras={"heidenhain.tcpm": tcpm})
+        tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras={"heidenhain.tcpm": tcpm})
+        if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
+            tp = radius_comp.follow(tp, side, radius)
+        return tp
 
     def _mixed_tcpm(self, tcpm: np.ndarray, angles: np.ndarray, lines: np.ndarray) -> np.ndarray:
         """(N,) targets with rotary positions but without M128 / TCPM in a program that uses it

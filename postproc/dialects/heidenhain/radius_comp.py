@@ -1,0 +1,158 @@
+"""RL / RR radius compensation: the tool-centre path the TNC cuts beside the programmed contour.
+
+TNC 640 User's Manual (Klartext / DIN/ISO, 34059x-05), section 5.3 "Tool compensation":
+- "Tool radius compensation": RL keeps the tool left of the contour in the direction of
+  travel, RR right; the compensation value is the tool's radius R (TOOL DEF in the program or
+  the tool table) + DR of TOOL CALL (+ DR of the tool table: a TOOL DEF tool has no table
+  row). It "becomes effective as soon as a tool is called and is moved with a straight line
+  block in the working plane with RL or RR"; "You cannot activate radius compensation in a
+  circle block"; R0 ends it (the tool centre then moves to the programmed coordinates);
+  between RL and RR blocks "you must program at least one traversing block ... with R0".
+- "Radius compensation: Machining corners": "Outside corners: ... the TNC moves the tool
+  around outside corners on a transitional arc"; "Inside corners: The TNC calculates the
+  intersection of the tool center paths ... From this point it then starts the next contour
+  element."
+These are the rules LinuxCNC's G41 / G42 follow (arc about the programmed corner outside, the
+offset paths' intersection inside, the entry move ending one radius beside its end,
+perpendicular to it; the move after R0 / G40 going from the compensated point to its
+programmed end), so the geometry is postproc.dialects.gcode.cutter_comp's. Where the TNC
+differs it is handled here: an outside corner after an FMAX move is a transitional arc too
+(LinuxCNC traverses straight after G0), and the TNC refuses what LinuxCNC would not meet
+(compensation opened in a circle block, RL straight to RR).
+
+The IR keeps, as for G-code (``Toolpath.ccomp``): position = the tool-centre path, values =
+the text's numbers (the contour); a transitional arc is a target without a block of its own.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+
+from ...errors import ParseError
+from ...ir import F_ARC, Kind, Toolpath
+from ...parse.common import LineIndex
+from ..gcode.cutter_comp import CutterComp, Unfollowed
+
+_ARC_KINDS = (int(Kind.ARC_CW), int(Kind.ARC_CCW))
+
+
+class _Run:
+    """One stretch of compensation (RL or RR up to R0 / the end): rows in, path moves out."""
+
+    def __init__(self, tp: Toolpath, side: int, radius: float, start: list):
+        self.tp = tp
+        self.path = CutterComp(side, radius, 1.0, prog=list(start))  # mm, so rs274's tolerances in mm
+
+    def feed(self, r: int) -> None:
+        tp = self.tp
+        end = [float(v) for v in tp.position[r]]
+        # FMAX moves go through the geometry as feed moves: the TNC rounds their outside corners too
+        motion = {int(Kind.ARC_CW): 2, int(Kind.ARC_CCW): 3}.get(int(tp.kind[r]), 1)
+        if motion == 1:
+            self.path.straight(r, 1, end, {})
+        else:
+            centre = (float(tp.values[r, F_ARC.start]), float(tp.values[r, F_ARC.start + 1]))
+            self.path.arc(r, motion, end, centre, {})
+
+
+def follow(tp: Toolpath, side: np.ndarray, radius: np.ndarray) -> Toolpath:
+    """The toolpath with each RL / RR stretch of known radius as the TNC cuts it: positions on
+    the offset path, transitional arcs added as targets; stretches it cannot follow stay as
+    programmed, flagged, with the line and the reason in the notes."""
+    n = len(tp)
+    out_rows: list[int] = []  # source row of each output target
+    out_pos: list = []  # (x, y, z) or None: keep the row's own
+    out_gen: list = []  # (kind, centre) of a transitional arc, else None
+    ccomp = np.zeros(n, np.int8)
+    notes = list(tp.notes)
+    lines = LineIndex(tp.sources[0].text)
+    r = 0
+    while r < n:
+        s = int(side[r])
+        if s == 0 or math.isnan(radius[r]):
+            r += 1
+            continue
+        first = r
+        while r < n and side[r] == s:
+            r += 1
+        _check_stretch(tp, side, first, r, lines)
+        stretch = range(first, r)
+        if radius[first] == 0.0:  # no offset: the contour itself (T0 or R+DR = 0)
+            continue
+        start = [float(v) for v in tp.position[first - 1]] if first > 0 else [math.nan] * 3
+        try:
+            if any(math.isnan(v) for v in start[:2]):
+                raise Unfollowed("the tool's position before the compensation is not known")
+            run = _Run(tp, s, float(radius[first]), start)
+            for i in stretch:
+                run.feed(i)
+            moves = run.path.off()  # R0 / the end: the pending moves end where they stand
+        except (Unfollowed, ValueError, ZeroDivisionError) as exc:
+            notes.append(f"line {int(tp.line[first])}: radius compensation {'RL' if s > 0 else 'RR'}: {exc}; the targets up to R0 are flagged (positions as programmed)")
+            ccomp[first:r] = 2
+            continue
+        ccomp[first:r] = 1
+        _place(moves, out_rows, out_pos, out_gen)
+    return _rebuild(tp, ccomp, out_rows, out_pos, out_gen, notes)
+
+
+def _check_stretch(tp: Toolpath, side: np.ndarray, first: int, end: int, lines: LineIndex) -> None:
+    """What the TNC refuses: compensation opened in a circle block, RL straight to RR."""
+    if int(tp.kind[first]) in _ARC_KINDS:
+        raise _error(tp, lines, first, "radius compensation cannot be opened in a circle block: open it in a straight-line block "
+                     "(TNC 640 manual, 5.3 Tool compensation)")
+    if end < len(tp) and side[end] == -side[first]:
+        raise _error(tp, lines, end, "RL and RR need a block with R0 between them (TNC 640 manual, 5.3 Tool compensation)")
+
+
+def _error(tp: Toolpath, lines: LineIndex, row: int, message: str) -> ParseError:
+    """A ParseError at the RL / RR word of the row's line (its first column if not found)."""
+    text = tp.sources[0].text.upper()
+    line = int(tp.line[row])
+    begin = int(lines.starts[line - 1])
+    stop = text.find("\n", begin)
+    stop = len(text) if stop < 0 else stop
+    found = [p for p in (text.find(k, begin, stop) for k in (" RL", " RR")) if p >= 0]
+    return lines.error(tp.sources[0].path, min(found) + 1 if found else begin, message)
+
+
+def _place(moves: list, out_rows: list, out_pos: list, out_gen: list) -> None:
+    for o in moves:
+        out_rows.append(o.row)
+        out_pos.append(tuple(o.end))
+        out_gen.append((int(Kind.ARC_CW) if o.motion == 2 else int(Kind.ARC_CCW), o.centre) if o.generated else None)
+
+
+def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out_gen: list, notes: list) -> Toolpath:
+    """The toolpath in execution order with the compensated stretches' moves in place of their rows."""
+    by_row: dict[int, list[int]] = {}
+    for k, row in enumerate(out_rows):
+        by_row.setdefault(row, []).append(k)
+    order, pos, gen = [], [], []
+    for row in range(len(tp)):
+        for k in by_row.get(row, [None]) if ccomp[row] == 1 else [None]:
+            order.append(row)
+            pos.append(out_pos[k] if k is not None else None)
+            gen.append(out_gen[k] if k is not None else None)
+    new = tp.take(np.array(order, np.int64))
+    position, kind, values = new.position.copy(), new.kind.copy(), new.values.copy()
+    spans, insert_at, resolved = new.spans.copy(), new.insert_at.copy(), new.resolved.copy()
+    arc = new.arc.copy() if new.arc is not None else np.full((len(new), 3), np.nan)
+    for i, (p, g) in enumerate(zip(pos, gen)):
+        if p is not None:
+            position[i, :2] = p[:2]  # the tool axis coordinate stays the block's own
+        if g is not None:  # a transitional arc: no words of its own, its centre the programmed corner
+            kind[i] = g[0]
+            values[i] = np.nan
+            values[i, F_ARC.start], values[i, F_ARC.start + 1] = g[1]
+            spans[i] = -1
+            insert_at[i] = -1
+            arc[i] = (17, 1, 1)
+    flagged = ccomp[order] == 2
+    resolved &= ~flagged
+    has_arc = np.isin(kind, _ARC_KINDS).any()
+    return replace(new, position=position, kind=kind, values=values, spans=spans, insert_at=insert_at, resolved=resolved,
+                   arc=arc if has_arc else new.arc, ccomp=ccomp[order], notes=tuple(notes))
