@@ -108,3 +108,42 @@ def test_a_corner_the_tool_cannot_fit_is_flagged():
 def test_round_trip_unchanged():
     tp = read(SQUARE_RL)
     assert emit_texts(tp, tp)[0] == SQUARE_RL
+
+
+FIVE_AXIS_RL = program("L X+10 Y+10 Z+5 A-10 C+15 R0 FMAX", "L X+0 Y+0 A-10 C+15 RL F100", "L X+20 Y+0 A-10 C+15", "L X+20 Y+20 A-10 C+15",
+                       "L X+0 Y+20 A-10 C+15", "L X+0 Y+0 A-10 C+15", "L X+10 Y+10 A-10 C+15 R0")
+
+
+def _compensate(tmp_path, text: str):
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    source = tmp_path / "rl.h"
+    source.write_text(text, encoding="latin-1")
+    out = tmp_path / "out.h"
+    res = CliRunner().invoke(app, ["compensate", str(source), "--model", str(TRUE), "-o", str(out), "--input-axes", "machine",
+                                   "--frame", "PRESET=0,0,0,0,0,0"])
+    return res, out
+
+
+TRUE = Path(__file__).parent / "data" / "fivex" / "xyzac-trt-true.toml"
+
+
+def test_compensate_rewrites_the_contour(tmp_path):
+    """The text under RL holds the contour; compensate moves the tool-centre path, so it writes
+    the contour whose offset path lands there: the square's corners stay the radius outside the
+    compensated centre path (inside corners: (-2, 2) ... ; the last side's end: (2, 0) beside it), and the written program, read again, puts
+    the tool where the compensation wants it (checked by compensate itself within 5 µm)."""
+    res, out = _compensate(tmp_path, FIVE_AXIS_RL)
+    assert res.exit_code == 0, res.output
+    before, after = read(FIVE_AXIS_RL), read(out.read_text(encoding="latin-1"))
+    np.testing.assert_allclose(after.values[1:6, :2] - before.values[1:6, :2], after.position[1:6, :2] - before.position[1:6, :2], atol=2e-3)
+    assert np.abs(after.position[1:6, :2] - before.position[1:6, :2]).max() > 0.03  # it did move (the true machine's error)
+    np.testing.assert_allclose(after.position[2:6, :2] - after.values[2:6, :2], [[-2, 2], [-2, -2], [2, -2], [2, 0]], atol=2e-3)
+
+
+def test_compensate_refuses_a_modal_axis_under_rl(tmp_path):
+    res, out = _compensate(tmp_path, FIVE_AXIS_RL.replace("L X+20 Y+0 A-10", "L X+20 A-10"))
+    assert res.exit_code == 2 and "rl.h:6" in res.output and "write X and Y" in res.output, res.output
+    assert not out.exists()

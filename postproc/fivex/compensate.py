@@ -127,4 +127,5 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
         ext[:, c] = angles[:, j]
         values[:, field] = np.where(has_word, angles[:, j], values[:, field])
     moved = replace(tp, ext=ext, values=values)
-    return moved.with_positions(xyz)
+    contour = getattr(dialects.of(tp), "contour_for", None)  # a dialect whose text holds the contour of a compensated tool path (Klartext RL / RR)
+    return contour(moved, xyz) if contour is not None and tp.ccomp is not None and (tp.ccomp == 1).any() else moved.with_positions(xyz)

@@ -11,6 +11,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
 from .parse import read_klartext
+from .radius_comp import contour_for
 from .writer import MODES, tcpm_text
 
 
@@ -43,6 +44,10 @@ class HeidenhainDialect(Dialect):
             raise EmitError(f"{original.sources[int(original.file[i])].path}:{int(original.line[i])}: the target's position is not determined by the "
                             f"program text ({note}); nothing was written")
         return super().emit_texts(original, modified)
+
+    def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
+        """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is ``xyz``."""
+        return contour_for(tp, xyz)
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         sign = "" if text.startswith("-") else "+"

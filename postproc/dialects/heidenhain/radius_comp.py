@@ -31,12 +31,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...errors import ParseError
+from ...errors import EmitError, ParseError
 from ...ir import F_ARC, Kind, Toolpath
 from ...parse.common import LineIndex
 from ..gcode.cutter_comp import CutterComp, Unfollowed
 
 _ARC_KINDS = (int(Kind.ARC_CW), int(Kind.ARC_CCW))
+# Toolpath.extras of a program read with RL / RR: the programmed point of each target (the
+# contour), True on the transitional arcs the TNC adds, the side and radius in force.
+CONTOUR, CORNER, SIDE, RADIUS = "heidenhain.contour", "heidenhain.corner", "heidenhain.comp_side", "heidenhain.comp_radius"
+MAX_PASSES = 50
+CONVERGED_MM = 1e-7
+WRITE_TOLERANCE_MM = 5e-4  # the writer's tolerance for positions (emit.splice.TOLERANCE)
 
 
 class _Run:
@@ -96,7 +102,7 @@ def follow(tp: Toolpath, side: np.ndarray, radius: np.ndarray) -> Toolpath:
             continue
         ccomp[first:r] = 1
         _place(moves, out_rows, out_pos, out_gen)
-    return _rebuild(tp, ccomp, out_rows, out_pos, out_gen, notes)
+    return _rebuild(tp, ccomp, out_rows, out_pos, out_gen, notes, side, radius)
 
 
 def _check_stretch(tp: Toolpath, side: np.ndarray, first: int, end: int, lines: LineIndex) -> None:
@@ -126,7 +132,7 @@ def _place(moves: list, out_rows: list, out_pos: list, out_gen: list) -> None:
         out_gen.append((int(Kind.ARC_CW) if o.motion == 2 else int(Kind.ARC_CCW), o.centre) if o.generated else None)
 
 
-def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out_gen: list, notes: list) -> Toolpath:
+def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out_gen: list, notes: list, side: np.ndarray, radius: np.ndarray) -> Toolpath:
     """The toolpath in execution order with the compensated stretches' moves in place of their rows."""
     by_row: dict[int, list[int]] = {}
     for k, row in enumerate(out_rows):
@@ -154,5 +160,57 @@ def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out
     flagged = ccomp[order] == 2
     resolved &= ~flagged
     has_arc = np.isin(kind, _ARC_KINDS).any()
+    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: np.array([g is not None for g in gen]), SIDE: side[order], RADIUS: radius[order]})
     return replace(new, position=position, kind=kind, values=values, spans=spans, insert_at=insert_at, resolved=resolved,
-                   arc=arc if has_arc else new.arc, ccomp=ccomp[order], notes=tuple(notes))
+                   arc=arc if has_arc else new.arc, ccomp=ccomp[order], notes=tuple(notes), extras=extras)
+
+
+def contour_for(tp: Toolpath, xyz: np.ndarray) -> Toolpath:
+    """``tp`` (read with RL / RR) with the tool-centre path moved to ``xyz`` (N, 3), written as
+    the programmed contour that puts it there: the text holds the contour, and the TNC offsets
+    it again, so each compensated block's point is moved until the offset path of the new
+    contour lands on ``xyz`` (a few fixed-point passes: the offset is a translation along each
+    side's normal). Refused (EmitError, with the line) where no contour does: a transitional
+    arc's ends are fixed by its corner, and two ends of one corner moved apart are not a
+    number rewrite."""
+    xyz = np.asarray(xyz, float)
+    comp = tp.ccomp == 1
+    own, corner = comp & ~tp.extras[CORNER], tp.extras[CORNER]
+    contour = tp.extras[CONTOUR].copy()
+    contour[~comp] = xyz[~comp]  # outside compensation the text holds the tool path itself
+    contour[own, 2] = xyz[own, 2]  # the offset is in the working plane: Z as it is
+    before = tp.take(~corner)
+    side, radius = before.extras[SIDE], before.extras[RADIUS]
+    for _ in range(MAX_PASSES):
+        offset = follow(replace(before, position=contour[~corner]), side, radius)
+        if len(offset) != len(tp) or (offset.ccomp != tp.ccomp).any():
+            return _refuse(tp, int(np.argmax(offset.ccomp == 2)) if len(offset) == len(tp) else int(np.argmax(comp)),
+                           "the moved contour changes the offset path's shape (a corner turns or the tool no longer fits)")
+        miss = xyz - offset.position
+        miss[~comp] = 0.0
+        if np.abs(miss).max() < CONVERGED_MM:
+            break
+        contour[own, :2] += miss[own, :2]
+    off = np.linalg.norm(miss, axis=1)
+    if off.max() > WRITE_TOLERANCE_MM:
+        return _refuse(tp, int(np.argmax(off)), f"no programmed contour puts the tool centre there (off by {off.max():.4f} mm): the "
+                       "corrections differ along one corner's transitional arc")
+    _require_words(tp, own, contour)
+    values = tp.values.copy()
+    values[:, :3] = np.where(np.isnan(tp.values[:, :3]), np.nan, contour)
+    return replace(tp, position=xyz.copy(), values=values, extras=dict(tp.extras, **{CONTOUR: contour}))
+
+
+def _require_words(tp: Toolpath, own: np.ndarray, contour: np.ndarray) -> None:
+    """A compensated block whose contour point moves must write X and Y itself: a word added
+    there would be written from the tool path (the writer's rule for modal axes), not the contour."""
+    moved = own & (np.abs(contour[:, :2] - tp.extras[CONTOUR][:, :2]) > 1e-9).any(axis=1)
+    lacking = moved & np.isnan(tp.values[:, :2]).any(axis=1)
+    if lacking.any():
+        _refuse(tp, int(np.argmax(lacking)), "the block's point moves but it does not write both X and Y (modal), and no word is added "
+                "to a compensated block; write X and Y on every RL / RR block")
+
+
+def _refuse(tp: Toolpath, row: int, why: str):
+    raise EmitError(f"{tp.sources[0].path}:{int(tp.line[row])}: under RL / RR radius compensation the text holds the contour, which the TNC "
+                    f"offsets by the tool radius: {why}; nothing was written")
