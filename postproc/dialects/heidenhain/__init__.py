@@ -11,6 +11,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
 from .parse import read_klartext
+from .plane_solution import place_tilted
 from .radius_comp import contour_for
 from .writer import MODES, tcpm_text
 
@@ -48,6 +49,10 @@ class HeidenhainDialect(Dialect):
     def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
         """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is ``xyz``."""
         return contour_for(tp, xyz)
+
+    def for_machine(self, tp: Toolpath, machine) -> Toolpath:
+        """The targets of a tilted plane (PLANE SPATIAL ... MOVE) placed on ``machine``: the TNC's rotary solution."""
+        return place_tilted(tp, machine)
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         sign = "" if text.startswith("-") else "+"

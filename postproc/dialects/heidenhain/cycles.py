@@ -122,9 +122,14 @@ class StateBlocks:
             self.tilt_line = line
             if up.startswith("PLANE SPATIAL"):
                 self.tilt = self._spatial(s, at)
-        if re.search(r"\b(MOVE|TURN)\b", up):
+        mode = re.search(r"\b(MOVE|TURN|STAY)\b", up)
+        seq = re.search(r"\bSEQ\s*([+-])", up)
+        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY", re.search(r"\b(DIST|ABST)\s*[+-]?0*\.?0*[1-9]", up[mode.end():]) is not None if mode else False)
+        if mode and mode.group(1) in ("MOVE", "TURN"):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
-            self.unresolved_row(line, at, f"line {line}: PLANE ... MOVE/TURN positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): not read")
+            self.positioning_rows.add(self.rows_all())
+            self.unresolved_row(line, at, f"line {line}: PLANE ... {mode.group(1)} positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): "
+                                "computed where a machine is given (compensate / convert), else not read")
         return None
 
     def _spatial(self, s: str, at: int) -> np.ndarray | None:

@@ -51,6 +51,7 @@ from .contours import Contours
 from .cycles import StateBlocks
 from .fields import AXES, COLUMNS, SIDE
 from . import radius_comp
+from .plane_solution import plane_extras
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, WordError, read_words
 
@@ -103,6 +104,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
         self.tilt: np.ndarray | None = None  # its rotation where the text gives it (PLANE SPATIAL)
         self.tcpm = False
+        self.planes: dict[int, tuple[int, str, bool]] = {}  # PLANE line -> (SEQ +1/-1/0, MOVE/TURN/STAY, a DIST or feed given after it)
+        self.positioning_rows: set[int] = set()  # rows of PLANE ... MOVE/TURN: the TNC turns the rotary axes there
         self.notes: dict[str, None] = {}
         self.numbers = None  # every number of the text, scanned once when a plain run needs it
         self.segments: list[tuple[np.ndarray, np.ndarray]] = []  # (rows table, cells) read in bulk, in order with the rows
@@ -507,7 +510,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         ext[:, :3] = table[:, 10:13]
         tcpm = table[:, 13].astype(bool)
         resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
-        tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras={"heidenhain.tcpm": tcpm})
+        extras = {"heidenhain.tcpm": tcpm, **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
+        tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras=extras)
         if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
             tp = radius_comp.follow(tp, side, radius)
         return tp
