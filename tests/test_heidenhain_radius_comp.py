@@ -147,3 +147,11 @@ def test_compensate_refuses_a_modal_axis_under_rl(tmp_path):
     res, out = _compensate(tmp_path, FIVE_AXIS_RL.replace("L X+20 Y+0 A-10", "L X+20 A-10"))
     assert res.exit_code == 2 and "rl.h:6" in res.output and "write X and Y" in res.output, res.output
     assert not out.exists()
+
+
+def test_a_contour_point_from_the_control_flags_its_stretch():
+    """A contour point from an FN 18 value: the offset path is not computed from a guess."""
+    tp = read(program("FN 18: SYSREAD Q5 = ID270 NR1 IDX1", "L X+0 Y-10 Z+5 R0 FMAX", "L X+0 Y+0 RL F100", "L X+Q5", "L Y+10",
+                      "L X+0 Y-10 R0"))
+    assert tp.resolved.tolist() == [True, False, False, False, True]
+    assert any("not determined by the text at line 7" in n for n in tp.notes), tp.notes

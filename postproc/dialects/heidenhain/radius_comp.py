@@ -92,6 +92,8 @@ def follow(tp: Toolpath, side: np.ndarray, radius: np.ndarray) -> Toolpath:
         try:
             if any(math.isnan(v) for v in start[:2]):
                 raise Unfollowed("the tool's position before the compensation is not known")
+            if not tp.resolved[first:r].all():  # a value from the control, a cycle's moves: the contour itself is not known
+                raise Unfollowed(f"the contour is not determined by the text at line {int(tp.line[first + int(np.argmin(tp.resolved[first:r]))])}")
             run = _Run(tp, s, float(radius[first]), start)
             for i in stretch:
                 run.feed(i)
