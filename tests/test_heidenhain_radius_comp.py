@@ -155,3 +155,19 @@ def test_a_contour_point_from_the_control_flags_its_stretch():
                       "L X+0 Y-10 R0"))
     assert tp.resolved.tolist() == [True, False, False, False, True]
     assert any("not determined by the text at line 7" in n for n in tp.notes), tp.notes
+
+
+def test_ct_after_one_line_that_follows_an_arc():
+    """CT is tangent to the element before it ("Path contours - Cartesian coordinates", CT): after
+    C ... and one L X+0 from (20,20) the direction is -X, so the arc to (-5,15) has its centre
+    below (0,20): (0,15), radius 5, counter-clockwise (a single plain L read in bulk once took
+    the direction of an older line). Under RL (R 2.5) the tangent chain has no corner: the
+    offset arcs end 2.5 inside, (20,17.5) and (-2.5,15), and no transitional arc is added."""
+    body = ("L X-10 Y-10 Z+5 R0 FMAX", "L X+0 Y+0 {c}F100", "L X+20", "CC X+20 Y+10", "C X+20 Y+20 DR+", "L X+0", "CT X-5 Y+15",
+            "L Y+0", "L X-10 Y-10 R0")
+    tp = read(program(*[b.format(c="") for b in body]))
+    np.testing.assert_allclose(tp.values[5, 19:21], [0, 15])
+    assert tp.kind[5] == Kind.ARC_CCW
+    tp = read(program(*[b.format(c="RL ") for b in body], tool="TOOL DEF 1 L+50 R+2\nTOOL CALL 1 Z S1000 DR+0.5"))
+    np.testing.assert_allclose(tp.position[:, :2], [[-10, -10], [-2.5 / S2, 2.5 / S2], [0, 2.5], [20, 2.5], [20, 17.5], [0, 17.5],
+                                                    [-2.5, 15], [-2.5, 0], [-10, -10]], atol=1e-9)

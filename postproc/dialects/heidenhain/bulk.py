@@ -105,12 +105,9 @@ class BulkReading:
             self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
         if self.tilt_line:
             self._state_resolved(run.first + 1, False)  # the note
+        self.tangent = _last_direction(self.pos[:2], table[:, 7:9], self.tangent)
         self.pos[:] = table[-1, 7:13]
         self.feed = float(feed[-1])
-        if n > 1:
-            self.line_start, self.tangent = tuple(table[-2, 7:9]), "line"
-        else:
-            self.line_start, self.tangent = tuple(self.line_start), "line"
         self.add_segment(table, np.concatenate(cells))
 
 
@@ -119,3 +116,12 @@ def carried(given: np.ndarray, before: float) -> np.ndarray:
     idx = np.where(np.isnan(given), -1, np.arange(len(given)))
     np.maximum.accumulate(idx, out=idx)
     return np.where(idx >= 0, given[np.maximum(idx, 0)], before)
+
+
+def _last_direction(before: np.ndarray, ends: np.ndarray, tangent):
+    """Direction (unit, XY) of the last of these straight moves that moves in the plane, from
+    ``before`` through ``ends``: what a CT after them is tangent to (``tangent`` if none moves)."""
+    d = ends - np.vstack([before[None, :], ends[:-1]])
+    length = np.hypot(d[:, 0], d[:, 1])
+    moving = np.nonzero(length > 0)[0]
+    return tangent if not len(moving) else d[moving[-1]] / length[moving[-1]]

@@ -92,8 +92,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.feed_unknown = False
         self.pole = np.full(2, np.nan)
         self.polar = [math.nan, math.nan]  # last PR, PA
-        self.tangent = None  # direction at the end of the last contour element (CT); "line": from line_start
-        self.line_start = (math.nan, math.nan)
+        self.tangent = None  # direction (unit XY) at the end of the last contour element (CT)
         self.comp = "R0"
         self.comp_line = 0
         self.tool = 0
