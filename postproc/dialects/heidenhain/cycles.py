@@ -41,6 +41,10 @@ class StateBlocks:
             raise self.error(at, "DL from a Q parameter is not read")
         base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
         self.radius = self.tool_radius.get(name, math.nan) + self._delta_radius(rest, at)
+        # LN (3-D compensation) moves the tool along N by the sum of the delta values (tool table and TOOL
+        # CALL): zero for a tool the program defines (no table row) called without DL / DR / DR2
+        deltas = re.findall(r"\b(?:DL|DR2|DR)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
+        self.ln_deltas_zero = name in self.tool_radius and all(float(v) == 0.0 for v in deltas)
         if dl and float(dl.group(1)) != 0.0:
             delta = float(dl.group(1)) * self.scale
             known = bool(self.b.tool_known[base])

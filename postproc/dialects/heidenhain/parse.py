@@ -98,6 +98,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.tool = 0
         self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
         self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
+        self.ln_deltas_zero = False  # the tool in force has no delta values (LN then moves to X Y Z as written)
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
@@ -348,7 +349,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if kind in ("L", "LN"):
             moved = self.cartesian(words, vals, spans, at)
             if kind == "LN":
-                self.notes["LN: 3-D tool compensation offsets the point by the tool radius along N (TNC 640 manual, 3-D tool compensation): not read"] = None
+                self.ln_note(line)
         elif kind in ("C", "CR", "CT"):
             moved = self.cartesian(words, vals, spans, at)
             arc = self.circle(kind, words, start, vals, spans, at)
@@ -361,6 +362,21 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if moved or kind != "L":
             self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
         return self.m_functions(words, line, at)
+
+    def ln_note(self, line: int) -> None:
+        """LN X Y Z NX NY NZ (TX TY TZ): X Y Z are the compensated end point; the TNC moves the tool
+        along N by the sum of the delta values (tool table and TOOL CALL), and under M128 / TCPM
+        turns the rotary axes to T (or perpendicular to the surface without T); without M128 T is
+        ignored (TNC 640 manual, "Three-dimensional tool compensation")."""
+        if self.tcpm:
+            self.notes[f"line {line}: LN under M128 / TCPM: the TNC turns the rotary axes to the tool orientation T (or normal to the surface), "
+                       "a solution of its own: not read"] = None
+        elif not self.ln_deltas_zero:
+            self.notes[f"line {line}: LN: the TNC moves the tool along N by the tool's delta values (tool table and TOOL CALL), which the text "
+                       "does not give (a tool from the tool table) or are not zero: not read"] = None
+        else:
+            self.notes["LN without M128: the tool moves to X Y Z (no delta values: TOOL DEF tool, no DL / DR / DR2); N and T change nothing "
+                       "(TNC 640 manual, three-dimensional tool compensation)"] = None
 
     def _feed(self, words: PathWords) -> None:
         if words.feed_other:
@@ -412,7 +428,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
         if kind == "LN":
-            resolved = False
+            resolved = resolved and self.ln_deltas_zero and not self.tcpm
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
         self.add_row(int(k), line, feed, resolved, insert, vals, spans)
