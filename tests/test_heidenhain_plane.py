@@ -102,3 +102,24 @@ def test_without_seq_and_no_start_position_stays_flagged():
     tp = _placed(parse_program(Path("p.h"), data=b"BEGIN PGM P MM\nL X+0 Y+0 Z+50 R0 FMAX\nPLANE SPATIAL SPA+30 SPB+0 SPC+0 MOVE\n"
                                                   b"L X+10 Y+0 Z+5 FMAX\nEND PGM P MM\n").with_frames({"PRESET": np.eye(4)}, None), "xyzac-trt")
     assert not tp.resolved[1:].any() and any("shorter way" in n for n in tp.notes)
+
+
+def test_compensate_refuses_a_tilted_plane_and_convert_to_m128_is_the_way(tmp_path):
+    """A correction of a tilted plane's targets would change the PLANE's angles (and the TNC's
+    solution), not its blocks' numbers: refused with the PLANE's line. Converted to M128 (tool tip
+    + axis positions), the same path is compensated."""
+    from typer.testing import CliRunner
+
+    from postproc.cli import app
+
+    runner, true = CliRunner(), Path(__file__).parent / "data" / "fivex" / "xyzac-trt-true.toml"
+    source = tmp_path / "p.h"
+    source.write_text("BEGIN PGM P MM\nTOOL CALL 1 Z S1000\nL X+0 Y+0 Z+50 A+0 C+0 R0 FMAX\nPLANE SPATIAL SPA+30 SPB+0 SPC+0 SEQ+ MOVE\n"
+                      "L X+10 Y+0 Z+5 FMAX\nL X+10 Y+10 Z+0 F100\nPLANE RESET STAY\nEND PGM P MM\n", encoding="latin-1")
+    common = ["--input-axes", "tip", "--frame", "PRESET=0,0,0,0,0,0"]
+    res = runner.invoke(app, ["compensate", str(source), "--model", str(true), "-o", str(tmp_path / "c.h"), *common])
+    assert res.exit_code == 2 and "p.h:4: targets in a tilted working plane" in res.output, res.output
+    res = runner.invoke(app, ["convert", str(source), "--to", "heidenhain", "--machine", "xyzac-trt", "--rtcp", "tcpm", "-o", str(tmp_path / "m.h"), *common])
+    assert res.exit_code == 0 and "rotary solution A+30.0000 C-180.0000 (SEQ+)" in res.output, res.output
+    res = runner.invoke(app, ["compensate", str(tmp_path / "m.h"), "--model", str(true), "-o", str(tmp_path / "mc.h"), *common])
+    assert res.exit_code == 0, res.output

@@ -81,6 +81,9 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if tp.relative.any():
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
+    refuse = getattr(dialects.of(tp), "refuse_compensation", None)  # what a dialect's text cannot carry as block numbers (Klartext: a tilted plane)
+    if refuse is not None:
+        refuse(tp)
     names = controller.rotary_names
     cols = [ROTARY_FIELD[n] for n in names]
     angles = tp.ext[:, cols]

@@ -6,7 +6,7 @@ import re
 
 import numpy as np
 
-from ...errors import EmitError
+from ...errors import EmitError, InputError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
@@ -53,6 +53,16 @@ class HeidenhainDialect(Dialect):
     def for_machine(self, tp: Toolpath, machine) -> Toolpath:
         """The targets of a tilted plane (PLANE SPATIAL ... MOVE) placed on ``machine``: the TNC's rotary solution."""
         return place_tilted(tp, machine)
+
+    def refuse_compensation(self, tp: Toolpath) -> None:
+        """A tilted working plane is not compensated: the correction would change the PLANE's angles
+        and with them the rotary solution the TNC takes, not numbers of the blocks under it."""
+        plane = tp.extras.get("heidenhain.plane_line")
+        if plane is not None and (plane > 0).any():
+            i = int(np.argmax(plane > 0))
+            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE SPATIAL) are not compensated: "
+                             "the correction would change the plane's angles and the rotary solution the TNC takes, not numbers of its blocks; "
+                             "convert the program to M128 (convert --to heidenhain --rtcp tcpm) and compensate that")
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         sign = "" if text.startswith("-") else "+"
