@@ -128,41 +128,40 @@ def _error(tp: Toolpath, lines: LineIndex, row: int, message: str) -> ParseError
 
 
 def _place(moves: list, out_rows: list, out_pos: list, out_gen: list) -> None:
+    """The path moves of one stretch: source row, end (x, y, z), (kind, centre x, centre y) of an added arc (NaN: a block's own move)."""
     for o in moves:
         out_rows.append(o.row)
         out_pos.append(tuple(o.end))
-        out_gen.append((int(Kind.ARC_CW) if o.motion == 2 else int(Kind.ARC_CCW), o.centre) if o.generated else None)
+        out_gen.append((int(Kind.ARC_CW) if o.motion == 2 else int(Kind.ARC_CCW), *o.centre) if o.generated else (np.nan, np.nan, np.nan))
 
 
 def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out_gen: list, notes: list, side: np.ndarray, radius: np.ndarray) -> Toolpath:
-    """The toolpath in execution order with the compensated stretches' moves in place of their rows."""
-    by_row: dict[int, list[int]] = {}
-    for k, row in enumerate(out_rows):
-        by_row.setdefault(row, []).append(k)
-    order, pos, gen = [], [], []
-    for row in range(len(tp)):
-        for k in by_row.get(row, [None]) if ccomp[row] == 1 else [None]:
-            order.append(row)
-            pos.append(out_pos[k] if k is not None else None)
-            gen.append(out_gen[k] if k is not None else None)
-    new = tp.take(np.array(order, np.int64))
+    """The toolpath in execution order with the compensated stretches' moves in place of their
+    rows (the moves come out in row order: a transitional arc just before its row's own move)."""
+    n = len(tp)
+    out_rows_a = np.asarray(out_rows, np.int64)
+    count = np.ones(n, np.int64)
+    followed = ccomp == 1
+    count[followed] = np.bincount(out_rows_a, minlength=n)[followed]
+    order = np.repeat(np.arange(n), count)
+    new = tp.take(order)
+    slots = np.nonzero(ccomp[order] == 1)[0]  # the output targets that are path moves, in the order they came out
+    gen = np.asarray(out_gen, float).reshape(-1, 3)
+    added = slots[~np.isnan(gen[:, 0])]
     position, kind, values = new.position.copy(), new.kind.copy(), new.values.copy()
-    spans, insert_at, resolved = new.spans.copy(), new.insert_at.copy(), new.resolved.copy()
+    position[slots, :2] = np.asarray(out_pos, float).reshape(-1, 3)[:, :2]  # the tool axis coordinate stays the block's own
+    kind[added] = gen[~np.isnan(gen[:, 0]), 0].astype(kind.dtype)  # a transitional arc: no words of its own, its centre the programmed corner
+    values[added] = np.nan
+    values[added, F_ARC.start:F_ARC.start + 2] = gen[~np.isnan(gen[:, 0]), 1:]
+    spans, insert_at = new.spans.copy(), new.insert_at.copy()
+    spans[added], insert_at[added] = -1, -1
     arc = new.arc.copy() if new.arc is not None else np.full((len(new), 3), np.nan)
-    for i, (p, g) in enumerate(zip(pos, gen)):
-        if p is not None:
-            position[i, :2] = p[:2]  # the tool axis coordinate stays the block's own
-        if g is not None:  # a transitional arc: no words of its own, its centre the programmed corner
-            kind[i] = g[0]
-            values[i] = np.nan
-            values[i, F_ARC.start], values[i, F_ARC.start + 1] = g[1]
-            spans[i] = -1
-            insert_at[i] = -1
-            arc[i] = (17, 1, 1)
-    flagged = ccomp[order] == 2
-    resolved &= ~flagged
+    arc[added] = (17, 1, 1)
+    corner = np.zeros(len(new), bool)
+    corner[added] = True
+    resolved = new.resolved & (ccomp[order] != 2)
     has_arc = np.isin(kind, _ARC_KINDS).any()
-    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: np.array([g is not None for g in gen]), SIDE: side[order], RADIUS: radius[order]})
+    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: corner, SIDE: side[order], RADIUS: radius[order]})
     return replace(new, position=position, kind=kind, values=values, spans=spans, insert_at=insert_at, resolved=resolved,
                    arc=arc if has_arc else new.arc, ccomp=ccomp[order], notes=tuple(notes), extras=extras)
 
