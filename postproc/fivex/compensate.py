@@ -81,6 +81,9 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if tp.relative.any():
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
+    refuse = getattr(dialects.of(tp), "refuse_compensation", None)  # what a dialect's text cannot carry as block numbers (Klartext: a tilted plane)
+    if refuse is not None:
+        refuse(tp)
     names = controller.rotary_names
     cols = [ROTARY_FIELD[n] for n in names]
     angles = tp.ext[:, cols]
@@ -127,4 +130,5 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
         ext[:, c] = angles[:, j]
         values[:, field] = np.where(has_word, angles[:, j], values[:, field])
     moved = replace(tp, ext=ext, values=values)
-    return moved.with_positions(xyz)
+    contour = getattr(dialects.of(tp), "contour_for", None)  # a dialect whose text holds the contour of a compensated tool path (Klartext RL / RR)
+    return contour(moved, xyz) if contour is not None and tp.ccomp is not None and (tp.ccomp == 1).any() else moved.with_positions(xyz)

@@ -6,11 +6,13 @@ import re
 
 import numpy as np
 
-from ...errors import EmitError
+from ...errors import EmitError, InputError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
 from .parse import read_klartext
+from .plane_solution import place_tilted
+from .radius_comp import contour_for
 from .writer import MODES, tcpm_text
 
 
@@ -43,6 +45,24 @@ class HeidenhainDialect(Dialect):
             raise EmitError(f"{original.sources[int(original.file[i])].path}:{int(original.line[i])}: the target's position is not determined by the "
                             f"program text ({note}); nothing was written")
         return super().emit_texts(original, modified)
+
+    def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
+        """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is ``xyz``."""
+        return contour_for(tp, xyz)
+
+    def for_machine(self, tp: Toolpath, machine) -> Toolpath:
+        """The targets of a tilted plane (PLANE SPATIAL ... MOVE) placed on ``machine``: the TNC's rotary solution."""
+        return place_tilted(tp, machine)
+
+    def refuse_compensation(self, tp: Toolpath) -> None:
+        """A tilted working plane is not compensated: the correction would change the PLANE's angles
+        and with them the rotary solution the TNC takes, not numbers of the blocks under it."""
+        plane = tp.extras.get("heidenhain.plane_line")
+        if plane is not None and (plane > 0).any():
+            i = int(np.argmax(plane > 0))
+            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE SPATIAL) are not compensated: "
+                             "the correction would change the plane's angles and the rotary solution the TNC takes, not numbers of its blocks; "
+                             "convert the program to M128 (convert --to heidenhain --rtcp tcpm) and compensate that")
 
     def insert_field(self, source: int, field: str, text: str) -> str:
         sign = "" if text.startswith("-") else "+"

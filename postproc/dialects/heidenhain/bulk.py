@@ -15,7 +15,7 @@ from ...ir import Kind
 from ...parse.common import _ranges, scan_numbers
 from ...parse.line_shapes import LineShapes
 from .blocks import PlainRun
-from .fields import AXES, COLUMNS
+from .fields import AXES, COLUMNS, SIDE
 
 # One plain L block alone on its line (block number, absolute plain numbers, no M, no comment):
 # digit runs only through \d+ / \d* so that lines of one shape match alike (line_shapes.py).
@@ -88,6 +88,8 @@ class BulkReading:
         table[:, 4] = self._frame_index()
         table[:, 6] = ws
         table[:, 13] = self.tcpm
+        table[:, 14] = SIDE[self.comp]
+        table[:, 15] = self.radius
         compensated = np.zeros(n, bool)
         cs, _ = self.plain.span("comp")
         cs = cs[rows]
@@ -95,6 +97,7 @@ class BulkReading:
             for i in range(n):
                 if cs[i] >= 0:
                     self.comp, self.comp_line = self.text[cs[i]:cs[i] + 2], run.first + i + 1
+                table[i, 14] = SIDE[self.comp]
                 if self.comp != "R0":
                     compensated[i] = not self._state_resolved(run.first + i + 1, False)  # with its note
         table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)
@@ -102,12 +105,9 @@ class BulkReading:
             self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
         if self.tilt_line:
             self._state_resolved(run.first + 1, False)  # the note
+        self.tangent = _last_direction(self.pos[:2], table[:, 7:9], self.tangent)
         self.pos[:] = table[-1, 7:13]
         self.feed = float(feed[-1])
-        if n > 1:
-            self.line_start, self.tangent = tuple(table[-2, 7:9]), "line"
-        else:
-            self.line_start, self.tangent = tuple(self.line_start), "line"
         self.add_segment(table, np.concatenate(cells))
 
 
@@ -116,3 +116,12 @@ def carried(given: np.ndarray, before: float) -> np.ndarray:
     idx = np.where(np.isnan(given), -1, np.arange(len(given)))
     np.maximum.accumulate(idx, out=idx)
     return np.where(idx >= 0, given[np.maximum(idx, 0)], before)
+
+
+def _last_direction(before: np.ndarray, ends: np.ndarray, tangent):
+    """Direction (unit, XY) of the last of these straight moves that moves in the plane, from
+    ``before`` through ``ends``: what a CT after them is tangent to (``tangent`` if none moves)."""
+    d = ends - np.vstack([before[None, :], ends[:-1]])
+    length = np.hypot(d[:, 0], d[:, 1])
+    moving = np.nonzero(length > 0)[0]
+    return tangent if not len(moving) else d[moving[-1]] / length[moving[-1]]

@@ -56,9 +56,6 @@ class Contours:
             centre = self._radius_centre(start[:2], self.pos[:2], r * self.scale, words.dr == "+", w.start)
             return ("CR", centre, words.dr)
         # CT: tangent to the previous element
-        if isinstance(self.tangent, str):  # after a plain L block: its direction
-            d = start[:2] - np.array(self.line_start)
-            self.tangent = d / np.hypot(*d) if np.hypot(*d) > 0 else None
         if self.tangent is None or np.isnan(self.tangent).any():
             raise self.error(at, "CT needs a contour element before it (its tangent)")
         d = self.tangent

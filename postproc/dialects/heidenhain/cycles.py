@@ -21,6 +21,9 @@ class StateBlocks:
         length = re.search(r"\bL\s*([+-]?(?:\d+\.?\d*|\.\d+))", m.group(2), re.IGNORECASE)
         if length:  # TNC 4xx: TOOL DEF n L.. R.. defines the tool in the program
             self.b.tool_index(f"T{m.group(1)}", along_z(float(length.group(1)) * self.scale))
+        radius = re.search(r"\bR\s*([+-]?(?:\d+\.?\d*|\.\d+))", m.group(2), re.IGNORECASE)
+        if radius:  # its radius R: what RL / RR offset by (TNC 640 manual, 5.2 Tool data)
+            self.tool_radius[f"T{m.group(1)}"] = float(radius.group(1)) * self.scale
         return None
 
     def tool_call(self, s: str, at: int, line: int):
@@ -37,6 +40,11 @@ class StateBlocks:
         if re.search(r"\bDL\s*[+-]?\s*Q", rest, re.IGNORECASE):
             raise self.error(at, "DL from a Q parameter is not read")
         base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
+        self.radius = self.tool_radius.get(name, math.nan) + self._delta_radius(rest, at)
+        # LN (3-D compensation) moves the tool along N by the sum of the delta values (tool table and TOOL
+        # CALL): zero for a tool the program defines (no table row) called without DL / DR / DR2
+        deltas = re.findall(r"\b(?:DL|DR2|DR)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
+        self.ln_deltas_zero = name in self.tool_radius and all(float(v) == 0.0 for v in deltas)
         if dl and float(dl.group(1)) != 0.0:
             delta = float(dl.group(1)) * self.scale
             known = bool(self.b.tool_known[base])
@@ -45,6 +53,15 @@ class StateBlocks:
         else:
             self.tool = base
         return None
+
+    def _delta_radius(self, rest: str, at: int) -> float:
+        """DR of TOOL CALL (mm): added to the tool's radius under RL / RR (TNC 640 manual,
+        5.3: compensation value = R + DR TOOL CALL + DR TAB; a TOOL DEF tool has no table row).
+        DR2 (the corner radius of 3-D compensation) is not it."""
+        if re.search(r"\bDR(?!2)\s*[+-]?\s*Q", rest, re.IGNORECASE):
+            raise self.error(at, "DR from a Q parameter is not read")
+        dr = re.search(r"\bDR(?!2)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
+        return float(dr.group(1)) * self.scale if dr else 0.0
 
     def cycle_def(self, s: str, at: int, line: int):
         m = re.match(r"CYCLE?\s+DEF\s+(\d+)(?:\.(\d+))?\s*(.*)$", s, re.IGNORECASE)
@@ -109,9 +126,14 @@ class StateBlocks:
             self.tilt_line = line
             if up.startswith("PLANE SPATIAL"):
                 self.tilt = self._spatial(s, at)
-        if re.search(r"\b(MOVE|TURN)\b", up):
+        mode = re.search(r"\b(MOVE|TURN|STAY)\b", up)
+        seq = re.search(r"\bSEQ\s*([+-])", up)
+        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY", re.search(r"\b(DIST|ABST)\s*[+-]?0*\.?0*[1-9]", up[mode.end():]) is not None if mode else False)
+        if mode and mode.group(1) in ("MOVE", "TURN"):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
-            self.unresolved_row(line, at, f"line {line}: PLANE ... MOVE/TURN positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): not read")
+            self.positioning_rows.add(self.rows_all())
+            self.unresolved_row(line, at, f"line {line}: PLANE ... {mode.group(1)} positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): "
+                                "computed where a machine is given (compensate / convert), else not read")
         return None
 
     def _spatial(self, s: str, at: int) -> np.ndarray | None:

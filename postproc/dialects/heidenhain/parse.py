@@ -49,7 +49,9 @@ from .blocks import Block, PlainRun, split_blocks
 from .bulk import BulkReading
 from .contours import Contours
 from .cycles import StateBlocks
-from .fields import AXES, COLUMNS
+from .fields import AXES, COLUMNS, SIDE
+from . import radius_comp
+from .plane_solution import plane_extras
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, WordError, read_words
 
@@ -90,16 +92,20 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.feed_unknown = False
         self.pole = np.full(2, np.nan)
         self.polar = [math.nan, math.nan]  # last PR, PA
-        self.tangent = None  # direction at the end of the last contour element (CT); "line": from line_start
-        self.line_start = (math.nan, math.nan)
+        self.tangent = None  # direction (unit XY) at the end of the last contour element (CT)
         self.comp = "R0"
         self.comp_line = 0
         self.tool = 0
+        self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
+        self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
+        self.ln_deltas_zero = False  # the tool in force has no delta values (LN then moves to X Y Z as written)
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
         self.tilt: np.ndarray | None = None  # its rotation where the text gives it (PLANE SPATIAL)
         self.tcpm = False
+        self.planes: dict[int, tuple[int, str, bool]] = {}  # PLANE line -> (SEQ +1/-1/0, MOVE/TURN/STAY, a DIST or feed given after it)
+        self.positioning_rows: set[int] = set()  # rows of PLANE ... MOVE/TURN: the TNC turns the rotary axes there
         self.notes: dict[str, None] = {}
         self.numbers = None  # every number of the text, scanned once when a plain run needs it
         self.segments: list[tuple[np.ndarray, np.ndarray]] = []  # (rows table, cells) read in bulk, in order with the rows
@@ -343,7 +349,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if kind in ("L", "LN"):
             moved = self.cartesian(words, vals, spans, at)
             if kind == "LN":
-                self.notes["LN: 3-D tool compensation offsets the point by the tool radius along N (TNC 640 manual, 3-D tool compensation): not read"] = None
+                self.ln_note(line)
         elif kind in ("C", "CR", "CT"):
             moved = self.cartesian(words, vals, spans, at)
             arc = self.circle(kind, words, start, vals, spans, at)
@@ -356,6 +362,21 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if moved or kind != "L":
             self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
         return self.m_functions(words, line, at)
+
+    def ln_note(self, line: int) -> None:
+        """LN X Y Z NX NY NZ (TX TY TZ): X Y Z are the compensated end point; the TNC moves the tool
+        along N by the sum of the delta values (tool table and TOOL CALL), and under M128 / TCPM
+        turns the rotary axes to T (or perpendicular to the surface without T); without M128 T is
+        ignored (TNC 640 manual, "Three-dimensional tool compensation")."""
+        if self.tcpm:
+            self.notes[f"line {line}: LN under M128 / TCPM: the TNC turns the rotary axes to the tool orientation T (or normal to the surface), "
+                       "a solution of its own: not read"] = None
+        elif not self.ln_deltas_zero:
+            self.notes[f"line {line}: LN: the TNC moves the tool along N by the tool's delta values (tool table and TOOL CALL), which the text "
+                       "does not give (a tool from the tool table) or are not zero: not read"] = None
+        else:
+            self.notes["LN without M128: the tool moves to X Y Z (no delta values: TOOL DEF tool, no DL / DR / DR2); N and T change nothing "
+                       "(TNC 640 manual, three-dimensional tool compensation)"] = None
 
     def _feed(self, words: PathWords) -> None:
         if words.feed_other:
@@ -407,7 +428,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
         if kind == "LN":
-            resolved = False
+            resolved = resolved and self.ln_deltas_zero and not self.tcpm
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
         self.add_row(int(k), line, feed, resolved, insert, vals, spans)
@@ -431,9 +452,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
         """False (with a note) where the modal state leaves the position to what the text does not give."""
         resolved = True
-        if self.comp in ("RL", "RR"):
+        if self.comp in ("RL", "RR") and math.isnan(self.radius):
             resolved = False
-            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give; those targets are read as programmed"] = None
+            self.notes[f"line {self.comp_line}: radius compensation {self.comp}: the TNC cuts beside the contour by the tool table's radius, which the text does not give "
+                       "(TOOL DEF n L.. R.. in the program gives it); those targets are read as programmed"] = None
         if self.tilt_line:
             resolved = False
             self.notes[f"line {self.tilt_line}: tilted working plane: positions are in the tilted plane, whose rotary-axis solution (SEQ+/SEQ-) is the TNC's: not read"] = None
@@ -463,7 +485,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
     def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
         r = self.rows_all()
         p = self.pos
-        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm))
+        self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm,
+                          SIDE[self.comp], self.radius))
         for f, v in vals.items():
             self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
 
@@ -498,10 +521,15 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.b.notes.append(f"line {self.tolerance_line}: CYCL DEF 32 TOLERANCE: the TNC smooths the path within the tolerance")
         tp = self.b.build(orientation=False)
         ext = tp.ext.copy()
+        side, radius = table[:, 14], table[:, 15]
         ext[:, :3] = table[:, 10:13]
         tcpm = table[:, 13].astype(bool)
         resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
-        return replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras={"heidenhain.tcpm": tcpm})
+        extras = {"heidenhain.tcpm": tcpm, **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
+        tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras=extras)
+        if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
+            tp = radius_comp.follow(tp, side, radius)
+        return tp
 
     def _mixed_tcpm(self, tcpm: np.ndarray, angles: np.ndarray, lines: np.ndarray) -> np.ndarray:
         """(N,) targets with rotary positions but without M128 / TCPM in a program that uses it
