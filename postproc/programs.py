@@ -21,6 +21,7 @@ from .errors import EmitError, OutputCheckError, OutputError
 from .files import write_all
 from .ir import F_POS, Kind, SourceDoc, Toolpath
 from .program_content import require_program
+from .robots import load_robot
 
 DIALECTS = dialects.names()
 
@@ -41,6 +42,12 @@ def parse_program(path: str | Path, dialect: str | None = None, data: bytes | No
     ``modules``: other modules' files (or folders of them) whose global data it uses (KRL)."""
     lang = dialects.get(dialect) if dialect else dialects.sniff(path, data)
     return lang.parse(path, data, modules) if modules else lang.parse(path, data)
+
+
+def with_robot(tp: Toolpath, robot: str | None) -> Toolpath:
+    """``tp`` with what the robot's data determine placed (``Dialect.with_robot``), where a
+    robot is named (a name from robots/ or a file); ``tp`` itself where none is."""
+    return tp if robot is None else dialects.of(tp).with_robot(tp, load_robot(robot))
 
 
 def emit_texts(original: Toolpath, modified: Toolpath) -> list[str]:

@@ -6,6 +6,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import YRC
 from .parse import InformParser
+from .pulses import with_pulse_joints
 from .writer import InformWriter
 
 
@@ -22,6 +23,9 @@ class InformDialect(Dialect):
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         return InformParser(sources).parse()
+
+    def with_robot(self, tp: Toolpath, robot) -> Toolpath:
+        return with_pulse_joints(tp, robot)
 
     def new_writer(self, name: str):
         return InformWriter(name)
