@@ -11,6 +11,7 @@ import typer
 from rich.table import Table
 
 from ..arcs import describe
+from ..convert_conf import converted_conf
 from ..dialects import get
 from ..emit.feeds import describe as describe_feeds
 from ..emit.tool_load import parse_tool_load
@@ -18,6 +19,7 @@ from ..errors import InputError, JobError, PostprocError
 from ..fivex.commands import convert_five
 from ..frames import matrix_to_quat_wxyz
 from ..plugin_option import with_plugins
+from ..robots import load_robot
 from ..programs import emit_texts, parse_program, with_robot, write_program, write_texts
 from .app import app, err, exit_code, handles_errors, out
 from .common import named_frames, refuse_unused
@@ -37,7 +39,7 @@ def inspect_cmd(
     robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions, with the robot file's [pulses])."),
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
-    tp = with_robot(parse_program(program, dialect, modules=data or ()), robot)
+    tp = with_robot(parse_program(program, dialect, modules=data or ()), None if robot is None else load_robot(robot))
     poses = tp.base_poses()
     has_ori = ~np.isnan(tp.orientation).any(axis=1)
     quats = np.full((len(tp), 4), np.nan)
@@ -130,10 +132,16 @@ def convert_cmd(
 
     load = None if tool_load is None else parse_tool_load(tool_load)
     outputs = get(to, "--to").new_program_paths(output)
-    tp = with_robot(parse_program(program, dialect), robot)
+    robot_model = None if robot is None else load_robot(robot)
+    tp = with_robot(parse_program(program, dialect), robot_model)
     if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
         tp = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool"))
-    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol)
+    conf = None
+    if robot_model is not None:  # the posture in the new language's terms, from the joints the input's controller takes
+        conf, conf_notes = converted_conf(tp, get(to, "--to"), robot_model)
+        for note in conf_notes:
+            err.print(f"note: {note}")
+    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol, conf=conf)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

@@ -132,6 +132,9 @@ class Dialect:
     # which column of conf_of_joints is the arm configuration (shoulder, elbow, wrist), the rest
     # being turn data; None where the language states no configuration
     arm_conf_column: int | None = None
+    #: what a joint motion to a Cartesian target takes its posture from, where a new program
+    #: must state it (Fanuc's CONFIG); None: the language's joint motions need none written
+    joint_motion_conf: str | None = None
     #: what ends a statement that may run over several lines ("\n": one line each)
     statement_end: str = "\n"
 

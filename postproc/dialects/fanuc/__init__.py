@@ -25,6 +25,7 @@ class FanucDialect(Dialect):
         return parse_ls(sources)
 
     arm_conf_column = 0  # the arm code (flip, up, front); columns 1-3 are turn numbers
+    joint_motion_conf = "CONFIG"  # a J motion takes the position's CONFIG (controller.py)
 
     def conf_of_joints(self, robot, q_deg):
         return fanuc_config(robot, q_deg)
