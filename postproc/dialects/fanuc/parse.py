@@ -33,6 +33,7 @@ import numpy as np
 from ...errors import ParseError
 from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
+from . import flow
 from .positions import NO_GROUP_1, UNTAUGHT, PositionError, Positions, read_positions
 from .statements import Statement, StatementError, statements
 
@@ -104,6 +105,7 @@ class _Reader:
         self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
         self.utool: int | None = None
         self.redefined: dict[str, int] = {}  # UFRAME[n] / UTOOL[n] -> line of its last assignment
+        self.seq = 0  # targets read so far
 
     def error(self, offset: int, why: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, why)
@@ -111,11 +113,19 @@ class _Reader:
     def read(self) -> Toolpath:
         sections = self._sections()
         self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
-        flow = False
-        for st in statements(self.text, *sections["MN"]):
-            flow |= self._statement(st)
-        if flow:
-            self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
+        found = statements(self.text, *sections["MN"])
+        changes_flow = [bool(_FLOW.match(st.text)) for st in found]
+        run = flow.order([st.text for st in found], changes_flow) if any(changes_flow) else None
+        if run is None:
+            for st in found:
+                self._statement(st)
+            if any(changes_flow):
+                self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
+        else:  # jumps and counted loops the text fixes: statements read as they run (a loop's motions once per pass)
+            for k in run:
+                self._statement(found[k])
+            self.notes.append(f"{self.doc.path}: the program's jumps are fixed by its text: its {len(run)} statement(s) are read in the order they run "
+                              f"({len(run) - len(set(run))} repeated by loops, {len(found) - len(set(run))} never run)")
         self._add_rows()
         self.builder.notes.extend(self.notes)
         return self.builder.build()
@@ -197,7 +207,8 @@ class _Reader:
         wrist = WRIST in unknown
         unknown = [why for why in unknown if why != WRIST]
         cnt = term.group(2)
-        row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
+        self.seq += 1  # program order: a statement a loop runs again gives its targets again, later
+        row = {"kind": kind, "line": line, "order": self.seq, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
                "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown, "off_line": wrist or motion == "A"}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
