@@ -66,3 +66,19 @@ def test_linear_motions_alone_need_no_robot_and_the_placeholder_is_named(tmp_pat
     res = runner.invoke(app, ["convert", str(path), "--to", "fanuc", "-o", str(tmp_path / "lin.ls")])
     assert res.exit_code == 0, res.output
     assert "L and C motions keep the posture the robot is in" in (tmp_path / "lin.ls").read_text()
+
+
+def test_val3_movej_points_carry_the_configuration_of_the_joints(source):
+    """--to val3 --robot: each movej point's shoulder / elbow / wrist are those of the joints the
+    input's controller takes; the VAL3 rules, read back, take the same joints."""
+    robot = postproc.load_robot("irb2400_10")
+    out = source.parent / "part.pgx"
+    res = runner.invoke(app, ["convert", str(source), "--to", "val3", "-o", str(out), "--robot", "irb2400_10"])
+    assert res.exit_code == 0, res.output
+    tp = parse_program(source)
+    back = parse_program(out)
+    q_in, _ = joints_taken(tp, robot)
+    q_out, _ = joints_taken(back, robot)
+    np.testing.assert_allclose(q_out, q_in, atol=1e-3)
+    data = (source.parent / "part.dtx").read_text()
+    assert data.count('shoulder="lefty"') == 2 and 'wrist="wpositive"' in data and 'wrist="wnegative"' in data
