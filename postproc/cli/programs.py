@@ -19,8 +19,8 @@ from ..errors import InputError, JobError, PostprocError
 from ..fivex.commands import convert_five
 from ..frames import matrix_to_quat_wxyz
 from ..plugin_option import with_plugins
-from ..robots import load_robot
 from ..programs import emit_texts, parse_program, with_robot, write_program, write_texts
+from ..robots import load_robot
 from .app import app, err, exit_code, handles_errors, out
 from .common import named_frames, refuse_unused
 
@@ -116,7 +116,7 @@ def convert_cmd(
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length): the flange -> the TCP (mm; KUKA A B C, deg), written as the robot's tool. Repeatable."),
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it the load the input program states is carried where it applies; with it, that load must be this one. Where neither gives one, RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
     arc_tol: Optional[float] = typer.Option(None, "--arc-tol", help="mm: write helical and spiral arcs (G2/G3 with a move along the plane's normal, or a changing radius), which no circular move holds, as straight moves within this chord error (without it they are refused)."),
-    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions), and the configuration data of joint motions --to fanuc or inform writes are computed from the joints the source controller takes."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions), and every target's configuration data in the new language's terms are computed from the joints the input's controller takes (needed for joint motions --to fanuc or inform; written also by --to rapid and val3's movej); a target whose joints the input does not determine is refused."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     if machine is not None or rtcp is not None:
