@@ -8,6 +8,7 @@ from __future__ import annotations
 import json
 
 import numpy as np
+from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
 import postproc
@@ -17,7 +18,7 @@ from postproc.compensate import compensate, predicted_positions
 from postproc.effects import parse_effects
 from postproc.errormodel import ErrorModel
 from postproc.model_io import save_model
-from postproc.programs import parse_program
+from postproc.programs import language_of, parse_program
 
 Q0 = np.array([0.0, 10.0, -10.0, 0.0, -60.0, 0.0])  # the MOVJ's joints, deg
 PULSES = [0, 13440, -13440, 0, -54600, 0]  # Q0 times the GP25 file's pulses per degree (1344 x3, 910 x2, 546)
@@ -29,8 +30,6 @@ def _job(robot) -> bytes:
     """A pulse MOVJ, then two MOVLs to RECTAN positions 20 and 40 mm along x from it."""
     flange = kin.fk(robot, Q0[None])[0]
     tcp = flange @ TOOL
-    from scipy.spatial.transform import Rotation
-
     rx, ry, rz = Rotation.from_matrix(tcp[:3, :3]).as_euler("xyz", degrees=True)
     rect = [f"C{k:05d}={tcp[0, 3] + 20.0 * k:.3f},{tcp[1, 3]:.3f},{tcp[2, 3]:.3f},{rx:.4f},{ry:.4f},{rz:.4f}" for k in (1, 2)]
     lines = ["/JOB", "//NAME PULSED", "//POS", "///NPOS 3,0,0,0,0,0", "///TOOL 0", "///POSTYPE PULSE", "///PULSE",
@@ -79,8 +78,6 @@ def test_inspect_and_convert_take_a_robot(tmp_path):
 def test_a_robot_without_pulse_data_leaves_them_unplaced_and_says_why():
     tp = parse_program("PULSED.JBI", data=_job(postproc.load_robot("gp25")))
     kr = postproc.load_robot("kr160_r1570")
-    from postproc.programs import language_of
-
     same = language_of(tp).with_robot(tp, kr)
     assert not same.resolved[0] and any("no [pulses] section" in n for n in same.notes)
 
