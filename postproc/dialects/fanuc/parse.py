@@ -27,6 +27,7 @@ structure", "Motion instructions" and "Position data"):
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 
@@ -82,18 +83,21 @@ OFF_LINE = "fanuc.off_line"
 
 
 def parse_ls(sources: list[SourceDoc]) -> Toolpath:
-    doc = sources[0]
-    lines = LineIndex(doc.text)
+    """The program (``sources[0]``) and the programs of its file set it calls (calls.py)."""
+    reader = _Reader(sources)
     try:
-        return _Reader(doc, lines).read()
+        return reader.read()
     except (PositionError, StatementError) as exc:
-        raise lines.error(doc.path, exc.offset, str(exc)) from None
+        raise reader.lines.error(reader.doc.path, exc.offset, str(exc)) from None
 
 
 class _Reader:
-    def __init__(self, doc: SourceDoc, lines: LineIndex):
-        self.doc, self.text, self.lines = doc, doc.text, lines
-        self.builder = Builder(DIALECT, "wpr", [doc])
+    def __init__(self, sources: list[SourceDoc]):
+        self.sources = sources
+        self.line_index = [LineIndex(doc.text) for doc in sources]
+        self.tables: list[Positions] = [Positions.empty()] * len(sources)
+        self._enter(0)
+        self.builder = Builder(DIALECT, "wpr", list(sources))
         # CNT n of each motion (-1: FINE; NaN: CNT R[n], set outside the program): the corner
         # rounding the controller sizes from it (R-30iB manual, "Positioning path")
         self.builder.declare_extra(CNT, float, np.nan)
@@ -110,22 +114,39 @@ class _Reader:
     def error(self, offset: int, why: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, why)
 
-    def read(self) -> Toolpath:
+    def _enter(self, k: int) -> None:
+        """Read program ``k`` of the file set from here (its text, lines and /POS)."""
+        self.k, self.doc = k, self.sources[k]
+        self.text, self.lines, self.positions = self.doc.text, self.line_index[k], self.tables[k]
+
+    def _program(self, k: int) -> list[Statement]:
+        """Program ``k``'s /MN statements, its /POS read into ``tables``."""
+        self._enter(k)
         sections = self._sections()
-        self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
-        found = statements(self.text, *sections["MN"])
-        changes_flow = [bool(_FLOW.match(st.text)) for st in found]
-        run = flow.order([st.text for st in found], changes_flow) if any(changes_flow) else None
+        self.tables[k] = self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
+        return statements(self.text, *sections["MN"])
+
+    def read(self) -> Toolpath:
+        found = [self._program(k) for k in range(len(self.sources))]
+        changes_flow = [[bool(_FLOW.match(st.text)) for st in program] for program in found]
+        names = {Path(doc.path).stem.upper(): k for k, doc in enumerate(self.sources) if k}
+        run = flow.order_with_calls([([st.text for st in program], flows) for program, flows in zip(found, changes_flow)], names) if any(changes_flow[0]) else None
+        self._enter(0)
         if run is None:
-            for st in found:
+            for st in found[0]:
                 self._statement(st)
-            if any(changes_flow):
+            if any(changes_flow[0]):
                 self.notes.append(f"{self.doc.path}: the program jumps or calls (JMP, IF, CALL, ...): targets are listed, and their postures carried, in text order")
-        else:  # jumps and counted loops the text fixes: statements read as they run (a loop's motions once per pass)
-            for k in run:
-                self._statement(found[k])
-            self.notes.append(f"{self.doc.path}: the program's jumps are fixed by its text: its {len(run)} statement(s) are read in the order they run "
-                              f"({len(run) - len(set(run))} repeated by loops, {len(found) - len(set(run))} never run)")
+        else:  # jumps, counted loops and calls the text fixes: statements read as they run (a loop's motions once per pass)
+            for k, i in run:
+                if k != self.k:
+                    self._add_rows()  # the rows read so far belong to the program left
+                    self._enter(k)
+                self._statement(found[k][i])
+            called = sorted({Path(self.sources[k].path).name for k, _ in run if k})
+            self.notes.append(f"{self.sources[0].path}: the program's jumps{' and calls' if called else ''} are fixed by its text: {len(run)} statement(s) are read "
+                              f"in the order they run ({len(run) - len(set(run))} repeated by loops, {len(found[0]) - len({i for k, i in run if not k})} of the program never run"
+                              f"{'; called: ' + ', '.join(called) if called else ''})")
         self._add_rows()
         self.builder.notes.extend(self.notes)
         return self.builder.build()
@@ -273,6 +294,9 @@ class _Reader:
     def _add_rows(self) -> None:
         rows, table = self.rows, self.positions
         n = len(rows)
+        if not n:
+            return
+        self.rows = []
         pidx = np.array([r["pos"] for r in rows], dtype=np.int64)
         has = pidx >= 0
         k = pidx[has]
@@ -282,7 +306,7 @@ class _Reader:
         conf = np.full((n, 4), np.nan)
         values[has], conf[has] = table.values[k], table.conf[k]
         spans[has, :, 1:] = table.spans[k]
-        spans[has, :, 0] = np.where(table.spans[k, :, 0] >= 0, 0, -1)  # every number is in the one file
+        spans[has, :, 0] = np.where(table.spans[k, :, 0] >= 0, self.k, -1)  # every number is in the program's own file
         joint = np.zeros(n, dtype=bool)
         joint[has] = table.joint[k]
         offset[joint, J3] = values[joint, J2]  # J2/J3 interaction: the robot file's J3 = J3 + J2 (the text keeps J3)
@@ -300,7 +324,7 @@ class _Reader:
         self.builder.add_block(np.array([r["order"] for r in rows], dtype=np.int64), kind=np.array([r["kind"] for r in rows], dtype=np.int8),
                                line=np.array([r["line"] for r in rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
                                speed=np.array([r["speed"] for r in rows], dtype=float), zone=np.array([r["zone"] for r in rows], dtype=float),
-                               resolved=resolved, frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in rows], dtype=float), OFF_LINE: np.array([r["off_line"] for r in rows], dtype=bool)},
+                               resolved=resolved, frame=frame, tool=tool, file=np.full(n, self.k, dtype=np.int16), **{CNT: np.array([r["cnt"] for r in rows], dtype=float), OFF_LINE: np.array([r["off_line"] for r in rows], dtype=bool)},
                                name=np.array([f"P[{r['number']}]" if r["pos"] >= 0 else "" for r in rows], dtype=object))
 
     def _frame(self, number: int | None, table: str) -> int:
