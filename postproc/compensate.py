@@ -81,7 +81,8 @@ def compensate_with(request: CompensationRequest, tp: Toolpath, *, controller=No
     language ``tp`` was read in). ``forces``: ``process_forces(request, tp)`` where the caller
     has it already; ``run``: ``progress``, ``reference``, ``detail`` (``core.compensate``)."""
     forces = process_forces(request, tp) if forces is None else forces
-    return core.compensate(tp, _error_model(request), controller=dialects.of(tp).controller if controller is None else controller,
+    model = _error_model(request)
+    return core.compensate(with_robot(tp, model), model, controller=dialects.of(tp).controller if controller is None else controller,
                            force_per_target=forces.per_target, **request.solver_options(), **run)
 
 
@@ -93,12 +94,18 @@ def compensate(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -
 
 def predicted_positions(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> tuple:
     """``core.predicted_positions`` by ``controller``'s rules, by default those of ``tp``'s language."""
-    return core.predicted_positions(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+    return core.predicted_positions(with_robot(tp, model), model, controller=dialects.of(tp).controller if controller is None else controller, **options)
 
 
 def reference_postures(tp: Toolpath, model: ErrorModel, *, controller=None, **options) -> Reference:
     """``core.reference_postures`` by ``controller``'s rules, by default those of ``tp``'s language."""
-    return core.reference_postures(tp, model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+    return core.reference_postures(with_robot(tp, model), model, controller=dialects.of(tp).controller if controller is None else controller, **options)
+
+
+def with_robot(tp: Toolpath, model: ErrorModel) -> Toolpath:
+    """``tp`` with what the model's robot data determine filled in (``Dialect.with_robot``:
+    INFORM's pulse positions placed with the robot file's pulse data)."""
+    return dialects.of(tp).with_robot(tp, model.robot)
 
 
 def _error_model(request: CompensationRequest) -> ErrorModel:

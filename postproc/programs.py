@@ -16,7 +16,7 @@ from .arcs import check_words
 from .emit.load_plan import carried_loads
 from .emit.readback import positions_read_back
 from .emit.splice import TOLERANCE
-from .emit.writer import drive
+from .emit.writer import drive, where
 from .errors import EmitError, OutputCheckError, OutputError
 from .files import write_all
 from .ir import F_POS, Kind, SourceDoc, Toolpath
@@ -41,6 +41,12 @@ def parse_program(path: str | Path, dialect: str | None = None, data: bytes | No
     ``modules``: other modules' files (or folders of them) whose global data it uses (KRL)."""
     lang = dialects.get(dialect) if dialect else dialects.sniff(path, data)
     return lang.parse(path, data, modules) if modules else lang.parse(path, data)
+
+
+def with_robot(tp: Toolpath, robot) -> Toolpath:
+    """``tp`` with what the robot's data determine placed (``Dialect.with_robot``), where a
+    robot (a ``RobotModel``) is given; ``tp`` itself where none is."""
+    return tp if robot is None else dialects.of(tp).with_robot(tp, robot)
 
 
 def emit_texts(original: Toolpath, modified: Toolpath) -> list[str]:
@@ -114,12 +120,16 @@ def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
     write_set(dict(zip(map(Path, outputs), texts)))
 
 
-def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None, arc_tol_mm: float | None = None) -> list[str]:
+def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None, arc_tol_mm: float | None = None,
+                  conf: np.ndarray | None = None) -> list[str]:
     """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
     ``Dialect.new_program_paths`` order); ``tool_load`` (emit.tool_load.ToolLoad) is the load
     every tool of it carries; without it, the load the input states is carried where it applies.
     ``arc_tol_mm``: helical and spiral G2/G3 are written as straight moves within this chord
-    error (without it they are refused: no circular move holds them)."""
+    error (without it they are refused: no circular move holds them). ``conf``: (N, 4) the
+    configuration data of every target in ``dialect``'s terms (``postproc.convert_conf``, from
+    the joints the input's controller takes); without it, an input in another language whose
+    joint motions need them in ``dialect`` (``Dialect.joint_motion_conf``) is refused."""
     require_program(tp)  # an empty input would give a program that does nothing
     lang = dialects.get(dialect, "--to")
     writer = lang.new_writer(name)
@@ -132,5 +142,21 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
     # the program's own load, or --tool-load's; helices as straight moves within arc_tol_mm
     loads = carried_loads(tp, tool_load, source.controller.stated_loads(tp))
     if source is not lang:  # one controller's configuration data mean nothing to another's (ABB cfx is no Fanuc CONFIG): not carried
-        tp = replace(tp, conf=np.full_like(tp.conf, np.nan))
+        if conf is None:
+            _refuse_joint_motions_without_conf(tp, lang)
+        tp = replace(tp, conf=np.full_like(tp.conf, np.nan) if conf is None else np.asarray(conf, dtype=float))
+    elif conf is not None:
+        raise EmitError(f"configuration data are computed for a program converted to another language, not for {dialect} to {dialect}")
     return drive(writer, tp, name, loads=loads, arc_tol_mm=arc_tol_mm, source=source)
+
+
+def _refuse_joint_motions_without_conf(tp: Toolpath, lang) -> None:
+    """An EmitError at the first joint motion to a Cartesian target where ``lang``'s joint
+    motions take their posture from configuration data the input does not state in its terms."""
+    if lang.joint_motion_conf is None:
+        return
+    joint = np.nonzero(np.isin(tp.kind, (Kind.JOINT, Kind.RAPID)))[0]
+    if joint.size:
+        raise EmitError(f"{where(tp, int(joint[0]))}: a joint motion to a Cartesian target: {lang.name}'s joint motion takes the posture "
+                        f"its {lang.joint_motion_conf} names, which only the robot's joints determine ({joint.size} such motion(s)); "
+                        "give --robot (the robot the program runs on) to compute it from the joints the input's controller takes")

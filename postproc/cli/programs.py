@@ -11,6 +11,7 @@ import typer
 from rich.table import Table
 
 from ..arcs import describe
+from ..convert_conf import converted_conf
 from ..dialects import get
 from ..emit.feeds import describe as describe_feeds
 from ..emit.tool_load import parse_tool_load
@@ -18,7 +19,8 @@ from ..errors import InputError, JobError, PostprocError
 from ..fivex.commands import convert_five
 from ..frames import matrix_to_quat_wxyz
 from ..plugin_option import with_plugins
-from ..programs import emit_texts, parse_program, write_program, write_texts
+from ..programs import emit_texts, parse_program, with_robot, write_program, write_texts
+from ..robots import load_robot
 from .app import app, err, exit_code, handles_errors, out
 from .common import DIALECT_HELP, MACHINE_LANGUAGES, PROGRAM_FILES, ROBOT_LANGUAGES, named_frames, refuse_unused
 
@@ -34,9 +36,10 @@ def inspect_cmd(
     json_out: bool = typer.Option(False, "--json", help="Machine-readable output (spec/cli.md)."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions, with the robot file's [pulses])."),
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
-    tp = parse_program(program, dialect, modules=data or ())
+    tp = with_robot(parse_program(program, dialect, modules=data or ()), None if robot is None else load_robot(robot))
     poses = tp.base_poses()
     has_ori = ~np.isnan(tp.orientation).any(axis=1)
     quats = np.full((len(tp), 4), np.nan)
@@ -113,13 +116,14 @@ def convert_cmd(
     tool: Optional[list[str]] = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1: a G43 tool length): the flange -> the TCP (mm; KUKA A B C, deg), written as the robot's tool. Repeatable."),
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it the load the input program states is carried where it applies; with it, that load must be this one. Where neither gives one, RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
     arc_tol: Optional[float] = typer.Option(None, "--arc-tol", help="mm: write helical and spiral arcs (G2/G3 with a move along the plane's normal, or a changing radius), which no circular move holds, as straight moves within this chord error (without it they are refused)."),
+    robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions), and every target's configuration data in the new language's terms are computed from the joints the input's controller takes (needed for joint motions --to fanuc or inform; written also by --to rapid and val3's movej); a target whose joints the input does not determine is refused."),
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     if machine is not None or rtcp is not None:
         if machine is None:
             raise InputError("--rtcp needs --machine (a name from machines/ or a machine file)")
         refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
-        refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None, "--arc-tol": arc_tol is not None})
+        refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None, "--arc-tol": arc_tol is not None, "--robot": robot is not None})
         for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
                                  frames=named_frames(frame, "--frame"), tools=named_frames(tool, "--tool")):
             out.print(line)
@@ -128,10 +132,16 @@ def convert_cmd(
 
     load = None if tool_load is None else parse_tool_load(tool_load)
     outputs = get(to, "--to").new_program_paths(output)
-    tp = parse_program(program, dialect)
+    robot_model = None if robot is None else load_robot(robot)
+    tp = with_robot(parse_program(program, dialect), robot_model)
     if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
         tp = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool"))
-    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol)
+    conf = None
+    if robot_model is not None:  # the posture in the new language's terms, from the joints the input's controller takes
+        conf, conf_notes = converted_conf(tp, get(to, "--to"), robot_model)
+        for note in conf_notes:
+            err.print(f"note: {note}")
+    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol, conf=conf)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

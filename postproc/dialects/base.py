@@ -73,6 +73,12 @@ class Dialect:
     def parse(self, path: str | Path, data: bytes | None = None, modules=()) -> Toolpath:
         return self.parse_sources(self.read_sources(path, data) + self.module_sources(path, modules))
 
+    def with_robot(self, tp: Toolpath, robot) -> Toolpath:
+        """``tp`` with what only the robot's own data determine filled in, where a robot is
+        known (``inspect --robot``, ``convert --robot``, the model's robot of ``compensate`` and
+        ``predict``): INFORM's pulse positions become joint angles. Most languages need none."""
+        return tp
+
     def missing_program(self, role: str, text: str) -> tuple[int, str] | None:
         """(offset, why) where a file of ``role`` is not a program the controller would run
         (KRL: a .src without DEF); None where it is (``program_content.require_program``)."""
@@ -126,6 +132,9 @@ class Dialect:
     # which column of conf_of_joints is the arm configuration (shoulder, elbow, wrist), the rest
     # being turn data; None where the language states no configuration
     arm_conf_column: int | None = None
+    #: what a joint motion to a Cartesian target takes its posture from, where a new program
+    #: must state it (Fanuc's CONFIG); None: the language's joint motions need none written
+    joint_motion_conf: str | None = None
     #: what ends a statement that may run over several lines ("\n": one line each)
     statement_end: str = "\n"
 

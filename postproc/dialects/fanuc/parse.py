@@ -27,12 +27,14 @@ structure", "Motion instructions" and "Position data"):
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 import numpy as np
 
 from ...errors import ParseError
 from ...ir import F_EXT, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
+from . import flow
 from .positions import NO_GROUP_1, UNTAUGHT, PositionError, Positions, read_positions
 from .statements import Statement, StatementError, statements
 
@@ -84,18 +86,21 @@ OFF_LINE = "fanuc.off_line"
 
 
 def parse_ls(sources: list[SourceDoc]) -> Toolpath:
-    doc = sources[0]
-    lines = LineIndex(doc.text)
+    """The program (``sources[0]``) and the programs of its file set it calls (calls.py)."""
+    reader = _Reader(sources)
     try:
-        return _Reader(doc, lines).read()
+        return reader.read()
     except (PositionError, StatementError) as exc:
-        raise lines.error(doc.path, exc.offset, str(exc)) from None
+        raise reader.lines.error(reader.doc.path, exc.offset, str(exc)) from None
 
 
 class _Reader:
-    def __init__(self, doc: SourceDoc, lines: LineIndex):
-        self.doc, self.text, self.lines = doc, doc.text, lines
-        self.builder = Builder(DIALECT, "wpr", [doc])
+    def __init__(self, sources: list[SourceDoc]):
+        self.sources = sources
+        self.line_index = [LineIndex(doc.text) for doc in sources]
+        self.tables: list[Positions] = [Positions.empty()] * len(sources)
+        self._enter(0)
+        self.builder = Builder(DIALECT, "wpr", list(sources))
         # CNT n of each motion (-1: FINE; NaN: CNT R[n], set outside the program): the corner
         # rounding the controller sizes from it (R-30iB manual, "Positioning path")
         self.builder.declare_extra(CNT, float, np.nan)
@@ -107,25 +112,50 @@ class _Reader:
         self.uframe: int | None = None  # UFRAME_NUM in force (None: as the controller has it)
         self.utool: int | None = None
         self.redefined: dict[str, int] = {}  # UFRAME[n] / UTOOL[n] -> line of its last assignment
-        # Line of the last jump, call or label since the last J motion to a taught position: the
-        # posture an L or C motion keeps is then the one of whichever motion ran before, which
-        # depends on the flow postproc does not follow (a J motion's CONFIG sets it again).
+        # Line of the last jump, call or label since the last J motion to a taught position, where
+        # the flow is not followed: the posture an L or C motion keeps is then the one of whichever
+        # motion ran before, which the text order does not give (a J motion's CONFIG sets it again).
         self.flow_line: int | None = None
+        self.seq = 0  # targets read so far
 
     def error(self, offset: int, why: str) -> ParseError:
         return self.lines.error(self.doc.path, offset, why)
 
-    def read(self) -> Toolpath:
+    def _enter(self, k: int) -> None:
+        """Read program ``k`` of the file set from here (its text, lines and /POS)."""
+        self.k, self.doc = k, self.sources[k]
+        self.text, self.lines, self.positions = self.doc.text, self.line_index[k], self.tables[k]
+
+    def _program(self, k: int) -> list[Statement]:
+        """Program ``k``'s /MN statements, its /POS read into ``tables``."""
+        self._enter(k)
         sections = self._sections()
-        self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
-        flow = False
-        for st in statements(self.text, *sections["MN"]):
-            if self._statement(st) or _FLOW_TARGET.match(st.text):
-                flow = True
-                self.flow_line = int(self.lines.line(st.start))
-        if flow:
-            self.notes.append(f"{self.doc.path}: the program jumps, calls or loops (JMP, LBL, IF, CALL, FOR, ...): targets are listed in text order; "
-                              "an L or C motion after such a statement, before the next J motion, is unresolved (its posture depends on the flow)")
+        self.tables[k] = self.positions = read_positions(self.text, *sections["POS"]) if "POS" in sections else Positions.empty()
+        return statements(self.text, *sections["MN"])
+
+    def read(self) -> Toolpath:
+        found = [self._program(k) for k in range(len(self.sources))]
+        changes_flow = [[bool(_FLOW.match(st.text)) for st in program] for program in found]
+        names = {Path(doc.path).stem.upper(): k for k, doc in enumerate(self.sources) if k}
+        run = flow.order_with_calls([([st.text for st in program], flows) for program, flows in zip(found, changes_flow)], names) if any(changes_flow[0]) else None
+        self._enter(0)
+        if run is None:
+            for st in found[0]:
+                if self._statement(st) or _FLOW_TARGET.match(st.text):
+                    self.flow_line = int(self.lines.line(st.start))
+            if any(changes_flow[0]):
+                self.notes.append(f"{self.doc.path}: the program jumps, calls or loops in ways its text does not fix (JMP, IF, CALL, FOR, ...): targets are "
+                                  "listed in text order; an L or C motion after such a statement, before the next J motion, is unresolved (its posture depends on the flow)")
+        else:  # jumps, counted loops and calls the text fixes: statements read as they run (a loop's motions once per pass)
+            for k, i in run:
+                if k != self.k:
+                    self._add_rows()  # the rows read so far belong to the program left
+                    self._enter(k)
+                self._statement(found[k][i])
+            called = sorted({Path(self.sources[k].path).name for k, _ in run if k})
+            self.notes.append(f"{self.sources[0].path}: the program's jumps{' and calls' if called else ''} are fixed by its text: {len(run)} statement(s) are read "
+                              f"in the order they run ({len(run) - len(set(run))} repeated by loops, {len(found[0]) - len({i for k, i in run if not k})} of the program never run"
+                              f"{'; called: ' + ', '.join(called) if called else ''})")
         self._add_rows()
         self.builder.notes.extend(self.notes)
         return self.builder.build()
@@ -212,7 +242,8 @@ class _Reader:
         wrist = WRIST in unknown
         unknown = [why for why in unknown if why != WRIST]
         cnt = term.group(2)
-        row = {"kind": kind, "line": line, "order": at, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
+        self.seq += 1  # program order: a statement a loop runs again gives its targets again, later
+        row = {"kind": kind, "line": line, "order": self.seq, "motion": motion, "speed": _speed(speed_m), "zone": 0.0 if term.group(1).upper() == "FINE" else np.nan,
                "cnt": -1.0 if cnt is None else float(cnt) if cnt.isdigit() else np.nan, "notes": unknown, "off_line": wrist or motion == "A"}
         if reg.upper() == "PR" or not number.isdigit():
             row["notes"] = unknown + [f"{reg}[{number}] holds a value set outside the program"]
@@ -277,6 +308,9 @@ class _Reader:
     def _add_rows(self) -> None:
         rows, table = self.rows, self.positions
         n = len(rows)
+        if not n:
+            return
+        self.rows = []
         pidx = np.array([r["pos"] for r in rows], dtype=np.int64)
         has = pidx >= 0
         k = pidx[has]
@@ -286,7 +320,7 @@ class _Reader:
         conf = np.full((n, 4), np.nan)
         values[has], conf[has] = table.values[k], table.conf[k]
         spans[has, :, 1:] = table.spans[k]
-        spans[has, :, 0] = np.where(table.spans[k, :, 0] >= 0, 0, -1)  # every number is in the one file
+        spans[has, :, 0] = np.where(table.spans[k, :, 0] >= 0, self.k, -1)  # every number is in the program's own file
         joint = np.zeros(n, dtype=bool)
         joint[has] = table.joint[k]
         offset[joint, J3] = values[joint, J2]  # J2/J3 interaction: the robot file's J3 = J3 + J2 (the text keeps J3)
@@ -304,7 +338,7 @@ class _Reader:
         self.builder.add_block(np.array([r["order"] for r in rows], dtype=np.int64), kind=np.array([r["kind"] for r in rows], dtype=np.int8),
                                line=np.array([r["line"] for r in rows], dtype=np.int32), values=values, spans=spans, offset=offset, conf=conf,
                                speed=np.array([r["speed"] for r in rows], dtype=float), zone=np.array([r["zone"] for r in rows], dtype=float),
-                               resolved=resolved, frame=frame, tool=tool, **{CNT: np.array([r["cnt"] for r in rows], dtype=float), OFF_LINE: np.array([r["off_line"] for r in rows], dtype=bool)},
+                               resolved=resolved, frame=frame, tool=tool, file=np.full(n, self.k, dtype=np.int16), **{CNT: np.array([r["cnt"] for r in rows], dtype=float), OFF_LINE: np.array([r["off_line"] for r in rows], dtype=bool)},
                                name=np.array([f"P[{r['number']}]" if r["pos"] >= 0 else "" for r in rows], dtype=object))
 
     def _frame(self, number: int | None, table: str) -> int:

@@ -4,10 +4,12 @@ Positions go to /POS, each motion to /MN (R-30iB Operator's Manual, "Program str
 User frames and tools are numbered in the order they come (0: the world frame and the
 faceplate); their values are set on the controller, not in a TP program, so each is
 written as a remark with its X Y Z W P R for the person who sets it. A Cartesian position
-needs a CONFIG, which only the robot's joints determine: where the input gives none the
-position gets 'N U T, 0, 0, 0' and the program says so in a remark where a J motion takes it
-(L and C motions keep the posture the robot is in: controller.py). A Fanuc input's CONFIG is
-kept (postproc.programs.write_program hands on configuration data within one language only).
+needs a CONFIG, which only the robot's joints determine: a Fanuc input's CONFIG is kept, and
+from another language it is computed from the joints the input's controller takes
+(``convert --robot``: postproc.convert_conf); without a robot a J motion from another language
+is refused (postproc.programs.write_program), and an L or C position, whose CONFIG the
+controller does not take (it keeps the posture the robot is in: controller.py), gets
+'N U T, 0, 0, 0', which a remark names.
 """
 
 from __future__ import annotations
@@ -112,12 +114,22 @@ class FanucWriter:
             self.remarks.append(f"CONFIG '{PLACEHOLDER}' is written where the input gives no Fanuc configuration: "
                                 "J motions take it; check their postures")
 
+    def _path_placeholder_remark(self, before: int) -> None:
+        """The remark that names the placeholder CONFIG of L and C positions, once."""
+        if self.placeholders > before and not any(r.startswith("CONFIG") for r in self.remarks):
+            self.remarks.append(f"CONFIG '{PLACEHOLDER}' is written where the input gives no Fanuc configuration: "
+                                "L and C motions keep the posture the robot is in, a J motion to such a position would take it")
+
     def move_linear(self, pose, conf=None) -> None:
+        before = self.placeholders
         self._statement(f"L {self._position(pose, conf)} {self._linear_speed()} {self.term}")
+        self._path_placeholder_remark(before)
 
     def move_circular(self, via, end, conf=None) -> None:
+        before = self.placeholders
         via_p = self._position(via, conf)
         end_p = self._position(end, conf)
+        self._path_placeholder_remark(before)
         self.mn.append(f"{len(self.mn) + 1:4d}:C {via_p}    ")
         self.mn.append(f"    :  {end_p} {self._linear_speed()} {self.term} ;")
 

@@ -36,16 +36,19 @@ def with_pulse_joints(tp: Toolpath, robot) -> Toolpath:
     only want was the pulse data) have their joint angles from ``robot``'s pulse data and are
     placed. Their text numbers stay pulses: the IR's values stay empty, so nothing rewrites them.
     A target unresolved for another reason (a note besides the pulses) stays so."""
-    pulses = tp.extras["inform.pulses"]
-    rows = np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(pulses).any(axis=1))[0]
+    pulses = tp.extras.get("inform.pulses")
+    rows = np.array([], dtype=int) if pulses is None else np.nonzero((tp.kind == Kind.ABSJ) & ~np.isnan(pulses).any(axis=1))[0]
     if not rows.size:
         return tp
+    if robot.pulses_per_deg is None or robot.zero_pulse is None:  # never guessed: they stay unplaced, and the user is told why
+        return replace(tp, notes=tp.notes + (f"{len(rows)} pulse position(s) stay unplaced: {robot.source_path} has no [pulses] section (pulses per degree, zero pulses)",))
     joints, resolved = tp.joints.copy(), tp.resolved.copy()
     joints[rows] = angles_of_pulses(robot, pulses[rows])
     only_pulses = np.array([_only_the_pulses(tp, int(r)) for r in rows], dtype=bool)
     resolved[rows[only_pulses]] = True
     notes = tuple(n for n in tp.notes if not any(n.endswith(f"line {tp.line[r]}: {tp.target_name[r]} is in pulses: joint angles need the robot's pulse data") for r in rows[only_pulses]))
-    estimate = " (estimates: the robot file flags them)" if robot.estimates.get("pulses") else ""
+    estimate = (" (its pulse data are estimates, flagged in the robot file: check the angles against the controller's"
+                " pulse parameters before trusting them)") if robot.estimates.get("pulses") else ""
     return replace(tp, joints=joints, resolved=resolved, notes=notes + (f"{len(rows)} pulse position(s) turned into joint angles with {robot.name}'s pulse data{estimate}",))
 
 

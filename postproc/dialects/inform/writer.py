@@ -65,11 +65,12 @@ class InformWriter:
         self.last = pose
 
     def move_joint(self, pose, conf=None) -> None:
-        known = self.source == "inform" and conf is not None and np.isfinite(conf).all()
-        if not known:
+        # conf: the input's own form (an INFORM job), or computed from the joints the input's
+        # controller takes (convert --robot); postproc.programs.write_program hands on no other
+        if conf is None or not np.isfinite(conf).all():
             raise EmitError("a joint move to a Cartesian target: INFORM's MOVJ takes the posture from the position's ///RCONF form, "
                             f"which the input does not state in Yaskawa's terms (target at {np.round(self.frame_t @ pose, 3)[:3, 3].tolist()} mm); "
-                            "write the move as a linear one in the input, or convert from an INFORM job")
+                            "give --robot to compute it from the joints, or write the move as a linear one in the input")
         flip, arm, side, turns = (int(v) for v in conf)
         self._move("MOVJ", pose, (flip, arm, side, turns & 1, turns >> 1 & 1, turns >> 2 & 1, 0, 0))
         self.last_was_circle = False

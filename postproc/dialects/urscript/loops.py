@@ -36,7 +36,7 @@ def counted(mask: str, starts: np.ndarray, ends: np.ndarray, index: int, scalars
     """The loop whose ``while`` is statement ``index`` (of ``starts``/``ends``), if its passes
     are fixed by the text (see the module's docstring), else None."""
     head = _CONDITION.match(mask, int(starts[index]), int(ends[index]))
-    if head is None or scalars.get(head.group(1)) is None:
+    if head is None or type(scalars.get(head.group(1))) is not int:  # (a truth value is no counter)
         return None
     counter, first, limit = head.group(1), scalars[head.group(1)], int(head.group(3))
     increment = re.compile(rf"[ \t]*{re.escape(counter)}[ \t]*=[ \t]*{re.escape(counter)}[ \t]*\+[ \t]*1[ \t]*\r?\Z")

@@ -19,7 +19,7 @@ import numpy as np
 
 from ...ir import F_JOINT, F_POS, NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
-from . import bulk, loops
+from . import branches, bulk, loops
 from .lexer import code_mask, matching, split_arguments, statements, strip
 from .poses import M_TO_MM, RAD_TO_DEG
 from .values import Evaluator, Unknown, Value
@@ -63,6 +63,8 @@ class _Block:
     sets_tcp: bool = False
     before: tuple = ()  # a function's (TCP, posture doubt) at its definition, restored after it: its body runs where it is called
     counted: loops.CountedLoop | None = None  # a while whose passes the text fixes (run pass by pass)
+    fixed: bool = False  # an if whose branch the text fixes (branches.py): only that branch is read
+    taken: bool = False  # a branch of that if has run: the others are not read
     body: tuple = ()  # (first statement index, offset) of a counted loop's body
 
 
@@ -89,6 +91,9 @@ class UrParser:
         self.scalars: dict[str, int | None] = {}  # integer variables the text fixes (loop counters)
         self.seq = 0  # program order of the next target (passes of a loop repeat offsets)
         self.program_at = -1
+        # a thread runs beside the program and may set any variable: then only conditions of
+        # literals are fixed (branches.py)
+        self.threads = re.search(r"^[ \t]*thread\b", self.mask, re.MULTILINE) is not None
 
     def _where(self, offset: int) -> str:
         line = int(self.lines.line(offset))
@@ -112,8 +117,8 @@ class UrParser:
     def _run(self, first: int, last: int, lo: int, hi: int) -> None:
         """The statements ``first``..``last``-1 and the bulk lines in [lo, hi) in text order; a
         counted loop's body again for each further pass before its 'end'."""
-        cursor = lo
-        for i in range(first, last):
+        cursor, i = lo, first
+        while i < last:
             start, end, line = int(self.own_start[i]), int(self.own_end[i]), int(self.own_line[i])
             self._flush(cursor, start)
             cursor = start
@@ -121,8 +126,43 @@ class UrParser:
             if block is not None and block.counted is not None and block.counted.end_index == i:
                 for _ in range(block.counted.passes - 1):
                     self._run(block.body[0], i, block.body[1], start)
-            self._statement(start, end, line, i)
+            resume = self._branch(i, start, end, line)
+            if resume is None:
+                self._statement(start, end, line, i)
+                i += 1
+            elif resume < 0:  # the branch runs: read on, its bulk lines included
+                i += 1
+            else:  # a branch that does not run: its statements and bulk lines are passed over
+                i = min(resume, last)
+                cursor = int(self.own_start[i]) if i < len(self.own_start) else hi
         self._flush(cursor, hi)
+
+    def _branch(self, index: int, start: int, end: int, line: int) -> int | None:
+        """Where reading goes on after statement ``index`` where it is an if / elif / else whose
+        branch the text fixes (branches.py): -1 where its branch runs (read on), else the index
+        of the next elif / else / end; None where it is no such statement (read as before)."""
+        word = re.match(r"[ \t]*(if|elif|else)\b", self.mask[start:end])
+        if word is None or any(b.kind in ("def", "thread", "while") and not b.program and b.counted is None for b in self.stack):
+            return None  # a function runs where it is called, a loop not counted from its own end: nothing fixed here
+        scalars = {} if self.threads else self.scalars
+        if word.group(1) == "if":
+            truth = branches.condition(self.mask, start, end, scalars)
+            if truth is None:
+                return None
+            self.stack.append(_Block("if", line, fixed=True, taken=truth))
+            self.notes.append(f"line {line}: the if's condition is {truth}: {'its first branch runs' if truth else 'its first branch does not run'}")
+            return -1 if truth else branches.next_branch(self.mask, self.own_start, self.own_end, index, to_end=False)
+        block = self.stack[-1] if self.stack else None
+        if block is None or block.kind != "if" or not block.fixed:
+            return None
+        if block.taken:  # a branch before ran: the rest of the chain does not
+            return branches.next_branch(self.mask, self.own_start, self.own_end, index, to_end=True)
+        truth = True if word.group(1) == "else" else branches.condition(self.mask, start, end, scalars)
+        if truth is None:  # from here on the chain is not fixed: read as any if (no branch before ran)
+            block.fixed = False
+            return None
+        block.taken = truth
+        return -1 if truth else branches.next_branch(self.mask, self.own_start, self.own_end, index, to_end=False)
 
     # ------------------------------------------------------------- statements
     def _statement(self, start: int, end: int, line: int, index: int = -1) -> None:
@@ -165,7 +205,7 @@ class UrParser:
         if not self.stack:
             raise self.lines.error(self.doc.path, start, "'end' without a block to close")
         block = self.stack.pop()
-        if block.counted is not None:  # run pass by pass: what follows is straight-line
+        if block.counted is not None or block.fixed:  # run pass by pass, or the one branch that runs: what follows is straight-line
             if self.stack:
                 self.stack[-1].moved |= block.moved
                 self.stack[-1].assigned |= block.assigned
@@ -451,6 +491,9 @@ def _next_scalar(mask: str, name: str, start: int, end: int, value: int | None) 
     literal = loops.INT_LITERAL.match(mask, start, end)
     if literal:
         return int(literal.group(1))
+    truth = re.fullmatch(r"[ \t]*(True|False)[ \t]*\r?", mask[start:end])
+    if truth:
+        return branches.TRUTH[truth.group(1)]
     if value is not None and re.fullmatch(rf"[ \t]*{re.escape(name)}[ \t]*\+[ \t]*1[ \t]*\r?", mask[start:end]):
         return value + 1
     return None

@@ -5,9 +5,11 @@ Every target becomes an element of a pointRx array linked to the frame in force 
 frame array linked to world), every tool an element of a tool array linked to flange,
 every (speed, zone) pair an mdesc: ``tmax`` the speed (mm/s), ``blend`` Cartesian with
 ``leave`` = ``reach`` = the zone (mm), or off where the zone is 0 or not given (the
-point is then reached exactly). Points carry ``ssame esame wsame``: the arm keeps the
-configuration it is in (VAL3 reference manual, "config"), as the input's own
-configuration data are not Stäubli's.
+point is then reached exactly). A movej point carries the configuration the events give
+(a VAL3 input's own, or one computed from the joints the input's controller takes:
+``convert --robot``, postproc.convert_conf); every other point, and a movej point without
+one, carries ``ssame esame wsame``: the arm keeps the configuration it is in (VAL3
+reference manual, "config").
 """
 
 from __future__ import annotations
@@ -21,6 +23,16 @@ from .rotation import matrix_to_rxyz
 
 _NS = 'xmlns:xsi="http://www.w3.org/2001/XMLSchema-instance"'
 SAME = 'shoulder="ssame" elbow="esame" wrist="wsame"'
+# Toolpath.conf codes of a VAL3 config (parse.py's CONFIG, read the other way)
+_WORDS = (("shoulder", {1.0: "righty", -1.0: "lefty", 0.0: "ssame", 2.0: "sfree"}), ("elbow", {1.0: "epositive", -1.0: "enegative", 0.0: "esame", 2.0: "efree"}),
+          ("wrist", {1.0: "wpositive", -1.0: "wnegative", 0.0: "wsame", 2.0: "wfree"}))
+
+
+def _config_attrs(conf) -> str:
+    """The config attributes of codes ``conf`` (shoulder, elbow, wrist, ...), SAME where they are not all given."""
+    if conf is None or not np.isfinite(conf[:3]).all() or any(float(c) not in words for c, (_, words) in zip(conf[:3], _WORDS)):
+        return SAME
+    return " ".join(f'{name}="{words[float(c)]}"' for c, (name, words) in zip(conf[:3], _WORDS))
 
 
 def _mdesc_value(key: int, speed: float | None, zone: float) -> str:
@@ -75,12 +87,12 @@ class Val3Writer:
         index = self.mdescs.setdefault(key, len(self.mdescs))
         return f"mDesc[{index}]"
 
-    def _point(self, pose: np.ndarray) -> str:
-        self.points.append(f'      <Value key="{len(self.points)}" {_pose_attrs(pose)} {SAME} fatherId="{self.frame_ref}" />')
+    def _point(self, pose: np.ndarray, config: str = SAME) -> str:
+        self.points.append(f'      <Value key="{len(self.points)}" {_pose_attrs(pose)} {config} fatherId="{self.frame_ref}" />')
         return f"pPoint[{len(self.points) - 1}]"
 
     def move_joint(self, pose, conf=None) -> None:
-        self.code.append(f"  movej({self._point(pose)}, {self.tool_ref}, {self._mdesc()})")
+        self.code.append(f"  movej({self._point(pose, _config_attrs(conf))}, {self.tool_ref}, {self._mdesc()})")
 
     def move_linear(self, pose, conf=None) -> None:
         self.code.append(f"  movel({self._point(pose)}, {self.tool_ref}, {self._mdesc()})")
