@@ -259,10 +259,13 @@ def test_listings_in_words_postproc_does_not_read_are_refused_with_the_reason(tm
 
 
 def test_a_linear_motion_after_a_jump_keeps_a_posture_the_text_does_not_fix():
-    """JMP LBL[10] skips P[2] (CONFIG 'F U T'): the L to P[3] keeps P[1]'s posture when the robot
-    runs it, P[2]'s when read in text order. Not followed, so P[3] is unresolved (R-30iB manual,
-    "Branching instructions": JMP LBL transfers control to the label); the J motions are placed
-    (each CONFIG sets the posture)."""
+    """IF DI[1]=ON,JMP LBL[10] may skip P[2] (CONFIG 'F U T'), on an input the text does not
+    give: the L to P[3] keeps P[1]'s posture or P[2]'s, so it is unresolved (R-30iB manual,
+    "Branching instructions"); the J motions are placed (each CONFIG sets the posture). The
+    same program with an unconditional JMP is followed (tests/test_fanuc_flow.py)."""
     tp = parse_program(Path(__file__).parent / "data" / "fanuc_jump.ls")
     assert tp.resolved.tolist() == [True, True, False]
     assert any("line 10" in note and "flow" in note for note in tp.notes)
+    unconditional = (Path(__file__).parent / "data" / "fanuc_jump.ls").read_text().replace("IF DI[1]=ON,JMP LBL[10]", "JMP LBL[10]")
+    tp = parse_program("jump.ls", "fanuc", unconditional.encode("latin-1"))
+    assert tp.target_name == ("P[1]", "P[3]") and tp.resolved.all()

@@ -5,7 +5,7 @@ OWNER		= MNEDITOR;
    1:  UFRAME_NUM=0 ;
    2:  UTOOL_NUM=0 ;
    3:J P[1] 100% FINE ;
-   4:  JMP LBL[10] ;
+   4:  IF DI[1]=ON,JMP LBL[10] ;
    5:J P[2] 100% FINE ;
    6:  LBL[10] ;
    7:L P[3] 100mm/sec FINE ;
