@@ -20,7 +20,7 @@ from ...ir import SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
-from . import frames, translate
+from . import frames, swivel, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -76,6 +76,7 @@ class SinumerikParser(GcodeParser):
         self.builder = Builder("sinumerik", "none", [doc])
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
+        self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
         self.plane = 17.0
         self.to_mm = 1.0
 
@@ -107,6 +108,9 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        if translate.SWIVEL_CODE in gcodes:
+            self._swivel(start)
+            return True, False
         mine = [gc for gc in gcodes if gc in _FRAME_CODES]
         if not mine:
             return super()._apply_gcodes([gc for gc in gcodes if gc not in _SETTABLE and gc != translate.VECTOR_CODE], state, values, start)
@@ -125,9 +129,30 @@ class SinumerikParser(GcodeParser):
             self.frame = frames.step(self.frame, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
         except frames.FrameRefused as exc:
             raise self._error_at(start, str(exc)) from None
-        identity = np.allclose(self.frame, np.eye(4), atol=0.0, rtol=0.0)
-        self.tilts.append((self._when(start), None if identity else self.frame.copy()))
+        self._frame_event(start)
         return True, False
+
+    def _frame_event(self, start: int) -> None:
+        """Later targets' frame: settable @ swivel @ programmable (Fundamentals, "Frame chain")."""
+        chain = self.swivel @ self.frame
+        if np.isnan(chain).any():
+            self.tilts.append((self._when(start), "unknown"))
+            return
+        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0)
+        self.tilts.append((self._when(start), None if identity else chain))
+
+    def _swivel(self, start: int) -> None:
+        """CYCLE800: the swivel frame from the call's parameters (``swivel.py``), read from the
+        file's own line; one that cannot be worked out flags the targets after it, with the reason."""
+        at = int(self.offsets([start])[0])
+        text = self.original.text
+        line = text[text.rfind("\n", 0, at) + 1 : text.find("\n", at) if text.find("\n", at) >= 0 else len(text)]
+        try:
+            self.swivel = swivel.swivel_frame(self.swivel, line, self.to_mm)
+        except swivel.Unknown as exc:
+            self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
+            self.swivel = np.full((4, 4), np.nan)
+        self._frame_event(start)
 
     def _resolve(self, t: dict) -> Toolpath:
         """The G-code reader's modal resolution, after refusing an axis block that comes

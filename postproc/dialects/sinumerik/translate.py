@@ -48,6 +48,7 @@ from ..gcode import siemens
 FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0, "SCALE": 9994.0, "ASCALE": 9995.0,
                "MIRROR": 9996.0, "AMIRROR": 9997.0}
 FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
+SWIVEL_CODE = 9989.0  # marks a CYCLE800 call (swivel plane) for parse.py, which reads its parameters (swivel.py)
 VECTOR_CODE = 9998.0  # marks a block with A3= B3= C3= (tool orientation vector) for parse.py
 _VECTOR = {"A3": "I", "B3": "J", "C3": "K"}  # the reader's tool-axis words (G43.5 I J K)
 R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
@@ -58,7 +59,7 @@ _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw
 # What may need rewriting: an '=' or a label's ':', an R parameter, a frame or refused word.
 # Found with byte masks and str.find (a regular expression over 10^6 lines costs seconds):
 # plain CAM blocks (N.. G1 X.. Y..) have none and are never looked at.
-_KEYWORDS = ("TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE", "SOFT", "BRISK", "FFWO", "ORI", "STOPRE", "COMP", "CYCLE832")
+_KEYWORDS = ("CYCLE800", "TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE", "SOFT", "BRISK", "FFWO", "ORI", "STOPRE", "COMP", "CYCLE832")
 _ALNUM = np.zeros(256, bool)
 _ALNUM[[*range(48, 58), *range(65, 91), *range(97, 123), 95]] = True
 
@@ -99,6 +100,8 @@ _IGNORED = {"ADIS", "ADISPOS", "SPOS", "SPOSA"}
 # and CYCLE832 are named by the controller's inexact_interpolation): read past. ORIMKS (vectors
 # in machine coordinates) is refused.
 _PASSIVE = re.compile(r"(?i)(?<![\w$])(?:SOFT|BRISK|FFWON|FFWOF|ORIWKS|STOPRE|COMPCAD|COMPCURV|COMPON|COMPOF|CYCLE832[ \t]*\([^)\n]*\))(?!\w)")
+# A CYCLE800 call alone in its block: the call becomes the internal SWIVEL_CODE, blanks to its length.
+_SWIVEL_LINE = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<call>CYCLE800[ \t]*\([^)\n]*\))[ \t]*$")
 _ORIMKS = re.compile(r"(?i)(?<![\w$])ORIMKS(?!\w)")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
 _R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
@@ -236,6 +239,10 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     orimks = _ORIMKS.search(code)
     if orimks:
         raise Refusal(start + orimks.start(), "ORIMKS (tool orientation vectors in machine coordinates) is not read: use ORIWKS")
+    swivel = _SWIVEL_LINE.match(code)
+    if swivel:
+        a, b = swivel.span("call")
+        return [(a, b, f"G{SWIVEL_CODE:g}".ljust(b - a))]
     passive = [(m.start(), m.end(), " " * (m.end() - m.start())) for m in _PASSIVE.finditer(code)]
     if passive:  # blanked (same length: every other character keeps its place), then the rest of the block as ever
         blanked = code

@@ -1,0 +1,95 @@
+"""CYCLE800 (swivel plane), AR= and CIP arcs in SINUMERIK programs, by hand.
+
+Expected values are worked out from the manuals' rules, cited at each test:
+- CYCLE800: SINUMERIK 840D sl / 828D Operating Manual, "Swivel plane (CYCLE800)" (X0 Y0 Z0 the
+  reference point for rotation, X1 Y1 Z1 the zero point of the rotated surface, axis-by-axis
+  rotation in the chosen sequence, each about the axes the one before left) and the Cycles
+  programming manual's parameter list (_MODE bits 0-5 the axis sequence, 6-7 the angle mode;
+  _ST units digit 0 new / 1 additive; _TC="0" deselects); Fundamentals "Frame chain" (the
+  swivel frame is a system frame below the programmable one).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from postproc.programs import emit_texts, parse_program
+
+S30, C30 = 0.5, np.sqrt(3) / 2
+
+
+def _read(tmp_path: Path, text: str, name: str = "PART.MPF"):
+    path = tmp_path / name
+    path.write_bytes(text.encode("latin-1"))
+    return parse_program(path), path
+
+
+SWIVEL = """N10 G54 G17 G71 G90
+N20 G0 X0 Y0 Z50
+N30 CYCLE800(1,"TC1",0,57,10,0,0,0,-30,0,0,0,0,-1)
+N40 G0 X0 Y0 Z5
+N50 G1 X10 Y0 Z0 F500
+N60 TRANS X1
+N70 G1 X0 Y0 Z0
+N80 CYCLE800(1,"TC1",1,57,0,0,0,0,0,90,0,0,0,-1)
+N90 G1 X1 Y0 Z0
+N100 CYCLE800(1,"0",0,57,0,0,0,0,0,0,0,0,0,1)
+N110 G0 X1 Y2 Z3
+N120 M30
+"""
+SWIVEL_EXPECTED = [
+    (0.0, 0.0, 50.0),  # N20: no swivel
+    (10 - 5 * S30, 0.0, 5 * C30),  # N40: TRANS(10,0,0) @ Ry(-30) (mode 57 = X-Y-Z, _B the Y angle) on (0,0,5)
+    (10 + 10 * C30, 0.0, 10 * S30),  # N50: Ry(-30) (10,0,0) = (10 cos30, 0, 10 sin30), + X0
+    (10 + C30, 0.0, S30),  # N70: TRANS X1 (programmable) sits on the swivel frame, which it does not delete
+    (10.0, 2.0, 0.0),  # N90: additive (_ST=1, mode 57, _C=90): Rz(90) on the swivel; TRANS X1 kept: (1+1,0,0) -> (0,2,0); Ry(-30) leaves Y; + X0
+    (2.0, 2.0, 3.0),  # N110: _TC="0" deletes the swivel frame only; TRANS X1 (programmable) still in force
+]
+
+
+def test_cycle800_axis_by_axis_by_hand(tmp_path):
+    tp, path = _read(tmp_path, SWIVEL)
+    assert tp.resolved.all()
+    np.testing.assert_allclose(tp.base_poses()[:, :3, 3], SWIVEL_EXPECTED, atol=1e-9)
+    assert emit_texts(tp, tp)[0] == SWIVEL  # byte-identical round trip
+
+
+def _one_swivel(tmp_path, call: str, points: str = "N40 G1 X0 Y0 Z1\nN50 G1 X0 Y1 Z0\n"):
+    return _read(tmp_path, f"N10 G54 G17 G90\nN20 G0 X0 Y0 Z9\nN30 {call}\n{points}N60 M30\n")[0]
+
+
+def test_cycle800_axis_sequence_and_solid_angle_by_hand(tmp_path):
+    # _MODE 27 = 0b011011: 1st rotation about Z (bits 1-0 = 11), 2nd Y (10), 3rd X (01); _A=90, _C=90:
+    # Rz(90) @ Rx(90): (0,0,1) -> Rx -> (0,-1,0) -> Rz -> (1,0,0); (0,1,0) -> (0,0,1) -> (0,0,1)
+    tp = _one_swivel(tmp_path, 'CYCLE800(0,"TC1",0,27,0,0,0,90,0,90,0,0,0,1)')
+    np.testing.assert_allclose(tp.base_poses()[1:, :3, 3], [(1, 0, 0), (0, 0, 1)], atol=1e-9)
+    # _MODE 64 (bits 7-6 = 01): solid angle, _A about Z then _B about the turned Y: Rz(90) @ Ry(90)
+    # (0,0,1) -> Ry -> (1,0,0) -> Rz -> (0,1,0); (0,1,0) -> (0,1,0) -> (-1,0,0)
+    tp = _one_swivel(tmp_path, 'CYCLE800(0,"TC1",0,64,0,0,0,90,90,0,0,0,0,1)')
+    np.testing.assert_allclose(tp.base_poses()[1:, :3, 3], [(0, 1, 0), (-1, 0, 0)], atol=1e-9)
+    # X1 Y1 Z1: the zero point of the rotated surface, in the rotated axes: T(X0) @ R @ T(X1)
+    tp = _one_swivel(tmp_path, 'CYCLE800(0,"TC1",0,57,0,0,5,0,0,90,2,0,0,1)')
+    np.testing.assert_allclose(tp.base_poses()[1:, :3, 3], [(0, 2, 6), (-1, 2, 5)], atol=1e-9)
+
+
+def test_cycle800_not_worked_out_flags_what_follows(tmp_path):
+    for call, why in (('CYCLE800(0,"TC1",0,57,0,0,0,R1,0,0,0,0,0,1)', "_A=R1 is not a number"),
+                      ('CYCLE800(0,"TC1",0,192,0,0,0,0,30,0,0,0,0,1)', "direct mode"),
+                      ('CYCLE800(0,"TC1",0,128,0,0,0,0,30,0,0,0,0,1)', "projection angles")):
+        tp = _one_swivel(tmp_path, call)
+        assert tp.resolved.tolist() == [True, False, False], call
+        assert any(why in note for note in tp.notes) and any("line 3" in note for note in tp.notes), tp.notes
+    # a new swivel plane after an unknown one is known again
+    tp = _one_swivel(tmp_path, 'CYCLE800(0,"TC1",0,192,0,0,0,0,30,0,0,0,0,1)',
+                     'N40 G1 X0 Y0 Z1\nN45 CYCLE800(0,"TC1",0,57,0,0,0,0,0,0,0,0,0,1)\nN50 G1 X0 Y1 Z0\n')
+    assert tp.resolved.tolist() == [True, False, True]
+
+
+def test_cycle800_beside_a_subprogram_call(tmp_path):
+    # a program with labels or calls goes through the flow reader: the swivel is read there too
+    text = 'N10 G54 G17 G90\nN20 G0 X0 Y0 Z9\nSTART:\nN30 CYCLE800(0,"TC1",0,57,0,0,0,0,0,90,0,0,0,1)\nN40 G1 X1 Y0 Z0\nN60 M30\n'
+    tp, _ = _read(tmp_path, text)
+    assert tp.resolved.all()
+    np.testing.assert_allclose(tp.base_poses()[1, :3, 3], (0, 1, 0), atol=1e-9)
