@@ -14,7 +14,10 @@ from __future__ import annotations
 from pathlib import Path
 
 import numpy as np
+import pytest
 
+from postproc.dialects.sinumerik import swivel
+from postproc.fivex.machine import load_machine
 from postproc.programs import emit_texts, parse_program
 
 S30, C30 = 0.5, np.sqrt(3) / 2
@@ -93,3 +96,19 @@ def test_cycle800_beside_a_subprogram_call(tmp_path):
     tp, _ = _read(tmp_path, text)
     assert tp.resolved.all()
     np.testing.assert_allclose(tp.base_poses()[1, :3, 3], (0, 1, 0), atol=1e-9)
+
+
+def test_cycle800_rotary_positions_by_dir(tmp_path):
+    # xyzac-trt (machines/xyzac-trt.toml): workpiece tool axis = Rz(-c) Rx(-a) (0,0,1) = (sin a sin c, sin a cos c, cos a).
+    # Swivel Rx(30) (mode 57, _A=30): tool axis (0, -1/2, cos30): a=-30, c=0 or a=30, c=180 (Operating Manual,
+    # "Direction (minus/plus)": minus the lower value of the reference axis, plus the higher).
+    machine = load_machine("xyzac-trt")
+    turn = swivel.rotation(57, np.array([30.0, 0.0, 0.0]))
+    np.testing.assert_allclose(swivel.rotary_positions(machine, turn, -1), (-30, 0), atol=1e-9)
+    a, c = swivel.rotary_positions(machine, turn, +1)
+    assert abs(a - 30) < 1e-9 and abs(abs(c) - 180) < 1e-9
+    # Rx(-60): a=60, c=0 (A's limit is 50: not reachable) or a=-60, c=180; plus gives way to the other
+    a, c = swivel.rotary_positions(machine, swivel.rotation(57, np.array([-60.0, 0.0, 0.0])), +1)
+    assert abs(a + 60) < 1e-9 and abs(abs(c) - 180) < 1e-9
+    with pytest.raises(swivel.Unknown, match="_DIR=0"):
+        swivel.rotary_positions(machine, turn, 0)

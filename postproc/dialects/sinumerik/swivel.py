@@ -16,6 +16,11 @@ of the rotated surface"):
 The swivel frame is a system frame below the programmable one (Fundamentals, "Frame chain":
 $P_WPFRAME before $P_PFRAME): TRANS / ROT in the program do not delete it, and a point p is at
 ``settable @ swivel @ programmable @ p``.
+The rotary positions the cycle turns to (``rotary_positions``) are the machine's: of the two
+solutions for the swivelled tool axis, ``_DIR`` -1 takes the lower value of the direction
+reference axis, +1 the higher, 0 does not turn; a solution outside the axis limits gives way to
+the other (Operating Manual, "Swivel plane", "Direction (minus/plus)"). The reference axis is
+set at commissioning; here it is the machine file's first rotary axis unless named.
 Projection angles and direct mode (rotary positions, the machine's kinematics) are not
 evaluated: the caller flags what follows, naming ``Unknown``'s reason.
 """
@@ -26,6 +31,8 @@ import re
 
 import numpy as np
 
+from ...fivex.kinematics import rotary_solutions
+from ...fivex.machine import Machine
 from ...frames import rot_x, rot_y, rot_z
 
 _ROT = {1: rot_x, 2: rot_y, 3: rot_z}
@@ -90,3 +97,24 @@ def swivel_frame(previous: np.ndarray, line: str, to_mm: float) -> np.ndarray:
     if additive and np.isnan(previous).any():
         raise Unknown("additive CYCLE800 on a swivel frame that is not known")
     return (previous if additive else np.eye(4)) @ before @ turn @ after
+
+
+def rotary_positions(machine: Machine, rotation_3x3: np.ndarray, direction: float, reference: int = 0) -> np.ndarray:
+    """The rotary axes' positions (deg, in the machine file's order) that put the tool along the
+    swivelled frame's Z (``rotation_3x3``, in the workpiece frame), chosen by ``_DIR``
+    (``direction``: -1 lower, +1 higher value of rotary axis ``reference``). Raises Unknown for
+    _DIR=0 (the cycle only computes the frame: the axes stay where they are, which the program
+    does not say) and where neither solution is within the limits."""
+    if direction == 0:
+        raise Unknown("CYCLE800 _DIR=0 does not turn the rotary axes: their positions are where they were")
+    tool_axis = np.asarray(rotation_3x3, float) @ machine.tool_axis
+    both, _ = rotary_solutions(machine, tool_axis[None, :])
+    both = both[0]  # (2 solutions, 2 axes)
+    lo = np.array([ax.limits[0] for ax in machine.rotary])
+    hi = np.array([ax.limits[1] for ax in machine.rotary])
+    inside = np.all((both >= lo - 1e-9) & (both <= hi + 1e-9), axis=1) & ~np.isnan(both).any(axis=1)
+    if not inside.any():
+        raise Unknown(f"CYCLE800: no rotary solution of {machine.name} within its limits reaches tool axis {np.round(tool_axis, 6).tolist()}")
+    order = np.argsort(both[:, reference])  # lower, higher value of the reference axis
+    wanted = order[0] if direction < 0 else order[1]
+    return both[wanted] if inside[wanted] else both[order[1] if wanted == order[0] else order[0]]
