@@ -184,6 +184,11 @@ def refuse_uncompensable(tp: Toolpath) -> None:
     bad = rows[~(turns == 1.0)]
     if len(bad):
         raise InputError(_where(tp, int(bad[0]), I_) + "an arc of several turns (P) is not compensated; write one arc per turn")
+    # a radius the reader worked out (SINUMERIK AR=: the text's number is the opening angle) has no number to rewrite
+    unwritable = rows[~np.isnan(tp.values[rows, R_]) & (tp.spans[rows, R_, 1] < 0)]
+    if len(unwritable):
+        raise InputError(_where(tp, int(unwritable[0]), I_) + "this arc's radius is not a number in the text (an opening angle, AR=): "
+                         "it cannot be rewritten; write the arc with CR= or I J K to compensate it")
     prev_absj = rows[tp.kind[rows - 1] == Kind.ABSJ]
     if len(prev_absj):
         raise InputError(_where(tp, int(prev_absj[0]), I_) + "an arc after a joint target is not compensated")

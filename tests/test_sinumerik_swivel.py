@@ -7,6 +7,9 @@ Expected values are worked out from the manuals' rules, cited at each test:
   programming manual's parameter list (_MODE bits 0-5 the axis sequence, 6-7 the angle mode;
   _ST units digit 0 new / 1 additive; _TC="0" deselects); Fundamentals "Frame chain" (the
   swivel frame is a system frame below the programmable one).
+- AR=: Fundamentals (6FC5398-1BP40), "Circular interpolation", "Circle with opening angle and
+  end point (AR)": from the start to the end point through the opening angle, G2 clockwise,
+  G3 counter-clockwise in the active plane (radius = chord / (2 sin(angle/2))).
 """
 
 from __future__ import annotations
@@ -16,7 +19,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from postproc import arcs
 from postproc.dialects.sinumerik import swivel
+from postproc.errors import InputError, ParseError
 from postproc.fivex.machine import load_machine
 from postproc.programs import emit_texts, parse_program
 
@@ -112,3 +117,42 @@ def test_cycle800_rotary_positions_by_dir(tmp_path):
     assert abs(a + 60) < 1e-9 and abs(abs(c) - 180) < 1e-9
     with pytest.raises(swivel.Unknown, match="_DIR=0"):
         swivel.rotary_positions(machine, turn, 0)
+
+
+OPENING = """N10 G54 G17 G71 G90
+N20 G1 X0 Y0 Z0 F100
+N30 G3 X10 Y10 AR=90
+N40 G2 X20 Y0 AR=270
+N50 G18 G2 X30 Z0 AR=180
+N60 M30
+"""
+
+
+def test_opening_angle_arcs_by_hand(tmp_path):
+    tp, path = _read(tmp_path, OPENING)
+    assert tp.resolved.all()
+    a = arcs.geometry(tp)
+    # N30: chord (0,0)->(10,10) = 10 sqrt2, 90 deg: radius 10 sqrt2 / (2 sin 45) = 10; counter-clockwise the short
+    # way: centre left of the chord, (0, 10) (start at -90 deg, end at 0 deg around it)
+    # N40: (10,10)->(20,0), 270 deg clockwise (the long way): radius 10, centre (20, 10) (start 180 deg, end -90 deg)
+    # N50: G18 (Z, X plane): (20,0,0)->(30,0,0), 180 deg: radius 5, centre Z=0 X=25 (in-plane (first, second) = (Z, X))
+    np.testing.assert_allclose(a.centre, [(0, 10), (20, 10), (0, 25)], atol=1e-9)
+    np.testing.assert_allclose(np.degrees(a.sweep()[1]), [90, -270, -180], atol=1e-9)
+    np.testing.assert_allclose(tp.values[1:4, arcs.R_], [10, -10, 5], atol=1e-9)
+    assert (tp.spans[1:4, arcs.R_, 1] < 0).all()  # the file's number is the angle: no radius to write there
+    assert emit_texts(tp, tp)[0] == OPENING
+    with pytest.raises(InputError, match=r"PART.MPF:3:.*opening angle"):
+        arcs.refuse_uncompensable(tp)  # compensate refuses: it could not write a changed radius
+
+
+def test_opening_angle_refusals(tmp_path):
+    head = "N10 G54 G17 G71 G90\nN20 G1 X0 Y0 Z0 F100\n"
+    for block, column, why in (("G3 I5 J0 AR=90", 4, "AR= with a centre"),
+                               ("G3 X10 Y0 AR=R1", 11, "not a number"),
+                               ("G3 X10 Y0 AR=360", 11, "between 0 and 360"),
+                               ("G3 X0 Y0 AR=90", 10, "end point is its start"),
+                               ("G1 X5 Y0 AR=90", 10, "not an arc")):
+        with pytest.raises(ParseError) as exc:
+            _read(tmp_path, head + f"N30 {block}\n")
+        assert (exc.value.line, why in exc.value.message) == (3, True), exc.value
+        assert exc.value.column == column + 4, (block, exc.value.column)

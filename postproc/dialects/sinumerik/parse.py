@@ -16,11 +16,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...ir import SourceDoc, Toolpath
+from ...ir import Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
-from . import frames, swivel, translate
+from ...arcs import PLANE_AXES, R_
+from ...errors import ParseError
+from . import arc_angle, frames, swivel, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -77,13 +79,37 @@ class SinumerikParser(GcodeParser):
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
+        self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
         self.plane = 17.0
         self.to_mm = 1.0
 
     def parse(self) -> Toolpath:
-        if _calls_or_labels(self.text):  # a call (CYCLE800(...)) or a jump label: the flow reader knows them
-            return self._back_to_file(self._parse_flow())
-        return self._back_to_file(super().parse())
+        if _calls_or_labels(self.text):  # a call or a jump label: the flow reader knows them
+            return self._opening_angle_arcs(self._back_to_file(self._parse_flow()))
+        return self._opening_angle_arcs(self._back_to_file(super().parse()))
+
+    def _opening_angle_arcs(self, tp: Toolpath) -> Toolpath:
+        """AR= arcs: the R word their chord (in their own frame) and opening angle give
+        (``arc_angle.py``); an arc whose start is unknown or in another frame stays flagged."""
+        if not self.opening_angles:
+            return tp
+        rows = np.nonzero((tp.file == 0) & np.isin(tp.line, list(self.opening_angles)))[0]
+        arc = np.isin(tp.kind[rows], (Kind.ARC_CW, Kind.ARC_CCW)) & (rows > 0)
+        if not arc.all():
+            raise self._at_opening_angle(int(tp.line[rows[~arc][0]]), "AR= in a block that is not an arc after a target (G2 / G3 with a start)")
+        axes = np.array([PLANE_AXES[int(p)] for p in tp.arc[rows, 0]], dtype=int).reshape(-1, 3)[:, :2]
+        start = np.take_along_axis(tp.position[rows - 1], axes, axis=1)
+        end = np.take_along_axis(tp.position[rows], axes, axis=1)
+        angles = np.array([self.opening_angles[int(line)] for line in tp.line[rows]])
+        radius = arc_angle.signed_radius(start, end, angles)
+        same = np.linalg.norm(end - start, axis=1) <= 1e-9
+        if same.any():
+            raise self._at_opening_angle(int(tp.line[rows[same][0]]), "AR= arc whose end point is its start: the opening angle gives no circle")
+        known = ~np.isnan(radius) & (tp.frame[rows] == tp.frame[rows - 1]) & tp.resolved[rows - 1]
+        values, resolved = tp.values.copy(), tp.resolved.copy()
+        values[rows, R_] = radius
+        resolved[rows[~known]] = False
+        return replace(tp, values=values, resolved=resolved)
 
     def _assign(self, item, start: int) -> tuple:
         """R1=10 R2=R1*2: the 840D runs a block's assignments left to right (Fundamentals,
@@ -108,6 +134,12 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        if translate.ARC_ANGLE_CODE in gcodes:
+            try:
+                self.opening_angles[self.lines.line(start)] = arc_angle.opening_angle(self._file_line(start))
+            except arc_angle.NotRead as exc:
+                raise self._at_opening_angle(self.lines.line(start), str(exc)) from None
+            gcodes = [gc for gc in gcodes if gc != translate.ARC_ANGLE_CODE]
         if translate.SWIVEL_CODE in gcodes:
             self._swivel(start)
             return True, False
@@ -141,14 +173,24 @@ class SinumerikParser(GcodeParser):
         identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0)
         self.tilts.append((self._when(start), None if identity else chain))
 
+    def _at_opening_angle(self, line: int, message: str) -> ParseError:
+        """A ParseError at the AR= word of a line of the file."""
+        text = self.original.text.split("\n")[line - 1]
+        column = text.upper().find("AR") + 1
+        return ParseError(self.original.path, line, max(column, 1), message, text.rstrip("\r"))
+
+    def _file_line(self, start: int) -> str:
+        """The file's own line holding offset ``start`` of the rewritten text."""
+        at = int(self.offsets([start])[0])
+        text = self.original.text
+        end = text.find("\n", at)
+        return text[text.rfind("\n", 0, at) + 1 : len(text) if end < 0 else end]
+
     def _swivel(self, start: int) -> None:
         """CYCLE800: the swivel frame from the call's parameters (``swivel.py``), read from the
         file's own line; one that cannot be worked out flags the targets after it, with the reason."""
-        at = int(self.offsets([start])[0])
-        text = self.original.text
-        line = text[text.rfind("\n", 0, at) + 1 : text.find("\n", at) if text.find("\n", at) >= 0 else len(text)]
         try:
-            self.swivel = swivel.swivel_frame(self.swivel, line, self.to_mm)
+            self.swivel = swivel.swivel_frame(self.swivel, self._file_line(start), self.to_mm)
         except swivel.Unknown as exc:
             self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
             self.swivel = np.full((4, 4), np.nan)

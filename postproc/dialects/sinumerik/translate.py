@@ -49,6 +49,7 @@ FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0,
                "MIRROR": 9996.0, "AMIRROR": 9997.0}
 FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
 SWIVEL_CODE = 9989.0  # marks a CYCLE800 call (swivel plane) for parse.py, which reads its parameters (swivel.py)
+ARC_ANGLE_CODE = 9988.0  # marks a block with AR= (arc by its opening angle): parse.py reads the angle (arc_angle.py)
 VECTOR_CODE = 9998.0  # marks a block with A3= B3= C3= (tool orientation vector) for parse.py
 _VECTOR = {"A3": "I", "B3": "J", "C3": "K"}  # the reader's tool-axis words (G43.5 I J K)
 R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
@@ -81,8 +82,7 @@ def candidate_lines(text: str, raw: np.ndarray, line_starts: np.ndarray) -> np.n
     positions = np.concatenate(found)
     return np.unique(line_starts[np.searchsorted(line_starts, positions, side="right") - 1])
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
-_REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
-            "I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
+_REFUSED = {"I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
             "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
 # Statements refused with their reason (840D "Job Planning": program jumps, CASE, arrays;
@@ -198,6 +198,8 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
     name, value = m.group("name").upper(), item[m.end():]
     if name in _REFUSED:
         raise Refusal(at, _REFUSED[name])
+    if name == "AR":  # the opening angle: line_edits blanks it and marks the block (ARC_ANGLE_CODE)
+        return item
     r_param = re.fullmatch(r"R(\d+)", name)
     if r_param:
         return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
@@ -275,6 +277,15 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
             centre = old[:1].upper() in "IJK" and not old[1:2].isalpha()
             if centre and any(code[pos + x : pos + x + 2].upper() in _VECTOR for x, _ in _split_items(code[pos:])):
                 raise Refusal(start + pos + a, "I J K (an arc centre) and A3= B3= C3= (the tool orientation) in one block are not read")
+    opening = [(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])]
+    if opening:
+        centre = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)(?:[IJK](?![A-Za-z_])|CR[ \t]*=)", code[pos + a : pos + b])]
+        if centre:
+            raise Refusal(start + centre[0], "AR= with a centre (I J K) or CR= in one block (no end point: the end is computed) is not read: "
+                          "write the end point with AR=")
+        (a, b), = opening[:1]
+        edits += [(a, a, f"G{ARC_ANGLE_CODE:g} "), (a, b, " " * (b - a))]  # the angle blanked (parse.py reads it from the file)
+        edits.sort(key=lambda e: (e[0], e[1]))
     if vector is not None:
         edits.insert(0, (vector, vector, f"G{VECTOR_CODE:g} "))  # the orientation vector's block: parse.py turns G43.5-like reading on
         edits.sort(key=lambda e: (e[0], e[1]))
