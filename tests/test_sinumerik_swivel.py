@@ -141,7 +141,7 @@ def test_opening_angle_arcs_by_hand(tmp_path):
     np.testing.assert_allclose(tp.values[1:4, arcs.R_], [10, -10, 5], atol=1e-9)
     assert (tp.spans[1:4, arcs.R_, 1] < 0).all()  # the file's number is the angle: no radius to write there
     assert emit_texts(tp, tp)[0] == OPENING
-    with pytest.raises(InputError, match=r"PART.MPF:3:.*opening angle"):
+    with pytest.raises(InputError, match=r"PART.MPF:3:.*opening angle AR="):
         arcs.refuse_uncompensable(tp)  # compensate refuses: it could not write a changed radius
 
 
@@ -156,3 +156,43 @@ def test_opening_angle_refusals(tmp_path):
             _read(tmp_path, head + f"N30 {block}\n")
         assert (exc.value.line, why in exc.value.message) == (3, True), exc.value
         assert exc.value.column == column + 4, (block, exc.value.column)
+
+
+CIP_PROGRAM = """N10 G54 G17 G71 G90
+N20 G1 X0 Y0 Z0 F100
+N30 CIP X20 Y0 I1=10 J1=10 K1=0
+N40 CIP X30 Y10 I1=30 J1=0 K1=0
+N50 CIP X30 Y0 Z10 I1=30 J1=0 K1=0
+N60 M30
+"""
+
+
+def test_circle_through_an_intermediate_point_by_hand(tmp_path):
+    # Fundamentals, "Circular interpolation with intermediate and end points (CIP)": the circle through start,
+    # intermediate and end point, in that order, in the plane of the three points.
+    tp, path = _read(tmp_path, CIP_PROGRAM)
+    assert tp.resolved.all()
+    a = arcs.geometry(tp)
+    # N30: (0,0) -> (10,10) -> (20,0): centre (10,0), over the top: clockwise 180 deg
+    # N40: (20,0) -> (30,0) -> (30,10): centre (25,5) (equidistant, r = sqrt 50); angles 225 -> 315 -> 405: counter-clockwise 180 deg
+    # N50: (30,10,0) -> (30,0,0) -> (30,0,10): all X = 30, the YZ plane (G19, in-plane (Y, Z)): centre (Y, Z) = (5, 5);
+    #      seen from +X, about (5,5): start (10,0) at -45 deg, (0,0) at -135, end (0,10) at 135 (= -225): clockwise 180 deg
+    np.testing.assert_allclose(a.centre, [(10, 0), (25, 5), (5, 5)], atol=1e-9)
+    np.testing.assert_allclose(np.degrees(a.sweep()[1]), [-180, 180, -180], atol=1e-9)
+    assert tp.arc[1:4, 0].tolist() == [17, 17, 19]
+    assert emit_texts(tp, tp)[0] == CIP_PROGRAM
+    with pytest.raises(InputError, match=r"PART.MPF:3:.*intermediate point CIP"):
+        arcs.refuse_uncompensable(tp)
+
+
+def test_cip_refusals(tmp_path):
+    head = "N10 G54 G17 G71 G90\nN20 G1 X0 Y0 Z0 F100\n"
+    for block, column, why in (("CIP X20 Y0 I1=10 J1=10 K1=5", 5, "not parallel"),
+                               ("CIP X20 Y0 I1=10 J1=0 K1=0", 5, "on a line"),
+                               ("CIP X20 Y0 I1=10 J1=10", 5, "all three"),
+                               ("CIP X20 Y0", 5, "without its intermediate point"),
+                               ("CIP X20 Y0 I1=10 J1=10 K1=0\nN40 X30 Y10", 1, "continued")):
+        with pytest.raises(ParseError) as exc:
+            _read(tmp_path, head + f"N30 {block}\n")
+        assert why in exc.value.message, exc.value
+        assert (exc.value.line, exc.value.column) == (3 if column > 1 else 4, column), (block, exc.value)

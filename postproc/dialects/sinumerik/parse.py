@@ -16,13 +16,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...ir import Kind, SourceDoc, Toolpath
+from ...ir import F_ARC, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
 from ...arcs import PLANE_AXES, R_
 from ...errors import ParseError
-from . import arc_angle, frames, swivel, translate
+from . import arc_angle, circle_through, frames, swivel, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -79,14 +79,55 @@ class SinumerikParser(GcodeParser):
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
+        self.cip_points: list[tuple[int, np.ndarray]] = []  # (line, intermediate point mm) of each CIP block read, in order
         self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
         self.plane = 17.0
         self.to_mm = 1.0
 
     def parse(self) -> Toolpath:
         if _calls_or_labels(self.text):  # a call or a jump label: the flow reader knows them
-            return self._opening_angle_arcs(self._back_to_file(self._parse_flow()))
-        return self._opening_angle_arcs(self._back_to_file(super().parse()))
+            return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
+        return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+
+    def _cip_arcs(self, tp: Toolpath) -> Toolpath:
+        """CIP blocks (read as G3 with the intermediate point in I J K): the plane arc through
+        start, intermediate and end point (``circle_through.py``), its centre absolute, without
+        spans (the file's numbers are the intermediate point's, never written over)."""
+        if not self.cip_points:
+            return tp
+        lines = {line for line, _ in self.cip_points}
+        rows = np.nonzero((tp.file == 0) & np.isin(tp.line, list(lines)))[0]
+        if len(rows) != len(self.cip_points):
+            raise self._at_word(self.cip_points[0][0], "I1", "I1= J1= K1= in a block that is not one arc target (CIP X.. Y.. Z..)")
+        values, resolved, kind, arc = tp.values.copy(), tp.resolved.copy(), tp.kind.copy(), tp.arc.copy()
+        spans = tp.spans.copy()
+        for row, (_, middle) in zip(rows.tolist(), self.cip_points, strict=True):  # one 2x2 solve per CIP block (few in a program)
+            line = int(tp.line[row])
+            if row == 0 or tp.kind[row] != Kind.ARC_CCW:
+                raise self._at_word(line, "I1", "I1= J1= K1= outside a CIP arc after a target (CIP with a start)")
+            if tp.relative[row]:
+                raise self._at_word(line, "CIP", "CIP under G91 (intermediate point relative to the start) is not read")
+            if np.isnan(middle).any():
+                raise self._at_word(line, "CIP", "CIP needs all three of I1= J1= K1= (an intermediate coordinate left out is not guessed)")
+            known = tp.frame[row] == tp.frame[row - 1] and resolved[row - 1] and not np.isnan(tp.position[[row - 1, row]]).any()
+            spans[row, F_ARC, 1:] = -1
+            if not known:
+                resolved[row] = False
+                continue
+            try:
+                plane, centre, ccw = circle_through.plane_arc(tp.position[row - 1], middle, tp.position[row])
+            except circle_through.NotRead as exc:
+                raise self._at_word(line, "CIP", str(exc)) from None
+            kind[row] = Kind.ARC_CCW if ccw else Kind.ARC_CW
+            arc[row, :2] = (plane, 1.0)  # the centre as coordinates (G90.1-like)
+            values[row, F_ARC] = np.nan
+            first, second, _ = PLANE_AXES[plane]
+            values[row, F_ARC.start + first], values[row, F_ARC.start + second] = centre[first], centre[second]
+        others = np.nonzero(np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)) & np.isnan(values[:, F_ARC]).all(axis=1))[0]
+        if len(others):
+            raise self._at_word(int(tp.line[others[0]]), "", "an arc without centre words in a program with CIP (a CIP continued "
+                                "modally?): write CIP with its intermediate point in every block")
+        return replace(tp, values=values, resolved=resolved, kind=kind, arc=arc, spans=spans)
 
     def _opening_angle_arcs(self, tp: Toolpath) -> Toolpath:
         """AR= arcs: the R word their chord (in their own frame) and opening angle give
@@ -134,6 +175,12 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        if translate.CIP_CODE in gcodes:
+            # I1 J1 K1 (read into I J K): the intermediate point, taken out before the reader sees arc centre words
+            ijk = [_AX["I"], _AX["J"], _AX["K"]]
+            self.cip_points.append((self.lines.line(start), values[ijk] * self.to_mm))
+            values[ijk] = np.nan
+            gcodes = [gc for gc in gcodes if gc != translate.CIP_CODE]
         if translate.ARC_ANGLE_CODE in gcodes:
             try:
                 self.opening_angles[self.lines.line(start)] = arc_angle.opening_angle(self._file_line(start))
@@ -174,9 +221,12 @@ class SinumerikParser(GcodeParser):
         self.tilts.append((self._when(start), None if identity else chain))
 
     def _at_opening_angle(self, line: int, message: str) -> ParseError:
-        """A ParseError at the AR= word of a line of the file."""
+        return self._at_word(line, "AR", message)
+
+    def _at_word(self, line: int, word: str, message: str) -> ParseError:
+        """A ParseError at the first ``word`` of a line of the file (its start where there is none)."""
         text = self.original.text.split("\n")[line - 1]
-        column = text.upper().find("AR") + 1
+        column = text.upper().find(word) + 1 if word else 1
         return ParseError(self.original.path, line, max(column, 1), message, text.rstrip("\r"))
 
     def _file_line(self, start: int) -> str:

@@ -49,6 +49,7 @@ FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0,
                "MIRROR": 9996.0, "AMIRROR": 9997.0}
 FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
 SWIVEL_CODE = 9989.0  # marks a CYCLE800 call (swivel plane) for parse.py, which reads its parameters (swivel.py)
+CIP_CODE = 9987.0  # marks a block with I1= J1= K1= (CIP's intermediate point) for parse.py (circle_through.py)
 ARC_ANGLE_CODE = 9988.0  # marks a block with AR= (arc by its opening angle): parse.py reads the angle (arc_angle.py)
 VECTOR_CODE = 9998.0  # marks a block with A3= B3= C3= (tool orientation vector) for parse.py
 _VECTOR = {"A3": "I", "B3": "J", "C3": "K"}  # the reader's tool-axis words (G43.5 I J K)
@@ -82,9 +83,9 @@ def candidate_lines(text: str, raw: np.ndarray, line_starts: np.ndarray) -> np.n
     positions = np.concatenate(found)
     return np.unique(line_starts[np.searchsorted(line_starts, positions, side="right") - 1])
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
-_REFUSED = {"I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
-            "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
-            "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
+_REFUSED: dict[str, str] = {}
+_INTERMEDIATE = {"I1": "I", "J1": "J", "K1": "K"}  # CIP's intermediate point -> the reader's I J K (parse.py takes them back)
+_CIP = re.compile(r"(?i)(?<![\w$])CIP(?!\w)")
 # Statements refused with their reason (840D "Job Planning": program jumps, CASE, arrays;
 # "Fundamentals": spline interpolation): the positions after them depend on what is not run.
 _NOT_READ = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?:[A-Za-z_]\w*:(?!=)[ \t]*)?(?:(?P<case>CASE\b)|(?P<spline>[ABC]SPLINE\b)"
@@ -203,7 +204,9 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
     r_param = re.fullmatch(r"R(\d+)", name)
     if r_param:
         return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
-    if name in _VECTOR:
+    if name in _INTERMEDIATE:
+        name = _INTERMEDIATE[name].ljust(len(m.group("name")))  # "I1=40" -> "I =40": the number keeps its place
+    elif name in _VECTOR:
         name = _VECTOR[name].ljust(len(m.group("name")))  # "A3=0" -> "I =0": the number keeps its place
     elif name == "CR" or (frame and name == "RPL"):
         name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
@@ -285,6 +288,15 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
                           "write the end point with AR=")
         (a, b), = opening[:1]
         edits += [(a, a, f"G{ARC_ANGLE_CODE:g} "), (a, b, " " * (b - a))]  # the angle blanked (parse.py reads it from the file)
+        edits.sort(key=lambda e: (e[0], e[1]))
+    cip = _CIP.search(code)
+    intermediate = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)[IJK]1[ \t]*=", code[pos + a : pos + b])]
+    if cip and not intermediate:
+        raise Refusal(start + cip.start(), "CIP without its intermediate point (I1= J1= K1=) in the block is not read")
+    if cip:
+        edits.append((cip.start(), cip.end(), "G3 "))  # read as an arc; parse.py puts its centre and direction
+    if intermediate:
+        edits.append((intermediate[0], intermediate[0], f"G{CIP_CODE:g} "))
         edits.sort(key=lambda e: (e[0], e[1]))
     if vector is not None:
         edits.insert(0, (vector, vector, f"G{VECTOR_CODE:g} "))  # the orientation vector's block: parse.py turns G43.5-like reading on
