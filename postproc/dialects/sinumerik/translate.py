@@ -244,7 +244,8 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     orimks = _ORIMKS.search(code)
     if orimks:
         raise Refusal(start + orimks.start(), "ORIMKS (tool orientation vectors in machine coordinates) is not read: use ORIWKS")
-    swivel = _SWIVEL_LINE.match(code)
+    upper = code.upper()  # cheap guards: most candidate lines (R parameters, expressions) have none of the words below
+    swivel = _SWIVEL_LINE.match(code) if "CYCLE800" in upper else None
     if swivel:
         a, b = swivel.span("call")
         return [(a, b, f"G{SWIVEL_CODE:g}".ljust(b - a))]
@@ -280,7 +281,7 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
             centre = old[:1].upper() in "IJK" and not old[1:2].isalpha()
             if centre and any(code[pos + x : pos + x + 2].upper() in _VECTOR for x, _ in _split_items(code[pos:])):
                 raise Refusal(start + pos + a, "I J K (an arc centre) and A3= B3= C3= (the tool orientation) in one block are not read")
-    opening = [(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])]
+    opening = [(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])] if "AR" in upper else []
     if opening:
         centre = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)(?:[IJK](?![A-Za-z_])|CR[ \t]*=)", code[pos + a : pos + b])]
         if centre:
@@ -289,8 +290,9 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
         (a, b), = opening[:1]
         edits += [(a, a, f"G{ARC_ANGLE_CODE:g} "), (a, b, " " * (b - a))]  # the angle blanked (parse.py reads it from the file)
         edits.sort(key=lambda e: (e[0], e[1]))
-    cip = _CIP.search(code)
-    intermediate = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)[IJK]1[ \t]*=", code[pos + a : pos + b])]
+    cip = _CIP.search(code) if "CIP" in upper else None
+    intermediate = ([pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)[IJK]1[ \t]*=", code[pos + a : pos + b])]
+                    if "1" in upper else [])
     if cip and not intermediate:
         raise Refusal(start + cip.start(), "CIP without its intermediate point (I1= J1= K1=) in the block is not read")
     if cip:
