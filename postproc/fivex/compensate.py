@@ -92,7 +92,10 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if tp.relative.any():
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
-    if tp.orientation_kind == "axis":
+    if tp.orientation_kind == "axis":  # which rotary solution a vector gets is the controller's rule: the 840D's is known
+        if tp.dialect != "sinumerik":
+            raise InputError(f"{tp.sources[0].path}: tool-axis vectors (I J K) are compensated in SINUMERIK programs only (the 840D's "
+                             "rotary solution rule); write rotary angles")
         return _compensate_vectors(tp, true, controller, grid, input_axes)
     names = controller.rotary_names
     cols = [ROTARY_FIELD[n] for n in names]
