@@ -92,10 +92,10 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if tp.relative.any():
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
-    if tp.orientation_kind == "axis":  # which rotary solution a vector gets is the controller's rule: the 840D's is known
-        if tp.dialect != "sinumerik":
-            raise InputError(f"{tp.sources[0].path}: tool-axis vectors (I J K) are compensated in SINUMERIK programs only (the 840D's "
-                             "rotary solution rule); write rotary angles")
+    if tp.orientation_kind == "axis":  # which rotary solution a vector gets is the controller's rule (the dialect states it)
+        if getattr(dialects.of(tp), "vector_solution", None) != "nearest":
+            raise InputError(f"{tp.sources[0].path}: tool-axis vectors (I J K) are compensated only where the controller's rotary "
+                             "solution rule is known (SINUMERIK: the shorter travel); write rotary angles")
         return _compensate_vectors(tp, true, controller, grid, input_axes)
     names = controller.rotary_names
     cols = [ROTARY_FIELD[n] for n in names]
@@ -179,7 +179,8 @@ def _compensate_vectors(tp: Toolpath, true: Machine, controller: Machine, grid: 
     other = np.abs((again - axes[:, 3:5] + 180.0) % 360.0 - 180.0).max(axis=1) > 1e-6
     if other.any():
         i = int(np.nonzero(other)[0][0])
-        raise JobError(f"{path}:{int(tp.line[i])}: for the compensated vector the controller would take the other rotary solution; nothing was written")
+        raise JobError(f"{path}:{int(tp.line[i])}: for the compensated vector the controller would take the other rotary solution; "
+                       "nothing was written")
     new = _with_vectors(tp, np.einsum("nji,nj->ni", placement[:, :3, :3], new_axis))
     notes = (tuple(grid.notes) if grid is not None else ()) + (
         "tool-axis vectors: the rotary solution of the first block is taken nearest 0, 0 (the controller takes the one nearest "

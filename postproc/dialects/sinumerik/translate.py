@@ -281,7 +281,8 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
             centre = old[:1].upper() in "IJK" and not old[1:2].isalpha()
             if centre and any(code[pos + x : pos + x + 2].upper() in _VECTOR for x, _ in _split_items(code[pos:])):
                 raise Refusal(start + pos + a, "I J K (an arc centre) and A3= B3= C3= (the tool orientation) in one block are not read")
-    opening = [(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])] if "AR" in upper else []
+    opening = ([(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])]
+               if "AR" in upper else [])
     if opening:
         centre = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)(?:[IJK](?![A-Za-z_])|CR[ \t]*=)", code[pos + a : pos + b])]
         if centre:
