@@ -62,6 +62,7 @@ def test_cycle800_axis_by_axis_by_hand(tmp_path):
     assert tp.resolved.all()
     np.testing.assert_allclose(tp.base_poses()[:, :3, 3], SWIVEL_EXPECTED, atol=1e-9)
     assert emit_texts(tp, tp)[0] == SWIVEL  # byte-identical round trip
+    assert any("line 3: CYCLE800 retracts (_FR=1" in n and "turns the rotary axes (_DIR=-1)" in n for n in tp.notes), tp.notes
 
 
 def _one_swivel(tmp_path, call: str, points: str = "N40 G1 X0 Y0 Z1\nN50 G1 X0 Y1 Z0\n"):

@@ -239,8 +239,12 @@ class SinumerikParser(GcodeParser):
     def _swivel(self, start: int) -> None:
         """CYCLE800: the swivel frame from the call's parameters (``swivel.py``), read from the
         file's own line; one that cannot be worked out flags the targets after it, with the reason."""
+        line = self._file_line(start)
+        moves = swivel.moves_not_in_program(line)
+        if moves:
+            self.notes.append(f"line {self.lines.line(start)}: {moves}")
         try:
-            self.swivel = swivel.swivel_frame(self.swivel, self._file_line(start), self.to_mm)
+            self.swivel = swivel.swivel_frame(self.swivel, line, self.to_mm)
         except swivel.Unknown as exc:
             self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
             self.swivel = np.full((4, 4), np.nan)

@@ -68,6 +68,20 @@ def arguments(line: str) -> dict[str, object]:
     return values
 
 
+def moves_not_in_program(line: str) -> str | None:
+    """What the call moves that the program does not say (a note), or None: the retraction
+    (``_FR`` 1 Z, 2 Z X Y, 4 / 5 along the tool: to positions in the swivel data record) and
+    the rotary axes' turn (``_DIR`` not 0)."""
+    try:
+        p = arguments(line)
+    except Unknown:
+        return None
+    parts = [f"retracts (_FR={p['_FR']:g}, to the swivel data record's positions)"] if p["_FR"] else []
+    if p["_DIR"] and str(p["_TC"]).strip() not in ("0", ""):
+        parts.append(f"turns the rotary axes (_DIR={p['_DIR']:g})")
+    return "CYCLE800 " + " and ".join(parts) + ": moves that are not targets" if parts else None
+
+
 def rotation(mode: int, abc: np.ndarray) -> np.ndarray:
     """The swivel's rotation (3x3) for ``_MODE`` and the angles ``_A _B _C`` (degrees)."""
     kind = (mode >> 6) & 3
