@@ -184,6 +184,12 @@ def refuse_uncompensable(tp: Toolpath) -> None:
     bad = rows[~(turns == 1.0)]
     if len(bad):
         raise InputError(_where(tp, int(bad[0]), I_) + "an arc of several turns (P) is not compensated; write one arc per turn")
+    # a centre or radius the reader worked out (SINUMERIK AR= opening angle, CIP intermediate point): no number to rewrite
+    worked_out = ~np.isnan(tp.values[rows, F_ARC]).all(axis=1) & (tp.spans[rows, F_ARC, 1] < 0).all(axis=1)
+    if worked_out.any():
+        raise InputError(_where(tp, int(rows[worked_out][0]), I_) + "this arc's centre or radius is not a number in the text "
+                         "(an opening angle AR= or an intermediate point CIP): it cannot be rewritten; "
+                         "write the arc with CR= or I J K to compensate it")
     prev_absj = rows[tp.kind[rows - 1] == Kind.ABSJ]
     if len(prev_absj):
         raise InputError(_where(tp, int(prev_absj[0]), I_) + "an arc after a joint target is not compensated")

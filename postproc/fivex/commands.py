@@ -146,7 +146,7 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
     for the real machine; the written text is read back and checked before it is kept."""
     # Deferred import: the error grid loads scipy.interpolate (slow to import); the CLI imports this module at start.
-    from .compensate import actual_tip, compensate_five, controller_axes
+    from .compensate import actual_tip, commanded, compensate_five
     from .errormap import load_grid
 
 
@@ -161,10 +161,9 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     text = emit_texts(tp, new)[0]
     # What the written numbers (rounded as the text has them) make the real machine do:
     again = parse_program(program, tp.dialect, data=text.encode("latin-1"))
-    cols = [ROTARY_FIELD[n] for n in controller.rotary_names]
     at, length = report.placement, report.tool_length
-    cmd = controller_axes(controller, to_machine(at, again.position), again.ext[:, cols], input_axes, length)
-    intended, _ = fk(controller, controller_axes(controller, to_machine(at, tp.position), tp.ext[:, cols], input_axes, length), length)
+    cmd = commanded(controller, again, at, input_axes, length)
+    intended, _ = fk(controller, commanded(controller, tp, at, input_axes, length), length)
     written = np.linalg.norm(actual_tip(true, grid, cmd, length) - intended, axis=1)
     if not np.isfinite(written).all() or written.max() > 0.005:
         i = int(np.nanargmax(np.where(np.isfinite(written), written, np.inf)))

@@ -19,12 +19,13 @@ import numpy as np
 
 from .. import dialects
 from ..errors import EmitError, InputError, JobError
+from ..frames import axis_to_quat_wxyz
 from ..ir import F_EXT, Toolpath
 from .errormap import GridMap
-from .kinematics import _head_tip, fk, ik, table_to_machine
+from .kinematics import _head_tip, fk, ik, rotary_solutions, table_to_machine
 from .machine import Machine
 from .offsets import machine_angles, program_to_machine, to_machine, to_program, tool_length
-from .program import ROTARY_FIELD
+from .program import ROTARY_FIELD, _filled_axis
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,16 @@ def controller_axes(controller: Machine, program_xyz: np.ndarray, angles: np.nda
     theta = np.radians(angles)
     offset, _ = _head_tip(controller, theta, tool_length)
     return np.c_[table_to_machine(controller, theta, program_xyz) - offset, angles]
+
+
+def commanded(controller: Machine, tp: Toolpath, placement: np.ndarray, input_axes: str, tool_length: float = 0.0) -> np.ndarray:
+    """(N, 5) machine axes the controller commands for a program's numbers: its rotary words,
+    or, for tool-axis vectors, the rotary solution nearest the previous one (the first from 0, 0)."""
+    if tp.orientation_kind == "axis":
+        axis = np.einsum("nij,nj->ni", placement[:, :3, :3], _filled_axis(tp))
+        return ik(controller, to_machine(placement, tp.position), axis, tool_length=tool_length).axes
+    cols = [ROTARY_FIELD[n] for n in controller.rotary_names]
+    return controller_axes(controller, to_machine(placement, tp.position), tp.ext[:, cols], input_axes, tool_length)
 
 
 def actual_tip(true: Machine, grid: GridMap | None, axes: np.ndarray, tool_length: float = 0.0) -> np.ndarray:
@@ -84,6 +95,11 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     refuse = getattr(dialects.of(tp), "refuse_compensation", None)  # what a dialect's text cannot carry as block numbers (Klartext: a tilted plane)
     if refuse is not None:
         refuse(tp)
+    if tp.orientation_kind == "axis":  # which rotary solution a vector gets is the controller's rule (the dialect states it)
+        if getattr(dialects.of(tp), "vector_solution", None) != "nearest":
+            raise InputError(f"{tp.sources[0].path}: tool-axis vectors (I J K) are compensated only where the controller's rotary "
+                             "solution rule is known (SINUMERIK: the shorter travel); write rotary angles")
+        return _compensate_vectors(tp, true, controller, grid, input_axes)
     names = controller.rotary_names
     cols = [ROTARY_FIELD[n] for n in names]
     angles = tp.ext[:, cols]
@@ -132,3 +148,80 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
     moved = replace(tp, ext=ext, values=values)
     contour = getattr(dialects.of(tp), "contour_for", None)  # a dialect whose text holds the contour of a compensated tool path (Klartext RL / RR)
     return contour(moved, xyz) if contour is not None and tp.ccomp is not None and (tp.ccomp == 1).any() else moved.with_positions(xyz)
+
+
+VECTOR = slice(3, 6)  # the IR's tool-axis vector words (G43.5 I J K, SINUMERIK A3= B3= C3=)
+
+
+def _compensate_vectors(tp: Toolpath, true: Machine, controller: Machine, grid: GridMap | None, input_axes: str) -> tuple[Toolpath, FiveReport]:
+    """Tool tips with tool-axis vectors (in the program's frame; TRAORI with A3= B3= C3=, G43.5):
+    the controller turns each vector into the rotary solution nearest the axes' current
+    position (840D: the shorter travel); the true machine's axes for the same tip and axis
+    are written back as the tip and vector the controller's model turns into those axes."""
+    path = tp.sources[0].path
+    if input_axes != "tip":
+        raise InputError(f"{path}: tool-axis vectors are given with the tool tip (RTCP, TRAORI / G43.5): use --input-axes tip")
+    if np.isnan(tp.position).any():
+        i = int(np.nonzero(np.isnan(tp.position).any(axis=1))[0][0])
+        raise InputError(f"{path}:{int(tp.line[i])}: tool tip position not known at this target")
+    placement, length = program_to_machine(tp), tool_length(tp, controller)
+    tip = to_machine(placement, tp.position)
+    axis = np.einsum("nij,nj->ni", placement[:, :3, :3], _filled_axis(tp))
+    _require_one_first_solution(tp, controller, axis[:1])
+    nominal = ik(controller, tip, axis, tool_length=length)  # the first block's solution is the only one in the limits (checked above)
+    sol = ik(true, tip, axis, start_deg=np.nan_to_num(nominal.axes[0, 3:5]), tool_length=length)
+    for result in (nominal, sol):
+        if not result.reachable.all():
+            i = int(np.nonzero(~result.reachable)[0][0])
+            raise JobError(f"{path}:{int(tp.line[i])}: target outside the machine's limits; nothing was written")
+    before = np.linalg.norm(actual_tip(true, grid, nominal.axes, length) - tip, axis=1)
+    axes = sol.axes.copy()
+    if grid is not None:
+        axes[:, :3] = _grid_inverse(grid, axes[:, :3], tp.line)
+    after = np.linalg.norm(actual_tip(true, grid, axes, length) - tip, axis=1)
+    new_tip, new_axis = fk(controller, axes, length)  # what the controller's model must be told to command ``axes``
+    again = ik(controller, new_tip, new_axis, start_deg=axes[0, 3:5], tool_length=length).axes[:, 3:5]
+    other = np.abs((again - axes[:, 3:5] + 180.0) % 360.0 - 180.0).max(axis=1) > 1e-6
+    if other.any():
+        i = int(np.nonzero(other)[0][0])
+        raise JobError(f"{path}:{int(tp.line[i])}: for the compensated vector the controller would take the other rotary solution; "
+                       "nothing was written")
+    new = _with_vectors(tp, np.einsum("nji,nj->ni", placement[:, :3, :3], new_axis))
+    notes = tuple(grid.notes) if grid is not None else ()
+    moved = new.with_positions(to_program(placement, new_tip))
+    return moved, FiveReport(tp.line.copy(), before, after, np.linalg.norm(axes[:, :3] - nominal.axes[:, :3], axis=1), notes, placement, length)
+
+
+def _require_one_first_solution(tp: Toolpath, controller: Machine, first_axis: np.ndarray) -> None:
+    """The controller turns the first vector into the rotary solution nearest where the axes
+    stand (840D: the shorter travel), which the program does not say: compensated only where
+    the machine's limits leave one of the two solutions (else refused with the line, not guessed)."""
+    cand, free = rotary_solutions(controller, first_axis)
+    ok = ~np.isnan(cand[0]).any(axis=1)
+    for i, ax in enumerate(controller.rotary):
+        if not ax.periodic:
+            ok &= (cand[0, :, i] >= ax.limits[0] - 1e-9) & (cand[0, :, i] <= ax.limits[1] + 1e-9)
+    distinct = np.abs((cand[0, 0] - cand[0, 1] + 180.0) % 360.0 - 180.0).max() > 1e-6
+    if ok.all() and distinct and not free[0].any():
+        raise InputError(f"{tp.sources[0].path}:{int(tp.line[0])}: the first tool-axis vector has two rotary solutions within the machine's "
+                         f"limits ({', '.join(f'{v:.3f}' for v in cand[0, 0])} and {', '.join(f'{v:.3f}' for v in cand[0, 1])} deg): the "
+                         "controller takes the one nearest where the axes stand, which the program does not say; position the rotary axes "
+                         "(angles) before the first vector block")
+
+
+def _with_vectors(tp: Toolpath, unit_axis: np.ndarray) -> Toolpath:
+    """New tool-axis vectors (program frame), each written at the length of the block's own
+    vector; a block that keeps the previous vector (no words) cannot change: refused."""
+    old = tp.values[:, VECTOR]
+    has_words = (tp.spans[:, VECTOR, 1] >= 0).all(axis=1)
+    changes = np.abs(unit_axis - _filled_axis(tp)).max(axis=1) > 5e-7
+    bad = changes & ~has_words
+    if bad.any():
+        i = int(np.nonzero(bad)[0][0])
+        raise EmitError(f"{tp.sources[0].path}:{int(tp.line[i])}: the tool-axis vector changes but the block has no vector words to change "
+                        "(write the vector on every five-axis block)")
+    values = tp.values.copy()
+    values[:, VECTOR] = np.where(has_words[:, None], unit_axis * np.linalg.norm(np.nan_to_num(old), axis=1, keepdims=True), old)
+    orientation = tp.orientation.copy()
+    orientation[has_words] = axis_to_quat_wxyz(values[has_words, VECTOR])
+    return replace(tp, values=values, orientation=orientation)

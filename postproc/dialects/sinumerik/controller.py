@@ -8,8 +8,9 @@ F2 "Multi-axis transformations", "Orientation programming" / "Singular positions
 - programmed rotary-axis positions (TRAORI with A/B/C words, ORIAXES) are taken as written:
   there is no solution to choose, the program states it;
 - an orientation given as a vector (A3= B3= C3=, ORIVECT) leaves two solutions; the 840D
-  takes the one with the shorter rotary-axis travel from the current position. postproc does
-  not read vectors yet (refused, ``translate.py``); its TRAORI writer
+  takes the one with the shorter rotary-axis travel from the current position. postproc reads
+  vectors as the tool axis (``translate.py``) and compensates them by this rule
+  (``postproc.fivex.compensate``, the dialect's ``vector_solution``); its TRAORI writer
   (``postproc.fivex.emit``) writes angles, chosen by the same nearest-travel rule
   (``postproc.fivex.kinematics.ik``: the branch nearest the previous angles).
 """

@@ -16,11 +16,13 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...ir import SourceDoc, Toolpath
+from ...ir import F_ARC, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
-from . import frames, translate
+from ...arcs import PLANE_AXES, R_
+from ...errors import ParseError
+from . import arc_angle, circle_through, frames, swivel, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -76,13 +78,79 @@ class SinumerikParser(GcodeParser):
         self.builder = Builder("sinumerik", "none", [doc])
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
+        self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
+        self.cip_points: list[tuple[int, np.ndarray]] = []  # (line, intermediate point mm) of each CIP block read, in order
+        self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
         self.plane = 17.0
         self.to_mm = 1.0
 
     def parse(self) -> Toolpath:
-        if _calls_or_labels(self.text):  # a call (CYCLE800(...)) or a jump label: the flow reader knows them
-            return self._back_to_file(self._parse_flow())
-        return self._back_to_file(super().parse())
+        if _calls_or_labels(self.text):  # a call or a jump label: the flow reader knows them
+            return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
+        return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+
+    def _cip_arcs(self, tp: Toolpath) -> Toolpath:
+        """CIP blocks (read as G3 with the intermediate point in I J K): the plane arc through
+        start, intermediate and end point (``circle_through.py``), its centre absolute, without
+        spans (the file's numbers are the intermediate point's, never written over)."""
+        if not self.cip_points:
+            return tp
+        lines = {line for line, _ in self.cip_points}
+        rows = np.nonzero((tp.file == 0) & np.isin(tp.line, list(lines)))[0]
+        if len(rows) != len(self.cip_points):
+            raise self._at_word(self.cip_points[0][0], "I1", "I1= J1= K1= in a block that is not one arc target (CIP X.. Y.. Z..)")
+        values, resolved, kind, arc = tp.values.copy(), tp.resolved.copy(), tp.kind.copy(), tp.arc.copy()
+        spans = tp.spans.copy()
+        for row, (_, middle) in zip(rows.tolist(), self.cip_points, strict=True):  # one 2x2 solve per CIP block (few in a program)
+            line = int(tp.line[row])
+            if row == 0 or tp.kind[row] != Kind.ARC_CCW:
+                raise self._at_word(line, "I1", "I1= J1= K1= outside a CIP arc after a target (CIP with a start)")
+            if tp.relative[row]:
+                raise self._at_word(line, "CIP", "CIP under G91 (intermediate point relative to the start) is not read")
+            if np.isnan(middle).any():
+                raise self._at_word(line, "CIP", "CIP needs all three of I1= J1= K1= (an intermediate coordinate left out is not guessed)")
+            known = tp.frame[row] == tp.frame[row - 1] and resolved[row - 1] and not np.isnan(tp.position[[row - 1, row]]).any()
+            spans[row, F_ARC, 1:] = -1
+            if not known:
+                resolved[row] = False
+                continue
+            try:
+                plane, centre, ccw = circle_through.plane_arc(tp.position[row - 1], middle, tp.position[row])
+            except circle_through.NotRead as exc:
+                raise self._at_word(line, "CIP", str(exc)) from None
+            kind[row] = Kind.ARC_CCW if ccw else Kind.ARC_CW
+            arc[row, :2] = (plane, 1.0)  # the centre as coordinates (G90.1-like)
+            values[row, F_ARC] = np.nan
+            first, second, _ = PLANE_AXES[plane]
+            values[row, F_ARC.start + first], values[row, F_ARC.start + second] = centre[first], centre[second]
+        others = np.nonzero(np.isin(tp.kind, (Kind.ARC_CW, Kind.ARC_CCW)) & np.isnan(values[:, F_ARC]).all(axis=1))[0]
+        if len(others):
+            raise self._at_word(int(tp.line[others[0]]), "", "an arc without centre words in a program with CIP (a CIP continued "
+                                "modally?): write CIP with its intermediate point in every block")
+        return replace(tp, values=values, resolved=resolved, kind=kind, arc=arc, spans=spans)
+
+    def _opening_angle_arcs(self, tp: Toolpath) -> Toolpath:
+        """AR= arcs: the R word their chord (in their own frame) and opening angle give
+        (``arc_angle.py``); an arc whose start is unknown or in another frame stays flagged."""
+        if not self.opening_angles:
+            return tp
+        rows = np.nonzero((tp.file == 0) & np.isin(tp.line, list(self.opening_angles)))[0]
+        arc = np.isin(tp.kind[rows], (Kind.ARC_CW, Kind.ARC_CCW)) & (rows > 0)
+        if not arc.all():
+            raise self._at_opening_angle(int(tp.line[rows[~arc][0]]), "AR= in a block that is not an arc after a target (G2 / G3 with a start)")
+        axes = np.array([PLANE_AXES[int(p)] for p in tp.arc[rows, 0]], dtype=int).reshape(-1, 3)[:, :2]
+        start = np.take_along_axis(tp.position[rows - 1], axes, axis=1)
+        end = np.take_along_axis(tp.position[rows], axes, axis=1)
+        angles = np.array([self.opening_angles[int(line)] for line in tp.line[rows]])
+        radius = arc_angle.signed_radius(start, end, angles)
+        same = np.linalg.norm(end - start, axis=1) <= 1e-9
+        if same.any():
+            raise self._at_opening_angle(int(tp.line[rows[same][0]]), "AR= arc whose end point is its start: the opening angle gives no circle")
+        known = ~np.isnan(radius) & (tp.frame[rows] == tp.frame[rows - 1]) & tp.resolved[rows - 1]
+        values, resolved = tp.values.copy(), tp.resolved.copy()
+        values[rows, R_] = radius
+        resolved[rows[~known]] = False
+        return replace(tp, values=values, resolved=resolved)
 
     def _assign(self, item, start: int) -> tuple:
         """R1=10 R2=R1*2: the 840D runs a block's assignments left to right (Fundamentals,
@@ -107,6 +175,21 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        if translate.CIP_CODE in gcodes:
+            # I1 J1 K1 (read into I J K): the intermediate point, taken out before the reader sees arc centre words
+            ijk = [_AX["I"], _AX["J"], _AX["K"]]
+            self.cip_points.append((self.lines.line(start), values[ijk] * self.to_mm))
+            values[ijk] = np.nan
+            gcodes = [gc for gc in gcodes if gc != translate.CIP_CODE]
+        if translate.ARC_ANGLE_CODE in gcodes:
+            try:
+                self.opening_angles[self.lines.line(start)] = arc_angle.opening_angle(self._file_line(start))
+            except arc_angle.NotRead as exc:
+                raise self._at_opening_angle(self.lines.line(start), str(exc)) from None
+            gcodes = [gc for gc in gcodes if gc != translate.ARC_ANGLE_CODE]
+        if translate.SWIVEL_CODE in gcodes:
+            self._swivel(start)
+            return True, False
         mine = [gc for gc in gcodes if gc in _FRAME_CODES]
         if not mine:
             return super()._apply_gcodes([gc for gc in gcodes if gc not in _SETTABLE and gc != translate.VECTOR_CODE], state, values, start)
@@ -125,9 +208,47 @@ class SinumerikParser(GcodeParser):
             self.frame = frames.step(self.frame, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
         except frames.FrameRefused as exc:
             raise self._error_at(start, str(exc)) from None
-        identity = np.allclose(self.frame, np.eye(4), atol=0.0, rtol=0.0)
-        self.tilts.append((self._when(start), None if identity else self.frame.copy()))
+        self._frame_event(start)
         return True, False
+
+    def _frame_event(self, start: int) -> None:
+        """Later targets' frame: settable @ swivel @ programmable (Fundamentals, "Frame chain")."""
+        chain = self.swivel @ self.frame
+        if np.isnan(chain).any():
+            self.tilts.append((self._when(start), "unknown"))
+            return
+        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0)
+        self.tilts.append((self._when(start), None if identity else chain))
+
+    def _at_opening_angle(self, line: int, message: str) -> ParseError:
+        return self._at_word(line, "AR", message)
+
+    def _at_word(self, line: int, word: str, message: str) -> ParseError:
+        """A ParseError at the first ``word`` of a line of the file (its start where there is none)."""
+        text = self.original.text.split("\n")[line - 1]
+        column = text.upper().find(word) + 1 if word else 1
+        return ParseError(self.original.path, line, max(column, 1), message, text.rstrip("\r"))
+
+    def _file_line(self, start: int) -> str:
+        """The file's own line holding offset ``start`` of the rewritten text."""
+        at = int(self.offsets([start])[0])
+        text = self.original.text
+        end = text.find("\n", at)
+        return text[text.rfind("\n", 0, at) + 1 : len(text) if end < 0 else end]
+
+    def _swivel(self, start: int) -> None:
+        """CYCLE800: the swivel frame from the call's parameters (``swivel.py``), read from the
+        file's own line; one that cannot be worked out flags the targets after it, with the reason."""
+        line = self._file_line(start)
+        moves = swivel.moves_not_in_program(line)
+        if moves:
+            self.notes.append(f"line {self.lines.line(start)}: {moves}")
+        try:
+            self.swivel = swivel.swivel_frame(self.swivel, line, self.to_mm)
+        except swivel.Unknown as exc:
+            self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
+            self.swivel = np.full((4, 4), np.nan)
+        self._frame_event(start)
 
     def _resolve(self, t: dict) -> Toolpath:
         """The G-code reader's modal resolution, after refusing an axis block that comes

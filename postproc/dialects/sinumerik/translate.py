@@ -48,6 +48,9 @@ from ..gcode import siemens
 FRAME_CODES = {"TRANS": 9990.0, "ATRANS": 9991.0, "ROT": 9992.0, "AROT": 9993.0, "SCALE": 9994.0, "ASCALE": 9995.0,
                "MIRROR": 9996.0, "AMIRROR": 9997.0}
 FRAME_NAMES = {v: k for k, v in FRAME_CODES.items()}
+SWIVEL_CODE = 9989.0  # marks a CYCLE800 call (swivel plane) for parse.py, which reads its parameters (swivel.py)
+CIP_CODE = 9987.0  # marks a block with I1= J1= K1= (CIP's intermediate point) for parse.py (circle_through.py)
+ARC_ANGLE_CODE = 9988.0  # marks a block with AR= (arc by its opening angle): parse.py reads the angle (arc_angle.py)
 VECTOR_CODE = 9998.0  # marks a block with A3= B3= C3= (tool orientation vector) for parse.py
 _VECTOR = {"A3": "I", "B3": "J", "C3": "K"}  # the reader's tool-axis words (G43.5 I J K)
 R_BASE = 1000  # R<n> is the reader's #<R_BASE + n>
@@ -58,7 +61,7 @@ _FRAME_LINE = re.compile(r"^(?P<head>[ \t]*(?:/[ \t]*)?(?:[Nn]\d+[ \t]+)?)(?P<kw
 # What may need rewriting: an '=' or a label's ':', an R parameter, a frame or refused word.
 # Found with byte masks and str.find (a regular expression over 10^6 lines costs seconds):
 # plain CAM blocks (N.. G1 X.. Y..) have none and are never looked at.
-_KEYWORDS = ("TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE", "SOFT", "BRISK", "FFWO", "ORI", "STOPRE", "COMP", "CYCLE832")
+_KEYWORDS = ("CYCLE800", "TRANS", "ROT", "SCALE", "MIRROR", "CIP", "CASE", "SPLINE", "SOFT", "BRISK", "FFWO", "ORI", "STOPRE", "COMP", "CYCLE832")
 _ALNUM = np.zeros(256, bool)
 _ALNUM[[*range(48, 58), *range(65, 91), *range(97, 123), 95]] = True
 
@@ -80,10 +83,9 @@ def candidate_lines(text: str, raw: np.ndarray, line_starts: np.ndarray) -> np.n
     positions = np.concatenate(found)
     return np.unique(line_starts[np.searchsorted(line_starts, positions, side="right") - 1])
 _ITEM = re.compile(r"(?P<name>[A-Za-z_$][A-Za-z0-9_]*)[ \t]*=(?!=)")
-_REFUSED = {"AR": "AR= (arc by its opening angle) is not read yet: write the arc with CR= or I J K",
-            "I1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
-            "J1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K",
-            "K1": "CIP (circle through an intermediate point) is not read yet: write the arc with CR= or I J K"}
+_REFUSED: dict[str, str] = {}
+_INTERMEDIATE = {"I1": "I", "J1": "J", "K1": "K"}  # CIP's intermediate point -> the reader's I J K (parse.py takes them back)
+_CIP = re.compile(r"(?i)(?<![\w$])CIP(?!\w)")
 # Statements refused with their reason (840D "Job Planning": program jumps, CASE, arrays;
 # "Fundamentals": spline interpolation): the positions after them depend on what is not run.
 _NOT_READ = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?:[A-Za-z_]\w*:(?!=)[ \t]*)?(?:(?P<case>CASE\b)|(?P<spline>[ABC]SPLINE\b)"
@@ -99,6 +101,8 @@ _IGNORED = {"ADIS", "ADISPOS", "SPOS", "SPOSA"}
 # and CYCLE832 are named by the controller's inexact_interpolation): read past. ORIMKS (vectors
 # in machine coordinates) is refused.
 _PASSIVE = re.compile(r"(?i)(?<![\w$])(?:SOFT|BRISK|FFWON|FFWOF|ORIWKS|STOPRE|COMPCAD|COMPCURV|COMPON|COMPOF|CYCLE832[ \t]*\([^)\n]*\))(?!\w)")
+# A CYCLE800 call alone in its block: the call becomes the internal SWIVEL_CODE, blanks to its length.
+_SWIVEL_LINE = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<call>CYCLE800[ \t]*\([^)\n]*\))[ \t]*$")
 _ORIMKS = re.compile(r"(?i)(?<![\w$])ORIMKS(?!\w)")
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
 _R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
@@ -195,10 +199,14 @@ def _rewrite_item(item: str, at: int, frame: bool) -> str:
     name, value = m.group("name").upper(), item[m.end():]
     if name in _REFUSED:
         raise Refusal(at, _REFUSED[name])
+    if name == "AR":  # the opening angle: line_edits blanks it and marks the block (ARC_ANGLE_CODE)
+        return item
     r_param = re.fullmatch(r"R(\d+)", name)
     if r_param:
         return f"#{R_BASE + int(r_param.group(1))}={_value(value)}"
-    if name in _VECTOR:
+    if name in _INTERMEDIATE:
+        name = _INTERMEDIATE[name].ljust(len(m.group("name")))  # "I1=40" -> "I =40": the number keeps its place
+    elif name in _VECTOR:
         name = _VECTOR[name].ljust(len(m.group("name")))  # "A3=0" -> "I =0": the number keeps its place
     elif name == "CR" or (frame and name == "RPL"):
         name = "R".ljust(len(m.group("name")))  # same length: the number keeps its place (and span)
@@ -236,6 +244,11 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     orimks = _ORIMKS.search(code)
     if orimks:
         raise Refusal(start + orimks.start(), "ORIMKS (tool orientation vectors in machine coordinates) is not read: use ORIWKS")
+    upper = code.upper()  # cheap guards: most candidate lines (R parameters, expressions) have none of the words below
+    swivel = _SWIVEL_LINE.match(code) if "CYCLE800" in upper else None
+    if swivel:
+        a, b = swivel.span("call")
+        return [(a, b, f"G{SWIVEL_CODE:g}".ljust(b - a))]
     passive = [(m.start(), m.end(), " " * (m.end() - m.start())) for m in _PASSIVE.finditer(code)]
     if passive:  # blanked (same length: every other character keeps its place), then the rest of the block as ever
         blanked = code
@@ -268,6 +281,26 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
             centre = old[:1].upper() in "IJK" and not old[1:2].isalpha()
             if centre and any(code[pos + x : pos + x + 2].upper() in _VECTOR for x, _ in _split_items(code[pos:])):
                 raise Refusal(start + pos + a, "I J K (an arc centre) and A3= B3= C3= (the tool orientation) in one block are not read")
+    opening = ([(pos + a, pos + b) for a, b in _split_items(code[pos:]) if re.match(r"(?i)AR[ \t]*=", code[pos + a : pos + b])]
+               if "AR" in upper else [])
+    if opening:
+        centre = [pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)(?:[IJK](?![A-Za-z_])|CR[ \t]*=)", code[pos + a : pos + b])]
+        if centre:
+            raise Refusal(start + centre[0], "AR= with a centre (I J K) or CR= in one block (no end point: the end is computed) is not read: "
+                          "write the end point with AR=")
+        (a, b), = opening[:1]
+        edits += [(a, a, f"G{ARC_ANGLE_CODE:g} "), (a, b, " " * (b - a))]  # the angle blanked (parse.py reads it from the file)
+        edits.sort(key=lambda e: (e[0], e[1]))
+    cip = _CIP.search(code) if "CIP" in upper else None
+    intermediate = ([pos + a for a, b in _split_items(code[pos:]) if re.match(r"(?i)[IJK]1[ \t]*=", code[pos + a : pos + b])]
+                    if "1" in upper else [])
+    if cip and not intermediate:
+        raise Refusal(start + cip.start(), "CIP without its intermediate point (I1= J1= K1=) in the block is not read")
+    if cip:
+        edits.append((cip.start(), cip.end(), "G3 "))  # read as an arc; parse.py puts its centre and direction
+    if intermediate:
+        edits.append((intermediate[0], intermediate[0], f"G{CIP_CODE:g} "))
+        edits.sort(key=lambda e: (e[0], e[1]))
     if vector is not None:
         edits.insert(0, (vector, vector, f"G{VECTOR_CODE:g} "))  # the orientation vector's block: parse.py turns G43.5-like reading on
         edits.sort(key=lambda e: (e[0], e[1]))
