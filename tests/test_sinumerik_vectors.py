@@ -48,3 +48,15 @@ def test_compensated_vectors_land_on_the_true_machine(tmp_path):
     # the tool axis on the part: the true rotary lines tilt it by ~4e-4 rad; the rewritten vectors put it back
     tilt_before, tilt_after = (np.arccos(np.clip(np.einsum("ni,ni->n", a, intended_axis), -1, 1)) for a in (before_axis, after_axis))
     assert tilt_before.max() > 2e-4 and tilt_after.max() < 1e-6, (tilt_before.max(), tilt_after.max())
+
+
+def test_a_first_vector_with_two_solutions_in_the_limits_is_refused(tmp_path):
+    """A first vector tilted 30 deg: A = -30 or A = +30 (C turned 180) are both inside
+    xyzac-trt's A limits (-100..50); the 840D takes the one nearest where the axes stand,
+    which the program does not say: refused with its line, not guessed."""
+    text = re.sub(r" A(\S+) C(\S+)", " A3=0 B3=-0.5 C3=0.8660254", impeller_in_sinumerik())
+    src = tmp_path / "TILT.MPF"
+    src.write_text(text, encoding="latin-1")
+    result = CliRunner().invoke(app, ["compensate", str(src), "--model", str(TRUE), "--input-axes", "tip", "-o", str(tmp_path / "OUT.MPF"), *AT_ZERO])
+    assert result.exit_code == 2 and "two rotary solutions" in result.output and "TILT.MPF:" in result.output, result.output
+    assert not (tmp_path / "OUT.MPF").exists()
