@@ -121,7 +121,7 @@ def write_texts(texts: list[str], outputs: list[str | Path]) -> None:
 
 
 def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load=None, arc_tol_mm: float | None = None,
-                  conf: np.ndarray | None = None) -> list[str]:
+                  conf: np.ndarray | None = None, robot=None) -> list[str]:
     """Texts of a new program in ``dialect`` with every target of ``tp`` (its files in
     ``Dialect.new_program_paths`` order); ``tool_load`` (emit.tool_load.ToolLoad) is the load
     every tool of it carries; without it, the load the input states is carried where it applies.
@@ -129,13 +129,16 @@ def write_program(tp: Toolpath, dialect: str, name: str = "converted", tool_load
     error (without it they are refused: no circular move holds them). ``conf``: (N, 4) the
     configuration data of every target in ``dialect``'s terms (``postproc.convert_conf``, from
     the joints the input's controller takes); without it, an input in another language whose
-    joint motions need them in ``dialect`` (``Dialect.joint_motion_conf``) is refused."""
+    joint motions need them in ``dialect`` (``Dialect.joint_motion_conf``) is refused. ``robot``:
+    the robot the program runs on, for a writer that needs its own data (INFORM's pulses)."""
     require_program(tp)  # an empty input would give a program that does nothing
     lang = dialects.get(dialect, "--to")
     writer = lang.new_writer(name)
     if writer is None:
         able = [d.name for d in dialects.REGISTRY.values() if d.new_writer("x") is not None]
         raise EmitError(f"cannot write a new {dialect} program ({' or '.join(able)})")
+    if robot is not None and hasattr(writer, "robot"):  # a writer that needs the robot's own data (INFORM: pulses of joint targets)
+        writer.robot = robot
     if arc_tol_mm is not None and not arc_tol_mm > 0:
         raise EmitError(f"--arc-tol must be > 0 mm, got {arc_tol_mm}")
     source = dialects.of(tp)  # emit imports no language: the input's rules are given to it here

@@ -200,14 +200,18 @@ def test_inform_to_inform_keeps_the_form_of_a_joint_move():
     assert "///RCONF 1,0,0,0,0,0,0,0" in text
 
 
-def test_pulse_positions_take_their_angles_from_the_robot_pulse_data():
+def test_pulse_positions_take_their_angles_from_the_robot_pulse_data(tmp_path):
     """angle = (pulse - zero) / pulses per degree; C00000 of the sample is 0,0,0,0,-45000,0:
-    B = -45000 / 910 deg with the GP25 file's (estimated) figures."""
+    B = -45000 / 910 deg with the GP25 file's figures taken as a controller's own; with the
+    bundled file's, which are estimates, the position stays unplaced (never guessed)."""
     from postproc.dialects.inform.pulses import pulses_of_angles, with_pulse_joints
+    from test_inform_pulses_cli import measured_gp25
 
-    robot = postproc.load_robot("gp25")
     tp = parse_program(SAMPLE)
     assert not tp.resolved[0] and np.isnan(tp.joints[0]).all()
+    estimated = with_pulse_joints(tp, postproc.load_robot("gp25"))
+    assert not estimated.resolved[0] and any("are estimates" in n for n in estimated.notes)
+    robot = postproc.load_robot(measured_gp25(tmp_path))
     placed = with_pulse_joints(tp, robot)
     np.testing.assert_allclose(placed.joints[0], [0, 0, 0, 0, -45000 / 910.0, 0])
     assert placed.resolved[0] and np.isnan(placed.values[0, 7:13]).all()  # the pulses are never rewritten

@@ -141,7 +141,7 @@ def convert_cmd(
         conf, conf_notes = converted_conf(tp, get(to, "--to"), robot_model)
         for note in conf_notes:
             err.print(f"note: {note}")
-    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol, conf=conf)
+    texts = write_program(tp, to, output.stem, tool_load=load, arc_tol_mm=arc_tol, conf=conf, robot=robot_model)
     write_texts(texts, outputs)
     out.print(f"{len(tp)} targets written to {', '.join(map(str, outputs))}")
 

@@ -42,14 +42,16 @@ def with_pulse_joints(tp: Toolpath, robot) -> Toolpath:
         return tp
     if robot.pulses_per_deg is None or robot.zero_pulse is None:  # never guessed: they stay unplaced, and the user is told why
         return replace(tp, notes=tp.notes + (f"{len(rows)} pulse position(s) stay unplaced: {robot.source_path} has no [pulses] section (pulses per degree, zero pulses)",))
+    if robot.estimates.get("pulses"):  # placeholders: angles from them would be numbers the robot does not run
+        return replace(tp, notes=tp.notes + (f"{len(rows)} pulse position(s) stay unplaced: the [pulses] of {robot.source_path} are estimates "
+                                             "(flagged in the file); give a robot file with your controller's pulses per degree and zero pulses "
+                                             "(estimate = false)",))
     joints, resolved = tp.joints.copy(), tp.resolved.copy()
     joints[rows] = angles_of_pulses(robot, pulses[rows])
     only_pulses = np.array([_only_the_pulses(tp, int(r)) for r in rows], dtype=bool)
     resolved[rows[only_pulses]] = True
     notes = tuple(n for n in tp.notes if not any(n.endswith(f"line {tp.line[r]}: {tp.target_name[r]} is in pulses: joint angles need the robot's pulse data") for r in rows[only_pulses]))
-    estimate = (" (its pulse data are estimates, flagged in the robot file: check the angles against the controller's"
-                " pulse parameters before trusting them)") if robot.estimates.get("pulses") else ""
-    return replace(tp, joints=joints, resolved=resolved, notes=notes + (f"{len(rows)} pulse position(s) turned into joint angles with {robot.name}'s pulse data{estimate}",))
+    return replace(tp, joints=joints, resolved=resolved, notes=notes + (f"{len(rows)} pulse position(s) turned into joint angles with {robot.name}'s pulse data",))
 
 
 def _only_the_pulses(tp: Toolpath, row: int) -> bool:

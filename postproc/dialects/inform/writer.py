@@ -6,8 +6,10 @@ with 3 decimals (the controller's 0.001 mm) and Rx Ry Rz with 4 (0.0001 deg). To
 numbered in the order the input uses them (``///TOOL n``): the controller's tool files
 must hold them. A joint move to a Cartesian position takes the posture its ``///RCONF``
 form names, which no other language states in Yaskawa's terms: from an INFORM job it is
-written with the job's form, from any other language refused, as is a joint target
-(pulses need the robot's pulse data).
+written with the job's form, from another language with the form of the joints its controller
+takes (``convert --robot``), else refused. A joint target is a ``///PULSE`` position: its
+angles in encoder pulses by the robot's ``[pulses]`` (``convert --robot``, a robot file whose
+pulse data are the controller's, not estimates), else refused.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ import numpy as np
 from ...emit.writer import legal_name, short_number
 from ...errors import EmitError
 from ...frames import matrix_to_abc
+from .pulses import pulses_of_angles
 
 COMMENT_LIMIT = 32  # characters of an INFORM comment (') line
 
@@ -27,8 +30,9 @@ class InformWriter:
         self.frame_t = np.eye(4)
         self.tool_numbers: dict[str, int] = {}
         self.tool_number = 0
-        self.positions: list[tuple[int, tuple | None, str]] = []  # (tool number, ///RCONF form or None, numbers)
+        self.positions: list[tuple[int, tuple | None, str, str]] = []  # (tool number, ///RCONF form or None, numbers, ///POSTYPE)
         self.source = None  # the input's language (postproc.emit.writer.drive sets it)
+        self.robot = None  # the robot the job runs on (postproc.programs.write_program sets it with convert --robot)
         self.body: list[str] = []
         self.tags = ""
         self.speed_tag = ""
@@ -56,7 +60,7 @@ class InformWriter:
         base = self.frame_t @ pose
         rz, ry, rx = matrix_to_abc(base[None, :3, :3])[0]  # R = Rz Ry Rx (KUKA A B C)
         numbers = [_fixed(v, 3) for v in base[:3, 3]] + [_fixed(v, 4) for v in (rx, ry, rz)]
-        self.positions.append((self.tool_number, form, ",".join(numbers)))
+        self.positions.append((self.tool_number, form, ",".join(numbers), "ROBOT"))
         return f"C{len(self.positions) - 1:05d}"
 
     def _move(self, word: str, pose: np.ndarray, form: tuple | None = None) -> None:
@@ -91,19 +95,33 @@ class InformWriter:
         self.last_was_circle = True
 
     def move_joints(self, q) -> None:
-        raise EmitError(f"a joint target {np.round(np.asarray(q, float), 4).tolist()} deg: INFORM joint positions are encoder pulses, "
-                        "which need the robot's pulse data; not written")
+        q = np.asarray(q, float)
+        robot = self.robot
+        why = ("no robot is given (--robot: a robot file with your controller's [pulses])" if robot is None else
+               f"{robot.source_path} has no [pulses] section" if robot.pulses_per_deg is None else
+               f"the [pulses] of {robot.source_path} are estimates" if robot.estimates.get("pulses") else None)
+        if why is not None:
+            raise EmitError(f"a joint target {np.round(q, 4).tolist()} deg: INFORM joint positions are encoder pulses, which need the "
+                            f"robot's pulse data: {why}; not written")
+        pulses = pulses_of_angles(robot, q[None])[0]
+        self.positions.append((self.tool_number, None, ",".join(str(int(v)) for v in pulses), "PULSE"))
+        self.body.append(f"MOVJ C{len(self.positions) - 1:05d}{self.tags}")
+        self.last = None  # (a joint target's TCP is not a pose of this writer's)
+        self.last_was_circle = False
 
     def raw(self, line: str) -> None:
         self.body.append(f"'{line[:COMMENT_LIMIT - 1]}")
 
     def end(self) -> list[str]:
-        pos = ["/JOB", f"//NAME {self.name}", "//POS", f"///NPOS {len(self.positions)},0,0,0,0,0", "///POSTYPE ROBOT", "///RECTAN"]
-        tool = form_written = None
-        for k, (number, form, numbers) in enumerate(self.positions):
+        pos = ["/JOB", f"//NAME {self.name}", "//POS", f"///NPOS {len(self.positions)},0,0,0,0,0"]
+        tool = form_written = postype = None
+        for k, (number, form, numbers, kind) in enumerate(self.positions):
             if number != tool:
                 pos.append(f"///TOOL {number}")
                 tool = number
+            if kind != postype:  # (a form written above pulse positions no longer applies below them)
+                pos += [f"///POSTYPE {kind}", "///PULSE" if kind == "PULSE" else "///RECTAN"]
+                postype, form_written = kind, None
             if form is not None and form != form_written:  # (a MOVL position keeps the form above it: MOVL does not use it)
                 pos.append("///RCONF " + ",".join(map(str, form)))
                 form_written = form
