@@ -123,7 +123,8 @@ class CodeReader:
         # Runs of plain motion lines are matched in one pass; what lies between them is read
         # statement by statement (blocks, calls, anything else), in program order.
         for plain in _PLAIN_LINES.finditer(text, start, end):
-            self._lines(file, text, at, plain.start(), depth, stack + (name,))
+            if plain.start() - at > 2 or text[at:plain.start()].strip():  # a blank gap (the '\n') holds no statement
+                self._lines(file, text, at, plain.start(), depth, stack + (name,))
             if depth or types.get(plain.group(1)) in GEOMETRY:
                 self._lines(file, text, plain.start(), plain.end(), depth, stack + (name,))
             else:

@@ -176,14 +176,14 @@ class _Assembler:
         self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': free lets the controller choose, same keeps the current value), give shoulder, elbow and wrist, or ssame, esame and wsame")
 
     def _config_words(self, tag: int) -> tuple[float, float, float]:
-        given = self.db.words[tag]
+        given = self.db.words(tag)
         written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
         if written not in self._configs:
             self._configs[written] = self._config_of(self.db.element_at(tag), given)
         return self._configs[written]
 
     def _frame_of(self, tag: int) -> int:
-        text = self.db.words[tag].get("fatherId")
+        text = self.db.words(tag).get("fatherId")
         if text not in self._fathers:
             self._fathers[text] = None if text is None else parse_father(text)
         father = self._fathers[text]
@@ -240,7 +240,7 @@ class _Assembler:
             raise self.db.error(text[1], f"'{text[0]}' is not a number") from None
 
     def _config(self, element: Element) -> tuple[float, float, float]:
-        given = self.db.words[element.tag] if element.tag >= 0 else {}
+        given = self.db.words(element.tag) if element.tag >= 0 else {}
         written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
         if written not in self._configs:
             self._configs[written] = self._config_of(element, given)
@@ -276,7 +276,7 @@ class _Assembler:
             element = parent
 
     def _frame(self, point: Element) -> int:
-        text = None if point.tag < 0 else self.db.words[point.tag].get("fatherId")
+        text = None if point.tag < 0 else self.db.words(point.tag).get("fatherId")
         if text not in self._fathers:
             self._fathers[text] = None if text is None else parse_father(text)
         father = self._fathers[text]
