@@ -109,6 +109,12 @@ class Database:
     def offset_array(self) -> np.ndarray:
         return np.array(self.offsets, np.int64)
 
+    @cached_property
+    def point_type(self) -> np.ndarray:
+        """Per tag: 1 for a pointRx, 2 for a jointRx, 0 for another type."""
+        codes = {"pointRx": 1, "jointRx": 2}
+        return np.array([codes.get(t, 0) for t in self.tag_type], np.int8)
+
     def element(self, name: str, key: str) -> Element | None:
         """The element ``name[key]``; one the file declares (``size``) but writes no <Value>
         for has every field at its default (Stäubli Robotics Suite writes
