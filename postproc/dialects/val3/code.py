@@ -124,6 +124,8 @@ def called_programs(text: str) -> list[str]:
 class CodeReader:
     """Walks the programs from one entry program, calls followed, and lists its motions."""
 
+    bulk = True  # False: every line statement by statement (the tests compare the two readings)
+
     def __init__(self, paths: list[str], texts: list[str], programs: Programs, types: dict[str, str]):
         self.paths, self.texts, self.programs, self.types = paths, texts, programs, types
         self.lines = {i: LineIndex(t) for i, t in enumerate(texts) if t is not None}
@@ -148,7 +150,7 @@ class CodeReader:
         # Plain motion lines are matched in one pass; what lies between them is read
         # statement by statement (blocks, calls, anything else), in program order. The gap
         # between two plain lines is their '\n' (or '\r\n'), unless a statement lies there.
-        plain = list(_PLAIN_LINES.finditer(text, start, end))
+        plain = list(_PLAIN_LINES.finditer(text, start, end)) if self.bulk else []
         starts = np.array([m.start() for m in plain] + [end], np.int64)
         ends = np.array([start] + [m.end() for m in plain], np.int64)
         assigned = np.array([m.group(1) is not None and types.get(m.group(1)) in GEOMETRY for m in plain] + [True], bool)
