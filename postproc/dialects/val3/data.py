@@ -275,11 +275,12 @@ def _attribute_names(raw: np.ndarray, names: tuple[str, ...]) -> tuple[np.ndarra
     quote = np.flatnonzero((raw[:-1] == ord("=")) & (raw[1:] == ord('"')))
     width = max(len(n) for n in names) + 1
     padded = np.concatenate([np.zeros(width, np.uint8), raw])  # names at the file's start look at zeros
+    before = [padded[quote + width - k] for k in range(width + 1)]  # before[k]: the byte k before each '=' (one gather each)
     at, column = [], []
     for c, name in enumerate(names):
-        ok = _BLANK[padded[quote + width - len(name) - 1]]
-        for i, ch in enumerate(name.encode("latin-1")):
-            ok &= padded[quote + width - len(name) + i] == ch
+        ok = _BLANK[before[len(name) + 1]]
+        for k, ch in enumerate(reversed(name.encode("latin-1")), 1):
+            ok &= before[k] == ch
         at.append(quote[ok] + 2)
         column.append(np.full(int(ok.sum()), c, np.int64))
     at, column = np.concatenate(at), np.concatenate(column)
