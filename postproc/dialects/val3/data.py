@@ -8,9 +8,10 @@ wrist`` (the point's config), ``fatherId="fTable[0]"`` (the frame or tool it is 
 texts are read with regular expressions, not an XML parser, because every number's offset
 in the file is needed to write it back in place (an XML parser gives none).
 
-A data file of a long program holds a <Value> per point: their numbers are read in one
-vectorised pass (``NUMERIC``: value and span of each), their words (config, fatherId) in
-another; an element's other attributes are read when asked for (``Element.attrs``).
+A data file of a long program holds a <Value> per point: the tags are found in one pass
+(their places and keys; a file with comments or a quoted '>' is read tag by tag), their
+numbers in one vectorised pass (``NUMERIC``: value and span of each), their words (config,
+fatherId) in another; an element's other attributes are read when asked for (``Element.attrs``).
 """
 
 from __future__ import annotations
