@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import re
 import shutil
-from dataclasses import replace
+from dataclasses import fields, replace
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +26,9 @@ from postproc.cli import app
 from postproc.compensate import compensate
 from postproc.dialects import sniff
 from postproc.dialects.val3 import VAL3
+from postproc.dialects.val3 import code as val3_code
+from postproc.dialects.val3 import data as val3_data
+from postproc.dialects.val3 import parse as val3_parse
 from postproc.dialects.val3.controller import config_of_joints
 from postproc.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz
 from postproc.errors import InputError, ParseError, SharedNumberError
@@ -296,3 +299,46 @@ def test_a_point_shared_by_two_motions_that_would_need_two_values_is_refused(tmp
     position[2, 0] += 0.5  # the first use moves, the second does not
     with pytest.raises(SharedNumberError, match="demo.dtx"):
         emit_texts(tp, tp.with_positions(position))
+
+
+def _mixed_program(tmp_path, n: int = 1500) -> Path:
+    """A long application whose plain motion lines (the bulk reading) are mixed with lines the
+    statement-by-statement reading takes: comments, appro(), movec, a call, a point declared
+    without a <Value>, movej to points whose config leaves the posture free (notes)."""
+    words = ['shoulder="lefty" elbow="epositive" wrist="wpositive"', 'shoulder="sfree" elbow="epositive" wrist="wpositive"', "", 'shoulder="ssame" elbow="esame" wrist="wsame"']
+    values = "".join(f'      <Value key="{i}" x="{100 + i * 0.5:.3f}" y="{(i % 17) - 8}" z="{50 + i % 5}" rx="180" ry="{i % 3}" rz="{i % 11}" {words[i % 4]} fatherId="{("world[0]", "fPart[0]", "fTable[0]")[i % 3]}" />\n' for i in range(n))
+    points = f'    <Data name="pRun" access="public" xsi:type="array" type="pointRx" size="{n + 3}">\n{values}    </Data>\n'
+    shapes = ["  movel(pRun[{i}], tTip, mFast)\n", "  movej(pRun[{i}], tGrip, mBlend)\n", "  movel( pRun[ {i} ] ,tTip,mBlend )  \n", "  movel(pRun[{i}], tTip, mFast) // a comment\n",
+              "  movel(appro(pRun[{i}], {{0, 0, -10, 0, 0, 0}}), tTip, mFast)\n", "  movec(pRun[{i}], pRun[{j}], tTip, mBlend)\n", "  movej(jHome, flange, mFast)\n", "\n  // {i}\n",
+              "  waitEndMove()\n", "  movel(pRun[{n}], tTip, mFast)\n", "  call cut()\n", "  movej(pB, tGrip, mFast)\r\n"]
+    rng = np.random.default_rng(29)
+    pick = rng.choice(len(shapes), 2 * n, p=np.array([40, 20, 5, 2, 2, 2, 2, 2, 2, 1, 1, 1]) / 80)
+    code = "".join(shapes[k].format(i=int(i), j=int(i + 1) % n, n=n + int(i) % 3) for k, i in zip(pick, rng.integers(0, n, 2 * n)))
+    shutil.copy(DEMO / "cut.pgx", tmp_path / "cut.pgx")
+    return _app(tmp_path, code, points)
+
+
+def test_the_bulk_reading_of_plain_lines_equals_the_statement_by_statement_reading(tmp_path, monkeypatch):
+    path = _mixed_program(tmp_path)
+    bulk_rows = []
+    monkeypatch.setattr(val3_parse._Assembler, "_fast_rows", _spy(val3_parse._Assembler._fast_rows, bulk_rows))
+    fast = parse_program(path)
+    assert sum(len(call[5]) for call in bulk_rows) > 0.8 * len(fast)  # the bulk path read most rows
+    monkeypatch.setattr(val3_code.CodeReader, "bulk", False)
+    monkeypatch.setattr(val3_data, "_read_tags_fast", lambda *args: None)
+    slow = parse_program(path)
+    assert len(fast) == len(slow) > 2500 and fast.notes == slow.notes and len(fast.notes) > 100
+    for f in fields(fast):
+        a, b = getattr(fast, f.name), getattr(slow, f.name)
+        if isinstance(a, np.ndarray):
+            np.testing.assert_array_equal(a, b, err_msg=f.name)  # NaN == NaN here; spans included
+        else:
+            assert a == b, f.name
+    assert emit_texts(fast, fast) == [s.text for s in fast.sources]
+
+
+def _spy(method, calls: list):
+    def spied(self, *args):
+        calls.append(args)
+        return method(self, *args)
+    return spied

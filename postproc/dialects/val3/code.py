@@ -17,6 +17,8 @@ import re
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
+import numpy as np
+
 from ...errors import ParseError
 from ...parse.common import LineIndex
 from .data import index_text
@@ -70,6 +72,30 @@ class Motion(NamedTuple):
     mdesc: Ref
 
 
+class PlainMotions(NamedTuple):
+    """A run of plain motion lines (``_PLAIN``: the bulk of a program) as columns: one row
+    per line, each tool and descriptor once (``tools[tool_code[i]]``)."""
+
+    file: int
+    movej: np.ndarray  # (M,) bool: movej, else movel
+    offset: np.ndarray  # (M,) where each statement (its movej / movel) starts
+    point_name: list[str]
+    point_key: list[str]
+    point_at: np.ndarray  # (M,) where each point argument starts
+    tool_code: np.ndarray
+    tools: list[Ref]
+    mdesc_code: np.ndarray
+    mdescs: list[Ref]
+
+    def __len__(self) -> int:
+        return len(self.offset)
+
+    def motion(self, i: int) -> Motion:
+        """Row i as the Motion the statement-by-statement reading makes of it."""
+        point = PointArg(Ref(self.point_name[i], self.point_key[i], int(self.point_at[i])))
+        return Motion("movej" if self.movej[i] else "movel", self.file, int(self.offset[i]), (point,), self.tools[self.tool_code[i]], self.mdescs[self.mdesc_code[i]])
+
+
 @dataclass
 class Programs:
     """Every program of the application's sources: name -> (source index, code start, code end)."""
@@ -98,17 +124,19 @@ def called_programs(text: str) -> list[str]:
 class CodeReader:
     """Walks the programs from one entry program, calls followed, and lists its motions."""
 
+    bulk = True  # False: every line statement by statement (the tests compare the two readings)
+
     def __init__(self, paths: list[str], texts: list[str], programs: Programs, types: dict[str, str]):
         self.paths, self.texts, self.programs, self.types = paths, texts, programs, types
         self.lines = {i: LineIndex(t) for i, t in enumerate(texts) if t is not None}
-        self.motions: list[Motion] = []
+        self.motions: list[Motion | PlainMotions] = []
         self._touched: dict[str, bool] = {}
         self._refs: dict[tuple, Ref] = {}  # (name, index) of a tool or descriptor -> its Ref at first use
 
     def error(self, file: int, offset: int, message: str) -> ParseError:
         return self.lines[file].error(self.paths[file], offset, message)
 
-    def run(self, name: str, stack: tuple[str, ...] = (), where: tuple[int, int] | None = None) -> list[Motion]:
+    def run(self, name: str, stack: tuple[str, ...] = (), where: tuple[int, int] | None = None) -> list[Motion | PlainMotions]:
         if name not in self.programs.code:
             if where is None:
                 raise ParseError(self.paths[0], 1, 1, f"no program '{name}' in this file")
@@ -118,19 +146,41 @@ class CodeReader:
         file, start, end = self.programs.code[name]
         depth: list[tuple[str, int]] = []
         text = self.texts[file]
-        motions, types, refs = self.motions, self.types, self._refs
-        at = start  # where the text not yet read starts
-        # Runs of plain motion lines are matched in one pass; what lies between them is read
-        # statement by statement (blocks, calls, anything else), in program order.
-        for plain in _PLAIN_LINES.finditer(text, start, end):
-            self._lines(file, text, at, plain.start(), depth, stack + (name,))
-            if depth or types.get(plain.group(1)) in GEOMETRY:
-                self._lines(file, text, plain.start(), plain.end(), depth, stack + (name,))
+        motions, types = self.motions, self.types
+        # Plain motion lines are matched in one pass; what lies between them is read
+        # statement by statement (blocks, calls, anything else), in program order. The gap
+        # between two plain lines is their '\n' (or '\r\n'), unless a statement lies there.
+        plain = list(_PLAIN_LINES.finditer(text, start, end)) if self.bulk else []
+        starts = np.array([m.start() for m in plain] + [end], np.int64)
+        ends = np.array([start] + [m.end() for m in plain], np.int64)
+        assigned = np.array([m.group(1) is not None and types.get(m.group(1)) in GEOMETRY for m in plain] + [True], bool)
+        cuts = np.flatnonzero((starts - ends > 2) | assigned | np.append(True, assigned[:-1]))
+        for i, j in zip(cuts[:-1].tolist(), cuts[1:].tolist()):  # plain[i:j]: no statement between
+            self._lines(file, text, int(ends[i]), int(starts[i]), depth, stack + (name,))
+            if depth or assigned[i]:
+                for m in plain[i:j]:
+                    self._lines(file, text, m.start(), m.end(), depth, stack + (name,))
             else:
-                motions.append(_plain(file, plain, refs))
-            at = plain.end()
-        self._lines(file, text, at, end, depth, stack + (name,))
+                motions.append(self._plain(file, plain[i:j]))
+        self._lines(file, text, int(ends[-1]), end, depth, stack + (name,))
         return motions
+
+    def _plain(self, file: int, plain: list[re.Match]) -> PlainMotions:
+        """Plain motion lines as columns. A tool or descriptor is one Ref per name, at its first
+        use (where an error about it is reported: the first motion that uses it)."""
+        _, word, point, point_key, tool, tool_key, mdesc, mdesc_key = zip(*(m.groups() for m in plain))
+        tool_code, tools = self._shared_refs(plain, tool, tool_key, 5)
+        mdesc_code, mdescs = self._shared_refs(plain, mdesc, mdesc_key, 7)
+        return PlainMotions(file, np.array(word) == "movej", np.array([m.start(2) for m in plain], np.int64), list(point), [k or "0" for k in point_key],
+                            np.array([m.start(3) for m in plain], np.int64), tool_code, tools, mdesc_code, mdescs)
+
+    def _shared_refs(self, plain: list[re.Match], names: tuple, keys: tuple, group: int) -> tuple[np.ndarray, list[Ref]]:
+        distinct: dict[tuple, int] = {}
+        codes = np.array([distinct.setdefault(pair, len(distinct)) for pair in zip(names, keys)], np.int64)
+        _, first = np.unique(codes, return_index=True)  # codes count up from 0 in order of first use
+        refs = [self._refs.get(pair) or self._refs.setdefault(pair, Ref(pair[0], pair[1] or "0", plain[row].start(group)))
+                for pair, row in zip(distinct, first.tolist())]
+        return codes, refs
 
     def _lines(self, file: int, text: str, start: int, end: int, depth: list, stack: tuple[str, ...]) -> None:
         """Read the statements of text[start:end] one line at a time."""
@@ -221,20 +271,6 @@ class CodeReader:
             raise self.error(file, offset + start + appro.start(1) + inner[1][1] + _lead(inner[1][0]), "appro's trsf is computed at run time: only a literal {x, y, z, rx, ry, rz} is known from the text")
         ref = self._ref(file, offset, inner[0][0], start + appro.start(1) + inner[0][1], "point")
         return PointArg(ref, numbers)
-
-
-def _plain(file: int, m: re.Match, refs: dict) -> Motion:
-    """A plain motion line (``_PLAIN``, matched in the file's text), its references straight
-    from the match. A tool or descriptor is one Ref per name, at its first use (where an
-    error about it is reported: the first motion that uses it)."""
-    _, word, point, point_key, tool, tool_key, mdesc, mdesc_key = m.groups()
-    tool_ref = refs.get((tool, tool_key))
-    if tool_ref is None:
-        tool_ref = refs[(tool, tool_key)] = Ref(tool, tool_key or "0", m.start(5))
-    mdesc_ref = refs.get((mdesc, mdesc_key))
-    if mdesc_ref is None:
-        mdesc_ref = refs[(mdesc, mdesc_key)] = Ref(mdesc, mdesc_key or "0", m.start(7))
-    return Motion(word, file, m.start(2), (PointArg(Ref(point, point_key or "0", m.start(3))),), tool_ref, mdesc_ref)
 
 
 def _strip_comment(line: str) -> str:

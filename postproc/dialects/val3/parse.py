@@ -19,8 +19,8 @@ import numpy as np
 from ...errors import ParseError
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
-from .code import CodeReader, Motion, PointArg, find_programs
-from .data import Database, Element, parse_father, read_database
+from .code import CodeReader, Motion, PlainMotions, PointArg, find_programs
+from .data import WORDS, Database, Element, parse_father, read_database
 from .rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz, trsf_matrix
 
 POSE_ATTRS = ("x", "y", "z", "rx", "ry", "rz")  # -> FIELDS x y z o1 o2 o3
@@ -81,13 +81,85 @@ class _Assembler:
         self._fathers: dict[str | None, tuple[str, str] | None] = {}  # fatherId text -> (name, index)
         self._mdescs: dict[tuple[str, str], tuple[float, float]] = {}
 
-    def toolpath(self, motions: list[Motion]) -> Toolpath:
-        rows = [(m, p, k) for m in motions for k, p in zip(KINDS[m.word], m.points)]
-        cols = _Rows(len(rows))
-        for r, (motion, point, k) in enumerate(rows):
-            if not self._bulk_row(cols, r, motion, point, k):
-                self._element_row(cols, r, motion, point, k)
+    def toolpath(self, motions: list[Motion | PlainMotions]) -> Toolpath:
+        cols = _Rows(sum(len(m) if isinstance(m, PlainMotions) else len(m.points) for m in motions))
+        r = 0
+        for item in motions:
+            if isinstance(item, PlainMotions):
+                self._plain_rows(cols, r, item)
+                r += len(item)
+                continue
+            for k, point in zip(KINDS[item.word], item.points):
+                if not self._bulk_row(cols, r, item, point, k):
+                    self._element_row(cols, r, item, point, k)
+                r += 1
         return self._build(cols)
+
+    def _plain_rows(self, cols: "_Rows", r: int, block: PlainMotions) -> None:
+        """Rows r.. of a run of plain motion lines: those whose point the bulk tables hold are
+        set as arrays, the others (declared without a <Value>, not read whole, another type:
+        their errors) one by one, in program order."""
+        index = self.db.index
+        tags = np.array([index.get(pair, -1) for pair in zip(block.point_name, block.point_key)], np.int64)
+        kind = np.append(self.db.point_type, 0)[tags]  # tag -1 (no such element): the 0 appended
+        fast = np.append(self.db.complete, False)[tags] & ((kind == 1) | (kind == 2) & block.movej)
+        bounds = [0] + (np.flatnonzero(fast[1:] != fast[:-1]) + 1).tolist() + [len(block)]
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            if fast[a]:
+                self._fast_rows(cols, r, block, a, b, tags[a:b], kind[a:b] == 2)
+                continue
+            for i in range(a, b):
+                motion = block.motion(i)
+                self._element_row(cols, r + i, motion, motion.points[0], KINDS[motion.word][0])
+
+    def _fast_rows(self, cols: "_Rows", r: int, block: PlainMotions, a: int, b: int, tags: np.ndarray, joint: np.ndarray) -> None:
+        """Rows r+a..r+b of block[a:b], every point in the bulk tables: the row by row reading
+        (``_bulk_row``) as arrays. Configs, frames, tools and descriptors are resolved once
+        each, in the order the row by row reading meets them (its errors, its frame and tool
+        numbers); the notes on movej without a fixed posture follow in row order."""
+        rows, movej = np.arange(r + a, r + b), block.movej[a:b]
+        cols.kind[rows] = np.where(joint, Kind.ABSJ, np.where(movej, Kind.JOINT, Kind.LINEAR))
+        cols.file[rows], cols.offset[rows] = block.file, block.offset[a:b]
+        cols.name[rows] = [f"{n}[{k}]" for n, k in zip(block.point_name[a:b], block.point_key[a:b])]
+        cols.insert[rows] = self.db.offset_array[tags] + len("<Value")
+        cols.bulk_blocks.append((rows, tags, joint))
+        conf, frame, tool, mdesc = self._resolve_once(block, a, b, tags, joint)
+        cart = ~joint
+        cols.conf[rows[cart]], cols.frame[rows[cart]] = conf[cart], frame[cart]
+        cols.tool[rows], cols.speed[rows], cols.zone[rows] = tool, mdesc[:, 0], mdesc[:, 1]
+        unfixed = np.flatnonzero(movej & cart & ~_fixed_postures(conf))
+        cols.resolved[rows[unfixed]] = False
+        for i in unfixed.tolist():
+            motion = block.motion(a + i)
+            self._unfixed(motion, motion.points[0], self.db.element(motion.points[0].ref.name, motion.points[0].ref.key))
+
+    def _resolve_once(self, block: PlainMotions, a: int, b: int, tags: np.ndarray, joint: np.ndarray):
+        """(conf (M, 3), frame (M,), tool (M,), speed and zone (M, 2)) of block[a:b]'s rows."""
+        words = self.db.word_codes[tags] + 1  # 0: not written
+        base = np.array([len(t) + 1 for t in self.db.word_texts[:3]], np.int64)
+        combo = np.where(joint, -1, (words[:, 0] * base[1] + words[:, 1]) * base[2] + words[:, 2])
+        father = np.where(joint, -1, words[:, 3])
+        keys = [(combo, 0), (father, 1), (block.tool_code[a:b], 2), (block.mdesc_code[a:b], 3)]
+        found = [np.unique(k, return_index=True, return_inverse=True) for k, _ in keys]
+        # (first row, what) of each distinct value, resolved in that order
+        todo = sorted((int(row), what, int(value)) for (k, what), (values, first, _) in zip(keys, found) for value, row in zip(values.tolist(), first.tolist()) if value >= 0)
+        table = {(what, value): self._resolve(what, int(tags[row]), block, a + row) for row, what, value in todo}
+        columns = []
+        for what, (values, _, inverse) in enumerate(found):
+            resolved = [table.get((what, v), (np.nan,) * 3 if what == 0 else 0) for v in values.tolist()]
+            columns.append(np.array(resolved, dtype=float if what in (0, 3) else np.int64)[inverse.reshape(-1)])
+        return columns
+
+    def _resolve(self, what: int, tag: int, block: PlainMotions, i: int):
+        """A row's config (what 0), frame (1), tool (2) or speed and zone (3), as ``_bulk_row`` finds it."""
+        if what == 0:
+            return self._config_words(tag)
+        if what == 1:
+            return self._frame_of(tag)
+        motion = block.motion(i)
+        if what == 2:
+            return self._tool_of_ref[motion.tool] if motion.tool in self._tool_of_ref else self._tool(motion)
+        return self._mdesc_of_ref[motion.mdesc] if motion.mdesc in self._mdesc_of_ref else self._mdesc(motion)
 
     def _bulk_row(self, cols: "_Rows", r: int, motion: Motion, point: PointArg, k: int) -> bool:
         """The bulk of a program: a data point read whole, nothing composed with it (its numbers
@@ -145,8 +217,11 @@ class _Assembler:
             values[r_, c_] = v_
             spans[r_, c_] = np.column_stack([np.full(len(r_), self.data_index), s_, e_])
         if cols.bulk:
-            self._gather(cols.bulk, values, spans)
-        kind, file = np.array(cols.kind, np.int8), np.array(cols.file, np.int16)
+            rows, tags, joint = (np.array(col) for col in zip(*cols.bulk))
+            cols.bulk_blocks.append((rows, tags, joint.astype(bool)))
+        for rows, tags, joint in cols.bulk_blocks:
+            self._gather(rows, tags, joint, values, spans)
+        kind, file = cols.kind, cols.file
         cart = kind != Kind.ABSJ
         pose = np.nan_to_num(values[:, :6])  # an attribute left out is 0
         position, rotation = pose[:, :3].copy(), pose[:, 3:6]
@@ -161,13 +236,13 @@ class _Assembler:
             position, orientation, offset = _approach(position, rotation, trsf, ~np.isnan(trsf).any(axis=1), offset)
         position[~cart], orientation[~cart] = np.nan, np.nan
         conf = np.full((n, 4), np.nan)
-        conf[:, :3] = np.array(cols.conf, dtype=float).reshape(n, 3)
-        insert = np.array(cols.insert, np.int64)
+        conf[:, :3] = cols.conf
+        insert = cols.insert
         insert_at = np.column_stack([np.where(insert >= 0, self.data_index, -1), insert]).reshape(n, 2)
         self.builder.notes.extend(self.notes)
-        self.builder.add_block(np.arange(n), kind=kind, line=self._lines(file, np.array(cols.offset, np.int64)), file=file, values=values, spans=spans,
-                               conf=conf, speed=np.array(cols.speed, float), zone=np.array(cols.zone, float), tool=np.array(cols.tool, np.int32),
-                               frame=np.array(cols.frame, np.int32), resolved=np.array(cols.resolved, bool), name=_object_array(cols.name),
+        self.builder.add_block(np.arange(n), kind=kind, line=self._lines(file, cols.offset), file=file, values=values, spans=spans,
+                               conf=conf, speed=cols.speed, zone=cols.zone, tool=cols.tool,
+                               frame=cols.frame, resolved=cols.resolved, name=cols.name,
                                insert_at=insert_at, offset=offset)
         tp = self.builder.build(orientation=False)
         return replace(tp, position=position, orientation=orientation, joints=joints)
@@ -176,14 +251,14 @@ class _Assembler:
         self.notes.append(f"{self.where(motion)}: movej to {point.ref.label} with config {_config_text(element)}: the arm configuration the controller takes is not fixed by the point (VAL3 reference manual, 'config': free lets the controller choose, same keeps the current value), give shoulder, elbow and wrist, or ssame, esame and wsame")
 
     def _config_words(self, tag: int) -> tuple[float, float, float]:
-        given = self.db.words[tag]
+        given = self.db.words(tag)
         written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
         if written not in self._configs:
             self._configs[written] = self._config_of(self.db.element_at(tag), given)
         return self._configs[written]
 
     def _frame_of(self, tag: int) -> int:
-        text = self.db.words[tag].get("fatherId")
+        text = self.db.words(tag).get("fatherId")
         if text not in self._fathers:
             self._fathers[text] = None if text is None else parse_father(text)
         father = self._fathers[text]
@@ -191,9 +266,8 @@ class _Assembler:
             self._frames[father] = self._new_frame(self.db.element_at(tag), father)
         return self._frames[father]
 
-    def _gather(self, bulk: list[tuple[int, int, bool]], values: np.ndarray, spans: np.ndarray) -> None:
+    def _gather(self, rows: np.ndarray, tags: np.ndarray, joint: np.ndarray, values: np.ndarray, spans: np.ndarray) -> None:
         """Numbers and spans of the rows' elements from the data file's bulk tables."""
-        rows, tags, joint = (np.array(col) for col in zip(*bulk))
         for sel, fields, table in ((~joint, slice(0, 6), slice(0, 6)), (joint, slice(7, 13), slice(6, 12))):
             if sel.any():
                 r, t = rows[sel], tags[sel]
@@ -240,7 +314,7 @@ class _Assembler:
             raise self.db.error(text[1], f"'{text[0]}' is not a number") from None
 
     def _config(self, element: Element) -> tuple[float, float, float]:
-        given = self.db.words[element.tag] if element.tag >= 0 else {}
+        given = self.db.words(element.tag) if element.tag >= 0 else {}
         written = (given.get("shoulder"), given.get("elbow"), given.get("wrist"))
         if written not in self._configs:
             self._configs[written] = self._config_of(element, given)
@@ -276,7 +350,7 @@ class _Assembler:
             element = parent
 
     def _frame(self, point: Element) -> int:
-        text = None if point.tag < 0 else self.db.words[point.tag].get("fatherId")
+        text = None if point.tag < 0 else self.db.words(point.tag).get("fatherId")
         if text not in self._fathers:
             self._fathers[text] = None if text is None else parse_father(text)
         father = self._fathers[text]
@@ -326,6 +400,11 @@ class _Assembler:
         return speed, self._number(element.attrs["leave"]) if "leave" in element.attrs else MDESC_LEAVE
 
 
+def _fixed_postures(conf: np.ndarray) -> np.ndarray:
+    """``_fixed_posture`` of each row of an (M, 3) array."""
+    return (np.abs(conf) == 1.0).all(axis=1) | (conf == 0.0).all(axis=1)
+
+
 def _fixed_posture(conf: tuple[float, float, float]) -> bool:
     """True where a movej's posture follows from the point's config: all three named (the
     controller takes them) or all three 'same' (the arm keeps the one it is in)."""
@@ -339,15 +418,16 @@ def _object_array(items: list) -> np.ndarray:
 
 
 class _Rows:
-    """Per-row Python lists, turned into arrays once (a million targets take one pass)."""
+    """The rows' columns, filled row by row (slow path) or by blocks of rows (plain motions)."""
 
     def __init__(self, n: int):
-        self.kind, self.file, self.offset, self.name = [0] * n, [0] * n, [0] * n, [""] * n
-        self.frame, self.tool, self.speed, self.zone = [0] * n, [0] * n, [np.nan] * n, [np.nan] * n
-        self.insert, self.conf, self.resolved = [-1] * n, [(np.nan,) * 3] * n, [True] * n
+        self.kind, self.file, self.offset, self.name = np.zeros(n, np.int8), np.zeros(n, np.int16), np.zeros(n, np.int64), _object_array([""] * n)
+        self.frame, self.tool, self.speed, self.zone = np.zeros(n, np.int32), np.zeros(n, np.int32), np.full(n, np.nan), np.full(n, np.nan)
+        self.insert, self.conf, self.resolved = np.full(n, -1, np.int64), np.full((n, 3), np.nan), np.ones(n, bool)
         self.approach: dict[int, tuple[float, ...]] = {}  # row -> appro()'s trsf
         self.cells: list[tuple[int, int, float, int, int]] = []  # (row, column, value, start, end)
         self.bulk: list[tuple[int, int, bool]] = []  # (row, data tag, jointRx)
+        self.bulk_blocks: list[tuple[np.ndarray, np.ndarray, np.ndarray]] = []  # (rows, data tags, jointRx) of plain motions
 
 
 KINDS = {"movej": (Kind.JOINT,), "movel": (Kind.LINEAR,), "movec": (Kind.CIRC_VIA, Kind.CIRC_END)}
