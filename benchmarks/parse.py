@@ -22,66 +22,58 @@ import time
 from pathlib import Path
 
 
+def _write(path: Path, head: str, lines, tail: str) -> Path:
+    """``path`` with ``head``, the generated ``lines`` (an iterable of whole lines) and ``tail``."""
+    with open(path, "w", encoding="latin-1") as fh:
+        fh.write(head)
+        fh.writelines(lines)
+        fh.write(tail)
+    return path
+
+
+def _x(i: int) -> float:
+    return 800 + (i % 400) * 0.5
+
+
+def _y(i: int) -> float:
+    return -200 + (i // 400) % 400
+
+
+def _z(i: int) -> float:
+    return 300 + (i % 7) * 0.125
+
+
+
 def make_fanuc(folder: Path, n: int) -> Path:
     """A Fanuc TP listing of about ``n`` lines: L motions in /MN, their positions in /POS (7 lines a target)."""
-    path = folder / "big.ls"
     count = max((n - 8) // 7, 1)
-    with open(path, "w", encoding="latin-1") as fh:
-        fh.write("/PROG  BIG\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n")
-        fh.writelines(f"{i + 1:4d}:L P[{i + 1}] 100mm/sec CNT50    ;\n" for i in range(count))
-        fh.write("/POS\n")
-        for i in range(count):
-            fh.write(f"P[{i + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
-                     f"\tX = {800 + (i % 400) * 0.5:9.3f}  mm,\tY = {-200 + (i // 400) % 400:9.3f}  mm,\tZ = {300 + (i % 7) * 0.125:9.3f}  mm,\n"
-                     "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\n")
-        fh.write("/END\n")
-    return path
+    motions = "".join(f"{i + 1:4d}:L P[{i + 1}] 100mm/sec CNT50    ;\n" for i in range(count))
+    positions = (f"P[{i + 1}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n"
+                 f"\tX = {_x(i):9.3f}  mm,\tY = {_y(i):9.3f}  mm,\tZ = {_z(i):9.3f}  mm,\n"
+                 "\tW =   180.000 deg,\tP =     0.000 deg,\tR =     0.000 deg\n};\n" for i in range(count))
+    return _write(folder / "big.ls", "/PROG  BIG\n/ATTR\nOWNER\t\t= MNEDITOR;\nDEFAULT_GROUP\t= 1,*,*,*,*;\n/MN\n" + motions + "/POS\n",
+                  positions, "/END\n")
 
 
 def make_programs(folder: Path, n: int) -> dict[str, Path]:
     out = {}
-    rapid = folder / "big.mod"
-    with open(rapid, "w", encoding="latin-1") as fh:
-        fh.write("MODULE Big\n  PROC main()\n")
-        for i in range(n - 5):
-            fh.write(f"    MoveL [[{800 + (i % 400) * 0.5:.3f},{-200 + (i // 400) % 400:.3f},{300 + (i % 7) * 0.125:.3f}],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tool0;\n")
-        fh.write("  ENDPROC\nENDMODULE\n")
-    out["rapid"] = rapid
-    krl = folder / "big_inline.src"
-    with open(krl, "w", encoding="latin-1") as fh:
-        fh.write("DEF big_inline( )\n$APO.CDIS = 0.5\n")
-        for i in range(n - 3):
-            fh.write(f"LIN {{X {800 + (i % 400) * 0.5:.3f}, Y {-200 + (i // 400) % 400:.3f}, Z {300 + (i % 7) * 0.125:.3f}, A 0, B 180, C 0}} C_DIS\n")
-        fh.write("END\n")
-    out["krl"] = krl
-    src, dat = folder / "big_dat.src", folder / "big_dat.dat"
+    out["rapid"] = _write(folder / "big.mod", "MODULE Big\n  PROC main()\n",
+                          (f"    MoveL [[{_x(i):.3f},{_y(i):.3f},{_z(i):.3f}],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, z1, tool0;\n"
+                           for i in range(n - 5)), "  ENDPROC\nENDMODULE\n")
+    out["krl"] = _write(folder / "big_inline.src", "DEF big_inline( )\n$APO.CDIS = 0.5\n",
+                        (f"LIN {{X {_x(i):.3f}, Y {_y(i):.3f}, Z {_z(i):.3f}, A 0, B 180, C 0}} C_DIS\n" for i in range(n - 3)), "END\n")
     half = n // 2
-    with open(src, "w", encoding="latin-1") as fs, open(dat, "w", encoding="latin-1") as fd:
-        fs.write("DEF big_dat( )\n")
-        fd.write("DEFDAT big_dat\n")
-        for i in range(half - 2):
-            fs.write(f"LIN XP{i} C_DIS\n")
-            fd.write(f"DECL E6POS XP{i}={{X {800 + (i % 400) * 0.5:.3f},Y {-200 + (i // 400) % 400:.3f},Z {300 + (i % 7) * 0.125:.3f},A 0.0,B 180.0,C 0.0,S 2,T 10}}\n")
-        fs.write("END\n")
-        fd.write("ENDDAT\n")
-    out["krl (.src + .dat)"] = src
+    _write(folder / "big_dat.dat", "DEFDAT big_dat\n",
+           (f"DECL E6POS XP{i}={{X {_x(i):.3f},Y {_y(i):.3f},Z {_z(i):.3f},A 0.0,B 180.0,C 0.0,S 2,T 10}}\n" for i in range(half - 2)), "ENDDAT\n")
+    out["krl (.src + .dat)"] = _write(folder / "big_dat.src", "DEF big_dat( )\n", (f"LIN XP{i} C_DIS\n" for i in range(half - 2)), "END\n")
     # A CAM point list: a FRAME array in the .dat, stepped through by a FOR to n (issue 28)
-    src, dat = folder / "frame_array.src", folder / "frame_array.dat"
     count = max(half - 3, 1)
-    with open(src, "w", encoding="latin-1") as fs, open(dat, "w", encoding="latin-1") as fd:
-        fs.write(f"DEF frame_array( )\nDECL INT i\nDECL INT n\nn = {count}\nFOR i = 1 TO n\n  LIN gfPoint[i] C_DIS\nENDFOR\nEND\n")
-        fd.write(f"DEFDAT frame_array PUBLIC\nDECL GLOBAL FRAME gfPoint[{count}]\n")
-        for i in range(1, count + 1):
-            fd.write(f"gfPoint[{i}]={{X {800 + (i % 400) * 0.5:.3f},Y {-200 + (i // 400) % 400:.3f},Z {300 + (i % 7) * 0.125:.3f},A 0.0,B 180.0,C 0.0}}\n")
-        fd.write("ENDDAT\n")
-    out["krl FRAME[] + FOR"] = src
-    gcode = folder / "big.ngc"
-    with open(gcode, "w", encoding="latin-1") as fh:
-        fh.write("G21 G90 G17\nG0 X0 Y0 Z5\nF1500\n")
-        for i in range(n - 4):
-            fh.write(f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n")
-        fh.write("M2\n")
-    out["gcode"] = gcode
+    _write(folder / "frame_array.dat", f"DEFDAT frame_array PUBLIC\nDECL GLOBAL FRAME gfPoint[{count}]\n",
+           (f"gfPoint[{i}]={{X {_x(i):.3f},Y {_y(i):.3f},Z {_z(i):.3f},A 0.0,B 180.0,C 0.0}}\n" for i in range(1, count + 1)), "ENDDAT\n")
+    out["krl FRAME[] + FOR"] = _write(folder / "frame_array.src", f"DEF frame_array( )\nDECL INT i\nDECL INT n\nn = {count}\nFOR i = 1 TO n\n"
+                                      "  LIN gfPoint[i] C_DIS\nENDFOR\nEND\n", (), "")
+    out["gcode"] = _write(folder / "big.ngc", "G21 G90 G17\nG0 X0 Y0 Z5\nF1500\n",
+                          (f"G1 X{(i % 400) * 0.5:.3f} Y{(i // 400) % 400:.3f} Z{-1 - (i % 7) * 0.125:.3f}\n" for i in range(n - 4)), "M2\n")
     out["urscript"] = make_urscript(folder, n)
     out["fanuc"] = make_fanuc(folder, n)
     out["sinumerik"] = make_sinumerik(folder, n)
@@ -107,28 +99,18 @@ def make_sinumerik(folder: Path, n: int) -> Path:
 
 def make_urscript(folder: Path, n: int) -> Path:
     """A URScript program: set_tcp, one movej to joints, then movel to literal poses (m, rad)."""
-    path = folder / "big.script"
-    with open(path, "w", encoding="latin-1") as fh:
-        fh.write("def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n")
-        for i in range(n - 4):
-            fh.write(f"  movel(p[{0.8 + (i % 400) * 0.0005:.6f}, {-0.2 + ((i // 400) % 400) * 0.001:.6f}, {0.3 + (i % 7) * 0.000125:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n")
-        fh.write("end\n")
-    return path
+    head = "def big():\n  set_tcp(p[0, 0, 0.2, 0, 0, 0])\n  movej([0, -1.5708, 1.5708, -1.5708, -1.5708, 0], a=1.4, v=1.05)\n"
+    return _write(folder / "big.script", head, (f"  movel(p[{_x(i) / 1000:.6f}, {_y(i) / 1000:.6f}, {_z(i) / 1000:.6f}, 0, 3.1416, 0], a=1.2, v=0.25, r=0.0005)\n"
+                                                for i in range(n - 4)), "end\n")
 
 
 def make_inform(folder: Path, n: int) -> Path:
     """A Yaskawa INFORM job: half its lines ///RECTAN positions, half the MOVL lines to them."""
     count = max((n - 14) // 2, 1)
-    job = folder / "BIG.JBI"
-    with open(job, "w", encoding="latin-1") as fh:
-        fh.write(f"/JOB\r\n//NAME BIG\r\n//POS\r\n///NPOS {count},0,0,0,0,0\r\n///TOOL 0\r\n///POSTYPE ROBOT\r\n///RECTAN\r\n///RCONF 1,0,0,0,0,0,0,0\r\n")
-        for i in range(count):
-            fh.write(f"C{i:05d}={800 + (i % 400) * 0.5:.3f},{-200 + (i // 400) % 400:.3f},{300 + (i % 7) * 0.125:.3f},180.0000,0.0000,0.0000\r\n")
-        fh.write("//INST\r\n///DATE 2024/01/01 00:00\r\n///ATTR SC,RW\r\n///GROUP1 RB1\r\nNOP\r\n")
-        for i in range(count):
-            fh.write(f"MOVL C{i:05d} V=100.0 PL=0\r\n")
-        fh.write("END\r\n")
-    return job
+    head = f"/JOB\r\n//NAME BIG\r\n//POS\r\n///NPOS {count},0,0,0,0,0\r\n///TOOL 0\r\n///POSTYPE ROBOT\r\n///RECTAN\r\n///RCONF 1,0,0,0,0,0,0,0\r\n"
+    positions = "".join(f"C{i:05d}={_x(i):.3f},{_y(i):.3f},{_z(i):.3f},180.0000,0.0000,0.0000\r\n" for i in range(count))
+    return _write(folder / "BIG.JBI", head + positions + "//INST\r\n///DATE 2024/01/01 00:00\r\n///ATTR SC,RW\r\n///GROUP1 RB1\r\nNOP\r\n",
+                  (f"MOVL C{i:05d} V=100.0 PL=0\r\n" for i in range(count)), "END\r\n")
 
 
 def make_val3(folder: Path, n: int) -> Path:
@@ -153,13 +135,9 @@ def make_val3(folder: Path, n: int) -> Path:
 
 def make_heidenhain(folder: Path, n: int) -> Path:
     """A five-axis Klartext program: numbered L blocks with tip and rotary positions under M128."""
-    path = folder / "big.h"
-    with open(path, "w", encoding="latin-1") as fh:
-        fh.write("0 BEGIN PGM BIG MM\n1 TOOL CALL 1 Z S12000\n2 M128\n")
-        for i in range(n - 5):
-            fh.write(f"{i + 3} L  X{(i % 400) * 0.5:+.3f}  Y{(i // 400) % 400:+.3f}  Z{-1 - (i % 7) * 0.125:+.3f}  A{-(i % 30) * 0.5:+.3f}  C{(i % 360):+.3f} F1500\n")
-        fh.write(f"{n - 2} M129\n{n - 1} END PGM BIG MM\n")
-    return path
+    return _write(folder / "big.h", "0 BEGIN PGM BIG MM\n1 TOOL CALL 1 Z S12000\n2 M128\n",
+                  (f"{i + 3} L  X{(i % 400) * 0.5:+.3f}  Y{(i // 400) % 400:+.3f}  Z{-1 - (i % 7) * 0.125:+.3f}  A{-(i % 30) * 0.5:+.3f}  C{(i % 360):+.3f} F1500\n"
+                   for i in range(n - 5)), f"{n - 2} M129\n{n - 1} END PGM BIG MM\n")
 
 
 def measure(path: str) -> None:
