@@ -1,4 +1,4 @@
-"""Parse throughput (lines/s) per dialect on 10^6-line programs (target: >= 1.5 x 10^5 lines/s, issue 12).
+"""Parse throughput (lines/s) per dialect on 10^6-line programs (target: >= 1.5 x 10^5 lines/s for RAPID, KRL and G-code, issue 12; >= 10^5 for the later languages, issues 29 and 30).
 
 Run: .venv/bin/python benchmarks/parse.py [--lines 1000000]
 Writes one program per dialect to a temporary folder (moves with literal targets, the bulk
@@ -156,6 +156,10 @@ def measure(path: str) -> None:
     print(json.dumps({"lines": lines, "targets": len(tp), "parse_s": t_parse, "parse_cpu_s": cpu_parse, "emit_s": t_emit, "peak_mb": peak_mb}))
 
 
+# Lines per CPU second: issue 12's for the first languages, issues 29 and 30's for the others.
+TARGET = {"rapid": 1.5e5, "krl": 1.5e5, "krl (.src + .dat)": 1.5e5, "krl FRAME[] + FOR": 1.5e5, "gcode": 1.5e5}
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lines", type=int, default=1_000_000)
@@ -168,7 +172,7 @@ def main():
         programs = make_programs(Path(tmp), args.lines)
         os.sync()  # the programs' write-back would otherwise compete with the first measurement
         print(f"load average {' '.join(f'{v:.2f}' for v in os.getloadavg())} (1, 5, 15 min)")
-        print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'CPU s':>8}{'lines/CPU s':>13}{'round trip s':>14}{'peak MB':>9}   target >= 1.5e5 lines per CPU s")
+        print(f"{'dialect':<20}{'lines':>10}{'targets':>10}{'parse s':>9}{'lines/s':>12}{'CPU s':>8}{'lines/CPU s':>13}{'round trip s':>14}{'peak MB':>9}   target, lines per CPU s")
         for name, path in programs.items():
             proc = subprocess.run([sys.executable, __file__, "--measure", str(path)], capture_output=True, text=True, env=os.environ)
             if proc.returncode:
@@ -178,7 +182,7 @@ def main():
             rate = r["lines"] / r["parse_s"]
             cpu_rate = r["lines"] / r["parse_cpu_s"]
             print(f"{name:<20}{r['lines']:>10,}{r['targets']:>10,}{r['parse_s']:>9.2f}{rate:>12,.0f}{r['parse_cpu_s']:>8.2f}{cpu_rate:>13,.0f}"
-                  f"{r['emit_s']:>14.2f}{r['peak_mb']:>9.0f}   {'met' if cpu_rate >= 1.5e5 else 'MISSED'}")
+                  f"{r['emit_s']:>14.2f}{r['peak_mb']:>9.0f}   {TARGET.get(name, 1e5):.1e} {'met' if cpu_rate >= TARGET.get(name, 1e5) else 'MISSED'}")
 
 
 if __name__ == "__main__":
