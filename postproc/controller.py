@@ -25,6 +25,10 @@ class Controller:
     #: the robot maker whose robots alone this controller drives, as robot files' descriptions
     #: name it first (None: any maker's, or a CNC)
     maker: str | None = None
+    #: which rotary solution the controller turns a programmed tool-axis vector into: "nearest"
+    #: (the shorter travel from where the axes stand, SINUMERIK TRAORI), or None where its rule is
+    #: not known (five-axis compensation then refuses vector programs)
+    vector_solution: str | None = None
 
     #: True where the posture before the program's first joint target (or configuration data
     #: that apply) may be assumed, with a note (nearest all-zero joints); False where the

@@ -178,6 +178,9 @@ class Dialect:
         """An event writer (see postproc.emit.writer) for a new program, or None."""
         return None
 
+    #: RTCP modes ``convert --to`` this language takes (the first the default where there is one;
+    #: None: every mode of postproc.fivex.emit, G-code's)
+    rtcp_modes: tuple[str, ...] | None = None
     #: RTCP modes in which this language writes new five-axis programs itself
     #: (``five_axis_text``; empty: written as G-code by postproc.fivex.emit)
     five_axis_modes: tuple[str, ...] = ()
@@ -187,6 +190,22 @@ class Dialect:
         """A new five-axis program: tool tips (N, 3) mm, rotary positions (N, 2) deg of the
         machine's axes ``letters``, rapid flags, tip feeds mm/min, the input lines (messages)."""
         raise EmitError(f"{self.name} does not write five-axis programs itself")
+
+    # ------------------------------------------------- five-axis compensation hooks
+    def for_machine(self, tp: Toolpath, machine) -> Toolpath:
+        """``tp`` with what the controller decides by its machine placed (Klartext PLANE: the
+        rotary solution); as it is by default."""
+        return tp
+
+    def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
+        """``tp`` whose text numbers give the tool path ``xyz`` (N, 3) under cutter radius
+        compensation (Klartext RL / RR: the contour the control offsets). Default: the tool path
+        itself, which the compensate read-back then refuses where the text holds a contour."""
+        return tp.with_positions(xyz)
+
+    def refuse_compensation(self, tp: Toolpath) -> None:
+        """An InputError where the text cannot carry a five-axis compensation as block numbers
+        (Klartext: a tilted plane); nothing by default."""
 
     def new_program_paths(self, output: Path) -> list[Path]:
         """Paths of the files a new program written to ``output`` consists of."""

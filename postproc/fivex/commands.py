@@ -85,7 +85,7 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if input_axes not in (None, "tip", "machine"):
         raise InputError(f"--input-axes: '{input_axes}' is not tip or machine")
     target = dialects.get(to, "--to")
-    modes = getattr(target, "rtcp_modes", MODES)  # a language with one RTCP form (sinumerik: TRAORI) takes it by default
+    modes = target.rtcp_modes or MODES  # a language with one RTCP form (sinumerik: TRAORI) takes it by default
     rtcp = modes[0] if rtcp is None and len(modes) == 1 else rtcp
     if target.machine_program and rtcp not in modes:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(modes)} (needed with --to {to})")

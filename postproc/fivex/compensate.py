@@ -92,11 +92,9 @@ def compensate_five(tp: Toolpath, true: Machine, controller: Machine, grid: Grid
     if tp.relative.any():
         i = int(np.nonzero(tp.relative)[0][0])
         raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: incremental (G91) five-axis blocks are not compensated; write the program in G90")
-    refuse = getattr(dialects.of(tp), "refuse_compensation", None)  # what a dialect's text cannot carry as block numbers (Klartext: a tilted plane)
-    if refuse is not None:
-        refuse(tp)
+    dialects.of(tp).refuse_compensation(tp)  # what a language's text cannot carry as block numbers (Klartext: a tilted plane)
     if tp.orientation_kind == "axis":  # which rotary solution a vector gets is the controller's rule (the dialect states it)
-        if getattr(dialects.of(tp), "vector_solution", None) != "nearest":
+        if dialects.of(tp).controller.vector_solution != "nearest":
             raise InputError(f"{tp.sources[0].path}: tool-axis vectors (I J K) are compensated only where the controller's rotary "
                              "solution rule is known (SINUMERIK: the shorter travel); write rotary angles")
         return _compensate_vectors(tp, true, controller, grid, input_axes)
@@ -146,8 +144,9 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
         ext[:, c] = angles[:, j]
         values[:, field] = np.where(has_word, angles[:, j], values[:, field])
     moved = replace(tp, ext=ext, values=values)
-    contour = getattr(dialects.of(tp), "contour_for", None)  # a dialect whose text holds the contour of a compensated tool path (Klartext RL / RR)
-    return contour(moved, xyz) if contour is not None and tp.ccomp is not None and (tp.ccomp == 1).any() else moved.with_positions(xyz)
+    if tp.ccomp is not None and (tp.ccomp == 1).any():  # under radius compensation the text may hold the contour (Klartext RL / RR)
+        return dialects.of(tp).contour_for(moved, xyz)
+    return moved.with_positions(xyz)
 
 
 VECTOR = slice(3, 6)  # the IR's tool-axis vector words (G43.5 I J K, SINUMERIK A3= B3= C3=)

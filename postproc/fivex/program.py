@@ -66,8 +66,7 @@ def from_toolpath(tp: Toolpath, machine: Machine, input_axes: str | None = None)
     if len(tp) == 0:
         raise InputError(f"{tp.sources[0].path}: no motion targets")
     _check_kinds(tp)
-    for_machine = getattr(dialects.of(tp), "for_machine", None)  # what the controller decides by its machine (Klartext PLANE: the rotary solution)
-    tp = for_machine(tp, machine) if for_machine is not None else tp
+    tp = dialects.of(tp).for_machine(tp, machine)  # what the controller decides by its machine (Klartext PLANE: the rotary solution)
     if not tp.placed().all():
         i = int(np.nonzero(~tp.placed())[0][0])
         where = f"{tp.sources[int(tp.file[i])].path}:{int(tp.line[i])}"

@@ -27,8 +27,6 @@ class SinumerikDialect(GcodeDialect):
     description = "Siemens SINUMERIK 840D (.MPF / .SPF): frames, R parameters, TRAORI"
     extensions = (".mpf", ".spf")
     controller = SINUMERIK_840D
-    # A3= B3= C3= vectors: the 840D takes the rotary solution with the shorter travel (controller.py); compensate relies on it
-    vector_solution = "nearest"
     rtcp_modes = ("siemens",)  # convert --to sinumerik writes TRAORI programs (postproc.fivex.emit)
 
     def sniff(self, head: str) -> bool:

@@ -10,7 +10,7 @@ F2 "Multi-axis transformations", "Orientation programming" / "Singular positions
 - an orientation given as a vector (A3= B3= C3=, ORIVECT) leaves two solutions; the 840D
   takes the one with the shorter rotary-axis travel from the current position. postproc reads
   vectors as the tool axis (``translate.py``) and compensates them by this rule
-  (``postproc.fivex.compensate``, the dialect's ``vector_solution``); its TRAORI writer
+  (``postproc.fivex.compensate``, the controller's ``vector_solution``); its TRAORI writer
   (``postproc.fivex.emit``) writes angles, chosen by the same nearest-travel rule
   (``postproc.fivex.kinematics.ik``: the branch nearest the previous angles).
 """
@@ -33,6 +33,9 @@ _CONTINUOUS = re.compile(r"(?im)^[^;\n]*(?:\bG64[1-5]?\b|\bCOMP(?:CAD|CURV|ON)\b
 class Sinumerik840D(Controller):
     name = "Siemens SINUMERIK 840D sl"
     maker = None  # a CNC: it drives no robot maker's arms
+    # TRAORI turns a programmed A3= B3= C3= vector into the rotary solution with the shorter travel
+    # (Function Manual Special Functions, F2 "Multi-axis transformations", "Orientation programming")
+    vector_solution = "nearest"
 
     def conf_applies(self, tp: Toolpath) -> np.ndarray:
         return np.zeros(len(tp), bool)  # no robot configuration data in a part program
