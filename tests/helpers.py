@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from scipy.spatial.transform import Rotation
 
 import postproc
+from postproc import kinematics as kin
 from postproc.effects import parse_effects
 from postproc.identify import fit
 from postproc.sim import Cylinder, random_truth, sample_poses, simulate
@@ -68,3 +71,27 @@ def z_scores(result, truth) -> dict[str, float]:
 
 def kr160():
     return postproc.load_robot("kr160_r1570")
+
+
+def true_tcp(model, tp, q, rows=None) -> np.ndarray:
+    """(N, 3) where the robot ``model`` describes puts the TCP at joints q (N, 6) of tp's targets
+    ``rows`` (default all), each with its own tool (the tests' own controller model runs them)."""
+    out = np.zeros((len(q), 3))
+    tools = tp.tool if rows is None else tp.tool[rows]
+    for t in np.unique(tools):
+        sel = tools == t
+        m = replace(model, tool_mm=tp.tools[t][:3, 3])
+        out[sel] = m.predict_prepared(m.prepare(q_deg=q[sel]))
+    return out
+
+
+def nearest_walk(robot, flange: np.ndarray, q_start: np.ndarray) -> np.ndarray:
+    """Joints (N, 6) a controller takes for straight moves to the flange poses: each IK solution
+    nearest the previous joints, turns unwrapped (written here, apart from postproc's posture code)."""
+    q_prev, reached = np.asarray(q_start, float), []
+    for sols in kin.ik(robot, flange):
+        ok = [s for s in sols if not np.isnan(s).any()]
+        steps = [np.abs((s - q_prev + 180.0) % 360.0 - 180.0).sum() for s in ok]
+        q_prev = q_prev + ((ok[int(np.argmin(steps))] - q_prev + 180.0) % 360.0 - 180.0)
+        reached.append(q_prev)
+    return np.array(reached)

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, kr160, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, kr160, true_tcp, truth_and_fit
 from typer.testing import CliRunner
 
 import postproc
@@ -53,12 +53,7 @@ def run_on(truth, tp, q_ref=None):
     sols = kin.ik(truth.robot, flange)
     ref = np.array([0.0, 0.0, 0.0, 0.0, -90.0, 0.0]) if q_ref is None else q_ref
     q, _ = kin.select_nearest(truth.robot, sols, ref)
-    out = np.zeros((len(tp), 3))
-    for t in np.unique(tp.tool):
-        sel = tp.tool == t
-        m = replace(truth, tool_mm=tp.tools[t][:3, 3])
-        out[sel] = m.predict_prepared(m.prepare(q_deg=q[sel]))
-    return out
+    return true_tcp(truth, tp, q)
 
 
 def krl_program(tmp_path, with_dat=False):

@@ -5,11 +5,10 @@ controller's joints: the CONFIG of each J target, the posture carried along L ta
 from __future__ import annotations
 
 import re
-from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, true_tcp, truth_and_fit
 
 import postproc
 from postproc import kinematics as kin
@@ -58,12 +57,7 @@ def run_on(truth, tp):
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
     q, branch = R30IB.branch_from_conf(truth.robot, kin.ik(truth.robot, flange), tp.conf)
     assert (branch >= 0).all()
-    out = np.zeros((len(tp), 3))
-    for t in np.unique(tp.tool):
-        sel = tp.tool == t
-        m = replace(truth, tool_mm=tp.tools[t][:3, 3])
-        out[sel] = m.predict_prepared(m.prepare(q_deg=q[sel]))
-    return out
+    return true_tcp(truth, tp, q)
 
 
 def test_compensated_fanuc_program_lands_within_0_05_mm(tmp_path, truth_and_model):

@@ -16,11 +16,11 @@ import json
 import os
 import shutil
 import subprocess
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import true_tcp
 from typer.testing import CliRunner
 
 import postproc
@@ -29,8 +29,8 @@ from postproc.cam.arcs import linearise_arc
 from postproc.cam.freecad import annotate, commands_to_gcode, planned_targets, run
 from postproc.cli import app
 from postproc.errors import InputError, JobError
-from postproc.program_check import ModelMismatchError
 from postproc.model_io import load_model
+from postproc.program_check import ModelMismatchError
 from postproc.programs import emit_texts, parse_program
 
 runner = CliRunner()
@@ -58,12 +58,7 @@ def _tcp(model, tp):
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
     q, _, ok = kin.select_path(model.robot, kin.ik(model.robot, flange), np.zeros(6), max_step_deg=180.0)  # moves between fixtures are long
     assert ok.all()
-    out = np.zeros((len(tp), 3))
-    for t in np.unique(tp.tool):
-        sel = tp.tool == t
-        m = replace(model, tool_mm=tp.tools[t][:3, 3])
-        out[sel] = m.predict_prepared(m.prepare(q_deg=q[sel]))
-    return out
+    return true_tcp(model, tp, q)
 
 
 def _cam_targets(objects, args=ARGS):

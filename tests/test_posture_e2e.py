@@ -15,8 +15,8 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, nearest_walk, true_tcp, truth_and_fit
 
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, truth_and_fit
 from postproc import kinematics as kin
 from postproc.compensate import compensate
 from postproc.programs import emit_texts, parse_program
@@ -81,17 +81,10 @@ def _pocket(robot, q_start, path):
 def _run_on_true_robot(robot, truth, tp, joints=False):
     """The controller: the PTP's axis values, then each LIN on the IK solution nearest the
     previous joints. Returns the true TCP of the LIN targets and their intended positions."""
-    q_prev = tp.joints[0]
     flange = tp.base_poses()[1:] @ np.linalg.inv(tp.tools[tp.tool[1:]])
-    reached = []
-    for sols in kin.ik(robot, flange):
-        ok = [s for s in sols if not np.isnan(s).any()]
-        steps = [np.abs((s - q_prev + 180.0) % 360.0 - 180.0).sum() for s in ok]
-        q_prev = q_prev + ((ok[int(np.argmin(steps))] - q_prev + 180.0) % 360.0 - 180.0)
-        reached.append(q_prev)
-    true = replace(truth, tool_mm=tp.tools[tp.tool[1]][:3, 3])
-    tcp = true.predict_prepared(true.prepare(q_deg=np.array(reached)))
-    return (tcp, np.array(reached)) if joints else tcp
+    reached = nearest_walk(robot, flange, tp.joints[0])
+    tcp = true_tcp(truth, tp, reached, rows=np.arange(1, len(tp)))
+    return (tcp, reached) if joints else tcp
 
 
 def test_the_centre_pose_has_four_configurations(robot):

@@ -11,14 +11,12 @@ within 0.05 mm of the programmed TCP positions.
 
 from __future__ import annotations
 
-from dataclasses import replace
-
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, nearest_walk, true_tcp, truth_and_fit
 from scipy.spatial.transform import Rotation
 
 import postproc
-from helpers import FRAME_AND_COMPLIANCE, TOOL, truth_and_fit
 from postproc import kinematics as kin
 from postproc.compensate import compensate
 from postproc.ir import Kind
@@ -83,14 +81,7 @@ def _run_on_true_robot(robot, truth, tp):
     else:
         q_prev = kin.select_nearest(robot, kin.ik(robot, tp.flange_poses()[:1]), tp.extras["urscript.qnear_deg"][:1])[0][0]
     flange = tp.base_poses()[1:] @ np.linalg.inv(tp.tools[tp.tool[1:]])
-    reached = []
-    for sols in kin.ik(robot, flange):
-        ok = [s for s in sols if not np.isnan(s).any()]
-        steps = [np.abs((s - q_prev + 180.0) % 360.0 - 180.0).sum() for s in ok]
-        q_prev = q_prev + ((ok[int(np.argmin(steps))] - q_prev + 180.0) % 360.0 - 180.0)
-        reached.append(q_prev)
-    true = replace(truth, tool_mm=tp.tools[tp.tool[1]][:3, 3])
-    return true.predict_prepared(true.prepare(q_deg=np.array(reached)))
+    return true_tcp(truth, tp, nearest_walk(robot, flange, q_prev), rows=np.arange(1, len(tp)))
 
 
 @pytest.mark.parametrize("branch, polyscope", [(4, False), (5, False), (0, True)])
