@@ -17,6 +17,7 @@ from ..plugin_option import with_plugins
 from ..program_check import check_model_fits
 from ..program_content import require_program
 from ..programs import parse_program
+from ..progress import ProgressLine
 from .app import app, err, handles_errors, out
 from .common import FORCE_OPTION, FRAME_OPTION, START_JOINTS_OPTION, TEMP_OPTION, TOOL_OPTION, floats, named_frames
 
@@ -52,9 +53,11 @@ def predict_cmd(
     error_model, _ = load_model(model)
     for note in check_model_fits(tp, error_model, str(model), None, allow_mismatch):
         err.print(f"note: {note} (--allow-model-mismatch)")
-    rows, predicted, why = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
-                                          force_n=None if force is None else floats(force, 3, "--force"),
-                                          start_joints=None if start_joints is None else floats(start_joints, 6, "--start-joints"))
+    with ProgressLine("predicting", console=err) as progress:  # a long program takes more than a few seconds
+        progress(f"the controller's postures and the model's TCP at {len(tp)} targets")
+        rows, predicted, why = predicted_positions(tp, error_model, frames=frames, tools=tools, temp_c=temp,
+                                                   force_n=None if force is None else floats(force, 3, "--force"),
+                                                   start_joints=None if start_joints is None else floats(start_joints, 6, "--start-joints"))
     goal = _intended_positions(goal_tp, tp, rows, frames, tools, intended)
     error = np.linalg.norm(predicted - goal, axis=1)
     where = [f"{tp.sources[int(tp.file[r])].path}:{int(tp.line[r])}" for r in rows]
