@@ -51,7 +51,7 @@ class HeidenhainDialect(Dialect):
         return contour_for(tp, xyz)
 
     def for_machine(self, tp: Toolpath, machine) -> Toolpath:
-        """The targets of a tilted plane (PLANE SPATIAL ... MOVE) placed on ``machine``: the TNC's rotary solution."""
+        """The targets of a tilted plane (PLANE ... MOVE / TURN) placed on ``machine``: the TNC's rotary solution."""
         return place_tilted(tp, machine)
 
     def refuse_compensation(self, tp: Toolpath) -> None:
@@ -60,7 +60,7 @@ class HeidenhainDialect(Dialect):
         plane = tp.extras.get("heidenhain.plane_line")
         if plane is not None and (plane > 0).any():
             i = int(np.argmax(plane > 0))
-            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE SPATIAL) are not compensated: "
+            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE, Cycle 19) are not compensated: "
                              "the correction would change the plane's angles and the rotary solution the TNC takes, not numbers of its blocks; "
                              "convert the program to M128 (convert --to heidenhain --rtcp tcpm) and compensate that")
 

@@ -8,7 +8,16 @@ import re
 
 import numpy as np
 
+from . import plane_forms
 from .fields import along_z, translation
+
+# PLANE forms and the words that define them (TNC 640 manual, "Tilting the working plane"; plane_forms)
+_PLANE_FORMS = {
+    "SPATIAL": ("SPA", "SPB", "SPC"), "EULER": ("EULPR", "EULNU", "EULROT"), "PROJECTED": ("PROPR", "PROMIN", "PROROT"),
+    "VECTOR": ("BX", "BY", "BZ", "NX", "NY", "NZ"),
+    "POINTS": ("P1X", "P1Y", "P1Z", "P2X", "P2Y", "P2Z", "P3X", "P3Y", "P3Z"),
+    "RELATIV": (), "AXIAL": (), "RESET": (),
+}
 
 
 class StateBlocks:
@@ -119,16 +128,23 @@ class StateBlocks:
 
     def plane(self, s: str, at: int, line: int):
         up = s.upper()
+        form = re.match(r"PLANE\s+([A-Z]+)", up)
+        if form is None or form.group(1) not in _PLANE_FORMS:
+            raise self.error(at, f"'{' '.join(up.split()[:2])}' is not a PLANE function (SPATIAL, PROJECTED, EULER, VECTOR, POINTS, RELATIV, AXIAL, RESET)")
+        active = self.tilt if self.tilt_line else np.eye(3)
         self.tilt = None
-        if up.startswith("PLANE RESET"):
-            self.tilt_line = 0
+        if form.group(1) == "RESET":
+            self.tilt_line, self.tilt_form = 0, ""
         else:
-            self.tilt_line = line
-            if up.startswith("PLANE SPATIAL"):
-                self.tilt = self._spatial(s, at)
+            self.tilt_line, self.tilt_form = line, form.group(1)
+            self.tilt = self._plane_rotation(form.group(1), s, at, active)
         mode = re.search(r"\b(MOVE|TURN|STAY)\b", up)
         seq = re.search(r"\bSEQ\s*([+-])", up)
-        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY", re.search(r"\b(DIST|ABST)\s*[+-]?0*\.?0*[1-9]", up[mode.end():]) is not None if mode else False)
+        dist = re.search(r"\b(?:DIST|ABST)\s*([+-]?(?:\d+\.?\d*|\.\d+))", up[mode.end():]) if mode else None
+        if mode and dist is None and re.search(r"\b(?:DIST|ABST)\b", up[mode.end():]):
+            raise self.error(at + mode.end(), "PLANE ... DIST: the distance is read as a number only")
+        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY",
+                             float(dist.group(1)) * self.scale if dist else 0.0)
         if mode and mode.group(1) in ("MOVE", "TURN"):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
             self.positioning_rows.add(self.rows_all())
@@ -136,24 +152,41 @@ class StateBlocks:
                                 "computed where a machine is given (compensate / convert), else not read")
         return None
 
-    def _spatial(self, s: str, at: int) -> np.ndarray | None:
-        """The tilted plane's orientation in the untilted workpiece system: SPA about X, then
-        SPB about Y, then SPC about Z, all about the fixed axes (TNC 640 manual, "PLANE
-        SPATIAL": tilting sequence A-B-C), so R = Rz(SPC) Ry(SPB) Rx(SPA); None where an
-        angle is not determined by the text."""
-        angles = []
-        for key in ("SPA", "SPB", "SPC"):
-            m = re.search(rf"{key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
-            if m is None:
-                raise self.error(at, f"PLANE SPATIAL needs {key} (all three spatial angles)")
-            angles.append(self.value(m.group(1), at + m.start(1))[0])
-        if any(math.isnan(a) for a in angles):
+    def _plane_rotation(self, form: str, s: str, at: int, active: np.ndarray | None) -> np.ndarray | None:
+        """The tilted plane's orientation in the untilted workpiece system (plane_forms), None where
+        a value is not determined by the text or the machine decides it (AXIAL: axis angles)."""
+        if form == "AXIAL":
+            return None  # axis positions: the plane is the machine's (placed in plane_solution)
+        if form == "RELATIV":
+            found = [k for k in ("SPA", "SPB", "SPC") if re.search(rf"(?<![A-Z]){k}", s, re.IGNORECASE)]
+            if len(found) != 1:
+                raise self.error(at, "PLANE RELATIV takes one angle: SPA, SPB or SPC")
+            angle = self._plane_values(s, at, found, form)[0]
+            return None if active is None or math.isnan(angle) else plane_forms.relative(active, found[0], angle)
+        values = self._plane_values(s, at, _PLANE_FORMS[form], form)
+        if any(math.isnan(v) for v in values):
             return None
-        a, b, c = np.radians(angles)
-        rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-        ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
-        rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
-        return rz @ ry @ rx
+        try:
+            if form == "SPATIAL":
+                return plane_forms.spatial(*values)
+            if form == "EULER":
+                return plane_forms.euler(*values)
+            if form == "PROJECTED":
+                return plane_forms.projected(*values)
+            if form == "VECTOR":
+                return plane_forms.vector(np.array(values[:3]), np.array(values[3:]))
+            return plane_forms.points(np.array(values[:3]), np.array(values[3:6]), np.array(values[6:]))
+        except plane_forms.PlaneError as exc:
+            raise self.error(at, str(exc)) from None
+
+    def _plane_values(self, s: str, at: int, keys: tuple, form: str) -> list[float]:
+        out = []
+        for key in keys:
+            m = re.search(rf"(?<![A-Z0-9]){key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
+            if m is None:
+                raise self.error(at, f"PLANE {form} needs {' '.join(keys)} ({key} is missing)")
+            out.append(self.value(m.group(1), at + m.start(1))[0])
+        return out
 
     def function(self, s: str, at: int, line: int):
         up = re.sub(r"\s+", " ", s.upper())

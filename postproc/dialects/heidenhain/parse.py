@@ -102,7 +102,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
-        self.tilt: np.ndarray | None = None  # its rotation where the text gives it (PLANE SPATIAL)
+        self.tilt: np.ndarray | None = None  # its rotation where the text gives it (plane_forms)
+        self.tilt_form = ""  # SPATIAL, EULER, ... of the PLANE in force
         self.tcpm = False
         self.planes: dict[int, tuple[int, str, bool]] = {}  # PLANE line -> (SEQ +1/-1/0, MOVE/TURN/STAY, a DIST or feed given after it)
         self.positioning_rows: set[int] = set()  # rows of PLANE ... MOVE/TURN: the TNC turns the rotary axes there
@@ -435,7 +436,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
-        """The frame of the next target: the preset, the datum shift on it, a PLANE SPATIAL
+        """The frame of the next target: the preset, the datum shift on it, a PLANE
         tilt about the shifted datum (TNC 640 manual: Cycle 7 before tilting shifts in the
         untilted system)."""
         name, transform = self.frame
@@ -446,7 +447,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
                 transform = tilt  # on the preset itself
             elif transform is not None:
                 transform = transform @ tilt  # else: on a shift the text does not give, still unknown
-            name = f"{name}+PLANE SPATIAL@line{self.tilt_line}"
+            name = f"{name}+PLANE {self.tilt_form}@line{self.tilt_line}"
         return 0 if name == "PRESET" else self.b.frame_index(name, transform, False)
 
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
