@@ -87,7 +87,7 @@ def test_angle_not_permitted():
 
 
 @pytest.mark.parametrize("plane, machine, why", [
-    ("PLANE SPATIAL SPA+30 SPB+0 SPC+0 SEQ+ STAY", "xyzac-trt", "STAY leaves the rotary axes"),
+    ("PLANE SPATIAL SPA+30 SPB+0 SPC+0 SEQ+ STAY", "xyzac-trt", "do not stand in the tilted plane"),  # STAY: no block positions the axes
     ("PLANE SPATIAL SPA+0 SPB+30 SPC+0 SEQ+ TURN", "xyzbc-5axiskins", "the tip swings by the tool length"),
 ])
 def test_what_the_manual_leaves_to_the_machine_stays_flagged(plane, machine, why):

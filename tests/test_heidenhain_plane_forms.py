@@ -21,6 +21,7 @@ import pytest
 
 from postproc import dialects
 from postproc.errors import ParseError
+from postproc.fivex.errors import MachineFileError
 from postproc.fivex.machine import load_machine
 from postproc.programs import parse_program
 
@@ -129,3 +130,88 @@ def test_turn_on_a_head_machine_swings_the_tip_about_the_pivot():
 def test_turn_without_the_rotary_positions_before_stays_flagged():
     tp = placed("PLANE SPATIAL SPA+30 SPB+0 SPC+0 SEQ+ TURN", before="")
     assert not tp.resolved[1:].any() and any("TURN moves the tool tip" in n for n in tp.notes), tp.notes
+
+
+# ---------------------------------------------------------------- STAY, Cycle 19, PLANE AXIAL
+# The tip values: xyzac-trt with the table at A (C0) puts workpiece point p at Rx(A) (p - c) + c,
+# c = (0, 20, 10); the tip (0, 0, 50) stays in the machine when only rotary axes move, so in the
+# workpiece it goes to Rx(-A) ((0, 0, 50) - c) + c:
+TIP_AT_A_MINUS_30 = [0, -10 * S3, 20 * S3]  # Rx(30) (0, -20, 40) + c
+TIP_AT_A_PLUS_30 = [0, 40 - 10 * S3, 20 + 20 * S3]  # Rx(-30) (0, -20, 40) + c
+RX30_P = [10, -2.5, 2.5 * S3]  # Rx(30) (10, 0, 5): the next target in the plane tilted by SPA+30
+RXM30_P = [10, 2.5, 2.5 * S3]  # Rx(-30) (10, 0, 5)
+
+
+def test_stay_with_q120_q122_is_the_tncs_solution():
+    """STAY stores the solution in Q120 (A) and Q122 (C): A+30 C-180 with SEQ+; the rotary-only
+    block moves no linear axis (the TURN tip, test_turn_moves_the_tip_with_the_table)."""
+    tp = placed("PLANE SPATIAL SPA+30 SPB+0 SPC+0 SEQ+ STAY\nL A+Q120 C+Q122 R0 FMAX")
+    assert tp.resolved.all(), tp.notes
+    np.testing.assert_allclose(tp.ext[1:, [0, 2]], [(30, -180)] * 2, atol=1e-9)
+    np.testing.assert_allclose(tp.position[1:], [[0, 10 * S3 - 40, 20 + 20 * S3], RX30_P], atol=1e-9)
+    assert any("Q120..Q122 are the TNC's solution A+30.0000 C-180.0000" in n for n in tp.notes), tp.notes
+
+
+def test_stay_with_the_programs_own_numbers():
+    """The program may position the other solution itself (A-30 C0 turns Rx(30) z onto z)."""
+    tp = placed("PLANE SPATIAL SPA+30 SPB+0 SPC+0 STAY\nL A-30 C+0 R0 FMAX")
+    assert tp.resolved.all(), tp.notes
+    np.testing.assert_allclose(tp.position[1:], [TIP_AT_A_MINUS_30, RX30_P], atol=1e-9)
+
+
+def test_stay_with_axes_off_the_plane_is_flagged():
+    tp = placed("PLANE SPATIAL SPA+30 SPB+0 SPC+0 STAY\nL A+10 C+0 R0 FMAX")
+    assert tp.resolved[0] and not tp.resolved[1:].any()
+    assert any("from line 5 on" in n and "do not stand in the tilted plane" in n for n in tp.notes), tp.notes
+
+
+def test_stay_q120_without_seq_or_start_stays_flagged():
+    tp = placed("PLANE SPATIAL SPA+30 SPB+0 SPC+0 STAY\nL A+Q120 C+Q122 R0 FMAX", before="")
+    assert not tp.resolved[1:].any() and any("Q120..Q122 (the TNC's solution)" in n for n in tp.notes), tp.notes
+
+
+CYCLE19 = "CYCL DEF 19.0 WORKING PLANE\nCYCL DEF 19.1 A{a}\nL A{axis} C+0 R0 FMAX"
+
+
+def test_cycle19_spatial_angles_by_default():
+    """Without [heidenhain] cycle19_angles the angles are spatial: A+30 is Rx(30), reached at A-30 C0."""
+    tp = placed(CYCLE19.format(a="+30", axis="-30"))
+    assert tp.resolved.all(), tp.notes
+    np.testing.assert_allclose(tp.position[1:], [TIP_AT_A_MINUS_30, RX30_P], atol=1e-9)
+    assert not placed(CYCLE19.format(a="+30", axis="+30")).resolved[1:].any()  # A+30 C0 tilts to Rx(-30)
+
+
+def axis_angle_machine(tmp_path):
+    text = (Path(__file__).parents[1] / "machines" / "xyzac-trt.toml").read_text()
+    path = tmp_path / "xyzac-axis.toml"
+    path.write_text(text.replace('name = "xyzac-trt"', 'name = "xyzac-axis"') + '\n[heidenhain]\ncycle19_angles = "axis"\n')
+    return str(path)
+
+
+def test_cycle19_axis_angles_from_the_machine_file(tmp_path):
+    """cycle19_angles = "axis": A+30 is the table at A+30: the plane Rx(-30); A-30 is Rx(30), the
+    same plane as spatial A+30."""
+    machine = axis_angle_machine(tmp_path)
+    tp = placed(CYCLE19.format(a="+30", axis="+30"), machine)
+    assert tp.resolved.all(), tp.notes
+    np.testing.assert_allclose(tp.position[1:], [TIP_AT_A_PLUS_30, RXM30_P], atol=1e-9)
+    tp = placed(CYCLE19.format(a="-30", axis="-30"), machine)
+    np.testing.assert_allclose(tp.position[1:], [TIP_AT_A_MINUS_30, RX30_P], atol=1e-9)
+
+
+def test_machine_file_heidenhain_key_is_checked(tmp_path):
+    path = tmp_path / "bad.toml"
+    path.write_text(Path(axis_angle_machine(tmp_path)).read_text().replace('"axis"', '"axes"'))
+    with pytest.raises(MachineFileError, match="heidenhain.cycle19_angles"):
+        load_machine(str(path))
+
+
+@pytest.mark.parametrize("plane, tip, after", [
+    ("PLANE AXIAL A-30 MOVE", [0, 0, 50], RX30_P),  # C not given: stays at C0; MOVE keeps the tip
+    ("PLANE AXIAL A+30 TURN", TIP_AT_A_PLUS_30, RXM30_P),
+])
+def test_plane_axial(plane, tip, after):
+    tp = placed(plane)
+    assert tp.resolved.all(), tp.notes
+    np.testing.assert_allclose(tp.position[1:], [tip, after], atol=1e-9)
+    np.testing.assert_allclose(tp.ext[1:, [0, 2]], [(float(plane.split()[2][1:]), 0)] * 2, atol=1e-9)

@@ -80,11 +80,7 @@ class StateBlocks:
         if number == 7:
             return self.datum_shift(sub, rest, at + m.start(3), line)
         if number == 19:
-            if sub and sub != "0":
-                angles = [float(v) for v in re.findall(r"[ABC]\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)]
-                self.tilt_line = line if any(a != 0.0 for a in angles) else 0
-                self.tilt = None  # axis or spatial angles, as the machine parameters say: not read
-            return None
+            return self.cycle19(sub, rest, at + m.start(3), line)
         if number in (8, 10, 11, 26):
             if sub and sub != "0":
                 raise self.error(at, f"coordinate transformation cycle {number} (mirror / rotation / scaling) is not read")
@@ -133,24 +129,58 @@ class StateBlocks:
             raise self.error(at, f"'{' '.join(up.split()[:2])}' is not a PLANE function (SPATIAL, PROJECTED, EULER, VECTOR, POINTS, RELATIV, AXIAL, RESET)")
         active = self.tilt if self.tilt_line else np.eye(3)
         self.tilt = None
+        axes = np.full(3, np.nan)
         if form.group(1) == "RESET":
             self.tilt_line, self.tilt_form = 0, ""
         else:
             self.tilt_line, self.tilt_form = line, form.group(1)
             self.tilt = self._plane_rotation(form.group(1), s, at, active)
+            if form.group(1) == "AXIAL":
+                axes = self._axis_words(s[form.end():], at + form.end(), "PLANE AXIAL")
         mode = re.search(r"\b(MOVE|TURN|STAY)\b", up)
         seq = re.search(r"\bSEQ\s*([+-])", up)
         dist = re.search(r"\b(?:DIST|ABST)\s*([+-]?(?:\d+\.?\d*|\.\d+))", up[mode.end():]) if mode else None
         if mode and dist is None and re.search(r"\b(?:DIST|ABST)\b", up[mode.end():]):
             raise self.error(at + mode.end(), "PLANE ... DIST: the distance is read as a number only")
         self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY",
-                             float(dist.group(1)) * self.scale if dist else 0.0)
+                             float(dist.group(1)) * self.scale if dist else 0.0, form.group(1), axes)
+        if self.tilt_line and (not mode or mode.group(1) == "STAY"):  # the TNC stores its solution in Q120 (A), Q121 (B), Q122 (C)
+            for name in ("Q120", "Q121", "Q122"):
+                self.q[name] = math.nan
+                self.q_origin.pop(name, None)
+                self.plane_q_line[name] = line
         if mode and mode.group(1) in ("MOVE", "TURN"):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
             self.positioning_rows.add(self.rows_all())
             self.unresolved_row(line, at, f"line {line}: PLANE ... {mode.group(1)} positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): "
-                                "computed where a machine is given (compensate / convert), else not read")
+                                "computed where a machine is given (compensate / convert), else not read", self._tilt_only(line, False))
         return None
+
+    def cycle19(self, sub: str | None, rest: str, at: int, line: int):
+        """CYCL DEF 19 WORKING PLANE: A B C as spatial angles or axis angles, as the machine's
+        parameters say (machine file [heidenhain] cycle19_angles; placed in plane_solution); all
+        zero resets the tilt. The cycle positions no axis: the program's own blocks do (TNC 640
+        manual, "Cycle 19 WORKING PLANE")."""
+        if not sub or sub == "0":
+            return None
+        axes = self._axis_words(rest, at, "CYCL DEF 19")
+        if np.all(np.nan_to_num(axes) == 0.0):
+            self.tilt_line, self.tilt_form, self.tilt = 0, "", None
+            return None
+        self.tilt_line, self.tilt_form, self.tilt = line, "CYCL19", None
+        self.planes[line] = (0, "STAY", 0.0, "CYCL19", axes)
+        return None
+
+    def _axis_words(self, s: str, at: int, what: str) -> np.ndarray:
+        """A B C of PLANE AXIAL / Cycle 19 (deg; NaN: not given)."""
+        out = np.full(3, np.nan)
+        for m in re.finditer(r"(?<![A-Z])([ABC])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE):
+            out["ABC".index(m.group(1).upper())] = self.value(m.group(2), at + m.start(2))[0]
+        if re.search(r"(?<![A-Z])I[ABC]", s, re.IGNORECASE):
+            raise self.error(at, f"{what}: incremental angles are not read")
+        if any(m.group(2).strip().upper().startswith("Q") for m in re.finditer(r"(?<![A-Z])([ABC])\s*([+-]?\s*Q[LR]?\d+)", s, re.IGNORECASE)) and np.isnan(out).any():
+            return np.full(3, np.nan)  # an angle from a Q parameter the text does not give: the plane is not determined
+        return out
 
     def _plane_rotation(self, form: str, s: str, at: int, active: np.ndarray | None) -> np.ndarray | None:
         """The tilted plane's orientation in the untilted workpiece system (plane_forms), None where

@@ -84,6 +84,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.labels = self._labels()
         self.q: dict[str, float] = {}
         self.q_origin: dict[str, int] = {}  # parameter -> line where it became unknown (FN 18)
+        self.plane_q_line: dict[str, int] = {}  # Q120..Q122 -> line of the PLANE ... STAY that computes them
+        self.plane_q = np.zeros(3, bool)  # A B C last set from the PLANE's own Q120 / Q121 / Q122
+        self.plane_q_events: list[tuple[int, np.ndarray]] = []  # (first row, plane_q) at each change
         self.scale = 1.0  # mm per program unit
         self.feed_scale = 1.0
         self.pos = np.full(6, np.nan)  # X Y Z A B C, program frame
@@ -270,7 +273,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
 
     def unknown_cause(self, used: list[str]) -> str:
         names = [u for u in used if math.isnan(self.q.get(u, math.nan))]
-        parts = [f"{u} (read from the control by FN 18 at line {self.q_origin[u]})" if u in self.q_origin else f"{u} (never set in this program)" for u in dict.fromkeys(names)]
+        parts = [f"{u} (read from the control by FN 18 at line {self.q_origin[u]})" if u in self.q_origin else
+                 f"{u} (the rotary position the TNC computes for the PLANE at line {self.plane_q_line[u]})" if u in self.plane_q_line else
+                 f"{u} (never set in this program)" for u in dict.fromkeys(names)]
         return ", ".join(parts) or "a value the text does not determine"
 
     def value(self, text: str, at: int) -> tuple[float, list[str]]:
@@ -303,6 +308,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         v, used = self.value(m.group(2), at + m.start(2))
         self.q[name] = v
         self.q_origin.pop(name, None)
+        self.plane_q_line.pop(name, None)
         from_control = [u for u in used if u in self.q_origin]
         if math.isnan(v) and from_control:  # unknown because of an FN 18 value: say which
             self.q_origin[name] = self.q_origin[from_control[0]]
@@ -401,6 +407,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             new = self.pos[i] + v if w.incremental else v
             self.unknown[i] = math.isnan(v)
             self.pos[i] = new
+            if i >= 3:
+                self._rotary_from_plane(i - 3, w.text)
             moved = True
             if w.plain and not w.incremental:
                 vals[k] = new
@@ -412,15 +420,33 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
                 raise self.error(words.words[extra].start, f"{extra} is not read in this block")
         return moved
 
-    def unresolved_row(self, line: int, at: int, note: str) -> None:
+    def _rotary_from_plane(self, axis: int, text: str) -> None:
+        """Note whether rotary axis ``axis`` (0 A, 1 B, 2 C) is now at the value the TNC computed
+        for the PLANE ... STAY in force (Q120 A, Q121 B, Q122 C: TNC 640 manual, "Automatic
+        positioning: STAY"); placed with a machine (plane_solution)."""
+        name = f"Q{120 + axis}"
+        mask = self.plane_q.copy()
+        mask[axis] = text.lstrip("+").upper() == name and name in self.plane_q_line
+        if (mask != self.plane_q).any():
+            self.plane_q = mask
+            self.plane_q_events.append((self.rows_all(), mask))
+
+    def plane_q_rows(self, n: int) -> np.ndarray:
+        """(n, 3) per target: A B C at the PLANE's own Q120..Q122."""
+        out = np.zeros((n, 3), bool)
+        for row, mask in self.plane_q_events:
+            out[row:] = mask
+        return out
+
+    def unresolved_row(self, line: int, at: int, note: str, aside: bool = False) -> None:
         self.notes[note] = None
-        self.add_row(int(Kind.RAPID), line, math.nan, False, -1, {}, {})
+        self.add_row(int(Kind.RAPID), line, math.nan, False, -1, {}, {}, aside)
 
     def row(self, kind: str, words: PathWords, vals: dict, spans: dict, line: int, at: int, arc, machine_datum: bool, start) -> None:
         # values: the block's own words (NaN for modal axes it leaves out, which splice may add
         # at insert_at); the position and rotary angles in force are kept beside them
         rapid = words.rapid
-        resolved = self._state_resolved(line, machine_datum)
+        resolved, aside = self._state_reasons(line, machine_datum)
         if rapid:
             k = Kind.RAPID
         elif arc is None:
@@ -429,10 +455,11 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
         if kind == "LN":
-            resolved = resolved and self.ln_deltas_zero and not self.tcpm
+            ln_read = self.ln_deltas_zero and not self.tcpm
+            resolved, aside = resolved and ln_read, aside and ln_read
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
-        self.add_row(int(k), line, feed, resolved, insert, vals, spans)
+        self.add_row(int(k), line, feed, resolved, insert, vals, spans, aside)
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
@@ -440,10 +467,12 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         tilt about the shifted datum (TNC 640 manual: Cycle 7 before tilting shifts in the
         untilted system)."""
         name, transform = self.frame
-        if self.tilt_line and self.tilt is not None:
+        if self.tilt_line:
             tilt = np.eye(4)
-            tilt[:3, :3] = self.tilt
-            if name == "PRESET":
+            tilt[:3, :3] = np.nan if self.tilt is None else self.tilt  # None: the machine's (AXIAL, Cycle 19) or a Q parameter's
+            if self.tilt is None:
+                transform = None
+            elif name == "PRESET":
                 transform = tilt  # on the preset itself
             elif transform is not None:
                 transform = transform @ tilt  # else: on a shift the text does not give, still unknown
@@ -452,6 +481,12 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
 
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
         """False (with a note) where the modal state leaves the position to what the text does not give."""
+        return self._state_reasons(line, machine_datum)[0]
+
+    def _state_reasons(self, line: int, machine_datum: bool) -> tuple[bool, bool]:
+        """(resolved, resolved but for the tilted plane): False (with a note) where the modal state
+        leaves the position to what the text does not give; the second ignores the tilted plane and
+        the rotary positions it computes (Q120..Q122), which a machine places (plane_solution)."""
         resolved = True
         if self.comp in ("RL", "RR") and math.isnan(self.radius):
             resolved = False
@@ -466,7 +501,15 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if self.unknown.any():
             resolved = False
             self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
-        return resolved
+        aside = resolved or (self._tilt_only(line, machine_datum) if self.tilt_line else False)
+        return resolved, aside
+
+    def _tilt_only(self, line: int, machine_datum: bool) -> bool:
+        """True where nothing but the tilted plane (and its Q120..Q122) leaves this target open."""
+        unknown = self.unknown.copy()
+        unknown[3:] &= ~self.plane_q
+        # RL / RR in a tilted plane: the contour is not followed there (radius_comp needs resolved targets)
+        return not (self.comp in ("RL", "RR") or machine_datum or unknown.any())
 
     def rows_all(self) -> int:
         """Rows read so far, in segments and in the row list."""
@@ -483,11 +526,11 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.rows_before += len(self.rows)
             self.rows, self.cells = [], []
 
-    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
+    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict, aside: bool | None = None) -> None:
         r = self.rows_all()
         p = self.pos
         self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm,
-                          SIDE[self.comp], self.radius))
+                          SIDE[self.comp], self.radius, resolved if aside is None else aside))
         for f, v in vals.items():
             self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
 
@@ -525,8 +568,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         side, radius = table[:, 14], table[:, 15]
         ext[:, :3] = table[:, 10:13]
         tcpm = table[:, 13].astype(bool)
-        resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
-        extras = {"heidenhain.tcpm": tcpm, **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
+        mixed = self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
+        resolved = tp.resolved & ~mixed
+        extras = {"heidenhain.tcpm": tcpm, "heidenhain.plane_q": self.plane_q_rows(n), "heidenhain.resolved_but_plane": table[:, 16].astype(bool) & ~mixed,
+                  **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
         tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras=extras)
         if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
             tp = radius_comp.follow(tp, side, radius)
