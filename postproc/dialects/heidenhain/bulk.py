@@ -71,7 +71,7 @@ class BulkReading:
             if self.unknown[col]:  # from a parameter the text does not determine, until the axis is given
                 known_from = int(r[0]) if len(r) else n
                 unknown_rows[:known_from] = True
-                open_rows[:known_from] |= col < 3 or not self.plane_q[col - 3]
+                open_rows[:known_from] |= col < 3 or self.rotary_source[col - 3] == 0  # 0: the text's (ln.SOURCE_TEXT)
                 self.unknown[col] = known_from == n
             cells.append(np.c_[r + first_row, np.full(len(r), AXES[chr(ch)]), v, num_start[sel], num_end[sel]])
         fs, _ = self.plain.span("feed")

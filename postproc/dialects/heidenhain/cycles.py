@@ -53,7 +53,9 @@ class StateBlocks:
         # LN (3-D compensation) moves the tool along N by the sum of the delta values (tool table and TOOL
         # CALL): zero for a tool the program defines (no table row) called without DL / DR / DR2
         deltas = re.findall(r"\b(?:DL|DR2|DR)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
-        self.ln_deltas_zero = name in self.tool_radius and all(float(v) == 0.0 for v in deltas)
+        self.ln_delta = sum(float(v) for v in deltas) * self.scale if name in self.tool_radius else math.nan
+        if re.search(r"\bDR2\s*[+-]?\s*Q", rest, re.IGNORECASE):
+            self.ln_delta = math.nan  # DR2 from a Q parameter: LN's displacement is not read
         if dl and float(dl.group(1)) != 0.0:
             delta = float(dl.group(1)) * self.scale
             known = bool(self.b.tool_known[base])

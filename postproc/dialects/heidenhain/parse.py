@@ -50,6 +50,8 @@ from .bulk import BulkReading
 from .contours import Contours
 from .cycles import StateBlocks
 from .fields import AXES, COLUMNS, SIDE
+from .ln import SOURCE_PLANE_Q, SOURCE_LN, SOURCE_TEXT, LnBlocks
+from .ln_placement import ln_extras
 from . import radius_comp
 from .plane_solution import plane_extras
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
@@ -71,7 +73,7 @@ _REFUSED_STATEMENTS = {
 }
 
 
-class KlartextReader(BulkReading, Contours, StateBlocks):
+class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
     """One run of a Klartext program: the state the TNC keeps, block by block."""
 
     def __init__(self, doc: SourceDoc, dialect: str = "heidenhain"):
@@ -85,8 +87,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.q: dict[str, float] = {}
         self.q_origin: dict[str, int] = {}  # parameter -> line where it became unknown (FN 18)
         self.plane_q_line: dict[str, int] = {}  # Q120..Q122 -> line of the PLANE ... STAY that computes them
-        self.plane_q = np.zeros(3, bool)  # A B C last set from the PLANE's own Q120 / Q121 / Q122
-        self.plane_q_events: list[tuple[int, np.ndarray]] = []  # (first row, plane_q) at each change
+        self.rotary_source = np.zeros(3, np.int8)  # where A B C in force come from (ln.SOURCE_*: the text, Q120..Q122, LN under M128)
+        self.rotary_events: list[tuple[int, np.ndarray]] = []  # (first row, rotary_source) at each change
+        self.ln_rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # LN row -> (tip offset from X Y Z, tool axis under M128)
         self.scale = 1.0  # mm per program unit
         self.feed_scale = 1.0
         self.pos = np.full(6, np.nan)  # X Y Z A B C, program frame
@@ -101,7 +104,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.tool = 0
         self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
         self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
-        self.ln_deltas_zero = False  # the tool in force has no delta values (LN then moves to X Y Z as written)
+        self.ln_delta = math.nan  # DL + DR + DR2 of the tool in force (mm), what LN moves the tool along N by; NaN: not in the text
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
@@ -355,8 +358,6 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         arc = None
         if kind in ("L", "LN"):
             moved = self.cartesian(words, vals, spans, at)
-            if kind == "LN":
-                self.ln_note(line)
         elif kind in ("C", "CR", "CT"):
             moved = self.cartesian(words, vals, spans, at)
             arc = self.circle(kind, words, start, vals, spans, at)
@@ -369,21 +370,6 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if moved or kind != "L":
             self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
         return self.m_functions(words, line, at)
-
-    def ln_note(self, line: int) -> None:
-        """LN X Y Z NX NY NZ (TX TY TZ): X Y Z are the compensated end point; the TNC moves the tool
-        along N by the sum of the delta values (tool table and TOOL CALL), and under M128 / TCPM
-        turns the rotary axes to T (or perpendicular to the surface without T); without M128 T is
-        ignored (TNC 640 manual, "Three-dimensional tool compensation")."""
-        if self.tcpm:
-            self.notes[f"line {line}: LN under M128 / TCPM: the TNC turns the rotary axes to the tool orientation T (or normal to the surface), "
-                       "a solution of its own: not read"] = None
-        elif not self.ln_deltas_zero:
-            self.notes[f"line {line}: LN: the TNC moves the tool along N by the tool's delta values (tool table and TOOL CALL), which the text "
-                       "does not give (a tool from the tool table) or are not zero: not read"] = None
-        else:
-            self.notes["LN without M128: the tool moves to X Y Z (no delta values: TOOL DEF tool, no DL / DR / DR2); N and T change nothing "
-                       "(TNC 640 manual, three-dimensional tool compensation)"] = None
 
     def _feed(self, words: PathWords) -> None:
         if words.feed_other:
@@ -408,7 +394,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.unknown[i] = math.isnan(v)
             self.pos[i] = new
             if i >= 3:
-                self._rotary_from_plane(i - 3, w.text)
+                name = f"Q{117 + i}"  # Q120 A, Q121 B, Q122 C
+                from_plane = w.text.lstrip("+").upper() == name and name in self.plane_q_line
+                self.set_rotary_source(np.arange(3) == i - 3, SOURCE_PLANE_Q if from_plane else SOURCE_TEXT)
             moved = True
             if w.plain and not w.incremental:
                 vals[k] = new
@@ -419,24 +407,6 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             if extra in words.words:
                 raise self.error(words.words[extra].start, f"{extra} is not read in this block")
         return moved
-
-    def _rotary_from_plane(self, axis: int, text: str) -> None:
-        """Note whether rotary axis ``axis`` (0 A, 1 B, 2 C) is now at the value the TNC computed
-        for the PLANE ... STAY in force (Q120 A, Q121 B, Q122 C: TNC 640 manual, "Automatic
-        positioning: STAY"); placed with a machine (plane_solution)."""
-        name = f"Q{120 + axis}"
-        mask = self.plane_q.copy()
-        mask[axis] = text.lstrip("+").upper() == name and name in self.plane_q_line
-        if (mask != self.plane_q).any():
-            self.plane_q = mask
-            self.plane_q_events.append((self.rows_all(), mask))
-
-    def plane_q_rows(self, n: int) -> np.ndarray:
-        """(n, 3) per target: A B C at the PLANE's own Q120..Q122."""
-        out = np.zeros((n, 3), bool)
-        for row, mask in self.plane_q_events:
-            out[row:] = mask
-        return out
 
     def unresolved_row(self, line: int, at: int, note: str, aside: bool = False) -> None:
         self.notes[note] = None
@@ -454,12 +424,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         else:
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
+        offset = None
         if kind == "LN":
-            ln_read = self.ln_deltas_zero and not self.tcpm
-            resolved, aside = resolved and ln_read, aside and ln_read
+            offset, axis, ln_read = self.ln_target(words, line, at)
+            resolved, aside = resolved and ln_read and not self.tcpm, aside and ln_read
+            self.ln_rows[self.rows_all()] = (offset, axis)
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
-        self.add_row(int(k), line, feed, resolved, insert, vals, spans, aside)
+        self.add_row(int(k), line, feed, resolved, insert, vals, spans, aside, offset)
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
@@ -501,13 +473,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if self.unknown.any():
             resolved = False
             self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
-        aside = resolved or (self._tilt_only(line, machine_datum) if self.tilt_line else False)
+        aside = resolved or self._tilt_only(line, machine_datum)
         return resolved, aside
 
     def _tilt_only(self, line: int, machine_datum: bool) -> bool:
-        """True where nothing but the tilted plane (and its Q120..Q122) leaves this target open."""
+        """True where nothing but what a machine places (the tilted plane, Q120..Q122, the rotary
+        positions of LN under M128) leaves this target open."""
         unknown = self.unknown.copy()
-        unknown[3:] &= ~self.plane_q
+        unknown[3:] &= self.rotary_source == SOURCE_TEXT  # Q120..Q122, LN under M128: the TNC's rotary positions, placed with a machine
         # RL / RR in a tilted plane: the contour is not followed there (radius_comp needs resolved targets)
         return not (self.comp in ("RL", "RR") or machine_datum or unknown.any())
 
@@ -526,9 +499,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.rows_before += len(self.rows)
             self.rows, self.cells = [], []
 
-    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict, aside: bool | None = None) -> None:
+    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict, aside: bool | None = None,
+                offset: np.ndarray | None = None) -> None:
         r = self.rows_all()
-        p = self.pos
+        p = self.pos if offset is None else np.r_[self.pos[:3] + offset, self.pos[3:]]  # LN: the tip off X Y Z (ln)
         self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm,
                           SIDE[self.comp], self.radius, resolved if aside is None else aside))
         for f, v in vals.items():
@@ -570,7 +544,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         tcpm = table[:, 13].astype(bool)
         mixed = self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
         resolved = tp.resolved & ~mixed
-        extras = {"heidenhain.tcpm": tcpm, "heidenhain.plane_q": self.plane_q_rows(n), "heidenhain.resolved_but_plane": table[:, 16].astype(bool) & ~mixed,
+        source = self.rotary_source_rows(n)
+        extras = {"heidenhain.tcpm": tcpm, "heidenhain.plane_q": source == SOURCE_PLANE_Q, "heidenhain.ln_rotary": source == SOURCE_LN,
+                  **ln_extras(self.ln_rows, n), "heidenhain.resolved_but_plane": table[:, 16].astype(bool) & ~mixed,
                   **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
         tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras=extras)
         if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
