@@ -49,7 +49,9 @@ class StateBlocks:
         if re.search(r"\bDL\s*[+-]?\s*Q", rest, re.IGNORECASE):
             raise self.error(at, "DL from a Q parameter is not read")
         base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
-        self.radius = self.tool_radius.get(name, math.nan) + self._delta_radius(rest, at)
+        self.called.add(name)
+        # the compensation value R + DR TAB + DR of TOOL CALL (TNC 640 manual, 5.3): R of TOOL DEF, or the table's R + DR given from outside
+        self.radius = self.tool_radius.get(name, self.table_radius.get(name, math.nan)) + self._delta_radius(rest, at)
         # LN (3-D compensation) moves the tool along N by the sum of the delta values (tool table and TOOL
         # CALL): zero for a tool the program defines (no table row) called without DL / DR / DR2
         deltas = re.findall(r"\b(?:DL|DR2|DR)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)

@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ...errors import ParseError
+from ...errors import InputError, ParseError
 from ...ir import F_ARC, FIELDS, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ...parse.line_shapes import LineMatches
@@ -76,7 +76,7 @@ _REFUSED_STATEMENTS = {
 class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
     """One run of a Klartext program: the state the TNC keeps, block by block."""
 
-    def __init__(self, doc: SourceDoc, dialect: str = "heidenhain"):
+    def __init__(self, doc: SourceDoc, dialect: str = "heidenhain", table_radius: dict[str, float] | None = None):
         self.doc = doc
         self.text = doc.text
         self.lines = LineIndex(doc.text)
@@ -104,6 +104,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         self.tool = 0
         self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
         self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
+        self.table_radius = dict(table_radius or {})  # tool table R + DR of tools the program calls, given from outside (--tool-radius)
+        self.called: set[str] = set()  # names of the tools TOOL CALL calls
         self.ln_delta = math.nan  # DL + DR + DR2 of the tool in force (mm), what LN moves the tool along N by; NaN: not in the text
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
@@ -564,5 +566,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         return mixed
 
 
-def read_klartext(doc: SourceDoc) -> Toolpath:
-    return KlartextReader(doc).run()
+def read_klartext(doc: SourceDoc, table_radius: dict[str, float] | None = None) -> Toolpath:
+    """The program of ``doc``; ``table_radius``: the tool table's radius (R + DR, mm) of tools
+    it calls but does not define (TOOL CALL 5: "T5"; TOOL CALL "NAME": "NAME")."""
+    reader = KlartextReader(doc, table_radius=table_radius)
+    tp = reader.run()
+    for name in reader.table_radius:
+        if name in reader.tool_radius and name != "T0":
+            raise InputError(f"--tool-radius {name}: the program defines that tool's radius itself (TOOL DEF); the option is not used for it")
+        if name not in reader.called:
+            raise InputError(f"--tool-radius {name}: {doc.path} never calls that tool (TOOL CALL 5 is T5, TOOL CALL \"NAME\" is NAME)")
+    return tp
