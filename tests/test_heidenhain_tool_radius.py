@@ -67,3 +67,4 @@ def test_inspect_with_tool_radius(tmp_path):
     assert [m.get("cutter_comp") for m in moves][1:3] == ["offset", "corner"]
     res = runner.invoke(app, ["inspect", str(source), "--tool-radius", "T7=1.5"])
     assert res.exit_code == 2 and "never calls that tool" in res.output, res.output
+

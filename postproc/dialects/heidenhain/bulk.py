@@ -105,7 +105,7 @@ class BulkReading:
         table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)
         table[:, 16] = ~compensated & ~open_rows & ((table[:, 14] == 0) | (self.tilt_line == 0))  # RL / RR: not followed in a tilted plane
         if unknown_rows.any():
-            self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
+            self.notes[f"line {run.first + 1}: position from a value the text does not determine (a Q parameter, a retract to the traverse limit)"] = None
         if self.tilt_line:
             self._state_resolved(run.first + 1, False)  # the note
         self.tangent = _last_direction(self.pos[:2], table[:, 7:9], self.tangent)

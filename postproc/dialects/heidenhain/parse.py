@@ -338,7 +338,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
             elif number == 103:
                 raise self.error(where, "M103 F: the TNC lowers the plunging feed by a factor (TNC manual, M103): not read")
             elif number == 140:
-                raise self.error(where, "M140 retracts along the tool axis to a distance the text does not give (MB): not read")
+                raise self.error(where, "M140 retracts along the tool axis: write it in an L block without axis words (L M140 MB ..)")
         return None
 
     # ------------------------------------------------------------- motion
@@ -354,6 +354,8 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         if kind == "CC":
             self.set_pole(words, at)
             return self.m_functions(words, line, at)
+        if any(n == 140 for n, _ in words.m):
+            return self.retract(kind, words, line, at)
         start = self.pos.copy()
         vals: dict[int, float] = {}  # field -> value of the block's own words (and arc data)
         spans: dict[int, tuple[int, int, int]] = {}  # field -> (source, start, end) of a plain number
@@ -372,6 +374,23 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         if moved or kind != "L":
             self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
         return self.m_functions(words, line, at)
+
+    def retract(self, kind: str, words: PathWords, line: int, at: int):
+        """L M140 MB d / MB MAX: the tool moves back along the tool axis by d, or to the end of the
+        traverse range (TNC 640 manual, "M140: Retraction from the contour in the tool-axis
+        direction"). With tool axis Z (no M128) that is Z + d; MB MAX's end is the machine's:
+        Z is then unknown (flagged) until the program gives it again."""
+        if kind != "L" or words.words or words.mb is None:
+            raise self.error(at, "M140 is read in an L block without axis words, with MB (L M140 MB 50 / MB MAX)")
+        value, where = words.mb
+        if value == "MAX" or self.tcpm:
+            self.pos[2], self.unknown[2] = math.nan, True
+            self.unresolved_row(line, where, f"line {line}: M140 MB {value}: the TNC retracts along the tool axis "
+                                + ("to the end of its traverse range, which the text does not give" if value == "MAX" else "under M128 (its direction is the turned tool axis)"))
+            return self.m_functions(replace(words, m=[(n, w) for n, w in words.m if n != 140]), line, at)
+        self.pos[2] += float(value) * self.scale
+        self.row(kind, words, {}, {}, line, at, None, False, self.pos.copy())
+        return self.m_functions(replace(words, m=[(n, w) for n, w in words.m if n != 140]), line, at)
 
     def _feed(self, words: PathWords) -> None:
         if words.feed_other:
@@ -474,7 +493,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
             self.notes[f"line {line}: M91/M92: coordinates in the machine datum, which the text does not give"] = None
         if self.unknown.any():
             resolved = False
-            self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
+            self.notes[f"line {line}: position from a value the text does not determine (a Q parameter, a retract to the traverse limit)"] = None
         aside = resolved or self._tilt_only(line, machine_datum)
         return resolved, aside
 
