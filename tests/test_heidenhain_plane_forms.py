@@ -215,3 +215,17 @@ def test_plane_axial(plane, tip, after):
     assert tp.resolved.all(), tp.notes
     np.testing.assert_allclose(tp.position[1:], [tip, after], atol=1e-9)
     np.testing.assert_allclose(tp.ext[1:, [0, 2]], [(float(plane.split()[2][1:]), 0)] * 2, atol=1e-9)
+
+
+def test_the_corpus_program_of_every_form_is_placed_on_a_machine():
+    """tests/corpus/heidenhain/planes.h: every PLANE form and positioning mode, Cycle 19, LN and
+    M140 in one program; byte-identical round trip; on xyzac-trt every target is placed but the
+    two M140 retracts whose Z the text does not give (before any position, and MB MAX)."""
+    from postproc.programs import emit_texts
+
+    path = Path(__file__).parent / "corpus" / "heidenhain" / "planes.h"
+    tp = parse_program(path)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == path.read_bytes()
+    placed_tp = dialects.of(tp).for_machine(tp.with_frames({"PRESET": np.eye(4)}, None), load_machine("xyzac-trt"))
+    assert placed_tp.line[~placed_tp.resolved].tolist() == [5, 41], placed_tp.notes
+    np.testing.assert_allclose(placed_tp.position[2], [0, 10 * S3 - 40, 20 + 20 * S3], atol=1e-9)  # TURN, as above

@@ -383,10 +383,11 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         if kind != "L" or words.words or words.mb is None:
             raise self.error(at, "M140 is read in an L block without axis words, with MB (L M140 MB 50 / MB MAX)")
         value, where = words.mb
-        if value == "MAX" or self.tcpm:
+        if value == "MAX" or self.tcpm or math.isnan(self.pos[2]):
             self.pos[2], self.unknown[2] = math.nan, True
             self.unresolved_row(line, where, f"line {line}: M140 MB {value}: the TNC retracts along the tool axis "
-                                + ("to the end of its traverse range, which the text does not give" if value == "MAX" else "under M128 (its direction is the turned tool axis)"))
+                                + ("to the end of its traverse range, which the text does not give" if value == "MAX" else
+                                   "under M128 (its direction is the turned tool axis)" if self.tcpm else "from a Z the text does not give"))
             return self.m_functions(replace(words, m=[(n, w) for n, w in words.m if n != 140]), line, at)
         self.pos[2] += float(value) * self.scale
         self.row(kind, words, {}, {}, line, at, None, False, self.pos.copy())

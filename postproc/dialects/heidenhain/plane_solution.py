@@ -138,7 +138,7 @@ class _Open(Exception):
 
 def _place_plane(tp: Toolpath, machine, rows: np.ndarray, out: dict) -> str:
     """Place one plane's targets into ``out``; the note that says how, or _Open."""
-    why = _left_open(tp, machine, rows)
+    why = _left_open(tp, machine, rows, out["ext"])
     if why:
         raise _Open(why)
     first, at = int(rows[0]), int(tp.extras["heidenhain.plane_line"][rows[0]])
@@ -207,13 +207,14 @@ def _positioned_tip(tp: Toolpath, machine, row: int, before: np.ndarray, start: 
     return preset[:3, :3].T @ (turned - preset[:3, 3])
 
 
-def _left_open(tp: Toolpath, machine, rows: np.ndarray) -> str | None:
-    """Why the TNC's positions under this plane are not determined here, or None."""
+def _left_open(tp: Toolpath, machine, rows: np.ndarray, ext: np.ndarray) -> str | None:
+    """Why the TNC's positions under this plane are not determined here, or None (``ext``: the
+    rotary positions as placed so far, an earlier plane's included)."""
     if machine.kind not in ("table-table", "head-head"):
         return f"machine {machine.name} is {machine.kind}: its master axis is the machine builder's (table-table and head-head machines are solved)"
     first = int(rows[0])
     mode = int(tp.extras["heidenhain.plane_mode"][first])
-    before = tp.ext[first - 1, ["ABC".index(k) for k in machine.rotary_names]] if first > 0 else np.full(2, np.nan)
+    before = ext[first - 1, ["ABC".index(k) for k in machine.rotary_names]] if first > 0 else np.full(2, np.nan)
     if mode not in (MODES["MOVE"], MODES["STAY"]) and np.isnan(before).any():
         return ("TURN moves the tool tip with the rotary axes from where they are" if mode == MODES["TURN"] else
                 "MOVE DIST turns about a point on the tool axis where it is") + ", which the text does not give before this block"
