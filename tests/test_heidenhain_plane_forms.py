@@ -23,7 +23,7 @@ from postproc import dialects
 from postproc.errors import ParseError
 from postproc.fivex.errors import MachineFileError
 from postproc.fivex.machine import load_machine
-from postproc.programs import parse_program
+from postproc.programs import emit_texts, parse_program
 
 S3 = np.sqrt(3.0)
 RY30 = np.array([[S3 / 2, 0, 0.5], [0, 1, 0], [-0.5, 0, S3 / 2]])  # Ry(30): columns tilted X, Y, Z
@@ -221,8 +221,6 @@ def test_the_corpus_program_of_every_form_is_placed_on_a_machine():
     """tests/corpus/heidenhain/planes.h: every PLANE form and positioning mode, Cycle 19, LN and
     M140 in one program; byte-identical round trip; on xyzac-trt every target is placed but the
     two M140 retracts whose Z the text does not give (before any position, and MB MAX)."""
-    from postproc.programs import emit_texts
-
     path = Path(__file__).parent / "corpus" / "heidenhain" / "planes.h"
     tp = parse_program(path)
     assert emit_texts(tp, tp)[0].encode("latin-1") == path.read_bytes()

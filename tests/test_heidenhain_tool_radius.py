@@ -68,3 +68,15 @@ def test_inspect_with_tool_radius(tmp_path):
     res = runner.invoke(app, ["inspect", str(source), "--tool-radius", "T7=1.5"])
     assert res.exit_code == 2 and "never calls that tool" in res.output, res.output
 
+
+
+def test_compensate_with_tool_radius_refuses_an_outside_corner_with_its_line(tmp_path):
+    """The option reaches compensate: the square's entry turns round an outside corner (line 5),
+    a transitional arc the five-axis compensation does not write: refused with file:line and why."""
+    source = tmp_path / "rc.h"
+    source.write_text(SQUARE.replace("Z+5 R0 FMAX", "Z+5 A+0 C+0 R0 FMAX"), encoding="latin-1")
+    true = Path(__file__).parent / "data" / "fivex" / "xyzac-trt-true.toml"
+    res = CliRunner().invoke(app, ["compensate", str(source), "--model", str(true), "-o", str(tmp_path / "c.h"), "--input-axes", "tip",
+                                   "--frame", "PRESET=0,0,0,0,0,0", "--tool-radius", "T5=1.5"])
+    assert res.exit_code == 2 and "rc.h:5: an outside corner under RL / RR" in res.output, res.output
+    assert not (tmp_path / "c.h").exists()

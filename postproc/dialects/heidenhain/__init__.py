@@ -14,7 +14,7 @@ from .controller import TNC
 from .parse import read_klartext
 from .ln_placement import place_ln, text_positions
 from .plane_solution import place_tilted
-from .radius_comp import contour_for
+from .radius_comp import CORNER, contour_for
 from .writer import MODES, tcpm_text
 
 
@@ -63,6 +63,12 @@ class HeidenhainDialect(Dialect):
     def refuse_compensation(self, tp: Toolpath) -> None:
         """A tilted working plane is not compensated: the correction would change the PLANE's angles
         and with them the rotary solution the TNC takes, not numbers of the blocks under it."""
+        corner = tp.extras.get(CORNER)
+        if corner is not None and corner.any():
+            i = int(np.argmax(corner))
+            raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: an outside corner under RL / RR: the TNC cuts it on a transitional arc "
+                             "about the programmed corner, a circle without a block of its own whose ends move with both sides' corrections; "
+                             "the five-axis compensation writes no arcs (round the corner in the program, or program the tool-centre path with R0)")
         ln_axis = tp.extras.get("heidenhain.ln_axis")
         if ln_axis is not None and not np.isnan(ln_axis).all():
             i = int(np.argmax(~np.isnan(ln_axis).any(axis=1)))
