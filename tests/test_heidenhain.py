@@ -244,9 +244,9 @@ REAL_EXPECTED = {
     # drunsinn/language-klartext testprogramme (hand-written and TNC example programs)
     "3170_de.h": ("refused", 22, 4, "CALL PGM runs another program file"),
     "9030_de.h": ("refused", 62, 4, "CALL PGM runs another program file"),
-    "668.h": ("refused", 11, 10, "',000' is not a word"),  # a decimal comma
-    "BewegBlv.h": ("refused", 25, 11, "',975' is not a word"),
-    "Krivka.h": ("refused", 8, 11, "',022' is not a word"),
+    "668.h": ("refused", 11, 10, "',000': a decimal comma"),  # a decimal comma
+    "BewegBlv.h": ("refused", 25, 11, "',975': a decimal comma"),
+    "Krivka.h": ("refused", 8, 11, "',022': a decimal comma"),
     "700.h": ("refused", 6, 3, "coordinate transformation cycle 8"),
     "programm-zirkularnut-fraesen.h": ("refused", 11, 4, "coordinate transformation cycle 10"),
     "7025.h": ("refused", 22, 4, "pole CC not determined"),  # CC Z X: a pole in the ZX plane

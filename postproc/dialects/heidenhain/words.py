@@ -65,6 +65,8 @@ def read_words(text: str, start: int, base: int) -> PathWords:
         m = _WORD.match(text, pos)
         if not m:
             at = pos + len(text[pos:]) - len(text[pos:].lstrip())
+            if re.match(r",\d", text[at:]):  # X+32,000: which number the control takes is its own setting: not guessed
+                raise WordError(base + at, f"'{text[at:].split()[0]}': a decimal comma; read are numbers with a decimal point (X+32.000)")
             raise WordError(base + at, f"'{text[at:].split()[0]}' is not a word of this block the reader knows")
         pos = m.end()
         if m.group("m"):

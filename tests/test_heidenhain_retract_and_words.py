@@ -1,10 +1,13 @@
-"""Heidenhain M140 (retraction along the tool axis) as the TNC runs it."""
+"""Heidenhain M140 (retraction along the tool axis) as the TNC runs it, and words the reader refuses."""
 
 from __future__ import annotations
 
 from pathlib import Path
 
 import numpy as np
+import pytest
+
+from postproc.errors import ParseError
 
 from postproc.programs import parse_program
 
@@ -22,3 +25,8 @@ def test_m140_retract():
     np.testing.assert_allclose(tp.position[:2], [[1, 2, 3], [1, 2, 53]])
     assert tp.resolved.tolist() == [True, True, False, False, True]
     assert np.isnan(tp.position[2:4, 2]).all() and tp.position[4, 2] == 15
+
+
+def test_a_decimal_comma_is_refused_with_its_column():
+    with pytest.raises(ParseError, match=r"r\.h:3:8: ',000': a decimal comma"):
+        read("BEGIN PGM R MM\nTOOL CALL 1 Z S1000\nL X+32,000 Y+0 R0 FMAX\nEND PGM R MM\n")
