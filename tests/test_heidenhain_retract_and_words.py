@@ -28,5 +28,5 @@ def test_m140_retract():
 
 
 def test_a_decimal_comma_is_refused_with_its_column():
-    with pytest.raises(ParseError, match=r"r\.h:3:8: ',000': a decimal comma"):
+    with pytest.raises(ParseError, match=r"r\.h:3:7: ',000': a decimal comma"):
         read("BEGIN PGM R MM\nTOOL CALL 1 Z S1000\nL X+32,000 Y+0 R0 FMAX\nEND PGM R MM\n")
