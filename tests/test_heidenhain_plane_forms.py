@@ -1,7 +1,7 @@
 """Heidenhain PLANE forms other than SPATIAL, and the positioning modes TURN and MOVE DIST.
 
 Expected values written by hand from the TNC 640 User's Manual (Klartext), "Tilting the working
-plane: PLANE function" (each form's definition, quoted in postproc/dialects/heidenhain/plane_forms.py)
+plane: PLANE function" (each form's definition, quoted in postproc/programs/dialects/heidenhain/plane_forms.py)
 and "Automatic positioning: MOVE/TURN/STAY":
 - MOVE turns about the tool tip; MOVE DIST d about the point d along the tool axis from the tip
   ("the tool is at the same position relative to the workpiece after positioning");

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from postproc.errors import ParseError
-
 from postproc.programs import parse_program
 
 

@@ -14,9 +14,9 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.dialects.heidenhain.tool_table import parse_tool_radii, with_tool_radii
 from postproc.errors import InputError
 from postproc.programs import parse_program
+from postproc.programs.dialects.heidenhain.tool_table import parse_tool_radii, with_tool_radii
 
 S2 = np.sqrt(2.0)
 SQUARE = ("BEGIN PGM RC MM\nTOOL CALL 5 Z S1000 DR+0.5\nL X-10 Y-10 Z+5 R0 FMAX\nL X+0 Y+0 RL F100\nL X+20\nL Y+20\nL X+0\nL Y+0\n"
