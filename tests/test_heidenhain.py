@@ -241,6 +241,20 @@ REAL_EXPECTED = {
     "parts-tools_boss_11.h": ("read", 4048, 3),
     "parts-2022_shimemcunha_12.h": ("read", 84, 6),
     "parts-2021_basemach_11.h": ("read", 2117, 23),
+    # drunsinn/language-klartext testprogramme (hand-written and TNC example programs)
+    "3170_de.h": ("refused", 22, 4, "CALL PGM runs another program file"),
+    "9030_de.h": ("refused", 62, 4, "CALL PGM runs another program file"),
+    "668.h": ("refused", 11, 10, "',000': a decimal comma"),  # a decimal comma
+    "BewegBlv.h": ("refused", 25, 11, "',975': a decimal comma"),
+    "Krivka.h": ("refused", 8, 11, "',022': a decimal comma"),
+    "700.h": ("refused", 6, 3, "coordinate transformation cycle 8"),
+    "programm-zirkularnut-fraesen.h": ("refused", 11, 4, "coordinate transformation cycle 10"),
+    "7025.h": ("refused", 22, 4, "pole CC not determined"),  # CC Z X: a pole in the ZX plane
+    "SLII001.h": ("read", 6, 3),
+    "VESELYparametr.h": ("read", 2, 2),
+    # polymech-info/heidenhain-simulator samples (a CAM post: M140 MB MAX, Cycle 200 called by M99)
+    "samples_asterix_spot-drill.h": ("read", 36, 19),
+    "samples_cas-mini_m5sx.h": ("read", 46, 24),
 }
 
 

@@ -25,6 +25,7 @@ DIALECT_HELP = f"The program's language: {LANGUAGES} (default: from the extensio
 # Options several program commands take, declared once (typer reads only their metadata).
 FRAME_OPTION = typer.Option(None, "--frame", help="NAME=X,Y,Z,A,B,C: a frame the program uses but does not define (G54, BASE_DATA[1]), mm and KUKA A,B,C degrees. Repeatable.")
 TOOL_OPTION = typer.Option(None, "--tool", help="NAME=X,Y,Z[,A,B,C]: a tool the program uses but does not define (H1, TOOL_DATA[2]). Repeatable.")
+TOOL_RADIUS_OPTION = typer.Option(None, "--tool-radius", help="TOOL=R: Klartext: the tool table's radius plus its DR (mm) of a tool the program calls but does not define (T5 for TOOL CALL 5), so RL / RR targets are followed. Repeatable.")
 START_JOINTS_OPTION = typer.Option(None, "--start-joints", help="Q1,...,Q6 degrees: the robot's posture when the program starts (for targets before the program's first joint target or configuration data).")
 TEMP_OPTION = typer.Option(None, "--temp", help="Cell temperature, degC (needs a model effect that uses it, e.g. thermal).")
 FORCE_OPTION = typer.Option(None, "--force", help="Constant process force fx,fy,fz in N, tool frame (needs a model effect that uses it, e.g. external_load).")

@@ -24,6 +24,7 @@ from postproc.model.coverage_text import describe_model, model_summary
 from postproc.model.measurements import write_text_atomic
 from postproc.programs.arcs import summary as arc_summary
 from postproc.programs.content import require_program
+from postproc.programs.dialects.heidenhain.tool_table import parse_tool_radii
 from postproc.programs.program_io import (
     check_texts,
     emit_texts,
@@ -37,7 +38,7 @@ from postproc.programs.program_io import (
 from postproc.progress import ProgressLine
 
 from .app import app, err, handles_errors, out
-from .common import DIALECT_HELP, check_output_folder, floats, named_frames
+from .common import DIALECT_HELP, TOOL_RADIUS_OPTION, check_output_folder, floats, named_frames
 from .plugin_option import with_plugins
 
 
@@ -72,6 +73,7 @@ def compensate_cmd(
     input_axes: Optional[str] = typer.Option(None, "--input-axes", help="Five-axis: tip (tool tip + rotary angles, RTCP on) or machine (machine axes)."),
     stream: str = typer.Option("auto", "--stream", help="auto (programs over 16 MB), always or never: compensate a long KRL or G-code program in chunks of lines (memory bounded; the same output), where the program allows it."),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
+    tool_radius: Optional[list[str]] = TOOL_RADIUS_OPTION,
     allow_extrapolation: bool = typer.Option(False, "--allow-extrapolation", help="Compensate targets outside the joint ranges and the region the model was measured in (refused by default: the model only extrapolates there)."),
 ):
     """Rewrite a program so the robot reaches its targets under the fitted error model
@@ -83,7 +85,7 @@ def compensate_cmd(
         load_target(model), programs=tuple(programs), output=output, out_dir=out_dir, jobs=jobs, scheduler=scheduler,
         dialect=dialect, data=tuple(data or ()), in_place=in_place, tol_mm=tol, max_iter=max_iter, scheme=scheme, temp_c=temp,
         force_n=None if force is None else tuple(floats(force, 3, "--force")), force_file=force_file, cut=cut,
-        frames=named_frames(frame, "--frame") or {}, tools=named_frames(tool, "--tool") or {},
+        frames=named_frames(frame, "--frame") or {}, tools=named_frames(tool, "--tool") or {}, tool_radii=parse_tool_radii(tool_radius),
         start_joints=None if start_joints is None else tuple(floats(start_joints, 6, "--start-joints")),
         max_deviation_mm=max_deviation, subdivide=subdivide, stream=stream, report=report, robot=robot,
         allow_mismatch=allow_mismatch, allow_extrapolation=allow_extrapolation, grid=grid, input_axes=input_axes)

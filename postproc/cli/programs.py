@@ -15,6 +15,7 @@ from postproc.jobs.convert_conf import converted_conf
 from postproc.jobs.five_axis.commands import convert_five
 from postproc.programs.arcs import describe
 from postproc.programs.dialects import get
+from postproc.programs.dialects.heidenhain.tool_table import parse_tool_radii, with_tool_radii
 from postproc.programs.emit.feeds import describe as describe_feeds
 from postproc.programs.emit.tool_load import parse_tool_load
 from postproc.programs.program_io import emit_texts, parse_program, with_robot, write_program, write_texts
@@ -22,7 +23,7 @@ from postproc.robot.frames import matrix_to_quat_wxyz
 from postproc.robot.robots import load_robot
 
 from .app import app, err, exit_code, handles_errors, out
-from .common import DIALECT_HELP, MACHINE_LANGUAGES, PROGRAM_FILES, ROBOT_LANGUAGES, named_frames, refuse_unused
+from .common import DIALECT_HELP, MACHINE_LANGUAGES, PROGRAM_FILES, ROBOT_LANGUAGES, TOOL_RADIUS_OPTION, named_frames, refuse_unused
 from .plugin_option import with_plugins
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
@@ -37,9 +38,11 @@ def inspect_cmd(
     dialect: Optional[str] = typer.Option(None, "--dialect", help=DIALECT_HELP),
     data: Optional[list[Path]] = typer.Option(None, "--data", help="KRL: another module's data list (.dat: its GLOBAL points of a PUBLIC DEFDAT), module (.src: its functions) or a folder of them, that the program uses. Repeatable."),
     robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions, with the robot file's [pulses])."),
+    tool_radius: Optional[list[str]] = TOOL_RADIUS_OPTION,
 ):
     """Motion targets of a program in the robot base frame (G-code: the machine frame), mm; a target the program text does not determine is listed and flagged."""
-    tp = with_robot(parse_program(program, dialect, modules=data or ()), None if robot is None else load_robot(robot))
+    tp = with_tool_radii(parse_program(program, dialect, modules=data or ()), parse_tool_radii(tool_radius))
+    tp = with_robot(tp, None if robot is None else load_robot(robot))
     poses = tp.base_poses()
     has_ori = ~np.isnan(tp.orientation).any(axis=1)
     quats = np.full((len(tp), 4), np.nan)
@@ -117,6 +120,7 @@ def convert_cmd(
     tool_load: Optional[str] = typer.Option(None, "--tool-load", help="MASS,CX,CY,CZ[,IX,IY,IZ]: the load every tool carries (kg; centre of gravity in the flange frame, mm; inertia about it, kg m^2), written as the tooldata's tload (rapid; tool0: a GripLoad) or $LOAD (krl). Without it the load the input program states is carried where it applies; with it, that load must be this one. Where neither gives one, RAPID tooldata get a 1 kg placeholder marked in a comment and KRL leaves $LOAD as the controller has it."),
     arc_tol: Optional[float] = typer.Option(None, "--arc-tol", help="mm: write helical and spiral arcs (G2/G3 with a move along the plane's normal, or a changing radius), which no circular move holds, as straight moves within this chord error (without it they are refused)."),
     robot: Optional[str] = typer.Option(None, "--robot", help="The robot the program runs on (a name from robots/ or a file): what only its data determine is placed (INFORM: pulse positions), and every target's configuration data in the new language's terms are computed from the joints the input's controller takes (needed for joint motions --to fanuc or inform; written also by --to rapid and val3's movej); a target whose joints the input does not determine is refused."),
+    tool_radius: Optional[list[str]] = TOOL_RADIUS_OPTION,
 ):
     """Write a new robot program with every target of another program, or a five-axis G-code program (--to gcode --machine M --rtcp MODE)."""
     if machine is not None or rtcp is not None:
@@ -125,7 +129,7 @@ def convert_cmd(
         refuse_unused("without --to gcode", {"--max-deviation": max_deviation is not None and rtcp is None})
         refuse_unused("by a five-axis G-code program", {"--tool-load": tool_load is not None, "--arc-tol": arc_tol is not None, "--robot": robot is not None})
         for line in convert_five(program, to, output, machine, rtcp, dialect, input_axes, max_deviation_mm=0.01 if max_deviation is None else max_deviation,
-                                 frames=named_frames(frame, "--frame"), tools=named_frames(tool, "--tool")):
+                                 frames=named_frames(frame, "--frame"), tools=named_frames(tool, "--tool"), tool_radii=parse_tool_radii(tool_radius)):
             out.print(line)
         return
     refuse_unused("without --machine (five-axis only)", {"--input-axes": input_axes is not None, "--max-deviation": max_deviation is not None})
@@ -133,7 +137,7 @@ def convert_cmd(
     load = None if tool_load is None else parse_tool_load(tool_load)
     outputs = get(to, "--to").new_program_paths(output)
     robot_model = None if robot is None else load_robot(robot)
-    tp = with_robot(parse_program(program, dialect), robot_model)
+    tp = with_robot(with_tool_radii(parse_program(program, dialect), parse_tool_radii(tool_radius)), robot_model)
     if frame or tool:  # work offsets and tool lengths the program leaves to the controller (refused when not given)
         tp = tp.with_frames(named_frames(frame, "--frame"), named_frames(tool, "--tool"))
     conf = None

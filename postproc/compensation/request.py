@@ -30,7 +30,7 @@ OPTION = {
     "start_joints": "--start-joints", "cut": "--cut", "max_deviation_mm": "--max-deviation", "robot": "--robot",
     "allow_mismatch": "--allow-model-mismatch", "force_file": "--force-file", "subdivide": "--subdivide", "grid": "--grid",
     "input_axes": "--input-axes", "stream": "--stream", "data": "--data", "allow_extrapolation": "--allow-extrapolation",
-    "force_per_target": "force_per_target",
+    "force_per_target": "force_per_target", "tool_radii": "--tool-radius",
 }
 # The sources of the process force, of which a request takes one, and what each gives.
 FORCE_SOURCES = {"force_n": "one constant force", "cut": "the force of every cutting move",
@@ -76,6 +76,7 @@ class CompensationRequest:
     allow_extrapolation: bool = False
     grid: Path | None = None
     input_axes: str | None = None
+    tool_radii: Mapping[str, float] = field(default_factory=dict)  # Klartext: the tool table's R + DR by tool name (--tool-radius)
 
     def __post_init__(self) -> None:
         self._refuse_what_the_machine_does_not_take()

@@ -24,7 +24,9 @@ import numpy as np
 from .errors import MachineFileError, UnknownMachineError
 
 KINDS = {"table-table": ("table", "table"), "head-table": ("head", "table"), "head-head": ("head", "head")}
-_TOP_KEYS = {"machine", "units", "sources", "linear", "rotary", "linuxcnc", "calibration"}
+_TOP_KEYS = {"machine", "units", "sources", "linear", "rotary", "linuxcnc", "calibration", "heidenhain"}
+# [heidenhain]: the TNC's machine parameters a Klartext program's meaning depends on (docs/languages/heidenhain.md)
+_HEIDENHAIN_KEYS = {"cycle19_angles": ("spatial", "axis")}
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,7 @@ class Machine:
     linuxcnc: dict[str, str] = field(default_factory=dict)
     calibration: dict[str, Any] = field(default_factory=dict)
     gauge_to_tip: float = 0.0  # head machines: from the point the head axes' points are given from to the tool tip, mm
+    heidenhain: dict[str, str] = field(default_factory=dict)  # [heidenhain] machine parameters (_HEIDENHAIN_KEYS)
 
     @property
     def rotary_names(self) -> tuple[str, str]:
@@ -183,7 +186,18 @@ def parse_machine_toml(text: str, path: str) -> Machine:
         linuxcnc={k: str(v) for k, v in r.table(data, "linuxcnc", required=False).items()},
         calibration=dict(r.table(data, "calibration", required=False)),
         gauge_to_tip=float(gauge),
+        heidenhain=_heidenhain(r, data),
     )
+
+
+def _heidenhain(r: _Reader, data: dict) -> dict[str, str]:
+    table = r.table(data, "heidenhain", required=False)
+    for key, value in table.items():
+        if key not in _HEIDENHAIN_KEYS:
+            raise r.fail(f"heidenhain.{key}", f"unknown key (allowed: {', '.join(sorted(_HEIDENHAIN_KEYS))})")
+        if value not in _HEIDENHAIN_KEYS[key]:
+            raise r.fail(f"heidenhain.{key}", f"must be one of {', '.join(_HEIDENHAIN_KEYS[key])}, got {value!r}")
+    return dict(table)
 
 
 def _rotary_axes(r: _Reader, data: dict, kind: str) -> tuple[RotaryAxis, RotaryAxis]:
@@ -231,6 +245,8 @@ def machine_toml(machine: Machine, header: str = "") -> str:
                   f"point = {vec(ax.point)}", f"limits = {vec(ax.limits)}"]
     if machine.linuxcnc:
         lines += ["", "[linuxcnc]"] + [f"{k} = {s(v)}" for k, v in machine.linuxcnc.items()]
+    if machine.heidenhain:
+        lines += ["", "[heidenhain]"] + [f"{k} = {s(v)}" for k, v in machine.heidenhain.items()]
     if machine.calibration:
         lines += ["", "[calibration]"] + [f"{k} = {s(v)}" for k, v in machine.calibration.items()]
     return "\n".join(lines) + "\n"

@@ -20,8 +20,8 @@ from postproc.programs.program_io import emit_texts, parse_program
 from postproc.robot import kinematics
 
 # What a five-axis machine's compensation uses; the rest of the request is the robot's.
-FIVE_AXIS_TAKES = frozenset({"programs", "output", "dialect", "frames", "tools", "grid", "input_axes"})
-ROBOT_TAKES = frozenset(OPTION) - {"grid", "input_axes"}
+FIVE_AXIS_TAKES = frozenset({"programs", "output", "dialect", "frames", "tools", "grid", "input_axes", "tool_radii"})
+ROBOT_TAKES = frozenset(OPTION) - {"grid", "input_axes", "tool_radii"}
 
 
 class _ProgramsByDialect:

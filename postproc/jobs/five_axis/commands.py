@@ -15,6 +15,7 @@ from postproc.fivex.machine import load_machine, machine_toml
 from postproc.fivex.probes import read_probes
 from postproc.programs import dialects
 from postproc.programs.dialects.heidenhain.kinematics import tnc_kinematics
+from postproc.programs.dialects.heidenhain.tool_table import with_tool_radii
 from postproc.programs.program_io import emit_texts, parse_program, write_program
 
 from .emit import MODES, emit, solve
@@ -76,9 +77,17 @@ def calibration_summary(doc: dict) -> list[str]:
     return lines
 
 
+def _read(program: Path, dialect: str | None, frames: dict | None, tools: dict | None, tool_radii: dict | None):
+    """The program, with the work offsets, tool lengths and (Klartext) tool-table radii it leaves to the controller."""
+    tp = with_tool_radii(parse_program(program, dialect), tool_radii or {})
+    if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
+        tp = tp.with_frames(frames, tools)
+    return tp
+
+
 def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: str | None, dialect: str | None = None,
                  input_axes: str | None = None, tool: int = 1, max_deviation_mm: float = 0.01, frames: dict | None = None,
-                 tools: dict | None = None) -> list[str]:
+                 tools: dict | None = None, tool_radii: dict | None = None) -> list[str]:
     """``convert`` with a machine: a five-axis G-code program for ``--rtcp`` mode, or a
     robot program from a five-axis G-code one. Returns the summary lines."""
 
@@ -91,10 +100,8 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
     if target.machine_program and rtcp not in modes:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(modes)} (needed with --to {to})")
     if target.five_axis_modes:  # a language that writes its own five-axis programs (Klartext M128)
-        return _convert_own(program, target, output, machine, rtcp, dialect, input_axes, tool, frames, tools)
-    tp = parse_program(program, dialect)
-    if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
-        tp = tp.with_frames(frames, tools)
+        return _convert_own(program, target, output, machine, rtcp, dialect, input_axes, tool, frames, tools, tool_radii)
+    tp = _read(program, dialect, frames, tools, tool_radii)
     path = from_toolpath(tp, machine, input_axes)
     if target.machine_program:
         if not max_deviation_mm > 0:
@@ -115,14 +122,12 @@ def convert_five(program: Path, to: str, output: Path, machine_name: str, rtcp: 
 
 
 def _convert_own(program: Path, target, output: Path, machine, rtcp: str | None, dialect: str | None, input_axes: str | None, tool: int,
-                 frames: dict | None, tools: dict | None) -> list[str]:
+                 frames: dict | None, tools: dict | None, tool_radii: dict | None = None) -> list[str]:
     """``convert --to LANG --rtcp MODE`` for a language with ``rtcp_modes``: the tips and the
     rotary positions the machine's inverse kinematics gives (emit.solve), written by the language."""
     if rtcp not in target.five_axis_modes:
         raise InputError(f"--rtcp: {'missing' if rtcp is None else repr(rtcp) + ' is not'} one of {', '.join(target.five_axis_modes)} (needed with --to {target.name})")
-    tp = parse_program(program, dialect)
-    if frames or tools:
-        tp = tp.with_frames(frames, tools)
+    tp = _read(program, dialect, frames, tools, tool_radii)
     path = from_toolpath(tp, machine, input_axes)
     axes = solve(machine, path, path.tool_length).axes
     header = [f"postproc: {rtcp} (tool tip + rotary axis positions), machine {machine.name}; from {Path(program).name}"]
@@ -138,12 +143,12 @@ def compensate_five_request(request) -> list[str]:
         raise InputError("five-axis compensation takes one program and -o OUT")
     return compensate_five_program(Path(request.programs[0]), Path(request.machine.source), Path(request.output), request.grid,
                                    request.input_axes, dialect=request.dialect, frames=dict(request.frames) or None,
-                                   tools=dict(request.tools) or None)
+                                   tools=dict(request.tools) or None, tool_radii=dict(request.tool_radii) or None)
 
 
 def compensate_five_program(program: Path, machine_file: Path, output: Path, grid_file: Path | None = None, input_axes: str | None = None,
                             controller_name: str | None = None, dialect: str | None = None, frames: dict | None = None,
-                            tools: dict | None = None) -> list[str]:
+                            tools: dict | None = None, tool_radii: dict | None = None) -> list[str]:
     """``compensate PROGRAM --model CALIBRATED.toml [--grid GRID.csv]``: the program's numbers
     for the real machine; the written text is read back and checked before it is kept."""
     # Deferred import: the error grid loads scipy.interpolate (slow to import); the CLI imports this module at start.
@@ -156,9 +161,7 @@ def compensate_five_program(program: Path, machine_file: Path, output: Path, gri
     true = load_machine(machine_file)
     controller = load_machine(controller_name or true.name)
     grid = load_grid(grid_file) if grid_file is not None else None
-    tp = parse_program(program, dialect)
-    if frames or tools:  # work offsets / tool lengths the program leaves to the controller (offsets.py refuses them undefined)
-        tp = tp.with_frames(frames, tools)
+    tp = _read(program, dialect, frames, tools, tool_radii)
     new, report = compensate_five(tp, true, controller, grid, input_axes)
     text = emit_texts(tp, new)[0]
     # What the written numbers (rounded as the text has them) make the real machine do:

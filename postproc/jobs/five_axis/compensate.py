@@ -145,9 +145,7 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
         ext[:, c] = angles[:, j]
         values[:, field] = np.where(has_word, angles[:, j], values[:, field])
     moved = replace(tp, ext=ext, values=values)
-    if tp.ccomp is not None and (tp.ccomp == 1).any():  # under radius compensation the text may hold the contour (Klartext RL / RR)
-        return dialects.of(tp).contour_for(moved, xyz)
-    return moved.with_positions(xyz)
+    return dialects.of(tp).contour_for(moved, xyz)  # the text may hold a contour, not the tool path (Klartext RL / RR, LN)
 
 
 VECTOR = slice(3, 6)  # the IR's tool-axis vector words (G43.5 I J K, SINUMERIK A3= B3= C3=)

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import numpy as np
 
@@ -11,9 +12,10 @@ from postproc.errors import EmitError, InputError
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect
 from .controller import TNC
+from .ln_placement import place_ln, text_positions
 from .parse import read_klartext
 from .plane_solution import place_tilted
-from .radius_comp import contour_for
+from .radius_comp import CORNER, contour_for
 from .writer import MODES, tcpm_text
 
 
@@ -48,20 +50,36 @@ class HeidenhainDialect(Dialect):
         return super().emit_texts(original, modified)
 
     def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
-        """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is ``xyz``."""
-        return contour_for(tp, xyz)
+        """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is
+        ``xyz``; an LN block's numbers are its tip less the displacement along N (ln.py)."""
+        if tp.ccomp is not None and (tp.ccomp == 1).any():
+            return contour_for(tp, xyz)
+        moved = tp.with_positions(text_positions(tp, xyz))
+        return replace(moved, position=np.asarray(xyz, float).copy())
 
     def for_machine(self, tp: Toolpath, machine) -> Toolpath:
-        """The targets of a tilted plane (PLANE SPATIAL ... MOVE) placed on ``machine``: the TNC's rotary solution."""
-        return place_tilted(tp, machine)
+        """The targets of a tilted plane (PLANE, Cycle 19) and of LN under M128 placed on ``machine``: the TNC's rotary positions."""
+        return place_ln(place_tilted(tp, machine), machine)
 
     def refuse_compensation(self, tp: Toolpath) -> None:
         """A tilted working plane is not compensated: the correction would change the PLANE's angles
         and with them the rotary solution the TNC takes, not numbers of the blocks under it."""
+        corner = tp.extras.get(CORNER)
+        if corner is not None and corner.any():
+            i = int(np.argmax(corner))
+            raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: an outside corner under RL / RR: the TNC cuts it on a transitional arc "
+                             "about the programmed corner, a circle without a block of its own whose ends move with both sides' corrections; "
+                             "the five-axis compensation writes no arcs (round the corner in the program, or program the tool-centre path with R0)")
+        ln_axis = tp.extras.get("heidenhain.ln_axis")
+        if ln_axis is not None and not np.isnan(ln_axis).all():
+            i = int(np.argmax(~np.isnan(ln_axis).any(axis=1)))
+            raise InputError(f"{tp.sources[0].path}:{int(tp.line[i])}: LN under M128 is not compensated: the TNC turns the rotary axes to the "
+                             "tool orientation T, so a correction of the rotary axes would be a change of T, not of the block's numbers; convert "
+                             "the program to M128 with axis positions (convert --to heidenhain --rtcp tcpm) and compensate that")
         plane = tp.extras.get("heidenhain.plane_line")
         if plane is not None and (plane > 0).any():
             i = int(np.argmax(plane > 0))
-            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE SPATIAL) are not compensated: "
+            raise InputError(f"{tp.sources[0].path}:{int(plane[i])}: targets in a tilted working plane (PLANE, Cycle 19) are not compensated: "
                              "the correction would change the plane's angles and the rotary solution the TNC takes, not numbers of its blocks; "
                              "convert the program to M128 (convert --to heidenhain --rtcp tcpm) and compensate that")
 

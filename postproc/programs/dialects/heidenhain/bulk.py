@@ -61,6 +61,7 @@ class BulkReading:
         cells = []
         first_row = self.rows_all()
         unknown_rows = np.zeros(n, bool)
+        open_rows = np.zeros(n, bool)  # unknown from anything but the PLANE's own Q120..Q122
         for col, ch in enumerate(b"XYZABC"):
             sel = letter == ch
             r, v = owner[sel], value[sel] * (self.scale if col < 3 else 1.0)
@@ -70,6 +71,7 @@ class BulkReading:
             if self.unknown[col]:  # from a parameter the text does not determine, until the axis is given
                 known_from = int(r[0]) if len(r) else n
                 unknown_rows[:known_from] = True
+                open_rows[:known_from] |= col < 3 or self.rotary_source[col - 3] == 0  # 0: the text's (ln.SOURCE_TEXT)
                 self.unknown[col] = known_from == n
             cells.append(np.c_[r + first_row, np.full(len(r), AXES[chr(ch)]), v, num_start[sel], num_end[sel]])
         fs, _ = self.plain.span("feed")
@@ -101,8 +103,9 @@ class BulkReading:
                 if self.comp != "R0":
                     compensated[i] = not self._state_resolved(run.first + i + 1, False)  # with its note
         table[:, 5] = ~compensated & ~unknown_rows & (self.tilt_line == 0)
+        table[:, 16] = ~compensated & ~open_rows & ((table[:, 14] == 0) | (self.tilt_line == 0))  # RL / RR: not followed in a tilted plane
         if unknown_rows.any():
-            self.notes[f"line {run.first + 1}: position from a Q parameter the text does not determine"] = None
+            self.notes[f"line {run.first + 1}: position from a value the text does not determine (a Q parameter, a retract to the traverse limit)"] = None
         if self.tilt_line:
             self._state_resolved(run.first + 1, False)  # the note
         self.tangent = _last_direction(self.pos[:2], table[:, 7:9], self.tangent)

@@ -8,7 +8,16 @@ import re
 
 import numpy as np
 
+from . import plane_forms
 from .fields import along_z, translation
+
+# PLANE forms and the words that define them (TNC 640 manual, "Tilting the working plane"; plane_forms)
+_PLANE_FORMS = {
+    "SPATIAL": ("SPA", "SPB", "SPC"), "EULER": ("EULPR", "EULNU", "EULROT"), "PROJECTED": ("PROPR", "PROMIN", "PROROT"),
+    "VECTOR": ("BX", "BY", "BZ", "NX", "NY", "NZ"),
+    "POINTS": ("P1X", "P1Y", "P1Z", "P2X", "P2Y", "P2Z", "P3X", "P3Y", "P3Z"),
+    "RELATIV": (), "AXIAL": (), "RESET": (),
+}
 
 
 class StateBlocks:
@@ -40,11 +49,15 @@ class StateBlocks:
         if re.search(r"\bDL\s*[+-]?\s*Q", rest, re.IGNORECASE):
             raise self.error(at, "DL from a Q parameter is not read")
         base = self.b.tool_index(name, None) if name not in self.b.tool_names else self.b.tool_names.index(name)
-        self.radius = self.tool_radius.get(name, math.nan) + self._delta_radius(rest, at)
+        self.called.add(name)
+        # the compensation value R + DR TAB + DR of TOOL CALL (TNC 640 manual, 5.3): R of TOOL DEF, or the table's R + DR given from outside
+        self.radius = self.tool_radius.get(name, self.table_radius.get(name, math.nan)) + self._delta_radius(rest, at)
         # LN (3-D compensation) moves the tool along N by the sum of the delta values (tool table and TOOL
         # CALL): zero for a tool the program defines (no table row) called without DL / DR / DR2
         deltas = re.findall(r"\b(?:DL|DR2|DR)\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)
-        self.ln_deltas_zero = name in self.tool_radius and all(float(v) == 0.0 for v in deltas)
+        self.ln_delta = sum(float(v) for v in deltas) * self.scale if name in self.tool_radius else math.nan
+        if re.search(r"\bDR2\s*[+-]?\s*Q", rest, re.IGNORECASE):
+            self.ln_delta = math.nan  # DR2 from a Q parameter: LN's displacement is not read
         if dl and float(dl.group(1)) != 0.0:
             delta = float(dl.group(1)) * self.scale
             known = bool(self.b.tool_known[base])
@@ -71,11 +84,7 @@ class StateBlocks:
         if number == 7:
             return self.datum_shift(sub, rest, at + m.start(3), line)
         if number == 19:
-            if sub and sub != "0":
-                angles = [float(v) for v in re.findall(r"[ABC]\s*([+-]?(?:\d+\.?\d*|\.\d+))", rest, re.IGNORECASE)]
-                self.tilt_line = line if any(a != 0.0 for a in angles) else 0
-                self.tilt = None  # axis or spatial angles, as the machine parameters say: not read
-            return None
+            return self.cycle19(sub, rest, at + m.start(3), line)
         if number in (8, 10, 11, 26):
             if sub and sub != "0":
                 raise self.error(at, f"coordinate transformation cycle {number} (mirror / rotation / scaling) is not read")
@@ -119,41 +128,99 @@ class StateBlocks:
 
     def plane(self, s: str, at: int, line: int):
         up = s.upper()
+        form = re.match(r"PLANE\s+([A-Z]+)", up)
+        if form is None or form.group(1) not in _PLANE_FORMS:
+            raise self.error(at, f"'{' '.join(up.split()[:2])}' is not a PLANE function (SPATIAL, PROJECTED, EULER, VECTOR, POINTS, RELATIV, AXIAL, RESET)")
+        active = self.tilt if self.tilt_line else np.eye(3)
         self.tilt = None
-        if up.startswith("PLANE RESET"):
-            self.tilt_line = 0
+        axes = np.full(3, np.nan)
+        if form.group(1) == "RESET":
+            self.tilt_line, self.tilt_form = 0, ""
         else:
-            self.tilt_line = line
-            if up.startswith("PLANE SPATIAL"):
-                self.tilt = self._spatial(s, at)
+            self.tilt_line, self.tilt_form = line, form.group(1)
+            self.tilt = self._plane_rotation(form.group(1), s, at, active)
+            if form.group(1) == "AXIAL":
+                axes = self._axis_words(s[form.end():], at + form.end(), "PLANE AXIAL")
         mode = re.search(r"\b(MOVE|TURN|STAY)\b", up)
         seq = re.search(r"\bSEQ\s*([+-])", up)
-        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY", re.search(r"\b(DIST|ABST)\s*[+-]?0*\.?0*[1-9]", up[mode.end():]) is not None if mode else False)
+        dist = re.search(r"\b(?:DIST|ABST)\s*([+-]?(?:\d+\.?\d*|\.\d+))", up[mode.end():]) if mode else None
+        if mode and dist is None and re.search(r"\b(?:DIST|ABST)\b", up[mode.end():]):
+            raise self.error(at + mode.end(), "PLANE ... DIST: the distance is read as a number only")
+        self.planes[line] = (0 if seq is None else 1 if seq.group(1) == "+" else -1, mode.group(1) if mode else "STAY",
+                             float(dist.group(1)) * self.scale if dist else 0.0, form.group(1), axes)
+        if self.tilt_line and (not mode or mode.group(1) == "STAY"):  # the TNC stores its solution in Q120 (A), Q121 (B), Q122 (C)
+            for name in ("Q120", "Q121", "Q122"):
+                self.q[name] = math.nan
+                self.q_origin.pop(name, None)
+                self.plane_q_line[name] = line
         if mode and mode.group(1) in ("MOVE", "TURN"):
             # the TNC positions the rotary axes itself (TNC 640 manual, "PLANE: automatic positioning")
             self.positioning_rows.add(self.rows_all())
             self.unresolved_row(line, at, f"line {line}: PLANE ... {mode.group(1)} positions the rotary axes as the TNC solves the plane (SEQ+/SEQ-): "
-                                "computed where a machine is given (compensate / convert), else not read")
+                                "computed where a machine is given (compensate / convert), else not read", self._tilt_only(line, False))
         return None
 
-    def _spatial(self, s: str, at: int) -> np.ndarray | None:
-        """The tilted plane's orientation in the untilted workpiece system: SPA about X, then
-        SPB about Y, then SPC about Z, all about the fixed axes (TNC 640 manual, "PLANE
-        SPATIAL": tilting sequence A-B-C), so R = Rz(SPC) Ry(SPB) Rx(SPA); None where an
-        angle is not determined by the text."""
-        angles = []
-        for key in ("SPA", "SPB", "SPC"):
-            m = re.search(rf"{key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
-            if m is None:
-                raise self.error(at, f"PLANE SPATIAL needs {key} (all three spatial angles)")
-            angles.append(self.value(m.group(1), at + m.start(1))[0])
-        if any(math.isnan(a) for a in angles):
+    def cycle19(self, sub: str | None, rest: str, at: int, line: int):
+        """CYCL DEF 19 WORKING PLANE: A B C as spatial angles or axis angles, as the machine's
+        parameters say (machine file [heidenhain] cycle19_angles; placed in plane_solution); all
+        zero resets the tilt. The cycle positions no axis: the program's own blocks do (TNC 640
+        manual, "Cycle 19 WORKING PLANE")."""
+        if not sub or sub == "0":
             return None
-        a, b, c = np.radians(angles)
-        rx = np.array([[1, 0, 0], [0, math.cos(a), -math.sin(a)], [0, math.sin(a), math.cos(a)]])
-        ry = np.array([[math.cos(b), 0, math.sin(b)], [0, 1, 0], [-math.sin(b), 0, math.cos(b)]])
-        rz = np.array([[math.cos(c), -math.sin(c), 0], [math.sin(c), math.cos(c), 0], [0, 0, 1]])
-        return rz @ ry @ rx
+        axes = self._axis_words(rest, at, "CYCL DEF 19")
+        if np.all(np.nan_to_num(axes) == 0.0):
+            self.tilt_line, self.tilt_form, self.tilt = 0, "", None
+            return None
+        self.tilt_line, self.tilt_form, self.tilt = line, "CYCL19", None
+        self.planes[line] = (0, "STAY", 0.0, "CYCL19", axes)
+        return None
+
+    def _axis_words(self, s: str, at: int, what: str) -> np.ndarray:
+        """A B C of PLANE AXIAL / Cycle 19 (deg; NaN: not given)."""
+        out = np.full(3, np.nan)
+        for m in re.finditer(r"(?<![A-Z])([ABC])\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE):
+            out["ABC".index(m.group(1).upper())] = self.value(m.group(2), at + m.start(2))[0]
+        if re.search(r"(?<![A-Z])I[ABC]", s, re.IGNORECASE):
+            raise self.error(at, f"{what}: incremental angles are not read")
+        if any(m.group(2).strip().upper().startswith("Q") for m in re.finditer(r"(?<![A-Z])([ABC])\s*([+-]?\s*Q[LR]?\d+)", s, re.IGNORECASE)) and np.isnan(out).any():
+            return np.full(3, np.nan)  # an angle from a Q parameter the text does not give: the plane is not determined
+        return out
+
+    def _plane_rotation(self, form: str, s: str, at: int, active: np.ndarray | None) -> np.ndarray | None:
+        """The tilted plane's orientation in the untilted workpiece system (plane_forms), None where
+        a value is not determined by the text or the machine decides it (AXIAL: axis angles)."""
+        if form == "AXIAL":
+            return None  # axis positions: the plane is the machine's (placed in plane_solution)
+        if form == "RELATIV":
+            found = [k for k in ("SPA", "SPB", "SPC") if re.search(rf"(?<![A-Z]){k}", s, re.IGNORECASE)]
+            if len(found) != 1:
+                raise self.error(at, "PLANE RELATIV takes one angle: SPA, SPB or SPC")
+            angle = self._plane_values(s, at, found, form)[0]
+            return None if active is None or math.isnan(angle) else plane_forms.relative(active, found[0], angle)
+        values = self._plane_values(s, at, _PLANE_FORMS[form], form)
+        if any(math.isnan(v) for v in values):
+            return None
+        try:
+            if form == "SPATIAL":
+                return plane_forms.spatial(*values)
+            if form == "EULER":
+                return plane_forms.euler(*values)
+            if form == "PROJECTED":
+                return plane_forms.projected(*values)
+            if form == "VECTOR":
+                return plane_forms.vector(np.array(values[:3]), np.array(values[3:]))
+            return plane_forms.points(np.array(values[:3]), np.array(values[3:6]), np.array(values[6:]))
+        except plane_forms.PlaneError as exc:
+            raise self.error(at, str(exc)) from None
+
+    def _plane_values(self, s: str, at: int, keys: tuple, form: str) -> list[float]:
+        out = []
+        for key in keys:
+            m = re.search(rf"(?<![A-Z0-9]){key}\s*([+-]?\s*(?:\d+\.?\d*|\.\d+|Q[LR]?\d+))", s, re.IGNORECASE)
+            if m is None:
+                raise self.error(at, f"PLANE {form} needs {' '.join(keys)} ({key} is missing)")
+            out.append(self.value(m.group(1), at + m.start(1))[0])
+        return out
 
     def function(self, s: str, at: int, line: int):
         up = re.sub(r"\s+", " ", s.upper())

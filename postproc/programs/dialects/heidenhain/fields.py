@@ -6,8 +6,9 @@ import numpy as np
 
 from ...ir import F_EXT, FIELDS
 
-COLUMNS = 16  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C, TCPM on,
-# radius compensation side (+1 RL, -1 RR, 0 R0), its radius (mm, NaN: not in the program)
+COLUMNS = 17  # per target: kind, line, feed, tool, frame, resolved, insert offset, X Y Z A B C, TCPM on,
+# radius compensation side (+1 RL, -1 RR, 0 R0), its radius (mm, NaN: not in the program), resolved but
+# for the tilted plane (placed with a machine)
 AXES = {"X": 0, "Y": 1, "Z": 2, "A": F_EXT.start, "B": F_EXT.start + 1, "C": F_EXT.start + 2}
 R_FIELD = FIELDS.index("r")
 SIDE = {"R0": 0, "RL": 1, "RR": -1}  # TNC 640 manual, 5.3: RL the tool left of the contour (as LinuxCNC G41), RR right

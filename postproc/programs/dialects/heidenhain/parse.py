@@ -41,7 +41,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from postproc.errors import ParseError
+from postproc.errors import InputError, ParseError
 
 from ...ir import F_ARC, FIELDS, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
@@ -52,6 +52,8 @@ from .bulk import BulkReading
 from .contours import Contours
 from .cycles import StateBlocks
 from .fields import AXES, COLUMNS, SIDE
+from .ln import SOURCE_LN, SOURCE_PLANE_Q, SOURCE_TEXT, LnBlocks
+from .ln_placement import ln_extras
 from .plane_solution import plane_extras
 from .qparams import ASSIGN_RE, FN_RE, FormulaError, evaluate, fn_as_formula
 from .words import PathWords, WordError, read_words
@@ -72,10 +74,10 @@ _REFUSED_STATEMENTS = {
 }
 
 
-class KlartextReader(BulkReading, Contours, StateBlocks):
+class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
     """One run of a Klartext program: the state the TNC keeps, block by block."""
 
-    def __init__(self, doc: SourceDoc, dialect: str = "heidenhain"):
+    def __init__(self, doc: SourceDoc, dialect: str = "heidenhain", table_radius: dict[str, float] | None = None):
         self.doc = doc
         self.text = doc.text
         self.lines = LineIndex(doc.text)
@@ -85,6 +87,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.labels = self._labels()
         self.q: dict[str, float] = {}
         self.q_origin: dict[str, int] = {}  # parameter -> line where it became unknown (FN 18)
+        self.plane_q_line: dict[str, int] = {}  # Q120..Q122 -> line of the PLANE ... STAY that computes them
+        self.rotary_source = np.zeros(3, np.int8)  # where A B C in force come from (ln.SOURCE_*: the text, Q120..Q122, LN under M128)
+        self.rotary_events: list[tuple[int, np.ndarray]] = []  # (first row, rotary_source) at each change
+        self.ln_rows: dict[int, tuple[np.ndarray, np.ndarray]] = {}  # LN row -> (tip offset from X Y Z, tool axis under M128)
         self.scale = 1.0  # mm per program unit
         self.feed_scale = 1.0
         self.pos = np.full(6, np.nan)  # X Y Z A B C, program frame
@@ -99,11 +105,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         self.tool = 0
         self.radius = math.nan  # compensation value of the tool in force (R + DR), mm; NaN: not in the program
         self.tool_radius: dict[str, float] = {"T0": 0.0}  # TOOL DEF n R.. (T0: the zero tool, L=0 R=0)
-        self.ln_deltas_zero = False  # the tool in force has no delta values (LN then moves to X Y Z as written)
+        self.table_radius = dict(table_radius or {})  # tool table R + DR of tools the program calls, given from outside (--tool-radius)
+        self.called: set[str] = set()  # names of the tools TOOL CALL calls
+        self.ln_delta = math.nan  # DL + DR + DR2 of the tool in force (mm), what LN moves the tool along N by; NaN: not in the text
         self.frame = ("PRESET", None)  # (name, transform on the preset): registered when a target uses it
         self.shift = np.zeros(3)
         self.tilt_line = 0  # line of the tilting (PLANE / CYCL DEF 19) in force, 0: none
-        self.tilt: np.ndarray | None = None  # its rotation where the text gives it (PLANE SPATIAL)
+        self.tilt: np.ndarray | None = None  # its rotation where the text gives it (plane_forms)
+        self.tilt_form = ""  # SPATIAL, EULER, ... of the PLANE in force
         self.tcpm = False
         self.planes: dict[int, tuple[int, str, bool]] = {}  # PLANE line -> (SEQ +1/-1/0, MOVE/TURN/STAY, a DIST or feed given after it)
         self.positioning_rows: set[int] = set()  # rows of PLANE ... MOVE/TURN: the TNC turns the rotary axes there
@@ -270,7 +279,9 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
 
     def unknown_cause(self, used: list[str]) -> str:
         names = [u for u in used if math.isnan(self.q.get(u, math.nan))]
-        parts = [f"{u} (read from the control by FN 18 at line {self.q_origin[u]})" if u in self.q_origin else f"{u} (never set in this program)" for u in dict.fromkeys(names)]
+        parts = [f"{u} (read from the control by FN 18 at line {self.q_origin[u]})" if u in self.q_origin else
+                 f"{u} (the rotary position the TNC computes for the PLANE at line {self.plane_q_line[u]})" if u in self.plane_q_line else
+                 f"{u} (never set in this program)" for u in dict.fromkeys(names)]
         return ", ".join(parts) or "a value the text does not determine"
 
     def value(self, text: str, at: int) -> tuple[float, list[str]]:
@@ -303,6 +314,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         v, used = self.value(m.group(2), at + m.start(2))
         self.q[name] = v
         self.q_origin.pop(name, None)
+        self.plane_q_line.pop(name, None)
         from_control = [u for u in used if u in self.q_origin]
         if math.isnan(v) and from_control:  # unknown because of an FN 18 value: say which
             self.q_origin[name] = self.q_origin[from_control[0]]
@@ -327,7 +339,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             elif number == 103:
                 raise self.error(where, "M103 F: the TNC lowers the plunging feed by a factor (TNC manual, M103): not read")
             elif number == 140:
-                raise self.error(where, "M140 retracts along the tool axis to a distance the text does not give (MB): not read")
+                raise self.error(where, "M140 retracts along the tool axis: write it in an L block without axis words (L M140 MB ..)")
         return None
 
     # ------------------------------------------------------------- motion
@@ -343,14 +355,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if kind == "CC":
             self.set_pole(words, at)
             return self.m_functions(words, line, at)
+        if any(n == 140 for n, _ in words.m):
+            return self.retract(kind, words, line, at)
         start = self.pos.copy()
         vals: dict[int, float] = {}  # field -> value of the block's own words (and arc data)
         spans: dict[int, tuple[int, int, int]] = {}  # field -> (source, start, end) of a plain number
         arc = None
         if kind in ("L", "LN"):
             moved = self.cartesian(words, vals, spans, at)
-            if kind == "LN":
-                self.ln_note(line)
         elif kind in ("C", "CR", "CT"):
             moved = self.cartesian(words, vals, spans, at)
             arc = self.circle(kind, words, start, vals, spans, at)
@@ -364,20 +376,23 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.row(kind, words, vals, spans, line, at, arc, machine_datum, start)
         return self.m_functions(words, line, at)
 
-    def ln_note(self, line: int) -> None:
-        """LN X Y Z NX NY NZ (TX TY TZ): X Y Z are the compensated end point; the TNC moves the tool
-        along N by the sum of the delta values (tool table and TOOL CALL), and under M128 / TCPM
-        turns the rotary axes to T (or perpendicular to the surface without T); without M128 T is
-        ignored (TNC 640 manual, "Three-dimensional tool compensation")."""
-        if self.tcpm:
-            self.notes[f"line {line}: LN under M128 / TCPM: the TNC turns the rotary axes to the tool orientation T (or normal to the surface), "
-                       "a solution of its own: not read"] = None
-        elif not self.ln_deltas_zero:
-            self.notes[f"line {line}: LN: the TNC moves the tool along N by the tool's delta values (tool table and TOOL CALL), which the text "
-                       "does not give (a tool from the tool table) or are not zero: not read"] = None
-        else:
-            self.notes["LN without M128: the tool moves to X Y Z (no delta values: TOOL DEF tool, no DL / DR / DR2); N and T change nothing "
-                       "(TNC 640 manual, three-dimensional tool compensation)"] = None
+    def retract(self, kind: str, words: PathWords, line: int, at: int):
+        """L M140 MB d / MB MAX: the tool moves back along the tool axis by d, or to the end of the
+        traverse range (TNC 640 manual, "M140: Retraction from the contour in the tool-axis
+        direction"). With tool axis Z (no M128) that is Z + d; MB MAX's end is the machine's:
+        Z is then unknown (flagged) until the program gives it again."""
+        if kind != "L" or words.words or words.mb is None:
+            raise self.error(at, "M140 is read in an L block without axis words, with MB (L M140 MB 50 / MB MAX)")
+        value, where = words.mb
+        if value == "MAX" or self.tcpm or math.isnan(self.pos[2]):
+            self.pos[2], self.unknown[2] = math.nan, True
+            self.unresolved_row(line, where, f"line {line}: M140 MB {value}: the TNC retracts along the tool axis "
+                                + ("to the end of its traverse range, which the text does not give" if value == "MAX" else
+                                   "under M128 (its direction is the turned tool axis)" if self.tcpm else "from a Z the text does not give"))
+            return self.m_functions(replace(words, m=[(n, w) for n, w in words.m if n != 140]), line, at)
+        self.pos[2] += float(value) * self.scale
+        self.row(kind, words, {}, {}, line, at, None, False, self.pos.copy())
+        return self.m_functions(replace(words, m=[(n, w) for n, w in words.m if n != 140]), line, at)
 
     def _feed(self, words: PathWords) -> None:
         if words.feed_other:
@@ -401,6 +416,10 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             new = self.pos[i] + v if w.incremental else v
             self.unknown[i] = math.isnan(v)
             self.pos[i] = new
+            if i >= 3:
+                name = f"Q{117 + i}"  # Q120 A, Q121 B, Q122 C
+                from_plane = w.text.lstrip("+").upper() == name and name in self.plane_q_line
+                self.set_rotary_source(np.arange(3) == i - 3, SOURCE_PLANE_Q if from_plane else SOURCE_TEXT)
             moved = True
             if w.plain and not w.incremental:
                 vals[k] = new
@@ -412,15 +431,15 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
                 raise self.error(words.words[extra].start, f"{extra} is not read in this block")
         return moved
 
-    def unresolved_row(self, line: int, at: int, note: str) -> None:
+    def unresolved_row(self, line: int, at: int, note: str, aside: bool = False) -> None:
         self.notes[note] = None
-        self.add_row(int(Kind.RAPID), line, math.nan, False, -1, {}, {})
+        self.add_row(int(Kind.RAPID), line, math.nan, False, -1, {}, {}, aside)
 
     def row(self, kind: str, words: PathWords, vals: dict, spans: dict, line: int, at: int, arc, machine_datum: bool, start) -> None:
         # values: the block's own words (NaN for modal axes it leaves out, which splice may add
         # at insert_at); the position and rotary angles in force are kept beside them
         rapid = words.rapid
-        resolved = self._state_resolved(line, machine_datum)
+        resolved, aside = self._state_reasons(line, machine_datum)
         if rapid:
             k = Kind.RAPID
         elif arc is None:
@@ -428,30 +447,41 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         else:
             dr = arc[2] if arc != "CP" else words.dr
             k = Kind.ARC_CCW if dr == "+" else Kind.ARC_CW
+        offset = None
         if kind == "LN":
-            resolved = resolved and self.ln_deltas_zero and not self.tcpm
+            offset, axis, ln_read = self.ln_target(words, line, at)
+            resolved, aside = resolved and ln_read and not self.tcpm, aside and ln_read
+            self.ln_rows[self.rows_all()] = (offset, axis)
         feed = math.nan if rapid else self.feed
         insert = at + len(kind) if kind in ("L", "LN") else -1
-        self.add_row(int(k), line, feed, resolved, insert, vals, spans)
+        self.add_row(int(k), line, feed, resolved, insert, vals, spans, aside, offset)
         self.tangent = self._tangent(k, start, arc)
 
     def _frame_index(self) -> int:
-        """The frame of the next target: the preset, the datum shift on it, a PLANE SPATIAL
+        """The frame of the next target: the preset, the datum shift on it, a PLANE
         tilt about the shifted datum (TNC 640 manual: Cycle 7 before tilting shifts in the
         untilted system)."""
         name, transform = self.frame
-        if self.tilt_line and self.tilt is not None:
+        if self.tilt_line:
             tilt = np.eye(4)
-            tilt[:3, :3] = self.tilt
-            if name == "PRESET":
+            tilt[:3, :3] = np.nan if self.tilt is None else self.tilt  # None: the machine's (AXIAL, Cycle 19) or a Q parameter's
+            if self.tilt is None:
+                transform = None
+            elif name == "PRESET":
                 transform = tilt  # on the preset itself
             elif transform is not None:
                 transform = transform @ tilt  # else: on a shift the text does not give, still unknown
-            name = f"{name}+PLANE SPATIAL@line{self.tilt_line}"
+            name = f"{name}+PLANE {self.tilt_form}@line{self.tilt_line}"
         return 0 if name == "PRESET" else self.b.frame_index(name, transform, False)
 
     def _state_resolved(self, line: int, machine_datum: bool) -> bool:
         """False (with a note) where the modal state leaves the position to what the text does not give."""
+        return self._state_reasons(line, machine_datum)[0]
+
+    def _state_reasons(self, line: int, machine_datum: bool) -> tuple[bool, bool]:
+        """(resolved, resolved but for the tilted plane): False (with a note) where the modal state
+        leaves the position to what the text does not give; the second ignores the tilted plane and
+        the rotary positions it computes (Q120..Q122), which a machine places (plane_solution)."""
         resolved = True
         if self.comp in ("RL", "RR") and math.isnan(self.radius):
             resolved = False
@@ -465,8 +495,17 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.notes[f"line {line}: M91/M92: coordinates in the machine datum, which the text does not give"] = None
         if self.unknown.any():
             resolved = False
-            self.notes[f"line {line}: position from a Q parameter the text does not determine"] = None
-        return resolved
+            self.notes[f"line {line}: position from a value the text does not determine (a Q parameter, a retract to the traverse limit)"] = None
+        aside = resolved or self._tilt_only(line, machine_datum)
+        return resolved, aside
+
+    def _tilt_only(self, line: int, machine_datum: bool) -> bool:
+        """True where nothing but what a machine places (the tilted plane, Q120..Q122, the rotary
+        positions of LN under M128) leaves this target open."""
+        unknown = self.unknown.copy()
+        unknown[3:] &= self.rotary_source == SOURCE_TEXT  # Q120..Q122, LN under M128: the TNC's rotary positions, placed with a machine
+        # RL / RR in a tilted plane: the contour is not followed there (radius_comp needs resolved targets)
+        return not (self.comp in ("RL", "RR") or machine_datum or unknown.any())
 
     def rows_all(self) -> int:
         """Rows read so far, in segments and in the row list."""
@@ -483,11 +522,12 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
             self.rows_before += len(self.rows)
             self.rows, self.cells = [], []
 
-    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict) -> None:
+    def add_row(self, kind: int, line: int, feed: float, resolved: bool, insert: int, vals: dict, spans: dict, aside: bool | None = None,
+                offset: np.ndarray | None = None) -> None:
         r = self.rows_all()
-        p = self.pos
+        p = self.pos if offset is None else np.r_[self.pos[:3] + offset, self.pos[3:]]  # LN: the tip off X Y Z (ln)
         self.rows.append((kind, line, feed, self.tool, self._frame_index(), resolved, insert, p[0], p[1], p[2], p[3], p[4], p[5], self.tcpm,
-                          SIDE[self.comp], self.radius))
+                          SIDE[self.comp], self.radius, resolved if aside is None else aside))
         for f, v in vals.items():
             self.cells.append((r, f, v) + (spans[f][1:] if f in spans else (-1, -1)))
 
@@ -525,8 +565,12 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         side, radius = table[:, 14], table[:, 15]
         ext[:, :3] = table[:, 10:13]
         tcpm = table[:, 13].astype(bool)
-        resolved = tp.resolved & ~self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
-        extras = {"heidenhain.tcpm": tcpm, **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
+        mixed = self._mixed_tcpm(tcpm, ext[:, :3], table[:, 1])
+        resolved = tp.resolved & ~mixed
+        source = self.rotary_source_rows(n)
+        extras = {"heidenhain.tcpm": tcpm, "heidenhain.plane_q": source == SOURCE_PLANE_Q, "heidenhain.ln_rotary": source == SOURCE_LN,
+                  **ln_extras(self.ln_rows, n), "heidenhain.resolved_but_plane": table[:, 16].astype(bool) & ~mixed,
+                  **plane_extras(self.planes, self.positioning_rows, tp.frame_names, tp.frame)}
         tp = replace(tp, position=table[:, 7:10].copy(), ext=ext, resolved=resolved, notes=tuple(self.b.notes), extras=extras)
         if ((side != 0) & ~np.isnan(radius)).any():  # RL / RR with the radius in the program: the path the TNC cuts
             tp = radius_comp.follow(tp, side, radius)
@@ -543,5 +587,14 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         return mixed
 
 
-def read_klartext(doc: SourceDoc) -> Toolpath:
-    return KlartextReader(doc).run()
+def read_klartext(doc: SourceDoc, table_radius: dict[str, float] | None = None) -> Toolpath:
+    """The program of ``doc``; ``table_radius``: the tool table's radius (R + DR, mm) of tools
+    it calls but does not define (TOOL CALL 5: "T5"; TOOL CALL "NAME": "NAME")."""
+    reader = KlartextReader(doc, table_radius=table_radius)
+    tp = reader.run()
+    for name in reader.table_radius:
+        if name in reader.tool_radius and name != "T0":
+            raise InputError(f"--tool-radius {name}: the program defines that tool's radius itself (TOOL DEF); the option is not used for it")
+        if name not in reader.called:
+            raise InputError(f"--tool-radius {name}: {doc.path} never calls that tool (TOOL CALL 5 is T5, TOOL CALL \"NAME\" is NAME)")
+    return tp

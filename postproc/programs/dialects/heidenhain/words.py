@@ -20,6 +20,7 @@ _WORD = re.compile(
     rf"|(?P<fmax>FMAX|FAUTO|FU|FZ)(?![A-Z])"
     rf"|(?P<f>F)\s*(?P<fval>[+]?(?:{NUM})|{QNAME})"
     r"|(?P<comp>R0|RL|RR)(?![\d.])"
+    rf"|(?P<mb>MB)\s*(?P<mbval>MAX|[+-]?(?:{NUM}))"
     r"|(?P<dr>DR)\s*(?P<drs>[+-])"
     rf"|(?P<word>I?(?:PR|PA|NX|NY|NZ|TX|TY|TZ|X|Y|Z|A|B|C|U|V|W|R))\s*(?P<val>[+-]?(?:{NUM})|[+-]?\s*{QNAME}|[+-]\s+(?:{NUM}))"
     r")",
@@ -45,6 +46,7 @@ class PathWords:
     feed_other: tuple[str, int] | None = None  # FAUTO / FU / FZ and its offset
     m: list[tuple[int, int]] | None = None  # (M number, offset)
     dr: str | None = None
+    mb: tuple[str, int] | None = None  # M140 MB: "MAX" or the distance as written, and its offset
 
 
 class WordError(Exception):
@@ -63,6 +65,8 @@ def read_words(text: str, start: int, base: int) -> PathWords:
         m = _WORD.match(text, pos)
         if not m:
             at = pos + len(text[pos:]) - len(text[pos:].lstrip())
+            if re.match(r",\d", text[at:]):  # X+32,000: which number the control takes is its own setting: not guessed
+                raise WordError(base + at, f"'{text[at:].split()[0]}': a decimal comma; read are numbers with a decimal point (X+32.000)")
             raise WordError(base + at, f"'{text[at:].split()[0]}' is not a word of this block the reader knows")
         pos = m.end()
         if m.group("m"):
@@ -79,6 +83,8 @@ def read_words(text: str, start: int, base: int) -> PathWords:
             out.feed = _word("F", False, m, "fval", base)
         elif m.group("comp"):
             out.comp = m.group("comp").upper()
+        elif m.group("mb"):
+            out.mb = (m.group("mbval").upper(), base + m.start("mb"))
         elif m.group("dr"):
             out.dr = m.group("drs")
         else:
