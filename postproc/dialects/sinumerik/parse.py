@@ -22,7 +22,7 @@ from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
 from ...arcs import PLANE_AXES, R_
 from ...errors import ParseError
-from . import arc_angle, circle_through, frames, swivel, translate
+from . import arc_angle, circle_through, frames, scaled, swivel, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -77,7 +77,10 @@ class SinumerikParser(GcodeParser):
         self.siemens = True
         self.builder = Builder("sinumerik", "none", [doc])
         self.lines = _MappedLines(text, original, self.offsets)
-        self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
+        self.frame = np.eye(4)  # the programmable frame's rigid part, as the blocks read so far leave it
+        self.axis_scale = np.ones(3)  # its axes' scale and mirror factors (SCALE, MIRROR): p at frame @ diag(axis_scale) @ p
+        self.axis_scales: list[tuple[int, np.ndarray]] = []  # (time, axis_scale) from each frame event on (frames.py)
+        self.row_axis_scale: np.ndarray | None = None  # (targets, 3) the factors each target is read under (_tilted_planes)
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
         self.cip_points: list[tuple[int, np.ndarray]] = []  # (line, intermediate point mm) of each CIP block read, in order
         self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
@@ -86,8 +89,25 @@ class SinumerikParser(GcodeParser):
 
     def parse(self) -> Toolpath:
         if _calls_or_labels(self.text):  # a call or a jump label: the flow reader knows them
-            return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
-        return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+            tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
+        else:
+            tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+        if self.row_axis_scale is None or (self.row_axis_scale == 1.0).all():
+            return tp
+        try:
+            return scaled.apply(tp, self.row_axis_scale)
+        except scaled.NotRead as exc:
+            raise self._at_word(int(tp.line[exc.row]), exc.word, exc.message) from None
+
+    def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
+        """The frames (``GcodeParser``), and the axes' scale and mirror each target is read under."""
+        super()._tilted_planes(t, rows, frame_idx, resolved)
+        if not self.axis_scales:
+            return
+        times = np.array([when for when, _ in self.axis_scales])
+        at = np.searchsorted(times, t.get("seq", t["offset"])[rows], side="right") - 1
+        factors = np.vstack([np.ones((1, 3))] + [d[None] for _, d in self.axis_scales])
+        self.row_axis_scale = factors[at + 1]
 
     def _cip_arcs(self, tp: Toolpath) -> Toolpath:
         """CIP blocks (read as G3 with the intermediate point in I J K): the plane arc through
@@ -205,7 +225,7 @@ class SinumerikParser(GcodeParser):
             self.tilts.append((self._when(start), "unknown"))  # added to a frame that is not known: not known either
             return True, False
         try:
-            self.frame = frames.step(self.frame, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
+            self.frame, self.axis_scale = frames.step(self.frame, self.axis_scale, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
         except frames.FrameRefused as exc:
             raise self._error_at(start, str(exc)) from None
         self._frame_event(start)
@@ -214,11 +234,13 @@ class SinumerikParser(GcodeParser):
     def _frame_event(self, start: int) -> None:
         """Later targets' frame: settable @ swivel @ programmable (Fundamentals, "Frame chain")."""
         chain = self.swivel @ self.frame
+        when = self._when(start)
+        self.axis_scales.append((when, self.axis_scale))
         if np.isnan(chain).any():
-            self.tilts.append((self._when(start), "unknown"))
+            self.tilts.append((when, "unknown"))
             return
-        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0)
-        self.tilts.append((self._when(start), None if identity else chain))
+        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0) and (self.axis_scale == 1.0).all()
+        self.tilts.append((when, None if identity else chain))  # a scaled or mirrored frame is named, its rigid part maybe identity
 
     def _at_opening_angle(self, line: int, message: str) -> ParseError:
         return self._at_word(line, "AR", message)
@@ -265,6 +287,10 @@ class SinumerikParser(GcodeParser):
     def _resolve_blocks(self, t: dict) -> Toolpath:
         """Programs the G-code interpreter runs block by block (cutter compensation, cycles):
         its work-offset tables know G54-G57 only, so G500 / G505.. there are refused."""
+        scaled_at = [when for when, d in self.axis_scales if (d != 1.0).any()]
+        if scaled_at:
+            raise self._error_at(self.event_offsets.get(scaled_at[0], scaled_at[0]), "SCALE / MIRROR in a program with cutter radius compensation (G41/G42) or a cycle "
+                                 "is not read (the 840D swaps G41/G42 under a mirror and does not scale the radius)")
         settable = t["wcs"] >= _SETTABLE_BASE
         if settable.any():
             raise self._error_at(int(t["offset"][np.argmax(settable)]), "G500 / G505..G599 in a program with cutter radius compensation "
