@@ -109,3 +109,9 @@ def test_uniform_scale_arc_in_another_plane_and_helix(tmp_path):
     tp, _ = _read(tmp_path, "G18 G0 X0 Y0 Z0\nSCALE Y3\nAMIRROR Z0\nG2 X10 Y1 Z0 CR=5 F10\n")
     assert tp.kind[1] == Kind.ARC_CCW
     np.testing.assert_allclose(tp.base_positions()[1], (10, 3, 0))
+
+
+def test_a_mirror_holds_through_a_jump_loop(tmp_path):
+    # the flow reader (labels, GOTOB): the factors follow the executed blocks
+    tp, _ = _read(tmp_path, "G0 X0 Y0 Z0\nMIRROR X0\nR1=0\nLOOP: G1 X=R1+1 Y0 Z0 F10\nR1=R1+1\nIF R1<3 GOTOB LOOP\nMIRROR\nG1 X1 Y1 Z1\n")
+    np.testing.assert_allclose(tp.base_positions(), [(0, 0, 0), (-1, 0, 0), (-2, 0, 0), (-3, 0, 0), (1, 1, 1)])
