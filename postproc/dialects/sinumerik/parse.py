@@ -22,7 +22,7 @@ from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
 from ...arcs import PLANE_AXES, R_
 from ...errors import ParseError
-from . import arc_angle, circle_through, frames, scaled, swivel, translate
+from . import arc_angle, circle_through, frames, scaled, swivel, swivel_rows, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -81,6 +81,8 @@ class SinumerikParser(GcodeParser):
         self.axis_scale = np.ones(3)  # its axes' scale and mirror factors (SCALE, MIRROR): p at frame @ diag(axis_scale) @ p
         self.axis_scales: list[tuple[int, np.ndarray]] = []  # (time, axis_scale) from each frame event on (frames.py)
         self.row_axis_scale: np.ndarray | None = None  # (targets, 3) the factors each target is read under (_tilted_planes)
+        self.swivels: list[tuple[int, swivel_rows.Swivel]] = []  # (time, the CYCLE800 in force from then on)
+        self.row_swivel: dict[str, np.ndarray] | None = None  # per target: the CYCLE800 in force (swivel_rows.extras)
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
         self.cip_points: list[tuple[int, np.ndarray]] = []  # (line, intermediate point mm) of each CIP block read, in order
         self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
@@ -92,6 +94,8 @@ class SinumerikParser(GcodeParser):
             tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
         else:
             tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+        if self.row_swivel is not None and len(tp) == len(self.row_swivel["sinumerik.swivel_line"]):
+            tp = replace(tp, extras={**tp.extras, **self.row_swivel})
         if self.row_axis_scale is None or (self.row_axis_scale == 1.0).all():
             return tp
         try:
@@ -102,6 +106,8 @@ class SinumerikParser(GcodeParser):
     def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
         """The frames (``GcodeParser``), and the axes' scale and mirror each target is read under."""
         super()._tilted_planes(t, rows, frame_idx, resolved)
+        if self.swivels:
+            self.row_swivel = swivel_rows.extras(self.swivels, t.get("seq", t["offset"])[rows])
         if not self.axis_scales:
             return
         times = np.array([when for when, _ in self.axis_scales])
@@ -270,6 +276,7 @@ class SinumerikParser(GcodeParser):
         except swivel.Unknown as exc:
             self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
             self.swivel = np.full((4, 4), np.nan)
+        self.swivels.append((self._when(start), swivel_rows.Swivel.of(self.lines.line(start), line, self.swivel)))
         self._frame_event(start)
 
     def _resolve(self, t: dict) -> Toolpath:
