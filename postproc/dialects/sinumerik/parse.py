@@ -22,7 +22,7 @@ from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
 from ...arcs import PLANE_AXES, R_
 from ...errors import ParseError
-from . import arc_angle, circle_through, frames, scaled, swivel, swivel_rows, translate
+from . import arc_angle, circle_through, frames, ori_reference, scaled, swivel, swivel_rows, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -44,6 +44,7 @@ def _calls_or_labels(text: str) -> bool:
             return True
     return False
 _FRAME_CODES = set(translate.FRAME_NAMES)
+_ORI_REFERENCE = {code: word == "ORIMKS" for word, code in translate.ORI_CODES.items()}  # G code -> ORIMKS
 # Settable frames beyond G54-G57 (group 8, Fundamentals "Settable zero offset G54 to G57, G505
 # to G599, G53, G500, SUPA, G153"): G500 and G505..G599 as work-offset numbers of their own
 # (the G-code reader's are 1..9); their values are in the controller, not in the program.
@@ -81,6 +82,8 @@ class SinumerikParser(GcodeParser):
         self.axis_scale = np.ones(3)  # its axes' scale and mirror factors (SCALE, MIRROR): p at frame @ diag(axis_scale) @ p
         self.axis_scales: list[tuple[int, np.ndarray]] = []  # (time, axis_scale) from each frame event on (frames.py)
         self.row_axis_scale: np.ndarray | None = None  # (targets, 3) the factors each target is read under (_tilted_planes)
+        self.ori_machine: list[tuple[int, bool]] = []  # (time, ORIMKS in force from then on: ORIWKS False)
+        self.row_ori_machine: np.ndarray | None = None  # (targets,) ORIMKS in force at each target
         self.swivels: list[tuple[int, swivel_rows.Swivel]] = []  # (time, the CYCLE800 in force from then on)
         self.row_swivel: dict[str, np.ndarray] | None = None  # per target: the CYCLE800 in force (swivel_rows.extras)
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
@@ -96,6 +99,8 @@ class SinumerikParser(GcodeParser):
             tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
         if self.row_swivel is not None and len(tp) == len(self.row_swivel["sinumerik.swivel_line"]):
             tp = replace(tp, extras={**tp.extras, **self.row_swivel})
+        if self.row_ori_machine is not None and self.row_ori_machine.any() and len(tp) == len(self.row_ori_machine):
+            tp = self._machine_reference(tp, self.row_ori_machine)
         if self.row_axis_scale is None or (self.row_axis_scale == 1.0).all():
             return tp
         try:
@@ -103,9 +108,26 @@ class SinumerikParser(GcodeParser):
         except scaled.NotRead as exc:
             raise self._at_word(int(tp.line[exc.row]), exc.word, exc.message) from None
 
+    def _machine_reference(self, tp: Toolpath, machine_reference: np.ndarray) -> Toolpath:
+        """Vectors under ORIMKS: read as under ORIWKS (block ends), refused in a turned frame, noted (ori_reference.py)."""
+        turned = ori_reference.turned_vector_row(tp, machine_reference)
+        if turned is not None:
+            raise self._at_word(int(tp.line[turned]), "", "A3= B3= C3= under ORIMKS in a rotated frame (ROT / AROT / CYCLE800): whether "
+                                "the frame turns a vector referred to the machine is not stated in the manual: not read (use ORIWKS)")
+        vectors = machine_reference & ~np.isnan(tp.values[:, ori_reference.VECTOR]).all(axis=1)
+        if not vectors.any():
+            return tp
+        note = (f"line {int(tp.line[np.argmax(vectors)])}: ORIMKS: the block ends' tool vectors are read as under ORIWKS; between them "
+                "the 840D interpolates the rotary axes linearly (Job Planning, ORIWKS / ORIMKS), which the targets do not hold")
+        return replace(tp, notes=tp.notes + (note,))
+
     def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
         """The frames (``GcodeParser``), and the axes' scale and mirror each target is read under."""
         super()._tilted_planes(t, rows, frame_idx, resolved)
+        times = t.get("seq", t["offset"])[rows]
+        if self.ori_machine:
+            at = np.searchsorted(np.array([when for when, _ in self.ori_machine]), times, side="right") - 1
+            self.row_ori_machine = np.array([False] + [flag for _, flag in self.ori_machine])[at + 1]
         if self.swivels:
             self.row_swivel = swivel_rows.extras(self.swivels, t.get("seq", t["offset"])[rows])
         if not self.axis_scales:
@@ -201,6 +223,10 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        reference = [gc for gc in gcodes if gc in _ORI_REFERENCE]
+        if reference:
+            self.ori_machine.append((self._when(start), _ORI_REFERENCE[reference[-1]]))
+            gcodes = [gc for gc in gcodes if gc not in _ORI_REFERENCE]
         if translate.CIP_CODE in gcodes:
             # I1 J1 K1 (read into I J K): the intermediate point, taken out before the reader sees arc centre words
             ijk = [_AX["I"], _AX["J"], _AX["K"]]

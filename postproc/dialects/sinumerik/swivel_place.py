@@ -24,6 +24,7 @@ import numpy as np
 from ...errors import InputError
 from ...ir import Toolpath
 from . import swivel
+from .ori_reference import settable_frames
 from .swivel_rows import STATES
 
 ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # the IR's ext columns of the rotary words (G-code reader)
@@ -49,7 +50,7 @@ def place(tp: Toolpath, machine) -> Toolpath:
         notes.append(f"line {int(tp.line[np.argmax(open_rows)])}: outside a CYCLE800 swivel plane the program does not say where the "
                      f"rotary axes stand: {int(open_rows.sum())} such target(s) flagged")
         resolved[open_rows] = False
-    base = _settable_frames(tp)
+    base = settable_frames(tp)
     for group in _groups(line, rotation, state == STATES["active"]):
         first = int(group[0])
         where = f"line {int(line[first])}"
@@ -79,15 +80,6 @@ def refuse_compensation(tp: Toolpath) -> None:
                      "only the linear axes: they could put the tips right but not the tool axis's tilt on the part, which needs other "
                      "cycle angles (and the rotary solution with them); convert the program to TRAORI (convert --to sinumerik "
                      "--machine M --input-axes tip) and compensate that")
-
-
-def _settable_frames(tp: Toolpath) -> np.ndarray:
-    """(F,) each frame's settable frame (the name before the first '+': G54 of G54+FRAME@line3)."""
-    index = {name: i for i, name in enumerate(tp.frame_names)}
-    out = np.arange(len(tp.frame_names))
-    for i, name in enumerate(tp.frame_names):
-        out[i] = index.get(name.split("+")[0], i)
-    return out
 
 
 def _groups(line: np.ndarray, rotation: np.ndarray, active: np.ndarray) -> list[np.ndarray]:
