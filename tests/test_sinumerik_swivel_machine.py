@@ -83,3 +83,31 @@ def test_compensate_refuses_a_swivel_plane_and_convert_writes_its_rotary_positio
     res = runner.invoke(app, ["compensate", str(tmp_path / "T.MPF"), "--model", str(TRUE), "-o", str(tmp_path / "TC.MPF"), "--input-axes", "tip",
                               *AT_G54])
     assert res.exit_code == 0, res.output
+
+
+TWO_PLANES = """N10 G54 G17 G71 G90
+N20 CYCLE800(1,"TC1",0,57,0,0,0,-30,0,0,0,0,0,-1)
+N30 G0 X0 Y0 Z5
+N40 G1 X10 Y0 Z0 F500
+N50 CYCLE800(1,"TC1",0,57,0,0,0,-30,0,0,0,0,0,1)
+N60 G0 X0 Y0 Z5
+N70 G1 X10 Y0 Z0 F500
+N80 M30
+"""
+
+
+def test_the_writer_keeps_each_planes_rotary_positions(tmp_path):
+    # the same plane with _DIR=-1, then +1: (A, C) = (-30, 180), then (30, 0); the writer's continuity rule alone would stay
+    # on the first branch (no travel): the input's positions are kept where they reach the tool axis (fivex/given_angles.py)
+    from postproc.fivex.emit import solve
+    from postproc.fivex.kinematics import fk
+
+    machine = load_machine("xyzac-trt")
+    tp = parse_program(_program(tmp_path, TWO_PLANES)).with_frames({"G54": np.eye(4)})
+    path = from_toolpath(tp, machine, "tip")
+    result = solve(machine, path)
+    np.testing.assert_allclose(np.abs(result.axes[:, 3:5]), [(30, 180), (30, 180), (30, 0), (30, 0)], atol=1e-9)
+    assert (np.sign(result.axes[:, 3]) == [-1, -1, 1, 1]).all()
+    tip, axis = fk(machine, result.axes)
+    np.testing.assert_allclose(tip, path.tip, atol=1e-9)
+    np.testing.assert_allclose(axis, path.axis, atol=1e-9)
