@@ -21,6 +21,8 @@ from typer.testing import CliRunner
 from postproc import dialects
 from postproc.cli import app
 from postproc.errors import InputError
+from postproc.fivex.emit import solve
+from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
 from postproc.fivex.program import from_toolpath
 from postproc.programs import parse_program
@@ -99,9 +101,6 @@ N80 M30
 def test_the_writer_keeps_each_planes_rotary_positions(tmp_path):
     # the same plane with _DIR=-1, then +1: (A, C) = (-30, 180), then (30, 0); the writer's continuity rule alone would stay
     # on the first branch (no travel): the input's positions are kept where they reach the tool axis (fivex/given_angles.py)
-    from postproc.fivex.emit import solve
-    from postproc.fivex.kinematics import fk
-
     machine = load_machine("xyzac-trt")
     tp = parse_program(_program(tmp_path, TWO_PLANES)).with_frames({"G54": np.eye(4)})
     path = from_toolpath(tp, machine, "tip")
