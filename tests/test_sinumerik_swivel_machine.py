@@ -62,6 +62,10 @@ def test_what_the_program_leaves_open_stays_flagged(tmp_path):
         from_toolpath(tp, machine, "tip")
     placed = dialects.of(tp).for_machine(tp, machine)
     assert not placed.resolved.any() and any("line 2: CYCLE800 _DIR=0" in n for n in placed.notes), placed.notes
+    # direct mode (_MODE bits 7-6 = 11): the swivel frame is not worked out, its targets are not placed
+    tp = parse_program(_program(tmp_path, PLANES.format(dir=-1).replace('"TC1",0,57,', '"TC1",0,192,')))
+    placed = dialects.of(tp).for_machine(tp, machine)
+    assert not placed.resolved.any() and any("line 2: CYCLE800 whose swivel frame is not known" in n for n in placed.notes), placed.notes
     # a move before the first CYCLE800: where the rotary axes stand is not in the program
     tp = parse_program(_program(tmp_path, PLANES.format(dir=-1).replace("N10 G54 G17 G71 G90\n", "N10 G54 G17 G71 G90\nN15 G0 X0 Y0 Z50\n")))
     with pytest.raises(InputError, match="PLANE.MPF:2: the target's position depends"):

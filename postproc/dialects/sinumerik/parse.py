@@ -97,9 +97,13 @@ class SinumerikParser(GcodeParser):
             tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
         else:
             tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
-        if self.row_swivel is not None and len(tp) == len(self.row_swivel["sinumerik.swivel_line"]):
-            tp = replace(tp, extras={**tp.extras, **self.row_swivel})
-        if self.row_ori_machine is not None and self.row_ori_machine.any() and len(tp) == len(self.row_ori_machine):
+        if self.swivels:
+            tp = replace(tp, extras={**tp.extras, **self._swivel_extras(tp)})
+        if any(flag for _, flag in self.ori_machine):
+            if self.row_ori_machine is None or len(tp) != len(self.row_ori_machine):
+                first = next(when for when, flag in self.ori_machine if flag)
+                raise self._error_at(self.event_offsets.get(first, first), "ORIMKS in a program read block by block (cutter radius "
+                                     "compensation, cycles) is not read")
             tp = self._machine_reference(tp, self.row_ori_machine)
         if self.row_axis_scale is None or (self.row_axis_scale == 1.0).all():
             return tp
@@ -107,6 +111,14 @@ class SinumerikParser(GcodeParser):
             return scaled.apply(tp, self.row_axis_scale)
         except scaled.NotRead as exc:
             raise self._at_word(int(tp.line[exc.row]), exc.word, exc.message) from None
+
+    def _swivel_extras(self, tp: Toolpath) -> dict[str, np.ndarray]:
+        """The CYCLE800 in force at each target (swivel_rows.py); where the targets are not one per
+        block (the block-by-block reader adds moves), every target's swivel is unknown (never placed)."""
+        if self.row_swivel is not None and len(tp) == len(self.row_swivel["sinumerik.swivel_line"]):
+            return self.row_swivel
+        unknown = swivel_rows.Swivel(self.swivels[0][1].line, swivel_rows.STATES["unknown"], np.nan, np.full((3, 3), np.nan))
+        return swivel_rows.extras([(-1, unknown)], np.zeros(len(tp), np.int64))
 
     def _machine_reference(self, tp: Toolpath, machine_reference: np.ndarray) -> Toolpath:
         """Vectors under ORIMKS: read as under ORIWKS (block ends), refused in a turned frame, noted (ori_reference.py)."""

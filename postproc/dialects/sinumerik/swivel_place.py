@@ -33,8 +33,8 @@ ROTARY_FIELD = {"A": 0, "B": 1, "C": 2}  # the IR's ext columns of the rotary wo
 def place(tp: Toolpath, machine) -> Toolpath:
     """``tp`` with the targets of active CYCLE800 planes placed on ``machine`` (see the module)."""
     state = tp.extras.get("sinumerik.swivel_state")
-    if state is None or not (state == STATES["active"]).any():
-        return tp
+    if state is None or not np.isin(state, (STATES["active"], STATES["unknown"])).any():
+        return tp  # no swivel plane (or only deselections): a three-axis program
     line = tp.extras["sinumerik.swivel_line"]
     rotation, direction = tp.extras["sinumerik.swivel_rotation"], tp.extras["sinumerik.swivel_dir"]
     cols = [ROTARY_FIELD[name] for name in machine.rotary_names]
@@ -45,11 +45,15 @@ def place(tp: Toolpath, machine) -> Toolpath:
         notes.append(f"line {int(tp.line[np.argmax(own_angles)])}: rotary words or tool orientation in a program with CYCLE800: "
                      "the swivel planes' rotary positions are not placed (the blocks' own angles are read)")
         return replace(tp, notes=tuple(notes))
-    open_rows = state != STATES["active"]
+    unknown = state == STATES["unknown"]
+    if unknown.any():
+        notes.append(f"line {int(line[np.argmax(unknown)])}: CYCLE800 whose swivel frame is not known here: the rotary positions "
+                     f"are not placed, {int(unknown.sum())} target(s) flagged")
+    open_rows = np.isin(state, (STATES["none"], STATES["deselected"]))
     if open_rows.any():
         notes.append(f"line {int(tp.line[np.argmax(open_rows)])}: outside a CYCLE800 swivel plane the program does not say where the "
                      f"rotary axes stand: {int(open_rows.sum())} such target(s) flagged")
-        resolved[open_rows] = False
+    resolved[open_rows | unknown] = False
     base = settable_frames(tp)
     for group in _groups(line, rotation, state == STATES["active"]):
         first = int(group[0])
@@ -86,6 +90,8 @@ def _groups(line: np.ndarray, rotation: np.ndarray, active: np.ndarray) -> list[
     """Rows of each swivel plane: the same CYCLE800 line and rotation (a call run again with
     other values, in a loop, is a plane of its own)."""
     rows = np.nonzero(active)[0]
+    if not len(rows):
+        return []
     keys = np.c_[line[rows], np.round(rotation[rows].reshape(len(rows), 9), 12)]
     _, inverse = np.unique(keys, axis=0, return_inverse=True)
     return [rows[inverse.reshape(-1) == k] for k in range(inverse.max() + 1)]
