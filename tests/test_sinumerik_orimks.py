@@ -1,4 +1,4 @@
-"""ORIMKS / ORIWKS with A3= B3= C3= vectors (postproc/dialects/sinumerik/ori_reference.py).
+"""ORIMKS / ORIWKS with A3= B3= C3= vectors (postproc/programs/dialects/sinumerik/ori_reference.py).
 
 SINUMERIK Job Planning (6FC5398-2BP40), "Orientation axis reference (ORIWKS, ORIMKS)": the
 orientation vector is programmed in the workpiece coordinate system under both; ORIMKS sets how

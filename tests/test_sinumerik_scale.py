@@ -1,4 +1,4 @@
-"""SINUMERIK SCALE / ASCALE / MIRROR / AMIRROR (postproc/dialects/sinumerik/frames.py, scaled.py).
+"""SINUMERIK SCALE / ASCALE / MIRROR / AMIRROR (postproc/programs/dialects/sinumerik/frames.py, scaled.py).
 
 Expected tool-tip positions worked out by hand from the 840D sl Fundamentals programming
 manual (6FC5398-1BP40), "Coordinate transformations (frames)": a point p at
@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.arcs import geometry
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.arcs import geometry
+from postproc.programs.ir import Kind
 
 MIRRORED = """N10 G54 G17 G71 G90
 N20 G0 X0 Y0 Z5

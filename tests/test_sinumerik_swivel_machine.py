@@ -1,5 +1,5 @@
 """CYCLE800 swivel planes on a five-axis machine: placed with the 840D's rotary positions,
-converted, and refused by compensate (postproc/dialects/sinumerik/swivel_place.py).
+converted, and refused by compensate (postproc/programs/dialects/sinumerik/swivel_place.py).
 
 By hand, for machines/xyzac-trt (workpiece tool axis = Rz(-c) Rx(-a) (0,0,1) = (sin a sin c,
 sin a cos c, cos a), A limits -100..50): CYCLE800 _MODE 57 (X-Y-Z) _A=-30 turns the frame by
@@ -21,10 +21,10 @@ from typer.testing import CliRunner
 from postproc import dialects
 from postproc.cli import app
 from postproc.errors import InputError
-from postproc.fivex.emit import solve
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.emit import solve
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 S30, C30 = 0.5, np.sqrt(3) / 2
