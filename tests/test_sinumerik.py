@@ -91,11 +91,8 @@ def test_sniffing_by_extension_and_content(tmp_path):
 
 
 @pytest.mark.parametrize("text, line, column, why", [
-    ("G0 X0\nSCALE X2 Y2\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
-    ("G0 X0\nN20 MIRROR X0\nG1 X1 F10\n", 2, 1, "scaled or mirrored"),
     ("G0 X0\nG3 I5 J0 AR=90 F10\n", 2, 4, "AR= with a centre"),
     ("TRAORI\nG1 X1 A3=0 B3=0 C3=1 F10\nG2 X2 Y1 I1 J0 A3=0 B3=1 C3=1\n", 3, 10, "arc centre) and A3= B3= C3="),
-    ("G1 X1 F10\nORIMKS\n", 2, 1, "ORIMKS"),
     ("G0 X0\nG1 X1 R5 F10\n", 2, 7, "not an address word"),
     ("G0 X0\nTRANS X1 G1\n", 2, 1, "block of its own"),
 ])

@@ -20,7 +20,7 @@ SEEDS += [p.read_bytes() for p in fuzzing.seed_files("gcode") if p.suffix.lower(
 TOKENS = ["TRANS X10", "ATRANS Y5", "ROT Z30", "AROT X10 Y20", "ROT RPL=45", "SCALE X2", "MIRROR", "R1=", "R2=R1*2+SIN(30)",
           "X=R1", "Y=IC(2)", "CR=5", "AR=90", "A3=0", "G500", "G505", "G54", "TRAORI", "TRAFOOF", "G2 X1 Y1 CR=-3", "DEF REAL A",
           "IF R1>2", "ENDIF", "WHILE R1<3", "ENDWHILE", "FOR I=1 TO 3", "ENDFOR", "REPEAT", "UNTIL R1>0", "LABEL1:", "GOTOF LABEL1",
-          "CYCLE800(1,\"T\",0,57)", "T=\"TOOL\"", "(", ")", "=", " ", "\n", ";", "$AA_IW[X]", "DIV", "MOD", "N10 "]
+          "CYCLE800(1,\"T\",0,57)", "MIRROR X0", "ASCALE X2 Y2", "AMIRROR Y0", "ORIMKS", "T=\"TOOL\"", "(", ")", "=", " ", "\n", ";", "$AA_IW[X]", "DIV", "MOD", "N10 "]
 
 
 def generated(rng: random.Random) -> bytes:

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from postproc.fivex.errors import UnreachableError
+from postproc.fivex.given_angles import keep_given
 from postproc.fivex.kinematics import POLE_TOL_DEG, fk, ik
 from postproc.fivex.machine import Machine
 
@@ -43,6 +44,7 @@ def solve(machine: Machine, path: FivePath, tool_length: float = 0.0):
     """IK of every target; unreachable targets stop the job naming their lines."""
     start = (0.0, 0.0) if path.angles is None else tuple(path.angles[0])
     result = ik(machine, path.tip, path.axis, start_deg=start, tool_length=tool_length)
+    result = keep_given(machine, path.tip, path.axis, path.angles, result, tool_length)  # the input's own rotary positions (given_angles.py)
     if not result.reachable.all():
         bad = np.nonzero(~result.reachable)[0]
         lines = ", ".join(str(int(path.line[i])) for i in bad[:20]) + (" ..." if len(bad) > 20 else "")

@@ -15,6 +15,7 @@ import re
 
 from ...ir import SourceDoc, Toolpath
 from ..gcode import GcodeDialect
+from . import swivel_place
 from .controller import SINUMERIK_840D
 
 # Words no other G-code dialect writes at the start of a block (the head is upper case).
@@ -31,6 +32,14 @@ class SinumerikDialect(GcodeDialect):
 
     def sniff(self, head: str) -> bool:
         return _SNIFF.search(head) is not None
+
+    def for_machine(self, tp: Toolpath, machine) -> Toolpath:
+        """The targets of CYCLE800 swivel planes placed on ``machine``: the 840D's rotary positions."""
+        return swivel_place.place(tp, machine)
+
+    def refuse_compensation(self, tp: Toolpath) -> None:
+        """A swivel plane is not compensated: the correction would change the cycle's angles, not block numbers."""
+        swivel_place.refuse_compensation(tp)
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import SinumerikParser  # the reader pulls in lark and the grammar: loaded when a program is read

@@ -23,7 +23,7 @@ from ...ir import F_ARC, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
-from . import arc_angle, circle_through, frames, swivel, translate
+from . import arc_angle, circle_through, frames, ori_reference, scaled, swivel, swivel_rows, translate
 
 _AX = {c: i for i, c in enumerate(AXES)}
 _CALL = re.compile(r"(?im)^[ \t]*(?:N\d+[ \t]+)?[A-Z_]\w{2,}[ \t]*\(")
@@ -45,6 +45,7 @@ def _calls_or_labels(text: str) -> bool:
             return True
     return False
 _FRAME_CODES = set(translate.FRAME_NAMES)
+_ORI_REFERENCE = {code: word == "ORIMKS" for word, code in translate.ORI_CODES.items()}  # G code -> ORIMKS
 # Settable frames beyond G54-G57 (group 8, Fundamentals "Settable zero offset G54 to G57, G505
 # to G599, G53, G500, SUPA, G153"): G500 and G505..G599 as work-offset numbers of their own
 # (the G-code reader's are 1..9); their values are in the controller, not in the program.
@@ -78,7 +79,14 @@ class SinumerikParser(GcodeParser):
         self.siemens = True
         self.builder = Builder("sinumerik", "none", [doc])
         self.lines = _MappedLines(text, original, self.offsets)
-        self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
+        self.frame = np.eye(4)  # the programmable frame's rigid part, as the blocks read so far leave it
+        self.axis_scale = np.ones(3)  # its axes' scale and mirror factors (SCALE, MIRROR): p at frame @ diag(axis_scale) @ p
+        self.axis_scales: list[tuple[int, np.ndarray]] = []  # (time, axis_scale) from each frame event on (frames.py)
+        self.row_axis_scale: np.ndarray | None = None  # (targets, 3) the factors each target is read under (_tilted_planes)
+        self.ori_machine: list[tuple[int, bool]] = []  # (time, ORIMKS in force from then on: ORIWKS False)
+        self.row_ori_machine: np.ndarray | None = None  # (targets,) ORIMKS in force at each target
+        self.swivels: list[tuple[int, swivel_rows.Swivel]] = []  # (time, the CYCLE800 in force from then on)
+        self.row_swivel: dict[str, np.ndarray] | None = None  # per target: the CYCLE800 in force (swivel_rows.extras)
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
         self.cip_points: list[tuple[int, np.ndarray]] = []  # (line, intermediate point mm) of each CIP block read, in order
         self.opening_angles: dict[int, float] = {}  # line -> AR= opening angle (deg) of the arc in that block
@@ -87,8 +95,60 @@ class SinumerikParser(GcodeParser):
 
     def parse(self) -> Toolpath:
         if _calls_or_labels(self.text):  # a call or a jump label: the flow reader knows them
-            return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
-        return self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+            tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(self._parse_flow())))
+        else:
+            tp = self._cip_arcs(self._opening_angle_arcs(self._back_to_file(super().parse())))
+        if self.swivels:
+            tp = replace(tp, extras={**tp.extras, **self._swivel_extras(tp)})
+        if any(flag for _, flag in self.ori_machine):
+            if self.row_ori_machine is None or len(tp) != len(self.row_ori_machine):
+                first = next(when for when, flag in self.ori_machine if flag)
+                raise self._error_at(self.event_offsets.get(first, first), "ORIMKS in a program read block by block (cutter radius "
+                                     "compensation, cycles) is not read")
+            tp = self._machine_reference(tp, self.row_ori_machine)
+        if self.row_axis_scale is None or (self.row_axis_scale == 1.0).all():
+            return tp
+        try:
+            return scaled.apply(tp, self.row_axis_scale)
+        except scaled.NotRead as exc:
+            raise self._at_word(int(tp.line[exc.row]), exc.word, exc.message) from None
+
+    def _swivel_extras(self, tp: Toolpath) -> dict[str, np.ndarray]:
+        """The CYCLE800 in force at each target (swivel_rows.py); where the targets are not one per
+        block (the block-by-block reader adds moves), every target's swivel is unknown (never placed)."""
+        if self.row_swivel is not None and len(tp) == len(self.row_swivel["sinumerik.swivel_line"]):
+            return self.row_swivel
+        unknown = swivel_rows.Swivel(self.swivels[0][1].line, swivel_rows.STATES["unknown"], np.nan, np.full((3, 3), np.nan))
+        return swivel_rows.extras([(-1, unknown)], np.zeros(len(tp), np.int64))
+
+    def _machine_reference(self, tp: Toolpath, machine_reference: np.ndarray) -> Toolpath:
+        """Vectors under ORIMKS: read as under ORIWKS (block ends), refused in a turned frame, noted (ori_reference.py)."""
+        turned = ori_reference.turned_vector_row(tp, machine_reference)
+        if turned is not None:
+            raise self._at_word(int(tp.line[turned]), "", "A3= B3= C3= under ORIMKS in a rotated frame (ROT / AROT / CYCLE800): whether "
+                                "the frame turns a vector referred to the machine is not stated in the manual: not read (use ORIWKS)")
+        vectors = machine_reference & ~np.isnan(tp.values[:, ori_reference.VECTOR]).all(axis=1)
+        if not vectors.any():
+            return tp
+        note = (f"line {int(tp.line[np.argmax(vectors)])}: ORIMKS: the block ends' tool vectors are read as under ORIWKS; between them "
+                "the 840D interpolates the rotary axes linearly (Job Planning, ORIWKS / ORIMKS), which the targets do not hold")
+        return replace(tp, notes=tp.notes + (note,))
+
+    def _tilted_planes(self, t: dict, rows: np.ndarray, frame_idx: np.ndarray, resolved: np.ndarray) -> None:
+        """The frames (``GcodeParser``), and the axes' scale and mirror each target is read under."""
+        super()._tilted_planes(t, rows, frame_idx, resolved)
+        times = t.get("seq", t["offset"])[rows]
+        if self.ori_machine:
+            at = np.searchsorted(np.array([when for when, _ in self.ori_machine]), times, side="right") - 1
+            self.row_ori_machine = np.array([False] + [flag for _, flag in self.ori_machine])[at + 1]
+        if self.swivels:
+            self.row_swivel = swivel_rows.extras(self.swivels, t.get("seq", t["offset"])[rows])
+        if not self.axis_scales:
+            return
+        times = np.array([when for when, _ in self.axis_scales])
+        at = np.searchsorted(times, t.get("seq", t["offset"])[rows], side="right") - 1
+        factors = np.vstack([np.ones((1, 3))] + [d[None] for _, d in self.axis_scales])
+        self.row_axis_scale = factors[at + 1]
 
     def _cip_arcs(self, tp: Toolpath) -> Toolpath:
         """CIP blocks (read as G3 with the intermediate point in I J K): the plane arc through
@@ -176,6 +236,10 @@ class SinumerikParser(GcodeParser):
                 # A3= B3= C3= under TRAORI (ORIWKS: in the workpiece frame, turned by the frames): the G-code
                 # reader's tool-axis vectors (G43.5 I J K), modal, an arc's I J K staying its centre
                 state["tlo"] = 43.5
+        reference = [gc for gc in gcodes if gc in _ORI_REFERENCE]
+        if reference:
+            self.ori_machine.append((self._when(start), _ORI_REFERENCE[reference[-1]]))
+            gcodes = [gc for gc in gcodes if gc not in _ORI_REFERENCE]
         if translate.CIP_CODE in gcodes:
             # I1 J1 K1 (read into I J K): the intermediate point, taken out before the reader sees arc centre words
             ijk = [_AX["I"], _AX["J"], _AX["K"]]
@@ -206,7 +270,7 @@ class SinumerikParser(GcodeParser):
             self.tilts.append((self._when(start), "unknown"))  # added to a frame that is not known: not known either
             return True, False
         try:
-            self.frame = frames.step(self.frame, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
+            self.frame, self.axis_scale = frames.step(self.frame, self.axis_scale, translate.FRAME_NAMES[mine[0]], xyz, rpl, self.plane, self.to_mm)
         except frames.FrameRefused as exc:
             raise self._error_at(start, str(exc)) from None
         self._frame_event(start)
@@ -215,11 +279,13 @@ class SinumerikParser(GcodeParser):
     def _frame_event(self, start: int) -> None:
         """Later targets' frame: settable @ swivel @ programmable (Fundamentals, "Frame chain")."""
         chain = self.swivel @ self.frame
+        when = self._when(start)
+        self.axis_scales.append((when, self.axis_scale))
         if np.isnan(chain).any():
-            self.tilts.append((self._when(start), "unknown"))
+            self.tilts.append((when, "unknown"))
             return
-        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0)
-        self.tilts.append((self._when(start), None if identity else chain))
+        identity = np.allclose(chain, np.eye(4), atol=0.0, rtol=0.0) and (self.axis_scale == 1.0).all()
+        self.tilts.append((when, None if identity else chain))  # a scaled or mirrored frame is named, its rigid part maybe identity
 
     def _at_opening_angle(self, line: int, message: str) -> ParseError:
         return self._at_word(line, "AR", message)
@@ -249,6 +315,7 @@ class SinumerikParser(GcodeParser):
         except swivel.Unknown as exc:
             self.notes.append(f"line {self.lines.line(start)}: {exc}; later targets are flagged")
             self.swivel = np.full((4, 4), np.nan)
+        self.swivels.append((self._when(start), swivel_rows.Swivel.of(self.lines.line(start), line, self.swivel)))
         self._frame_event(start)
 
     def _resolve(self, t: dict) -> Toolpath:
@@ -266,6 +333,10 @@ class SinumerikParser(GcodeParser):
     def _resolve_blocks(self, t: dict) -> Toolpath:
         """Programs the G-code interpreter runs block by block (cutter compensation, cycles):
         its work-offset tables know G54-G57 only, so G500 / G505.. there are refused."""
+        scaled_at = [when for when, d in self.axis_scales if (d != 1.0).any()]
+        if scaled_at:
+            raise self._error_at(self.event_offsets.get(scaled_at[0], scaled_at[0]), "SCALE / MIRROR in a program with cutter radius compensation (G41/G42) or a cycle "
+                                 "is not read (the 840D swaps G41/G42 under a mirror and does not scale the radius)")
         settable = t["wcs"] >= _SETTABLE_BASE
         if settable.any():
             raise self._error_at(int(t["offset"][np.argmax(settable)]), "G500 / G505..G599 in a program with cutter radius compensation "

@@ -24,10 +24,10 @@ What is rewritten:
   takes back; ``RPL=`` -> ``R=`` (the plane rotation's angle);
 - ``A3= B3= C3=`` (tool orientation vector, ORIWKS) -> the reader's tool-axis words ``I J K``,
   the block marked with ``VECTOR_CODE``;
-- words that set how the 840D moves, not where (SOFT, FFWON, ORIWKS, CYCLE832(...), ...) ->
-  blanks of the same length.
+- words that set how the 840D moves, not where (SOFT, FFWON, CYCLE832(...), ...) ->
+  blanks of the same length; ORIWKS / ORIMKS -> internal G codes (``ORI_CODES``).
 What is refused with its position (``Refusal``, a ``ParseError`` once the reader has it):
-``AR=``, ``CIP``, ``ORIMKS``, an arc's I J K with A3= in one block, jumps and labels, CASE,
+``AR=``, ``CIP``, an arc's I J K with A3= in one block, jumps and labels, CASE,
 splines, array elements, other addresses set in a motion block, and an R parameter used as
 an address word. An expression the reader cannot evaluate (IC(), ATAN2, POT, DIV, TRUNC, system
 variables) becomes a parameter that is never set: the target is flagged, never guessed.
@@ -97,13 +97,14 @@ _NOT_READ_WHY = {"case": "CASE ... OF ... GOTOF is a program jump, not followed 
 _IGNORED = {"ADIS", "ADISPOS", "SPOS", "SPOSA"}
 # Words and cycles that set how the 840D moves, not where to (Fundamentals: "Acceleration
 # behavior" SOFT / BRISK, "Feedforward control" FFWON / FFWOF, "Orientation reference" ORIWKS,
-# the default, which is how vectors are read here; compressor COMPCAD / COMPCURV / COMPON / COMPOF
-# and CYCLE832 are named by the controller's inexact_interpolation): read past. ORIMKS (vectors
-# in machine coordinates) is refused.
-_PASSIVE = re.compile(r"(?i)(?<![\w$])(?:SOFT|BRISK|FFWON|FFWOF|ORIWKS|STOPRE|COMPCAD|COMPCURV|COMPON|COMPOF|CYCLE832[ \t]*\([^)\n]*\))(?!\w)")
+# the default, and ORIMKS, which parse.py follows; compressor COMPCAD / COMPCURV / COMPON / COMPOF
+# and CYCLE832 are named by the controller's inexact_interpolation): read past.
+_PASSIVE = re.compile(r"(?i)(?<![\w$])(?:SOFT|BRISK|FFWON|FFWOF|ORIWKS|ORIMKS|STOPRE|COMPCAD|COMPCURV|COMPON|COMPOF|CYCLE832[ \t]*\([^)\n]*\))(?!\w)")
 # A CYCLE800 call alone in its block: the call becomes the internal SWIVEL_CODE, blanks to its length.
 _SWIVEL_LINE = re.compile(r"(?i)^[ \t]*(?:[Nn]\d+[ \t]+)?(?P<call>CYCLE800[ \t]*\([^)\n]*\))[ \t]*$")
-_ORIMKS = re.compile(r"(?i)(?<![\w$])ORIMKS(?!\w)")
+# ORIWKS / ORIMKS (orientation reference, Job Planning "Orientation axis reference"): internal G codes
+# of the same length as the word, which parse.py takes back (ori_reference.py), not blanks.
+ORI_CODES = {"ORIWKS": 9985.0, "ORIMKS": 9986.0}
 _NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)$")
 _R_PARAM = re.compile(r"(?<![A-Za-z0-9_$#])R(\d+)(?![A-Za-z0-9_])", re.IGNORECASE)
 
@@ -241,19 +242,16 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
     """The edits (start, end in the line, new text) that put a block of the file (offset
     ``start``) in the reader's syntax; none for a block it reads as it is."""
     code = line.partition(";")[0]
-    orimks = _ORIMKS.search(code)
-    if orimks:
-        raise Refusal(start + orimks.start(), "ORIMKS (tool orientation vectors in machine coordinates) is not read: use ORIWKS")
     upper = code.upper()  # cheap guards: most candidate lines (R parameters, expressions) have none of the words below
     swivel = _SWIVEL_LINE.match(code) if "CYCLE800" in upper else None
     if swivel:
         a, b = swivel.span("call")
         return [(a, b, f"G{SWIVEL_CODE:g}".ljust(b - a))]
-    passive = [(m.start(), m.end(), " " * (m.end() - m.start())) for m in _PASSIVE.finditer(code)]
+    passive = [(m.start(), m.end(), _passive_text(m.group(0))) for m in _PASSIVE.finditer(code)]
     if passive:  # blanked (same length: every other character keeps its place), then the rest of the block as ever
         blanked = code
-        for a, b, blank in passive:
-            blanked = blanked[:a] + blank + blanked[b:]
+        for a, b, _ in passive:
+            blanked = blanked[:a] + " " * (b - a) + blanked[b:]
         return sorted(passive + [e for e in line_edits(blanked, start) if not any(a <= e[0] < b for a, b, _ in passive)])
     not_read = _NOT_READ.match(code)
     if not_read:
@@ -305,6 +303,12 @@ def line_edits(line: str, start: int) -> list[tuple[int, int, str]]:
         edits.insert(0, (vector, vector, f"G{VECTOR_CODE:g} "))  # the orientation vector's block: parse.py turns G43.5-like reading on
         edits.sort(key=lambda e: (e[0], e[1]))
     return edits
+
+
+def _passive_text(word: str) -> str:
+    """What a word read past becomes: blanks, or ORIWKS / ORIMKS's internal G code (same length)."""
+    code = ORI_CODES.get(word.upper())
+    return f"G{code:g}".ljust(len(word)) if code else " " * len(word)
 
 
 def rewrite(text: str) -> tuple[str, OffsetMap]:
