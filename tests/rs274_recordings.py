@@ -6,8 +6,9 @@ from __future__ import annotations
 
 import shutil
 import tempfile
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Mapping
 
 import pytest
 from test_real_corpus import run_rs274
@@ -30,3 +31,33 @@ def record_all(names: Iterable[str], program_in: Callable[[Path, str], Path], fo
             accepted, calls, err = run_rs274(program_in(Path(scratch), name))
             assert accepted, f"{name}: {err}"
             (folder / f"{name}.canon").write_bytes(calls.encode("latin-1"))
+
+
+@dataclass(frozen=True)
+class Recordings:
+    """A test file's G-code programs (name -> text) and the folder of their recorded rs274 calls."""
+
+    programs: Mapping[str, str]
+    folder: Path
+
+    def write(self, folder: Path, name: str) -> Path:
+        """The program ``name`` written as ``folder``/NAME.ngc."""
+        path = folder / f"{name}.ngc"
+        path.write_text(self.programs[name], encoding="latin-1")
+        return path
+
+    def freshness_test(self) -> Callable:
+        """The test that a fresh rs274 run gives every program's recording (skipped without rs274);
+        a test file binds it to a ``test_...`` name."""
+
+        @needs_rs274
+        @pytest.mark.parametrize("name", sorted(self.programs))
+        def test(name: str, tmp_path: Path) -> None:
+            assert_current(self.write(tmp_path, name), self.folder / f"{name}.canon")
+
+        return test
+
+    def record_if_asked(self, argv: list[str]) -> None:
+        """``python tests/test_x.py --record``: every program through rs274 into the folder again."""
+        if "--record" in argv[1:]:
+            record_all(self.programs, self.write, self.folder)

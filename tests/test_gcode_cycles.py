@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274
 
 from postproc.dialects.gcode.canned import PECK_CLEARANCE_MM
@@ -67,10 +67,8 @@ PROGRAMS.update({
 })
 
 
-def _program(tmp_path: Path, name: str) -> Path:
-    path = tmp_path / f"{name}.ngc"
-    path.write_text({**ALL_CYCLES, **PROGRAMS}[name], encoding="latin-1")
-    return path
+RECORDINGS = Recordings({**ALL_CYCLES, **PROGRAMS}, RECORDED)
+_program = RECORDINGS.write
 
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
@@ -84,10 +82,7 @@ def test_ir_matches_the_rs274_recording(name, tmp_path):
     np.testing.assert_allclose(machine[rows], canon[keep], rtol=0, atol=1e-6)
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted({**ALL_CYCLES, **PROGRAMS}))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 def test_g87_in_the_g18_plane_by_hand(tmp_path):
@@ -163,5 +158,4 @@ def test_what_rs274_refuses_is_refused_with_file_line_column(name, tmp_path):
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all({**ALL_CYCLES, **PROGRAMS}, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)

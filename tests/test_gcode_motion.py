@@ -18,7 +18,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from test_real_corpus import _moves, canonical_endpoints, machine_positions
 
 from postproc.errors import EmitError, ParseError
@@ -53,10 +53,8 @@ PROGRAMS = {
 }
 
 
-def _program(tmp_path: Path, name: str) -> Path:
-    path = tmp_path / f"{name}.ngc"
-    path.write_text(PROGRAMS[name], encoding="latin-1")
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def _machine(name: str, tmp_path: Path) -> np.ndarray:
@@ -231,15 +229,11 @@ def test_ir_matches_the_rs274_recording(name, tmp_path):
     np.testing.assert_allclose(machine[rows], canon[keep], atol=1e-4 + 1e-9)
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all(PROGRAMS, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)
 
 
 def test_runs_of_holes_read_at_once_equal_the_block_by_block_reading(tmp_path, monkeypatch):
