@@ -28,14 +28,20 @@ def random_joints(robot, n, seed, margin=0.0):
     return out[:n]
 
 
+def pinocchio_at(robot, q, quantity) -> np.ndarray:
+    """The reference: pinocchio's ``quantity(model, data, q)`` (pin_model.flange_pose,
+    flange_jacobian) of ``robot`` at every row of ``q``."""
+    model = pin_model.build_model(robot)
+    data = model.createData()
+    return np.stack([quantity(model, data, qi) for qi in q])
+
+
 @pytest.mark.parametrize("name", ALL)
 def test_fk_matches_pinocchio(name):
     robot = postproc.load_robot(name)
-    model = pin_model.build_model(robot)
-    data = model.createData()
     q = random_joints(robot, 200, seed=1)
     ours = postproc.fk(robot, q)
-    ref = np.stack([pin_model.flange_pose(model, data, qi) for qi in q])
+    ref = pinocchio_at(robot, q, pin_model.flange_pose)
     np.testing.assert_allclose(ours[:, :3, 3], ref[:, :3, 3], atol=1e-9)
     np.testing.assert_allclose(ours[:, :3, :3], ref[:, :3, :3], atol=1e-12)
 
@@ -77,11 +83,9 @@ def test_bad_shapes_raise_typed_errors():
 @pytest.mark.parametrize("name", ALL)
 def test_jacobian_matches_pinocchio_and_finite_differences(name):
     robot = postproc.load_robot(name)
-    model = pin_model.build_model(robot)
-    data = model.createData()
     q = random_joints(robot, 40, seed=4)
     ours = postproc.jacobian(robot, q)
-    ref = np.stack([pin_model.flange_jacobian(model, data, qi) for qi in q])
+    ref = pinocchio_at(robot, q, pin_model.flange_jacobian)
     np.testing.assert_allclose(ours, ref, atol=1e-8)
     # Finite differences of the TCP position, tool included, per radian of controller joint.
     tool = np.array([20.0, 0.0, 150.0])

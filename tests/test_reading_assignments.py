@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import TOOL, kr160
+from rapid_programs import spindle_module
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -35,13 +36,7 @@ def _compensate(program: Path, model: Path, out: Path):
     return runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--allow-model-mismatch"])
 
 
-RAPID = f"""MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
-    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+RAPID = spindle_module(f"""\
     p1 := [[100,50,120],[0,0,1,0],[-1,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1.rot := [0,{R2},{R2},0];
@@ -50,9 +45,7 @@ RAPID = f"""MODULE m
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     tSpindle.tframe.trans := [0,0,250];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_whole_robtargets_rotations_and_frames_are_followed(tmp_path):
@@ -96,20 +89,12 @@ def test_rapid_assignments_that_depend_on_inputs_or_calls_stay_unresolved(tmp_pa
     assert any("upd.mod:8: " in n and "is assigned" in n for n in tp.notes), tp.notes
 
 
-WHOLE = """MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
-    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+WHOLE = spindle_module("""\
     p1 := [[100,50,120],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1 := [[150,-30,130],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_whole_robtarget_assignments_are_compensated_into_their_own_numbers(tmp_path, model_path):

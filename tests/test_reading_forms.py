@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import TOOL, kr160
+from rapid_programs import spindle_module
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -390,22 +391,14 @@ def test_tool_frame_steps_are_compensated_and_written_back_in_the_tool_frame(tmp
 
 
 # ------------------------------------------------------------------ RAPID runtime assignments
-RAPID_UPDATES = """MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
-    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
+RAPID_UPDATES = spindle_module("""\
     p1.trans := [100, 50, 120];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1.trans.z := 130;
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     wobj1.oframe.trans := [100, 50, 0];
     MoveL [[0,0,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_constant_assignments_in_straight_line_code_are_followed(tmp_path):
