@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc.effect_check import check_effect
+from postproc.effect_check import check_effect, with_random_context
 from postproc.effects import BUILTIN, CATALOG, EffectSpecError, EffectSum, Geometric, JointHarmonics, parse_effects
 from postproc.effects.backlash import approach_from_order
 from postproc.errormodel import ErrorModel
@@ -49,15 +49,7 @@ def test_bad_effect_specs(text, message):
 
 def _random_set(n=25, seed=0):
     rng = np.random.default_rng(seed)
-    return MeasurementSet(
-        q_deg=rng.uniform(-60, 60, (n, 6)),
-        measured_mm=np.zeros((n, 3)),
-        ids=tuple(str(i) for i in range(n)),
-        force_n=rng.normal(0, 200, (n, 3)),
-        approach=rng.choice([-1.0, 1.0], (n, 6)),
-        temp_c=rng.uniform(18, 30, n),
-        time_s=np.arange(n) * 30.0,
-    )
+    return with_random_context(rng.uniform(-60, 60, (n, 6)), rng)
 
 
 @pytest.mark.parametrize("name", sorted(BUILTIN))
