@@ -1,5 +1,5 @@
 """The RAPID module of the reading tests: a spindle tool, a work object and a point p1, and a
-main routine that first moves to p1 as declared; each test adds what its main runs next."""
+main routine that switches ConfL off; each test gives what its main runs next."""
 
 from __future__ import annotations
 
@@ -9,10 +9,9 @@ _HEAD = """MODULE m
   VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
   PROC main()
     ConfL\\Off;
-    MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
 """
 
 
 def spindle_module(statements: str) -> str:
-    """The module with ``statements`` (lines indented four spaces) after main's first move to p1."""
+    """The module with ``statements`` (lines indented four spaces) after main's ConfL\\Off."""
     return _HEAD + statements + "  ENDPROC\nENDMODULE\n"

@@ -10,8 +10,11 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Mapping
 
+import numpy as np
 import pytest
-from test_real_corpus import run_rs274
+from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274
+
+from postproc.programs import parse_program
 
 needs_rs274 = pytest.mark.skipif(shutil.which("rs274") is None, reason="LinuxCNC's rs274 is not installed (apt-get install linuxcnc-uspace)")
 
@@ -45,6 +48,17 @@ class Recordings:
         path = folder / f"{name}.ngc"
         path.write_text(self.programs[name], encoding="latin-1")
         return path
+
+    def moves(self, folder: Path, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(the IR's, rs274's recorded) machine positions of program ``name``'s moves, mm, after
+        checking they are as many; the IR is read from the program written to ``folder``."""
+        tp = parse_program(self.write(folder, name))
+        canon, tol, arc = canonical_endpoints((self.folder / f"{name}.canon").read_text(encoding="latin-1"))
+        keep = _moves(canon, tol, arc)
+        machine = machine_positions(tp)
+        rows = _moves(machine, np.full(len(tp), 1e-9), np.zeros(len(tp), bool))
+        assert len(rows) == len(keep), f"rs274 made {len(keep)} moves, the IR {len(rows)}"
+        return machine[rows], canon[keep]
 
     def freshness_test(self) -> Callable:
         """The test that a fresh rs274 run gives every program's recording (skipped without rs274);

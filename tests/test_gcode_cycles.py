@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rs274_recordings import Recordings
-from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274
+from test_real_corpus import canonical_endpoints, machine_positions, run_rs274
 
 from postproc.dialects.gcode.canned import PECK_CLEARANCE_MM
 from postproc.errors import ParseError
@@ -73,13 +73,8 @@ _program = RECORDINGS.write
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_ir_matches_the_rs274_recording(name, tmp_path):
-    tp = parse_program(_program(tmp_path, name))
-    canon, tol, arc = canonical_endpoints((RECORDED / f"{name}.canon").read_text(encoding="latin-1"))
-    keep = _moves(canon, tol, arc)
-    machine = machine_positions(tp)
-    rows = _moves(machine, np.full(len(tp), 1e-9), np.zeros(len(tp), bool))
-    assert len(rows) == len(keep), f"rs274 made {len(keep)} moves, the IR {len(rows)}"
-    np.testing.assert_allclose(machine[rows], canon[keep], rtol=0, atol=1e-6)
+    ours, recorded = RECORDINGS.moves(tmp_path, name)
+    np.testing.assert_allclose(ours, recorded, rtol=0, atol=1e-6)
 
 
 test_rs274_recordings_are_current = RECORDINGS.freshness_test()

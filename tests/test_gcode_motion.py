@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from rs274_recordings import Recordings
-from test_real_corpus import _moves, canonical_endpoints, machine_positions
+from test_real_corpus import machine_positions
 
 from postproc.errors import EmitError, ParseError
 from postproc.ir import Kind
@@ -220,13 +220,8 @@ def test_moves_to_a_stored_position_or_a_probe_contact_are_listed_and_flag_what_
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_ir_matches_the_rs274_recording(name, tmp_path):
-    tp = parse_program(_program(tmp_path, name))
-    canon, tol, arc = canonical_endpoints((RECORDED / f"{name}.canon").read_text(encoding="latin-1"))
-    keep = _moves(canon, tol, arc)
-    machine = machine_positions(tp)
-    rows = _moves(machine, np.full(len(tp), 1e-9), np.zeros(len(tp), bool))
-    assert len(rows) == len(keep), f"rs274 made {len(keep)} moves, the IR {len(rows)}"
-    np.testing.assert_allclose(machine[rows], canon[keep], atol=1e-4 + 1e-9)
+    ours, recorded = RECORDINGS.moves(tmp_path, name)
+    np.testing.assert_allclose(ours, recorded, atol=1e-4 + 1e-9)
 
 
 test_rs274_recordings_are_current = RECORDINGS.freshness_test()
