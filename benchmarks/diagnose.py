@@ -28,9 +28,9 @@ def _child(case: str, n: int) -> None:
     """Time one command in this process (data made first, outside the clock)."""
     from simulated_kr160 import measured_truth
 
-    from postproc.diagnose import diagnose, ladder
-    from postproc.effects import parse_effects
-    from postproc.identify import fit
+    from postproc.model.diagnose import diagnose, ladder
+    from postproc.model.effects import parse_effects
+    from postproc.model.identify import fit
 
     robot, tool, _, data = measured_truth(TRUTH, n)
     model = fit(robot, tool, parse_effects(MODEL), data, cv_folds=0).model if case == "diagnose" else None

@@ -11,8 +11,8 @@ import time
 
 from simulated_kr160 import measured_truth, poses_option
 
-from postproc.effects import parse_effects
-from postproc.identify import fit
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
 
 EVERYTHING = "geometric,base_frame,tool_offset,joint_compliance,external_load,{harmonics},backlash,thermal"
 

@@ -8,8 +8,8 @@ import argparse
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 
 def poses_option(doc: str, default: int = 1000) -> int:

@@ -18,8 +18,8 @@ import numpy as np
 import pytest
 from krl_programs import placed_positions, read_krl
 
-from postproc.compensate import _refuse_unplaced
 from postproc.errors import InputError
+from postproc.jobs.compensate import _refuse_unplaced
 from postproc.programs import parse_program
 
 INI = "BAS (#INITMOV,0 )\n"

@@ -1,4 +1,4 @@
-"""KRL $BASE / $TOOL set inside a FOR body, followed pass by pass (postproc/dialects/krl/passes.py).
+"""KRL $BASE / $TOOL set inside a FOR body, followed pass by pass (postproc/programs/dialects/krl/passes.py).
 
 Expected positions by hand from "KUKA System Software 8.x, Operating and Programming
 Instructions for System Integrators" (KSS 8 SI):
@@ -17,7 +17,6 @@ from pathlib import Path
 
 import numpy as np
 from krl_programs import placed_positions, read_krl
-
 
 DAT = "DEFDAT p\nDECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}\nENDDAT\n"
 CONFIG = "DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nBASE_DATA[2]={X 0,Y 2000,Z 0,A 0,B 0,C 0}\nENDDAT\n"

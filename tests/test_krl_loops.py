@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from krl_programs import placed_positions, read_krl
 
 from postproc.errors import SharedNumberError
