@@ -26,19 +26,13 @@ MODEL = "geometric,base_frame,tool_offset"
 
 def _child(case: str, n: int) -> None:
     """Time one command in this process (data made first, outside the clock)."""
-    import numpy as np
+    from simulated_kr160 import measured_truth
 
-    import postproc
     from postproc.model.diagnose import diagnose, ladder
     from postproc.model.effects import parse_effects
     from postproc.model.identify import fit
-    from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
-    robot = postproc.load_robot("kr160_r1570")
-    tool = [0.0, 0.0, 200.0]
-    rng = np.random.default_rng(0)
-    truth = random_truth(robot, tool, parse_effects(TRUTH), rng)
-    data = simulate(truth, sample_poses(robot, tool, n, Cylinder(), rng), rng)
+    robot, tool, _, data = measured_truth(TRUTH, n)
     model = fit(robot, tool, parse_effects(MODEL), data, cv_folds=0).model if case == "diagnose" else None
     t0 = time.perf_counter()
     if case == "diagnose":

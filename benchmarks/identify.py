@@ -7,29 +7,20 @@ and without 5-fold cross-validation, on a simulated KR160 that has all the effec
 
 from __future__ import annotations
 
-import argparse
 import time
 
-import numpy as np
+from simulated_kr160 import measured_truth, poses_option
 
-import postproc
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit
-from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 EVERYTHING = "geometric,base_frame,tool_offset,joint_compliance,external_load,{harmonics},backlash,thermal"
 
 
 def main():
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--n", type=int, default=1000)
-    args = parser.parse_args()
-    robot = postproc.load_robot("kr160_r1570")
-    tool = [0.0, 0.0, 200.0]
-    rng = np.random.default_rng(0)
-    truth = random_truth(robot, tool, parse_effects(EVERYTHING.format(harmonics="joint_harmonics[joints=2,3;orders=1,2]")), rng)
-    data = simulate(truth, sample_poses(robot, tool, args.n, Cylinder(), rng), rng)
-    print(f"{args.n} poses, KR160 with every catalog effect")
+    n = poses_option(__doc__)
+    robot, tool, _, data = measured_truth(EVERYTHING.format(harmonics="joint_harmonics[joints=2,3;orders=1,2]"), n)
+    print(f"{n} poses, KR160 with every catalog effect")
     print(f"{'harmonic terms':<34}{'CV folds':>9}{'seconds':>9}{'params':>8}{'RMS mm':>9}   target <= 10 s")
     for harmonics in ("joint_harmonics[joints=1,2,3,4,5,6;orders=1,2]", "joint_harmonics"):
         for folds in (0, 5):

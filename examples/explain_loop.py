@@ -15,7 +15,7 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.model.diagnose import diagnose, grouped_findings, ladder
+from postproc.model.diagnose import diagnose, findings_lines, ladder
 from postproc.model.effects import parse_effects
 from postproc.model.identify import Stats, fit, residuals
 from postproc.model.measurements import write_text_atomic
@@ -41,11 +41,8 @@ for round_ in range(1, 5):
     val_rms = Stats.of(residuals(model, val)).rms_mm
     print(f"round {round_}: model {model.effects.spec()}")
     print(f"  validation RMS {val_rms:.4f} mm, cross-validated {diag.cv_rms_mm:.4f} mm, noise floor {diag.noise_floor_mm:.4f} mm")
-    for texts, command in grouped_findings(diag.findings):
-        for text in texts:
-            print(f"  - {text}")
-        if command:
-            print(f"    run: {command}")
+    for line in findings_lines(diag.findings, bullet="  - "):
+        print(line)
     if round_ == 1:
         report = out_dir / "explain_report.html"
         write_text_atomic(report, diagnosis_report(model, data, diag, title="Diagnosis of the first model"))

@@ -31,6 +31,7 @@ import postproc
 from postproc.model.effects import parse_effects
 from postproc.model.formats.ur10_ipa import read_series
 from postproc.model.identify import fit, refit_base, residuals
+from postproc.model.validate import rigid_offset
 
 args = [a for a in sys.argv[1:] if a != "--quick"]
 QUICK = "--quick" in sys.argv  # the test suite: every 20th pose of Series A, two of the ceiling fits
@@ -61,17 +62,6 @@ def repeats(meas) -> list[tuple[int, int]]:
     return [tuple(np.nonzero(inverse == g)[0][:2]) for g in np.nonzero(counts > 1)[0]]
 
 
-def rigid_residual(pred: np.ndarray, resid: np.ndarray) -> np.ndarray:
-    """What is left of resid after the best small rigid motion (6 DOF) of the predicted points."""
-    centred = pred - pred.mean(axis=0)
-    jac = np.zeros((len(pred), 3, 6))
-    jac[:, :, :3] = np.eye(3)
-    for k, axis in enumerate(np.eye(3)):
-        jac[:, :, 3 + k] = np.cross(axis, centred)
-    coef, *_ = np.linalg.lstsq(jac.reshape(-1, 6), resid.reshape(-1), rcond=None)
-    return resid - jac @ coef
-
-
 print("1. protocols")
 days_a = sorted({s[:8] for s in raw_column("Series_A", "Timestamp")})
 print(f"   Series A: {len(series_a)} poses on {len(days_a)} days {days_a[0]}..{days_a[-1]}, {series_a.temp_c.min():.2f}-{series_a.temp_c.max():.2f} degC")
@@ -96,7 +86,7 @@ left = resid_a.copy()
 for s in np.unique(session):
     rows = session == s
     if rows.sum() >= 10:
-        left[rows] = rigid_residual(pred_a[rows], resid_a[rows])
+        left[rows] = rigid_offset(pred_a[rows], resid_a[rows])[1]  # what the best small rigid motion leaves
 print(f"   {session.max() + 1} sessions; Series A residual {stats(resid_a)} -> with a frame per session {stats(left)}")
 day = np.floor(series_a.time_s / 86400 + 0.69).astype(int)  # calendar day (the series starts at 16:39)
 point = series_a.extra["point"].astype(int)  # commanded position (read_series groups the goal poses)

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.model.diagnose import Files, diagnose, grouped_findings, ladder
+from postproc.model.diagnose import Files, diagnose, findings_lines, ladder
 from postproc.model.effects import parse_effects
 from postproc.model.formats.ur10_ipa import read_series
 from postproc.model.identify import fit
@@ -51,11 +51,8 @@ print(f"diagnose {model.effects.spec()} on Series A: cross-validated RMS {diag.c
 print(f"{'candidate':<46}{'explained':>10}{'CV RMS mm':>11}{'p (Holm)':>10}  significant")
 for c in diag.candidates:
     print(f"{c.effect:<46}{100 * c.explained:>9.1f}%{c.rms_if_added_mm:>11.4f}{c.p_adjusted:>10.1e}  {'yes' if c.significant else 'no'}")
-for texts, command in grouped_findings(diag.findings):
-    for text in texts:
-        print(f"- {text}")
-    if command:
-        print(f"    run: {command}")
+for line in findings_lines(diag.findings):
+    print(line)
 
 steps = GEOMETRIC.split(",") + [c.effect for c in diag.candidates]  # the physics in the order diagnose ranked it
 rows = ladder(robot, tool, series_a, steps, folds=FOLDS, validation=series_b, reregister=True)

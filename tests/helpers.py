@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from dataclasses import replace
+from pathlib import Path
 
 import numpy as np
 from scipy.spatial.transform import Rotation
@@ -95,3 +96,15 @@ def nearest_walk(robot, flange: np.ndarray, q_start: np.ndarray) -> np.ndarray:
         q_prev = q_prev + ((ok[int(np.argmin(steps))] - q_prev + 180.0) % 360.0 - 180.0)
         reached.append(q_prev)
     return np.array(reached)
+
+
+def edited_csv(src: Path, dst: Path, row: int, column: str, value: str) -> Path:
+    """``src`` (a measurement CSV) written to ``dst`` with the cell of ``row`` (1: the first data
+    row) in ``column`` replaced by ``value``."""
+    lines = src.read_text().splitlines()
+    header = lines[0].split(",")
+    cells = lines[row].split(",")
+    cells[header.index(column)] = value
+    lines[row] = ",".join(cells)
+    dst.write_text("\n".join(lines) + "\n")
+    return dst

@@ -124,11 +124,10 @@ def _compensated(tmp_path, model, body=BODY):
     return tp, new, report, out
 
 
-def test_compensated_arcs_pass_the_intended_ones(tmp_path, model):
-    """Re-parsed, every arc's commanded geometry (its written words) puts the robot, under the
-    model, within a few micrometres of the intended arc all along; as written it is off by mm."""
-    tp, new, report, out = _compensated(tmp_path, model)
-    assert not report.failed.any(), report.failures()
+def _off_the_intended_arcs(model, tp, out: Path):
+    """``out`` (``tp`` compensated) read back, its arcs, and how far the robot runs under the model
+    from each of ``tp``'s intended arcs (mm, an arc a row, 21 points along it): as ``tp`` writes
+    them and as ``out`` does. BODY's six arcs, the third a full circle, both times."""
     back = parse_program(out).with_frames({"G54": WORK}, {"H1": H1})
     intended = tp.with_frames({"G54": WORK}, {"H1": H1})
     want, got = arcs.geometry(intended), arcs.geometry(back)
@@ -136,6 +135,15 @@ def test_compensated_arcs_pass_the_intended_ones(tmp_path, model):
     fractions = np.linspace(0, 1, 21)
     before = want.distance(_robot_along(model, intended, want, fractions))
     after = want.distance(_robot_along(model, back, got, fractions))
+    return back, got, before, after
+
+
+def test_compensated_arcs_pass_the_intended_ones(tmp_path, model):
+    """Re-parsed, every arc's commanded geometry (its written words) puts the robot, under the
+    model, within a few micrometres of the intended arc all along; as written it is off by mm."""
+    tp, new, report, out = _compensated(tmp_path, model)
+    assert not report.failed.any(), report.failures()
+    back, got, before, after = _off_the_intended_arcs(model, tp, out)
     assert before.max() > 0.5
     # The arcs pass the intended ones within 0.03 mm (the error of the model varies along
     # them; between the five points fixed by compensation the arc cannot follow it). A

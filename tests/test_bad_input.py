@@ -6,6 +6,7 @@ from __future__ import annotations
 import shutil
 
 import pytest
+from helpers import edited_csv
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -55,16 +56,6 @@ def test_binary_robot_file(tmp_path, val_csv):
     assert not out.exists()
 
 
-def _edited_csv(src, dst, row, column, value):
-    lines = src.read_text().splitlines()
-    header = lines[0].split(",")
-    cells = lines[row].split(",")
-    cells[header.index(column)] = value
-    lines[row] = ",".join(cells)
-    dst.write_text("\n".join(lines) + "\n")
-    return dst
-
-
 @pytest.fixture(scope="module")
 def verified_robot(tmp_path_factory):
     """The KR160 file with its limits marked verified and wide enough for the shared sets,
@@ -81,7 +72,7 @@ def verified_robot(tmp_path_factory):
 
 
 def test_joint_beyond_limits_names_line_and_column(tmp_path, val_csv, verified_robot):
-    bad = _edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
+    bad = edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
     out = tmp_path / "m.json"
     _fails_cleanly(["fit", str(bad), "--robot", str(verified_robot), "--tool", "0,0,200", "--effects", "base_frame", "-o", str(out)],
                    str(bad), "line 8", "'q3'", "outside the robot's limits")
@@ -89,7 +80,7 @@ def test_joint_beyond_limits_names_line_and_column(tmp_path, val_csv, verified_r
 
 
 def test_drop_invalid_lists_the_dropped_rows(tmp_path, val_csv, verified_robot):
-    bad = _edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
+    bad = edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
     out = tmp_path / "m.json"
     result = runner.invoke(app, ["fit", str(bad), "--robot", str(verified_robot), "--tool", "0,0,200", "--effects", "base_frame",
                                  "--cv", "0", "-o", str(out), "--drop-invalid"])
@@ -100,7 +91,7 @@ def test_drop_invalid_lists_the_dropped_rows(tmp_path, val_csv, verified_robot):
 
 def test_estimated_limits_warn_and_keep_the_rows(tmp_path, val_csv, model_json):
     """Every bundled robot's limits are marked estimates: rows beyond them are listed, not refused."""
-    bad = _edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
+    bad = edited_csv(val_csv, tmp_path / "m.csv", 7, "q3", "171")
     result = runner.invoke(app, ["evaluate", str(model_json), str(bad), "--json"])
     assert result.exit_code == 0, result.output
     assert "warning:" in result.output and "estimates" in result.output
@@ -109,7 +100,7 @@ def test_estimated_limits_warn_and_keep_the_rows(tmp_path, val_csv, model_json):
 
 
 def test_absurd_position_names_line_and_column(tmp_path, val_csv, model_json):
-    bad = _edited_csv(val_csv, tmp_path / "m.csv", 4, "my", "25000.0")
+    bad = edited_csv(val_csv, tmp_path / "m.csv", 4, "my", "25000.0")
     _fails_cleanly(["evaluate", str(model_json), str(bad), "--json"], str(bad), "line 5", "'my'", "10 m")
 
 

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from test_real_corpus import _moves, canonical_endpoints
 from typer.testing import CliRunner
 
@@ -57,10 +57,8 @@ PROGRAMS = {
 TOOL_H1 = "H1=0,0,100"  # the tool tip 100 mm along the flange's z
 
 
-def _program(folder: Path, name: str) -> Path:
-    path = folder / f"{name}.ngc"
-    path.write_text(PROGRAMS[name])
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def _convert(src: Path, out: Path, *options: str):
@@ -194,12 +192,8 @@ def test_without_the_rs274_move_check_the_tool_length_case_would_be_wrong(tmp_pa
     assert tp.resolved.tolist() == [True, False] and tp.tool_names[tp.tool[1]] == "H1"
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all(PROGRAMS, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)

@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).parent))
-from rs274_recordings import assert_current, needs_rs274, record_all  # noqa: E402
+from rs274_recordings import Recordings, needs_rs274  # noqa: E402
 from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274  # noqa: E402
 
 from postproc.errors import EmitError  # noqa: E402
@@ -81,10 +81,8 @@ PROGRAMS = {
 }
 
 
-def _program(folder: Path, name: str) -> Path:
-    path = folder / f"{name}.ngc"
-    path.write_text(PROGRAMS[name])
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def _arc_centres(text: str) -> tuple[np.ndarray, np.ndarray]:
@@ -256,14 +254,11 @@ def test_rs274_refuses_the_tool_changes_and_runs_the_other(tmp_path):
     assert accepted, err
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_recordings_are_current(tmp_path, name):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_recordings_are_current = RECORDINGS.freshness_test()
 
 
-if __name__ == "__main__" and "--record" in sys.argv:
-    record_all(PROGRAMS, _program, RECORDED)
+if __name__ == "__main__":
+    RECORDINGS.record_if_asked(sys.argv)
     print(f"recorded {len(PROGRAMS)} programs in {RECORDED}")
 
 

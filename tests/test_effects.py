@@ -7,7 +7,7 @@ import pytest
 
 import postproc
 from postproc.errors import MeasurementError
-from postproc.model.effect_check import check_effect
+from postproc.model.effect_check import check_effect, with_random_context
 from postproc.model.effects import BUILTIN, CATALOG, EffectSpecError, EffectSum, Geometric, JointHarmonics, parse_effects
 from postproc.model.effects.backlash import approach_from_order
 from postproc.model.errormodel import ErrorModel
@@ -48,15 +48,7 @@ def test_bad_effect_specs(text, message):
 
 def _random_set(n=25, seed=0):
     rng = np.random.default_rng(seed)
-    return MeasurementSet(
-        q_deg=rng.uniform(-60, 60, (n, 6)),
-        measured_mm=np.zeros((n, 3)),
-        ids=tuple(str(i) for i in range(n)),
-        force_n=rng.normal(0, 200, (n, 3)),
-        approach=rng.choice([-1.0, 1.0], (n, 6)),
-        temp_c=rng.uniform(18, 30, n),
-        time_s=np.arange(n) * 30.0,
-    )
+    return with_random_context(rng.uniform(-60, 60, (n, 6)), rng)
 
 
 @pytest.mark.parametrize("name", sorted(BUILTIN))

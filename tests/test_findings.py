@@ -114,9 +114,12 @@ def test_the_cli_finding_command_runs_and_adds_the_effect(tmp_path):
 def test_each_command_is_printed_once_after_the_findings_it_acts_on():
     """Findings in a row that end in the same command are grouped (the CLI, the report and
     the examples print the command once)."""
-    from postproc.model.diagnose import grouped_findings, with_command
+    from postproc.model.diagnose import findings_lines, grouped_findings, with_command
 
     findings = [with_command("a follows s1", "postproc fit +backlash"), with_command("backlash explains 93%", "postproc fit +backlash"),
                 "no command here", with_command("use it", "postproc compensate"), with_command("use it too", "postproc compensate")]
     assert grouped_findings(findings) == [(["a follows s1", "backlash explains 93%"], "postproc fit +backlash"),
                                           (["no command here"], ""), (["use it", "use it too"], "postproc compensate")]
+    assert findings_lines(findings, bullet="  - ") == ["  - a follows s1", "  - backlash explains 93%", "    run: postproc fit +backlash", "  - no command here",
+                                                   "  - use it", "  - use it too", "    run: postproc compensate"]
+    assert findings_lines([]) == []

@@ -45,7 +45,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -207,10 +207,8 @@ PROGRAMS = {
 }
 
 
-def _program_file(folder: Path, name: str) -> Path:
-    path = folder / f"{name}.ngc"
-    path.write_text(PROGRAMS[name][0])
-    return path
+RECORDINGS = Recordings({name: case[0] for name, case in PROGRAMS.items()}, RECORDED)
+_program_file = RECORDINGS.write
 
 
 def rs274_machine_axes(text: str) -> np.ndarray:
@@ -307,11 +305,8 @@ def test_what_is_not_followed_is_refused(tmp_path, text, machine, where, message
     assert res.exit_code == 2 and f"in.ngc{where}" in flat and re.search(message, flat) and not out.exists(), flat
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program_file(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
-if __name__ == "__main__" and "--record" in sys.argv:
-    record_all(PROGRAMS, _program_file, RECORDED)
+if __name__ == "__main__":
+    RECORDINGS.record_if_asked(sys.argv)

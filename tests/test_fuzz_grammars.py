@@ -17,6 +17,7 @@ from postproc.programs import emit_texts, parse_program
 
 SEEDS = {d: [p.read_bytes() for p in fuzzing.seed_files(d)] for d in fuzzing.DIALECTS}
 EXAMPLES = {"rapid": 150, "krl": 150, "gcode": 150}
+SUFFIX = {"rapid": ".mod", "krl": ".src", "gcode": ".ngc"}  # the file name a program text is read under
 
 def _fuzz(dialect: str, data: bytes) -> None:
     note(f"input: {data!r}")
@@ -59,22 +60,25 @@ def test_the_judge_catches_a_changed_text(monkeypatch):
         fuzzing.judge("gcode", b"G1 X1\nM2\n")
 
 
+def _assert_read_and_written_back_unchanged(dialect: str, text: bytes) -> None:
+    """``text`` read as a ``dialect`` program and written back with no change is the same bytes."""
+    tp = parse_program(f"fuzz{SUFFIX[dialect]}", dialect, text)
+    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+
+
 @pytest.mark.parametrize("text", [b"DEF a( )\nLIN_REL {Z -20}\nEND\n", b"DEF a( )\nPTP_REL {A1 5}\nEND\n"])
 def test_krl_relative_move_from_an_unknown_start_round_trips(text):
-    tp = parse_program("fuzz.src", "krl", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("krl", text)
 
 
 def test_krl_circ_with_an_unknown_auxiliary_point_round_trips():
     text = b"DEF fuzz( )\nPTP {Y 9E+09, A 1972.0, C -667, Z 521, S 6, T 27} C_DIS\nCIRC XHOME, {B -2494.7810, Z -2819, A -2187.85014, S 6, T 27} C_DIS\nEND\n"
-    tp = parse_program("fuzz.src", "krl", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("krl", text)
 
 
 def test_krl_partial_target_after_an_axis_ptp_round_trips():
     text = b"DEF a( )\nLIN {X 700, Y 0, Z 500, A 0, B 90, C 0}\nPTP {A1 0, A2 -90, A3 90, A4 0, A5 0, A6 0}\nLIN {X 700, Y 100}\nEND\n"
-    tp = parse_program("fuzz.src", "krl", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("krl", text)
 
 
 def test_gcode_g53_without_a_motion_mode_round_trips_or_is_refused():
@@ -90,8 +94,7 @@ def test_krl_relative_move_to_a_declared_point_keeps_its_numbers():
     text = (b"DEF fuzz( )\r\nDECL E6POS XP1 = {Z 0.0, A -227, C -554, Y 2082, X -1789.293770, S 6, T 27}\r\n"
             b"LIN {A 1831.2505, B -367.247271, X 447.221493, Z 1310.35, C 00012, Y -1627, S 6, T 27}\r\n"
             b"PTP {C 486.456979} C_PTP\r\nLIN {Z 2205.55002, S 6, T 27}\r\nLIN_REL XP1\r\nEND\r\n")
-    tp = parse_program("fuzz.src", "krl", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("krl", text)
 
 
 @pytest.mark.parametrize("text", [
@@ -102,8 +105,7 @@ def test_gcode_increment_after_g92_keeps_its_number(text):
     """Found by benchmarks/fuzz.py: after G92, an unchanged emit rewrote an incremental X
     (-2168 -> -2922.199): the previous target was taken in the old offset. The increment is
     the number in the text (LinuxCNC manual, "G91": relative to the current point)."""
-    tp = parse_program("fuzz.ngc", "gcode", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("gcode", text)
 
 
 @pytest.mark.parametrize("text", [
@@ -114,8 +116,7 @@ def test_krl_relative_move_after_huge_coordinates_keeps_its_numbers(text):
     """Found by benchmarks/fuzz.py: after a coordinate of 1e308 or 9E9 the absolute value
     absorbs the increment (1e308 + 419 == 1e308), and an unchanged emit must still write
     the text's increment back as it was, not the difference of two absolute values."""
-    tp = parse_program("fuzz.src", "krl", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("krl", text)
 
 
 @pytest.mark.parametrize("text", [
@@ -138,5 +139,4 @@ def test_rapid_offs_with_a_zero_term_round_trips():
     raised ZeroDivisionError: the expression evaluator built every operation's result, a / b
     included, for any operator."""
     text = b"MODULE Fuzz\n  PROC main()\n    MoveL Offs(p1,-2475.29847-0,+1,-658.4), v500, fine, tool0;\n    MoveL Offs(p1,3*0,0,0), v500, fine, tool0;\n  ENDPROC\nENDMODULE\n"
-    tp = parse_program("fuzz.mod", "rapid", text)
-    assert emit_texts(tp, tp)[0].encode("latin-1") == text
+    _assert_read_and_written_back_unchanged("rapid", text)

@@ -21,8 +21,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
-from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274
+from rs274_recordings import Recordings
+from test_real_corpus import canonical_endpoints, machine_positions, run_rs274
 
 from postproc.errors import ParseError
 from postproc.programs import parse_program
@@ -67,27 +67,17 @@ PROGRAMS.update({
 })
 
 
-def _program(tmp_path: Path, name: str) -> Path:
-    path = tmp_path / f"{name}.ngc"
-    path.write_text({**ALL_CYCLES, **PROGRAMS}[name], encoding="latin-1")
-    return path
+RECORDINGS = Recordings({**ALL_CYCLES, **PROGRAMS}, RECORDED)
+_program = RECORDINGS.write
 
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_ir_matches_the_rs274_recording(name, tmp_path):
-    tp = parse_program(_program(tmp_path, name))
-    canon, tol, arc = canonical_endpoints((RECORDED / f"{name}.canon").read_text(encoding="latin-1"))
-    keep = _moves(canon, tol, arc)
-    machine = machine_positions(tp)
-    rows = _moves(machine, np.full(len(tp), 1e-9), np.zeros(len(tp), bool))
-    assert len(rows) == len(keep), f"rs274 made {len(keep)} moves, the IR {len(rows)}"
-    np.testing.assert_allclose(machine[rows], canon[keep], rtol=0, atol=1e-6)
+    ours, recorded = RECORDINGS.moves(tmp_path, name)
+    np.testing.assert_allclose(ours, recorded, rtol=0, atol=1e-6)
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted({**ALL_CYCLES, **PROGRAMS}))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 def test_g87_in_the_g18_plane_by_hand(tmp_path):
@@ -163,5 +153,4 @@ def test_what_rs274_refuses_is_refused_with_file_line_column(name, tmp_path):
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all({**ALL_CYCLES, **PROGRAMS}, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)

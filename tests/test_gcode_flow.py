@@ -175,24 +175,25 @@ def test_call_of_a_sub_in_another_file(tmp_path):
 LOOP = "G21 G90\n#1 = 0\no10 repeat [3]\n#1 = [#1 + 1]\nG1 X#1 Y5 F100\nG0 Z1\no10 endrepeat\nM2\n"
 
 
-def test_one_text_number_executed_with_different_corrections_is_refused(tmp_path):
+def _refusal_of_a_y_per_pass(tmp_path, line: int) -> SharedNumberError:
+    """What writing LOOP back raises when the three passes of its ``line`` get different Y corrections."""
     tp = _read(tmp_path, LOOP)
     new = tp.position.copy()
-    new[tp.line == 5, 1] += [0.1, 0.2, 0.3]
+    new[tp.line == line, 1] += [0.1, 0.2, 0.3]
     with pytest.raises(SharedNumberError) as exc:
         emit_texts(tp, tp.with_positions(new))
-    assert (exc.value.line, exc.value.column) == (5, 9) and str(exc.value).startswith(f"{tmp_path / 'p.ngc'}:5:9: ")
-    assert "loop body" in str(exc.value)
+    return exc.value
+
+
+def test_one_text_number_executed_with_different_corrections_is_refused(tmp_path):
+    error = _refusal_of_a_y_per_pass(tmp_path, 5)
+    assert (error.line, error.column) == (5, 9) and str(error).startswith(f"{tmp_path / 'p.ngc'}:5:9: ")
+    assert "loop body" in str(error)
 
 
 def test_one_added_word_with_different_values_is_refused(tmp_path):
     # G0 Z1 has no Y: a correction that differs per pass would add two different Y words.
-    tp = _read(tmp_path, LOOP)
-    new = tp.position.copy()
-    new[tp.line == 6, 1] += [0.1, 0.2, 0.3]
-    with pytest.raises(SharedNumberError) as exc:
-        emit_texts(tp, tp.with_positions(new))
-    assert exc.value.line == 6
+    assert _refusal_of_a_y_per_pass(tmp_path, 6).line == 6
 
 
 def test_the_same_correction_for_every_execution_is_written_once(tmp_path):

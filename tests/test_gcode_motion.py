@@ -18,8 +18,8 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
-from test_real_corpus import _moves, canonical_endpoints, machine_positions
+from rs274_recordings import Recordings
+from test_real_corpus import machine_positions
 
 from postproc.errors import EmitError, ParseError
 from postproc.programs import emit_texts, parse_program
@@ -53,10 +53,8 @@ PROGRAMS = {
 }
 
 
-def _program(tmp_path: Path, name: str) -> Path:
-    path = tmp_path / f"{name}.ngc"
-    path.write_text(PROGRAMS[name], encoding="latin-1")
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def _machine(name: str, tmp_path: Path) -> np.ndarray:
@@ -222,24 +220,15 @@ def test_moves_to_a_stored_position_or_a_probe_contact_are_listed_and_flag_what_
 
 @pytest.mark.parametrize("name", sorted(PROGRAMS))
 def test_ir_matches_the_rs274_recording(name, tmp_path):
-    tp = parse_program(_program(tmp_path, name))
-    canon, tol, arc = canonical_endpoints((RECORDED / f"{name}.canon").read_text(encoding="latin-1"))
-    keep = _moves(canon, tol, arc)
-    machine = machine_positions(tp)
-    rows = _moves(machine, np.full(len(tp), 1e-9), np.zeros(len(tp), bool))
-    assert len(rows) == len(keep), f"rs274 made {len(keep)} moves, the IR {len(rows)}"
-    np.testing.assert_allclose(machine[rows], canon[keep], atol=1e-4 + 1e-9)
+    ours, recorded = RECORDINGS.moves(tmp_path, name)
+    np.testing.assert_allclose(ours, recorded, atol=1e-4 + 1e-9)
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all(PROGRAMS, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)
 
 
 def test_runs_of_holes_read_at_once_equal_the_block_by_block_reading(tmp_path, monkeypatch):

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -56,10 +56,8 @@ BY_HAND = {
 USE_TLO = re.compile(r"^(USE_TOOL_LENGTH_OFFSET|STRAIGHT_TRAVERSE|STRAIGHT_FEED|ARC_FEED|USE_LENGTH_UNITS)\((.*)\)$")
 
 
-def _program(folder: Path, name: str) -> Path:
-    path = folder / f"{name}.ngc"
-    path.write_text(PROGRAMS[name])
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def rs274_lengths(canon: str) -> list[float]:
@@ -93,10 +91,7 @@ def test_lengths_equal_the_hand_worked_ones_and_rs274s(name, tmp_path):
     np.testing.assert_allclose(got, recorded, atol=1e-3)  # rs274 prints 4 decimals of the program's unit
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_recordings_equal_a_fresh_rs274_run(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_recordings_equal_a_fresh_rs274_run = RECORDINGS.freshness_test()
 
 
 @pytest.mark.parametrize("text, line", [
@@ -147,5 +142,5 @@ def test_g92_after_an_unknown_length_change_is_refused(tmp_path):
     assert res.exit_code == 2 and "p.ngc:6:" in res.stderr
 
 
-if __name__ == "__main__" and "--record" in sys.argv:
-    record_all(PROGRAMS, _program, RECORDED)
+if __name__ == "__main__":
+    RECORDINGS.record_if_asked(sys.argv)

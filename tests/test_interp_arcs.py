@@ -20,7 +20,7 @@ from unittest import mock
 
 import numpy as np
 import pytest
-from rs274_recordings import assert_current, needs_rs274, record_all
+from rs274_recordings import Recordings
 from test_arcs import _rs274_arcs
 from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions
 
@@ -53,10 +53,8 @@ PROGRAMS = {
 }
 
 
-def _program(folder: Path, name: str) -> Path:
-    path = folder / f"{name}.ngc"
-    path.write_text(PROGRAMS[name])
-    return path
+RECORDINGS = Recordings(PROGRAMS, RECORDED)
+_program = RECORDINGS.write
 
 
 def _read_block_by_block(path: Path):
@@ -146,20 +144,16 @@ def test_arcs_the_controller_refuses_are_refused_block_by_block_too(tmp_path, te
     assert (err.value.line, err.value.column) == (line, column)
 
 
-@needs_rs274
-@pytest.mark.parametrize("name", sorted(PROGRAMS))
-def test_rs274_recordings_are_current(name, tmp_path):
-    assert_current(_program(tmp_path, name), RECORDED / f"{name}.canon")
+test_rs274_recordings_are_current = RECORDINGS.freshness_test()
 
 
 if __name__ == "__main__":
-    if sys.argv[1:] == ["--record"]:
-        record_all(PROGRAMS, _program, RECORDED)
+    RECORDINGS.record_if_asked(sys.argv)
 
 
 # ------------------------------------------------------------------ compensate and convert accept them
 
-from test_arcs import BODY, H1, START, WORK, _robot_along, model  # noqa: E402,F401  (model: the fixture)
+from test_arcs import BODY, H1, START, WORK, _off_the_intended_arcs, model  # noqa: E402,F401  (model: the fixture)
 
 from postproc.jobs.compensate import compensate  # noqa: E402
 from postproc.programs import emit_texts, write_program  # noqa: E402
@@ -178,13 +172,7 @@ def test_compensated_arcs_under_g92_pass_the_intended_ones(tmp_path, model):
     assert not report.failed.any(), report.failures()
     out = tmp_path / "out.ngc"
     out.write_bytes(emit_texts(tp, new)[0].encode("latin-1"))
-    back = parse_program(out).with_frames({"G54": WORK}, {"H1": H1})
-    intended = tp.with_frames({"G54": WORK}, {"H1": H1})
-    want, got = arcs.geometry(intended), arcs.geometry(back)
-    assert len(got.rows) == 6 and got.full.tolist() == [False, False, True, False, False, False]
-    fractions = np.linspace(0, 1, 21)
-    before = want.distance(_robot_along(model, intended, want, fractions))
-    after = want.distance(_robot_along(model, back, got, fractions))
+    _, got, before, after = _off_the_intended_arcs(model, tp, out)
     assert before.max() > 0.5 and after[~got.full].max() < 0.03, after.max(axis=1)
 
 

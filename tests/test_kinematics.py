@@ -28,14 +28,20 @@ def random_joints(robot, n, seed, margin=0.0):
     return out[:n]
 
 
-@pytest.mark.parametrize("name", ALL)
-def test_fk_matches_pinocchio(name):
+def ours_and_pinocchios(name: str, n: int, seed: int, ours_of, reference_of):
+    """(robot, q, ours, reference) at ``n`` random joint sets of robot ``name``: our vectorised
+    ``ours_of(robot, q)`` (postproc.fk, jacobian) and pinocchio's ``reference_of(model, data, q)``
+    (pin_model.flange_pose, flange_jacobian) at every row of ``q``."""
     robot = postproc.load_robot(name)
+    q = random_joints(robot, n, seed=seed)
     model = pin_model.build_model(robot)
     data = model.createData()
-    q = random_joints(robot, 200, seed=1)
-    ours = postproc.fk(robot, q)
-    ref = np.stack([pin_model.flange_pose(model, data, qi) for qi in q])
+    return robot, q, ours_of(robot, q), np.stack([reference_of(model, data, qi) for qi in q])
+
+
+@pytest.mark.parametrize("name", ALL)
+def test_fk_matches_pinocchio(name):
+    _, _, ours, ref = ours_and_pinocchios(name, 200, 1, postproc.fk, pin_model.flange_pose)
     np.testing.assert_allclose(ours[:, :3, 3], ref[:, :3, 3], atol=1e-9)
     np.testing.assert_allclose(ours[:, :3, :3], ref[:, :3, :3], atol=1e-12)
 
@@ -76,12 +82,7 @@ def test_bad_shapes_raise_typed_errors():
 
 @pytest.mark.parametrize("name", ALL)
 def test_jacobian_matches_pinocchio_and_finite_differences(name):
-    robot = postproc.load_robot(name)
-    model = pin_model.build_model(robot)
-    data = model.createData()
-    q = random_joints(robot, 40, seed=4)
-    ours = postproc.jacobian(robot, q)
-    ref = np.stack([pin_model.flange_jacobian(model, data, qi) for qi in q])
+    robot, q, ours, ref = ours_and_pinocchios(name, 40, 4, postproc.jacobian, pin_model.flange_jacobian)
     np.testing.assert_allclose(ours, ref, atol=1e-8)
     # Finite differences of the TCP position, tool included, per radian of controller joint.
     tool = np.array([20.0, 0.0, 150.0])

@@ -21,22 +21,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
-from postproc.programs import parse_program
+from krl_programs import placed_positions, read_krl
 
 DAT = "DEFDAT p\nDECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}\nENDDAT\n"
 CONFIG = "DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nBASE_DATA[2]={X 0,Y 2000,Z 0,A 0,B 0,C 0}\nENDDAT\n"
 
 
 def program(tmp_path, text: str):
-    (tmp_path / "p.src").write_text(text.strip() + "\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    (tmp_path / "$config.dat").write_text(CONFIG)
-    return parse_program(tmp_path / "p.src")
-
-
-def placed_positions(tp) -> np.ndarray:
-    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+    return read_krl(tmp_path, text.strip() + "\n", DAT, CONFIG)
 
 
 def test_a_subprogram_runs_with_the_frame_of_its_call_and_leaves_its_own(tmp_path):
@@ -307,9 +299,7 @@ def test_a_loop_of_a_subprogram_called_twice_runs_in_each_call(tmp_path):
     # sub's FOR I = 1 TO 2 runs LIN XP[I] (p.dat: XP[1] = (1, 2, 3), XP[2] = (4, 5, 6)); sub is
     # called under BASE_DATA[1] ({X 1000}) then BASE_DATA[2] ({Y 2000}): four executed motions
     # (1001, 2, 3), (1004, 5, 6), (1, 2002, 3), (4, 2005, 6) (KSS 8 SI "FOR", "Subprograms").
-    (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\nsub( )\n$BASE = BASE_DATA[2]\nsub( )\nEND\n"
-                                    "DEF sub( )\nDECL INT I\nFOR I = 1 TO 2\nLIN XP[I]\nENDFOR\nEND\n")
-    (tmp_path / "p.dat").write_text("DEFDAT p\nDECL E6POS XP[2]\nXP[1]={X 1,Y 2,Z 3,A 0,B 90,C 0}\nXP[2]={X 4,Y 5,Z 6,A 0,B 90,C 0}\nENDDAT\n")
-    (tmp_path / "$config.dat").write_text(CONFIG)
-    tp = parse_program(tmp_path / "p.src")
+    tp = read_krl(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nsub( )\n$BASE = BASE_DATA[2]\nsub( )\nEND\n"
+                  "DEF sub( )\nDECL INT I\nFOR I = 1 TO 2\nLIN XP[I]\nENDFOR\nEND\n",
+                  "DEFDAT p\nDECL E6POS XP[2]\nXP[1]={X 1,Y 2,Z 3,A 0,B 90,C 0}\nXP[2]={X 4,Y 5,Z 6,A 0,B 90,C 0}\nENDDAT\n", CONFIG)
     np.testing.assert_allclose(placed_positions(tp), [[1001, 2, 3], [1004, 5, 6], [1, 2002, 3], [4, 2005, 6]], atol=1e-9)

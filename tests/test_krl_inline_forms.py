@@ -16,6 +16,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from krl_programs import placed_positions, read_krl
 
 from postproc.errors import InputError
 from postproc.jobs.compensate import _refuse_unplaced
@@ -52,15 +53,7 @@ ENDDAT
 
 
 def program(tmp_path: Path, body: str, config: str | None = CONFIG):
-    (tmp_path / "p.src").write_text("DEF p( )\n" + body + "END\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    if config is not None:
-        (tmp_path / "$config.dat").write_text(config)
-    return parse_program(tmp_path / "p.src")
-
-
-def placed(tp) -> np.ndarray:
-    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+    return read_krl(tmp_path, "DEF p( )\n" + body + "END\n", DAT, config)
 
 
 def test_ptp_and_lin_inline_forms_take_tool_and_base_from_their_fdat(tmp_path):
@@ -68,7 +61,7 @@ def test_ptp_and_lin_inline_forms_take_tool_and_base_from_their_fdat(tmp_path):
     # about Z is (0, 100, 500), + (0, 2000, 0). FP2: BASE_DATA[1] = {X 1000}: XP2 + (1000, 0, 0).
     # TOOL_NO 1 -> $TOOL = TOOL_DATA[1] = {Z 100}.
     tp = program(tmp_path, INI + fold("PTP", "P1", "FP1", "") + fold("LIN", "P2", "FP2", ""))
-    np.testing.assert_allclose(placed(tp), [[0, 2100, 500], [1200, 50, 400]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[0, 2100, 500], [1200, 50, 400]], atol=1e-9)
     np.testing.assert_allclose(tp.tools[tp.tool][:, :3, 3], [[0, 0, 100]] * 2, atol=1e-9)
     _refuse_unplaced(tp)  # nothing refused
 
@@ -76,13 +69,13 @@ def test_ptp_and_lin_inline_forms_take_tool_and_base_from_their_fdat(tmp_path):
 def test_fdat_written_inline_and_bas_frames(tmp_path):
     # FDAT_ACT = {TOOL_NO 1, BASE_NO 1, IPO_FRAME #BASE} then BAS(#FRAMES): FRAMES() alone.
     tp = program(tmp_path, INI + fold("PTP", "P1", "{TOOL_NO 1,BASE_NO 1,IPO_FRAME #BASE}", "BAS(#FRAMES)"))
-    np.testing.assert_allclose(placed(tp), [[1100, 0, 500]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500]], atol=1e-9)
 
 
 def test_tool_zero_is_the_flange(tmp_path):
     # FP4: TOOL_NO 0 -> TOOL(0) -> $TOOL = $NULLFRAME; BASE_NO 3 -> BASE_DATA[3] = {Z 300}.
     tp = program(tmp_path, INI + fold("LIN", "P2", "FP4", ""))
-    np.testing.assert_allclose(placed(tp), [[200, 50, 700]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[200, 50, 700]], atol=1e-9)
     np.testing.assert_allclose(tp.tools[tp.tool[0]], np.eye(4), atol=1e-12)
 
 
@@ -137,4 +130,4 @@ def test_real_config_and_system_file_shapes_are_read(tmp_path):
     config = CONFIG.replace("ENDDAT", ';FOLD TOOLS\nTOOL_NAME[1,]="Spindle"\n;ENDFOLD\n;ENDFOLD\nENDDAT')
     body = INI + ";FOLD MOVES\n" + fold("PTP", "P1", "FP1", "") + "ON_ERROR_PROCEED\nEND\n;ENDFOLD\nDEF sub( )\n"
     tp = program(tmp_path, body, config=config)
-    np.testing.assert_allclose(placed(tp), [[0, 2100, 500]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[0, 2100, 500]], atol=1e-9)

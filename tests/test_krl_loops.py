@@ -14,9 +14,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from krl_programs import placed_positions, read_krl
 
 from postproc.errors import SharedNumberError
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import emit_texts
 
 DAT = """DEFDAT p
 DECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}
@@ -30,21 +31,14 @@ CONFIG = "DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nENDDAT\n"
 
 
 def program(tmp_path: Path, body: str):
-    (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\n$TOOL = $NULLFRAME\n" + body + "END\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    (tmp_path / "$config.dat").write_text(CONFIG)
-    return parse_program(tmp_path / "p.src")
-
-
-def placed(tp) -> np.ndarray:
-    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+    return read_krl(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\n$TOOL = $NULLFRAME\n" + body + "END\n", DAT, CONFIG)
 
 
 def test_for_over_an_array_runs_each_pass_in_order(tmp_path):
     # I = 1, 2, 3: XP[I] then XP1, each in BASE_DATA[1] = {X 1000}.
     tp = program(tmp_path, "FOR I = 1 TO 3\n  LIN XP[I]\n  PTP XP1\nENDFOR\n")
     assert tp.line.tolist() == [5, 6] * 3
-    np.testing.assert_allclose(placed(tp), [[1001, 2, 3], [1100, 0, 500], [1004, 5, 6], [1100, 0, 500], [1007, 8, 9], [1100, 0, 500]])
+    np.testing.assert_allclose(placed_positions(tp), [[1001, 2, 3], [1100, 0, 500], [1004, 5, 6], [1100, 0, 500], [1007, 8, 9], [1100, 0, 500]])
     assert not any("XP[I]" in n for n in tp.notes)
 
 
@@ -53,7 +47,7 @@ def test_step_down_nested_and_no_pass(tmp_path):
     tp = program(tmp_path, "FOR J = 3 TO 1 STEP -2\n  FOR K = 1 TO 2\n    LIN {X 10, Y 20, Z 30, A 0, B 90, C 0}\n  ENDFOR\nENDFOR\n"
                            "FOR N = 2 TO 1\n  LIN XP1\nENDFOR\n")
     assert tp.line.tolist() == [6] * 4
-    np.testing.assert_allclose(placed(tp), [[1010, 20, 30]] * 4)
+    np.testing.assert_allclose(placed_positions(tp), [[1010, 20, 30]] * 4)
 
 
 def test_partial_aggregates_and_relative_moves_follow_execution_order(tmp_path):
@@ -70,15 +64,21 @@ def test_a_count_not_known_at_post_time_lists_the_body_once(tmp_path, loop):
     assert tp.line.tolist() == [5] and any("p.src:4: the number of passes" in n for n in tp.notes)
 
 
-def test_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
-    tp = program(tmp_path, "FOR I = 1 TO 2\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0}\nENDFOR\n")
+def _assert_written_once_for_both_passes_or_refused_at(tp, line: int) -> None:
+    """The loop's two passes of LIN {X 10, Y 20, Z 30, ...}: one correction for both is written
+    once in the text; a different one per pass is refused at the Z number (p.src, ``line``, column 22)."""
     new = tp.position.copy()
     new[:, 2] += 0.5
     assert "LIN {X 10, Y 20, Z 30.5," in emit_texts(tp, tp.with_positions(new))[0]
     new[1, 2] += 0.25  # the second pass would need Z 30.75
     with pytest.raises(SharedNumberError) as exc:
         emit_texts(tp, tp.with_positions(new))
-    assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.src", 5, 22)
+    assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.src", line, 22)
+
+
+def test_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
+    tp = program(tmp_path, "FOR I = 1 TO 2\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0}\nENDFOR\n")
+    _assert_written_once_for_both_passes_or_refused_at(tp, 5)
 
 
 # ------------------------------------------------- WHILE / REPEAT over a counter (counters.py)
@@ -87,10 +87,7 @@ def test_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
 # a variable declared in the DEF is local to it (nothing else changes it).
 
 def counter_program(tmp_path: Path, decl: str, body: str):
-    (tmp_path / "p.src").write_text("DEF p( )\n" + decl + "$BASE = BASE_DATA[1]\n$TOOL = $NULLFRAME\n" + body + "END\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    (tmp_path / "$config.dat").write_text(CONFIG)
-    return parse_program(tmp_path / "p.src")
+    return read_krl(tmp_path, "DEF p( )\n" + decl + "$BASE = BASE_DATA[1]\n$TOOL = $NULLFRAME\n" + body + "END\n", DAT, CONFIG)
 
 
 def test_while_over_a_counter_runs_each_pass_with_the_counter_of_its_place(tmp_path):
@@ -98,7 +95,7 @@ def test_while_over_a_counter_runs_each_pass_with_the_counter_of_its_place(tmp_p
     # the PTP after it XP[2] then XP[3]; each in BASE_DATA[1] = {X 1000}.
     tp = counter_program(tmp_path, "DECL INT I\n", "I = 1\nWHILE I <= 2\n  LIN XP[I]\n  I = I + 1\n  PTP XP[I]\nENDWHILE\n")
     assert tp.line.tolist() == [7, 9] * 2
-    np.testing.assert_allclose(placed(tp), [[1001, 2, 3], [1004, 5, 6], [1004, 5, 6], [1007, 8, 9]])
+    np.testing.assert_allclose(placed_positions(tp), [[1001, 2, 3], [1004, 5, 6], [1004, 5, 6], [1007, 8, 9]])
 
 
 def test_repeat_runs_at_least_once_and_stops_when_the_condition_holds(tmp_path):
@@ -107,7 +104,7 @@ def test_repeat_runs_at_least_once_and_stops_when_the_condition_holds(tmp_path):
     tp = counter_program(tmp_path, "DECL INT J, K\n", "J = 3\nREPEAT\n  LIN XP1\n  J = J - 2\nUNTIL J < 0\n"
                                                     "K = 5\nREPEAT\n  LIN XP[1]\n  K = K + 1\nUNTIL K > 0\n")
     assert tp.line.tolist() == [7, 7, 12]
-    np.testing.assert_allclose(placed(tp), [[1100, 0, 500], [1100, 0, 500], [1001, 2, 3]])
+    np.testing.assert_allclose(placed_positions(tp), [[1100, 0, 500], [1100, 0, 500], [1001, 2, 3]])
 
 
 @pytest.mark.parametrize("decl, body, why", [
@@ -128,13 +125,7 @@ def test_a_counter_loop_not_provable_from_the_text_is_listed_once(tmp_path, decl
 def test_counter_loop_write_back_once_for_every_pass_or_refuse_with_the_place(tmp_path):
     tp = counter_program(tmp_path, "DECL INT I\n", "I = 0\nWHILE I < 2\n  LIN {X 10, Y 20, Z 30, A 0, B 90, C 0}\n  I = I + 1\nENDWHILE\n")
     assert tp.line.tolist() == [7, 7]
-    new = tp.position.copy()
-    new[:, 2] += 0.5
-    assert "LIN {X 10, Y 20, Z 30.5," in emit_texts(tp, tp.with_positions(new))[0]
-    new[1, 2] += 0.25  # the second pass would need Z 30.75
-    with pytest.raises(SharedNumberError) as exc:
-        emit_texts(tp, tp.with_positions(new))
-    assert (Path(exc.value.path).name, exc.value.line, exc.value.column) == ("p.src", 7, 22)
+    _assert_written_once_for_both_passes_or_refused_at(tp, 7)
 
 
 def test_a_for_that_may_exit_early_is_listed_once(tmp_path):

@@ -21,6 +21,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from krl_programs import placed_positions, read_krl
 
 from postproc.errors import InputError
 from postproc.jobs.compensate import _refuse_unplaced
@@ -32,16 +33,7 @@ CONFIG = ("DEFDAT $CONFIG\nBASE_DATA[1]={X 1000,Y 0,Z 0,A 0,B 0,C 0}\nBASE_DATA[
 
 
 def program(tmp_path: Path, body: str, config: bool = True):
-    (tmp_path / "p.src").write_text("DEF p( )\n" + body.strip() + "\nEND\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    if config:
-        (tmp_path / "$config.dat").write_text(CONFIG)
-    return parse_program(tmp_path / "p.src")
-
-
-def placed_positions(tp) -> np.ndarray:
-    """Base-frame positions, NaN where the target is not placed (point, frame or tool unknown)."""
-    return np.where(tp.placed()[:, None], tp.base_positions(), np.nan)
+    return read_krl(tmp_path, "DEF p( )\n" + body.strip() + "\nEND\n", DAT, CONFIG if config else None)
 
 
 def test_component_changes_in_straight_line_code_are_applied_in_order(tmp_path):
@@ -156,10 +148,7 @@ def test_a_subprogram_that_changes_a_frame_changes_it_where_it_is_called(tmp_pat
     # the caller goes on with the $BASE it leaves: BASE_DATA[1] with X 5 (KSS 8 SI "Structures").
     # XP1 (100, 0, 500) in $BASE {X 1000}: (1100, 0, 500); after shift( ): (105, 0, 500).
     # (tests/test_krl_calls.py has the call-structure cases.)
-    (tmp_path / "p.src").write_text("DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nshift( )\nLIN XP1\nEND\n\nDEF shift( )\n$BASE.X = 5\nEND\n")
-    (tmp_path / "p.dat").write_text(DAT)
-    (tmp_path / "$config.dat").write_text(CONFIG)
-    tp = parse_program(tmp_path / "p.src")
+    tp = read_krl(tmp_path, "DEF p( )\n$BASE = BASE_DATA[1]\nLIN XP1\nshift( )\nLIN XP1\nEND\n\nDEF shift( )\n$BASE.X = 5\nEND\n", DAT, CONFIG)
     assert tp.placed().all()
     np.testing.assert_allclose(tp.base_positions(), [[1100, 0, 500], [105, 0, 500]], atol=1e-9)
 

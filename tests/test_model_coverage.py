@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import edited_csv
 from typer.testing import CliRunner
 
 import postproc
@@ -47,6 +48,12 @@ def measured(tmp_path_factory):
     return folder, folder / "meas.csv", folder / "model.json"
 
 
+@pytest.fixture
+def model(measured) -> Path:
+    """The fitted model's file (JSON)."""
+    return measured[2]
+
+
 def _pocket(path: Path, x0: float, x1: float, z: float = 448.0) -> Path:
     """The README example's pocket outline (KRL, tool pointing down) between x0 and x1."""
     lines = ["DEF pocket( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", "$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}"]
@@ -59,32 +66,29 @@ def _pocket(path: Path, x0: float, x1: float, z: float = 448.0) -> Path:
     return path
 
 
-def _edited(src: Path, dst: Path, row: int, column: str, value: str) -> Path:
-    lines = src.read_text().splitlines()
-    header = lines[0].split(",")
-    cells = lines[row].split(",")
-    cells[header.index(column)] = value
-    lines[row] = ",".join(cells)
-    dst.write_text("\n".join(lines) + "\n")
-    return dst
+def _compensate(program: Path, model: Path, out: Path, *options: str):
+    return runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), *options])
 
 
 # ------------------------------------------------------------------ measurement rows
 
 
-def test_joint_beyond_360_is_refused_with_line_and_column_even_under_estimated_limits(measured, tmp_path):
+def _evaluated_with_a_cell(measured, folder: Path, row: int, column: str, value: str):
+    """(the measurement CSV with one cell edited, ``evaluate --json`` of the model on it)."""
     _, meas, model = measured
-    bad = _edited(meas, tmp_path / "m.csv", 5, "q2", "400")
-    result = runner.invoke(app, ["evaluate", str(model), str(bad), "--json"])
+    bad = edited_csv(meas, folder / "m.csv", row, column, value)
+    return bad, runner.invoke(app, ["evaluate", str(model), str(bad), "--json"])
+
+
+def test_joint_beyond_360_is_refused_with_line_and_column_even_under_estimated_limits(measured, tmp_path):
+    bad, result = _evaluated_with_a_cell(measured, tmp_path, 5, "q2", "400")
     assert result.exit_code == 2, result.output
     assert f"{bad}, line 6, column 'q2'" in result.output and "beyond +-360 deg: no revolute joint turns that far" in result.output
 
 
-def test_joint_beyond_estimated_limits_plus_margin_is_refused(measured, tmp_path):
+def test_joint_beyond_estimated_limits_plus_margin_is_refused(measured, model, tmp_path):
     """q5 = 185 deg: 65 deg beyond the KR160's estimated +-120 deg, more than the 60 deg margin."""
-    _, meas, model = measured
-    bad = _edited(meas, tmp_path / "m.csv", 3, "q5", "185")
-    result = runner.invoke(app, ["evaluate", str(model), str(bad), "--json"])
+    bad, result = _evaluated_with_a_cell(measured, tmp_path, 3, "q5", "185")
     assert result.exit_code == 2, result.output
     assert "line 4, column 'q5'" in result.output and "60 deg" in result.output
     dropped = runner.invoke(app, ["evaluate", str(model), str(bad), "--json", "--drop-invalid"])
@@ -93,9 +97,7 @@ def test_joint_beyond_estimated_limits_plus_margin_is_refused(measured, tmp_path
 
 
 def test_joint_within_the_margin_is_kept_with_a_warning(measured, tmp_path):
-    _, meas, model = measured
-    bad = _edited(meas, tmp_path / "m.csv", 3, "q5", "150")
-    result = runner.invoke(app, ["evaluate", str(model), str(bad), "--json"])
+    _, result = _evaluated_with_a_cell(measured, tmp_path, 3, "q5", "150")
     assert result.exit_code == 0, result.output
     assert "warning:" in result.output and "within 60 deg" in result.output
 
@@ -133,7 +135,7 @@ def test_old_model_file_loads_with_region_unknown(measured, tmp_path):
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["outside_region"] is None
     program = _pocket(tmp_path / "p.src", 1300, 1400)  # outside the region, but none is recorded
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(old), "-o", str(tmp_path / "o.src")])
+    result = _compensate(program, old, tmp_path / "o.src")
     assert result.exit_code == 0, result.output
     assert "measured region: unknown" in result.output
 
@@ -178,42 +180,38 @@ def test_evaluate_reports_poses_outside_the_fitted_joint_range(tmp_path):
 # ------------------------------------------------------------------ compensate
 
 
-def test_compensate_names_the_model_robot_and_region(measured, tmp_path):
-    _, _, model = measured
+def test_compensate_names_the_model_robot_and_region(model, tmp_path):
     program = _pocket(tmp_path / "p.src", 900, 1100)
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(tmp_path / "o.src")])
+    result = _compensate(program, model, tmp_path / "o.src")
     assert result.exit_code == 0, result.output
     assert "model for kr160_r1570 (KUKA KR160 R1570" in result.output and "measured region: 120 poses, z " in result.output
 
 
-def test_compensate_refuses_targets_outside_the_region(measured, tmp_path):
+def test_compensate_refuses_targets_outside_the_region(model, tmp_path):
     """The issue's case: a model measured at radius 700-1150 mm and a program at 1300-1400 mm."""
-    _, _, model = measured
     program = _pocket(tmp_path / "p.src", 1300, 1400)
     out = tmp_path / "o.src"
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out)])
+    result = _compensate(program, model, out)
     assert result.exit_code == 1, result.output
     assert re.search(rf"{re.escape(str(program))}:4:\d+: outside the region the model was measured in: .*mm outside the measured region", result.output)
     assert "--allow-extrapolation" in result.output and "nothing was written" in result.output and not out.exists()
-    allowed = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--allow-extrapolation"])
+    allowed = _compensate(program, model, out, "--allow-extrapolation")
     assert allowed.exit_code == 0, allowed.output
     assert out.exists()
 
 
-def test_streamed_compensation_refuses_them_too(measured, tmp_path):
-    _, _, model = measured
+def test_streamed_compensation_refuses_them_too(model, tmp_path):
     program = _pocket(tmp_path / "p.src", 1300, 1400)
     out = tmp_path / "o.src"
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--stream", "always"])
+    result = _compensate(program, model, out, "--stream", "always")
     assert result.exit_code == 1, result.output
     assert f"{program}:4:8: outside the region the model was measured in" in result.output and not out.exists()
-    allowed = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--stream", "always", "--allow-extrapolation"])
+    allowed = _compensate(program, model, out, "--stream", "always", "--allow-extrapolation")
     assert allowed.exit_code == 0, allowed.output
     assert "model for kr160_r1570" in allowed.output
 
 
-def test_batch_refuses_the_program_outside_the_region(measured, tmp_path):
-    _, _, model = measured
+def test_batch_refuses_the_program_outside_the_region(model, tmp_path):
     inside, outside = _pocket(tmp_path / "in.src", 900, 1100), _pocket(tmp_path / "out.src", 1300, 1400)
     (tmp_path / "done").mkdir()
     result = runner.invoke(app, ["compensate", str(inside), str(outside), "--model", str(model), "--out-dir", str(tmp_path / "done"), "--jobs", "1"])
@@ -240,10 +238,10 @@ def test_model_for_another_maker_is_refused(tmp_path):
     model = ErrorModel.create(postproc.load_robot("irb6660_205_190"), TOOL, EffectSum())
     save_model(tmp_path / "abb.json", model)
     program = _pocket(tmp_path / "p.src", 900, 1100)
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(tmp_path / "abb.json"), "-o", str(tmp_path / "o.src")])
+    result = _compensate(program, tmp_path / "abb.json", tmp_path / "o.src")
     assert result.exit_code == 2, result.output
     assert "the program is KRL, the language of KUKA controllers" in result.output and "irb6660_205_190" in result.output
-    streamed = runner.invoke(app, ["compensate", str(program), "--model", str(tmp_path / "abb.json"), "-o", str(tmp_path / "o.src"), "--stream", "always"])
+    streamed = _compensate(program, tmp_path / "abb.json", tmp_path / "o.src", "--stream", "always")
     assert streamed.exit_code == 2, streamed.output
     assert "language of KUKA controllers" in streamed.output and not (tmp_path / "o.src").exists()
 
@@ -253,7 +251,7 @@ def test_five_axis_refuses_allow_extrapolation(tmp_path):
     toml = next(iter(sorted(machine.glob("*.toml"))), None)
     if toml is None:
         pytest.skip("no bundled machine file in this layout")
-    result = runner.invoke(app, ["compensate", str(_pocket(tmp_path / "p.src", 900, 1100)), "--model", str(toml), "-o", str(tmp_path / "o"), "--allow-extrapolation"])
+    result = _compensate(_pocket(tmp_path / "p.src", 900, 1100), toml, tmp_path / "o", "--allow-extrapolation")
     assert result.exit_code == 2, result.output
     assert "--allow-extrapolation" in result.output and "never extrapolated" in result.output
 
@@ -261,11 +259,10 @@ def test_five_axis_refuses_allow_extrapolation(tmp_path):
 # ------------------------------------------------------------------ --report
 
 
-def test_report_page_shows_path_error_margins_and_region(measured, tmp_path):
-    _, _, model = measured
+def test_report_page_shows_path_error_margins_and_region(model, tmp_path):
     program = _pocket(tmp_path / "p.src", 900, 1100)
     page = tmp_path / "page.html"
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(tmp_path / "o.src"), "--report", str(page)])
+    result = _compensate(program, model, tmp_path / "o.src", "--report", str(page))
     assert result.exit_code == 0, result.output
     text = page.read_text()
     assert text.count("data:image/png;base64,") == 5
@@ -273,16 +270,15 @@ def test_report_page_shows_path_error_margins_and_region(measured, tmp_path):
                   "model for kr160_r1570"):  # the captions of the five figures
         assert words in text, words
     as_json = tmp_path / "points.json"
-    runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(tmp_path / "o2.src"), "--report", str(as_json)])
+    _compensate(program, model, tmp_path / "o2.src", "--report", str(as_json))
     summary = json.loads(as_json.read_text())["summary"]
     assert summary["model"]["robot"] == KR160 and summary["model"]["region"]["poses"] == 120
 
 
-def test_report_page_lists_the_targets_outside(measured, tmp_path):
-    _, _, model = measured
+def test_report_page_lists_the_targets_outside(model, tmp_path):
     program = _pocket(tmp_path / "p.src", 1300, 1400)
     page = tmp_path / "page.html"
-    result = runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(tmp_path / "o.src"), "--report", str(page)])
+    result = _compensate(program, model, tmp_path / "o.src", "--report", str(page))
     assert result.exit_code == 1
     text = page.read_text()
     assert "Targets that cannot be compensated" in text and "outside the region the model was measured in" in text

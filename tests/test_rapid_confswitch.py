@@ -20,22 +20,23 @@ def _applies(tmp_path, text, name="p.mod"):
     return dialects.of(tp).controller.conf_applies(tp).tolist(), tp
 
 
-def test_a_routine_written_after_confl_off_but_called_before_it_runs_with_confl_on(tmp_path):
+@pytest.mark.parametrize("text, applies", [
     # Text order: main (ConfL\Off at its end), then approach: text order would say Off for
     # approach's MoveL; but main calls approach before switching: On.
-    text = ("MODULE P\n  PROC main()\n    approach;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
-            f"  PROC approach()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
-            f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
-    applies, _ = _applies(tmp_path, text)
-    assert applies == [True, False]
-
-
-def test_a_routine_written_before_the_switch_but_called_after_it_runs_with_confl_off(tmp_path):
-    text = ("MODULE P\n"
-            f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
-            f"  PROC main()\n    ConfL\\Off;\n    cut;\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
-    applies, _ = _applies(tmp_path, text)
-    assert applies == [False, True]
+    pytest.param("MODULE P\n  PROC main()\n    approach;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
+                 f"  PROC approach()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
+                 f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n",
+                 [True, False], id="written_after_confl_off_but_called_before_it_runs_with_confl_on"),
+    pytest.param("MODULE P\n"
+                 f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\n"
+                 f"  PROC main()\n    ConfL\\Off;\n    cut;\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n",
+                 [False, True], id="written_before_the_switch_but_called_after_it_runs_with_confl_off"),
+    pytest.param("MODULE P\n  PROC main()\n    cut;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
+                 f"  PROC cut()\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n",
+                 [True], id="that_sets_the_switch_itself_is_not_ambiguous"),
+])
+def test_a_routine_runs_with_the_switch_in_force_where_it_is_called(tmp_path, text, applies):
+    assert _applies(tmp_path, text)[0] == applies
 
 
 def test_calls_across_modules_of_a_program_file(tmp_path):
@@ -51,13 +52,6 @@ def test_a_routine_called_with_both_states_is_refused_with_its_line(tmp_path):
             f"  PROC cut()\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
     with pytest.raises(InputError, match=r"p.mod, line 8: this motion runs with ConfL/ConfJ both on and off .*main -> cut \(line 5\)"):
         _applies(tmp_path, text)
-
-
-def test_a_routine_that_sets_the_switch_itself_is_not_ambiguous(tmp_path):
-    text = ("MODULE P\n  PROC main()\n    cut;\n    ConfL\\Off;\n    cut;\n  ENDPROC\n"
-            f"  PROC cut()\n    ConfL\\On;\n    MoveL {T}, v100, z1, tool0;\n  ENDPROC\nENDMODULE\n")
-    applies, _ = _applies(tmp_path, text)
-    assert applies == [True]
 
 
 def test_without_main_the_module_text_order_is_kept(tmp_path):

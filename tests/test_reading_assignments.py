@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import TOOL, kr160
+from rapid_programs import spindle_module
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -31,16 +32,14 @@ def model_path(tmp_path_factory) -> Path:
     return path
 
 
-def _compensate(program: Path, model: Path, out: Path):
+def _compensate(program: Path, model: Path):
+    """``program`` compensated into a new folder out/ beside it, under the same name."""
+    (program.parent / "out").mkdir()
+    out = program.parent / "out" / program.name
     return runner.invoke(app, ["compensate", str(program), "--model", str(model), "-o", str(out), "--allow-model-mismatch"])
 
 
-RAPID = f"""MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
+RAPID = spindle_module(f"""\
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1 := [[100,50,120],[0,0,1,0],[-1,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
@@ -50,9 +49,7 @@ RAPID = f"""MODULE m
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     tSpindle.tframe.trans := [0,0,250];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_whole_robtargets_rotations_and_frames_are_followed(tmp_path):
@@ -96,20 +93,13 @@ def test_rapid_assignments_that_depend_on_inputs_or_calls_stay_unresolved(tmp_pa
     assert any("upd.mod:8: " in n and "is assigned" in n for n in tp.notes), tp.notes
 
 
-WHOLE = """MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
+WHOLE = spindle_module("""\
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1 := [[100,50,120],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1 := [[150,-30,130],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_whole_robtarget_assignments_are_compensated_into_their_own_numbers(tmp_path, model_path):
@@ -117,8 +107,7 @@ def test_rapid_whole_robtarget_assignments_are_compensated_into_their_own_number
     there, and the written program reads back to the compensated targets."""
     path = tmp_path / "upd.mod"
     path.write_text(WHOLE)
-    (tmp_path / "out").mkdir()
-    result = _compensate(path, model_path, tmp_path / "out" / "upd.mod")
+    result = _compensate(path, model_path)
     assert result.exit_code == 0, result.output
     text = (tmp_path / "out" / "upd.mod").read_text()
     for old in ("[[10,20,150]", "p1 := [[100,50,120]", "p1 := [[150,-30,130]"):
@@ -135,8 +124,7 @@ def test_rapid_rotation_update_sharing_position_numbers_is_refused_where_they_ar
     compensated values: refused at those numbers, nothing written."""
     path = tmp_path / "upd.mod"
     path.write_text(RAPID)
-    (tmp_path / "out").mkdir()
-    result = _compensate(path, model_path, tmp_path / "out" / "upd.mod")
+    result = _compensate(path, model_path)
     assert result.exit_code == 2 and "upd.mod:8:13:" in result.output and "give each use its own point" in result.output
     assert list((tmp_path / "out").iterdir()) == []
 
@@ -170,8 +158,7 @@ def test_krl_aggregate_assignment_is_compensated_into_its_own_numbers(tmp_path, 
     are compensated where they are written."""
     (tmp_path / "a.src").write_text(KRL_SRC.replace("XP1.X = 950\nLIN XP1\n", ""))
     (tmp_path / "a.dat").write_text(KRL_DAT)
-    (tmp_path / "out").mkdir()
-    result = _compensate(tmp_path / "a.src", model_path, tmp_path / "out" / "a.src")
+    result = _compensate(tmp_path / "a.src", model_path)
     assert result.exit_code == 0, result.output
     assert "XP1 = {X 1000," not in (tmp_path / "out" / "a.src").read_text()
     assert "XP1={X 900," not in (tmp_path / "out" / "a.dat").read_text()
@@ -182,18 +169,12 @@ def test_krl_component_assignment_sharing_numbers_is_refused_where_they_are(tmp_
     moves that need different values; refused there (a.src:5:...), nothing written."""
     (tmp_path / "a.src").write_text(KRL_SRC)
     (tmp_path / "a.dat").write_text(KRL_DAT)
-    (tmp_path / "out").mkdir()
-    result = _compensate(tmp_path / "a.src", model_path, tmp_path / "out" / "a.src")
+    result = _compensate(tmp_path / "a.src", model_path)
     assert result.exit_code == 2 and "a.src:5:" in result.output and "give each use its own point" in result.output, result.output
     assert list((tmp_path / "out").iterdir()) == []
 
 
-LOOP = """MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
+LOOP = spindle_module("""\
     FOR i FROM 1 TO 3 DO
       MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
       p1.trans.z := 120;
@@ -201,9 +182,7 @@ LOOP = """MODULE m
       wobj1.oframe.trans := [100, 0, 0];
     ENDFOR
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_assignments_in_a_for_loop_with_known_count_are_followed_pass_by_pass(tmp_path):
@@ -233,8 +212,7 @@ def test_rapid_assignment_in_a_loop_is_compensated_into_its_own_numbers(tmp_path
     text = text.replace("      wobj1.oframe.trans := [100, 0, 0];\n", "")
     path = tmp_path / "loop.mod"
     path.write_text(text)
-    (tmp_path / "out").mkdir()
-    result = _compensate(path, model_path, tmp_path / "out" / "loop.mod")
+    result = _compensate(path, model_path)
     assert result.exit_code == 0, result.output
     written = (tmp_path / "out" / "loop.mod").read_text()
     assert "p1 := [[100,50,120]" not in written and "[[10,20,150]" in written  # the declaration serves no move

@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from helpers import TOOL, kr160
+from krl_programs import placed_positions
+from rapid_programs import spindle_module
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -357,14 +359,14 @@ def test_inline_forms_take_their_frames_from_config_dat_beside_the_program(tmp_p
     TOOL_NO 1 / BASE_NO 2 are TOOL_DATA[1] / BASE_DATA[2] of the $config.dat beside it
     (BAS.SRC FRAMES()). BASE_DATA[2] = {X 0, Y 2000, A 90}: XP1 (100, 0, 500) turned 90 deg about
     Z is (0, 100, 500), + (0, 2000, 0) = (0, 2100, 500)."""
-    from test_krl_inline_forms import CONFIG, INI, fold, placed, program
+    from test_krl_inline_forms import CONFIG, INI, fold, program
 
     tp = program(tmp_path, INI + fold("PTP", "P1", "FP1", ""))
-    np.testing.assert_allclose(placed(tp), [[0, 2100, 500]], atol=1e-9)
+    np.testing.assert_allclose(placed_positions(tp), [[0, 2100, 500]], atol=1e-9)
     alone = tmp_path / "alone"
     alone.mkdir()
     missing = program(alone, INI + fold("PTP", "P1", "FP1", ""), config=None)  # no $config.dat: flagged, never guessed
-    assert np.isnan(placed(missing)).all() and "BASE_DATA[2]" in " ".join(missing.frame_names)
+    assert np.isnan(placed_positions(missing)).all() and "BASE_DATA[2]" in " ".join(missing.frame_names)
     assert "BASE_DATA[2]={X 0,Y 2000" in CONFIG
 
 
@@ -390,12 +392,7 @@ def test_tool_frame_steps_are_compensated_and_written_back_in_the_tool_frame(tmp
 
 
 # ------------------------------------------------------------------ RAPID runtime assignments
-RAPID_UPDATES = """MODULE m
-  PERS tooldata tSpindle := [TRUE,[[0,0,200],[1,0,0,0]],[10,[0,0,80],[1,0,0,0],0,0,0]];
-  TASK PERS wobjdata wobj1 := [FALSE,TRUE,"",[[900,-100,300],[1,0,0,0]],[[0,0,0],[1,0,0,0]]];
-  VAR robtarget p1 := [[10,20,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]];
-  PROC main()
-    ConfL\\Off;
+RAPID_UPDATES = spindle_module("""\
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     p1.trans := [100, 50, 120];
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
@@ -403,9 +400,7 @@ RAPID_UPDATES = """MODULE m
     MoveL p1, v100, fine, tSpindle\\WObj:=wobj1;
     wobj1.oframe.trans := [100, 50, 0];
     MoveL [[0,0,150],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]], v100, fine, tSpindle\\WObj:=wobj1;
-  ENDPROC
-ENDMODULE
-"""
+""")
 
 
 def test_rapid_constant_assignments_in_straight_line_code_are_followed(tmp_path):

@@ -160,6 +160,17 @@ def test_gcode_block_that_also_changes_the_tool_is_not_copied(tmp_path):
         dialects.of(tp).insert_points(tp, [NewPoint(end, tp.values[end], np.full(4, np.nan))])
 
 
+@pytest.mark.parametrize("move, who", [("G1 X100 F600", "a point before it"), ("G2 X20 Y0 I10 J0 F600", "it")])
+def test_gcode_incremental_target_is_refused_with_its_line(tmp_path, move, who):
+    # A G91 number is relative to the point before: a copy before it would move what it means.
+    path = tmp_path / "p.ngc"
+    path.write_text(f"G21 G90 G17\nG0 X0 Y0 Z10\nG91\n{move}\nM30\n")
+    tp = parse_program(path)
+    end = int(np.nonzero(tp.line == 4)[0][0])
+    with pytest.raises(EmitError, match=rf"p\.ngc, line 4: the target is written in increments \(G91\): {who} cannot be written as a copy$"):
+        dialects.of(tp).insert_points(tp, [NewPoint(end, tp.values[end], np.full(4, np.nan))])
+
+
 def test_rapid_offs_target_is_refused_with_its_line(tmp_path):
     (tmp_path / "o.mod").write_text(RAPID.replace("    MoveL [[1300", "    MoveL Offs(p2,300,0,0), v100, fine, tool0;\n    MoveL [[1300"))
     tp = parse_program(tmp_path / "o.mod")

@@ -355,6 +355,17 @@ def grouped_findings(findings) -> list[tuple[list[str], str]]:
     return groups
 
 
+def findings_lines(findings, bullet: str = "- ") -> list[str]:
+    """The findings as plain lines to print: each text after ``bullet``, a group's command once
+    after its texts as ``    run: COMMAND``."""
+    lines = []
+    for texts, command in grouped_findings(findings):
+        lines += [bullet + text for text in texts]
+        if command:
+            lines.append(f"    run: {command}")
+    return lines
+
+
 #: The finding that offers a data-driven predictor as the other way starts so.
 OTHER_WAY = "The other way:"
 

@@ -86,8 +86,15 @@ def _instance(cls) -> tuple[Effect | None, str]:
 def _measurements(robot, n: int, seed: int) -> MeasurementSet:
     rng = np.random.default_rng(seed)
     low, high = np.maximum(robot.lower_deg, -150.0), np.minimum(robot.upper_deg, 150.0)
+    return with_random_context(rng.uniform(low, high, (n, 6)), rng)
+
+
+def with_random_context(q_deg: np.ndarray, rng: np.random.Generator) -> MeasurementSet:
+    """Poses ``q_deg`` (N, 6) with every context an effect may read drawn from ``rng`` (process
+    force, approach directions, temperature) and one every 30 s; measured points zero."""
+    n = len(q_deg)
     return MeasurementSet(
-        q_deg=rng.uniform(low, high, (n, 6)),
+        q_deg=q_deg,
         measured_mm=np.zeros((n, 3)),
         ids=tuple(str(i) for i in range(n)),
         force_n=rng.normal(0, 200, (n, 3)),

@@ -169,15 +169,23 @@ def _fields(tp: Toolpath, r: int) -> list[int]:
     fields = [f for f in written if spans[f, 0] >= 0]
     if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW) and spans[F_POS, 0].max() < 0:
         return fields  # a full circle: its end-point words are added
+    _refuse_uncopied(tp, r, fields, "it cannot")
+    return fields
+
+
+def _refuse_uncopied(tp: Toolpath, r: int, fields: list[int], who_cannot: str) -> None:
+    """An EmitError where the numbers ``fields`` of target ``r`` cannot be copied: none is a
+    coordinate, they are an expression on another point or increments (``who_cannot``: what the
+    message says cannot then be written as a copy), or they stand in more than one file."""
+    spans = tp.spans[r]
     if not fields or spans[F_POS, 0].max() < 0:
         raise EmitError(f"{_where(tp, r)}: the target writes no coordinate: a point before it cannot be written as a copy")
     if tp.offset_span is not None and (tp.offset_span[r, :, 0] >= 0).any():
-        raise EmitError(f"{_where(tp, r)}: the target is an expression on another point (Offs, RelTool, ...): it cannot be written as a copy")
+        raise EmitError(f"{_where(tp, r)}: the target is an expression on another point (Offs, RelTool, ...): {who_cannot} be written as a copy")
     if tp.relative[r]:
-        raise EmitError(f"{_where(tp, r)}: the target is written in increments (G91): it cannot be written as a copy")
+        raise EmitError(f"{_where(tp, r)}: the target is written in increments (G91): {who_cannot} be written as a copy")
     if any(int(spans[f, 0]) != int(spans[fields[0], 0]) for f in fields):
         raise EmitError(f"{_where(tp, r)}: the target's numbers are spread over several files")
-    return fields
 
 
 def _literal_around(text: str, at: int) -> tuple[int, int]:
@@ -198,20 +206,13 @@ def _literal_around(text: str, at: int) -> tuple[int, int]:
 def _clone(dialect, tp: Toolpath, p: NewPoint, taken: set[str]):
     """(motion text, declaration insertion or None, new name) of one new point."""
     r = p.row
-    where = f"{tp.sources[int(tp.file[r])].path}, line {tp.line[r]}"
+    where = _where(tp, r)
     spans = tp.spans[r]
     fields = [f for f in _WRITTEN if spans[f, 0] >= 0]
-    if not fields or spans[F_POS, 0].max() < 0:
-        raise EmitError(f"{where}: the target writes no coordinate: a point before it cannot be written as a copy")
     # A coordinate the target leaves out keeps its value from the previous target (G-code
     # modal axes, a KRL aggregate without Y): so does the copy, on the same line between them.
-    if tp.offset_span is not None and (tp.offset_span[r, :, 0] >= 0).any():
-        raise EmitError(f"{where}: the target is an expression on another point (Offs, RelTool, ...): a point before it cannot be written as a copy")
-    if tp.relative[r]:
-        raise EmitError(f"{where}: the target is written in increments (G91): a point before it cannot be written as a copy")
+    _refuse_uncopied(tp, r, fields, "a point before it cannot")
     source = int(spans[fields[0], 0])
-    if any(int(spans[f, 0]) != source for f in fields):
-        raise EmitError(f"{where}: the target's numbers are spread over several files")
     motion_start, motion_end = _line_start(tp, r), _statement_end(dialect, tp.sources[int(tp.file[r])].text, _line_start(tp, r))
     inline = source == int(tp.file[r]) and all(motion_start <= spans[f, 1] < motion_end for f in fields)
     if inline:

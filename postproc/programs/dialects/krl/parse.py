@@ -462,14 +462,20 @@ class KrlParser:
         if self._defs > 1:
             self._inline.fdat_act = None
 
+    def _loop_planning_inputs(self, text: str, lines: list[str]) -> tuple[set[str], list[tuple[int, str]]]:
+        """What a loop's passes are proved from: the INTs declared in the first DEF (local: nothing
+        else changes them), and each call's line with its code (no comment)."""
+        main = self.routines[0] if self.routines else None
+        local_ints = declared_ints(text[main.start:main.end if main.end > 0 else len(text)]) if main else set()
+        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        return local_ints, calls_text
+
     def _plan_counter_loops(self, src: _Doc) -> None:
         """WHILE / REPEAT over a counter run pass by pass (counters.py); any other listed once, noted."""
         if not self._counter_loops:
             return
         lines = src.text.split("\n")
-        main = self.routines[0] if self.routines else None
-        local_ints = declared_ints(src.text[main.start:main.end if main.end > 0 else len(src.text)]) if main else set()
-        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        local_ints, calls_text = self._loop_planning_inputs(src.text, lines)
         for loop in self._counter_loops:
             body = [_split_comment(code)[0] for code in lines[loop.first_line:loop.last_line - 1]]
             planned, why = plan_counter_loop(loop, self._assigns, local_ints, body, calls_text) if not self._has_goto else (None, "the program has a GOTO that may jump")
@@ -483,10 +489,7 @@ class KrlParser:
         """FOR I = 1 TO N with N set to a constant: run pass by pass (bounds.py); any other listed once, noted."""
         if not self._named_fors:
             return
-        lines = src.text.split("\n")
-        main = self.routines[0] if self.routines else None
-        local_ints = declared_ints(src.text[main.start:main.end if main.end > 0 else len(src.text)]) if main else set()
-        calls_text = [(c.line, _split_comment(lines[c.line - 1])[0]) for c in self.calls]
+        local_ints, calls_text = self._loop_planning_inputs(src.text, src.text.split("\n"))
         for named in self._named_fors:
             loop, why = plan_named_for(named, self._assigns, local_ints, calls_text, self._has_goto)
             if loop is not None and _leaves_early(src.text, loop.first_line, loop.last_line):

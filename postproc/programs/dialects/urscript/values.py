@@ -122,21 +122,24 @@ class Evaluator:
             return self._inverse_kin(positional[0], named.get("qnear"), env, at)
         return Unknown(f"{function}(...) at {self.where(at)} is not evaluated by postproc (only pose_trans, pose_add and get_inverse_kin of constants are)")
 
-    def _pose_trans(self, frame: Value | Unknown, pose: Value | Unknown, at: int) -> Value | Unknown:
-        for value in (frame, pose):
+    def _not_poses(self, function: str, arguments: tuple[Value | Unknown, ...], at: int) -> Unknown | None:
+        """Why ``function``'s arguments are not all known poses (the first that is not), or None."""
+        for value in arguments:
             if isinstance(value, Unknown):
                 return value
             if not value.is_pose:
-                return Unknown(f"pose_trans at {self.where(at)} is given a joint list, not a pose")
+                return Unknown(f"{function} at {self.where(at)} is given a joint list, not a pose")
+        return None
+
+    def _pose_trans(self, frame: Value | Unknown, pose: Value | Unknown, at: int) -> Value | Unknown:
+        if (refused := self._not_poses("pose_trans", (frame, pose), at)) is not None:
+            return refused
         name = frame.name or f"pose_trans@{self.where(at)}"
         return Value(True, pose.numbers, pose.spans, pose_trans(frame.transform(), pose.frame), name if pose.frame_name == "<base>" else f"{name}+{pose.frame_name}", pose.name)
 
     def _pose_add(self, first: Value | Unknown, second: Value | Unknown, at: int) -> Value | Unknown:
-        for value in (first, second):
-            if isinstance(value, Unknown):
-                return value
-            if not value.is_pose:
-                return Unknown(f"pose_add at {self.where(at)} is given a joint list, not a pose")
+        if (refused := self._not_poses("pose_add", (first, second), at)) is not None:
+            return refused
         # The constant is the operand whose numbers postproc does not rewrite: a variable
         # (a frame the program names) where the other is a literal, else the first.
         target, constant = (first, second) if (second.name and not first.name) else (second, first)

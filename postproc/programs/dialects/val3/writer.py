@@ -46,6 +46,15 @@ def _pose_attrs(t: np.ndarray) -> str:
     return " ".join(f'{k}="{short_number(v, 6)}"' for k, v in zip(("x", "y", "z", "rx", "ry", "rz"), [*t[:3, 3], *rxyz]))
 
 
+def _reference(values: list[str], array: str, father_T: np.ndarray, father: str, father_itself: str) -> str:
+    """How a move names the frame or tool ``father_T`` (relative to ``father``): ``father_itself``
+    where it is the identity, else a new value of the .dtx array ``array`` (added to ``values``)."""
+    if np.allclose(father_T, np.eye(4), atol=1e-12):
+        return father_itself
+    values.append(f'      <Value key="{len(values)}" {_pose_attrs(father_T)} fatherId="{father}" />')
+    return f"{array}[{len(values) - 1}]"
+
+
 class Val3Writer:
     def __init__(self, name: str = "converted"):
         self.name = legal_name(name, "prog")
@@ -63,18 +72,10 @@ class Val3Writer:
         pass
 
     def frame(self, name: str, base_T_frame: np.ndarray) -> None:
-        if np.allclose(base_T_frame, np.eye(4), atol=1e-12):
-            self.frame_ref = "world[0]"
-            return
-        self.frames.append(f'      <Value key="{len(self.frames)}" {_pose_attrs(base_T_frame)} fatherId="world[0]" />')
-        self.frame_ref = f"fFrame[{len(self.frames) - 1}]"
+        self.frame_ref = _reference(self.frames, "fFrame", base_T_frame, "world[0]", "world[0]")
 
     def tool(self, name: str, flange_T_tcp: np.ndarray) -> None:
-        if np.allclose(flange_T_tcp, np.eye(4), atol=1e-12):
-            self.tool_ref = "flange"
-            return
-        self.tools.append(f'      <Value key="{len(self.tools)}" {_pose_attrs(flange_T_tcp)} fatherId="flange[0]" />')
-        self.tool_ref = f"tTool[{len(self.tools) - 1}]"
+        self.tool_ref = _reference(self.tools, "tTool", flange_T_tcp, "flange[0]", "flange")
 
     def speed(self, mm_s: float) -> None:
         self.speed_now = mm_s
