@@ -54,7 +54,7 @@ class Suggestion:
     fixed: dict[str, str]  # parameters the candidates cannot separate, and why (as fit reports them)
     condition_number: float  # of the identification Jacobian of measured + chosen poses (columns in typical sizes)
     curve: tuple[tuple[int, float, float], ...]  # (N, expected RMS suggested, expected RMS random), mm
-    swaps: int  # exchanges the refinement made
+    swaps: int  # poses of the greedy design the refinement (exchange and restarts) replaced
     where: str  # what expected_rms_mm is measured over
     notes: tuple[str, ...] = field(default_factory=tuple)
     bound_rms_mm: float | None = None  # with a program and nothing measured: no design of N poses from the candidates predicts better

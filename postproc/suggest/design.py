@@ -216,7 +216,6 @@ def _i_directional(problem: Problem, w: np.ndarray, rows: np.ndarray) -> tuple[n
     return d, float(np.einsum("kl,lk->", problem.weight, cov))
 
 
-
 def restarts_for(n: int) -> int:
     """How many perturbed restarts a design of n poses gets (RESTART_POSES / n, rounded down)."""
     return RESTART_POSES // max(n, 1)
@@ -225,10 +224,11 @@ def restarts_for(n: int) -> int:
 def refine(problem: Problem, order: np.ndarray, criterion: str, n_fixed: int, rng: np.random.Generator,
            excluded: np.ndarray | None = None, restarts: int | None = None, say=lambda msg: None) -> tuple[np.ndarray, int]:
     """Exchange from ``order`` (the greedy design), then ``restarts`` times (default
-    ``restarts_for(len(design))``): replace PERTURBED_SHARE of the best design's free poses by
+    ``restarts_for(len(order))``): replace PERTURBED_SHARE of the best design's free poses by
     random other candidates, exchange again, keep the result if its criterion is higher.
-    Deterministic for a given ``rng``. Returns the best design and the swaps of its exchanges."""
-    best, swaps = exchange(problem, order, criterion, n_fixed, excluded, say=say)
+    Deterministic for a given ``rng``. Returns the best design and how many of the greedy
+    design's poses it replaced."""
+    best, _ = exchange(problem, order, criterion, n_fixed, excluded, say=say)
     best_value = criterion_value(problem, problem.information(best), criterion)
     allowed = np.ones(len(problem.blocks), dtype=bool) if excluded is None else ~excluded
     free = np.arange(n_fixed, len(best))
@@ -240,9 +240,8 @@ def refine(problem: Problem, order: np.ndarray, criterion: str, n_fixed: int, rn
         k = min(max(1, int(round(PERTURBED_SHARE * len(free)))), int(others.sum()))
         start = best.copy()
         start[rng.choice(free, k, replace=False)] = rng.choice(np.nonzero(others)[0], k, replace=False)
-        candidate, made = exchange(problem, start, criterion, n_fixed, excluded)
+        candidate, _ = exchange(problem, start, criterion, n_fixed, excluded)
         value = criterion_value(problem, problem.information(candidate), criterion)
-        swaps += made
         if value > best_value:
             best, best_value = candidate, value
-    return best, swaps
+    return best, int(np.setdiff1d(best[n_fixed:], order[n_fixed:]).size)
