@@ -341,7 +341,7 @@ def main():
         if not args.skip_share0:  # the same truths and candidates; random designs as above
             runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws)
-    lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
+    lines = ["benchmarks/suggest.py" + ("" if args.ur10_only else f" --seeds {args.seeds}") + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
              + (" --pass-only" if args.pass_only else " --ur10-only" if args.ur10_only else "")
              + ("" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}") + f" --random-draws {args.random_draws}"
              + (" --skip-share0" if args.skip_share0 else "")
