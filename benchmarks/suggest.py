@@ -2,6 +2,8 @@
 number of measured poses.
 
 Run: .venv/bin/python benchmarks/suggest.py [--seeds 5] [--ur10 /work/shared/data/ur10_ipa] [--figure docs/suggest-poses.png]
+Parts alone: --pass-only (2a, e.g. --seeds 12 --noise-draws 6 --random-draws 20 --skip-share0) and
+--ur10-only (3), each with --merge-into benchmarks/results/suggest.npz to redraw the figure with it.
 
 1. Simulated KR160s with known truth (geometric, base_frame, tool_offset, joint_compliance;
    random magnitudes x2, noise 0.02 mm per axis), candidates 1,500 poses in seed 001's
@@ -16,7 +18,8 @@ Run: .venv/bin/python benchmarks/suggest.py [--seeds 5] [--ur10 /work/shared/dat
 3. The real UR10, Series A, retrospectively: candidates are 2,000 of its measured poses
    (subsampled from 11,911 to keep the run short), 2,000 others held out; the model fitted
    on the suggested N against random N, held-out RMS (whole held-out set, and a region:
-   the 300 held-out poses nearest one point, given to the design as its targets).
+   the 300 held-out poses nearest one point, given to the design as its targets), N from 13,
+   the fewest fit accepts for the model's 39 parameters.
 """
 
 from __future__ import annotations
