@@ -2,6 +2,8 @@
 number of measured poses.
 
 Run: .venv/bin/python benchmarks/suggest.py [--seeds 5] [--ur10 /work/shared/data/ur10_ipa] [--figure docs/suggest-poses.png]
+Parts alone: --pass-only (2a, e.g. --seeds 12 --noise-draws 6 --random-draws 20 --skip-share0) and
+--ur10-only (3), each with --merge-into benchmarks/results/suggest.npz to redraw the figure with it.
 
 1. Simulated KR160s with known truth (geometric, base_frame, tool_offset, joint_compliance;
    random magnitudes x2, noise 0.02 mm per axis), candidates 1,500 poses in seed 001's
@@ -16,7 +18,8 @@ Run: .venv/bin/python benchmarks/suggest.py [--seeds 5] [--ur10 /work/shared/dat
 3. The real UR10, Series A, retrospectively: candidates are 2,000 of its measured poses
    (subsampled from 11,911 to keep the run short), 2,000 others held out; the model fitted
    on the suggested N against random N, held-out RMS (whole held-out set, and a region:
-   the 300 held-out poses nearest one point, given to the design as its targets).
+   the 300 held-out poses nearest one point, given to the design as its targets), N from 13,
+   the fewest fit accepts for the model's 39 parameters.
 """
 
 from __future__ import annotations
@@ -95,8 +98,9 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
     nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
-    out = {"suggested": np.full((seeds, len(GRID)), np.nan), "random": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
-           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), RANDOM_DRAWS), np.nan),
+    width = max(draws, 1)
+    out = {"suggested": np.full((seeds, len(GRID)), np.nan), "random": np.full((seeds, len(GRID), width), np.nan),
+           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), width), np.nan),
            "theory_suggested": np.full((seeds, len(GRID)), np.nan), "theory_random": np.full((seeds, len(THEORY_GRID)), np.nan),
            "bound": np.full(seeds, np.nan), "uniform": np.full(seeds, np.nan)}
     for s in range(seeds):
@@ -212,7 +216,10 @@ def load_lines(res: dict, seeds: int) -> list[str]:
     return lines
 
 
-def ur10(folder: Path, seeds: int) -> dict:
+UR10_GRID = (13, 14, 16, 18, 24, 32, 40, 50, 64, 80, 100)  # from the fewest poses fit accepts for the model's 39 parameters (13)
+
+
+def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS) -> dict:
     """Series A retrospectively: held-out RMS of fits on suggested and random subsets."""
     data, tool = read_series(folder / "Series_A")
     robot = postproc.load_robot("ur10")
@@ -226,17 +233,17 @@ def ur10(folder: Path, seeds: int) -> dict:
     cands = Candidates(q_deg=q_cand, ids=tuple(data.ids[i] for i in cand_rows), source="Series_A")
     pool = data.subset(cand_rows)
     nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
-    grid = tuple(n for n in GRID if n >= 18)
+    grid = UR10_GRID
     out = {"grid": grid}
     for label, targets in (("whole", None), ("region", held.q_deg[region_rows])):
         sug = np.full((seeds, len(grid)), np.nan)
-        ran = np.full((seeds, len(grid), RANDOM_DRAWS), np.nan)
+        ran = np.full((seeds, len(grid), draws), np.nan)
         rows = np.arange(len(held)) if targets is None else region_rows
         for s in range(seeds):
             for k, n in enumerate(grid):
                 pick = suggest_poses(nominal, cands, n, targets_q=targets, seed=s).chosen
                 sug[s, k] = _held_out(robot, tool, pool.subset(pick), held, rows)
-                for d in range(RANDOM_DRAWS):
+                for d in range(draws):
                     ran[s, k, d] = _held_out(robot, tool, pool.subset(rng.choice(len(cand_rows), n, replace=False)), held, rows)
                 say(f"UR10 {label} seed {s + 1}/{seeds} N {n}: held-out RMS suggested {sug[s, k]:.4f} random {np.mean(ran[s, k]):.4f} mm")
         out[label] = {"suggested": sug, "random": ran}
@@ -272,6 +279,25 @@ def saving_lines(grid, sug_mean, ran_mean, levels_from) -> list[str]:
     return lines
 
 
+BOOTSTRAP = 2000  # resamples of the seeds for the interval of a saving
+
+
+def saving_interval(grid, sug: np.ndarray, ran: np.ndarray, n_r: int, seed: int = 0) -> tuple[float, float]:
+    """95 % bootstrap interval of the share of random's poses the design needs at random's N = n_r:
+    the seeds resampled with replacement (a seed's design curve and its random draws together),
+    the share recomputed from the resampled means; beyond the grid counts as infinite."""
+    rng = np.random.default_rng(seed)
+    k = list(grid).index(n_r)
+    ran = ran.reshape(ran.shape[0], ran.shape[1], -1)
+    shares = np.empty(BOOTSTRAP)
+    for b in range(BOOTSTRAP):
+        pick = rng.integers(len(sug), size=len(sug))
+        n_s = first_n_below(grid, np.nanmean(sug[pick], axis=0), np.nanmean(ran[pick, k]))
+        shares[b] = np.inf if n_s is None else abs(n_s) / n_r
+    low, high = np.percentile(shares, [2.5, 97.5])
+    return float(low), float(high)
+
+
 def table(grid, rows: list[tuple[str, np.ndarray, np.ndarray]]) -> list[str]:
     head = f"{'N':>5}" + "".join(f"{name:>22}" for name, _, _ in rows)
     body = [f"{n:>5}" + "".join(f"{m[k]:>13.4f} +- {s[k]:.4f}" for _, m, s in rows) for k, n in enumerate(grid)]
@@ -289,18 +315,15 @@ def main():
                         "suggested design by the mean of its fits (its expected error; random's curve is already a mean over draws).")
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
     parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
+    parser.add_argument("--ur10-only", action="store_true", help="Only part 3 (UR10 Series A retrospectively).")
+    parser.add_argument("--random-draws", type=int, default=RANDOM_DRAWS, help="Random designs per seed and N (their mean is what the design is compared with).")
+    parser.add_argument("--skip-share0", action="store_true", help="Region: leave out the --random-share 0 variant.")
+    parser.add_argument("--merge-into", type=Path, help="After --pass-only or --ur10-only: put this run's arrays into that .npz (the figure's "
+                        "raw arrays, e.g. benchmarks/results/suggest.npz) in place of the older run's, and redraw --figure from it.")
     parser.add_argument("--figure-only", action="store_true", help="Only redraw the figure from the raw arrays of the last full run (--output's .npz).")
     args = parser.parse_args()
     if args.figure_only:
-        raw = np.load(args.output.with_suffix(".npz"))
-        runs, real = {}, {"grid": tuple(int(n) for n in raw["ur10_grid"])}
-        for key in raw.files:
-            head, _, field = key.partition("__")
-            if head.startswith("ur10_") and field:
-                real.setdefault(head[5:], {})[field] = raw[key]
-            elif field:
-                runs.setdefault(head, {})[field] = raw[key]
-        figure(args.figure, runs, real)
+        redraw(args.output.with_suffix(".npz"), args.figure)
         return
     if args.loads_only:
         t0 = time.perf_counter()
@@ -313,18 +336,22 @@ def main():
         return
     t0 = time.perf_counter()
     runs = {}
-    if not args.pass_only:
-        runs["whole"] = simulated(args.seeds, None)
-    for name, box in (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE)):
-        runs[name] = simulated(args.seeds, box, theory=True, noise_draws=args.noise_draws)
-        runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)  # the same truths and candidates; random designs as above
-    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds)
-    lines = [f"benchmarks/suggest.py --seeds {args.seeds}" + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
-             + (" --pass-only" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}")
+    if not (args.pass_only or args.ur10_only):
+        runs["whole"] = simulated(args.seeds, None, draws=args.random_draws)
+    boxes = () if args.ur10_only else (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE))
+    for name, box in boxes:
+        runs[name] = simulated(args.seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
+        if not args.skip_share0:  # the same truths and candidates; random designs as above
+            runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
+    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws)
+    lines = ["benchmarks/suggest.py" + ("" if args.ur10_only else f" --seeds {args.seeds}") + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
+             + (" --pass-only" if args.pass_only else " --ur10-only" if args.ur10_only else "")
+             + ("" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}") + f" --random-draws {args.random_draws}"
+             + (" --skip-share0" if args.skip_share0 else "")
              + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2, greedy + exchange; "
-             f"random: {RANDOM_DRAWS} draws per seed from all candidates (the same set the design chooses from)"]
+             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
+             f"(+ perturbed restarts at small N); random: {args.random_draws} draws per seed from all candidates (the same set the design chooses from)"]
     if "whole" in runs:
         lines += whole_lines(runs, args.seeds)
     lines += region_lines(runs, args.seeds)
@@ -332,11 +359,41 @@ def main():
         lines += ur10_lines(real, args.ur10_seeds)
     args.output.write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
-    if real is not None:
+    if args.merge_into is not None:
+        merge(args.merge_into, runs, real)
+        redraw(args.merge_into, args.figure)
+    elif real is not None and runs:
         raw = args.output.with_suffix(".npz")
         np.savez_compressed(raw, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
                             **{f"ur10_{label}__{key}": v for label in ("whole", "region") for key, v in real[label].items()}, ur10_grid=np.array(real["grid"]))
         figure(args.figure, runs, real)
+
+
+def redraw(raw_path: Path, figure_path: Path) -> None:
+    """The figure from raw arrays saved by a full run (possibly with parts merged from later runs)."""
+    raw = np.load(raw_path)
+    runs, real = {}, {"grid": tuple(int(n) for n in raw["ur10_grid"])}
+    for key in raw.files:
+        head, _, field = key.partition("__")
+        if head.startswith("ur10_") and field:
+            real.setdefault(head[5:], {})[field] = raw[key]
+        elif field:
+            runs.setdefault(head, {})[field] = raw[key]
+    figure(figure_path, runs, real)
+
+
+def merge(raw_path: Path, runs: dict, real: dict | None) -> None:
+    """Replace in ``raw_path`` the arrays of the parts this run measured (the others stay)."""
+    old = dict(np.load(raw_path))
+    for run, d in runs.items():
+        stale = (f"{run}__", f"{run}0__") if run + "0" not in runs else (f"{run}__",)  # a share-0 variant of an older run does not belong to this one
+        old = {k: v for k, v in old.items() if not k.startswith(stale)}
+        old.update({f"{run}__{key}": v for key, v in d.items()})
+    if real is not None:
+        old = {k: v for k, v in old.items() if not k.startswith("ur10_")}
+        old.update({f"ur10_{label}__{key}": v for label in ("whole", "region") for key, v in real[label].items()})
+        old["ur10_grid"] = np.array(real["grid"])
+    np.savez_compressed(raw_path, **old)
 
 
 def whole_lines(runs, seeds: int) -> list[str]:
@@ -358,13 +415,22 @@ def region_lines(runs, seeds: int) -> list[str]:
         if name not in runs:
             continue
         rg = summary(GRID, runs[name]["suggested"], runs[name]["random"])
-        r0 = summary(GRID, runs[name + "0"]["suggested"], runs[name]["random"])
+        draws = runs[name]["random"].shape[2]
+        columns = [("suggested (I)", rg[0], rg[1]), ("random", rg[2], rg[3])]
+        share0 = name + "0" in runs
+        if share0:
+            r0 = summary(GRID, runs[name + "0"]["suggested"], runs[name]["random"])
+            columns.append(("suggested, share 0", r0[0], r0[1]))
+        intervals = [saving_interval(GRID, runs[name]["suggested"], runs[name]["random"], n_r) for n_r in (32, 50, 64, 100)]
         lines += ["", f"2{'ab'[k]}. simulated KR160, region-targeted: 200 targets in a 250 x 300 x 200 mm box, {what}; "
-                  f"true error at the targets, {seeds} seeds",
-                  *table(GRID, [("suggested (I)", rg[0], rg[1]), ("random", rg[2], rg[3]), ("suggested, share 0", r0[0], r0[1])]),
+                  f"true error at the targets, {seeds} seeds, random {draws} draws per seed (+- : std over seeds, random over seeds x draws)",
+                  *table(GRID, columns),
                   *saving_lines(GRID, rg[0], rg[2], (32, 50, 64, 100)),
-                  "  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100)),
-                  *theory_lines(runs[name], runs[name + "0"])]
+                  "  95 % bootstrap interval over seeds (design and random resampled together): "
+                  + ", ".join(f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r, (lo, hi) in zip((32, 50, 64, 100), intervals))]
+        if share0:
+            lines += ["  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100))]
+        lines += theory_lines(runs[name], runs.get(name + "0"))
     return lines
 
 
@@ -380,7 +446,7 @@ def theory_lines(run: dict, run0: dict) -> list[str]:
         rand = run["theory_random"][:, list(grid).index(n_r)]
         best = run["bound"] / rand**2 / n_r
         parts = []
-        for label, r in (("default share", run), ("share 0", run0)):
+        for label, r in (("default share", run), ("share 0", run0)) if run0 is not None else (("default share", run),):
             shares = []
             for s in range(len(rand)):
                 n_s = first_n_below(GRID, r["theory_suggested"][s], rand[s])
@@ -400,7 +466,10 @@ def ur10_lines(real, seeds: int) -> list[str]:
         what = "all 2,000 held-out poses (D-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
         lines += ["", f"3. UR10 Series A retrospectively ({label}): held-out RMS on {what}, {seeds} seeds",
                   *table(grid, [("suggested", m[0], m[1]), ("random", m[2], m[3])]),
-                  *saving_lines(grid, m[0], m[2], tuple(n for n in (32, 50, 64, 100) if n in grid))]
+                  *saving_lines(grid, m[0], m[2], tuple(n for n in (32, 50, 64, 100) if n in grid)),
+                  "  95 % bootstrap interval over seeds: " + ", ".join(
+                      f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r in (32, 50, 64, 100)
+                      for lo, hi in [saving_interval(grid, real[label]["suggested"], real[label]["random"], n_r)])]
     return lines
 
 
@@ -428,8 +497,8 @@ def figure(path: Path, runs, real) -> None:
     axes[0].axhline(FLOOR, color="k", linestyle=":", label=f"noise floor {FLOOR:.4f} mm")
     axes[0].axhline(1.2 * FLOOR, color="#d62728", linestyle="--", label="1.2 x noise floor")
     axes[1].set_yscale("log")
-    sm = np.nanmean(runs["pass0"]["suggested"], axis=0)
-    axes[1].plot(GRID, sm, "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
+    if "pass0" in runs:
+        axes[1].plot(GRID, np.nanmean(runs["pass0"]["suggested"], axis=0), "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
     if "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
         axes[1].plot(GRID, np.sqrt(np.mean(runs["pass"]["bound"]) / np.array(GRID)), "k:",
                      label="I-optimal bound: the least any N poses\nof these candidates can expect (noise only)")

@@ -23,6 +23,9 @@ from .candidates import Candidates, load_state_order
 from .targets import program_targets
 
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
+# The share is of the poses beyond the fewest fit accepts (random_count): those first poses are all
+# needed to determine the model's parameters, and a random one among them costs most (the simulated
+# machining pass, fitted: the design with 3-4 random poses of 14-18 had 5-9 % more error than with none, suggest_pass_noise.txt).
 # With --program the random share is drawn from this fraction of the candidates, those nearest
 # a target in joint space (at least 4 x the random poses): a model that misses an effect is
 # then checked where the program runs (benchmarks/suggest.py: 1-3 points of the poses random
@@ -51,7 +54,7 @@ class Suggestion:
     fixed: dict[str, str]  # parameters the candidates cannot separate, and why (as fit reports them)
     condition_number: float  # of the identification Jacobian of measured + chosen poses (columns in typical sizes)
     curve: tuple[tuple[int, float, float], ...]  # (N, expected RMS suggested, expected RMS random), mm
-    swaps: int  # exchanges the refinement made
+    swaps: int  # poses of the greedy design the refinement (exchange and restarts) replaced
     where: str  # what expected_rms_mm is measured over
     notes: tuple[str, ...] = field(default_factory=tuple)
     bound_rms_mm: float | None = None  # with a program and nothing measured: no design of N poses from the candidates predicts better
@@ -73,8 +76,10 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     ``criterion``: D, E, A or I (the mean predicted error variance over the candidates); with
     ``targets_q`` (joints at a program's targets) the design minimises it there (I). ``measured``: the
     poses measured already (their information is counted; their ids are not chosen again).
-    ``random_share``: the fraction of the n drawn at random first (seeded), kept through the search;
-    with ``targets_q`` drawn from the candidates nearest the targets (``NEAR_TARGETS_FRACTION``).
+    ``random_share``: the fraction drawn at random first (seeded), kept through the search, of the
+    poses beyond the fewest fit accepts (``random_count``); with ``targets_q`` drawn from the
+    candidates nearest the targets (``NEAR_TARGETS_FRACTION``). The exchange restarts at small N
+    (``design.refine``) draw from their own stream of the same seed.
     """
     say = progress or (lambda msg: None)
     criterion = _check_options(criterion, targets_q, n, random_share, noise_mm)
@@ -91,7 +96,7 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
         raise InputError(f"-n {n}: {n + m} poses give {3 * (n + m)} equations; fit needs at least {3 * least} for the model's "
                          f"{len(model.params)} parameters ({k} of them identifiable from these candidates): choose at least {least - m}")
     rng = np.random.default_rng(seed)
-    n_random = int(round(random_share * n))
+    n_random = random_count(random_share, n, least - m)
     pool = np.nonzero(~excluded)[0]
     if targets_q is not None and n_random:  # region-targeted: robustness where the program runs
         pool = near_targets(candidates.q_deg, targets_q, pool, max(4 * n_random, int(NEAR_TARGETS_FRACTION * len(pool))))
@@ -99,11 +104,18 @@ def suggest_poses(model: ErrorModel, candidates: Candidates, n: int, *, criterio
     say(f"greedy search ({n} poses from {available})")
     greedy_order = design.greedy(info.problem, n, criterion, fixed, excluded, say=say)
     say("exchange refinement")
-    final, swaps = design.exchange(info.problem, greedy_order, criterion, n_random, excluded, say=say)
+    restarts_rng = np.random.default_rng([seed, 1])  # its own stream: the random share and the curve's draws stay those of the seed
+    final, swaps = design.refine(info.problem, greedy_order, criterion, n_random, restarts_rng, excluded, say=say)
     start = measured.q_deg[-1] if m else None
     forces = candidates.group(FORCES)
     order = final[load_state_order(candidates.q_deg[final], None if forces is None else forces[final], start)]
     return _summarise(info, candidates, order, greedy_order, criterion, n_random, swaps, excluded, rng, m)
+
+
+def random_count(share: float, n: int, needed: int) -> int:
+    """Random poses among n: ``share`` of those beyond the ``needed`` ones (the fewest fit
+    accepts, less the poses measured already), rounded; none while n is at most that."""
+    return int(round(share * max(n - max(needed, 0), 0)))
 
 
 def near_targets(q_deg: np.ndarray, targets_q: np.ndarray, pool: np.ndarray, size: int) -> np.ndarray:

@@ -34,7 +34,7 @@ def write_outputs(suggestion: Suggestion, cands: Candidates, output: Path, progr
 def report_lines(s: Suggestion, names_shown: int = 60) -> list[str]:
     """The terminal report: criterion, predicted error against random, standard errors, condition number, curve."""
     n = len(s.chosen)
-    lines = [f"{n} poses chosen ({s.n_random} of them at random, {s.swaps} exchanges refined the rest), criterion {CRITERION_NAMES[s.criterion]}",
+    lines = [f"{n} poses chosen ({s.n_random} of them at random, the exchange replaced {s.swaps} of the greedy search's), criterion {CRITERION_NAMES[s.criterion]}",
              f"expected model error RMS at {s.where}: {s.expected_rms_mm:.4f} mm (random {n} poses: {s.random_rms_mm:.4f} mm; "
              + (f"random selection needs about {s.random_equivalent_n} poses for the same)" if s.random_equivalent_n is not None
                 else "random selection needs more poses than the curve spans for the same)"),
