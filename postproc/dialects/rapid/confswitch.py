@@ -95,6 +95,8 @@ def refuse_conditional_switches(sources) -> None:
 def switch_states(tp, text_order: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """(N,) True where ``ConfL`` / ``ConfJ`` is off at each target, by the call structure from
     ``main``; ``text_order`` (the module-text answer) where main does not reach a target."""
+    if not any(_ANY_SWITCH.search(doc.text) for doc in tp.sources):
+        return text_order  # no switch anywhere (most programs): nothing to walk or refuse
     refuse_conditional_switches(tp.sources)
     table = routines(tp.sources)
     switched_off = any(kind == "switch" and value[1] for r in table.values() for _, kind, value in r.events)
