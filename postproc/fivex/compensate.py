@@ -21,6 +21,7 @@ from .. import dialects
 from ..errors import EmitError, InputError, JobError
 from ..frames import axis_to_quat_wxyz
 from ..ir import F_EXT, Toolpath
+from ..parse.nc_columns import CCOMP
 from .errormap import GridMap
 from .kinematics import _head_tip, fk, ik, rotary_solutions, table_to_machine
 from .machine import Machine
@@ -144,7 +145,7 @@ def _with_numbers(tp: Toolpath, xyz: np.ndarray, angles: np.ndarray, cols: list[
         ext[:, c] = angles[:, j]
         values[:, field] = np.where(has_word, angles[:, j], values[:, field])
     moved = replace(tp, ext=ext, values=values)
-    if tp.ccomp is not None and (tp.ccomp == 1).any():  # under radius compensation the text may hold the contour (Klartext RL / RR)
+    if np.any(tp.extras.get(CCOMP, 0) == 1):  # under radius compensation the text may hold the contour (Klartext RL / RR)
         return dialects.of(tp).contour_for(moved, xyz)
     return moved.with_positions(xyz)
 

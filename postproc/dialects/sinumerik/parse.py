@@ -17,6 +17,7 @@ from dataclasses import replace
 import numpy as np
 
 from ...ir import F_ARC, Kind, SourceDoc, Toolpath
+from ...parse import nc_columns
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
@@ -76,6 +77,7 @@ class SinumerikParser(GcodeParser):
         self.original = doc
         self.siemens = True
         self.builder = Builder("sinumerik", "none", [doc])
+        nc_columns.declare(self.builder)
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame, as the blocks read so far leave it
         self.swivel = np.eye(4)  # the CYCLE800 swivel frame (a system frame below the programmable one)
