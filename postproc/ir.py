@@ -99,18 +99,14 @@ class Toolpath:
     frame_known: np.ndarray = field(repr=False, default=None)  # (F,) False where the program does not define the frame
     tool_known: np.ndarray = field(repr=False, default=None)  # (T,) False where the program does not define the tool
     notes: tuple[str, ...] = ()
-    # (N, 3) G-code arcs (ARC_CW / ARC_CCW rows): plane (17, 18, 19), IJK absolute (1: G90.1) or
-    # incremental from the start (0: G91.1), full turns P (1 when absent); NaN on other rows.
-    # None when the program has no G2/G3 (see postproc.arcs).
-    arc: np.ndarray | None = field(repr=False, default=None)
     # What only some languages state, per target: {"<dialect>.<what>": (N, ...) array}, e.g. a
-    # Fanuc CNT value, a UR blend radius, or the NC family's feed mode, spindle speed, rotary
-    # offsets and cutter compensation ("nc.*": postproc.parse.nc_columns). A new language keeps
+    # Fanuc CNT value, a UR blend radius, or the NC family's arc geometry, feed mode, spindle
+    # speed, rotary offsets and cutter compensation ("nc.*": postproc.parse.nc_columns). A new language keeps
     # its own here instead of adding a field to the core; ``take`` slices them with the rest.
     extras: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

@@ -22,7 +22,7 @@ import numpy as np
 from ..arcs import PLANE_AXES, arc_rows, geometry
 from ..errors import EmitError
 from ..ir import Kind, Toolpath
-from ..parse.nc_columns import CCOMP, FEED_MODE, SPINDLE
+from ..parse.nc_columns import ARC, CCOMP, FEED_MODE, SPINDLE
 
 MIN_LENGTH_MM = 1e-9  # a G93 move shorter than this has no tool speed
 _F_WORD = re.compile(r"[Ff][ \t]*[-+.\d#\[]")
@@ -136,7 +136,7 @@ def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
             continue
         prog[r] = np.where(np.isnan(tp.values[r, :3]), prev, tp.values[r, :3])
         if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW):
-            first, second, normal = PLANE_AXES[int(tp.arc[r, 0])]  # G17: X Y Z; G18: Z X Y
+            first, second, normal = PLANE_AXES[int(tp.extras[ARC][r, 0])]  # G17: X Y Z; G18: Z X Y
             centre = tp.values[r, [19 + first, 19 + second]]  # I J (G18: K I): absolute under compensation
             a0 = np.arctan2(prev[second] - centre[1], prev[first] - centre[0])
             a1 = np.arctan2(prog[r, second] - centre[1], prog[r, first] - centre[0])

@@ -179,7 +179,6 @@ class Builder:
             tool_known=np.array(self.tool_known, dtype=bool),
             offset=cols["offset"],
             offset_span=cols["offset_span"],
-            arc=cols["arc"],
             notes=tuple(self.notes),
             extras={name: cols[name] for name in self.extra_columns if cols[name] is not None},
         )
@@ -193,7 +192,7 @@ class Builder:
         cols = {}
         columns = {key: (dtype, fill, _COLUMN_SHAPES.get(key, ())) for key, (dtype, fill) in _COLUMN_DEFAULTS.items()}
         for key, (dtype, fill, shape) in {**columns, **self.extra_columns}.items():
-            if (key in ("offset", "offset_span", "arc") or key in self.optional_extras) and not any(key in b for b in self.blocks):
+            if (key in ("offset", "offset_span") or key in self.optional_extras) and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
@@ -230,9 +229,8 @@ _COLUMN_DEFAULTS = {
     "insert_at": (np.int64, -1),
     "offset": (float, 0.0),
     "offset_span": (np.int64, -1),
-    "arc": (float, np.nan),
 }
-_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,)}
+_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
 
 
 __all__ = ["FIELDS", "Builder", "Kind", "LineIndex", "Numbers", "scan_numbers"]

@@ -1,6 +1,11 @@
 """The per-target columns the NC readers share (G-code, SINUMERIK, Heidenhain), kept in
 ``Toolpath.extras`` under the family name ``nc.``; no other language has them.
 
+- ``nc.arc`` (N, 3) float: the circle of a G2/G3 (or Heidenhain CC + C, SINUMERIK CIP / CT)
+  target: plane (17, 18, 19), IJK absolute (1: G90.1) or incremental from the start (0:
+  G91.1), full turns P (1 when absent); NaN on other rows. The centre words themselves are
+  the core's ``values`` I J K R (``F_ARC``). Absent: the program has no arc (postproc.arcs
+  fits the centres; KRL CIRC and RAPID MoveC circles are CIRC_VIA / CIRC_END targets instead).
 - ``nc.feed_mode`` (N,) int8: the feed mode in force at each target: 93 inverse time (F =
   1/minutes of the move), 94 units per minute, 95 units per spindle revolution; ``speed``
   keeps F as written whatever the mode (postproc.emit.feeds turns it into mm/min).
@@ -16,22 +21,21 @@
   program has none.
 
 A column no block of a program gives is left out of ``extras`` (``tp.extras.get(name)`` is
-None), as the core fields it replaces were None. ``Toolpath.arc`` (plane, IJK mode, turns of
-a G2/G3 or CC/C circle) stays in the core: the compensation's arc fit (postproc.arcs) and the
-writers' insertion read it as the circle geometry.
+None), as the core fields they replace were None.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+ARC = "nc.arc"
 FEED_MODE = "nc.feed_mode"
 SPINDLE = "nc.spindle"
 ROTARY_OFFSET = "nc.rotary_offset"
 CCOMP = "nc.ccomp"
 
 # name -> (dtype, the value of a target whose block gives none, shape of one row)
-COLUMNS = {FEED_MODE: (np.int8, 94, ()), SPINDLE: (float, np.nan, ()), ROTARY_OFFSET: (float, 0.0, (3,)), CCOMP: (np.int8, 0, ())}
+COLUMNS = {ARC: (float, np.nan, (3,)), FEED_MODE: (np.int8, 94, ()), SPINDLE: (float, np.nan, ()), ROTARY_OFFSET: (float, 0.0, (3,)), CCOMP: (np.int8, 0, ())}
 
 
 def declare(builder) -> None:

@@ -499,7 +499,7 @@ class GcodeParser:
             speed=speed,
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
-            **({"arc": arc} if arc is not None else {}),
+            **({nc_columns.ARC: arc} if arc is not None else {}),
             **self._feed_columns(t, rows, motion[rows]),
         )
         tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
@@ -600,7 +600,7 @@ class GcodeParser:
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=self._speeds_of(t, rows, scale), insert_at=insert_at,
                                **self._synced_feed_mode(t, rows, self._feed_columns(t, rows, moves.motion.astype(float))),
-                               **({"arc": arc} if arc is not None else {}), **({nc_columns.CCOMP: moves.ccomp} if moves.ccomp.any() else {}),
+                               **({nc_columns.ARC: arc} if arc is not None else {}), **({nc_columns.CCOMP: moves.ccomp} if moves.ccomp.any() else {}),
                                **({nc_columns.ROTARY_OFFSET: moves.rotary} if (moves.rotary != 0).any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))

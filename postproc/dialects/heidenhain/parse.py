@@ -516,7 +516,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks):
         if arcs.any():
             arc = np.full((n, 3), np.nan)
             arc[arcs] = (17, 1, 1)  # XY plane (tool axis Z), centre absolute, one turn
-            block["arc"] = arc
+            block[nc_columns.ARC] = arc
         self.b.add_block(np.arange(n), **block)  # execution order (a repeated section comes again)
         self.b.notes.extend(self.notes)
         if self.tolerance_line:

@@ -34,7 +34,7 @@ import numpy as np
 from ...errors import EmitError, ParseError
 from ...ir import F_ARC, Kind, Toolpath
 from ...parse.common import LineIndex
-from ...parse.nc_columns import CCOMP
+from ...parse.nc_columns import ARC, CCOMP
 from ..gcode.cutter_comp import CutterComp, Unfollowed
 
 _ARC_KINDS = (int(Kind.ARC_CW), int(Kind.ARC_CCW))
@@ -156,15 +156,16 @@ def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out
     values[added, F_ARC.start:F_ARC.start + 2] = gen[~np.isnan(gen[:, 0]), 1:]
     spans, insert_at = new.spans.copy(), new.insert_at.copy()
     spans[added], insert_at[added] = -1, -1
-    arc = new.arc.copy() if new.arc is not None else np.full((len(new), 3), np.nan)
+    arc = new.extras[ARC].copy() if ARC in new.extras else np.full((len(new), 3), np.nan)
     arc[added] = (17, 1, 1)
     corner = np.zeros(len(new), bool)
     corner[added] = True
     resolved = new.resolved & (ccomp[order] != 2)
     has_arc = np.isin(kind, _ARC_KINDS).any()
-    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: corner, SIDE: side[order], RADIUS: radius[order], CCOMP: ccomp[order]})
+    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: corner, SIDE: side[order], RADIUS: radius[order], CCOMP: ccomp[order]},
+                  **({ARC: arc} if has_arc else {}))
     return replace(new, position=position, kind=kind, values=values, spans=spans, insert_at=insert_at, resolved=resolved,
-                   arc=arc if has_arc else new.arc, notes=tuple(notes), extras=extras)
+                   notes=tuple(notes), extras=extras)
 
 
 def contour_for(tp: Toolpath, xyz: np.ndarray) -> Toolpath:
