@@ -39,14 +39,21 @@ _SINGAREA = re.compile(r"^[ \t]*SingArea[ \t]*\\(Wrist|LockAxis4)\b", re.IGNOREC
 def with_controller_facts(tp: Toolpath) -> Toolpath:
     """``tp`` with the ConfL/ConfJ and SingArea columns in its extras."""
     n = len(tp)
+    # A plain substring test first: most programs name neither instruction, and the regular
+    # expressions below scan a 10^6-line module several times slower than str.lower and `in`.
+    lowered = [doc.text.lower() for doc in tp.sources]
     refused = ""
-    text_order = {"CONFL": _text_order_state(tp, "CONFL"), "CONFJ": _text_order_state(tp, "CONFJ")}
-    try:
-        states = switch_states(tp, text_order)
-    except InputError as why:  # refused only where a posture rule is asked for (the controller)
-        refused, states = str(why), text_order
+    named = any("conf" in t for t in lowered) and any("confl" in t or "confj" in t for t in lowered)
+    text_order = {switch: _text_order_state(tp, switch) if named else np.zeros(n, bool) for switch in ("CONFL", "CONFJ")}
+    states = text_order
+    if named:
+        try:
+            states = switch_states(tp, text_order)
+        except InputError as why:  # refused only where a posture rule is asked for (the controller)
+            refused = str(why)
+    singarea = _first_singarea(tp) if any("singarea" in t for t in lowered) else ""
     facts = {CONFL_OFF: states["CONFL"], CONFJ_OFF: states["CONFJ"],
-             CONF_REFUSED: np.full(n, refused, dtype=object), SINGAREA: np.full(n, _first_singarea(tp), dtype=object)}
+             CONF_REFUSED: np.full(n, refused, dtype=object), SINGAREA: np.full(n, singarea, dtype=object)}
     return replace(tp, extras={**tp.extras, **facts})
 
 
