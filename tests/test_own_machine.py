@@ -9,10 +9,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postproc.compensate import compensate_with
 from postproc.compensation.machine import Machine
 from postproc.compensation.request import CompensationRequest
 from postproc.errors import InputError
+from postproc.jobs.compensate import compensate_with
 from postproc.programs import emit_texts, parse_program
 
 PROGRAM = "G21 G90\nG0 X0 Y0 Z50\nG1 X100 Y20 Z5 F600\nG1 X250.5 Y-40 Z5\nG1 X300 Y300 Z10\nM30\n"

@@ -6,15 +6,14 @@ from pathlib import Path
 from typing import Optional
 
 import numpy as np
-
 import typer
 
-from .. import dialects
-from ..errors import InputError, OutputError
-from ..frames import abc_to_matrix, make_transform
-from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
-from .app import err
+from postproc.errors import InputError, OutputError
+from postproc.model.measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
+from postproc.programs import dialects
+from postproc.robot.frames import abc_to_matrix, make_transform
 
+from .app import err
 
 # The built-in languages, for help texts (plugin dialects load later, with the command's --plugins).
 LANGUAGES = ", ".join(dialects.names())

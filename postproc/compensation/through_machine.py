@@ -12,15 +12,16 @@ commanded point moves by the predicted error it leaves, ``c <- c - (predict(inve
 until the residual is under ``tol_mm`` or ``max_iter`` steps have run (a target still off
 then fails, with its line). Joint targets and targets given in axis values are not moved.
 Circular moves are refused: their centres would have to move with their end points, which
-only the robot core fits (``postproc.arcs``).
+only the robot core fits (``postproc.programs.arcs``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
-from ..ir import Kind, Toolpath
+from postproc.errors import InputError
+from postproc.programs.ir import Kind, Toolpath
+
 from .core import Report
 from .machine import Machine
 
