@@ -69,7 +69,7 @@ def test_absolute_centres_and_every_plane(tmp_path):
     # YZ: ARC_FEED(100, -100, 100, -50, 1, ...), ARC_FEED(310, 90, 300, 90, 1, ...)
     np.testing.assert_allclose(geo.centre, [[150, 0], [200, 50], [200, 50], [0, 300], [100, -50], [300, 90]], atol=1e-9)
     assert geo.full.tolist() == [False, False, True, False, False, False]
-    assert tp.arc[tp.kind == Kind.ARC_CW, 1].tolist() == [1.0, 0.0, 0.0]  # G90.1 once, then G91.1
+    assert tp.extras["nc.arc"][tp.kind == Kind.ARC_CW, 1].tolist() == [1.0, 0.0, 0.0]  # G90.1 once, then G91.1
     if shutil.which("rs274"):
         out = subprocess.run(["rs274", "-g", prog.name], cwd=tmp_path, capture_output=True, text=True, stdin=subprocess.DEVNULL).stdout
         centres, turns = _rs274_arcs(out)

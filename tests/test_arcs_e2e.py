@@ -189,7 +189,7 @@ def _commanded_path(tp):
     SAMPLES of it, and a function giving the distance of points (K, 3) from that motion's
     path when ``tp`` is the program as intended."""
     poses = tp.base_poses()
-    gcode_arcs = arcs.geometry(tp) if tp.arc is not None else None
+    gcode_arcs = arcs.geometry(tp) if "nc.arc" in tp.extras else None
     out = []
     for r in range(1, len(tp)):
         kind = tp.kind[r]

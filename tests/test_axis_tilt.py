@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from helpers import TOOL, kr160
+from helpers import kr160
 
 import postproc
 from postproc.model.diagnose import diagnose

@@ -120,7 +120,7 @@ def test_offset_path_equals_rs274s(tmp_path, name):
     assert in_plane.sum() == 2 * len(rs274_centres)
     np.testing.assert_allclose(centres[in_plane], rs274_centres[in_plane], atol=5e-5 * (25.4 if "G20" in PROGRAMS[name] else 1) + 1e-6)
     np.testing.assert_array_equal(np.where(tp.kind[ir_arc] == Kind.ARC_CCW, 1, -1), rs274_turns)  # G2 / G3 as rs274 turns
-    assert tp.resolved.all() and (tp.ccomp != 2).all()
+    assert tp.resolved.all() and (tp.extras["nc.ccomp"] != 2).all()
 
 
 @pytest.mark.parametrize("name", ["inverse_time_exit", "g18_inverse_time"])
@@ -149,7 +149,7 @@ def test_corner_arcs_are_generated_rows_and_the_text_comes_back_unchanged(tmp_pa
     tp = parse_program(path)
     corner = np.nonzero(tp.insert_at[:, 1] < 0)[0]
     assert len(corner) == 3 and (tp.kind[corner] == Kind.ARC_CCW).all()  # G42: about the corner counter-clockwise
-    assert tp.line[corner].tolist() == [7, 8, 9] and (tp.spans[corner, :, 1] < 0).all() and (tp.ccomp[corner] == 1).all()
+    assert tp.line[corner].tolist() == [7, 8, 9] and (tp.spans[corner, :, 1] < 0).all() and (tp.extras["nc.ccomp"][corner] == 1).all()
     assert emit_texts(tp, tp)[0] == path.read_text()
 
 
@@ -158,7 +158,7 @@ def test_compensate_refuses_to_write_back_a_compensated_block(tmp_path):
     never written back as them; refused with file:line."""
     path = _program(tmp_path, "inside_square")
     tp = parse_program(path)
-    moved = tp.with_positions(tp.position + np.where(tp.ccomp[:, None] == 1, 0.01, 0.0))
+    moved = tp.with_positions(tp.position + np.where(tp.extras["nc.ccomp"][:, None] == 1, 0.01, 0.0))
     with pytest.raises(EmitError, match=r"inside_square\.ngc:5:.*cutter radius compensation"):
         emit_texts(tp, moved)
 
@@ -295,7 +295,7 @@ def test_cases_not_followed_are_flagged_with_the_reason(tmp_path, body, why):
     prog = tmp_path / "nf.ngc"
     prog.write_text("G21 G90\nG0 X-10 Y-10 Z1\nG1 F100\n" + body + "G40\nG1 X-10 Y-10\nM2\n")
     tp = parse_program(prog)
-    under = tp.ccomp == 2
+    under = tp.extras["nc.ccomp"] == 2
     assert under.any() and not tp.resolved[under].any() and tp.resolved[~under].all()
     assert any(why in n for n in tp.notes), tp.notes
 
@@ -349,7 +349,7 @@ def test_random_programs_equal_rs274s(tmp_path, plane):
         except ParseError:
             assert not accepted, f"{path.read_text()}: the IR refuses what rs274 runs"
             continue
-        flagged = tp.ccomp is not None and bool((tp.ccomp == 2).any())
+        flagged = "nc.ccomp" in tp.extras and bool((tp.extras["nc.ccomp"] == 2).any())
         assert flagged != accepted, f"{path.read_text()}: rs274 {'runs' if accepted else 'refuses'} it ({err.strip()[-120:]}), the IR {'flags' if flagged else 'follows'} it"
         if accepted:
             canon, tol, arc = canonical_endpoints(calls)

@@ -83,10 +83,10 @@ def test_ir_keeps_f_as_written_and_carries_the_mode_and_spindle():
     """The speed column keeps F as read (the five-axis writer re-emits a G93 F); the mode
     and S in force are columns of their own."""
     tp = parse_program(PROGRAM)
-    assert tp.feed_mode.tolist() == [94, 93, 93, 93, 93, 93, 93, 94, 95, 95, 94]
+    assert tp.extras["nc.feed_mode"].tolist() == [94, 93, 93, 93, 93, 93, 93, 94, 95, 95, 94]
     np.testing.assert_allclose(tp.speed[1:7], [2, 4, 3, 6, 5, 2])
-    assert np.isnan(tp.spindle[:8]).all() and (tp.spindle[8:] == 1200).all()
-    assert tp.take([1, 8]).feed_mode.tolist() == [93, 95]
+    assert np.isnan(tp.extras["nc.spindle"][:8]).all() and (tp.extras["nc.spindle"][8:] == 1200).all()
+    assert tp.take([1, 8]).extras["nc.feed_mode"].tolist() == [93, 95]
 
 
 def test_inverse_time_in_inches_by_hand(tmp_path):

@@ -238,7 +238,7 @@ def ir_machine_axes(tp) -> np.ndarray:
     """(N, 6) the machine axes the IR gives: X Y Z through the work offset + the tool length in
     force, A B C programmed + the rotary work offsets."""
     xyz = to_machine(program_to_machine(tp), tp.position) + tp.tools[tp.tool][:, :3, 3]
-    abc = tp.ext[:, :3] + (0.0 if tp.rotary_offset is None else tp.rotary_offset)
+    abc = tp.ext[:, :3] + tp.extras.get("nc.rotary_offset", 0.0)
     return np.c_[xyz, abc]
 
 

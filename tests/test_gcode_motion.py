@@ -265,7 +265,7 @@ def test_targets_under_cutter_radius_compensation_are_flagged(tmp_path):
     tp = parse_program(prog)
     assert tp.line.tolist() == [2, 4, 5, 7, 9]
     assert tp.resolved.tolist() == [True, False, False, True, True]
-    assert tp.ccomp.tolist() == [0, 2, 2, 0, 1]
+    assert tp.extras["nc.ccomp"].tolist() == [0, 2, 2, 0, 1]
     np.testing.assert_allclose(tp.position[4], [5 + 0.5**0.5, 5 - 0.5**0.5, 1.0], atol=1e-12)
     assert any("cutter radius compensation" in n and "line 3" in n and "tool table" in n for n in tp.notes)
 

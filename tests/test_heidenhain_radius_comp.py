@@ -46,7 +46,7 @@ def test_rl_inside_a_square(marker):
     assert tp.line.tolist() == [4, 5, 6, 6, 7, 8, 9, 10]
     assert tp.kind[2] == Kind.ARC_CW and tp.kind[3] == Kind.LINEAR
     np.testing.assert_allclose(tp.values[2, 19:21], [0, 0])  # the arc's centre: the programmed corner
-    assert tp.ccomp.tolist() == [0, 1, 1, 1, 1, 1, 1, 0]
+    assert tp.extras["nc.ccomp"].tolist() == [0, 1, 1, 1, 1, 1, 1, 0]
     assert tp.resolved.all() and (tp.position[:, 2] == 5).all()
 
 
@@ -101,7 +101,7 @@ def test_a_corner_the_tool_cannot_fit_is_flagged():
     tp = read(program("L X+0 Y-10 Z+5 R0 FMAX", "L X+0 Y+0 RL F100", "L X+10", "L Y+1", "L X+0", "L X+0 Y-10 R0"))
     assert not tp.resolved[1:5].any() and tp.resolved[[0, -1]].all()
     np.testing.assert_allclose(tp.position[1:5, :2], [[0, 0], [10, 0], [10, 1], [0, 1]])
-    assert tp.ccomp.tolist() == [0, 2, 2, 2, 2, 0]
+    assert tp.extras["nc.ccomp"].tolist() == [0, 2, 2, 2, 2, 0]
     assert any("line 5: radius compensation RL" in n for n in tp.notes)
 
 

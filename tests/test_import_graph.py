@@ -228,7 +228,8 @@ def test_folders_import_one_way():
 
 
 def test_every_folder_has_a_floor():
-    import postproc
     from pathlib import Path
+
+    import postproc
     folders = {p.name for p in Path(postproc.__file__).parent.iterdir() if (p / "__init__.py").exists()}
     assert folders == set(FLOORS)

@@ -73,7 +73,7 @@ def test_arc_centres_turns_and_ends_equal_rs274s(name, tmp_path):
     # rs274 prints 4 decimals of the program unit
     tol = 5e-5 * (25.4 if "INCHES" in text else 1.0) + 1e-9
     np.testing.assert_allclose(geo.centre, centres, atol=tol)
-    np.testing.assert_array_equal(np.where(geo.ccw, 1.0, -1.0) * tp.arc[geo.rows, 2], turns)
+    np.testing.assert_array_equal(np.where(geo.ccw, 1.0, -1.0) * tp.extras["nc.arc"][geo.rows, 2], turns)
     canon, ctol, carc = canonical_endpoints(text)
     keep = _moves(canon, ctol, carc)
     machine = machine_positions(tp)
@@ -93,7 +93,7 @@ def test_hand_worked_centres_under_a_rotated_g54_and_g92(tmp_path):
     row = int(np.nonzero(tp.line == 10)[0][0])
     np.testing.assert_allclose(described[row]["centre"], [10 + 20 * np.cos(np.radians(30)), 20 + 20 * np.sin(np.radians(30)), 15.0], atol=1e-9)
     assert described[row]["radius"] == pytest.approx(5.0)
-    assert tp.arc[row].tolist() == [17.0, 1.0, 1.0]
+    assert tp.extras["nc.arc"][row].tolist() == [17.0, 1.0, 1.0]
 
 
 # A G-code file of the corpus with arcs, read by the vectorised reader: the block-by-block
@@ -106,9 +106,10 @@ VECTORISED = ["gcode/CauldronDevelopmentLLC_CAMotics__heart.ngc", "gcode/LinuxCN
 def test_the_block_by_block_reader_gives_the_vectorised_readers_arcs(name):
     fast = parse_program(corpus_file(name))
     slow = _read_block_by_block(corpus_file(name))
-    assert fast.arc is not None and len(fast) == len(slow)
-    for field in ("kind", "line", "position", "arc", "values", "spans", "scale", "frame", "resolved"):
+    assert "nc.arc" in fast.extras and len(fast) == len(slow)
+    for field in ("kind", "line", "position", "values", "spans", "scale", "frame", "resolved"):
         np.testing.assert_array_equal(getattr(slow, field), getattr(fast, field), err_msg=field)
+    np.testing.assert_array_equal(slow.extras["nc.arc"], fast.extras["nc.arc"], err_msg="nc.arc")
 
 
 # Real programs read block by block (canned cycles, G92) with arcs: centres equal the recordings.
@@ -167,7 +168,7 @@ def test_compensated_arcs_under_g92_pass_the_intended_ones(tmp_path, model):
     prog = tmp_path / "g92arcs.ngc"
     prog.write_text(G92_HEAD + BODY + "M30\n")
     tp = parse_program(prog)
-    assert tp.arc is not None and tp.frame_names[tp.frame[-1]] == "G54+G92@line4"
+    assert "nc.arc" in tp.extras and tp.frame_names[tp.frame[-1]] == "G54+G92@line4"
     new, report = compensate(tp, model, frames={"G54": WORK}, tools={"H1": H1}, start_joints=START)
     assert not report.failed.any(), report.failures()
     out = tmp_path / "out.ngc"

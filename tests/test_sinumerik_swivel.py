@@ -180,7 +180,7 @@ def test_circle_through_an_intermediate_point_by_hand(tmp_path):
     #      seen from +X, about (5,5): start (10,0) at -45 deg, (0,0) at -135, end (0,10) at 135 (= -225): clockwise 180 deg
     np.testing.assert_allclose(a.centre, [(10, 0), (25, 5), (5, 5)], atol=1e-9)
     np.testing.assert_allclose(np.degrees(a.sweep()[1]), [-180, 180, -180], atol=1e-9)
-    assert tp.arc[1:4, 0].tolist() == [17, 17, 19]
+    assert tp.extras["nc.arc"][1:4, 0].tolist() == [17, 17, 19]
     assert emit_texts(tp, tp)[0] == CIP_PROGRAM
     with pytest.raises(InputError, match=r"PART.MPF:3:.*intermediate point CIP"):
         arcs.refuse_uncompensable(tp)

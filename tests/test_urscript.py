@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from postproc import dialects
-from postproc.errors import InputError, ParseError
+from postproc.errors import ParseError
 from postproc.programs import emit_texts, parse_program
 from postproc.programs.ir import Kind
 

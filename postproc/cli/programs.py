@@ -18,6 +18,7 @@ from postproc.programs.dialects import get
 from postproc.programs.dialects.heidenhain.tool_table import parse_tool_radii, with_tool_radii
 from postproc.programs.emit.feeds import describe as describe_feeds
 from postproc.programs.emit.tool_load import parse_tool_load
+from postproc.programs.parse.nc_columns import CCOMP
 from postproc.programs.program_io import emit_texts, parse_program, with_robot, write_program, write_texts
 from postproc.robot.frames import matrix_to_quat_wxyz
 from postproc.robot.robots import load_robot
@@ -57,6 +58,7 @@ def inspect_cmd(
     arc_of = describe(tp)  # G2/G3: plane, direction, centre, radius
 
     feed_of = describe_feeds(tp)  # G-code: feed mode; G93 / G95: F, its unit and the derived mm/min
+    ccomp = tp.extras.get(CCOMP)
     moves = []
     for i in range(len(tp)):
         entry = {
@@ -79,8 +81,8 @@ def inspect_cmd(
             entry["conf"] = [num(v) for v in tp.conf[i]]
         if i in arc_of:
             entry["arc"] = arc_of[i]
-        if tp.ccomp is not None and tp.ccomp[i]:  # G41/G42: the offset path (a corner arc: no block words of its own), or not followed
-            entry["cutter_comp"] = ("corner" if tp.insert_at is not None and tp.insert_at[i, 1] < 0 else "offset") if tp.ccomp[i] == 1 else "not_followed"
+        if ccomp is not None and ccomp[i]:  # G41/G42: the offset path (a corner arc: no block words of its own), or not followed
+            entry["cutter_comp"] = ("corner" if tp.insert_at is not None and tp.insert_at[i, 1] < 0 else "offset") if ccomp[i] == 1 else "not_followed"
         entry["speed"] = num(tp.speed[i])
         if i in feed_of:
             entry.update(feed_of[i])

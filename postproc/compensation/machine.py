@@ -3,8 +3,11 @@ its fitted error model, or a calibrated five-axis machine.
 
 ``Machine`` is a protocol: the robot target and the five-axis target
 (``postproc.jobs.targets``) implement it, and ``postproc.jobs.targets.load_target`` returns the one
-a file holds, judged by its content (never by its suffix). This module imports nothing of
-the languages or of either target, so the request (``request.py``) can carry one.
+a file holds, judged by its content (never by its suffix). A script may bring its own
+class: ``postproc.jobs.compensate.compensate_with`` compensates any machine that is not a robot
+under a fitted error model through ``inverse`` and ``predict`` alone (``through_machine.py``).
+This module imports nothing of the languages or of either target, so the request
+(``request.py``) can carry one.
 """
 
 from __future__ import annotations

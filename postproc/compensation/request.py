@@ -16,6 +16,7 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from postproc.errors import InputError
+from postproc.model.errormodel import ErrorModel
 
 from .machine import Machine
 
@@ -151,6 +152,20 @@ class CompensationRequest:
     @property
     def is_batch(self) -> bool:
         return len(self.programs) > 1 or self.out_dir is not None or self.jobs is not None or self.scheduler is not None
+
+    def error_model(self) -> ErrorModel | None:
+        """The robot's fitted error model where the machine is a robot under one (``RobotTarget``),
+        else None: then compensation asks the machine itself (``through_machine``)."""
+        model = getattr(self.machine, "model", None)
+        return model if isinstance(model, ErrorModel) else None
+
+    def robot_model(self, what: str) -> ErrorModel:
+        """``error_model()`` for what only a robot's compensation does (``what``: its option, e.g.
+        ``--subdivide``); InputError naming the machine for any other."""
+        model = self.error_model()
+        if model is None:
+            raise InputError(f"{what}: only for a robot under a fitted error model, not a {self.machine.kind} ({self.machine.source})")
+        return model
 
     def solver_options(self) -> dict[str, Any]:
         """The keyword options of ``compensation.core.compensate`` this request sets."""

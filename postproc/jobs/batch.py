@@ -107,6 +107,7 @@ def check_programs(programs: list[Path], out_dir: Path) -> None:
 def run_batch_request(request: CompensationRequest, on_done=None) -> list[ProgramResult]:
     """Compensate every program of ``request`` (several, ``out_dir``, ``jobs`` or ``scheduler``)
     on a Dask cluster; results in the programs' order, ``on_done`` as in ``run_batch``."""
+    request.robot_model("--out-dir")  # the workers read the model file again: a robot's
     options = {**request.solver_options(), "model_check": request.model_check()}
     return run_batch([Path(p) for p in request.programs], Path(request.machine.source), request.out_dir, options, jobs=request.jobs,
                      scheduler=request.scheduler, dialect=request.dialect, on_done=on_done)

@@ -31,7 +31,7 @@ from postproc.compensation.core import (  # noqa: F401  (the names callers take 
     check_inputs,
 )
 from postproc.compensation.request import CompensationRequest
-from postproc.errors import InputError
+from postproc.compensation.through_machine import compensate_on
 from postproc.model.errormodel import ErrorModel
 from postproc.process.force_file import base_frame_forces, read_force_file
 from postproc.process.forces import load_cut_params, program_forces
@@ -78,11 +78,16 @@ def process_forces(request: CompensationRequest, tp: Toolpath) -> ProcessForces:
 
 def compensate_with(request: CompensationRequest, tp: Toolpath, *, controller=None, forces: ProcessForces | None = None,
                     **run) -> tuple[Toolpath, Report]:
-    """``tp`` compensated as ``request`` asks, by ``controller``'s rules (default: those of the
-    language ``tp`` was read in). ``forces``: ``process_forces(request, tp)`` where the caller
+    """``tp`` compensated as ``request`` asks. A robot under its fitted error model
+    (``RobotTarget``) by the robot core and ``controller``'s rules (default: those of the
+    language ``tp`` was read in); any other ``Machine`` through its own protocol methods
+    (``compensation.through_machine``: ``inverse`` and ``predict``). ``forces``: ``process_forces(request, tp)`` where the caller
     has it already; ``run``: ``progress``, ``reference``, ``detail`` (``core.compensate``)."""
+    model = request.error_model()
+    if model is None:  # not a robot under a fitted model: ask the machine itself (its protocol)
+        return compensate_on(request.machine, tp, tol_mm=request.tol_mm, max_iter=request.max_iter,
+                             frames=dict(request.frames), tools=dict(request.tools))
     forces = process_forces(request, tp) if forces is None else forces
-    model = _error_model(request)
     return core.compensate(with_robot(tp, model), model, controller=dialects.of(tp).controller if controller is None else controller,
                            force_per_target=forces.per_target, **request.solver_options(), **run)
 
@@ -107,12 +112,3 @@ def with_robot(tp: Toolpath, model: ErrorModel) -> Toolpath:
     """``tp`` with what the model's robot data determine filled in (``Dialect.with_robot``:
     INFORM's pulse positions placed with the robot file's pulse data)."""
     return dialects.of(tp).with_robot(tp, model.robot)
-
-
-def _error_model(request: CompensationRequest) -> ErrorModel:
-    """The robot's error model; a five-axis machine is compensated by ``postproc.fivex``."""
-    model = getattr(request.machine, "model", None)
-    if not isinstance(model, ErrorModel):
-        raise InputError(f"{request.machine.source}: a {request.machine.kind}, not a robot error model: "
-                              "five-axis programs are compensated by postproc.fivex")
-    return model

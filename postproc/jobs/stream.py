@@ -691,7 +691,7 @@ def compensate_streamed(path: str | Path, model, output: str | Path, *, dialect:
 
 def _stream(request: CompensationRequest, model_check: tuple | None, chunk_lines: int, progress, workers: int | None,
             tune_malloc: bool) -> StreamResult:
-    path, output, model = Path(request.programs[0]), Path(request.output), request.machine.model
+    path, output, model = Path(request.programs[0]), Path(request.output), request.robot_model("--stream")
     options = request.solver_options()
     lang, rules = stream_rules_for(path, request.dialect, model)
     if tune_malloc:

@@ -72,7 +72,7 @@ def subdivide_request(request: CompensationRequest, tp: Toolpath, language, *, f
     forces = process_forces(request, tp) if forces is None else forces
     options = {**request.solver_options(), "force_per_target": forces.per_target, **run}
     options.pop("max_deviation_mm")
-    return _subdivided(tp, request.machine.model, request.max_deviation_mm or DEFAULT_TOLERANCE_MM, language, options)
+    return _subdivided(tp, request.robot_model("--subdivide"), request.max_deviation_mm or DEFAULT_TOLERANCE_MM, language, options)
 
 
 def compensate_subdivided(tp: Toolpath, model, tolerance_mm: float = DEFAULT_TOLERANCE_MM, *, language=None, **options) -> Subdivided:

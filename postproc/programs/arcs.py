@@ -35,6 +35,7 @@ from postproc.robot.posture import interpolate_poses, near_singular
 
 from .emit.splice import TOLERANCE
 from .ir import F_ARC, Kind, Toolpath
+from .parse.nc_columns import ARC
 
 # In-plane first and second axes and the normal axis of each plane, in program coordinates;
 # (first, second, normal) is right-handed, so counter-clockwise in (first, second) is G3.
@@ -122,21 +123,21 @@ def geometry(tp: Toolpath, base_positions: np.ndarray | None = None, words: np.n
     ``base_positions`` (N, 3) replaces the targets' positions, ``words`` (N, 4) the I J K R values."""
     rows = arc_rows(tp)
     rows = rows[rows > 0]
-    if tp.arc is None or not len(rows):
+    if ARC not in tp.extras or not len(rows):
         z = np.zeros((0, 3))
         return Arcs(rows[:0], np.zeros((0, 3), int), z, z, np.zeros((0, 2)), np.zeros(0, bool), np.zeros(0, bool))
     base = tp.base_positions() if base_positions is None else base_positions
     words = tp.values[:, F_ARC] if words is None else words
     start = _local(tp, rows, base[rows - 1])
     end = _local(tp, rows, base[rows])
-    axes = np.array([PLANE_AXES[int(p)] for p in tp.arc[rows, 0]], dtype=int).reshape(-1, 3)
+    axes = np.array([PLANE_AXES[int(p)] for p in tp.extras[ARC][rows, 0]], dtype=int).reshape(-1, 3)
     ccw = tp.kind[rows] == Kind.ARC_CCW
     arcs = Arcs(rows, axes, start, end, np.zeros((len(rows), 2)), ccw, np.zeros(len(rows), bool))
     s2, e2 = arcs.in_plane(start), arcs.in_plane(end)
     full = np.linalg.norm(e2 - s2, axis=1) < FULL_TOL_MM
     ijk = np.nan_to_num(words[rows, :3])  # a centre word left out reads as 0
     centre = np.take_along_axis(ijk, axes[:, :2], axis=1)
-    centre = np.where(tp.arc[rows, 1:2] == 1.0, centre, s2 + centre)
+    centre = np.where(tp.extras[ARC][rows, 1:2] == 1.0, centre, s2 + centre)
     radius = words[rows, 3]
     by_r = ~np.isnan(radius)
     if by_r.any():
@@ -176,12 +177,12 @@ def refuse_uncompensable(tp: Toolpath) -> None:
     rows = arc_rows(tp)
     if not len(rows):
         return
-    if tp.arc is None:  # both G-code readers give every G2/G3 its words; a Toolpath built without them has no centres
+    if ARC not in tp.extras:  # both G-code readers give every G2/G3 its words; a Toolpath built without them has no centres
         raise InputError(_where(tp, int(rows[0]), I_) + "this arc has no centre words in the toolpath; it cannot be compensated")
     if rows[0] == 0:
         raise InputError(_where(tp, 0, I_) + "the program starts with an arc: its start is where the machine stands, unknown to the "
                          "post-processor (move to the start first)")
-    turns = tp.arc[rows, 2]
+    turns = tp.extras[ARC][rows, 2]
     bad = rows[~(turns == 1.0)]
     if len(bad):
         raise InputError(_where(tp, int(bad[0]), I_) + "an arc of several turns (P) is not compensated; write one arc per turn")
@@ -349,7 +350,7 @@ def _words(tp: Toolpath, arcs: Arcs) -> np.ndarray:
     words = np.full((len(rows), 4), np.nan)
     s2 = arcs.in_plane(arcs.start)
     by_r = ~np.isnan(old[:, 3])
-    absolute = tp.arc[rows, 1] == 1.0
+    absolute = tp.extras[ARC][rows, 1] == 1.0
     offset = np.where(absolute[:, None], arcs.centre, arcs.centre - s2)
     m = np.nonzero(~by_r)[0]
     words[m[:, None], arcs.axes[m, :2]] = offset[m]
@@ -418,7 +419,7 @@ def check_words(original: Toolpath, modified: Toolpath, back: Toolpath, rows: np
     """The re-parsed output ``back`` gives every compensated arc of ``rows`` the centre words
     the compensation wrote (an omitted word reads as 0), within the writing tolerance."""
 
-    if modified.arc is None or not len(rows):
+    if ARC not in modified.extras or not len(rows):
         return
     want, got = modified.values[rows][:, F_ARC], back.values[rows][:, F_ARC]
     bad = ~np.isnan(want) & ~(np.abs(np.nan_to_num(got) - np.nan_to_num(want)) <= TOLERANCE[F_ARC] * (1 + 1e-6))
@@ -454,6 +455,6 @@ def describe(tp: Toolpath) -> dict[int, dict]:
     def num(v):
         return round(float(v), 6) if np.isfinite(v) else None  # an axis the program has not given yet
 
-    return {int(r): {"plane": f"G{int(tp.arc[r, 0])}", "direction": "ccw" if ccw else "cw", "centre": [num(v) for v in c],
-                     "radius": num(rad), "full_circle": bool(full), "turns": num(tp.arc[r, 2])}
+    return {int(r): {"plane": f"G{int(tp.extras[ARC][r, 0])}", "direction": "ccw" if ccw else "cw", "centre": [num(v) for v in c],
+                     "radius": num(rad), "full_circle": bool(full), "turns": num(tp.extras[ARC][r, 2])}
             for r, ccw, c, rad, full in zip(geo.rows, geo.ccw, base, radius, geo.full)}

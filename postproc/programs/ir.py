@@ -100,35 +100,14 @@ class Toolpath:
     frame_known: np.ndarray = field(repr=False, default=None)  # (F,) False where the program does not define the frame
     tool_known: np.ndarray = field(repr=False, default=None)  # (T,) False where the program does not define the tool
     notes: tuple[str, ...] = ()
-    # (N, 3) G-code arcs (ARC_CW / ARC_CCW rows): plane (17, 18, 19), IJK absolute (1: G90.1) or
-    # incremental from the start (0: G91.1), full turns P (1 when absent); NaN on other rows.
-    # None when the program has no G2/G3 (see postproc.programs.arcs).
-    arc: np.ndarray | None = field(repr=False, default=None)
-    # (N,) G-code feed mode in force at each target: 93 inverse time (F = 1/minutes of the
-    # move), 94 units per minute, 95 units per spindle revolution; ``speed`` keeps F as
-    # written whatever the mode (postproc.programs.emit.feeds turns it into mm/min). ``spindle`` (N,)
-    # the S word in force (rev/min, NaN unknown). Both None for dialects without them.
-    feed_mode: np.ndarray | None = field(repr=False, default=None)
-    spindle: np.ndarray | None = field(repr=False, default=None)
-    # (N, 3) G-code: the A B C offsets in force at each target (G5x origin + G92 + G43.1's, deg; NaN where
-    # the program sets one from what its text does not determine): the machine's rotary axis
-    # is at ext's A B C + these (LinuxCNC emccanon.cc rotate_and_offset_pos). None: no program
-    # sets one (all zero).
-    rotary_offset: np.ndarray | None = field(repr=False, default=None)
-
-    # (N,) G-code cutter radius compensation (G41/G42) at each target: 0 none, 1 the position is
-    # the offset path the controller cuts (the text's numbers are in ``values``; a corner arc the
-    # controller adds has none), 2 under a compensation the program text does not determine
-    # (position as programmed, not resolved). None when the program has no G41/G42.
-    ccomp: np.ndarray | None = field(repr=False, default=None)
-
     # What only some languages state, per target: {"<dialect>.<what>": (N, ...) array}, e.g. a
-    # Fanuc CNT value or a UR blend radius. A new language keeps its own here instead of adding
-    # a field to the core; ``take`` slices them with the rest.
+    # Fanuc CNT value, a UR blend radius, or the NC family's arc geometry, feed mode, spindle
+    # speed, rotary offsets and cutter compensation ("nc.*": postproc.programs.parse.nc_columns). A new language keeps
+    # its own here instead of adding a field to the core; ``take`` slices them with the rest.
     extras: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
-                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp")
+                  "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at")
 
     def take(self, rows) -> "Toolpath":
         """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""

@@ -19,8 +19,7 @@ from postproc.programs.dialects.heidenhain.tool_table import with_tool_radii
 from postproc.programs.program_io import emit_texts, parse_program, write_program
 
 from .emit import MODES, emit, solve
-from .offsets import to_machine
-from .program import ROTARY_FIELD, from_toolpath, to_robot_toolpath
+from .program import from_toolpath, to_robot_toolpath
 
 
 def rtcp_calibrate(probes: Path, machine_name: str, output: Path | None = None, axis: str | None = None, method: str = "seed003",

@@ -44,6 +44,7 @@ from postproc.errors import InputError
 from postproc.fivex.machine import Machine
 from postproc.programs.emit.writer import where
 from postproc.programs.ir import Toolpath
+from postproc.programs.parse.nc_columns import ROTARY_OFFSET
 
 
 def program_to_machine(tp: Toolpath) -> np.ndarray:
@@ -68,11 +69,12 @@ def program_to_machine(tp: Toolpath) -> np.ndarray:
 
 def machine_angles(tp: Toolpath, angles: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     """(N, 2) the machine's rotary axes ``names`` (deg): the programmed angles + the A B C work
-    offsets in force (tp.rotary_offset); refused with file:line:column where an offset the
+    offsets in force (extras["nc.rotary_offset"]); refused with file:line:column where an offset the
     program sets is not known."""
-    if tp.rotary_offset is None:
+    rotary_offset = tp.extras.get(ROTARY_OFFSET)
+    if rotary_offset is None:
         return angles
-    offset = tp.rotary_offset[:, ["ABC".index(k) for k in names]]
+    offset = rotary_offset[:, ["ABC".index(k) for k in names]]
     bad = np.isnan(offset).any(axis=1)
     if bad.any():
         i = int(np.argmax(bad))

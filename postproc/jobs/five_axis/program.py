@@ -24,6 +24,7 @@ from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import Machine
 from postproc.programs import dialects
 from postproc.programs.ir import Kind, Toolpath
+from postproc.programs.parse.nc_columns import FEED_MODE, ROTARY_OFFSET
 from postproc.robot.frames import axis_to_quat_wxyz
 
 from .offsets import machine_angles, program_to_machine, to_machine, tool_length
@@ -47,11 +48,12 @@ class FivePath:
 
 
 def inverse_time_rows(tp: Toolpath) -> np.ndarray:
-    """(N,) True where the target's block runs in G93 inverse-time mode (the IR's feed_mode;
+    """(N,) True where the target's block runs in G93 inverse-time mode (the IR's extras["nc.feed_mode"];
     dialects without feed modes: none)."""
-    if tp.feed_mode is None:
+    feed_mode = tp.extras.get(FEED_MODE)
+    if feed_mode is None:
         return np.zeros(len(tp), bool)
-    return tp.feed_mode == 93
+    return feed_mode == 93
 
 
 def _check_kinds(tp: Toolpath) -> None:
@@ -140,7 +142,7 @@ def _from_gcode(tp: Toolpath, machine: Machine, input_axes: str | None) -> FiveP
     dist = np.linalg.norm(np.diff(tip, axis=0, prepend=tip[:1]), axis=1)
     feed = np.where(rapid, np.nan, np.where(g93, dist * tp.speed, tp.speed))
     _require_feed(tp, rapid, feed)
-    if (np.abs(placement - np.eye(4)) > 0).any() or (tp.rotary_offset is not None and (tp.rotary_offset != 0).any()):
+    if (np.abs(placement - np.eye(4)) > 0).any() or np.any(tp.extras.get(ROTARY_OFFSET, 0) != 0):
         notes.append("positions are in the machine frame (the program's work offsets applied): an output runs with a zero work offset")
     return FivePath(tip, axis, rapid, feed, time_min, tp.line.copy(), angles, path, tuple(notes), length)
 
@@ -182,4 +184,4 @@ def to_robot_toolpath(tp: Toolpath, path: FivePath) -> Toolpath:
     speed = np.where(path.rapid, np.nan, path.feed)
     per_minute = np.full(len(tp), 94, np.int8)
     machine = dict(frames=np.eye(4)[None], frame_names=("machine",), frame_known=np.ones(1, bool), frame=np.zeros(len(tp), tp.frame.dtype))
-    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, feed_mode=per_minute, **machine)
+    return replace(tp, position=path.tip.copy(), orientation=quat, orientation_kind="quat", speed=speed, extras={**tp.extras, FEED_MODE: per_minute}, **machine)

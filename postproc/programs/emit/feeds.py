@@ -23,6 +23,7 @@ from postproc.errors import EmitError
 
 from ..arcs import PLANE_AXES, arc_rows, geometry
 from ..ir import Kind, Toolpath
+from ..parse.nc_columns import ARC, CCOMP, FEED_MODE, SPINDLE
 
 MIN_LENGTH_MM = 1e-9  # a G93 move shorter than this has no tool speed
 _F_WORD = re.compile(r"[Ff][ \t]*[-+.\d#\[]")
@@ -43,11 +44,12 @@ def machine_speeds(tp: Toolpath) -> np.ndarray:
 def describe(tp: Toolpath) -> dict[int, dict]:
     """For ``inspect --json``: per target, its feed mode and, under G93 / G95, F with its
     unit and the derived speed in mm/min (None where it cannot be known, with the reason)."""
-    if tp.feed_mode is None:
+    feed_mode = tp.extras.get(FEED_MODE)
+    if feed_mode is None:
         return {}
     speeds, why = _speeds(tp)
     out = {}
-    for i, mode in enumerate(tp.feed_mode.tolist()):
+    for i, mode in enumerate(feed_mode.tolist()):
         entry = {"feed_mode": f"G{mode}"}
         if mode != 94 and tp.kind[i] != Kind.RAPID:
             f = _f_word(tp, i)
@@ -64,10 +66,11 @@ def _speeds(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
     """Speeds (N,) mm/min and, per target, why it cannot be known ('' where it can)."""
     speeds = np.asarray(tp.speed, dtype=float).copy()
     why = np.full(len(tp), "", dtype=object)
-    if tp.feed_mode is None:
+    feed_mode = tp.extras.get(FEED_MODE)
+    if feed_mode is None:
         return speeds, why
     feed = tp.kind != Kind.RAPID
-    inverse = feed & (tp.feed_mode == 93)
+    inverse = feed & (feed_mode == 93)
     if inverse.any():
         length, rotary_only = move_lengths(tp)
         length = _programmed_lengths(tp, length)
@@ -79,9 +82,9 @@ def _speeds(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
         why[short & rotary_only] = "a G93 inverse-time move of rotary axes only: it has no tool speed to write for a robot"
         why[short & ~rotary_only] = "a G93 inverse-time move of zero length: it has no tool speed to write for a robot"
         why[inverse & ~(why != "") & ~(per_min > 0)] = "a G93 inverse-time move with F not above 0"
-    per_rev = feed & (tp.feed_mode == 95)
+    per_rev = feed & (feed_mode == 95)
     if per_rev.any():
-        spindle = np.asarray(tp.spindle, dtype=float) if tp.spindle is not None else np.full(len(tp), np.nan)
+        spindle = np.asarray(tp.extras.get(SPINDLE, np.full(len(tp), np.nan)), dtype=float)
         speeds[per_rev] = (tp.speed * spindle)[per_rev]
         why[per_rev & np.isnan(spindle)] = "a G95 feed-per-revolution move with no known spindle speed (S): its speed (F x S) cannot be known"
         why[per_rev & (spindle == 0)] = "a G95 feed-per-revolution move with the spindle speed S0: the machine does not move"
@@ -113,27 +116,28 @@ def move_lengths(tp: Toolpath) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
-    """Under cutter radius compensation (G41/G42, ``Toolpath.ccomp`` 1) LinuxCNC times a G93
+    """Under cutter radius compensation (G41/G42, ``extras["nc.ccomp"]`` 1) LinuxCNC times a G93
     move by its programmed length (rs274ngc: the move from the programmed point, not the offset
     one), and the corner arc it adds runs at the rate of the move it belongs to: the lengths
     of those moves, so that length x F is the feed rate the machine runs them at. The
     programmed points are the text's numbers (``values``; a word left out keeps the programmed
     value before it), the arcs' centres their absolute I J (G18: K I). The move after G40
     runs from the programmed point too (rs274: its length from there, times F)."""
-    if tp.ccomp is None or not (tp.ccomp == 1).any():
+    ccomp = tp.extras.get(CCOMP)
+    if ccomp is None or not (ccomp == 1).any():
         return length
 
     own = tp.insert_at[:, 1] >= 0 if tp.insert_at is not None else np.ones(len(tp), bool)
     prog = tp.position.copy()
     out = length.copy()
-    for r in np.nonzero(tp.ccomp == 1)[0].tolist():  # compensated moves only (a few per program)
+    for r in np.nonzero(ccomp == 1)[0].tolist():  # compensated moves only (a few per program)
         prev = prog[r - 1] if r > 0 else np.full(3, np.nan)
         if not own[r]:
             prog[r] = prev  # a corner arc: the programmed point stays at the corner
             continue
         prog[r] = np.where(np.isnan(tp.values[r, :3]), prev, tp.values[r, :3])
         if tp.kind[r] in (Kind.ARC_CW, Kind.ARC_CCW):
-            first, second, normal = PLANE_AXES[int(tp.arc[r, 0])]  # G17: X Y Z; G18: Z X Y
+            first, second, normal = PLANE_AXES[int(tp.extras[ARC][r, 0])]  # G17: X Y Z; G18: Z X Y
             centre = tp.values[r, [19 + first, 19 + second]]  # I J (G18: K I): absolute under compensation
             a0 = np.arctan2(prev[second] - centre[1], prev[first] - centre[0])
             a1 = np.arctan2(prog[r, second] - centre[1], prog[r, first] - centre[0])
@@ -142,10 +146,10 @@ def _programmed_lengths(tp: Toolpath, length: np.ndarray) -> np.ndarray:
             out[r] = np.hypot(np.linalg.norm(prog[r, [first, second]] - centre) * sweep, prog[r, normal] - prev[normal])
         else:
             out[r] = np.linalg.norm(prog[r] - prev)
-    after = np.nonzero((tp.ccomp[1:] == 0) & (tp.ccomp[:-1] == 1))[0] + 1
+    after = np.nonzero((ccomp[1:] == 0) & (ccomp[:-1] == 1))[0] + 1
     for r in after.tolist():  # the move after G40: from the programmed point too (its start is the offset one)
         out[r] = np.linalg.norm(tp.position[r] - prog[r - 1])
-    generated = np.nonzero((tp.ccomp == 1) & ~own)[0]
+    generated = np.nonzero((ccomp == 1) & ~own)[0]
     for r in generated[::-1].tolist():  # a corner arc: the rate of the next move of its block
         if r + 1 < len(tp) and tp.line[r + 1] == tp.line[r]:
             out[r] = out[r + 1] * (tp.speed[r + 1] / tp.speed[r]) if tp.speed[r] else np.nan

@@ -25,6 +25,7 @@ from postproc.errors import EmitError
 
 from ..arcs import PLANE_AXES
 from ..ir import F_ARC, F_EXT, F_ORI, F_POS, FIELDS, Kind, SourceDoc, Toolpath
+from ..parse.nc_columns import ARC
 from .splice import TOLERANCE, format_like
 
 _WRITTEN = np.r_[np.arange(F_POS.start, F_POS.stop), np.arange(F_ORI.start, F_ORI.stop), np.arange(F_EXT.start, F_EXT.stop)]
@@ -144,7 +145,8 @@ def _block_with(dialect, tp: Toolpath, p: NewPoint, fields: list[int], text: str
     # stays modal, as in the block.
 
     r = p.row
-    normal = PLANE_AXES[int(tp.arc[r, 0])][2] if tp.arc is not None and int(tp.arc[r, 0]) in PLANE_AXES else -1
+    arc = tp.extras.get(ARC)
+    normal = PLANE_AXES[int(arc[r, 0])][2] if arc is not None and int(arc[r, 0]) in PLANE_AXES else -1
     lacking = [f for f in lacking if not (f == normal and r > 0 and abs(p.values[f] - tp.position[r, f]) <= 1e-9
                                           and abs(tp.position[r - 1, f] - tp.position[r, f]) <= 1e-9)]
     file, at = (int(v) for v in tp.insert_at[p.row]) if tp.insert_at is not None else (-1, -1)

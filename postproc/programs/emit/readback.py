@@ -27,6 +27,7 @@ import numpy as np
 from numba import njit
 
 from ..ir import F_ARC, F_POS, Kind, Toolpath
+from ..parse.nc_columns import ARC
 from ..parse.scan_kernel import _POW10, _run_end, _value
 
 _REL = 1e-12  # the original's numbers must read back as the parser's values to rounding
@@ -79,7 +80,7 @@ def _applies(original: Toolpath, modified: Toolpath, texts: list[str], rows: np.
         return False
     if original.relative.any() or (original.offset_span is not None and (original.offset_span[:, F_POS, 1] >= 0).any()):
         return False
-    if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or modified.arc is not None and not np.isnan(modified.values[:, F_ARC]).all():
+    if np.isin(original.kind, (Kind.ARC_CW, Kind.ARC_CCW)).any() or ARC in modified.extras and not np.isnan(modified.values[:, F_ARC]).all():
         return False
     pos = original.spans[:, F_POS][rows]  # the position columns only (spans has every field's)
     return bool(((pos[:, :, 0] == 0) & (pos[:, :, 1] >= 0)).all())

@@ -106,10 +106,15 @@ class Builder:
     # A language's own per-target columns (Toolpath.extras): name -> (dtype, fill, shape of one
     # row); a block gives one under its name, a block that does not gets the fill.
     extra_columns: dict[str, tuple] = field(default_factory=dict)
+    # Extras left out of the Toolpath where no block gives them (the program never states them)
+    optional_extras: set[str] = field(default_factory=set)
 
-    def declare_extra(self, name: str, dtype, fill, shape: tuple = ()) -> None:
-        """A per-target column only this language has (``"<dialect>.<what>"``), kept in Toolpath.extras."""
+    def declare_extra(self, name: str, dtype, fill, shape: tuple = (), optional: bool = False) -> None:
+        """A per-target column only this language (or family: ``"nc."``) has (``"<dialect>.<what>"``),
+        kept in Toolpath.extras; ``optional``: left out where no block of the program gives it."""
         self.extra_columns[name] = (dtype, fill, tuple(shape))
+        if optional:
+            self.optional_extras.add(name)
 
     @staticmethod
     def _register(names, values, known, name, transform, is_known):
@@ -175,13 +180,8 @@ class Builder:
             tool_known=np.array(self.tool_known, dtype=bool),
             offset=cols["offset"],
             offset_span=cols["offset_span"],
-            arc=cols["arc"],
-            feed_mode=cols["feed_mode"],
-            spindle=cols["spindle"],
-            rotary_offset=cols["rotary_offset"],
-            ccomp=cols["ccomp"],
             notes=tuple(self.notes),
-            extras={name: cols[name] for name in self.extra_columns},
+            extras={name: cols[name] for name in self.extra_columns if cols[name] is not None},
         )
 
     def _columns(self) -> dict[str, np.ndarray | None]:
@@ -193,7 +193,7 @@ class Builder:
         cols = {}
         columns = {key: (dtype, fill, _COLUMN_SHAPES.get(key, ())) for key, (dtype, fill) in _COLUMN_DEFAULTS.items()}
         for key, (dtype, fill, shape) in {**columns, **self.extra_columns}.items():
-            if key in ("offset", "offset_span", "arc", "feed_mode", "spindle", "rotary_offset", "ccomp") and not any(key in b for b in self.blocks):
+            if (key in ("offset", "offset_span") or key in self.optional_extras) and not any(key in b for b in self.blocks):
                 cols[key] = None  # no Offs in this program: 600 bytes a target saved
                 continue
             parts = [np.asarray(b[key], dtype=dtype) if key in b else np.broadcast_to(np.array(fill, dtype=dtype), (len(b["order"]),) + shape) for b in self.blocks]
@@ -230,13 +230,8 @@ _COLUMN_DEFAULTS = {
     "insert_at": (np.int64, -1),
     "offset": (float, 0.0),
     "offset_span": (np.int64, -1),
-    "arc": (float, np.nan),
-    "feed_mode": (np.int8, 94),
-    "spindle": (float, np.nan),
-    "rotary_offset": (float, 0.0),
-    "ccomp": (np.int8, 0),
 }
-_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3), "arc": (3,), "rotary_offset": (3,)}
+_COLUMN_SHAPES = {"values": (NF,), "spans": (NF, 3), "scale": (NF,), "conf": (4,), "insert_at": (2,), "offset": (NF,), "offset_span": (NF, 3)}
 
 
 __all__ = ["FIELDS", "Builder", "Kind", "LineIndex", "Numbers", "scan_numbers"]

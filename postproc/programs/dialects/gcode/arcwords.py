@@ -9,7 +9,7 @@ centre-format block without any end-point word is a full circle back to the star
 parser). ``P`` asks for that many turns (default 1).
 
 The IR keeps the words as the text gives them, times the unit scale (mm), in fields
-``i j k r`` with their spans; ``Toolpath.arc`` holds plane, IJK mode and turns per row.
+``i j k r`` with their spans; ``extras["nc.arc"]`` holds plane, IJK mode and turns per row.
 postproc.programs.arcs turns them into centres and back.
 """
 
@@ -49,7 +49,7 @@ def full_circles(t: dict, arc_blocks: np.ndarray, error_at) -> np.ndarray:
 def arc_words(t: dict, rows: np.ndarray, arc_rows: np.ndarray, plane: np.ndarray, ijk_mode: np.ndarray, linear_scale: np.ndarray,
               ir_values: np.ndarray, ir_spans: np.ndarray, scale: np.ndarray, text: str, error_at) -> np.ndarray | None:
     """Arc words of the targets ``rows`` (blocks of ``t``) into IR fields i j k r (in place);
-    returns ``Toolpath.arc`` (m, 3), or None when no target is an arc."""
+    returns the ``nc.arc`` column (m, 3), or None when no target is an arc."""
     if not arc_rows.any():
         return None
     cols = _letter_columns(AXES)

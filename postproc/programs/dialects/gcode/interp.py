@@ -22,6 +22,7 @@ import numpy as np
 
 from postproc.errors import EmitError
 
+from ...parse.nc_columns import CCOMP
 from . import canned
 from .canned import CycleError, CycleState
 from .cutter_comp import CutterComp, Unfollowed, arc_centre
@@ -726,7 +727,7 @@ def refuse_unwritable(original, modified) -> None:
     new_frame = np.concatenate([[False], original.frame[1:] != original.frame[:-1]])
     moved_before = np.concatenate([[False], moved[:-1]])  # a cycle starts from where the tool is: its moves follow
     after = moved & original.relative & (new_frame | np.concatenate([[False], generated[:-1]]))
-    comp = (original.ccomp != 0) if original.ccomp is not None else np.zeros(len(original), bool)
+    comp = (original.extras[CCOMP] != 0) if CCOMP in original.extras else np.zeros(len(original), bool)
     for rows, why in (((moved | np.concatenate([moved[1:], [False]])) & comp,
                        "it runs under cutter radius compensation (G41/G42): the controller offsets the programmed path by the tool radius "
                        "and decides each end point from the next move, so a compensated position cannot be written back as the block's words "

@@ -24,7 +24,7 @@ from lark import Token, Tree
 from postproc.robot.frames import axis_to_quat_wxyz, make_transform, rot_x, rot_z
 
 from ...ir import F_ARC, NF, Kind, SourceDoc, Toolpath
-from ...parse import scan_kernel
+from ...parse import nc_columns, scan_kernel
 from ...parse.common import Builder, LineIndex, _ranges, parse_statement, scan_numbers
 from ...parse.grammar import grammar
 from ...parse.line_shapes import LineShapes
@@ -98,6 +98,7 @@ class GcodeParser:
         self.text = doc.text
         self.lines = LineIndex(doc.text)
         self.builder = Builder("gcode", "none", [doc])
+        nc_columns.declare(self.builder)
         self.params: dict = {}
         self.notes: list[str] = []
         self.g10: list[tuple[int, int, np.ndarray]] = []  # (offset, P number, X Y Z) of G10 L2/L20
@@ -499,7 +500,7 @@ class GcodeParser:
             speed=speed,
             # Missing axis words are inserted at the end of the block's code (before any comment).
             insert_at=np.stack([np.zeros(m, np.int64), t["code_end"][rows]], axis=1),
-            **({"arc": arc} if arc is not None else {}),
+            **({nc_columns.ARC: arc} if arc is not None else {}),
             **self._feed_columns(t, rows, motion[rows]),
         )
         tp = _with_modal_positions(self.builder.build(), absolute[rows], ir_values, axis_rows)
@@ -521,7 +522,7 @@ class GcodeParser:
                          (missing, "feed move in G93 inverse-time mode without its own F word (F is not modal in G93)")):
             if bad.any():
                 raise self._error_at(int(t["offset"][rows[np.argmax(bad)]]), why)
-        return {"feed_mode": mode.astype(np.int8), "spindle": spindle}
+        return {nc_columns.FEED_MODE: mode.astype(np.int8), nc_columns.SPINDLE: spindle}
 
     def _under_cutter_comp(self, t: dict, rows: np.ndarray) -> np.ndarray:
         """(len(rows),) True where G41/G42 (or G41.1/G42.1) is active: the path the controller
@@ -600,8 +601,8 @@ class GcodeParser:
                                relative=(dist[rows] == 91.0) & own, frame=frame_idx, tool=tool_idx, resolved=resolved,
                                speed=self._speeds_of(t, rows, scale), insert_at=insert_at,
                                **self._synced_feed_mode(t, rows, self._feed_columns(t, rows, moves.motion.astype(float))),
-                               **({"arc": arc} if arc is not None else {}), **({"ccomp": moves.ccomp} if moves.ccomp.any() else {}),
-                               **({"rotary_offset": moves.rotary} if (moves.rotary != 0).any() else {}))
+                               **({nc_columns.ARC: arc} if arc is not None else {}), **({nc_columns.CCOMP: moves.ccomp} if moves.ccomp.any() else {}),
+                               **({nc_columns.ROTARY_OFFSET: moves.rotary} if (moves.rotary != 0).any() else {}))
         tp = _with_modal_positions(self.builder.build(), point, ir_values, axis_rows)
         return arcwords.carry_tool_axis(tp, arc_move & (tlo[rows] == 43.5))
 
@@ -623,7 +624,7 @@ class GcodeParser:
         column is that in mm/min already (feed mode 94)."""
         synced = np.isin(t["setup"][rows], (33.0, 33.1))
         if synced.any():
-            columns["feed_mode"] = np.where(synced, 94, columns["feed_mode"]).astype(np.int8)
+            columns[nc_columns.FEED_MODE] = np.where(synced, 94, columns[nc_columns.FEED_MODE]).astype(np.int8)
         return columns
 
     def _block_circles(self, t: dict, mode: np.ndarray) -> np.ndarray:

@@ -14,6 +14,7 @@ import re
 import numpy as np
 
 from ...ir import Kind, Toolpath
+from ...parse.nc_columns import CCOMP
 from ..base import StreamRules, plain_number
 
 _NUM = r"[+-]?(?:\d+\.?\d*|\.\d+)"
@@ -32,7 +33,7 @@ _SHAPE_BODY = re.compile(BODY.pattern.replace(_G01, r"[Gg]0?0(?![\d.])"))
 def restate(last: Toolpath, carried: np.ndarray) -> str | None:
     """One absolute block to the target ``last`` (its motion mode, X Y Z, rotary axes, feed),
     or None where it has no complete position."""
-    if np.isnan(last.position[0]).any() or (last.ccomp is not None and last.ccomp[0]):
+    if np.isnan(last.position[0]).any() or (CCOMP in last.extras and last.extras[CCOMP][0]):
         return None  # no position, or one under G41/G42: the offset path does not restart at a cut
     words = ["G0" if last.kind[0] == Kind.RAPID else "G1"]
     words += [f"{axis}{plain_number(v)}" for axis, v in zip("XYZ", last.position[0])]

@@ -10,6 +10,7 @@ import numpy as np
 from postproc.errors import EmitError, InputError
 
 from ...ir import SourceDoc, Toolpath
+from ...parse.nc_columns import CCOMP
 from ..base import Dialect
 from .controller import TNC
 from .ln_placement import place_ln, text_positions
@@ -52,7 +53,8 @@ class HeidenhainDialect(Dialect):
     def contour_for(self, tp: Toolpath, xyz: np.ndarray) -> Toolpath:
         """Under RL / RR the text holds the contour the TNC offsets: the contour whose offset path is
         ``xyz``; an LN block's numbers are its tip less the displacement along N (ln.py)."""
-        if tp.ccomp is not None and (tp.ccomp == 1).any():
+        ccomp = tp.extras.get(CCOMP)
+        if ccomp is not None and (ccomp == 1).any():
             return contour_for(tp, xyz)
         moved = tp.with_positions(text_positions(tp, xyz))
         return replace(moved, position=np.asarray(xyz, float).copy())

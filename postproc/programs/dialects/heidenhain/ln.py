@@ -44,7 +44,7 @@ class LnBlocks:
             self.notes[f"line {line}: LN: the TNC moves the tool along N by the tool's delta values (tool table and TOOL CALL), which the text "
                        "does not give (a tool from the tool table): not read"] = None
             return np.zeros(3), np.full(3, np.nan), False
-        self.notes[f"LN without M128: the tip goes to X Y Z + (DL + DR + DR2) N/|N| (TOOL DEF tool: the deltas of TOOL CALL); T changes nothing "
+        self.notes["LN without M128: the tip goes to X Y Z + (DL + DR + DR2) N/|N| (TOOL DEF tool: the deltas of TOOL CALL); T changes nothing "
                    "(TNC 640 manual, three-dimensional tool compensation)"] = None
         return self.ln_delta * normal, np.full(3, np.nan), not np.isnan(normal).any()
 

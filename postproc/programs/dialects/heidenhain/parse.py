@@ -44,6 +44,7 @@ import numpy as np
 from postproc.errors import InputError, ParseError
 
 from ...ir import F_ARC, FIELDS, Kind, SourceDoc, Toolpath
+from ...parse import nc_columns
 from ...parse.common import Builder, LineIndex
 from ...parse.line_shapes import LineMatches
 from . import radius_comp
@@ -82,6 +83,7 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         self.text = doc.text
         self.lines = LineIndex(doc.text)
         self.b = Builder(dialect, "none", [doc], tool_names=["<none>"], frame_names=["PRESET"], frame_known=[False])
+        nc_columns.declare(self.b)
         self.plain: LineMatches | None = None
         self.blocks = split_blocks(doc.text, self._plain_lines())
         self.labels = self._labels()
@@ -551,11 +553,11 @@ class KlartextReader(BulkReading, Contours, StateBlocks, LnBlocks):
         insert = table[:, 6].astype(np.int64)
         block = dict(kind=kind, line=table[:, 1].astype(np.int32), values=values, spans=spans, scale=scale, speed=table[:, 2],
                      tool=table[:, 3].astype(np.int32), frame=table[:, 4].astype(np.int32), resolved=table[:, 5].astype(bool),
-                     feed_mode=np.full(n, 94, np.int8), insert_at=np.stack([np.where(insert >= 0, 0, -1), insert], axis=1))
+                     **{nc_columns.FEED_MODE: np.full(n, 94, np.int8)}, insert_at=np.stack([np.where(insert >= 0, 0, -1), insert], axis=1))
         if arcs.any():
             arc = np.full((n, 3), np.nan)
             arc[arcs] = (17, 1, 1)  # XY plane (tool axis Z), centre absolute, one turn
-            block["arc"] = arc
+            block[nc_columns.ARC] = arc
         self.b.add_block(np.arange(n), **block)  # execution order (a repeated section comes again)
         self.b.notes.extend(self.notes)
         if self.tolerance_line:

@@ -20,7 +20,7 @@ differs it is handled here: an outside corner after an FMAX move is a transition
 (LinuxCNC traverses straight after G0), and the TNC refuses what LinuxCNC would not meet
 (compensation opened in a circle block, RL straight to RR).
 
-The IR keeps, as for G-code (``Toolpath.ccomp``): position = the tool-centre path, values =
+The IR keeps, as for G-code (``extras["nc.ccomp"]``): position = the tool-centre path, values =
 the text's numbers (the contour); a transitional arc is a target without a block of its own.
 """
 
@@ -35,6 +35,7 @@ from postproc.errors import EmitError, ParseError
 
 from ...ir import F_ARC, Kind, Toolpath
 from ...parse.common import LineIndex
+from ...parse.nc_columns import ARC, CCOMP
 from ..gcode.cutter_comp import CutterComp, Unfollowed
 
 _ARC_KINDS = (int(Kind.ARC_CW), int(Kind.ARC_CCW))
@@ -156,15 +157,16 @@ def _rebuild(tp: Toolpath, ccomp: np.ndarray, out_rows: list, out_pos: list, out
     values[added, F_ARC.start:F_ARC.start + 2] = gen[~np.isnan(gen[:, 0]), 1:]
     spans, insert_at = new.spans.copy(), new.insert_at.copy()
     spans[added], insert_at[added] = -1, -1
-    arc = new.arc.copy() if new.arc is not None else np.full((len(new), 3), np.nan)
+    arc = new.extras[ARC].copy() if ARC in new.extras else np.full((len(new), 3), np.nan)
     arc[added] = (17, 1, 1)
     corner = np.zeros(len(new), bool)
     corner[added] = True
     resolved = new.resolved & (ccomp[order] != 2)
     has_arc = np.isin(kind, _ARC_KINDS).any()
-    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: corner, SIDE: side[order], RADIUS: radius[order]})
+    extras = dict(new.extras, **{CONTOUR: new.position.copy(), CORNER: corner, SIDE: side[order], RADIUS: radius[order], CCOMP: ccomp[order]},
+                  **({ARC: arc} if has_arc else {}))
     return replace(new, position=position, kind=kind, values=values, spans=spans, insert_at=insert_at, resolved=resolved,
-                   arc=arc if has_arc else new.arc, ccomp=ccomp[order], notes=tuple(notes), extras=extras)
+                   notes=tuple(notes), extras=extras)
 
 
 def contour_for(tp: Toolpath, xyz: np.ndarray) -> Toolpath:
@@ -176,7 +178,7 @@ def contour_for(tp: Toolpath, xyz: np.ndarray) -> Toolpath:
     arc's ends are fixed by its corner, and two ends of one corner moved apart are not a
     number rewrite."""
     xyz = np.asarray(xyz, float)
-    comp = tp.ccomp == 1
+    comp = tp.extras[CCOMP] == 1
     own, corner = comp & ~tp.extras[CORNER], tp.extras[CORNER]
     contour = tp.extras[CONTOUR].copy()
     contour[~comp] = xyz[~comp]  # outside compensation the text holds the tool path itself
@@ -185,8 +187,8 @@ def contour_for(tp: Toolpath, xyz: np.ndarray) -> Toolpath:
     side, radius = before.extras[SIDE], before.extras[RADIUS]
     for _ in range(MAX_PASSES):
         offset = follow(replace(before, position=contour[~corner]), side, radius)
-        if len(offset) != len(tp) or (offset.ccomp != tp.ccomp).any():
-            return _refuse(tp, int(np.argmax(offset.ccomp == 2)) if len(offset) == len(tp) else int(np.argmax(comp)),
+        if len(offset) != len(tp) or (offset.extras[CCOMP] != tp.extras[CCOMP]).any():
+            return _refuse(tp, int(np.argmax(offset.extras[CCOMP] == 2)) if len(offset) == len(tp) else int(np.argmax(comp)),
                            "the moved contour changes the offset path's shape (a corner turns or the tool no longer fits)")
         miss = xyz - offset.position
         miss[~comp] = 0.0

@@ -2,17 +2,14 @@
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from postproc.robot.kinematics import select_by_kuka_status
 
 from ...controller import Controller
 from ...ir import Kind, Toolpath
+from .facts import CIRCULAR_ANGLE
 from .loads import load_masses, stated_loads
-
-_CIRCULAR_ANGLE = re.compile(r"\bCA\b", re.IGNORECASE)
 
 
 class KukaController(Controller):
@@ -42,14 +39,9 @@ class KukaController(Controller):
         return load_masses(tp)
 
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:
-        """A CIRC with CA (circular angle) runs on past or stops short of its end point."""
-        ends = np.ones(len(tp.kind), dtype=bool)
-        arcs = np.nonzero(tp.kind == Kind.CIRC_END)[0]  # only arcs' lines are read (a long program has few)
-        if arcs.size:
-            lines = [doc.text.split("\n") for doc in tp.sources]
-            ends[arcs] = [not _CIRCULAR_ANGLE.search(lines[f][n - 1]) if 0 < n <= len(lines[f]) else True
-                          for f, n in zip(tp.file[arcs].tolist(), tp.line[arcs].tolist())]
-        return ends
+        """A CIRC with CA (circular angle, ``extras["krl.circular_angle"]``) runs on past or
+        stops short of its end point."""
+        return ~tp.extras[CIRCULAR_ANGLE]
 
 
 KRC = KukaController()

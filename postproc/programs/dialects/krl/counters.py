@@ -99,7 +99,7 @@ def plan(loop: CounterLoop, assigns: list[Assign], local_ints: set[str], body_te
     others = [a for a in assigns if a.name == counter and a not in inside and not (a.straight and _INT.fullmatch(a.rhs.strip()))]
     if others or not before:
         return None, f"{counter} is not set by literal integers in straight-line code before the loop (or is changed elsewhere)"
-    if any(re.search(rf"\b(?:EXIT|RETURN|GOTO)\b|^[ \t]*\w+[ \t]*:(?!=)", code, re.IGNORECASE) for code in body_text):
+    if any(re.search(r"\b(?:EXIT|RETURN|GOTO)\b|^[ \t]*\w+[ \t]*:(?!=)", code, re.IGNORECASE) for code in body_text):
         return None, "its body has EXIT, RETURN, GOTO or a label"
     if any(re.search(rf"\b{re.escape(counter)}\b", args, re.IGNORECASE) for line, args in calls_text):
         return None, f"{counter} is passed to a call (it may be changed there)"

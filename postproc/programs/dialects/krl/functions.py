@@ -20,7 +20,7 @@ import math
 import re
 from dataclasses import dataclass, field
 
-from lark import Token, Tree
+from lark import Tree
 
 from ...parse.common import LineIndex, parse_statement
 from ...parse.grammar import grammar

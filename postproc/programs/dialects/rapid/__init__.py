@@ -14,6 +14,7 @@ from postproc.robot.kinematics import abb_confdata
 from ...ir import SourceDoc, Toolpath
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
 from .controller import IRC5
+from .facts import with_controller_facts
 from .parse import parse_modules
 from .placing import set_work_object
 from .targets import set_robtarget_conf
@@ -54,7 +55,7 @@ class RapidDialect(Dialect):
         return docs
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        return parse_modules(sources)
+        return with_controller_facts(parse_modules(sources))
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "[", 2)  # [[x,y,z],[q],[conf],[ext]]

@@ -42,8 +42,11 @@ class _Routine:
     events: list = field(default_factory=list)  # (line, kind, value): ("switch", (which, off)) or ("call", name)
 
 
-def _line_of(text: str, offset: int) -> int:
-    return text.count("\n", 0, offset) + 1
+def _line_finder(text: str):
+    """offset -> 1-based line of ``text``: one pass over the text for its line ends, then a
+    binary search per offset (counting the newlines before each offset is quadratic in a long module)."""
+    newlines = np.flatnonzero(np.frombuffer(text.encode("latin-1"), dtype=np.uint8) == 10)
+    return lambda offset: int(np.searchsorted(newlines, offset)) + 1
 
 
 def routines(sources) -> dict[str, _Routine]:
@@ -51,22 +54,24 @@ def routines(sources) -> dict[str, _Routine]:
     found: dict[str, _Routine] = {}
     for f, doc in enumerate(sources):
         text = re.sub(r"!.*", lambda m: " " * len(m.group()), doc.text)  # comments out, offsets kept
-        ends = [_line_of(text, m.start()) for m in _ENDPROC.finditer(text)]
+        _line_of = _line_finder(text)
+        ends = [_line_of(m.start()) for m in _ENDPROC.finditer(text)]
         for m in _PROC.finditer(text):
-            first = _line_of(text, m.start())
+            first = _line_of(m.start())
             last = next((e for e in ends if e > first), first)
             found.setdefault(m.group(1).upper(), _Routine(m.group(1), f, first, last))
         for r in (r for r in found.values() if r.file == f):
             for m in _SWITCH.finditer(text):
-                line = _line_of(text, m.start())
+                line = _line_of(m.start())
                 if r.first < line < r.last:
                     r.events.append((line, "switch", (m.group(1).upper(), m.group(2).upper() == "OFF")))
     for f, doc in enumerate(sources):
         text = re.sub(r"!.*", lambda m: " " * len(m.group()), doc.text)
+        _line_of = _line_finder(text)
         for m in _STATEMENT.finditer(text):
-            line = _line_of(text, m.start())
             callee = m.group(1).upper()
-            if callee in found:
+            if callee in found:  # (most statements are motions: their line is not needed)
+                line = _line_of(m.start())
                 caller = next((r for r in found.values() if r.file == f and r.first < line < r.last), None)
                 if caller is not None:
                     caller.events.append((line, "call", callee))
@@ -95,6 +100,8 @@ def refuse_conditional_switches(sources) -> None:
 def switch_states(tp, text_order: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
     """(N,) True where ``ConfL`` / ``ConfJ`` is off at each target, by the call structure from
     ``main``; ``text_order`` (the module-text answer) where main does not reach a target."""
+    if not any(_ANY_SWITCH.search(doc.text) for doc in tp.sources):
+        return text_order  # no switch anywhere (most programs): nothing to walk or refuse
     refuse_conditional_switches(tp.sources)
     table = routines(tp.sources)
     switched_off = any(kind == "switch" and value[1] for r in table.values() for _, kind, value in r.events)

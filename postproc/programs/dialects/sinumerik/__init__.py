@@ -17,6 +17,7 @@ from ...ir import SourceDoc, Toolpath
 from ..gcode import GcodeDialect
 from . import swivel_place
 from .controller import SINUMERIK_840D
+from .facts import with_controller_facts
 
 # Words no other G-code dialect writes at the start of a block (the head is upper case).
 _SNIFF = re.compile(r"(?m)^[ \t]*(?:N\d+[ \t]+)?(?:A?TRANS|A?ROT|A?SCALE|A?MIRROR|TRAORI|TRAFOOF|CYCLE800|CYCLE832|G500|G710|G700|SUPA|"
@@ -44,7 +45,7 @@ class SinumerikDialect(GcodeDialect):
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
         from .parse import SinumerikParser  # the reader pulls in lark and the grammar: loaded when a program is read
 
-        return SinumerikParser(sources[0]).parse()
+        return with_controller_facts(SinumerikParser(sources[0]).parse())
 
 
 SINUMERIK = SinumerikDialect()

@@ -17,17 +17,11 @@ F2 "Multi-axis transformations", "Orientation programming" / "Singular positions
 
 from __future__ import annotations
 
-import re
-
 import numpy as np
 
 from ...controller import Controller
 from ...ir import Toolpath
-
-# Continuous-path mode: G64 and the smoothing modes G641..G645 leave the programmed corner
-# (Fundamentals, "Continuous-path mode G64, G641, G642, G643, G644, G645"); G60 / G9 / G601 /
-# G602 / G603 stop exactly at the block end.
-_CONTINUOUS = re.compile(r"(?im)^[^;\n]*(?:\bG64[1-5]?\b|\bCOMP(?:CAD|CURV|ON)\b|\bCYCLE832[ \t]*\()")
+from .facts import CONTINUOUS
 
 
 class Sinumerik840D(Controller):
@@ -47,12 +41,10 @@ class Sinumerik840D(Controller):
         Planning, "NC block compression"), which the path
         prediction does not model; None where the program never asks for it (the reset
         value of the group, machine data 20150, is the machine's: not in the program)."""
-        for doc in tp.sources:
-            m = _CONTINUOUS.search(doc.text)
-            if m:
-                line = doc.text.count("\n", 0, m.start()) + 1
-                return f"{doc.path}:{line}: continuous-path mode or compressor (G64 / G641..G645, COMPCAD, CYCLE832): the 840D leaves the programmed corners"
-        return None
+        where = tp.extras[CONTINUOUS][0] if len(tp) else ""  # the reader's (facts.py)
+        if not where:
+            return None
+        return f"{where}: continuous-path mode or compressor (G64 / G641..G645, COMPCAD, CYCLE832): the 840D leaves the programmed corners"
 
 
 SINUMERIK_840D = Sinumerik840D()

@@ -20,6 +20,7 @@ from postproc.errors import ParseError
 
 from ...arcs import PLANE_AXES, R_
 from ...ir import F_ARC, Kind, SourceDoc, Toolpath
+from ...parse import nc_columns
 from ...parse.common import Builder, LineIndex
 from ..gcode.blockwords import AXES
 from ..gcode.parse import GcodeParser
@@ -78,6 +79,7 @@ class SinumerikParser(GcodeParser):
         self.original = doc
         self.siemens = True
         self.builder = Builder("sinumerik", "none", [doc])
+        nc_columns.declare(self.builder)
         self.lines = _MappedLines(text, original, self.offsets)
         self.frame = np.eye(4)  # the programmable frame's rigid part, as the blocks read so far leave it
         self.axis_scale = np.ones(3)  # its axes' scale and mirror factors (SCALE, MIRROR): p at frame @ diag(axis_scale) @ p
@@ -160,7 +162,7 @@ class SinumerikParser(GcodeParser):
         rows = np.nonzero((tp.file == 0) & np.isin(tp.line, list(lines)))[0]
         if len(rows) != len(self.cip_points):
             raise self._at_word(self.cip_points[0][0], "I1", "I1= J1= K1= in a block that is not one arc target (CIP X.. Y.. Z..)")
-        values, resolved, kind, arc = tp.values.copy(), tp.resolved.copy(), tp.kind.copy(), tp.arc.copy()
+        values, resolved, kind, arc = tp.values.copy(), tp.resolved.copy(), tp.kind.copy(), tp.extras[nc_columns.ARC].copy()
         spans = tp.spans.copy()
         for row, (_, middle) in zip(rows.tolist(), self.cip_points, strict=True):  # one 2x2 solve per CIP block (few in a program)
             line = int(tp.line[row])
@@ -188,7 +190,7 @@ class SinumerikParser(GcodeParser):
         if len(others):
             raise self._at_word(int(tp.line[others[0]]), "", "an arc without centre words in a program with CIP (a CIP continued "
                                 "modally?): write CIP with its intermediate point in every block")
-        return replace(tp, values=values, resolved=resolved, kind=kind, arc=arc, spans=spans)
+        return replace(tp, values=values, resolved=resolved, kind=kind, extras={**tp.extras, nc_columns.ARC: arc}, spans=spans)
 
     def _opening_angle_arcs(self, tp: Toolpath) -> Toolpath:
         """AR= arcs: the R word their chord (in their own frame) and opening angle give
@@ -199,7 +201,7 @@ class SinumerikParser(GcodeParser):
         arc = np.isin(tp.kind[rows], (Kind.ARC_CW, Kind.ARC_CCW)) & (rows > 0)
         if not arc.all():
             raise self._at_opening_angle(int(tp.line[rows[~arc][0]]), "AR= in a block that is not an arc after a target (G2 / G3 with a start)")
-        axes = np.array([PLANE_AXES[int(p)] for p in tp.arc[rows, 0]], dtype=int).reshape(-1, 3)[:, :2]
+        axes = np.array([PLANE_AXES[int(p)] for p in tp.extras[nc_columns.ARC][rows, 0]], dtype=int).reshape(-1, 3)[:, :2]
         start = np.take_along_axis(tp.position[rows - 1], axes, axis=1)
         end = np.take_along_axis(tp.position[rows], axes, axis=1)
         angles = np.array([self.opening_angles[int(line)] for line in tp.line[rows]])

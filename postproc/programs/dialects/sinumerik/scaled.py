@@ -29,6 +29,7 @@ import numpy as np
 
 from ...arcs import PLANE_AXES, R_
 from ...ir import F_ARC, F_POS, Kind, Toolpath
+from ...parse.nc_columns import ARC, CCOMP, FEED_MODE
 
 
 class NotRead(ValueError):
@@ -59,7 +60,7 @@ def apply(tp: Toolpath, factors: np.ndarray) -> Toolpath:
         offset[rows, ijk] *= d
     arcs = rows[np.isin(tp.kind[rows], (Kind.ARC_CW, Kind.ARC_CCW))]
     if len(arcs):
-        plane = np.array([PLANE_AXES[int(p)][:2] for p in tp.arc[arcs, 0]], dtype=int).reshape(-1, 2)
+        plane = np.array([PLANE_AXES[int(p)][:2] for p in tp.extras[ARC][arcs, 0]], dtype=int).reshape(-1, 2)
         first, second = np.take_along_axis(factors[arcs], plane, axis=1).T
         uneven = np.abs(first) != np.abs(second)
         if uneven.any():
@@ -80,11 +81,13 @@ def _refuse(tp: Toolpath, factors: np.ndarray, rows: np.ndarray) -> None:
                       "read: how the 840D scales or mirrors an orientation is not modelled")
     if tp.relative[rows].any():
         raise NotRead(int(rows[tp.relative[rows]][0]), "", "G91 increments under SCALE / MIRROR are not read (write G90 positions)")
-    if tp.ccomp is not None and (tp.ccomp[rows] != 0).any():
-        raise NotRead(int(rows[tp.ccomp[rows] != 0][0]), "", "cutter radius compensation under SCALE / MIRROR is not read "
+    ccomp = tp.extras.get(CCOMP)
+    if ccomp is not None and (ccomp[rows] != 0).any():
+        raise NotRead(int(rows[ccomp[rows] != 0][0]), "", "cutter radius compensation under SCALE / MIRROR is not read "
                       "(the 840D swaps G41 / G42 under a mirror and does not scale the radius)")
-    if tp.feed_mode is not None and (tp.feed_mode[rows] == 93).any():
-        raise NotRead(int(rows[tp.feed_mode[rows] == 93][0]), "F", "G93 inverse-time feed under SCALE / MIRROR is not read (the IR "
+    feed_mode = tp.extras.get(FEED_MODE)
+    if feed_mode is not None and (feed_mode[rows] == 93).any():
+        raise NotRead(int(rows[feed_mode[rows] == 93][0]), "F", "G93 inverse-time feed under SCALE / MIRROR is not read (the IR "
                       "keeps the program unit in the axes' scale, which SCALE / MIRROR change)")
     before = np.vstack([np.ones((1, 3)), factors[:-1]])
     changed = (factors != before).any(axis=1) & np.isnan(tp.values[:, F_POS]).any(axis=1) & (tp.kind != Kind.ABSJ)

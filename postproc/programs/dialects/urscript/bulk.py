@@ -24,7 +24,7 @@ from .poses import M_TO_MM
 _NUM = r"-?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"  # digit runs only through \d+ / \d* (line_shapes)
 _SEP = r"[ \t]*,[ \t]*"
 BULK_LINE = re.compile(
-    rf"[ \t]*(?P<function>movel|movep)[ \t]*\([ \t]*p[ \t]*\[[ \t]*"
+    r"[ \t]*(?P<function>movel|movep)[ \t]*\([ \t]*p[ \t]*\[[ \t]*"
     + _SEP.join(f"(?P<n{k}>{_NUM})" for k in range(6))
     + rf"[ \t]*\](?:{_SEP}a[ \t]*=[ \t]*(?P<a>{_NUM}))?(?:{_SEP}v[ \t]*=[ \t]*(?P<v>{_NUM}))?"
     rf"(?:{_SEP}r[ \t]*=[ \t]*(?P<r>{_NUM}))?[ \t]*\)[ \t]*\r?"

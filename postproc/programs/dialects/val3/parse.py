@@ -21,7 +21,7 @@ from postproc.errors import ParseError
 from ...ir import NF, Kind, SourceDoc, Toolpath
 from ...parse.common import Builder, LineIndex
 from .code import CodeReader, Motion, PlainMotions, PointArg, find_programs
-from .data import WORDS, Database, Element, parse_father, read_database
+from .data import Database, Element, parse_father, read_database
 from .rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz, trsf_matrix
 
 POSE_ATTRS = ("x", "y", "z", "rx", "ry", "rz")  # -> FIELDS x y z o1 o2 o3
