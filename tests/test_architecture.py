@@ -17,7 +17,7 @@ import postproc
 from postproc.model.effects import CATALOG
 
 PACKAGE = Path(postproc.__file__).parent
-EFFECTS_DIR = PACKAGE / "effects"
+EFFECTS_DIR = PACKAGE / "model" / "effects"
 
 
 def _names() -> set[str]:

@@ -6,8 +6,6 @@ import re
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
-import numpy as np
-
 from postproc.errors import InputError
 from postproc.robot.kinematics import abb_confdata
 
