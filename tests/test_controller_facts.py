@@ -73,3 +73,11 @@ def test_sinumerik_continuous_path_mode_is_an_ir_column(tmp_path):
     assert controller.inexact_interpolation(_blanked(tp)).startswith(f"{tmp_path / 'p.mpf'}:3: continuous-path mode")
     plain, _ = _read(tmp_path, "q.mpf", "G54 G71\nG1 X1 Y2 Z3 F100\nG1 X2\nM30\n")
     assert controller.inexact_interpolation(_blanked(plain)) is None
+
+
+def test_sinumerik_continuous_words_in_comments_or_other_words_do_not_count(tmp_path):
+    text = "G54 G71 ; G64 here is a comment\nG1 X1 Y2 Z3 F100\nR1=1 ; COMPCAD too\nG1 X2\nG6420 X3\ncompcad\nG1 X4\nM30\n"
+    tp, controller = _read(tmp_path, "c.mpf", text)
+    assert tp.extras["sinumerik.continuous"][0] == f"{tmp_path / 'c.mpf'}:6"
+    none, _ = _read(tmp_path, "d.mpf", "G54 G71 ; G642\nG1 X1 Y2 Z3 F100\nG1 X2\nM30\n")
+    assert controller.inexact_interpolation(_blanked(none)) is None
