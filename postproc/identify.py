@@ -403,12 +403,12 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")
     physics = _replace(model, residual=None)
     target = meas.measured_mm - physics.predict(meas)
-    gp_options = dict(gp_options or {})
-    feature_kind = gp_options.pop("features", None) or (FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features)
-    if kind != "gpr" and feature_kind != (FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features):
-        raise IdentificationError(f"features '{feature_kind}' are an option of the gpr predictor only, not of {kind}")
-    if feature_kind not in GP_KINDS and kind == "gpr":
-        raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
+    gp_options = dict(gp_options or {})  # the gpr's options; the other predictors take none
+    feature_kind = FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features
+    if kind == "gpr":
+        feature_kind = gp_options.pop("features", None) or feature_kind
+        if feature_kind not in GP_KINDS:
+            raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":

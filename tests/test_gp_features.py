@@ -89,12 +89,10 @@ def test_the_features_survive_the_model_file(robot, two_wrists, tmp_path):
     np.testing.assert_allclose(back.predict(two_wrists), hybrid.predict(two_wrists), atol=1e-9)
 
 
-def test_unknown_features_or_another_predictor_refused(robot, two_wrists):
+def test_unknown_features_refused(robot, two_wrists):
     nominal = fit(robot, TOOL, parse_effects("none"), two_wrists, cv_folds=0).model
     with pytest.raises(IdentificationError, match="not one of pose, tcp\\+joints, joints"):
         fit_predictor(nominal, two_wrists, "gpr", gp_options={"features": "position"})
-    with pytest.raises(IdentificationError, match="gpr predictor only"):
-        fit_predictor(nominal, two_wrists, "grid", gp_options={"features": "joints"})
 
 
 @pytest.mark.parametrize("args, message", [
