@@ -28,10 +28,10 @@ def program(path: Path, n: int) -> None:
 
 if __name__ == "__main__":
     import postproc
-    from postproc.batch import run_batch
-    from postproc.effects import parse_effects
-    from postproc.model_io import save_model
-    from postproc.sim import random_truth
+    from postproc.jobs.batch import run_batch
+    from postproc.model.effects import parse_effects
+    from postproc.model.model_io import save_model
+    from postproc.model.sim import random_truth
 
     count, jobs, targets = (int(a) for a in (sys.argv[1:] + ["20", "2", "2000"][len(sys.argv) - 1 :])[:3])
     with tempfile.TemporaryDirectory() as tmp:

@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.identify import fit
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import emit_texts, parse_program, write_texts
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 
 def make_program(path: Path, n: int) -> None:

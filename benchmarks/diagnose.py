@@ -29,10 +29,10 @@ def _child(case: str, n: int) -> None:
     import numpy as np
 
     import postproc
-    from postproc.diagnose import diagnose, ladder
-    from postproc.effects import parse_effects
-    from postproc.identify import fit
-    from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+    from postproc.model.diagnose import diagnose, ladder
+    from postproc.model.effects import parse_effects
+    from postproc.model.identify import fit
+    from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
     robot = postproc.load_robot("kr160_r1570")
     tool = [0.0, 0.0, 200.0]

@@ -12,8 +12,8 @@ import timeit
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 EVERYTHING = "geometric,base_frame,tool_offset,joint_compliance,external_load,joint_harmonics[joints=1,2,3,4,5,6;orders=1,2],backlash,thermal,link_bending"
 

@@ -31,9 +31,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 def run_chunk(job: tuple[str, int, int]) -> dict:
     """Child process: ``n`` hypothesis examples of ``dialect``; counts and the first crashes."""
-    from hypothesis import HealthCheck, Phase, given, seed, settings
-
     import fuzzing
+    from hypothesis import HealthCheck, Phase, given, seed, settings
 
     dialect, n, part = job
     cpu0 = time.process_time()

@@ -25,7 +25,7 @@ def field(n, seed=0):
 
 
 def one(n: int, method: str) -> None:
-    from postproc.learn import GPRPredictor
+    from postproc.model.learn import GPRPredictor
 
     X, y, _ = field(n)
     Xt, _, ft = field(2000, seed=1)

@@ -13,9 +13,9 @@ import time
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.identify import fit
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 EVERYTHING = "geometric,base_frame,tool_offset,joint_compliance,external_load,{harmonics},backlash,thermal"
 

@@ -27,8 +27,8 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.identify import Stats, fit, fit_predictor, residuals
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, fit_predictor, residuals
 
 PHYSICS = "geometric,base_frame,tool_offset,joint_compliance"
 
@@ -56,7 +56,7 @@ def timed(label: str, call):
 
 
 def sim(n: int) -> None:
-    from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+    from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
@@ -75,9 +75,9 @@ def sim(n: int) -> None:
 
 
 def ur10(root: Path, subsample: int) -> None:
-    from postproc.formats.ur10_ipa import read_series
-    from postproc.learn import GPRPredictor
-    from postproc.learn.features import features
+    from postproc.model.formats.ur10_ipa import read_series
+    from postproc.model.learn import GPRPredictor
+    from postproc.model.learn.features import features
 
     data, tool = read_series(root / "Series_A")
     robot = postproc.load_robot("ur10")

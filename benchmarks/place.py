@@ -30,10 +30,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 from placement_reference import reference_cell  # noqa: E402  (tests/, put on the path above)
 
 from postproc import placement as pl  # noqa: E402
-from postproc.place_program import problem_from_program  # noqa: E402
-from postproc.placement_branch import REASONS, reason_counts  # noqa: E402
+from postproc.process.place_program import problem_from_program  # noqa: E402
+from postproc.process.placement_branch import REASONS, reason_counts  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
-from postproc.robots import load_robot  # noqa: E402
+from postproc.robot.robots import load_robot  # noqa: E402
 
 CASES = [  # (program, extra options, what it is)
     ("examples/data/block_face.mod", [], "RAPID, confdata on every target, re-derived (default)"),

@@ -15,16 +15,16 @@ from __future__ import annotations
 import argparse
 import os
 import resource
+import tempfile
 import time
 from pathlib import Path
-import tempfile
 
 import numpy as np
 
 from postproc import placement as pl
-from postproc.place_program import problem_from_program
+from postproc.process.place_program import problem_from_program
 from postproc.programs import parse_program
-from postproc.robots import load_robot
+from postproc.robot.robots import load_robot
 
 
 def make_program(path: Path, points: int, spacing: float = 10.0) -> None:

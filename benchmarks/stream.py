@@ -6,7 +6,7 @@ Each size and path runs in a fresh process (peak RSS is per process): a raster p
 N moves (KRL ``LIN {X .., Y .., Z .., A 0, B 180, C 0} C_DIS`` or five-axis G-code with
 G43.5 tool axis vectors, the stream tests' raster) is compensated with a physics model of
 the KR160 (geometric, base_frame, tool_offset, joint_compliance) by
-- ``stream``: ``postproc.stream.compensate_streamed`` with its default worker processes
+- ``stream``: ``postproc.jobs.stream.compensate_streamed`` with its default worker processes
   (this process reads, cuts and parses; two workers compute each chunk's postures as
   written, handing the end posture on, then compensate, emit, re-parse check it; one
   temporary file renamed at the end);
@@ -62,8 +62,8 @@ def make_program(path: Path, n: int, dialect: str) -> None:
 
 def model():
     import postproc
-    from postproc.effects import parse_effects
-    from postproc.sim import random_truth
+    from postproc.model.effects import parse_effects
+    from postproc.model.sim import random_truth
 
     robot = postproc.load_robot("kr160_r1570")
     return random_truth(robot, np.array([0.0, 0.0, 200.0]), parse_effects("geometric,base_frame,tool_offset,joint_compliance"), np.random.default_rng(0))
@@ -76,7 +76,7 @@ def model_file(out: Path) -> Path:
 
 
 def load(out: Path):
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     return load_model(model_file(out))[0]
 
@@ -86,7 +86,7 @@ def options(dialect: str) -> dict:
 
 
 def run_stream(src: Path, out: Path, dialect: str, workers: int | None = None) -> None:
-    from postproc.stream import compensate_streamed
+    from postproc.jobs.stream import compensate_streamed
 
     compensate_streamed(src, load(out), out, workers=workers, tune_malloc=True, **options(dialect))
 
@@ -96,7 +96,7 @@ def run_serial(src: Path, out: Path, dialect: str) -> None:
 
 
 def run_whole(src: Path, out: Path, dialect: str) -> None:
-    from postproc.compensate import compensate
+    from postproc.jobs.compensate import compensate
     from postproc.programs import check_texts, emit_texts, files_for, parse_program, write_set
 
     tp = parse_program(src)
@@ -108,7 +108,7 @@ def run_whole(src: Path, out: Path, dialect: str) -> None:
 
 
 def run_loop(src: Path, out: Path, dialect: str) -> None:
-    from postproc.compensate import compensate
+    from postproc.jobs.compensate import compensate
     from postproc.programs import emit_texts, parse_program
 
     small = src.with_name("loop" + src.suffix)
@@ -123,9 +123,9 @@ def run_loop(src: Path, out: Path, dialect: str) -> None:
 
 
 def child(path: str, src: Path, out: Path, dialect: str) -> None:
-    import postproc.compensate  # noqa: F401  (imports are start-up, not work)
-    import postproc.stream  # noqa: F401
-    from postproc.model_io import save_model
+    import postproc.jobs.compensate  # noqa: F401  (imports are start-up, not work)
+    import postproc.jobs.stream  # noqa: F401
+    from postproc.model.model_io import save_model
 
     save_model(model_file(out), model())  # setup: the user's job starts from the model file
     t0, (own0, workers0) = time.perf_counter(), cpu_seconds()

@@ -40,8 +40,8 @@ def main() -> None:
     parser.add_argument("--dialect", default="krl", choices=("krl", "gcode"))
     parser.add_argument("--moves", type=int, default=1_000_000)
     args = parser.parse_args()
+    import postproc.jobs.stream as stream
     import postproc.programs as programs
-    import postproc.stream as stream
     from postproc import dialects
 
     totals: dict[str, float] = {}

@@ -34,15 +34,15 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import postproc  # noqa: E402
-from postproc.effects import parse_effects  # noqa: E402
-from postproc.errormodel import ErrorModel  # noqa: E402
-from postproc.formats.ur10_ipa import read_series  # noqa: E402
-from postproc.identify import fit  # noqa: E402
-from postproc.measurements import MeasurementSet  # noqa: E402
-from postproc.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
+from postproc.model.effects import parse_effects  # noqa: E402
+from postproc.model.errormodel import ErrorModel  # noqa: E402
+from postproc.model.formats.ur10_ipa import read_series  # noqa: E402
+from postproc.model.identify import fit  # noqa: E402
+from postproc.model.measurements import MeasurementSet  # noqa: E402
+from postproc.model.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
 from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
-from postproc.suggest.design import i_optimal_bound  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
+from postproc.suggest.design import i_optimal_bound  # noqa: E402
 
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
 NOISE = 0.02

@@ -10,8 +10,8 @@ time (about 2-5 min each on a shared 2-core machine); --skip-hybrid leaves them 
 from __future__ import annotations
 
 import json
-import subprocess
 import os
+import subprocess
 import sys
 import tempfile
 import time

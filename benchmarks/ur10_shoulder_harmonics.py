@@ -23,12 +23,12 @@ import numpy as np
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from postproc.effects import parse_effects  # noqa: E402
-from postproc.identify import residuals  # noqa: E402
-from postproc.measurements import read_measurements  # noqa: E402
+from postproc.model.effects import parse_effects  # noqa: E402
+from postproc.model.identify import residuals  # noqa: E402
+from postproc.model.measurements import read_measurements  # noqa: E402
+from postproc.model.validate import FitSpec, every_kth_group, fit_model, group_column, with_order_columns  # noqa: E402
 from postproc.progress import ProgressLine  # noqa: E402
-from postproc.robots import load_robot  # noqa: E402
-from postproc.validate import FitSpec, every_kth_group, fit_model, group_column, with_order_columns  # noqa: E402
+from postproc.robot.robots import load_robot  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE = ROOT / "benchmarks" / "results" / "ur10_shoulder_harmonics.png"

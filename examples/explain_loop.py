@@ -15,12 +15,12 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.diagnose import diagnose, grouped_findings, ladder
-from postproc.effects import parse_effects
-from postproc.identify import Stats, fit, residuals
-from postproc.measurements import write_text_atomic
+from postproc.model.diagnose import diagnose, grouped_findings, ladder
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, residuals
+from postproc.model.measurements import write_text_atomic
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.report.html import diagnosis_report
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 out_dir = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out")
 out_dir.mkdir(parents=True, exist_ok=True)

@@ -23,12 +23,12 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from postproc.fivex.commands import rtcp_calibrate  # noqa: E402
-from postproc.fivex.emit import emit  # noqa: E402
 from postproc.fivex.kinematics import fk  # noqa: E402
 from postproc.fivex.machine import load_machine  # noqa: E402
-from postproc.fivex.program import from_toolpath  # noqa: E402
 from postproc.fivex.simulate import perturbed, probe_rows, rows_csv  # noqa: E402
+from postproc.jobs.five_axis.commands import rtcp_calibrate  # noqa: E402
+from postproc.jobs.five_axis.emit import emit  # noqa: E402
+from postproc.jobs.five_axis.program import from_toolpath  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/fivex")

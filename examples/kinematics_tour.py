@@ -12,7 +12,7 @@ import numpy as np
 
 import postproc
 from postproc import kinematics as kin
-from postproc.frames import abc_to_matrix, make_transform
+from postproc.robot.frames import abc_to_matrix, make_transform
 
 robot = postproc.load_robot("kr160_r1570")
 tool = np.array([0.0, 0.0, 200.0])  # spindle tip 200 mm along the flange z axis

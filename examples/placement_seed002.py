@@ -31,11 +31,11 @@ import numpy as np  # noqa: E402
 
 from postproc import compliance as comp  # noqa: E402
 from postproc import placement as pl  # noqa: E402
-from postproc.forces import load_cut_params  # noqa: E402
-from postproc.place_program import problem_from_program  # noqa: E402
+from postproc.process.forces import load_cut_params  # noqa: E402
+from postproc.process.place_program import problem_from_program  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
 from postproc.report.placement_figures import error_maps  # noqa: E402
-from postproc.robots import load_robot  # noqa: E402
+from postproc.robot.robots import load_robot  # noqa: E402
 
 HERE = Path(__file__).resolve().parent
 Z_MM = 1170.0

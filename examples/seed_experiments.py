@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import sys
 
-from postproc.learn.experiments import seed000_hidden_sizes, seed001_transfer
+from postproc.model.learn.experiments import seed000_hidden_sizes, seed001_transfer
 
 quick = "--quick" in sys.argv[1:]
 

@@ -33,11 +33,11 @@ sys.path.insert(0, str(HERE.parent / "tests"))  # the Sinumerik impeller is buil
 
 from test_sinumerik import impeller_in_sinumerik  # noqa: E402
 
-from postproc.fivex.commands import compensate_five_program, convert_five, rtcp_calibrate  # noqa: E402
-from postproc.fivex.compensate import actual_tip, controller_axes  # noqa: E402
 from postproc.fivex.machine import load_machine  # noqa: E402
-from postproc.fivex.program import from_toolpath  # noqa: E402
 from postproc.fivex.simulate import perturbed, probe_rows, rows_csv  # noqa: E402
+from postproc.jobs.five_axis.commands import compensate_five_program, convert_five, rtcp_calibrate  # noqa: E402
+from postproc.jobs.five_axis.compensate import actual_tip, controller_axes  # noqa: E402
+from postproc.jobs.five_axis.program import from_toolpath  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
 
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "out/sinumerik")

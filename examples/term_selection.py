@@ -1,7 +1,7 @@
 """Which reducer harmonics does the fit choose? Simulated KR160s with harmonics 2:4 and 3:3
 (joint:order), 120 poses to fit and 300 to validate, noise 0.02 mm per axis; the model
 asks for ``joint_harmonics`` without options, so the fit chooses the terms
-(postproc.term_selection: best subset over all 24 joint/order terms, cross-validated size,
+(postproc.model.term_selection: best subset over all 24 joint/order terms, cross-validated size,
 selection frequency over resamples).
 
 Run: .venv/bin/python examples/term_selection.py [seed ...]   (default seeds 4 5 7 9)
@@ -14,9 +14,9 @@ import sys
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.identify import Stats, fit, residuals
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, residuals
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 MODEL = "geometric,base_frame,tool_offset,joint_compliance"
 TOOL = np.array([0.0, 0.0, 200.0])

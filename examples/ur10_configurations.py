@@ -40,11 +40,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 import postproc  # noqa: E402
-from postproc.effects import parse_effects  # noqa: E402
-from postproc.formats.ur10_ipa import read_series  # noqa: E402
-from postproc.identify import fit, residuals  # noqa: E402
-from postproc.kinematics import gravity_torque, jacobian  # noqa: E402
-from postproc.validate import every_kth_group  # noqa: E402
+from postproc.model.effects import parse_effects  # noqa: E402
+from postproc.model.formats.ur10_ipa import read_series  # noqa: E402
+from postproc.model.identify import fit, residuals  # noqa: E402
+from postproc.model.validate import every_kth_group  # noqa: E402
+from postproc.robot.kinematics import gravity_torque, jacobian  # noqa: E402
 
 PHYSICS = "geometric,base_frame,tool_offset,joint_compliance"
 MAX_ORDER = 259

@@ -28,9 +28,9 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.identify import fit, refit_base, residuals
-from postproc.formats.ur10_ipa import read_series
+from postproc.model.effects import parse_effects
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.identify import fit, refit_base, residuals
 
 args = [a for a in sys.argv[1:] if a != "--quick"]
 QUICK = "--quick" in sys.argv  # the test suite: every 20th pose of Series A, two of the ceiling fits

@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc.diagnose import Files, diagnose, grouped_findings, ladder
-from postproc.effects import parse_effects
-from postproc.formats.ur10_ipa import read_series
-from postproc.identify import fit
+from postproc.model.diagnose import Files, diagnose, grouped_findings, ladder
+from postproc.model.effects import parse_effects
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.identify import fit
 
 args = [a for a in sys.argv[1:] if a != "--quick"]
 EVERY = 20 if "--quick" in sys.argv else 3  # --quick (the test suite): every 20th pose of Series A

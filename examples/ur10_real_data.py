@@ -13,9 +13,9 @@ import time
 from pathlib import Path
 
 import postproc
-from postproc.effects import parse_effects
-from postproc.formats.ur10_ipa import read_series
-from postproc.identify import Stats, fit, nominal_model, refit_base, residuals
+from postproc.model.effects import parse_effects
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.identify import Stats, fit, nominal_model, refit_base, residuals
 
 root = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(__file__).resolve().parents[2] / "shared" / "data" / "ur10_ipa"
 robot = postproc.load_robot("ur10")

@@ -2,10 +2,15 @@
 
 from importlib.metadata import PackageNotFoundError, version
 
-from . import kinematics
+from . import moved
+
+moved.install()  # old module paths (postproc.effects.api, postproc.compensate, ...) stay importable
+
+from postproc.robot import kinematics
+from postproc.robot.kinematics import fk, gravity_torque, ik, jacobian
+from postproc.robot.robots import RobotModel, available_robots, load_robot
+
 from .errors import InputError, JobError, KinematicsError, PostprocError, RobotFileError, UnknownRobotError
-from .kinematics import fk, gravity_torque, ik, jacobian
-from .robots import RobotModel, available_robots, load_robot
 
 try:
     __version__ = version("postproc")
@@ -38,11 +43,11 @@ def __getattr__(name: str):
     # pull in compensation, the dialects and the program writers (about 1.5 s), which a
     # plain `import postproc` should not pay for.
     if name == "post":
-        from .cam.post import post  # lazily: compensation, languages and writers load on first use
+        from postproc.cam.post import post  # lazily: compensation, languages and writers load on first use
 
         return post
     if name == "suggest_poses":
-        from .suggest import suggest_poses  # lazily: as post
+        from postproc.suggest import suggest_poses  # lazily: as post
 
         return suggest_poses
     raise AttributeError(f"module 'postproc' has no attribute {name!r}")

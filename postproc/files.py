@@ -15,7 +15,7 @@ def write_all(files: dict[Path, bytes | Iterable[bytes]], backup: bool = False) 
     """Write every file of one job, or none of them.
 
     A file's content may be an iterable of byte strings (a long program written as it is
-    computed, postproc.stream): it is staged piece by piece, and an exception raised while
+    computed, postproc.jobs.stream): it is staged piece by piece, and an exception raised while
     producing it leaves nothing behind.
 
     Each file is written to a temporary file in its target's folder first (a missing

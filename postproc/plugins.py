@@ -5,8 +5,8 @@ three ways, all loaded by ``load_plugins``:
 
 - a path given by ``--plugins PATH`` (repeatable; a ``.py`` file or a folder of them);
 - the environment variable ``POSTPROC_PLUGINS`` (paths separated by ``os.pathsep``);
-- the entry-point groups ``postproc.effects``, ``postproc.predictors`` and
-  ``postproc.dialects`` of installed distributions (the entry point names a module, or
+- the entry-point groups ``postproc.model.effects``, ``postproc.predictors`` and
+  ``postproc.programs.dialects`` of installed distributions (the entry point names a module, or
   the class / dialect object itself).
 
 In a loaded module, every ``Effect`` subclass with a ``name`` defined there becomes an
@@ -30,14 +30,15 @@ from pathlib import Path
 from types import ModuleType
 from typing import Iterable
 
-from . import dialects as dialect_registry
-from . import effects as effect_registry
-from .dialects.base import Dialect
-from .effects.base import Effect
+from postproc.model import effects as effect_registry
+from postproc.model import predictor_plugins as predictor_registry
+from postproc.model.effects.base import Effect
+from postproc.model.plugin_records import ENV, HOW_TO_LOAD, RECORD_ATTR, PluginRecord, check_model_plugins, plugin_document, plugin_record  # noqa: F401  (callers take them from here too)
+from postproc.model.predictor_plugins import PluginPredictor
+from postproc.programs import dialects as dialect_registry
+from postproc.programs.dialects.base import Dialect
+
 from .errors import InputError
-from . import predictor_plugins as predictor_registry
-from .plugin_records import ENV, HOW_TO_LOAD, RECORD_ATTR, PluginRecord, check_model_plugins, plugin_document, plugin_record  # noqa: F401  (callers take them from here too)
-from .predictor_plugins import PluginPredictor
 
 GROUPS = {"effect": "postproc.effects", "predictor": "postproc.predictors", "dialect": "postproc.dialects"}
 

@@ -20,7 +20,7 @@ import typer
 
 import postproc
 from postproc.cli import app
-from postproc.effects import CATALOG
+from postproc.model.effects import CATALOG
 
 ROOT = Path(__file__).resolve().parents[1]
 #: The robot whose joint count and names fill the parameter tables (any bundled robot works).

@@ -9,9 +9,9 @@ from scipy.spatial.transform import Rotation
 
 import postproc
 from postproc import kinematics as kin
-from postproc.effects import parse_effects
-from postproc.identify import fit
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 TOOL = np.array([0.0, 0.0, 200.0])
 FRAME = "geometric,base_frame,tool_offset"

@@ -14,11 +14,11 @@ from pathlib import Path
 import numpy as np
 from helpers import TOOL, kr160
 
-from postproc.effects import EffectSum, parse_effects
-from postproc.effects.base import Effect
-from postproc.errormodel import ErrorModel
-from postproc.identify import fit
-from postproc.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.model.effects import EffectSum, parse_effects
+from postproc.model.effects.base import Effect
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import fit
+from postproc.model.sim import JointBox, random_truth, sample_poses, simulate
 
 PLUGINS = Path(__file__).parent / "plugins"
 MODEL = "geometric,base_frame,tool_offset,joint_compliance"

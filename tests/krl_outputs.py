@@ -30,7 +30,7 @@ SHIFT = np.array([0.1234, -0.0567, 0.0089])  # mm: every number moves, some by a
 
 
 def _tool_load():
-    from postproc.emit.tool_load import ToolLoad
+    from postproc.programs.emit.tool_load import ToolLoad
 
     return ToolLoad(12.5, (1.0, -2.0, 80.0), (0.05, 0.04, 0.01))
 
@@ -62,9 +62,9 @@ def _krl_texts(tp, path: Path) -> dict[str, str]:
 
 
 def _placed(path: Path) -> dict[str, str]:
-    from postproc.dialects.krl.placing import set_base
     from postproc.errors import EmitError
-    from postproc.frames import abc_to_matrix, make_transform
+    from postproc.programs.dialects.krl.placing import set_base
+    from postproc.robot.frames import abc_to_matrix, make_transform
 
     text = path.read_bytes().decode("latin-1")
     frame = make_transform(abc_to_matrix(np.array([[12.5, -3.25, 178.0]]))[0], np.array([1250.5, -300.25, 410.125]))

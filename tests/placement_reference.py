@@ -1,6 +1,6 @@
 """Brute-force reference for workpiece placement feasibility: one candidate at a time, one
 target at a time, written straight from the controller's rules (no vectorisation, no shared
-selection code with ``postproc.placement_branch``), to check the product against.
+selection code with ``postproc.process.placement_branch``), to check the product against.
 
 At each candidate, for each target in program order:
 - the flange pose's eight IK solutions (none: out of reach);
@@ -23,7 +23,7 @@ import itertools
 import numpy as np
 
 from postproc import kinematics as kin
-from postproc.posture import singularity_margins
+from postproc.robot.posture import singularity_margins
 
 REACH, CONF, LIMIT, COUPLING, WRIST, ELBOW, SHOULDER, FLIP = 1, 2, 3, 9, 10, 11, 12, 13
 

@@ -16,15 +16,15 @@ import re
 
 import numpy as np
 import pytest
+from test_arcs_e2e import CELLS, _configurations, _distances, _gcode, _krl, _rapid, _run_on_true_robot, _truth_and_model, _work_frame
 from typer.testing import CliRunner
 
-from test_arcs_e2e import CELLS, _configurations, _distances, _gcode, _krl, _rapid, _run_on_true_robot, _truth_and_model, _work_frame
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.ir import Kind
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.jobs.subdivide import compensate_subdivided
+from postproc.model.model_io import save_model
 from postproc.programs import emit_texts, parse_program
-from postproc.subdivide import compensate_subdivided
+from postproc.programs.ir import Kind
 
 TOLERANCE_MM = 0.01
 CELL = CELLS["kr160"]

@@ -1,6 +1,6 @@
 """Architecture rules that keep an effect in one file (issue 14).
 
-No code outside ``postproc/effects/`` names an effect: no string that is an effect's name,
+No code outside ``postproc/model/effects/`` names an effect: no string that is an effect's name,
 one of its parameter names (``"thermal.alpha"``, ``f"base_frame.r{ax}"``) or a spec with
 options (``"joint_harmonics[..."``). The rest of postproc reaches effects only through the
 Effect interface, so adding an effect is adding one file. Prose (help texts, messages,
@@ -14,7 +14,7 @@ import re
 from pathlib import Path
 
 import postproc
-from postproc.effects import CATALOG
+from postproc.model.effects import CATALOG
 
 PACKAGE = Path(postproc.__file__).parent
 EFFECTS_DIR = PACKAGE / "effects"
@@ -72,14 +72,14 @@ def test_no_effect_is_named_outside_the_effects_package():
         if EFFECTS_DIR in path.parents:
             continue
         found += [f"{path.relative_to(PACKAGE.parent)}:{line}: {text}" for line, text in offenders(path.read_text(encoding="utf-8"), pattern)]
-    assert not found, "effects named outside postproc/effects/ (go through the Effect interface):\n" + "\n".join(found)
+    assert not found, "effects named outside postproc/model/effects/ (go through the Effect interface):\n" + "\n".join(found)
 
 
 def test_every_catalog_effect_declares_its_interface():
     robot = postproc.load_robot("kr160_r1570")
     for name, cls in CATALOG.items():
         assert cls.summary and cls.finding and cls.identifiability, f"{name}: summary, finding and identifiability notes"
-        assert cls.__module__.endswith("." + name), f"{name} lives in postproc/effects/{name}.py"
+        assert cls.__module__.endswith("." + name), f"{name} lives in postproc/model/effects/{name}.py"
         effect = cls.from_options({})
         if effect.resolved:
             assert effect.params(robot), f"{name} declares its parameters"

@@ -1,7 +1,7 @@
-"""A dialect is one object: no code outside postproc/dialects/ branches on a dialect's name.
+"""A dialect is one object: no code outside postproc/programs/dialects/ branches on a dialect's name.
 
 What a language does (its files, parsing, frames, configuration rules, emitting) lives in
-its package under postproc/dialects/; everything else asks the registry. Branching on
+its package under postproc/programs/dialects/; everything else asks the registry. Branching on
 ``tp.dialect == "krl"``, ``{"rapid": ...}[name]`` or a source file's role elsewhere is how a
 compensated $config.dat target came to be never written. CLI option values are fine as
 long as they go through the registry (``dialects.get``), which this test does not flag.
@@ -69,7 +69,7 @@ def _modules_outside_dialects():
 
 def test_no_dialect_branching_outside_the_dialects_package():
     offences = [f"{path.relative_to(PACKAGE.parent)}:{line}: {what}" for path in _modules_outside_dialects() for line, what in branching_by_name(path.read_text(encoding="utf-8"), frozenset(OTHER_MEANING.get(path.parent.name, ())))]
-    assert not offences, "dialect knowledge outside postproc/dialects/:\n" + "\n".join(offences)
+    assert not offences, "dialect knowledge outside postproc/programs/dialects/:\n" + "\n".join(offences)
 
 
 @pytest.mark.parametrize(
@@ -116,8 +116,8 @@ class ToyDialect(dialects.Dialect):
     def parse_sources(self, sources):
         import numpy as np
 
-        from postproc.ir import NF, Kind
-        from postproc.parse.common import Builder, LineIndex, scan_numbers
+        from postproc.programs.ir import NF, Kind
+        from postproc.programs.parse.common import Builder, LineIndex, scan_numbers
 
         doc = sources[0]
         builder, numbers, lines = Builder(self.name, "none", [doc]), scan_numbers(doc.text), LineIndex(doc.text)

@@ -11,18 +11,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_real_corpus import RECORDINGS, corpus_file
 
 from postproc import arcs
 from postproc import kinematics as kin
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
 from postproc.errors import InputError, ParseError
-from postproc.ir import F_ARC, Kind
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.sim import random_truth
 from postproc.programs import emit_texts, parse_program
-from postproc.robots import load_robot
-from postproc.sim import random_truth
-
-from test_real_corpus import RECORDINGS, corpus_file
+from postproc.programs.ir import F_ARC, Kind
+from postproc.robot.robots import load_robot
 
 TOOL = np.array([0.0, 0.0, 200.0])
 ARC_FEED = re.compile(r"(ARC_FEED|USE_LENGTH_UNITS|SELECT_PLANE)\(([^)]*)\)")
@@ -210,7 +209,7 @@ def test_the_cli_reports_the_mid_arc_deviation_and_refuses_beyond_max_deviation(
     from typer.testing import CliRunner
 
     from postproc.cli import app
-    from postproc.model_io import save_model
+    from postproc.model.model_io import save_model
 
     runner = CliRunner()
     model_path = tmp_path / "model.json"

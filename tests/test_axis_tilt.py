@@ -8,13 +8,13 @@ import pytest
 from helpers import TOOL, kr160
 
 import postproc
-from postproc.diagnose import diagnose
-from postproc.effects import parse_effects
-from postproc.effects.axis_tilt import parallel_pairs
-from postproc.errormodel import ErrorModel
-from postproc.identify import fit
-from postproc.kinematics import joint_frames
-from postproc.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.model.diagnose import diagnose
+from postproc.model.effects import parse_effects
+from postproc.model.effects.axis_tilt import parallel_pairs
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import fit
+from postproc.model.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.robot.kinematics import joint_frames
 
 FR = "geometric,base_frame,tool_offset,joint_compliance"
 UR_TOOL = np.array([0.0, 0.0, 109.0])
@@ -92,7 +92,7 @@ def test_diagnose_ranks_a_hidden_tilt_first():
 
 @pytest.mark.parametrize("bad", ["axis_tilt[frames=0]", "axis_tilt[frames=x]", "axis_tilt[axes=2]"])
 def test_bad_options_are_refused(bad):
-    from postproc.effects import EffectSpecError
+    from postproc.model.effects import EffectSpecError
 
     with pytest.raises(EffectSpecError):
         parse_effects(bad)

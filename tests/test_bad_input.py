@@ -71,7 +71,7 @@ def verified_robot(tmp_path_factory):
     so that only the row edited below lies outside them."""
     import postproc
 
-    text = (postproc.robots.resources.files("postproc.robot_files") / "kr160_r1570.toml").read_text()
+    text = (postproc.robot.robots.resources.files("postproc.robot_files") / "kr160_r1570.toml").read_text()
     start = text.index("[limits]")
     end = text.index("\n[", start + 1) + 1
     limits = '[limits]\nsource = "test"\nestimate = false\nlower = [-185.0, -160.0, -170.0, -350.0, -180.0, -350.0]\nupper = [185.0, 60.0, 170.0, 350.0, 180.0, 350.0]\n\n'

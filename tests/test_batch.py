@@ -12,13 +12,13 @@ from helpers import FRAME_AND_COMPLIANCE, TOOL
 from typer.testing import CliRunner
 
 import postproc
-from postproc.batch import compensate_file
-from postproc.programs import write_texts
 from postproc.cli import app
-from postproc.effects import parse_effects
 from postproc.errors import OutputError
-from postproc.model_io import load_model, save_model
-from postproc.sim import random_truth
+from postproc.jobs.batch import compensate_file
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import load_model, save_model
+from postproc.model.sim import random_truth
+from postproc.programs import write_texts
 
 runner = CliRunner()
 

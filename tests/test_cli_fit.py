@@ -9,7 +9,7 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.model_io import load_model
+from postproc.model.model_io import load_model
 
 runner = CliRunner()
 
@@ -88,7 +88,7 @@ def test_simulate_rejects_unknown_workspace(tmp_path):
 
 
 def test_simulate_workspace_regions(tmp_path):
-    from postproc.measurements import read_measurements
+    from postproc.model.measurements import read_measurements
 
     out = tmp_path / "cyl.csv"
     result = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--n", "60", "--region", "theta1=-10:10;radius=900:1000;z=400:500;tilt=5", "-o", str(out)])

@@ -17,13 +17,13 @@ from typer.testing import CliRunner
 import postproc
 from postproc import kinematics as kin
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
 from postproc.errors import InputError
-from postproc.identify import fit
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 runner = CliRunner()
 EFFECTS = FRAME_AND_COMPLIANCE
@@ -223,7 +223,7 @@ def test_bad_inputs_exit_2_without_output(truth_and_model, tmp_path):
     result = runner.invoke(app, ["compensate", str(ngc), "--model", str(bad_model), "-o", str(tmp_path / "o3.ngc")])
     assert result.exit_code == 2 and "kr999" in result.stderr
     skewed = replace(postproc.load_robot("ur10"), alpha_deg=np.array([90.0, 0.0, 0.0, 90.0, 90.0, 0.0]))  # neither OPW nor UR-shaped
-    no_ik = replace(_fitted_on_simulated(postproc.load_robot("ur10"), "geometric", 60, postproc.sim.JointBox(), seed=1), robot=skewed)
+    no_ik = replace(_fitted_on_simulated(postproc.load_robot("ur10"), "geometric", 60, postproc.model.sim.JointBox(), seed=1), robot=skewed)
     with pytest.raises(InputError, match="analytic IK"):
         compensate(parse_program(rapid_program(tmp_path)), no_ik)
     thermal = _fitted_on_simulated(model.robot, "geometric,thermal", 120, Cylinder(), seed=2)

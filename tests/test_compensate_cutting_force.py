@@ -9,16 +9,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
-from helpers import TOOL, kr160
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.forces import load_cut_params, program_forces
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import save_model
+from postproc.model.sim import random_truth
+from postproc.process.forces import load_cut_params, program_forces
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import random_truth
 
 CUT = Path(__file__).resolve().parents[1] / "examples" / "cut_aluminium.toml"
 runner = CliRunner()
@@ -31,7 +31,7 @@ def model():
 
 def _program(tmp_path):
     from postproc import kinematics as kin
-    from postproc.frames import abc_to_matrix
+    from postproc.robot.frames import abc_to_matrix
 
     # An axis PTP to the first target's own joints: the straight moves start where the robot stands.
     first = np.eye(4)
@@ -56,8 +56,7 @@ def test_cutting_force_is_pre_compensated(model, tmp_path):
     (tmp_path / "out.src").write_text(emit_texts(tp, new)[0], encoding="latin-1")
     written = parse_program(tmp_path / "out.src")
     from postproc import kinematics as kin
-
-    from postproc.posture import branch_of
+    from postproc.robot.posture import branch_of
 
     # The controller keeps the posture of the axis PTP along the LINs (KSS: LIN ignores S and T).
     flange = written.base_poses()[1:] @ np.linalg.inv(written.tools[written.tool[1:]])

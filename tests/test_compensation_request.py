@@ -17,17 +17,17 @@ import postproc
 from postproc.cam.post import post_request
 from postproc.cli import app
 from postproc.cli.compensate import _can_stream
-from postproc.compensate import compensate, compensate_with, request_for
 from postproc.compensation.machine import Machine
 from postproc.compensation.request import CompensationRequest
-from postproc.effects import parse_effects
-from postproc.errormodel import ErrorModel
 from postproc.errors import InputError, ModelFileError
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate, compensate_with, request_for
+from postproc.jobs.stream import compensate_streamed, stream_request
+from postproc.jobs.target_file import load_target
+from postproc.jobs.targets import FiveAxisTarget, RobotTarget
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import save_model
 from postproc.programs import parse_program
-from postproc.stream import compensate_streamed, stream_request
-from postproc.target_file import load_target
-from postproc.targets import FiveAxisTarget, RobotTarget
 
 runner = CliRunner()
 HERE = Path(__file__).parent

@@ -15,8 +15,8 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.ir import Kind
 from postproc.programs import parse_program
+from postproc.programs.ir import Kind
 
 runner = CliRunner()
 ARCS = """G21 G90 G17

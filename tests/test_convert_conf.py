@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 import postproc
 from postproc.cli import app
-from postproc.convert_conf import joints_taken
+from postproc.jobs.convert_conf import joints_taken
 from postproc.programs import parse_program
 
 runner = CliRunner()

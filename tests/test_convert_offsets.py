@@ -33,8 +33,8 @@ from test_real_corpus import _moves, canonical_endpoints
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.ir import Kind
 from postproc.programs import parse_program
+from postproc.programs.ir import Kind
 
 RECORDED = Path(__file__).parent / "data" / "rs274" / "convert_offsets"
 runner = CliRunner()

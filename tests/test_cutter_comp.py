@@ -31,10 +31,10 @@ sys.path.insert(0, str(Path(__file__).parent))
 from rs274_recordings import assert_current, needs_rs274, record_all  # noqa: E402
 from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274  # noqa: E402
 
-from postproc.arcs import describe  # noqa: E402
 from postproc.errors import EmitError  # noqa: E402
-from postproc.ir import Kind  # noqa: E402
 from postproc.programs import emit_texts, parse_program  # noqa: E402
+from postproc.programs.arcs import describe  # noqa: E402
+from postproc.programs.ir import Kind  # noqa: E402
 
 RECORDED = Path(__file__).parent / "data" / "rs274" / "cutter_comp"
 HEAD = "G21 G17 G90 G40 G94\nG0 X-10 Y-10 Z5\nG1 Z-1 F300\n"
@@ -131,7 +131,7 @@ def test_inverse_time_speeds_equal_rs274s(tmp_path, name):
     the feed rate rs274 sets for it (printed to 4 decimals), the move after G40 included."""
     from test_feed_modes import canonical_feeds
 
-    from postproc.emit.feeds import _speeds
+    from postproc.programs.emit.feeds import _speeds
 
     tp = parse_program(_program(tmp_path, name))
     text = (RECORDED / f"{name}.canon").read_text(encoding="latin-1")

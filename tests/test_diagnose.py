@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from helpers import TOOL, kr160
-from postproc.diagnose import diagnose, holm, ladder
-from postproc.effects import parse_effects
-from postproc.identify import fit
-from postproc.measurements import read_measurements
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+
+from postproc.model.diagnose import diagnose, holm, ladder
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.measurements import read_measurements
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 FR = "geometric,base_frame,tool_offset"
 FLOOR = 0.02 * np.sqrt(3)

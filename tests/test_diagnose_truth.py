@@ -17,16 +17,16 @@ from hidden_plugins import BOX, HIDDEN, MODEL, PLUGINS, hidden_case
 from threadpoolctl import threadpool_info
 from typer.testing import CliRunner
 
-import postproc.diagnose as diagnose_module
+import postproc.model.diagnose as diagnose_module
 from postproc import noise_floor
 from postproc.cli import app
-from postproc.diagnose import OTHER_WAY, diagnose
-from postproc.effects import parse_effects
-from postproc.identify import fit, residuals
-from postproc.measurements import MeasurementSet, write_measurements
-from postproc.model_io import save_model
+from postproc.model.diagnose import OTHER_WAY, diagnose
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit, residuals
+from postproc.model.measurements import MeasurementSet, write_measurements
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.progress import ProgressLine
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
 
 FLOOR = 0.02 * np.sqrt(3)
 FR = "geometric,base_frame,tool_offset,joint_compliance"
@@ -96,7 +96,7 @@ def _case(truth_spec, seed, n):
 def test_linearised_ranking_matches_the_full_refit():
     """The linearised candidates rank as the full nonlinear refit with nonlinear
     cross-validation ranks them (the old way), and their CV RMS agree closely."""
-    from postproc.identify import cross_validation_errors, free_mask
+    from postproc.model.identify import cross_validation_errors, free_mask
 
     data, model = _case(FR + ",backlash[joints=2,3],thermal", 5, 120)
     names = ["backlash", "thermal", "base_tilt", "link_bending"]
@@ -171,7 +171,7 @@ def test_diagnose_json_carries_the_verdict(tmp_path):
 def test_seven_percent_is_never_significant():
     """The issue's case: a candidate that removes 7 % of the residual on every pose (so a
     paired test calls it significant beyond doubt) goes 5 % of the way to the floor: left out."""
-    from postproc.candidates import judge
+    from postproc.model.candidates import judge
 
     base_sq = np.random.default_rng(0).chisquare(3, 600) * 0.01  # CV RMS 0.17 mm, floor 0.035 mm
     small = judge("thermal", base_sq, 0.93 * base_sq, floor_mm=0.035, rng_seed=0)

@@ -10,7 +10,7 @@ import pytest
 from postproc import dialects
 from postproc import kinematics as kin
 from postproc.errors import InputError
-from postproc.robots import load_robot
+from postproc.robot.robots import load_robot
 
 CORPUS = Path(__file__).parent / "corpus"
 
@@ -49,7 +49,7 @@ def test_unknown_dialect_names_list_the_known_ones():
 def kr160_solutions():
     robot = load_robot("kr160_r1570")
     q = np.array([[10.0, -80.0, 100.0, 30.0, 45.0, -20.0], [-25.0, -60.0, 80.0, -100.0, -30.0, 60.0]])
-    from postproc.kinematics import fk
+    from postproc.robot.kinematics import fk
 
     return robot, q, kin.ik(robot, fk(robot, q))
 
@@ -94,7 +94,7 @@ def test_a_rapid_program_file_names_its_missing_or_malformed_parts(tmp_path):
 
 
 def test_each_language_names_the_controller_that_runs_it():
-    from postproc.controller import Controller
+    from postproc.programs.controller import Controller
 
     makers = {name: dialects.get(name).controller.maker for name in ("rapid", "krl", "gcode")}
     assert makers == {"rapid": "ABB", "krl": "KUKA", "gcode": None}

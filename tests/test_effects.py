@@ -6,13 +6,12 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc.effect_check import check_effect
-from postproc.effects import BUILTIN, CATALOG, EffectSpecError, EffectSum, Geometric, JointHarmonics, parse_effects
-from postproc.effects.backlash import approach_from_order
-from postproc.errormodel import ErrorModel
 from postproc.errors import MeasurementError
-from postproc.measurements import MeasurementSet
-
+from postproc.model.effect_check import check_effect
+from postproc.model.effects import BUILTIN, CATALOG, EffectSpecError, EffectSum, Geometric, JointHarmonics, parse_effects
+from postproc.model.effects.backlash import approach_from_order
+from postproc.model.errormodel import ErrorModel
+from postproc.model.measurements import MeasurementSet
 
 
 def test_catalog_names_are_the_spec_names():
@@ -122,7 +121,7 @@ def test_thermal_growth_scales_link_lengths():
     model = ErrorModel.create(robot, [0, 0, 0], parse_effects("thermal"), {"thermal.alpha": 1e-4})
     pos = model.predict(meas)
     grow = 1 + 1e-4 * (meas.temp_c - 20.0)
-    expected = np.stack([postproc.kinematics.forward_dh(postproc.kinematics.dh_angles(robot, meas.q_deg[i : i + 1]), robot.d_mm * g, robot.a_mm * g, robot.alpha_deg)[0, :3, 3] for i, g in enumerate(grow)])
+    expected = np.stack([postproc.robot.kinematics.forward_dh(postproc.robot.kinematics.dh_angles(robot, meas.q_deg[i : i + 1]), robot.d_mm * g, robot.a_mm * g, robot.alpha_deg)[0, :3, 3] for i, g in enumerate(grow)])
     np.testing.assert_allclose(pos, expected, atol=1e-9)
 
 

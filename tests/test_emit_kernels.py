@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postproc.emit import number_kernel
-from postproc.emit.splice import format_like
+from postproc.programs.emit import number_kernel
+from postproc.programs.emit.splice import format_like
 
 
 def test_digits_are_pythons_format_for_every_value_and_precision():

@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.engagement import block_stock, from_stock, load_stock, program_engagement, stock_heights
 from postproc.errors import InputError
-from postproc.forces import CutParams, cutter_forces, engagement_from_width
+from postproc.process.engagement import block_stock, from_stock, load_stock, program_engagement, stock_heights
+from postproc.process.forces import CutParams, cutter_forces, engagement_from_width
 
 REPO = Path(__file__).resolve().parents[1]
 

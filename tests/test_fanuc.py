@@ -14,11 +14,11 @@ import pytest
 
 import postproc
 from postproc import kinematics as kin
-from postproc.dialects import sniff
-from postproc.dialects.fanuc.controller import R30IB, config_text, fanuc_config
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.dialects import sniff
+from postproc.programs.dialects.fanuc.controller import R30IB, config_text, fanuc_config
+from postproc.programs.ir import Kind
 
 SAMPLE = Path(__file__).parent / "data" / "fanuc_sample.ls"
 
@@ -60,7 +60,7 @@ def test_sample_targets_as_the_manual_reads_them(sample):
 
 def test_orientations_are_written_back_as_w_p_r(sample):
     """A new orientation is written as W P R near the numbers there (rotation_forms 'wpr')."""
-    from postproc.frames import abc_to_quat_wxyz
+    from postproc.robot.frames import abc_to_quat_wxyz
 
     turned = abc_to_quat_wxyz(np.array([[95.0, 0.0, 180.0]]))  # R 95 (about Z), W 180
     rows = np.array([1, 5])  # P[2] is the target of both lines: one number, one value (else SharedNumberError)
@@ -181,7 +181,7 @@ def test_branch_from_conf_gives_back_the_joints(m20ia):
 def test_the_one_pass_reading_of_pos_equals_the_block_reading(tmp_path):
     """The controller's own Cartesian layout is read in one pass (positions._canonical); it
     must give what the block-by-block reader gives."""
-    from postproc.dialects.fanuc import positions
+    from postproc.programs.dialects.fanuc import positions
 
     text = SAMPLE.read_text(encoding="latin-1").replace("P[5]{", "P[9]{")  # any P numbers
     cartesian = text[: text.index("P[9]{")] + "/END\n"  # the joint position P[9] is not of that layout

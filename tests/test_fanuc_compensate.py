@@ -12,9 +12,9 @@ from helpers import FRAME_AND_COMPLIANCE, true_tcp, truth_and_fit
 
 import postproc
 from postproc import kinematics as kin
-from postproc.compensate import compensate
+from postproc.jobs.compensate import compensate
+from postproc.model.sim import Cylinder
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import Cylinder
 
 UFRAME1 = np.eye(4)
 UFRAME1[:3, 3] = [0.0, 0.0, -100.0]  # the table 100 mm below the J2 height
@@ -52,7 +52,7 @@ def truth_and_model(m20ia):
 def run_on(truth, tp):
     """Where the true robot's TCP goes when the controller runs the program: each target's
     joints by the nominal IK, the CONFIG's solution ('N U T, 0, 0, 0')."""
-    from postproc.dialects.fanuc.controller import R30IB
+    from postproc.programs.dialects.fanuc.controller import R30IB
 
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
     q, branch = R30IB.branch_from_conf(truth.robot, kin.ik(truth.robot, flange), tp.conf)

@@ -9,9 +9,9 @@ from typer.testing import CliRunner
 import postproc
 from postproc import dialects
 from postproc.cli import app
-from postproc.convert_conf import converted_conf
-from postproc.ir import Kind
+from postproc.jobs.convert_conf import converted_conf
 from postproc.programs import parse_program, write_program
+from postproc.programs.ir import Kind
 
 runner = CliRunner()
 

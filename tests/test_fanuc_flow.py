@@ -9,8 +9,8 @@ from dataclasses import replace
 
 import numpy as np
 
-from postproc.dialects import get
 from postproc.programs import emit_files, parse_program
+from postproc.programs.dialects import get
 
 POS = "".join(
     f"P[{n}]{{\n   GP1:\n\tUF : 0, UT : 0,\t\tCONFIG : 'N U T, 0, 0, 0',\n\tX = {x:9.3f}  mm,\tY =     0.000  mm,\tZ =   300.000  mm,\n"

@@ -1,5 +1,5 @@
 """The compensation loop's compiled shortcuts give bit for bit what the generic code gives
-(postproc.fast_model, kinematics.ik_branch / branch_joints)."""
+(postproc.model.fast_model, kinematics.ik_branch / branch_joints)."""
 
 import numpy as np
 import pytest
@@ -7,8 +7,8 @@ import pytest
 import postproc
 from postproc import fast_model
 from postproc import kinematics as kin
-from postproc.effects import parse_effects
-from postproc.sim import random_truth
+from postproc.model.effects import parse_effects
+from postproc.model.sim import random_truth
 
 ROBOTS = ("kr160_r1570", "irb2400_10", "kr6_r700_sixx")
 

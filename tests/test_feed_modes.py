@@ -27,10 +27,10 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.emit.feeds import machine_speeds
 from postproc.errors import EmitError, ParseError
-from postproc.ir import Kind
 from postproc.programs import parse_program
+from postproc.programs.emit.feeds import machine_speeds
+from postproc.programs.ir import Kind
 
 HERE = Path(__file__).parent
 PROGRAM = HERE / "data" / "rs274" / "feed_modes" / "feeds.ngc"
@@ -212,7 +212,7 @@ def test_corpus_feeds_equal_rs274s(name):
     gives no tool speed either: a rotary-only or zero-length G93 move."""
     from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions, recording
 
-    from postproc.emit.feeds import _speeds
+    from postproc.programs.emit.feeds import _speeds
 
     tp = parse_program(corpus_file(name))
     text = recording(name).read_text(encoding="latin-1")

@@ -12,11 +12,11 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.diagnose import OTHER_WAY, Candidate, Files, _findings, split_command
-from postproc.effects import parse_effects
-from postproc.errormodel import ErrorModel
-from postproc.model_io import load_model
-from postproc.structure import Structure
+from postproc.model.diagnose import OTHER_WAY, Candidate, Files, _findings, split_command
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import load_model
+from postproc.model.structure import Structure
 
 runner = CliRunner()
 FLOOR = 0.02 * np.sqrt(3)
@@ -114,7 +114,7 @@ def test_the_cli_finding_command_runs_and_adds_the_effect(tmp_path):
 def test_each_command_is_printed_once_after_the_findings_it_acts_on():
     """Findings in a row that end in the same command are grouped (the CLI, the report and
     the examples print the command once)."""
-    from postproc.diagnose import grouped_findings, with_command
+    from postproc.model.diagnose import grouped_findings, with_command
 
     findings = [with_command("a follows s1", "postproc fit +backlash"), with_command("backlash explains 93%", "postproc fit +backlash"),
                 "no command here", with_command("use it", "postproc compensate"), with_command("use it too", "postproc compensate")]

@@ -10,12 +10,12 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.fivex.compensate import actual_tip, controller_axes
-from postproc.fivex.emit import emit
 from postproc.fivex.errormap import GridFileError, load_grid
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.compensate import actual_tip, controller_axes
+from postproc.jobs.five_axis.emit import emit
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 HERE = Path(__file__).parent

@@ -10,10 +10,10 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.fivex.emit import emit
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.emit import emit
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 HERE = Path(__file__).parent
@@ -22,7 +22,7 @@ IMPELLER = HERE / "corpus" / "fivex" / "impeller-7bl-xyzac-head.ngc"
 CALIBRATED = HERE / "data" / "fivex" / "xyzac-trt-calibrated.toml"
 runner = CliRunner()
 # The G-code programs here (the LinuxCNC impeller, ours) never set G54: the five-axis path
-# refuses them unless the work offset is given (postproc/fivex/offsets.py); zero here: the
+# refuses them unless the work offset is given (postproc/jobs/five_axis/offsets.py); zero here: the
 # part's frame is the machine frame with the rotary axes at zero, as they were written for.
 ZERO = {"G54": np.eye(4)}
 AT_ZERO = ("--frame", "G54=0,0,0,0,0,0")

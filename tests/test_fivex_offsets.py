@@ -1,5 +1,5 @@
 """Five-axis G-code programs read through their work offsets and tool lengths, or refused
-(issue 12, "G-code work offsets and tool length"; postproc/fivex/offsets.py).
+(issue 12, "G-code work offsets and tool length"; postproc/jobs/five_axis/offsets.py).
 
 The five-axis kinematics work in the machine frame with the rotary axes at zero (the rotary
 axes' points in machines/*.toml are there). The controller puts a program point there with
@@ -45,14 +45,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
-
 from rs274_recordings import assert_current, needs_rs274, record_all
+from typer.testing import CliRunner
 
 from postproc.cli import app
 from postproc.fivex.machine import load_machine
-from postproc.fivex.offsets import program_to_machine, to_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.offsets import program_to_machine, to_machine
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 runner = CliRunner()

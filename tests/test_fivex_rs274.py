@@ -25,10 +25,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.fivex.emit import emit
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.emit import emit
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 HERE = Path(__file__).parent

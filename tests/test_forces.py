@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from postproc.errors import InputError
-from postproc.forces import (
+from postproc.process.forces import (
     CutFileError,
     CutParams,
     cutter_forces,

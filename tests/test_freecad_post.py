@@ -29,8 +29,8 @@ from postproc.cam.arcs import linearise_arc
 from postproc.cam.freecad import annotate, commands_to_gcode, planned_targets, run
 from postproc.cli import app
 from postproc.errors import InputError, JobError
-from postproc.model_io import load_model
-from postproc.program_check import ModelMismatchError
+from postproc.jobs.program_check import ModelMismatchError
+from postproc.model.model_io import load_model
 from postproc.programs import emit_texts, parse_program
 
 runner = CliRunner()

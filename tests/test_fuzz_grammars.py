@@ -7,11 +7,11 @@ file 150 per dialect (about 30 s in all), from a fixed seed.
 
 from __future__ import annotations
 
+import fuzzing
 import numpy as np
 import pytest
 from hypothesis import HealthCheck, Phase, given, note, seed, settings
 
-import fuzzing
 from postproc.errors import ParseError
 from postproc.programs import emit_texts, parse_program
 

@@ -24,9 +24,9 @@ import pytest
 from rs274_recordings import assert_current, needs_rs274, record_all
 from test_real_corpus import _moves, canonical_endpoints, machine_positions, run_rs274
 
-from postproc.dialects.gcode.canned import PECK_CLEARANCE_MM
 from postproc.errors import ParseError
 from postproc.programs import parse_program
+from postproc.programs.dialects.gcode.canned import PECK_CLEARANCE_MM
 
 RECORDED = Path(__file__).parent / "data" / "rs274" / "cycles"
 

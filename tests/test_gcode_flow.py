@@ -1,4 +1,4 @@
-"""G-code control flow (postproc/dialects/gcode/flow.py): every executed motion is one IR row.
+"""G-code control flow (postproc/programs/dialects/gcode/flow.py): every executed motion is one IR row.
 
 Expected positions are written by hand from LinuxCNC's G-code manual, "O Codes"
 (https://linuxcnc.org/docs/html/gcode/o-code.html) and "Numbered/Named Parameters"
@@ -14,9 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.dialects.gcode import flow
 from postproc.errors import ParseError, SharedNumberError
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.dialects.gcode import flow
 
 
 def _read(tmp_path: Path, text: str, name: str = "p.ngc"):

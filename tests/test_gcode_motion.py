@@ -22,8 +22,8 @@ from rs274_recordings import assert_current, needs_rs274, record_all
 from test_real_corpus import _moves, canonical_endpoints, machine_positions
 
 from postproc.errors import EmitError, ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 RECORDED = Path(__file__).parent / "data" / "rs274" / "motion"
 
@@ -245,7 +245,7 @@ if __name__ == "__main__":
 def test_runs_of_holes_read_at_once_equal_the_block_by_block_reading(tmp_path, monkeypatch):
     """Blocks that only give the next hole are expanded for the whole run at once; the
     result must be the block-by-block one (G98 below R, G99, G83 pecks, G18, F words)."""
-    import postproc.dialects.gcode.interp as interp
+    import postproc.programs.dialects.gcode.interp as interp
 
     holes = "".join(f"X{i * 1.5:.3f} Y{(i % 7) * 0.5:.3f}{' F80' if i % 5 == 0 else ''}\n" for i in range(40))
     zx_holes = "".join(f"X{i * 1.5:.3f} Z{(i % 3) * 0.5:.3f}\n" for i in range(10))

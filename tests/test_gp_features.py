@@ -15,13 +15,13 @@ from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.effects import parse_effects
 from postproc.errors import IdentificationError
-from postproc.identify import fit, fit_predictor, residuals
-from postproc.learn.features import GP_KINDS, features
-from postproc.measurements import write_measurements
-from postproc.model_io import load_model, save_model
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit, fit_predictor, residuals
+from postproc.model.learn.features import GP_KINDS, features
+from postproc.model.measurements import write_measurements
+from postproc.model.model_io import load_model, save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 runner = CliRunner()
 WRIST_STEP_MM = 0.3  # the error that differs between the two wrist configurations

@@ -9,10 +9,10 @@ import pytest
 from scipy.optimize import approx_fprime
 from sklearn.gaussian_process import GaussianProcessRegressor
 
-from postproc.learn import GPRPredictor
-from postproc.learn.gp_lml import neg_log_marginal_likelihood
-from postproc.learn.memory import MemoryBudgetError, gp_fit_bytes
-from postproc.learn.residual import estimator_from_state, estimator_state
+from postproc.model.learn import GPRPredictor
+from postproc.model.learn.gp_lml import neg_log_marginal_likelihood
+from postproc.model.learn.memory import MemoryBudgetError, gp_fit_bytes
+from postproc.model.learn.residual import estimator_from_state, estimator_state
 
 
 def _field(n, seed=0):
@@ -77,7 +77,7 @@ def test_a_fit_that_would_not_fit_in_memory_is_refused_before_it_starts():
 
 
 def test_pso_bp_on_a_large_set_uses_mini_batches_and_stops_early():
-    from postproc.learn import PSOBPPredictor
+    from postproc.model.learn import PSOBPPredictor
 
     X, y, f = _field(3000)
     seen = []
@@ -89,7 +89,7 @@ def test_pso_bp_on_a_large_set_uses_mini_batches_and_stops_early():
 def test_interrupted_fit_says_so_and_writes_no_model(tmp_path, monkeypatch):
     from typer.testing import CliRunner
 
-    import postproc.identify
+    import postproc.model.identify
     from postproc.cli import app
 
     runner = CliRunner()
@@ -100,7 +100,7 @@ def test_interrupted_fit_says_so_and_writes_no_model(tmp_path, monkeypatch):
         progress(1, 10, "expert 1 of 9")
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(postproc.identify, "fit_predictor", interrupted)
+    monkeypatch.setattr(postproc.model.identify, "fit_predictor", interrupted)
     out = tmp_path / "model.json"
     result = runner.invoke(app, ["fit", str(meas), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "--cv", "0", "--predictor", "gpr", "-o", str(out)])
     assert result.exit_code == 130 and "interrupted: no model written" in result.stderr

@@ -18,14 +18,14 @@ from typer.testing import CliRunner
 
 from postproc import dialects
 from postproc.cli import app
-from postproc.dialects.heidenhain import parse as klartext_parse
 from postproc.errors import ParseError
-from postproc.fivex.compensate import actual_tip, controller_axes
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
-from postproc.ir import Kind
+from postproc.jobs.five_axis.compensate import actual_tip, controller_axes
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.dialects.heidenhain import parse as klartext_parse
+from postproc.programs.ir import Kind
 
 HERE = Path(__file__).parent
 CORPUS = HERE / "corpus" / "heidenhain"
@@ -209,8 +209,8 @@ def test_fuzzed_programs_never_crash():
 def test_calibration_as_tnc_kinematics_chain(tmp_path):
     """The chain written for the calibrated machine turns the table exactly as the calibrated
     kinematics do (every axis a line through its calibrated point along its direction)."""
-    from postproc.dialects.heidenhain.kinematics import chain, chain_transform, tnc_kinematics
     from postproc.fivex.kinematics import table_to_machine
+    from postproc.programs.dialects.heidenhain.kinematics import chain, chain_transform, tnc_kinematics
 
     cal = load_machine(TRUE)
     entries = chain(cal)

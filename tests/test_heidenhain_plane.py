@@ -23,7 +23,7 @@ import pytest
 from postproc import dialects
 from postproc.errors import InputError
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import parse_program
 
 S3 = np.sqrt(3.0)

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 S2 = np.sqrt(2.0)
 

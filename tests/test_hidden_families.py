@@ -12,11 +12,11 @@ import numpy as np
 import pytest
 from helpers import TOOL, kr160
 
-from postproc.diagnose import diagnose
-from postproc.effects import parse_effects
-from postproc.effects.nonlinear_stiffness import largest_gravity_torque
-from postproc.identify import fit
-from postproc.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.model.diagnose import diagnose
+from postproc.model.effects import parse_effects
+from postproc.model.effects.nonlinear_stiffness import largest_gravity_torque
+from postproc.model.identify import fit
+from postproc.model.sim import JointBox, random_truth, sample_poses, simulate
 
 FR = "geometric,base_frame,tool_offset,joint_compliance"
 FLOOR = 0.02 * np.sqrt(3)
@@ -76,8 +76,8 @@ def test_fit_recovers_tilt_and_knee_slopes():
 
 
 def test_tilt_loads_joint_one_and_knee_is_robot_only():
-    from postproc.effects.base_tilt import gravity_torque_for
-    from postproc.kinematics import GRAVITY, gravity_torque
+    from postproc.model.effects.base_tilt import gravity_torque_for
+    from postproc.robot.kinematics import GRAVITY, gravity_torque
 
     q = sample_poses(kr160(), TOOL, 20, BOX, np.random.default_rng(0))
     np.testing.assert_allclose(gravity_torque_for(kr160(), q, GRAVITY), gravity_torque(kr160(), q), atol=1e-9)
@@ -90,7 +90,7 @@ def test_tilt_loads_joint_one_and_knee_is_robot_only():
 
 @pytest.mark.parametrize("spec", ["nonlinear_stiffness[knee=100]", "nonlinear_stiffness[joints=2;knee=-1]", "base_tilt[x=1]"])
 def test_bad_options_are_refused(spec):
-    from postproc.effects import EffectSpecError
+    from postproc.model.effects import EffectSpecError
 
     with pytest.raises(EffectSpecError):
         parse_effects(spec)

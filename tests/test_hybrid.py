@@ -11,12 +11,12 @@ from typer.testing import CliRunner
 
 from postproc import kinematics as kin
 from postproc.cli import app
-from postproc.effects import parse_effects
-from postproc.frames import abc_to_matrix, make_transform
-from postproc.identify import Stats, fit, fit_predictor, residuals
-from postproc.measurements import write_measurements
-from postproc.model_io import load_model, save_model
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, fit_predictor, residuals
+from postproc.model.measurements import write_measurements
+from postproc.model.model_io import load_model, save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.robot.frames import abc_to_matrix, make_transform
 
 runner = CliRunner()
 EFFECTS = FRAME_AND_COMPLIANCE
@@ -106,7 +106,7 @@ def test_cli_predictors_and_transfer(robot, distorted, tmp_path):
 def test_seed001_design_transfer_beats_target_only_gpr_and_nears_dense_gpr():
     """Seed 001 Table 8 design: Tr-GPR (126 source + 80 target poses) beats GPR on the
     target poses and comes within 25 % of GPR on 378 poses of the validation region."""
-    from postproc.learn.experiments import seed001_transfer
+    from postproc.model.learn.experiments import seed001_transfer
 
     rows = {r["model"].split(" (")[0]: r["mean_mm"] for r in seed001_transfer(1)}
     assert rows["Tr-GPR"] < rows["GPR-80"] and rows["Tr-GPR"] < rows["GPR-50"]
@@ -117,7 +117,7 @@ def test_seed001_design_transfer_beats_target_only_gpr_and_nears_dense_gpr():
 def test_turn_physics_carries_a_base_tilt_between_sectors():
     """Errors that turn with joint 1 plus a base tilt and shift: the fitted turn term
     recovers the tilt's and shift's horizontal components."""
-    from postproc.learn.transfer import _rotate, _rz, _turn_design
+    from postproc.model.learn.transfer import _rotate, _rz, _turn_design
 
     rng = np.random.default_rng(0)
     omega, shift = np.array([4e-4, -2e-4, 0.0]), np.array([0.3, -0.5, 0.2])

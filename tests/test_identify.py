@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from helpers import FRAME, TOOL, identifiable_truth, kr160, z_scores
-from postproc.effects import parse_effects
+
 from postproc.errors import IdentificationError
-from postproc.identify import Stats, fit, refit_base, residuals
-from postproc.measurements import read_measurements
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate, tracker_frame
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, refit_base, residuals
+from postproc.model.measurements import read_measurements
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate, tracker_frame
 
 NOISE = 0.02
 FLOOR = NOISE * np.sqrt(3)  # RMS of a 3-D error with 0.02 mm per axis

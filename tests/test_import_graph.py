@@ -131,9 +131,9 @@ def circles(graph: dict[str, dict[str, str]]) -> list[list[str]]:
 def test_the_graph_is_drawn():
     """The drawing sees the arrows it must (a broken drawing would find no circle anywhere)."""
     graph = import_graph()
-    assert "postproc.emit.writer" in graph["postproc.dialects.krl.writer"]  # module level, relative
-    assert "postproc.dialects.rapid.parse" in graph["postproc.dialects.rapid.writer"]  # from .parse import NAME
-    assert "postproc.dialects.krl.writer" in graph["postproc.dialects.krl"]  # inside a method
+    assert "postproc.programs.emit.writer" in graph["postproc.programs.dialects.krl.writer"]  # module level, relative
+    assert "postproc.programs.dialects.rapid.parse" in graph["postproc.programs.dialects.rapid.writer"]  # from .parse import NAME
+    assert "postproc.programs.dialects.krl.writer" in graph["postproc.programs.dialects.krl"]  # inside a method
     assert "postproc.cam.post" in graph["postproc"]
 
 
@@ -148,10 +148,10 @@ def test_no_import_circle():
 
 
 # Floors below the languages: they ask a controller object they are given, never the registry.
-BELOW_LANGUAGES = ("postproc.compensation", "postproc.emit", "postproc.parse", "postproc.kinematics", "postproc.posture",
-                   "postproc.errormodel", "postproc.effects", "postproc.fast_model", "postproc.identify", "postproc.diagnose",
-                   "postproc.sim", "postproc.learn", "postproc.robots", "postproc.dh", "postproc.ir", "postproc.arcs",
-                   "postproc.segments", "postproc.frames", "postproc.errors", "postproc.controller", "postproc.rotation_forms")
+BELOW_LANGUAGES = ("postproc.compensation", "postproc.programs.emit", "postproc.programs.parse", "postproc.robot.kinematics", "postproc.robot.posture",
+                   "postproc.model.errormodel", "postproc.effects", "postproc.model.fast_model", "postproc.model.identify", "postproc.model.diagnose",
+                   "postproc.model.sim", "postproc.model.learn", "postproc.robot.robots", "postproc.robot.dh", "postproc.programs.ir", "postproc.programs.arcs",
+                   "postproc.compensation.segments", "postproc.robot.frames", "postproc.errors", "postproc.programs.controller", "postproc.programs.rotation_forms")
 
 
 def _reached(graph: dict[str, dict[str, str]], start: str) -> dict[str, list[str]]:
@@ -180,8 +180,8 @@ def test_compensation_and_physics_import_no_language():
 # (issue 27): model files through the plugin loader, engagement through place_program,
 # placement through placement_branch. They are handed what they need, or import a module
 # that knows no language (plugin_records, workpiece).
-NO_LANGUAGE_EITHER = ("postproc.model_io", "postproc.plugin_records", "postproc.engagement", "postproc.workpiece",
-                      "postproc.placement", "postproc.placement_branch")
+NO_LANGUAGE_EITHER = ("postproc.model.model_io", "postproc.model.plugin_records", "postproc.process.engagement", "postproc.programs.workpiece",
+                      "postproc.process.placement", "postproc.process.placement_branch")
 
 
 def test_model_files_engagement_and_placement_reach_no_language():
@@ -194,4 +194,41 @@ def test_model_files_engagement_and_placement_reach_no_language():
 def test_subdivide_is_handed_the_language():
     """subdivide takes the program's language as an argument (compensate / the CLI resolve it)."""
     graph = import_graph()
-    assert not [t for t in graph["postproc.subdivide"] if t.startswith("postproc.dialects")], graph["postproc.subdivide"]
+    assert not [t for t in graph["postproc.jobs.subdivide"] if t.startswith("postproc.dialects")], graph["postproc.jobs.subdivide"]
+
+
+# The folders of the flow layout, each on its floor (docs/ARCHITECTURE.md, "Who imports whom"):
+# a folder imports only folders on lower floors. The ground (errors, files, progress, threads)
+# is below all of them.
+FLOORS = {"robot": 1, "fivex": 1, "model": 2, "programs": 2, "compensation": 3, "process": 3, "jobs": 4,
+          "cam": 5, "suggest": 5, "report": 5, "cli": 6}
+GROUND = {"errors", "files", "progress", "threads", "moved"}
+
+
+def _folder(module: str) -> str | None:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 and parts[1] in FLOORS else None
+
+
+def test_folders_import_one_way():
+    graph = import_graph()
+    bad = []
+    for module, targets in graph.items():
+        here = _folder(module)
+        parts = module.split(".")
+        if len(parts) > 1 and parts[1] in GROUND:
+            bad += [f"{module} -> {t} ({w}): the ground imports nothing of the house" for t, w in targets.items() if t.split(".")[1:2] and t.split(".")[1] not in GROUND]
+        if here is None:
+            continue
+        for target, where in targets.items():
+            there = _folder(target)
+            if there is not None and there != here and FLOORS[there] >= FLOORS[here]:
+                bad.append(f"{module} (floor {FLOORS[here]}) -> {target} (floor {FLOORS[there]}) at {where}")
+    assert not bad, "imports that do not run down the floors:\n" + "\n".join(sorted(bad)[:30])
+
+
+def test_every_folder_has_a_floor():
+    import postproc
+    from pathlib import Path
+    folders = {p.name for p in Path(postproc.__file__).parent.iterdir() if (p / "__init__.py").exists()}
+    assert folders == set(FLOORS)

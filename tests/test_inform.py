@@ -14,13 +14,13 @@ import pytest
 
 import postproc
 from postproc import kinematics as kin
-from postproc.dialects import sniff
-from postproc.dialects.inform.form import form_of_joints, select_by_form
 from postproc.errors import EmitError, ParseError, RobotFileError
-from postproc.frames import abc_to_matrix
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program, write_program
-from postproc.robots import parse_robot_toml
+from postproc.programs.dialects import sniff
+from postproc.programs.dialects.inform.form import form_of_joints, select_by_form
+from postproc.programs.ir import Kind
+from postproc.robot.frames import abc_to_matrix
+from postproc.robot.robots import parse_robot_toml
 
 HERE = Path(__file__).parent
 SAMPLE = HERE / "data" / "inform" / "sample.jbi"
@@ -41,7 +41,7 @@ def test_sample_reads_as_the_manual_says():
     np.testing.assert_array_equal(tp.position[1:], [[1000, 0, 500], [1000, 0, 500], [1100, -50.5, 500], [1150, 0, 500], [1100, 50, 500]])
     # C00004: Rx -180, Ry 0, Rz 90 -> R = Rz(90) Ry(0) Rx(-180), in the IR's A B C = Rz Ry Rx
     np.testing.assert_array_equal(tp.values[5, 3:6], [90.0, 0.0, -180.0])
-    rot = postproc.frames.quat_wxyz_to_matrix(tp.orientation[5:6])[0]
+    rot = postproc.robot.frames.quat_wxyz_to_matrix(tp.orientation[5:6])[0]
     np.testing.assert_allclose(rot, [[0, 1, 0], [1, 0, 0], [0, 0, -1]], atol=1e-12)
     # ///RCONF 1,0,0,0,0,0: no flip, upper arm, front, R T S below 180
     assert tp.conf[1].tolist() == [1, 0, 0, 0]
@@ -173,7 +173,7 @@ def test_convert_refuses_a_joint_move_without_a_form(tmp_path):
 def test_rxyz_is_kukas_abc_reversed():
     """Yaskawa: Rx, Ry, Rz about the fixed X, Y, Z axes in that order: R = Rz Ry Rx."""
     tp = parse_program("t.jbi", data=_job("MOVL C00000 V=10\n", "///TOOL 0\n///POSTYPE ROBOT\n///RECTAN\nC00000=0,0,0,10.0000,20.0000,30.0000\n"))
-    rot = postproc.frames.quat_wxyz_to_matrix(tp.orientation)[0]
+    rot = postproc.robot.frames.quat_wxyz_to_matrix(tp.orientation)[0]
     np.testing.assert_allclose(rot, abc_to_matrix(np.array([30.0, 20.0, 10.0])), atol=1e-12)
 
 
@@ -204,8 +204,9 @@ def test_pulse_positions_take_their_angles_from_the_robot_pulse_data(tmp_path):
     """angle = (pulse - zero) / pulses per degree; C00000 of the sample is 0,0,0,0,-45000,0:
     B = -45000 / 910 deg with the GP25 file's figures taken as a controller's own; with the
     bundled file's, which are estimates, the position stays unplaced (never guessed)."""
-    from postproc.dialects.inform.pulses import pulses_of_angles, with_pulse_joints
     from test_inform_pulses_cli import measured_gp25
+
+    from postproc.programs.dialects.inform.pulses import pulses_of_angles, with_pulse_joints
 
     tp = parse_program(SAMPLE)
     assert not tp.resolved[0] and np.isnan(tp.joints[0]).all()

@@ -12,9 +12,9 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, kr160, truth_and_fit
 
 from postproc import kinematics as kin
-from postproc.compensate import compensate
-from postproc.dialects.inform.form import form_of_joints
+from postproc.jobs.compensate import compensate
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.dialects.inform.form import form_of_joints
 
 TOOL_0 = np.eye(4)
 TOOL_0[:3, 3] = [0.0, 0.0, 200.0]  # tool file 0 of the controller: given, as the job cannot hold it
@@ -32,7 +32,7 @@ def controller_joints(robot, tp):
     flange = tp.base_poses() @ np.linalg.inv(tp.tools[tp.tool])
     sols = kin.ik(robot, flange)
     q = np.zeros((len(tp), 6))
-    from postproc.dialects.inform.form import select_by_form
+    from postproc.programs.dialects.inform.form import select_by_form
 
     q[:1] = select_by_form(robot, sols[:1], tp.conf[:1])[0]
     for i in range(1, len(tp)):

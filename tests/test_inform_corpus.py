@@ -10,8 +10,8 @@ from pathlib import Path
 import pytest
 
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 HERE = Path(__file__).parent / "corpus" / "inform"
 SHARED = Path(os.environ.get("POSTPROC_SHARED", "/nonexistent")) / "corpus" / "real" / "inform"

@@ -17,10 +17,10 @@ from typer.testing import CliRunner
 import postproc
 from postproc import kinematics as kin
 from postproc.cli import app
-from postproc.compensate import compensate, predicted_positions
-from postproc.effects import parse_effects
-from postproc.errormodel import ErrorModel
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate, predicted_positions
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import save_model
 from postproc.programs import language_of, parse_program
 
 Q0 = np.array([0.0, 10.0, -10.0, 0.0, -60.0, 0.0])  # the MOVJ's joints, deg

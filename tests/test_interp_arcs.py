@@ -20,15 +20,15 @@ from unittest import mock
 
 import numpy as np
 import pytest
-from test_arcs import _rs274_arcs
 from rs274_recordings import assert_current, needs_rs274, record_all
+from test_arcs import _rs274_arcs
 from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions
 
 from postproc import arcs
-from postproc.dialects.gcode import interp
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import parse_program
+from postproc.programs.dialects.gcode import interp
+from postproc.programs.ir import Kind
 
 RECORDED = Path(__file__).parent / "data" / "rs274" / "interp_arcs"
 
@@ -161,7 +161,7 @@ if __name__ == "__main__":
 
 from test_arcs import BODY, H1, START, WORK, _robot_along, model  # noqa: E402,F401  (model: the fixture)
 
-from postproc.compensate import compensate  # noqa: E402
+from postproc.jobs.compensate import compensate  # noqa: E402
 from postproc.programs import emit_texts, write_program  # noqa: E402
 
 G92_HEAD = "G21 G90 G17 G54\nG43.5 H1\nG1 X0 Y0 Z0 I0 J0 K1 F500\nG92 X10 Y0\n"  # G92: read block by block
@@ -191,7 +191,7 @@ def test_compensated_arcs_under_g92_pass_the_intended_ones(tmp_path, model):
 def test_converted_arcs_pass_rs274s_circles(tmp_path):
     """convert: each G2/G3 of a program read block by block becomes a KRL CIRC whose via and end
     points lie on rs274's circle (centre and radius from its ARC_FEED), in the machine frame."""
-    from postproc.frames import abc_to_matrix
+    from postproc.robot.frames import abc_to_matrix
 
     tp = parse_program(_program(tmp_path, "g53_arc"))  # G54 set by G10 L2; G53 moves; an R and an I J arc
     src, _ = write_program(tp, "krl", "conv")

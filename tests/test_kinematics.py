@@ -68,7 +68,7 @@ def test_bad_shapes_raise_typed_errors():
         postproc.ik(robot, np.zeros((3, 3, 3)))
     with pytest.raises(postproc.KinematicsError, match="tool"):
         postproc.fk(robot, np.zeros((1, 6)), tool=[1.0, 2.0])
-    # neither ortho-parallel (no [opw]) nor of the UR shape (postproc.ur_kinematics): no analytic IK
+    # neither ortho-parallel (no [opw]) nor of the UR shape (postproc.robot.ur_kinematics): no analytic IK
     skewed = replace(postproc.load_robot("ur10"), alpha_deg=np.array([90.0, 0.0, 0.0, 90.0, 90.0, 0.0]))
     with pytest.raises(postproc.KinematicsError, match="no \\[opw\\] section"):
         postproc.ik(skewed, np.eye(4))

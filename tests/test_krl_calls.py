@@ -1,4 +1,4 @@
-"""KRL $BASE / $TOOL followed through calls to subprograms (postproc/dialects/krl/calls.py).
+"""KRL $BASE / $TOOL followed through calls to subprograms (postproc/programs/dialects/krl/calls.py).
 
 Expected positions worked out by hand from "KUKA System Software 8.x, Operating and
 Programming Instructions for System Integrators" (KSS 8 SI):

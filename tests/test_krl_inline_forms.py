@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.compensate import _refuse_unplaced
 from postproc.errors import InputError
+from postproc.jobs.compensate import _refuse_unplaced
 from postproc.programs import parse_program
 
 INI = "BAS (#INITMOV,0 )\n"

@@ -1,4 +1,4 @@
-"""KRL inline forms read where they stand (postproc/dialects/krl/inline_window.py).
+"""KRL inline forms read where they stand (postproc/programs/dialects/krl/inline_window.py).
 
 Shapes of real robot cells (HugoDanielson/ChinaMilling's KukaMiling: a SWITCH on a routine's
 parameter whose CASEs each run one inline form, a jump table of GOTOs into a list of folds,

@@ -1,4 +1,4 @@
-"""KRL $BASE / $TOOL set inside a FOR body, followed pass by pass (postproc/dialects/krl/passes.py).
+"""KRL $BASE / $TOOL set inside a FOR body, followed pass by pass (postproc/programs/dialects/krl/passes.py).
 
 Expected positions by hand from "KUKA System Software 8.x, Operating and Programming
 Instructions for System Integrators" (KSS 8 SI):

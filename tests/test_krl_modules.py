@@ -1,4 +1,4 @@
-"""KRL points of another module's data list (``--data``; postproc/dialects/krl/modules.py).
+"""KRL points of another module's data list (``--data``; postproc/programs/dialects/krl/modules.py).
 
 The cell in tests/data/krl_modules/ has the layout of a real KUKA milling cell
 (KRC/R1/Program/KukaMiling/Dat/xPoints.dat with the stations' points, the motion modules in
@@ -133,9 +133,9 @@ def test_compensate_with_data_writes_the_module_data_list_with_the_program(tmp_p
     # so OUT's folder gets the .src and the changed xPoints.dat, written together (postproc.files.write_all).
     from helpers import TOOL, kr160
 
-    from postproc.effects import parse_effects
-    from postproc.errormodel import ErrorModel
-    from postproc.model_io import save_model
+    from postproc.model.effects import parse_effects
+    from postproc.model.errormodel import ErrorModel
+    from postproc.model.model_io import save_model
 
     (tmp_path / "Dat").mkdir()
     (tmp_path / "Dat" / "xPoints.dat").write_text("DEFDAT XPOINTS PUBLIC\nDECL GLOBAL E6POS XCUT={X 1000.0,Y 0.0,Z 400.0,A 0.0,B 180.0,C 0.0}\nENDDAT\n")

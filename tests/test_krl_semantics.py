@@ -22,8 +22,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc.compensate import _refuse_unplaced
 from postproc.errors import InputError
+from postproc.jobs.compensate import _refuse_unplaced
 from postproc.programs import parse_program
 
 DAT = "DEFDAT p\nDECL E6POS XP1={X 100,Y 0,Z 500,A 0,B 90,C 0,S 2,T 35}\nDECL E6POS XP2={X 200,Y 50,Z 400,A 0,B 90,C 0}\nENDDAT\n"

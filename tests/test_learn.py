@@ -9,10 +9,10 @@ import pytest
 from sklearn.base import clone
 
 import postproc
-from postproc.effects import parse_effects
 from postproc.errors import InputError
-from postproc.learn import GPRPredictor, GridPredictor, OutsideGridError, PSOBPPredictor, hidden_size_table
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.effects import parse_effects
+from postproc.model.learn import GPRPredictor, GridPredictor, OutsideGridError, PSOBPPredictor, hidden_size_table
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 FAST_NN = {"n_particles": 12, "pso_iters": 8, "epochs": 120}
 
@@ -96,7 +96,7 @@ def test_one_torch_and_it_is_the_pinned_one():
 
 
 def test_region_similarity():
-    from postproc.learn import region_similarity
+    from postproc.model.learn import region_similarity
 
     rng = np.random.default_rng(0)
     base = rng.normal(0, 1, (50, 3))

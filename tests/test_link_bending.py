@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 from helpers import TOOL, kr160
 
-from postproc.diagnose import diagnose
-from postproc.effects import parse_effects
-from postproc.effects.link_bending import segment_deflection
-from postproc.errormodel import ErrorModel
-from postproc.identify import fit
-from postproc.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.model.diagnose import diagnose
+from postproc.model.effects import parse_effects
+from postproc.model.effects.link_bending import segment_deflection
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import fit
+from postproc.model.sim import JointBox, random_truth, sample_poses, simulate
 
 FR = "geometric,base_frame,tool_offset,joint_compliance"
 TRUTH = FR + ",link_bending"
@@ -84,6 +84,6 @@ def test_diagnose_ranks_hidden_bending_first():
 
 @pytest.mark.parametrize("spec", ["link_bending"])
 def test_named_in_the_catalog_by_its_file_alone(spec):
-    from postproc.effects import CATALOG
+    from postproc.model.effects import CATALOG
 
-    assert CATALOG[spec].__module__ == "postproc.effects.link_bending"
+    assert CATALOG[spec].__module__ == "postproc.model.effects.link_bending"

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from postproc.errors import MeasurementError
-from postproc.measurements import MeasurementSet, parse_measurements, read_measurements, write_measurements
+from postproc.model.measurements import MeasurementSet, parse_measurements, read_measurements, write_measurements
 
 HEADER = "id,q1,q2,q3,q4,q5,q6,mx,my,mz"
 ROWS = [
@@ -110,7 +110,7 @@ def test_write_read_round_trip(tmp_path):
 
 def test_atomic_write_errors_are_typed_and_modes_are_ordinary(tmp_path):
     from postproc.errors import OutputError
-    from postproc.measurements import write_text_atomic
+    from postproc.model.measurements import write_text_atomic
 
     with pytest.raises(OutputError, match=r"missing/x\.txt: cannot write"):
         write_text_atomic(tmp_path / "missing" / "x.txt", "a")

@@ -17,14 +17,14 @@ from typer.testing import CliRunner
 import postproc
 from postproc.cli import app
 from postproc.cli.common import load_measurements
-from postproc.coverage import Coverage
-from postproc.effects import EffectSum, parse_effects
-from postproc.errormodel import ErrorModel
 from postproc.errors import ModelFileError
-from postproc.identify import fit
-from postproc.measurements import write_measurements
-from postproc.model_io import load_model, save_model
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.coverage import Coverage
+from postproc.model.effects import EffectSum, parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import fit
+from postproc.model.measurements import write_measurements
+from postproc.model.model_io import load_model, save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 
 runner = CliRunner()
 KR160 = "kr160_r1570"
@@ -223,7 +223,7 @@ def test_batch_refuses_the_program_outside_the_region(measured, tmp_path):
 
 
 def test_cam_post_refuses_them_unless_allowed(measured):
-    from postproc.compensate import CompensationError
+    from postproc.jobs.compensate import CompensationError
 
     _, _, model = measured
     gcode = "G90 G54\nG0 X1300 Y-100 Z448\nG1 X1400 Y-100 F500\nG1 X1400 Y100\n"

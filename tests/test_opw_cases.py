@@ -7,7 +7,7 @@ import pytest
 import yaml
 
 import postproc
-from postproc.frames import quat_xyzw_to_matrix
+from postproc.robot.frames import quat_xyzw_to_matrix
 
 ROBOTS = {"Irb2400_10": "irb2400_10", "KukaKR6_R700_sixx": "kr6_r700_sixx"}
 

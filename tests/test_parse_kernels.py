@@ -11,12 +11,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from postproc.dialects.gcode import parse as gcode
-from postproc.dialects.krl import parse as krl
-from postproc.dialects.rapid import parse as rapid
-from postproc.parse.common import LineIndex, scan_numbers
-from postproc.parse.line_shapes import LineShapes, factorize_spans
-from postproc.parse.name_table import NameTable
+from postproc.programs.dialects.gcode import parse as gcode
+from postproc.programs.dialects.krl import parse as krl
+from postproc.programs.dialects.rapid import parse as rapid
+from postproc.programs.parse.common import LineIndex, scan_numbers
+from postproc.programs.parse.line_shapes import LineShapes, factorize_spans
+from postproc.programs.parse.name_table import NameTable
 
 NUMBER = re.compile(r"[+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?")
 
@@ -162,7 +162,7 @@ def test_name_table_agrees_with_a_dict_and_the_last_declaration_wins():
 
 def test_name_table_survives_a_hash_collision(monkeypatch):
     """Force every name to the same hash: lookups must still compare the names."""
-    from postproc.parse import name_table
+    from postproc.programs.parse import name_table
 
     monkeypatch.setattr(name_table, "_span_hashes", lambda raw, spans, prime, offset: np.zeros(len(spans), np.uint64))
     table = NameTable()
@@ -172,7 +172,7 @@ def test_name_table_survives_a_hash_collision(monkeypatch):
 
 def test_line_shapes_survive_a_hash_collision(monkeypatch):
     """Every line hashed alike: lines that differ from their representative are matched one by one."""
-    from postproc.parse import line_shapes
+    from postproc.programs.parse import line_shapes
 
     real = line_shapes._shapes
 

@@ -5,18 +5,18 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
-from postproc.cli import app
 from postproc import kinematics as kin
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.identify import fit
-from postproc.ir import Kind
-from postproc.model_io import save_model
+from postproc.cli import app
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import parse_program
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.programs.ir import Kind
 
 runner = CliRunner()
 HEAD = ["DEF part( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",

@@ -11,16 +11,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from placement_reference import reference_cell
 from typer.testing import CliRunner
 
-from placement_reference import reference_cell
 from postproc import dialects
 from postproc import placement as pl
 from postproc import placement_branch as pb
 from postproc.cli import app
-from postproc.place_program import problem_from_program
+from postproc.process.place_program import problem_from_program
 from postproc.programs import parse_program
-from postproc.robots import load_robot
+from postproc.robot.robots import load_robot
 
 REPO = Path(__file__).resolve().parents[1]
 FACE_MOD = REPO / "examples" / "data" / "block_face.mod"  # RAPID, confdata on every target, written at x 1300, y -500, theta 90
@@ -161,9 +161,9 @@ def test_written_program_reads_back_at_the_placed_poses(tmp_path):
 def test_compensate_reads_the_placed_program(tmp_path):
     """The placed program (new work object, re-derived confdata) compensates with exit 0:
     every target reached on its written configuration, none changes branch."""
-    from postproc.effects import parse_effects
-    from postproc.errormodel import ErrorModel
-    from postproc.model_io import save_model
+    from postproc.model.effects import parse_effects
+    from postproc.model.errormodel import ErrorModel
+    from postproc.model.model_io import save_model
 
     out = tmp_path / "placed.mod"
     # (off round numbers: a target with axis 1 at exactly 0 deg sits on a quadrant boundary,

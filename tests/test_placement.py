@@ -10,14 +10,14 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc import compliance as comp
-from postproc.cli import app
 from postproc import kinematics as kin
 from postproc import placement as pl
 from postproc import placement_branch as pb
-from postproc.place_program import current_frame, problem_from_program
-from postproc.posture import singularity_margins
+from postproc.cli import app
+from postproc.process.place_program import current_frame, problem_from_program
 from postproc.programs import parse_program
-from postproc.robots import load_robot
+from postproc.robot.posture import singularity_margins
+from postproc.robot.robots import load_robot
 
 REPO = Path(__file__).resolve().parents[1]
 BLOCK_PASS = REPO / "examples" / "data" / "block_pass.src"
@@ -72,8 +72,8 @@ def test_weights_and_normal_error():
 
 
 def test_identified_compliance_is_used(robot):
-    from postproc.effects import parse_effects
-    from postproc.errormodel import ErrorModel
+    from postproc.model.effects import parse_effects
+    from postproc.model.errormodel import ErrorModel
 
     for spec in ("joint_compliance", "geometric,external_load"):
         base = ErrorModel.create(robot, [0, 0, 200], parse_effects(spec))
@@ -215,7 +215,7 @@ def test_cli_bad_input_and_no_feasible_placement(tmp_path):
 
 
 def test_cli_place_with_cut_model_and_stock(tmp_path):
-    from postproc.engagement import block_stock
+    from postproc.process.engagement import block_stock
 
     stl = tmp_path / "block.stl"
     block_stock().export(stl)

@@ -26,16 +26,16 @@ from postproc import dialects
 from postproc import effects as effect_catalog
 from postproc import predictor_plugins as predictors
 from postproc.cli import app
-from postproc.effect_check import check_effect
-from postproc.effect_template import write_template
-from postproc.effects import CATALOG, parse_effects
 from postproc.errors import ModelFileError
-from postproc.identify import Stats, fit, fit_predictor, residuals
-from postproc.measurements import write_measurements
-from postproc.model_io import load_model, model_document, model_from_document, save_model
+from postproc.model.effect_check import check_effect
+from postproc.model.effect_template import write_template
+from postproc.model.effects import CATALOG, parse_effects
+from postproc.model.identify import Stats, fit, fit_predictor, residuals
+from postproc.model.measurements import write_measurements
+from postproc.model.model_io import load_model, model_document, model_from_document, save_model
+from postproc.model.sim import parse_region, random_truth, sample_poses, simulate
 from postproc.plugins import ENV, PluginError, load_plugins, loaded_plugin_files, plugin_arguments
-from postproc.robots import load_robot
-from postproc.sim import parse_region, random_truth, sample_poses, simulate
+from postproc.robot.robots import load_robot
 
 PLUGINS = Path(__file__).parent / "plugins"
 EFFECT_FILE = PLUGINS / "user_wrist_cable.py"
@@ -301,7 +301,7 @@ def test_compensate_with_a_plugin_model_in_fresh_processes(user_model, rapid_pro
 
 
 def test_feature_kinds_agree_with_the_learners():
-    from postproc.learn.features import KINDS  # here only: postproc.learn loads scikit-learn (seconds)
+    from postproc.model.learn.features import KINDS  # here only: postproc.model.learn loads scikit-learn (seconds)
 
     assert predictors.FEATURE_KINDS == KINDS
 
@@ -372,10 +372,10 @@ def test_streamed_workers_compensate_with_a_plugin_model(tmp_path):
 
     Streaming reads KRL, so the robot is a KUKA measured in seed 001's cylinder, and the
     program is block_pass's header with $BASE moved into that region."""
-    from postproc.compensate import compensate
-    from postproc.program_check import check_model_fits
+    from postproc.jobs.compensate import compensate
+    from postproc.jobs.program_check import check_model_fits
+    from postproc.jobs.stream import compensate_streamed
     from postproc.programs import emit_texts, parse_program
-    from postproc.stream import compensate_streamed
 
     user_model = _user_model(tmp_path / "kuka.json", KUKA, None)
     head = [line.replace("$BASE = {X 1400, Y 200, Z 1170,", "$BASE = {X 950, Y -100, Z 300,") for line in KRL.read_text().splitlines()[:6]]

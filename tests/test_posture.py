@@ -1,4 +1,4 @@
-"""The controller's posture carried along a path (postproc.posture): joint targets and
+"""The controller's posture carried along a path (postproc.robot.posture): joint targets and
 applicable configuration data set it, every other target keeps the branch it is in."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import pytest
 
 from postproc import kinematics as kin
 from postproc import load_robot
-from postproc.posture import branch_of, carry
+from postproc.robot.posture import branch_of, carry
 
 
 @pytest.fixture(scope="module")
@@ -92,7 +92,7 @@ def _flanges(robot, q):
 
 
 def test_straight_segments_between_good_targets_pass(robot):
-    from postproc.posture import check_linear_segments
+    from postproc.robot.posture import check_linear_segments
 
     q = _path([0.0, -60.0, 40.0, 20.0, 40.0, 10.0], [1.0, 0.5, -0.5, 0.5, 0.5, 1.0], 6)
     f = _flanges(robot, q)
@@ -103,7 +103,7 @@ def test_straight_segments_between_good_targets_pass(robot):
 def test_a_segment_through_the_wrist_singularity_is_flagged(robot):
     """A5 = +5 then -5: both end points are reachable, the straight line between them passes
     A5 = 0 (on the carried branch the wrist flips there)."""
-    from postproc.posture import check_linear_segments
+    from postproc.robot.posture import check_linear_segments
 
     a = np.array([[0.0, -60.0, 40.0, 30.0, 5.0, 0.0]])
     b = np.array([[0.0, -60.0, 40.0, 30.0, -5.0, 0.0]])
@@ -112,7 +112,7 @@ def test_a_segment_through_the_wrist_singularity_is_flagged(robot):
 
 
 def test_interpolation_hits_both_ends(robot):
-    from postproc.posture import interpolate_poses
+    from postproc.robot.posture import interpolate_poses
 
     q = _path([0.0, -60.0, 40.0, 20.0, 40.0, 10.0], [10.0, 5.0, -5.0, 30.0, 20.0, 40.0], 2)
     f = _flanges(robot, q)

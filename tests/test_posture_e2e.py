@@ -18,9 +18,9 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, nearest_walk, true_tcp, truth_and_fit
 
 from postproc import kinematics as kin
-from postproc.compensate import compensate
+from postproc.jobs.compensate import compensate
+from postproc.model.sim import JointBox
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import JointBox
 
 # A pose whose IK solutions include every configuration the KR160's limits allow away from
 # singularities: four (wrist flipped or not, elbow up or down); the other four need joint
@@ -67,7 +67,7 @@ def _pocket(robot, q_start, path):
     tcp = kin.fk(robot, q_path, tool=TOOL)
     lines = ["DEF pocket( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",
              "PTP {" + ", ".join(f"A{i + 1} {v:.4f}" for i, v in enumerate(q_start)) + "}"]
-    from postproc.frames import matrix_to_abc
+    from postproc.robot.frames import matrix_to_abc
 
     for pose in tcp:
         a, b, c = matrix_to_abc(pose[None, :3, :3])[0]
@@ -129,16 +129,16 @@ def test_krl_lin_ignores_status_and_turn_ptp_follows_them(tmp_path):
 def test_compensation_asks_the_controller_it_is_given(robot, tmp_path):
     """The KRC takes the PTP's Status/Turn; a user's controller that takes no configuration data
     leaves the robot in the posture it starts from (the same program, another posture)."""
-    from postproc.compensate import reference_postures
-    from postproc.controller import Controller
-    from postproc.effects import EffectSum
-    from postproc.errormodel import ErrorModel
+    from postproc.jobs.compensate import reference_postures
+    from postproc.model.effects import EffectSum
+    from postproc.model.errormodel import ErrorModel
+    from postproc.programs.controller import Controller
 
     class KeepsThePosture(Controller):
         def conf_applies(self, tp):
             return np.zeros(len(tp.kind), dtype=bool)
 
-    from postproc.frames import matrix_to_abc
+    from postproc.robot.frames import matrix_to_abc
 
     start = np.array([0.0, -90.0, 90.0, 0.0, 30.0, 0.0])
     flipped = start * np.array([1, 1, 1, 1, -1, 1]) + np.array([0, 0, 0, 180, 0, 180])  # the same pose, the wrist flipped
@@ -175,7 +175,7 @@ def test_a_straight_move_through_the_wrist_singularity_is_refused(robot, truth_a
     truth, model = truth_and_model
     q_a = np.array([0.0, -60.0, 40.0, 30.0, 8.0, 0.0])
     q_b = np.array([0.0, -60.0, 40.0, 30.0, -8.0, 0.0])
-    from postproc.frames import matrix_to_abc
+    from postproc.robot.frames import matrix_to_abc
 
     lines = ["DEF p( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",
              "PTP {" + ", ".join(f"A{i + 1} {v:.4f}" for i, v in enumerate(q_a)) + "}"]

@@ -4,14 +4,14 @@ is an error naming both (exit 2, nothing written), or notes with --allow-model-m
 from __future__ import annotations
 
 import pytest
+from helpers import kr160
 from typer.testing import CliRunner
 
-from helpers import kr160
 from postproc.cli import app
-from postproc.effects import parse_effects
-from postproc.errormodel import ErrorModel
-from postproc.model_io import save_model
-from postproc.program_check import ModelMismatchError, check_model_fits
+from postproc.jobs.program_check import ModelMismatchError, check_model_fits
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import save_model
 from postproc.programs import parse_program
 
 runner = CliRunner()
@@ -84,7 +84,7 @@ def test_krl_load_data_selected_by_bas_comes_from_config_dat(tmp_path):
     (tmp_path / "$config.dat").write_text("DEFDAT $CONFIG\nLOAD_DATA[3]={M 35,CM {X 0,Y 0,Z 0,A 0,B 0,C 0},J {X 0,Y 0,Z 0}}\nENDDAT\n")
     program = _krl(tmp_path, extra=["BAS(#TOOL, 3)"])
     tp = parse_program(program)
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     model, _ = load_model(_model(tmp_path, "geometric,joint_compliance[payload=20]"))
     with pytest.raises(ModelMismatchError, match=r"line 4 \(LOAD_DATA\[3\]\): the program's payload is 35 kg"):
@@ -103,7 +103,7 @@ ENDMODULE
 
 
 def test_rapid_tooldata_load_against_the_models_payload(tmp_path):
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     model, _ = load_model(_model(tmp_path, "geometric,joint_compliance[payload=20]"))
     for mass, ok in (("20", True), ("8.5", False)):
@@ -157,7 +157,7 @@ def test_every_effect_gravity_drives_needs_the_payload(tmp_path, effects):
 
 def test_a_payload_stated_as_zero_is_compared(tmp_path):
     model = _model(tmp_path, "geometric,joint_compliance[payload=0]")
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     assert load_model(model)[0].effects.spec() == "geometric,joint_compliance[payload=0.0;payload_com=0.0,0.0,0.0]"
     res, out = _run(tmp_path, _krl(tmp_path, extra=["$LOAD.M = 50"]), model)
@@ -190,7 +190,7 @@ ENDMODULE
 
 
 def test_rapid_gripload_and_tload_are_the_payload(tmp_path):
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     (tmp_path / "part.mod").write_text(GRIP)
     tp = parse_program(tmp_path / "part.mod")

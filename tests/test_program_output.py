@@ -15,17 +15,17 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.dialects.krl import KrlDialect
-from postproc.effects import parse_effects
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import save_model
+from postproc.model.sim import random_truth
 from postproc.programs import parse_program
-from postproc.robots import load_robot
-from postproc.sim import random_truth
+from postproc.programs.dialects.krl import KrlDialect
+from postproc.robot.robots import load_robot
 
 runner = CliRunner()
 TOOL = np.array([0.0, 0.0, 200.0])
-WRITE_TOL_MM = 5.01e-4  # the emitter's rounding of a position (postproc.emit.splice.TOLERANCE)
+WRITE_TOL_MM = 5.01e-4  # the emitter's rounding of a position (postproc.programs.emit.splice.TOLERANCE)
 
 
 @pytest.fixture(scope="module")
@@ -62,7 +62,7 @@ def test_a_target_in_config_dat_is_compensated_and_written(model_path, tmp_path)
     assert result.exit_code == 0, result.output
     assert sorted(p.name for p in out.parent.iterdir()) == ["$config.dat", "prog.dat", "prog.src"]
     assert _snapshot(program.parent) == before  # the input is untouched
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     want, _ = compensate(parse_program(program), load_model(model_path)[0])
     back = parse_program(out)
@@ -73,7 +73,7 @@ def test_a_target_in_config_dat_is_compensated_and_written(model_path, tmp_path)
 
 
 def test_the_dialect_returns_every_changed_file(model_path, tmp_path):
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     program = krl_with_config(tmp_path)
     tp = parse_program(program)
@@ -168,7 +168,7 @@ def rapid_program_file(folder: Path) -> Path:
 
 
 def test_a_rapid_program_of_several_modules_is_compensated_and_written_whole(model_path, tmp_path):
-    from postproc.model_io import load_model
+    from postproc.model.model_io import load_model
 
     program = rapid_program_file(tmp_path / "in")
     tp = parse_program(program)

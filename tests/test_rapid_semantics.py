@@ -11,8 +11,8 @@ import numpy as np
 import pytest
 
 from postproc.errors import ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 P1 = "[[100,200,300],[1,0,0,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
 

@@ -1,4 +1,4 @@
-"""The output check's read-back of position numbers (postproc.emit.readback): it answers True
+"""The output check's read-back of position numbers (postproc.programs.emit.readback): it answers True
 only where a whole re-parse would pass, and every corrupted output still fails the check."""
 
 from __future__ import annotations
@@ -9,14 +9,14 @@ from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL
 
 import postproc
 from postproc import dialects
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.emit import readback
-from postproc.emit.splice import TOLERANCE
 from postproc.errors import OutputCheckError, ParseError
-from postproc.ir import F_POS, Kind, SourceDoc
+from postproc.jobs.compensate import compensate
+from postproc.model.effects import parse_effects
+from postproc.model.sim import random_truth
 from postproc.programs import check_texts, emit_texts, parse_program
-from postproc.sim import random_truth
+from postproc.programs.emit import readback
+from postproc.programs.emit.splice import TOLERANCE
+from postproc.programs.ir import F_POS, Kind, SourceDoc
 
 TOL = TOLERANCE[F_POS] * (1 + 1e-6)
 

@@ -14,10 +14,10 @@ from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.effects import parse_effects
-from postproc.model_io import save_model
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import save_model
+from postproc.model.sim import random_truth
 from postproc.programs import parse_program
-from postproc.sim import random_truth
 
 runner = CliRunner()
 R2 = "0.7071068"

@@ -13,10 +13,10 @@ from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.effects import parse_effects
-from postproc.model_io import save_model
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import save_model
+from postproc.model.sim import random_truth
 from postproc.programs import parse_program
-from postproc.sim import random_truth
 
 runner = CliRunner()
 MARK = b"\xef\xbb\xbf"
@@ -372,8 +372,8 @@ def test_tool_frame_steps_are_compensated_and_written_back_in_the_tool_frame(tmp
     """A #TOOL step's increments stay in the tool frame: the written program, read back by the
     KSS rule above, puts every target where the compensation put it (within the 0.5 um the
     numbers are written to), and the steps keep their #TOOL / #BASE words."""
-    from postproc.compensate import compensate
-    from postproc.model_io import load_model
+    from postproc.jobs.compensate import compensate
+    from postproc.model.model_io import load_model
 
     path = tmp_path / "rel.src"
     path.write_bytes(REL.encode())

@@ -36,8 +36,8 @@ import numpy as np
 import pytest
 
 from postproc.errors import InputError, ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 REPO = Path(__file__).resolve().parents[1]
 REAL = Path(__file__).parent / "corpus" / "real"

@@ -9,7 +9,7 @@ import pytest
 
 import postproc
 from postproc.errors import RobotFileError, UnknownRobotError
-from postproc.robots import parse_robot_toml
+from postproc.robot.robots import parse_robot_toml
 
 REQUIRED = {"kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10", "ur10e", "ur5e"}
 
@@ -43,7 +43,7 @@ def test_irb6660_marks_estimates_and_has_coupling_limit():
     assert len(robot.couplings) == 1
     q = np.zeros((2, 6))
     q[1, 1], q[1, 2] = -40.0, -10.0  # q2 + q3 = -50 violates the coupling
-    assert postproc.kinematics.within_limits(robot, q).tolist() == [True, False]
+    assert postproc.robot.kinematics.within_limits(robot, q).tolist() == [True, False]
 
 
 def test_load_by_path(tmp_path):

@@ -1,12 +1,12 @@
-"""The table of orientation notations (postproc.rotation_forms) and Toolpath.extras."""
+"""The table of orientation notations (postproc.programs.rotation_forms) and Toolpath.extras."""
 
 import numpy as np
 import pytest
 
 from postproc import rotation_forms
 from postproc.errors import InputError
-from postproc.frames import abc_to_matrix, matrix_to_quat_wxyz
-from postproc.parse.common import Builder
+from postproc.programs.parse.common import Builder
+from postproc.robot.frames import abc_to_matrix, matrix_to_quat_wxyz
 
 
 @pytest.mark.parametrize("name", ["quat", "abc", "wpr"])

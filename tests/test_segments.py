@@ -1,10 +1,10 @@
-"""Interpolation between targets as controllers do it, and path distances (postproc.segments)."""
+"""Interpolation between targets as controllers do it, and path distances (postproc.compensation.segments)."""
 
 from __future__ import annotations
 
 import numpy as np
 
-from postproc.segments import arc_samples, circle_through, distance_to_circles, distance_to_segments, linear_samples
+from postproc.compensation.segments import arc_samples, circle_through, distance_to_circles, distance_to_segments, linear_samples
 
 
 def _pose(p):

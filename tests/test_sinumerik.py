@@ -1,4 +1,4 @@
-"""SINUMERIK 840D part programs (postproc/dialects/sinumerik): read, written back, judged.
+"""SINUMERIK 840D part programs (postproc/programs/dialects/sinumerik): read, written back, judged.
 
 No open Sinumerik interpreter exists: the expected positions below are worked out by hand
 from the 840D sl "Fundamentals" programming manual (6FC5398-1BP40), section "Coordinate
@@ -22,7 +22,7 @@ from test_fivex_rs274 import canonical_axes
 from postproc import dialects
 from postproc.errors import ParseError
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.program import from_toolpath
 from postproc.programs import emit_texts, parse_program
 
 HERE = Path(__file__).parent
@@ -261,7 +261,7 @@ def test_compensated_impeller_lands_on_the_true_machine(tmp_path):
     from typer.testing import CliRunner
 
     from postproc.cli import app
-    from postproc.fivex.compensate import actual_tip, controller_axes
+    from postproc.jobs.five_axis.compensate import actual_tip, controller_axes
 
     src = tmp_path / "IMPELLER.MPF"
     src.write_text(impeller_in_sinumerik(), encoding="latin-1")

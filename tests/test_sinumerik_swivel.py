@@ -20,10 +20,10 @@ import numpy as np
 import pytest
 
 from postproc import arcs
-from postproc.dialects.sinumerik import swivel
 from postproc.errors import InputError, ParseError
 from postproc.fivex.machine import load_machine
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.dialects.sinumerik import swivel
 
 S30, C30 = 0.5, np.sqrt(3) / 2
 

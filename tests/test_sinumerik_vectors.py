@@ -16,10 +16,10 @@ from test_sinumerik import AT_ZERO, TRUE, _read, _skeleton, impeller_in_sinumeri
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.fivex.compensate import actual_tip
 from postproc.fivex.kinematics import fk, ik
 from postproc.fivex.machine import load_machine
-from postproc.fivex.program import from_toolpath
+from postproc.jobs.five_axis.compensate import actual_tip
+from postproc.jobs.five_axis.program import from_toolpath
 
 
 def test_compensated_vectors_land_on_the_true_machine(tmp_path):

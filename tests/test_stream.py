@@ -1,4 +1,4 @@
-"""Programs compensated in chunks (postproc.stream): byte-identical to the whole-program path
+"""Programs compensated in chunks (postproc.jobs.stream): byte-identical to the whole-program path
 on programs both can take, posture and modal state carried across cuts, all or nothing."""
 
 from __future__ import annotations
@@ -10,12 +10,12 @@ from typer.testing import CliRunner
 
 import postproc
 from postproc.cli import app
-from postproc.compensate import CompensationError, compensate
-from postproc.effects import parse_effects
-from postproc.model_io import save_model
+from postproc.jobs.compensate import CompensationError, compensate
+from postproc.jobs.stream import StreamFallback, compensate_streamed
+from postproc.model.effects import parse_effects
+from postproc.model.model_io import save_model
+from postproc.model.sim import random_truth
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import random_truth
-from postproc.stream import StreamFallback, compensate_streamed
 
 runner = CliRunner()
 
@@ -164,8 +164,8 @@ def test_a_chunk_sent_to_a_worker_is_restored_bit_for_bit(tmp_path, model):
     every other value come back as they were."""
     import dataclasses
 
-    from postproc.compensate import reference_postures
-    from postproc.stream import _Task
+    from postproc.jobs.compensate import reference_postures
+    from postproc.jobs.stream import _Task
 
     tp = parse_program(_krl(tmp_path / "p.src", n=60))
     values = tp.values.copy()

@@ -1,4 +1,4 @@
-"""The main process of the streamed pipeline (postproc.stream): body lines told by their
+"""The main process of the streamed pipeline (postproc.jobs.stream): body lines told by their
 shape agree with the body pattern line for line; the posture handed from worker to worker
 (``_Baton``) is the one the whole program carries, anchors in later chunks included."""
 
@@ -11,14 +11,13 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL
 
 import postproc
-from postproc.compensate import compensate, reference_postures
-from postproc.effects import parse_effects
+from postproc.jobs.compensate import compensate, reference_postures
+from postproc.jobs.stream import StreamFallback, _Baton, _is_body, compensate_streamed
+from postproc.model.effects import parse_effects
+from postproc.model.sim import random_truth
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import random_truth
-from postproc.stream import StreamFallback, _Baton, _is_body, compensate_streamed
-
-from postproc.dialects.gcode.stream import RULES as GCODE
-from postproc.dialects.krl.stream import RULES as KRL
+from postproc.programs.dialects.gcode.stream import RULES as GCODE
+from postproc.programs.dialects.krl.stream import RULES as KRL
 
 KRL_BODY = "LIN {X 900.125, Y -200.5, Z 450, A 0, B 180, C 0} C_DIS"
 KRL_LINES = [KRL_BODY, "LIN {X 1}", "PTP {X 1, Y 2} C_PTP ; 12 a comment", "$VEL.CP = 0.2", "$APO.CDIS=12.5", "; 123 comment",
@@ -99,7 +98,7 @@ def test_line_reader_hands_out_whole_lines_in_order(tmp_path, monkeypatch, read_
     one without its '\\n' where the file has none."""
     import io
 
-    from postproc.stream import _LineReader
+    from postproc.jobs.stream import _LineReader
 
     lines = [f"LIN {{X {i}.5}} ; é {i * i}\r\n" if i % 3 else f"{'x' * (i % 11)}\n" for i in range(200)]
     text = "first line\n" + "".join(lines)
@@ -121,7 +120,7 @@ def test_a_chunk_that_fails_in_a_worker_hands_the_failure_on(monkeypatch):
     """A chunk whose postures cannot be computed (here: no toolpath at all) posts that it
     failed, so the next chunk stops at once instead of waiting for a posture."""
     from postproc import stream
-    from postproc.stream import _postures, _Task
+    from postproc.jobs.stream import _postures, _Task
 
     monkeypatch.setattr(stream, "BATON_WAIT_S", 2.0)
     baton = _Baton(multiprocessing.get_context("fork"))
@@ -135,7 +134,7 @@ def test_a_chunk_that_fails_in_a_worker_hands_the_failure_on(monkeypatch):
 def test_shared_slots_give_back_what_was_put_or_refuse_what_does_not_fit():
     """A task's arrays go through shared memory as they are (bits, dtype, shape, writable in
     the taker); an object whose arrays exceed the slot is refused, for the pipe to take."""
-    from postproc.stream import _Slots
+    from postproc.jobs.stream import _Slots
 
     slots = _Slots(2, capacity=4096)
     values = np.array([1.5, np.nan, -0.0, 3.0])

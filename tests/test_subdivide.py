@@ -7,22 +7,22 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from postproc import dialects
 from postproc import kinematics as kin
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.effects import parse_effects
-from postproc.emit.insert import NewPoint
 from postproc.errors import EmitError
-from postproc.identify import fit
-from postproc.ir import Kind
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.jobs.subdivide import compensate_subdivided, new_points
+from postproc.model.effects import parse_effects
+from postproc.model.identify import fit
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import parse_program
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
-from postproc.subdivide import compensate_subdivided, new_points
+from postproc.programs.emit.insert import NewPoint
+from postproc.programs.ir import Kind
 
 runner = CliRunner()
 DOWN = "A 0, B 180, C 0"
@@ -46,7 +46,7 @@ def model(truth_and_model):
 
 def _start_ptp(x, y, z):
     """An axis PTP to the joints of the first target (the wrist as a KR160 usually holds it)."""
-    from postproc.frames import abc_to_matrix, make_transform
+    from postproc.robot.frames import abc_to_matrix, make_transform
 
     pose = make_transform(abc_to_matrix(np.array([[0.0, 180.0, 0.0]]))[0], np.array([x, y, z]))
     flange = pose @ np.linalg.inv(make_transform(np.eye(3), TOOL))
@@ -171,7 +171,7 @@ def test_rapid_offs_target_is_refused_with_its_line(tmp_path):
 def _true_path(truth, tp, samples=16):
     """The true robot driven by the nominal controller along the program's LIN segments
     (straight commanded lines, joints nearest the previous ones): TCP points (M, 3)."""
-    from postproc.posture import interpolate_poses
+    from postproc.robot.posture import interpolate_poses
 
     robot = truth.robot
     flange = tp.flange_poses()
@@ -187,7 +187,7 @@ def _true_path(truth, tp, samples=16):
 
 
 def _distance_to_polyline(points, corners):
-    from postproc.segments import distance_to_segments
+    from postproc.compensation.segments import distance_to_segments
 
     d = [distance_to_segments(points[None], a[None], b[None])[0] for a, b in zip(corners[:-1], corners[1:])]
     return np.min(d, axis=0)
@@ -228,7 +228,7 @@ def test_rapid_program_subdivided_through_the_cli(model, tmp_path):
 
 def test_a_force_per_block_follows_the_new_targets(tmp_path):
     """--force-file / --cut forces are per target: a new target gets its motion's force."""
-    from postproc.subdivide import _new_index, _options_for_longer
+    from postproc.jobs.subdivide import _new_index, _options_for_longer
 
     (tmp_path / "part.mod").write_text(RAPID)
     tp = parse_program(tmp_path / "part.mod")
@@ -245,10 +245,10 @@ def test_real_gcode_segments_are_copied_and_read_back(shared):
     (others use parameters, #<z_cut>) gets a midpoint block; the text parses back with every
     old target unchanged and every new one on its segment (measured: 6,193 segments, 5
     blocks refused with their lines; pytest -s prints it)."""
-    from postproc.errors import PostprocError
-    from postproc.subdivide import check_inserted
-
     import re
+
+    from postproc.errors import PostprocError
+    from postproc.jobs.subdivide import check_inserted
 
     files = sorted((shared / "corpus" / "real" / "gcode").glob("*"))
     refused = []
@@ -282,7 +282,7 @@ def test_real_gcode_segments_are_copied_and_read_back(shared):
 
 
 def test_krl_copies_get_their_own_status_and_turn():
-    from postproc.dialects.krl import KRL
+    from postproc.programs.dialects.krl import KRL
 
     decl = "DECL E6POS XP1={X 1000,Y -300,Z 500,A 0,B 180,C 0,S 2,T 35,E1 0}"
     assert KRL.set_conf_text(decl, np.array([6, 27, np.nan, np.nan])) == decl.replace("S 2,T 35", "S 6,T 27")

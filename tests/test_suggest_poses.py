@@ -12,15 +12,15 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.effects import parse_effects
 from postproc.errors import InputError
-from postproc.errormodel import ErrorModel
-from postproc.identify import fit
-from postproc.measurements import read_measurements, write_measurements
-from postproc.model_io import save_model
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import fit
+from postproc.model.measurements import read_measurements, write_measurements
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder, random_truth, simulate
 from postproc.programs import parse_program
-from postproc.robots import load_robot
-from postproc.sim import Cylinder, random_truth, simulate
+from postproc.robot.robots import load_robot
 from postproc.suggest import NEAR_TARGETS_FRACTION, _information, design, near_targets, suggest_poses  # _information: the very blocks the design uses
 from postproc.suggest.candidates import Candidates, Tracker, generate, read_candidates, visible
 

@@ -1,4 +1,4 @@
-"""Term selection (postproc.term_selection): best subset over the whole family finds the
+"""Term selection (postproc.model.term_selection): best subset over the whole family finds the
 true support where greedy forward selection does not, reports how stable the choice is,
 and chooses nothing when there is nothing to find; on simulated KR160s through ``fit``."""
 
@@ -8,12 +8,12 @@ import re
 
 import numpy as np
 import pytest
-
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
-from postproc.effects import parse_effects
-from postproc.identify import Stats, fit, residuals
-from postproc.sim import Cylinder, random_truth, sample_poses, simulate
-from postproc.term_selection import select_terms
+
+from postproc.model.effects import parse_effects
+from postproc.model.identify import Stats, fit, residuals
+from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.model.term_selection import select_terms
 
 NOISE = 0.02
 FLOOR = NOISE * np.sqrt(3)  # 3-D RMS of 0.02 mm per axis

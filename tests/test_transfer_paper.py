@@ -1,4 +1,4 @@
-"""Seed 001's transfer learning as published (postproc.learn.transfer_paper) and the
+"""Seed 001's transfer learning as published (postproc.model.learn.transfer_paper) and the
 source-region predictor of eq. 26, next to the default (physics) Tr-GPR."""
 
 from __future__ import annotations
@@ -6,9 +6,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postproc.learn import TrGPRPredictor
-from postproc.learn import transfer_paper as paper
-from postproc.learn.residual import estimator_from_state, estimator_state
+from postproc.model.learn import TrGPRPredictor
+from postproc.model.learn import transfer_paper as paper
+from postproc.model.learn.residual import estimator_from_state, estimator_state
 
 
 def _regions(rng, n_source=60, n_target=40):
@@ -86,7 +86,7 @@ def test_seed001_design_default_and_as_published():
     The default Tr-GPR is within 1.2x of GPR on 378 validation-region poses and far better
     than GPR on the 80 target poses; the as-published variant beats GPR on the 50
     validation-region poses but not the default (numbers in the README)."""
-    from postproc.learn.experiments import seed001_transfer
+    from postproc.model.learn.experiments import seed001_transfer
 
     rows = {r["model"].split(" (")[0]: r["mean_mm"] for r in seed001_transfer(1)}
     assert rows["Tr-GPR"] <= 1.2 * rows["GPR-378"]

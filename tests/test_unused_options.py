@@ -6,13 +6,13 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from helpers import kr160
 from typer.testing import CliRunner
 
-from helpers import kr160
 from postproc.cli import app
-from postproc.effects import parse_effects
-from postproc.errormodel import ErrorModel
-from postproc.model_io import save_model
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import save_model
 
 runner = CliRunner()
 FIVEX = Path(__file__).parent / "data" / "fivex"

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc.effects import parse_effects
 from postproc.errors import MeasurementError
-from postproc.formats.ur10_ipa import read_series
-from postproc.identify import Stats, fit, nominal_model, refit_base, residuals
+from postproc.model.effects import parse_effects
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.identify import Stats, fit, nominal_model, refit_base, residuals
 
 
 @pytest.fixture(scope="module")

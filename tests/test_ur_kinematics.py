@@ -1,4 +1,4 @@
-"""Analytic inverse kinematics of UR arms (postproc.ur_kinematics), checked against the DH
+"""Analytic inverse kinematics of UR arms (postproc.robot.ur_kinematics), checked against the DH
 forward kinematics: every branch reproduces the pose, the joints it came from are among them."""
 
 from __future__ import annotations

@@ -18,8 +18,8 @@ import pytest
 
 from postproc import dialects
 from postproc.errors import InputError, ParseError
-from postproc.ir import Kind
 from postproc.programs import emit_texts, parse_program
+from postproc.programs.ir import Kind
 
 CELL = Path(__file__).parent / "corpus" / "urscript" / "cell.script"
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from postproc import dialects
-from postproc.ir import Kind
+from postproc.programs.ir import Kind
 
 START = "def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n"
 A, B, C, D = (f"p[{x}, 0, 0.3, 0, 3.14, 0]" for x in ("0.4", "0.5", "0.6", "0.7"))

@@ -1,7 +1,7 @@
 """A compensated URScript program run on a simulated true UR10e (issue 29).
 
 The program: set_tcp, a movej to joint values, then movel targets along a short joint-space
-path. The controller is modelled here, independently of postproc.posture, as the URScript
+path. The controller is modelled here, independently of postproc.robot.posture, as the URScript
 manual states it ("movel": the inverse kinematics nearest the current joints): each movel
 target on the IK solution nearest the previous joints, a per-point loop as a controller steps.
 Started in each of two configurations (the movej sets it: joint values, or get_inverse_kin with
@@ -18,10 +18,10 @@ from scipy.spatial.transform import Rotation
 
 import postproc
 from postproc import kinematics as kin
-from postproc.compensate import compensate
-from postproc.ir import Kind
+from postproc.jobs.compensate import compensate
+from postproc.model.sim import Cylinder
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import Cylinder
+from postproc.programs.ir import Kind
 
 Q_START = np.array([180.0, -100.0, 100.0, -90.0, -90.0, 0.0])  # arm towards +x, tool down, elbow up
 STEP = np.array([0.5, 0.3, -0.3, 0.4, 0.2, 0.5])

@@ -23,20 +23,20 @@ from typer.testing import CliRunner
 import postproc
 from postproc import kinematics as kin
 from postproc.cli import app
-from postproc.compensate import compensate
-from postproc.dialects import sniff
-from postproc.dialects.val3 import VAL3
-from postproc.dialects.val3 import code as val3_code
-from postproc.dialects.val3 import data as val3_data
-from postproc.dialects.val3 import parse as val3_parse
-from postproc.dialects.val3.controller import config_of_joints
-from postproc.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz
 from postproc.errors import InputError, ParseError, SharedNumberError
-from postproc.frames import quat_wxyz_to_matrix
-from postproc.ir import Kind
-from postproc.model_io import save_model
+from postproc.jobs.compensate import compensate
+from postproc.model.model_io import save_model
+from postproc.model.sim import Cylinder
 from postproc.programs import emit_texts, parse_program
-from postproc.sim import Cylinder
+from postproc.programs.dialects import sniff
+from postproc.programs.dialects.val3 import VAL3
+from postproc.programs.dialects.val3 import code as val3_code
+from postproc.programs.dialects.val3 import data as val3_data
+from postproc.programs.dialects.val3 import parse as val3_parse
+from postproc.programs.dialects.val3.controller import config_of_joints
+from postproc.programs.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz
+from postproc.programs.ir import Kind
+from postproc.robot.frames import quat_wxyz_to_matrix
 
 DEMO = Path(__file__).parent / "data" / "val3_demo"
 runner = CliRunner()

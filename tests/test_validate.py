@@ -11,12 +11,12 @@ from typer.testing import CliRunner
 
 import postproc
 from postproc.cli import app
-from postproc.effects import parse_effects
 from postproc.errors import InputError, MeasurementError
-from postproc.formats.ur10_ipa import read_series
-from postproc.measurements import write_measurements
-from postproc.sim import JointBox, random_truth, sample_poses, simulate
-from postproc.validate import FitSpec, run_points, run_random, run_series, run_sessions, session_ids, with_order_columns
+from postproc.model.effects import parse_effects
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.measurements import write_measurements
+from postproc.model.sim import JointBox, random_truth, sample_poses, simulate
+from postproc.model.validate import FitSpec, run_points, run_random, run_series, run_sessions, session_ids, with_order_columns
 
 runner = CliRunner()
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"

@@ -9,10 +9,10 @@ import pytest
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.dialects.rapid.writer import RapidWriter
 from postproc.errors import EmitError
-from postproc.ir import Kind
 from postproc.programs import parse_program, write_program
+from postproc.programs.dialects.rapid.writer import RapidWriter
+from postproc.programs.ir import Kind
 
 CORPUS = Path(__file__).parent / "corpus"
 runner = CliRunner()

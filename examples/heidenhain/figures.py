@@ -20,10 +20,10 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402  after the backend
 import numpy as np  # noqa: E402
 
-from postproc.fivex.commands import compensate_five_program, rtcp_calibrate  # noqa: E402
-from postproc.fivex.compensate import actual_tip, controller_axes  # noqa: E402
 from postproc.fivex.kinematics import fk  # noqa: E402
 from postproc.fivex.machine import load_machine  # noqa: E402
+from postproc.jobs.five_axis.commands import compensate_five_program, rtcp_calibrate  # noqa: E402
+from postproc.jobs.five_axis.compensate import actual_tip, controller_axes  # noqa: E402
 from postproc.programs import parse_program  # noqa: E402
 
 REPO = Path(__file__).resolve().parents[2]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..errors import InputError
+from postproc.errors import InputError
 
 # The two in-plane axes and the normal axis of G17 / G18 / G19 (indices into X, Y, Z).
 PLANES = {17: (0, 1, 2), 18: (2, 0, 1), 19: (1, 2, 0)}

@@ -24,12 +24,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .. import dialects
-from ..coverage_text import describe_model, model_summary
-from ..emit.writer import TOOL_DOWN
-from ..errors import InputError, JobError, PostprocError
-from ..frames import abc_to_matrix, make_transform
-from ..programs import parse_program
+from postproc.errors import InputError, JobError, PostprocError
+from postproc.model.coverage_text import describe_model, model_summary
+from postproc.programs import dialects
+from postproc.programs.emit.writer import TOOL_DOWN
+from postproc.programs.program_io import parse_program
+from postproc.robot.frames import abc_to_matrix, make_transform
+
 from .arcs import linearise_arc
 
 FREECAD_FEED_TO_MM_MIN = 60.0  # FreeCAD keeps feeds in mm/s (its internal velocity unit)
@@ -249,7 +250,8 @@ def planned_targets(request: dict):
 def run(request: dict) -> dict:
     """One post request (see the module docstring) -> its answer; raises PostprocError."""
     # Deferred, as postproc.post: the fitting and compensation stack loads only when a job is posted.
-    from ..model_io import load_model
+    from postproc.model.model_io import load_model
+
     from .post import post, write_programs
 
     args, gcode, frames, tools = _prepare(request)

@@ -9,8 +9,9 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from ..errors import InputError
-from ..measurements import write_text_atomic
+from postproc.errors import InputError
+from postproc.model.measurements import write_text_atomic
+
 from .freecad import help_text
 
 POST_FILE = "postproc_post.py"  # FreeCAD lists posts by their *_post.py file names: "postproc"

@@ -13,19 +13,19 @@ from pathlib import Path
 
 import numpy as np
 
-from ..compensate import CompensationError, compensate_with
-from ..compensation.request import CompensationRequest
-from ..dialects import get as get_dialect
-from ..dialects import names as dialect_names
-from ..dialects import of as dialect_of
-from ..errormodel import ErrorModel
-from ..errors import InputError
-from ..ir import Kind, Toolpath
-from ..model_io import load_model
-from ..plugins import load_plugins
-from ..program_check import check_model_fits
-from ..programs import emit_texts, parse_program, sniff, write_program, write_texts
-from ..targets import RobotTarget
+from postproc.compensation.request import CompensationRequest
+from postproc.errors import InputError
+from postproc.jobs.compensate import CompensationError, compensate_with
+from postproc.jobs.program_check import check_model_fits
+from postproc.jobs.targets import RobotTarget
+from postproc.model.errormodel import ErrorModel
+from postproc.model.model_io import load_model
+from postproc.plugins import load_plugins
+from postproc.programs.dialects import get as get_dialect
+from postproc.programs.dialects import names as dialect_names
+from postproc.programs.dialects import of as dialect_of
+from postproc.programs.ir import Kind, Toolpath
+from postproc.programs.program_io import emit_texts, parse_program, sniff, write_program, write_texts
 
 
 def robot_languages() -> tuple[str, ...]:

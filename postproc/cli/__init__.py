@@ -9,20 +9,22 @@ act on, 2 bad input or usage (message on stderr naming file, line/row and column
 from __future__ import annotations
 
 # Imported for their registrations, in the order `postproc --help` lists the commands.
-from . import robot  # noqa: F401  robots, fk, ik
-from . import fit  # noqa: F401
-from . import evaluate  # noqa: F401
-from . import validate  # noqa: F401
-from . import diagnose  # noqa: F401  diagnose, ladder, similarity
-from . import data  # noqa: F401  import-ur10, simulate
-from . import suggest  # noqa: F401  suggest-poses
-from . import compensate  # noqa: F401
-from . import predict  # noqa: F401
-from . import programs  # noqa: F401  inspect, convert, roundtrip
-from . import fivex  # noqa: F401  rtcp-calibrate
-from . import cam  # noqa: F401  freecad-install-post
-from . import place  # noqa: F401
-from . import effect  # noqa: F401  effect new, effect check
+from . import (
+    cam,  # noqa: F401  freecad-install-post
+    compensate,  # noqa: F401
+    data,  # noqa: F401  import-ur10, simulate
+    diagnose,  # noqa: F401  diagnose, ladder, similarity
+    effect,  # noqa: F401  effect new, effect check
+    evaluate,  # noqa: F401
+    fit,  # noqa: F401
+    fivex,  # noqa: F401  rtcp-calibrate
+    place,  # noqa: F401
+    predict,  # noqa: F401
+    programs,  # noqa: F401  inspect, convert, roundtrip
+    robot,  # noqa: F401  robots, fk, ik
+    suggest,  # noqa: F401  suggest-poses
+    validate,  # noqa: F401
+)
 from .app import app
 
 __all__ = ["app", "main"]

@@ -12,8 +12,8 @@ import functools
 import typer
 from rich.console import Console
 
-from .. import __version__
-from ..errors import JobError, PostprocError
+from postproc import __version__
+from postproc.errors import JobError, PostprocError
 
 app = typer.Typer(
     name="postproc",

@@ -7,7 +7,8 @@ from typing import Optional
 
 import typer
 
-from ..cam.install import default_macro_dir, install_post
+from postproc.cam.install import default_macro_dir, install_post
+
 from .app import app, handles_errors, out
 
 

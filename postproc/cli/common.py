@@ -6,15 +6,14 @@ from pathlib import Path
 from typing import Optional
 
 import numpy as np
-
 import typer
 
-from .. import dialects
-from ..errors import InputError, OutputError
-from ..frames import abc_to_matrix, make_transform
-from ..measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
-from .app import err
+from postproc.errors import InputError, OutputError
+from postproc.model.measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
+from postproc.programs import dialects
+from postproc.robot.frames import abc_to_matrix, make_transform
 
+from .app import err
 
 # The built-in languages, for help texts (plugin dialects load later, with the command's --plugins).
 LANGUAGES = ", ".join(dialects.names())
@@ -43,7 +42,7 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
     return values
 
 
-GP_FEATURES = ("pose", "tcp+joints", "joints")  # = postproc.learn.features.GP_KINDS; not imported: importing postproc.learn loads torch (seconds)
+GP_FEATURES = ("pose", "tcp+joints", "joints")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
 GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart) or joints."
 
 

@@ -12,17 +12,19 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..arcs import summary as arc_summary
-from ..compensate import CompensationError, compensate_with, process_forces
-from ..compensation.request import CompensationRequest
-from ..coverage_text import describe_model, model_summary
-from ..errors import InputError
-from ..fivex.commands import compensate_five_request
-from ..measurements import write_text_atomic
-from ..plugin_option import with_plugins
-from ..program_check import check_model_fits
-from ..program_content import require_program
-from ..programs import (
+from postproc.compensation.request import CompensationRequest
+from postproc.errors import InputError
+from postproc.jobs.compensate import CompensationError, compensate_with, process_forces
+from postproc.jobs.five_axis.commands import compensate_five_request
+from postproc.jobs.program_check import check_model_fits
+from postproc.jobs.stream import StreamFallback, stream_request, wants_stream
+from postproc.jobs.subdivide import subdivide_request
+from postproc.jobs.targets import FiveAxisTarget
+from postproc.model.coverage_text import describe_model, model_summary
+from postproc.model.measurements import write_text_atomic
+from postproc.programs.arcs import summary as arc_summary
+from postproc.programs.content import require_program
+from postproc.programs.program_io import (
     check_texts,
     emit_texts,
     files_for,
@@ -32,12 +34,11 @@ from ..programs import (
     refuse_stdout,
     write_set,
 )
-from ..progress import ProgressLine
-from ..stream import StreamFallback, stream_request, wants_stream
-from ..subdivide import subdivide_request
-from ..targets import FiveAxisTarget
+from postproc.progress import ProgressLine
+
 from .app import app, err, handles_errors, out
 from .common import DIALECT_HELP, check_output_folder, floats, named_frames
+from .plugin_option import with_plugins
 
 
 @app.command("compensate")
@@ -76,7 +77,7 @@ def compensate_cmd(
     """Rewrite a program so the robot reaches its targets under the fitted error model
     (or a five-axis G-code program for a calibrated machine file given as --model)."""
     # Deferred import: reading a model loads scipy.optimize (slow to import); `postproc --version` must stay fast.
-    from ..target_file import load_target
+    from postproc.jobs.target_file import load_target
 
     request = CompensationRequest(
         load_target(model), programs=tuple(programs), output=output, out_dir=out_dir, jobs=jobs, scheduler=scheduler,
@@ -182,7 +183,7 @@ def _write_page(report: Path, rep, summary: dict, model, program: str, model_pat
     """--report PAGE.html (its figures take a few seconds: a spinner meanwhile)."""
 
     # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
-    from ..report.compensation import compensation_report
+    from postproc.report.compensation import compensation_report
 
     with ProgressLine("report", console=err) as progress:
         progress(f"writing the report page {report}")
@@ -240,10 +241,10 @@ def _write_compensated(tp, new, rows, output: str, in_place: bool, original=None
     write_set(files, backup=in_place)
 
 def _compensate_batch(request: CompensationRequest) -> int:
-    """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.batch on Dask."""
+    """compensate PROGRAM... --out-dir DIR [--jobs N | --scheduler ADDRESS]: postproc.jobs.batch on Dask."""
 
     # Deferred import: it loads dask.distributed (slow to import); `postproc --version` must stay fast.
-    from ..batch import run_batch_request
+    from postproc.jobs.batch import run_batch_request
 
     programs, out_dir, report = request.programs, request.out_dir, request.report
     finished = []
@@ -281,7 +282,7 @@ def _can_stream(request: CompensationRequest) -> bool:
 
 
 def _compensate_streamed(request: CompensationRequest) -> bool:
-    """compensate --stream: a long program in chunks (postproc.stream); False where the
+    """compensate --stream: a long program in chunks (postproc.jobs.stream); False where the
     whole-program path must take it (too short, or a program the chunks cannot carry: said why)."""
     program, model = request.programs[0], request.machine.model
     if not wants_stream(program, request.stream):

@@ -8,17 +8,18 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..effects import parse_effects
-from ..errormodel import require_resolved
-from ..errors import InputError
-from ..formats.ur10_ipa import read_series
-from ..measurements import write_measurements
-from ..plugin_option import with_plugins
-from ..progress import ProgressLine
-from ..robots import load_robot
-from ..sim import parse_region, random_truth, sample_poses, simulate
+from postproc.errors import InputError
+from postproc.model.effects import parse_effects
+from postproc.model.errormodel import require_resolved
+from postproc.model.formats.ur10_ipa import read_series
+from postproc.model.measurements import write_measurements
+from postproc.model.sim import parse_region, random_truth, sample_poses, simulate
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import floats
+from .plugin_option import with_plugins
 
 
 @app.command("import-ur10")
@@ -53,7 +54,7 @@ def simulate_cmd(
 ):
     """Generate a measurement set from a simulated robot with chosen error effects."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..model_io import save_model
+    from postproc.model.model_io import save_model
 
     space = parse_region(workspace, region)
     if n < 1:
@@ -73,7 +74,7 @@ def simulate_cmd(
     if truth_out is not None:
         save_model(truth_out, truth)
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..identify import Stats, nominal_model, residuals
+    from postproc.model.identify import Stats, nominal_model, residuals
 
     # The same nominal error as fit, ladder and the report print: the nominal robot registered onto the data.
     st = Stats.of(residuals(nominal_model(robot_model, tool_mm, data, registered=True), data))

@@ -9,16 +9,17 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from ..effects import EffectSum, _split_top_level, parse_effects
-from ..errormodel import ErrorModel
-from ..errors import InputError, OutputError
-from ..measurements import write_text_atomic
-from ..plugin_option import with_plugins
-from ..plugins import plugin_arguments
-from ..progress import ProgressLine
-from ..robots import load_robot
+from postproc.errors import InputError, OutputError
+from postproc.model.effects import EffectSum, _split_top_level, parse_effects
+from postproc.model.errormodel import ErrorModel
+from postproc.model.measurements import write_text_atomic
+from postproc.plugins import plugin_arguments
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import DROP_INVALID_HELP, check_output_folder, floats, load_measurements, refuse_unused
+from .plugin_option import with_plugins
 
 
 @app.command("diagnose")
@@ -36,8 +37,8 @@ def diagnose_cmd(
 ):
     """Where the model fails and which effect is missing."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..diagnose import Files, diagnose
-    from ..model_io import load_model
+    from postproc.model.diagnose import Files, diagnose
+    from postproc.model.model_io import load_model
 
     if folds < 2:
         raise InputError("--folds must be at least 2")
@@ -48,7 +49,7 @@ def diagnose_cmd(
         result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas), plugin_arguments()))
     if report is not None:
         # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
-        from ..report.html import diagnosis_report
+        from postproc.report.html import diagnosis_report
 
         write_text_atomic(report, diagnosis_report(error_model, data, result, title=f"Diagnosis of {model.name} on {meas.name}"))
     if json_out:
@@ -62,8 +63,8 @@ def diagnose_cmd(
 def _print_diagnosis(result, error_model) -> None:
     """The diagnosis on one screen; each suggested command printed once, after its findings."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..candidates import MIN_PROGRESS, MIN_STABILITY
-    from ..diagnose import grouped_findings
+    from postproc.model.candidates import MIN_PROGRESS, MIN_STABILITY
+    from postproc.model.diagnose import grouped_findings
 
     st = result.stats
     out.print(f"model {error_model.effects.spec()} on {st.n} poses: RMS {st.rms_mm:.4f} mm, mean {st.mean_mm:.4f}, max {st.max_mm:.4f} "
@@ -113,7 +114,7 @@ def ladder_cmd(
 ):
     """Fit a sequence of models, each adding the next effect, and report the error per step."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..diagnose import ladder
+    from postproc.model.diagnose import ladder
 
     robot_model, tool_mm = load_robot(robot), floats(tool, 3, "--tool")
     check_output_folder(plot, "--plot")
@@ -129,7 +130,7 @@ def ladder_cmd(
     floor = rows[-1]["noise_floor_mm"]
     if plot is not None:
         # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
-        from ..report.figures import ladder_chart
+        from postproc.report.figures import ladder_chart
 
         fig = ladder_chart(rows, floor)
         tmp = plot.with_name(f".{plot.name}.tmp.png")
@@ -142,7 +143,7 @@ def ladder_cmd(
             tmp.unlink(missing_ok=True)
     if report is not None:
         # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
-        from ..report.html import ladder_report
+        from postproc.report.html import ladder_report
 
         write_text_atomic(report, ladder_report(rows, floor, f"Ladder on {meas.name}"))
     if json_out:
@@ -170,8 +171,8 @@ def similarity_cmd(
 ):
     """How alike two regions' error patterns are (seed 001 eq. 9-10), and whether transfer learning is advisable."""
     # Deferred import: it loads torch and scikit-learn / scipy (slow to import); `postproc --version` must stay fast.
-    from ..learn import region_similarity
-    from ..model_io import load_model
+    from postproc.model.learn import region_similarity
+    from postproc.model.model_io import load_model
 
     if model is not None:
         refuse_unused("with --model (the model gives the robot and tool)", {"--robot": robot is not None, "--tool": tool is not None})

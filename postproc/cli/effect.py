@@ -7,11 +7,11 @@ from pathlib import Path
 import typer
 from rich.table import Table
 
-from ..effect_template import write_template
-from ..effects import CATALOG
-from ..plugins import PluginError, load_plugins
-from .app import app, handles_errors, out
+from postproc.model.effect_template import write_template
+from postproc.model.effects import CATALOG
+from postproc.plugins import PluginError, load_plugins
 
+from .app import app, handles_errors, out
 
 effect_app = typer.Typer(help="Write and check an error effect of your own (docs/own-effect.md).", no_args_is_help=True)
 app.add_typer(effect_app, name="effect")
@@ -36,7 +36,7 @@ def effect_check_cmd(
 ):
     """Contract checks of the effects in FILE: Jacobian, zero parameters, bounds, texts, round trips."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..effect_check import check_effect
+    from postproc.model.effect_check import check_effect
 
     records = [r for r in load_plugins([file], environ={}, entry_points=False) if r.kind == "effect"]
     if not records:

@@ -8,11 +8,11 @@ from pathlib import Path
 import numpy as np
 import typer
 
-from ..errors import InputError
-from ..plugin_option import with_plugins
+from postproc.errors import InputError
+
 from .app import app, err, handles_errors, out
 from .common import DROP_INVALID_HELP, load_measurements, refuse_unused
-
+from .plugin_option import with_plugins
 
 # it an estimate rather than an interpolation of noise.
 _MIN_REGISTRATION_ROWS = 6
@@ -41,9 +41,9 @@ def evaluate_cmd(
 ):
     """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..coverage import describe_outside, outside_poses
-    from ..identify import Stats, refit_base, residuals
-    from ..model_io import load_model
+    from postproc.model.coverage import describe_outside, outside_poses
+    from postproc.model.identify import Stats, refit_base, residuals
+    from postproc.model.model_io import load_model
 
     refuse_unused("without --json", {"--region": region_json and not json_out})  # usage first, before any work
     error_model, _ = load_model(model)

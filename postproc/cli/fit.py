@@ -8,14 +8,15 @@ from typing import Optional
 import typer
 from rich.table import Table
 
-from ..effects import parse_effects
-from ..errors import InputError
-from ..plugin_option import with_plugins
-from ..predictor_plugins import predictor_names
-from ..progress import ProgressLine
-from ..robots import load_robot
+from postproc.errors import InputError
+from postproc.model.effects import parse_effects
+from postproc.model.predictor_plugins import predictor_names
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
+from .plugin_option import with_plugins
 
 
 def _fit_summary(result, robot_name: str, effects_spec: str) -> None:
@@ -78,8 +79,8 @@ def fit_cmd(
 
 def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from ..identify import fit as run_fit
-    from ..model_io import load_model, save_model
+    from postproc.model.identify import fit as run_fit
+    from postproc.model.model_io import load_model, save_model
 
     if predictor is not None and predictor not in predictor_names():
         raise InputError(f"--predictor: '{predictor}' is not one of {', '.join(predictor_names())}")
@@ -112,7 +113,7 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
     final = result.model
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-        from ..identify import Stats, fit_predictor, residuals
+        from postproc.model.identify import Stats, fit_predictor, residuals
 
         with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
             final = fit_predictor(result.model, data, predictor, load_measurements(source) if source is not None else None, seed=seed,

@@ -8,8 +8,9 @@ from typing import Optional
 
 import typer
 
-from ..errors import InputError
-from ..fivex.commands import calibration_summary, rtcp_calibrate
+from postproc.errors import InputError
+from postproc.jobs.five_axis.commands import calibration_summary, rtcp_calibrate
+
 from .app import app, handles_errors, out
 
 

@@ -10,19 +10,21 @@ from typing import Optional
 import numpy as np
 import typer
 
-from .. import place_report as report, placement as pl
-from ..compliance import identified_compliance
-from ..dialects import of as dialect_of
-from ..errors import InputError, JobError
-from ..files import write_all
-from ..forces import load_cut_params
-from ..place_program import check_placed, placed_conf, placed_texts, problem_from_program
-from ..plugin_option import with_plugins
-from ..programs import parse_program
-from ..progress import ProgressLine
-from ..robots import load_robot
+from postproc.errors import InputError, JobError
+from postproc.files import write_all
+from postproc.process import place_report as report
+from postproc.process import placement as pl
+from postproc.process.compliance import identified_compliance
+from postproc.process.forces import load_cut_params
+from postproc.process.place_program import check_placed, placed_conf, placed_texts, problem_from_program
+from postproc.programs.dialects import of as dialect_of
+from postproc.programs.program_io import parse_program
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import DIALECT_HELP, floats
+from .plugin_option import with_plugins
 
 
 def _search_spec(text: str) -> list[tuple[float, float, float]]:
@@ -103,7 +105,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, c
     fitted = None
     if model is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-        from ..model_io import load_model
+        from postproc.model.model_io import load_model
 
         fitted, _ = load_model(model)
     params = None if cut is None else load_cut_params(cut)
@@ -113,7 +115,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, c
         if params is None:
             raise InputError("--stock needs --cut (the engagement feeds the mechanistic force model)")
         # Deferred import: it loads trimesh (slow to import); `postproc --version` must stay fast.
-        from ..engagement import load_stock, program_engagement
+        from postproc.process.engagement import load_stock, program_engagement
 
         engagement = program_engagement(tp, params.diameter, load_stock(stock))
     problem = problem_from_program(tp, robot_model, force_tool=force_tool, params=params, engagement=engagement, model=fitted, singular_deg=singular_margin, conf_mode=conf_mode)
@@ -125,7 +127,7 @@ def _place_problem(tp, robot_model, force, cut, stock, model, singular_margin, c
 def _place_figures(plot: Path, result, problem, best_frame, frame0, cur) -> dict[Path, bytes]:
     """The heat map (PLOT) and the error along the path (PLOT_path), as PNG bytes by path."""
     # Deferred import: it loads matplotlib (slow to import); `postproc --version` must stay fast.
-    from ..report.placement_figures import error_maps, path_errors
+    from postproc.report.placement_figures import error_maps, path_errors
 
     steps = np.linalg.norm(np.diff(problem.local_tcp[:, :3, 3], axis=0), axis=1) * ((problem.weights[1:] > 0) & (problem.weights[:-1] > 0))
     dist = np.concatenate([[0.0], np.cumsum(steps)])  # length along the cut

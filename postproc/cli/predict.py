@@ -9,17 +9,18 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..compensate import predicted_positions
-from ..dialects import of as dialect_of
-from ..errors import InputError
-from ..ir import Kind
-from ..plugin_option import with_plugins
-from ..program_check import check_model_fits
-from ..program_content import require_program
-from ..programs import parse_program
-from ..progress import ProgressLine
+from postproc.errors import InputError
+from postproc.jobs.compensate import predicted_positions
+from postproc.jobs.program_check import check_model_fits
+from postproc.programs.content import require_program
+from postproc.programs.dialects import of as dialect_of
+from postproc.programs.ir import Kind
+from postproc.programs.program_io import parse_program
+from postproc.progress import ProgressLine
+
 from .app import app, err, handles_errors, out
 from .common import FORCE_OPTION, FRAME_OPTION, START_JOINTS_OPTION, TEMP_OPTION, TOOL_OPTION, floats, named_frames
+from .plugin_option import with_plugins
 
 
 @app.command("predict")
@@ -48,7 +49,7 @@ def predict_cmd(
     goal_tp = tp if intended is None else parse_program(intended, dialect)
     frames, tools = named_frames(frame, "--frame"), named_frames(tool, "--tool")
     # Deferred import: it loads scipy.optimize (slow to import); `postproc --help` must stay fast.
-    from ..model_io import load_model
+    from postproc.model.model_io import load_model
 
     error_model, _ = load_model(model)
     for note in check_model_fits(tp, error_model, str(model), None, allow_mismatch):

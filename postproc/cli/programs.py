@@ -10,20 +10,20 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..arcs import describe
-from ..convert_conf import converted_conf
-from ..dialects import get
-from ..emit.feeds import describe as describe_feeds
-from ..emit.tool_load import parse_tool_load
-from ..errors import InputError, JobError, PostprocError
-from ..fivex.commands import convert_five
-from ..frames import matrix_to_quat_wxyz
-from ..plugin_option import with_plugins
-from ..programs import emit_texts, parse_program, with_robot, write_program, write_texts
-from ..robots import load_robot
+from postproc.errors import InputError, JobError, PostprocError
+from postproc.jobs.convert_conf import converted_conf
+from postproc.jobs.five_axis.commands import convert_five
+from postproc.programs.arcs import describe
+from postproc.programs.dialects import get
+from postproc.programs.emit.feeds import describe as describe_feeds
+from postproc.programs.emit.tool_load import parse_tool_load
+from postproc.programs.program_io import emit_texts, parse_program, with_robot, write_program, write_texts
+from postproc.robot.frames import matrix_to_quat_wxyz
+from postproc.robot.robots import load_robot
+
 from .app import app, err, exit_code, handles_errors, out
 from .common import DIALECT_HELP, MACHINE_LANGUAGES, PROGRAM_FILES, ROBOT_LANGUAGES, named_frames, refuse_unused
-
+from .plugin_option import with_plugins
 
 _KIND_NAMES = {0: "joint", 1: "linear", 2: "circular_via", 3: "circular_end", 4: "joint_target", 5: "rapid", 6: "arc_cw", 7: "arc_ccw"}
 

@@ -9,10 +9,13 @@ import numpy as np
 import typer
 from rich.table import Table
 
-from ..errors import JobError
-from ..frames import abc_to_matrix, make_transform, matrix_to_abc
-from ..kinematics import fk as _fk, ik as _ik, within_limits
-from ..robots import available_robots, load_robot
+from postproc.errors import JobError
+from postproc.robot.frames import abc_to_matrix, make_transform, matrix_to_abc
+from postproc.robot.kinematics import fk as _fk
+from postproc.robot.kinematics import ik as _ik
+from postproc.robot.kinematics import within_limits
+from postproc.robot.robots import available_robots, load_robot
+
 from .app import app, handles_errors, out
 from .common import floats
 

@@ -9,14 +9,15 @@ from typing import Optional
 import numpy as np
 import typer
 
-from ..effects import parse_effects
-from ..errors import InputError
-from ..plugin_option import with_plugins
-from ..progress import ProgressLine
-from ..robots import load_robot
-from ..sim import parse_region
+from postproc.errors import InputError
+from postproc.model.effects import parse_effects
+from postproc.model.sim import parse_region
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import check_output_folder, floats, load_measurements, refuse_unused
+from .plugin_option import with_plugins
 
 
 @app.command("suggest-poses")
@@ -54,12 +55,12 @@ def suggest_poses_cmd(
     """Choose the poses to measure that identify the model best (optimal experiment design)."""
 
     # Deferred import: it loads scipy / matplotlib (slow to import); `postproc --version` must stay fast.
-    from ..model_io import load_model
-    from ..suggest import program_targets, suggest_poses
-    from ..suggest.candidates import generate, read_candidates, with_load_states
-    from ..suggest.inputs import design_model, tracker_from
-    from ..suggest.job import report_lines, write_outputs
-    from ..suggest.program import language_of
+    from postproc.model.model_io import load_model
+    from postproc.suggest import program_targets, suggest_poses
+    from postproc.suggest.candidates import generate, read_candidates, with_load_states
+    from postproc.suggest.inputs import design_model, tracker_from
+    from postproc.suggest.job import report_lines, write_outputs
+    from postproc.suggest.program import language_of
 
     if box is not None or cylinder is not None:  # spec/cli.md's --box/--cylinder: a workspace and its region in one option
         refuse_unused("with --box or --cylinder (they give the workspace)", {"--workspace": workspace != "cylinder", "--region": region is not None,

@@ -8,13 +8,14 @@ from typing import Optional
 
 import typer
 
-from ..effects import parse_effects
-from ..errors import InputError
-from ..plugin_option import with_plugins
-from ..progress import ProgressLine
-from ..robots import load_robot
+from postproc.errors import InputError
+from postproc.model.effects import parse_effects
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
+
 from .app import app, err, handles_errors, out
 from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, floats, gp_features_checked, load_measurements, refuse_unused
+from .plugin_option import with_plugins
 
 
 @app.command("validate")
@@ -37,7 +38,7 @@ def validate_cmd(
 ):
     """Error on held-out poses under a named protocol, with each test pose's distance to the training poses."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
-    from .. import validate as protocols
+    from postproc.model import validate as protocols
 
     if protocol not in protocols.PROTOCOLS:
         raise InputError(f"--protocol: '{protocol}' is not one of {', '.join(protocols.PROTOCOLS)}")

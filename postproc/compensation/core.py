@@ -20,7 +20,7 @@ branch are reported with their program lines; the caller must not write such a p
 
 The controller's rules (which configuration data apply and the branch they name, where its
 interpolation is not exact, where an arc ends) come from the ``controller`` object the
-caller gives: this module imports no language (``postproc.compensate`` is the public entry
+caller gives: this module imports no language (``postproc.jobs.compensate`` is the public entry
 that gives the program's own).
 """
 
@@ -32,14 +32,17 @@ from functools import lru_cache, wraps
 import numpy as np
 from threadpoolctl import ThreadpoolController
 
-from .. import arcs, fast_model, posture, segments
-from .. import kinematics as kin
-from ..effects import consumers_of
-from ..errormodel import ErrorModel
-from ..errors import InputError, JobError
-from ..frames import invert_transform
-from ..ir import Kind, Toolpath
+from postproc.errors import InputError, JobError
+from postproc.model import fast_model
+from postproc.model.effects import consumers_of
+from postproc.model.errormodel import ErrorModel
+from postproc.programs import arcs
+from postproc.programs.ir import Kind, Toolpath
+from postproc.robot import kinematics as kin
+from postproc.robot import posture
+from postproc.robot.frames import invert_transform
 
+from . import segments
 
 
 @lru_cache(maxsize=1)
@@ -84,8 +87,8 @@ class Report:
     posture: np.ndarray | None = None  # (N,) POSTURE_* code, 0 where the controller's posture is fine
     path_mm: np.ndarray | None = None  # (N,) predicted largest distance from the intended path on the segment into the target
     path_limit_mm: float | None = None  # --max-deviation: a segment straying further fails
-    end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.stream carries it on)
-    outside_region: dict[int, str] | None = None  # target index -> why it lies outside the model's measured region (postproc.coverage); None: not checked
+    end_joints: np.ndarray | None = None  # (6,) the posture the controller holds at the last Cartesian target as written (postproc.jobs.stream carries it on)
+    outside_region: dict[int, str] | None = None  # target index -> why it lies outside the model's measured region (postproc.model.coverage); None: not checked
     detail: "PathDetail | None" = None  # per-target vectors for the --report page (compensate(detail=True))
 
     @property
@@ -214,7 +217,7 @@ class _Plant:
 
 def _reference_joints(tp: Toolpath, robot, flange: np.ndarray, rows: np.ndarray, controller, start_q=None) -> tuple[np.ndarray, np.ndarray, np.ndarray, list[str]]:
     """The joints and branch the controller takes for each Cartesian target as written, by
-    its rules (``controller``: ``conf_applies``, ``branch_from_conf``; postproc.posture):
+    its rules (``controller``: ``conf_applies``, ``branch_from_conf``; postproc.robot.posture):
     joint targets and configuration data that apply set the posture, every other target
     carries it. Also returns, per Cartesian target, why the controller could not take that
     posture (POSTURE_* codes, 0 where it can)."""
@@ -281,9 +284,9 @@ def compensate(
     ``reference``: ``reference_postures`` of the same program, frames, tools and start joints.
     Targets outside the region the model was measured in fail unless ``allow_extrapolation``.
     ``detail``: the report also carries the per-target vectors of ``PathDetail``.
-    ``controller``: the rules of the controller that runs the program (a ``postproc.controller.Controller``:
+    ``controller``: the rules of the controller that runs the program (a ``postproc.programs.controller.Controller``:
     ``conf_applies``, ``branch_from_conf``, ``inexact_interpolation``, ``arc_ends_at_target``);
-    ``postproc.compensate.compensate`` takes those of the program's language by default."""
+    ``postproc.jobs.compensate.compensate`` takes those of the program's language by default."""
     if scheme not in _SCHEMES:
         raise InputError(f"unknown compensation scheme '{scheme}' (broyden or seed000)")
     _require_usable_model(model)
@@ -301,7 +304,7 @@ def compensate(
     progress("predicting the program as written")
     before = problem.predicted_error_as_written()
     solution = _SCHEMES[scheme](problem, before, tol_mm, max_iter, progress)
-    arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.arcs)
+    arc_fit = arcs.fit(problem, solution, tol_mm, max_iter, _solve_broyden, progress)  # G2/G3 centres (postproc.programs.arcs)
     report = _report(problem, before, solution)
     progress("predicting the path between targets")
     path = _path_deviation(problem, solution, controller)
@@ -363,7 +366,7 @@ def reference_postures(tp: Toolpath, model: ErrorModel, *, controller, frames: d
                        start_joints=None, **_options) -> Reference:
     """What ``compensate(tp, model, ...)`` computes first (the postures of the program as
     written, by ``controller``'s rules), without compensating; given back to it as
-    ``reference`` it is not computed again. It depends on the targets as written only, so postproc.stream carries its end
+    ``reference`` it is not computed again. It depends on the targets as written only, so postproc.jobs.stream carries its end
     posture to the next chunk while this one is compensated in another process."""
     if frames or tools:
         tp = tp.with_frames(frames, tools)
@@ -644,7 +647,7 @@ def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> dic
     """{target index: why it lies outside the region the model was measured in}: its joints
     where the model predicts them (the compensated command's, or the target's as written where
     there is none) and its TCP. None where the model records no region. (A dict, not a column:
-    nearly always empty, and postproc.stream sends every chunk's report between processes.)"""
+    nearly always empty, and postproc.jobs.stream sends every chunk's report between processes.)"""
     if model.coverage is None:
         return None
     q = np.where(np.isnan(sol.q), problem.q_ref, sol.q)

@@ -2,7 +2,7 @@
 its fitted error model, or a calibrated five-axis machine.
 
 ``Machine`` is a protocol: the robot target and the five-axis target
-(``postproc.targets``) implement it, and ``postproc.targets.load_target`` returns the one
+(``postproc.jobs.targets``) implement it, and ``postproc.jobs.targets.load_target`` returns the one
 a file holds, judged by its content (never by its suffix). This module imports nothing of
 the languages or of either target, so the request (``request.py``) can carry one.
 """
@@ -13,7 +13,7 @@ from typing import Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
-from ..ir import Toolpath
+from postproc.programs.ir import Toolpath
 
 
 @runtime_checkable

@@ -1,8 +1,8 @@
 """One typed request: everything a compensation job needs, checked once when it is built.
 
 The command line builds a ``CompensationRequest`` from its options; the library entries
-(``postproc.compensate.compensate``, ``postproc.stream``, ``postproc.batch``,
-``postproc.subdivide``, ``postproc.post``) take one, and their older keyword signatures
+(``postproc.jobs.compensate.compensate``, ``postproc.jobs.stream``, ``postproc.jobs.batch``,
+``postproc.jobs.subdivide``, ``postproc.post``) take one, and their older keyword signatures
 build one. Every rule about which options go together (the three force options, one
 program or many, what a five-axis machine takes) lives in ``__post_init__`` here and
 nowhere else.
@@ -15,7 +15,8 @@ from dataclasses import dataclass, field, fields
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..errors import InputError
+from postproc.errors import InputError
+
 from .machine import Machine
 
 SCHEMES = ("broyden", "seed000")
@@ -40,7 +41,7 @@ ONE_PROGRAM_ONLY = ("cut", "force_file", "in_place", "subdivide", "data")
 
 @dataclass(frozen=True, eq=False)
 class CompensationRequest:
-    """A compensation job. ``machine``: the robot or machine (``postproc.targets.load_target``).
+    """A compensation job. ``machine``: the robot or machine (``postproc.jobs.targets.load_target``).
     ``programs``: program paths (``-``: standard input), empty where the caller hands a
     parsed Toolpath to the library. Forces: at most one of ``force_n`` (constant, N, tool
     frame), ``force_file`` (a CSV, a force per motion block), ``cut`` (a cut file: the

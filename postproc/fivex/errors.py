@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import InputError, JobError, located
+from postproc.errors import InputError, JobError, located
 
 
 class MachineFileError(InputError):

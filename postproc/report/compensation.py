@@ -9,8 +9,9 @@ import html
 
 import numpy as np
 
-from .. import posture
-from ..coverage_text import describe_model
+from postproc.model.coverage_text import describe_model
+from postproc.robot import posture
+
 from . import compensation_figures as figs
 from .html import CSS, _img
 

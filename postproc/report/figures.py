@@ -12,7 +12,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from ..candidates import MIN_PROGRESS, MIN_STABILITY  # noqa: E402
+from postproc.model.candidates import MIN_PROGRESS, MIN_STABILITY  # noqa: E402
 
 AXIS_COLOURS = ("#d62728", "#2ca02c", "#1f77b4")  # x red, y green, z blue
 MEASURED, MODEL, RESIDUAL = "#7f7f7f", "#1f77b4", "#d62728"

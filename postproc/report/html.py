@@ -9,10 +9,11 @@ import io
 import matplotlib.pyplot as plt
 import numpy as np
 
-from .. import kinematics as kin
-from ..diagnose import grouped_findings
-from ..identify import Stats, nominal_model, residuals
-from ..structure import smooth_fit
+from postproc.model.diagnose import grouped_findings
+from postproc.model.identify import Stats, nominal_model, residuals
+from postproc.model.structure import smooth_fit
+from postproc.robot import kinematics as kin
+
 from . import figures
 from .partial_residual import partial_residual
 
@@ -71,7 +72,7 @@ def diagnosis_report(model, meas, diagnosis, ladder_rows=None, title: str | None
     parts.append(f"<h1>{html.escape(title or 'Diagnosis')}</h1>")
     parts.append(f"<p>Robot <b>{html.escape(model.robot.name)}</b>, tool {model.tool_mm.tolist()} mm, model effects <code>{html.escape(model.effects.spec())}</code>; {st.n} poses from <code>{html.escape(meas.source)}</code>.</p>")
     if len(model.effects):
-        # Each effect's own plain-language description (postproc.effects: Effect.summary).
+        # Each effect's own plain-language description (postproc.model.effects: Effect.summary).
         parts.append("<ul>" + "".join(f"<li><code>{html.escape(e.spec())}</code>: {html.escape(e.summary)}</li>" for e in model.effects) + "</ul>")
     parts.append("<h2>What to do</h2>")
     parts.append(_findings(diagnosis.findings))

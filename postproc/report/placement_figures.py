@@ -11,7 +11,7 @@ from matplotlib.colors import BoundaryNorm, ListedColormap  # noqa: E402
 from matplotlib.lines import Line2D  # noqa: E402
 from matplotlib.patches import Patch  # noqa: E402
 
-from ..placement_branch import REASONS, reason_counts  # noqa: E402
+from postproc.process.placement_branch import REASONS, reason_counts  # noqa: E402
 
 BEST, CURRENT = "#1f77b4", "#ff7f0e"
 # One colour per infeasibility reason (placement_branch.REASONS order; index 0, feasible, unused)

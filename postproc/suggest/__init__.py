@@ -1,6 +1,6 @@
 """Suggest the poses to measure (issue 32): choose N candidate poses that identify a
 model best, from the identification Jacobian of the model's own effects with the
-parameters removed that ``fit`` removes (``postproc.identify.identifiability``).
+parameters removed that ``fit`` removes (``postproc.model.identify.identifiability``).
 
 ``suggest_poses`` is the library entry point; ``postproc suggest-poses`` wraps it.
 """
@@ -11,13 +11,13 @@ from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
-
 from scipy.spatial import cKDTree
 
-from ..errormodel import ErrorModel
-from ..errors import InputError
-from ..identify import identifiability
-from ..measurements import APPROACH, FORCES, MeasurementSet
+from postproc.errors import InputError
+from postproc.model.errormodel import ErrorModel
+from postproc.model.identify import identifiability
+from postproc.model.measurements import APPROACH, FORCES, MeasurementSet
+
 from . import design
 from .candidates import Candidates, load_state_order
 from .targets import program_targets

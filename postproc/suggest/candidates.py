@@ -14,14 +14,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import kinematics as kin
-from ..errors import InputError, MeasurementError
-from ..measurements import APPROACH, FORCES, JOINTS
-from ..robots import RobotModel
-from ..sim import sample_poses
+from postproc.errors import InputError, MeasurementError
+from postproc.model.measurements import APPROACH, FORCES, JOINTS
+from postproc.model.sim import sample_poses
+from postproc.robot import kinematics as kin
+from postproc.robot.robots import RobotModel
 
 # The robot programs that visit the poses write joint values with 4 decimals
-# (postproc.emit.writer.short_number): candidates are rounded to them, so the CSV, the
+# (postproc.programs.emit.writer.short_number): candidates are rounded to them, so the CSV, the
 # design and the program hold the very numbers the controller executes.
 JOINT_DECIMALS = 4
 _NUMERIC_OPTIONAL = FORCES + APPROACH + ("temp", "t")
@@ -87,7 +87,7 @@ def visible(robot: RobotModel, tool_mm, q_deg: np.ndarray, tracker: Tracker) -> 
 
 def generate(robot: RobotModel, tool_mm, n: int, region, rng: np.random.Generator, tracker: Tracker | None = None,
              id_prefix: str = "s") -> Candidates:
-    """n candidate poses in ``region`` (postproc.sim regions) inside the joint limits, visible
+    """n candidate poses in ``region`` (postproc.model.sim regions) inside the joint limits, visible
     to the tracker, with ids ``{id_prefix}1``, ``{id_prefix}2``, ..."""
     if n < 1:
         raise InputError("--n-candidates must be at least 1")

@@ -7,9 +7,10 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..effects import EffectSum
-from ..errormodel import ErrorModel, require_resolved
-from ..errors import InputError
+from postproc.errors import InputError
+from postproc.model.effects import EffectSum
+from postproc.model.errormodel import ErrorModel, require_resolved
+
 from .candidates import Tracker
 
 

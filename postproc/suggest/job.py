@@ -6,7 +6,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..files import write_all
+from postproc.files import write_all
+
 from . import CRITERION_NAMES, Suggestion
 from .candidates import Candidates, chosen_csv
 from .figure import curve_png

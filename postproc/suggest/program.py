@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import dialects
-from ..errors import EmitError, OutputCheckError
-from ..programs import parse_program
+from postproc.errors import EmitError, OutputCheckError
+from postproc.programs import dialects
+from postproc.programs.program_io import parse_program
 
 DEFAULT_SPEED_MM_S = 250.0
 

@@ -7,11 +7,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ..compensate import reference_postures
-from ..errormodel import ErrorModel
-from ..errors import InputError
-from ..ir import Kind
-from ..programs import parse_program
+from postproc.errors import InputError
+from postproc.jobs.compensate import reference_postures
+from postproc.model.errormodel import ErrorModel
+from postproc.programs.ir import Kind
+from postproc.programs.program_io import parse_program
 
 
 def program_targets(path: str | Path, model: ErrorModel, dialect: str | None = None) -> np.ndarray:

@@ -10,8 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.effects.api import Context, Effect, Param
-from postproc.effects.api import gravity_torque
+from postproc.model.effects.api import Context, Effect, Param, gravity_torque
 
 
 class DirectionStiffness(Effect):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.effects.api import Context, Effect, Param
+from postproc.model.effects.api import Context, Effect, Param
 
 
 class TimeDrift(Effect):

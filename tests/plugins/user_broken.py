@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.effects.api import Effect, Param
+from postproc.model.effects.api import Effect, Param
 
 
 class UserBroken(Effect):

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from postproc.dialects import get
+from postproc.programs.dialects import get
 
 KrlDialect = type(get("krl"))
 

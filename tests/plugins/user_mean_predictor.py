@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc.effects.api import PluginPredictor
+from postproc.model.effects.api import PluginPredictor
 
 
 class UserPlane(PluginPredictor):

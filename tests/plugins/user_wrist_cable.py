@@ -8,15 +8,15 @@ Written by `postproc effect new user_wrist_cable`; edited: the texts and the dri
 
 The model file records this file's sha256: a model fitted with it is refused (exit 2)
 where the file is not loaded or has changed since. Reference: docs/own-effect.md, and
-the context fields, units and helpers in postproc.effects.api.
+the context fields, units and helpers in postproc.model.effects.api.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-# Everything an effect may use is in postproc.effects.api; nothing else is needed.
-from postproc.effects.api import Context, Effect, EffectSpecError, Param, parse_int_list
+# Everything an effect may use is in postproc.model.effects.api; nothing else is needed.
+from postproc.model.effects.api import Context, Effect, EffectSpecError, Param, parse_int_list
 
 
 class UserWristCable(Effect):
@@ -24,7 +24,7 @@ class UserWristCable(Effect):
     name = "user_wrist_cable"
     # How the effect perturbs the robot. "joint": an offset of the joint values, linear in the
     # parameters; prepare() returns d(offset)/d(parameters). Other kinds ("cartesian",
-    # "geometry", "tool", "base"): see postproc.effects.api.
+    # "geometry", "tool", "base"): see postproc.model.effects.api.
     kind = "joint"
     # Measurement columns it cannot do without: "force", "approach", "temp", "t".
     needs = ()

@@ -1,0 +1,120 @@
+"""Cyclic joint errors (gear and reducer eccentricity): delta q_j = sum_k a_jk sin(k q_j) + b_jk cos(k q_j).
+
+Without options the fit chooses the joints and orders the data support (see
+``postproc.model.identify.select_terms``, best subset with a stability check) and records them in the model file.
+
+Source: a strain-wave (harmonic drive) gear's transmission error is periodic; besides the
+fast components tied to the wave generator, eccentric and tilted mounting of the circular
+spline and flexspline make it vary once and twice per output revolution, i.e. orders 1 and
+2 of the joint angle (Ghorbel, Gandhi & Alpeter, "On the kinematic error in harmonic drive
+gears", ASME J. Mechanical Design 123(1), 2001, 90-97; Tuttle & Seering, IEEE Trans.
+Robotics and Automation 12(3), 1996, 368-374). Orders 1 and 2 are separable from the
+geometry and the compliance only on a joint that turns over much of a revolution: over a
+range of less than about 90 degrees sin/cos of order 1 and 2 are nearly a constant, a slope
+and a curvature, which the joint offset, the DH errors and the gravity compliance already
+carry; the candidate search then finds no support for them, and says so.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .base import Context, Effect, EffectSpecError, Param, parse_int_list
+
+CANDIDATE_ORDERS = (1, 2, 3, 4)
+
+
+class JointHarmonics(Effect):
+    name = "joint_harmonics"
+    kind = "joint"
+    summary = "cyclic joint errors of gears and reducers: sin/cos of a joint's angle and its multiples"
+    finding = "residuals follow sin/cos of a joint angle"
+    identifiability = (
+        "The order-1 terms of a joint whose axis stays parallel to gravity's plane trade against its compliance and "
+        "the DH errors (cos q is the gravity torque's shape); higher orders separate given a joint range of more "
+        "than one period. Without options the fit keeps only the terms cross-validation supports."
+    )
+
+    def __init__(self, terms: tuple[tuple[int, int], ...] | None = None):
+        """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them."""
+        self.terms = None if terms is None else tuple(sorted(set(terms)))
+
+    @classmethod
+    def grid(cls, joints, orders) -> "JointHarmonics":
+        return cls(tuple((j, k) for j in joints for k in orders))
+
+    @classmethod
+    def from_options(cls, opts: dict[str, str]) -> "JointHarmonics":
+        unknown = set(opts) - {"joints", "orders", "terms"}
+        if unknown:
+            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms)")
+        if "terms" in opts:
+            pairs = []
+            for item in opts["terms"].split(","):
+                try:
+                    j, k = (int(v) for v in item.split(":"))
+                except ValueError:
+                    raise EffectSpecError(f"{cls.name}: terms are joint:order pairs, got '{item}'") from None
+                if not (1 <= j <= 6 and 1 <= k <= 12):
+                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..12)")
+                pairs.append((j, k))
+            return cls(tuple(pairs))
+        if not opts:
+            return cls(None)
+        joints = parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6)
+        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, 12)
+        return cls.grid(joints, orders)
+
+    @property
+    def resolved(self) -> bool:
+        return self.terms is not None
+
+    def options(self) -> dict:
+        if self.terms is None:
+            return {}
+        joints = sorted({j for j, _ in self.terms})
+        orders = sorted({k for _, k in self.terms})
+        if set(self.terms) == {(j, k) for j in joints for k in orders}:
+            return {"joints": joints, "orders": orders}
+        return {"terms": [f"{j}:{k}" for j, k in self.terms]}
+
+    def _terms(self):
+        if self.terms is None:
+            raise EffectSpecError(f"{self.name} without options is resolved by 'fit'; give joints and orders to use it here")
+        return self.terms
+
+    def params(self, robot) -> list[Param]:
+        out = []
+        for j, k in self._terms():
+            out.append(Param(f"{self.name}.j{j}_sin{k}", "deg", 0.01, 0.01))
+            out.append(Param(f"{self.name}.j{j}_cos{k}", "deg", 0.01, 0.01))
+        return out
+
+    def candidate_terms(self) -> list[tuple[int, int]]:
+        return [(j, k) for j in range(1, 7) for k in CANDIDATE_ORDERS]
+
+    def with_terms(self, terms) -> "JointHarmonics":
+        return JointHarmonics(tuple(terms))
+
+    def term_columns(self, dp_dq: np.ndarray, q_deg: np.ndarray, term) -> np.ndarray:
+        j, k = term
+        q = np.deg2rad(q_deg[:, j - 1])
+        return np.stack([dp_dq[:, :, j - 1] * np.sin(k * q)[:, None], dp_dq[:, :, j - 1] * np.cos(k * q)[:, None]], axis=-1)
+
+    def describe_finding(self) -> str:
+        if not self.terms:
+            return self.finding
+        parts = []
+        for j in sorted({j for j, _ in self.terms}):
+            orders = sorted(k for jj, k in self.terms if jj == j)
+            parts.append(f"joint {j}" + (f" (order {', '.join(map(str, orders))})" if orders != [1] else ""))
+        return "residuals follow sin/cos of " + " and ".join(parts)
+
+    def prepare(self, ctx: Context, robot) -> np.ndarray:
+        terms = self._terms()
+        q = np.deg2rad(ctx.q_deg)
+        basis = np.zeros((q.shape[0], 6, 2 * len(terms)))
+        for p, (j, k) in enumerate(terms):
+            basis[:, j - 1, 2 * p] = np.sin(k * q[:, j - 1])
+            basis[:, j - 1, 2 * p + 1] = np.cos(k * q[:, j - 1])
+        return basis

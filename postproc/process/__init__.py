@@ -1,0 +1,1 @@
+"""The machining process: cutting forces, tool engagement, the workpiece's placement."""

@@ -1,0 +1,41 @@
+"""Siemens SINUMERIK 840D part programs (.MPF main programs, .SPF subprograms).
+
+The language shares ISO G-code's words and the Sinumerik control flow the G-code reader
+already runs (``..gcode``: DEF, PROC, IF, WHILE, FOR, REPEAT, calls); this package adds what
+is Sinumerik's own (``translate.py``: R parameters, ``X=`` expressions, ``CR=``; ``frames.py``:
+TRANS, ATRANS, ROT, AROT, RPL, SCALE, MIRROR) and what the 840D does with the program
+(``controller.py``). Writing back is the G-code splice (numbers only, byte-identical when
+unchanged); new programs are the five-axis TRAORI writer (``postproc.jobs.five_axis.emit``, mode
+``siemens``).
+"""
+
+from __future__ import annotations
+
+import re
+
+from ...ir import SourceDoc, Toolpath
+from ..gcode import GcodeDialect
+from .controller import SINUMERIK_840D
+
+# Words no other G-code dialect writes at the start of a block (the head is upper case).
+_SNIFF = re.compile(r"(?m)^[ \t]*(?:N\d+[ \t]+)?(?:A?TRANS|A?ROT|A?SCALE|A?MIRROR|TRAORI|TRAFOOF|CYCLE800|CYCLE832|G500|G710|G700|SUPA|"
+                    r"MSG[ \t]*\(|DEF[ \t]+(?:REAL|INT|BOOL|STRING|AXIS|FRAME)\b|R\d+[ \t]*=)")
+
+
+class SinumerikDialect(GcodeDialect):
+    name = "sinumerik"
+    description = "Siemens SINUMERIK 840D (.MPF / .SPF): frames, R parameters, TRAORI"
+    extensions = (".mpf", ".spf")
+    controller = SINUMERIK_840D
+    rtcp_modes = ("siemens",)  # convert --to sinumerik writes TRAORI programs (postproc.jobs.five_axis.emit)
+
+    def sniff(self, head: str) -> bool:
+        return _SNIFF.search(head) is not None
+
+    def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
+        from .parse import SinumerikParser  # the reader pulls in lark and the grammar: loaded when a program is read
+
+        return SinumerikParser(sources[0]).parse()
+
+
+SINUMERIK = SinumerikDialect()

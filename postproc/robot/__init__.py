@@ -1,0 +1,1 @@
+"""The robot: kinematics, robot files, postures, rotations."""
