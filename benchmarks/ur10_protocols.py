@@ -3,8 +3,8 @@
 Run: .venv/bin/python benchmarks/ur10_protocols.py [path/to/ur10_ipa] [--skip-hybrid]
 Writes benchmarks/results/ur10_protocols.txt (the table, the command behind each row and
 its wall time). Imports Series A and B with `postproc import-ur10` into a temporary folder
-first. The two hybrid rows (physics + local-expert GPR on ~9,500 poses) take most of the
-time (about 5-10 min each on a shared 2-core machine); --skip-hybrid leaves them out.
+first. The hybrid rows (physics + GPR; local experts on ~9,500 poses of A) take most of the
+time (about 2-5 min each on a shared 2-core machine); --skip-hybrid leaves them out.
 """
 
 from __future__ import annotations
@@ -20,21 +20,29 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "ur10_protocols.txt"
 PHYSICS = "geometric,base_frame,tool_offset,joint_compliance"
+# Joints 1 and 2 are where a GPR on the joint angles, fitted on B's training half, puts its
+# short length scales (about 4 deg: docs/guide/explain.md); orders 1-12 are the effect's whole range.
+SHOULDER = "joint_harmonics[joints=1,2;orders=1,2,3,4,5,6,7,8,9,10,11,12]"
 UR10 = ["--robot", "ur10", "--tool", "0,0,109", "--effects"]
 
 
 def rows(a: str, b: str, hybrid: bool) -> list[tuple[str, str, list[str]]]:
     """(label, goal, validate arguments) per table row; the hybrid rows only with ``hybrid``."""
     gpr = ["--predictor", "gpr"]
+    posture = [*gpr, "--gp-features", "tcp+joints"]  # the learner sees the joint angles too
     table = [
         ("A: random 20 % of poses held out, physics", "", [a, "--protocol", "random", *UR10, PHYSICS]),
         ("A: random 20 % of poses held out, hybrid", "<= 0.06", [a, "--protocol", "random", *UR10, PHYSICS, *gpr]),
+        ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.06", [a, "--protocol", "random", *UR10, PHYSICS, *posture]),
         ("A: every 5th grid point held out, physics", "", [a, "--protocol", "points", *UR10, PHYSICS]),
         ("A: every 5th grid point held out, hybrid", "<= 0.20", [a, "--protocol", "points", *UR10, PHYSICS, *gpr]),
+        ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.20", [a, "--protocol", "points", *UR10, PHYSICS, *posture]),
         ("A: each session held out, physics", "", [a, "--protocol", "sessions", *UR10, PHYSICS]),
         ("B: half of the commanded positions held out, physics", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS]),
         ("B: the same, + joint_harmonics (terms chosen by the fit)", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS + ",joint_harmonics"]),
+        ("B: the same, + joint_harmonics[joints=1,2;orders=1-12]", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS + "," + SHOULDER]),
         ("B: the same, hybrid", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *gpr]),
+        ("B: the same, hybrid with --gp-features tcp+joints", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *posture]),
         ("A -> B: re-registered on half of B, physics", "vs ceiling", [a, "--protocol", "series", "--other", b, *UR10, PHYSICS]),
     ]
     return [row for row in table if hybrid or "--predictor" not in row[2]]

@@ -43,6 +43,16 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
     return values
 
 
+GP_FEATURES = ("pose", "tcp+joints", "joints")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
+GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart) or joints."
+
+
+def gp_features_checked(value: str) -> str:
+    if value not in GP_FEATURES:
+        raise InputError(f"--gp-features: '{value}' is not one of {', '.join(GP_FEATURES)}")
+    return value
+
+
 def refuse_unused(why: str, options: dict[str, bool]) -> None:
     """Options given (True) that this use of the command would not use are an error, not a no-op."""
     unused = [name for name, given in options.items() if given]

@@ -15,7 +15,7 @@ from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, check_output_folder, floats, load_measurements, refuse_unused
+from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
 from .plugin_option import with_plugins
 
 
@@ -59,6 +59,7 @@ def fit_cmd(
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
     gp_method: str = typer.Option("auto", "--gp-method", help="gpr: exact, local (experts over workspace regions, 10^4-10^5 poses) or auto (exact up to 2,000 poses)."),
     gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
+    gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
     memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
 ):
     """Identify an error model from measurements and write MODEL.json."""
@@ -66,9 +67,11 @@ def fit_cmd(
         raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
     refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
     refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
+                                               "--gp-features": gp_features != "pose",
                                                "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
-        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit}, drop_invalid)
+        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit,
+                                                                                "features": gp_features_checked(gp_features)}, drop_invalid)
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")
         raise typer.Exit(130) from None

@@ -14,7 +14,7 @@ from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, floats, load_measurements, refuse_unused
+from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, floats, gp_features_checked, load_measurements, refuse_unused
 from .plugin_option import with_plugins
 
 
@@ -31,6 +31,7 @@ def validate_cmd(
     other: Optional[Path] = typer.Option(None, "--other", help="series: the other series' measurement CSV."),
     fraction: float = typer.Option(0.2, "--fraction", help="random: share of the poses held out."),
     every: int = typer.Option(5, "--every", help="points: hold out every k-th commanded position ('point' column)."),
+    gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
     seed: int = typer.Option(0, "--seed"),
     json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
@@ -45,12 +46,13 @@ def validate_cmd(
         raise InputError(f"--predictor: '{predictor}' is not one of gpr, pso-bp, grid")
     refuse_unused(f"with --protocol {protocol}", {"--other": other is not None and protocol != "series",
                                                    "--fraction": fraction != 0.2 and protocol != "random",
-                                                   "--every": every != 5 and protocol != "points"})
+                                                   "--every": every != 5 and protocol != "points",
+                                                   "--gp-features": gp_features != "pose" and predictor != "gpr"})
     if protocol == "series" and other is None:
         raise InputError("--protocol series needs --other OTHER.csv (the series to re-register and score)")
     robot_model = load_robot(robot)
     chosen = parse_effects(effects)
-    spec = protocols.FitSpec(robot_model, floats(tool, 3, "--tool"), chosen, predictor, seed=seed)
+    spec = protocols.FitSpec(robot_model, floats(tool, 3, "--tool"), chosen, predictor, {"features": gp_features_checked(gp_features)} if predictor == "gpr" else None, seed=seed)
     data = load_measurements(meas, robot_model, drop_invalid)
     other_data = load_measurements(other, robot_model, drop_invalid) if other is not None else None
     with ProgressLine("validate", console=err, disable=json_out) as say:

@@ -398,17 +398,22 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         Residual,
         TrGPRPredictor,
     )
-    from .learn.features import features
+    from .learn.features import GP_KINDS, features
 
     if kind not in FEATURES and kind not in PREDICTORS:
         raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")
     physics = _replace(model, residual=None)
     target = meas.measured_mm - physics.predict(meas)
+    gp_options = dict(gp_options or {})  # the gpr's options; the other predictors take none
     feature_kind = FEATURES[kind] if kind in FEATURES else PREDICTORS[kind].features
+    if kind == "gpr":
+        feature_kind = gp_options.pop("features", None) or feature_kind
+        if feature_kind not in GP_KINDS:
+            raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference)
     if kind == "gpr":
-        est = GPRPredictor(anisotropic=True, random_state=seed, **(gp_options or {})).fit(X, target, progress=progress)
+        est = GPRPredictor(anisotropic=True, random_state=seed, **gp_options).fit(X, target, progress=progress)
     elif kind == "pso-bp":
         est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":

@@ -3,7 +3,15 @@
 - ``pose``: the nominal TCP pose (x, y, z mm; KUKA A, B, C deg) — seed 001's features;
 - ``joints+disp``: the 6 joint angles and the TCP's displacement from a reference point
   (the first pose of the training set) — seed 000's features;
-- ``position``: the nominal TCP position only — the spatial grid's.
+- ``position``: the nominal TCP position only — the spatial grid's;
+- ``tcp+joints``: the nominal TCP position (mm) and the 6 joint angles (deg) — the arm's
+  posture as well as where the probe is: Cartesian features cannot tell two postures that
+  reach the same pose apart (another IK branch, another wrist angle), joint angles can;
+- ``joints``: the 6 joint angles (deg) only.
+
+GP_KINDS are the kinds the ``gpr`` predictor may be given (``--gp-features``); its first
+three features are what its local experts are split on (the TCP position, or for
+``joints`` the first three joint angles).
 """
 
 from __future__ import annotations
@@ -13,7 +21,8 @@ import numpy as np
 from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc
 
-KINDS = ("pose", "joints+disp", "position")
+KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints")
+GP_KINDS = ("pose", "tcp+joints", "joints")
 
 
 def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray | None = None) -> np.ndarray:
@@ -22,6 +31,10 @@ def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray
         return poses[:, :3, 3]
     if kind == "pose":
         return np.hstack([poses[:, :3, 3], matrix_to_abc(poses[:, :3, :3])])
+    if kind == "tcp+joints":
+        return np.hstack([poses[:, :3, 3], np.asarray(q_deg, dtype=float)])
+    if kind == "joints":
+        return np.asarray(q_deg, dtype=float).copy()
     if kind == "joints+disp":
         ref = np.zeros(3) if reference is None else np.asarray(reference, dtype=float)
         return np.hstack([np.asarray(q_deg, dtype=float), poses[:, :3, 3] - ref])
