@@ -137,3 +137,15 @@ def test_too_few_poses_is_an_identification_error():
     data = simulate(truth, sample_poses(robot, TOOL, 8, Cylinder(), rng), rng)
     with pytest.raises(IdentificationError, match="measure more poses"):
         fit(robot, TOOL, parse_effects(FRAME), data, cv_folds=0)
+
+
+def test_a_fit_says_each_step_of_the_solver():
+    """A fit of many terms on 10^4 poses runs for minutes: the progress callback hears every
+    Jacobian, so the command's progress line goes on (issue 31 saw 18 silent minutes)."""
+    robot = kr160()
+    spec = FRAME + ",joint_compliance"
+    truth, q, rng = identifiable_truth(robot, spec, seed=11)
+    heard = []
+    fit(robot, TOOL, parse_effects(spec), simulate(truth, q, rng, noise_mm=NOISE), cv_folds=0, progress=heard.append)
+    steps = [m for m in heard if m.startswith("fitting") and "(step " in m]
+    assert len(steps) >= 2 and steps[0].endswith("(step 1)"), heard

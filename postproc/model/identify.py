@@ -140,7 +140,10 @@ def _absorbers(model: ErrorModel, sub: np.ndarray, keep_local: np.ndarray, keep:
     return out
 
 
-def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None):
+def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None,
+           say=lambda message: None):
+    """Least squares over the free parameters; ``say`` hears of every Jacobian (a fit of many
+    terms on 10^4 poses runs for minutes: the command's progress line must go on)."""
     free = np.asarray(free, dtype=bool)
     if not free.any():
         return model.values.copy(), SimpleNamespace(success=True, message="nothing to fit")
@@ -155,7 +158,11 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
     def fun(x):
         return (model.predict_prepared(prep, unpack(x)) - measured).ravel()
 
+    jacobians = [0]
+
     def jac(x):
+        jacobians[0] += 1
+        say(f"fitting {int(free.sum())} parameters (step {jacobians[0]})")
         _, jj = model.evaluate(prep, unpack(x))
         return jj.reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
 
@@ -232,7 +239,7 @@ def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -
 
     say("fitting")
     f_scale = 0.05
-    values, res = _solve(model, prep, meas.measured_mm, free, loss, f_scale)
+    values, res = _solve(model, prep, meas.measured_mm, free, loss, f_scale, say=say)
     if not res.success:
         raise IdentificationError(f"{meas.source}: the fit did not converge ({res.message})")
     model = model.with_vector(values)
