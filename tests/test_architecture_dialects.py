@@ -14,17 +14,18 @@ from pathlib import Path
 
 import pytest
 
-from postproc import dialects
+from postproc.programs import dialects
 
-PACKAGE = Path(dialects.__file__).parents[1]
+PACKAGE = Path(dialects.__file__).parents[2]  # postproc/programs/dialects -> postproc
 DIALECTS_DIR = Path(dialects.__file__).parent
 NAMES = set(dialects.names())
 # File names a language gives its files: deciding by them is the dialect's business too.
 EXTENSIONS = {e for d in dialects.REGISTRY.values() for e in d.extensions} | {".dat", "$config.dat"}
 NAMED_ATTRIBUTES = {"dialect", "role"}  # Toolpath.dialect, SourceDoc.role
-# Words that name something else in one package: postproc/fivex's --rtcp modes include
-# "fanuc" (a Fanuc CNC's G43.4 G-code), not the Fanuc TP robot language.
-OTHER_MEANING = {"fivex": {"fanuc"}}
+# Words that name something else in one package: the five-axis writers' --rtcp modes
+# (postproc/jobs/five_axis) include "fanuc" (a Fanuc CNC's G43.4 G-code), not the Fanuc TP
+# robot language.
+OTHER_MEANING = {"five_axis": {"fanuc"}}
 
 
 def _names_a_dialect(node: ast.AST, not_dialects: frozenset = frozenset()) -> bool:
@@ -147,3 +148,9 @@ def test_a_new_dialect_is_one_class_and_one_registry_entry(tmp_path, monkeypatch
     tp = dialects.get("toy").parse(program)
     files = dialects.of(tp).emit(tp, tp.with_positions(tp.position + 0.25), out)
     assert files == {out: "START\nMOVE 1.25 2.25 3.25\nMOVE 4.75 -5.75 7.25 ; done\n"}
+
+
+def test_the_exceptions_name_folders_that_exist():
+    """A renamed folder would leave its exception matching nothing, and the test above blind there."""
+    folders = {p.name for p in PACKAGE.rglob("*") if p.is_dir()}
+    assert set(OTHER_MEANING) <= folders and DIALECTS_DIR.is_dir()

@@ -149,7 +149,7 @@ def test_no_import_circle():
 
 # Floors below the languages: they ask a controller object they are given, never the registry.
 BELOW_LANGUAGES = ("postproc.compensation", "postproc.programs.emit", "postproc.programs.parse", "postproc.robot.kinematics", "postproc.robot.posture",
-                   "postproc.model.errormodel", "postproc.effects", "postproc.model.fast_model", "postproc.model.identify", "postproc.model.diagnose",
+                   "postproc.model.errormodel", "postproc.model.effects", "postproc.model.fast_model", "postproc.model.identify", "postproc.model.diagnose",
                    "postproc.model.sim", "postproc.model.learn", "postproc.robot.robots", "postproc.robot.dh", "postproc.programs.ir", "postproc.programs.arcs",
                    "postproc.compensation.segments", "postproc.robot.frames", "postproc.errors", "postproc.programs.controller", "postproc.programs.rotation_forms")
 
@@ -172,7 +172,7 @@ def test_compensation_and_physics_import_no_language():
     bad = []
     for module in graph:
         if any(module == floor or module.startswith(floor + ".") for floor in BELOW_LANGUAGES):
-            bad += [" -> ".join(path) for target, path in _reached(graph, module).items() if target.startswith("postproc.dialects")]
+            bad += [" -> ".join(path) for target, path in _reached(graph, module).items() if target.startswith("postproc.programs.dialects")]
     assert not bad, "below the languages, yet reaching one:\n" + "\n".join(sorted(bad)[:20])
 
 
@@ -187,14 +187,14 @@ NO_LANGUAGE_EITHER = ("postproc.model.model_io", "postproc.model.plugin_records"
 def test_model_files_engagement_and_placement_reach_no_language():
     graph = import_graph()
     bad = [" -> ".join(path) for module in NO_LANGUAGE_EITHER if module in graph
-           for target, path in _reached(graph, module).items() if target.startswith("postproc.dialects")]
+           for target, path in _reached(graph, module).items() if target.startswith("postproc.programs.dialects")]
     assert not bad, "reaching a language:\n" + "\n".join(sorted(bad)[:20])
 
 
 def test_subdivide_is_handed_the_language():
     """subdivide takes the program's language as an argument (compensate / the CLI resolve it)."""
     graph = import_graph()
-    assert not [t for t in graph["postproc.jobs.subdivide"] if t.startswith("postproc.dialects")], graph["postproc.jobs.subdivide"]
+    assert not [t for t in graph["postproc.jobs.subdivide"] if t.startswith("postproc.programs.dialects")], graph["postproc.jobs.subdivide"]
 
 
 # The folders of the flow layout, each on its floor (docs/ARCHITECTURE.md, "Who imports whom"):
@@ -228,8 +228,5 @@ def test_folders_import_one_way():
 
 
 def test_every_folder_has_a_floor():
-    from pathlib import Path
-
-    import postproc
-    folders = {p.name for p in Path(postproc.__file__).parent.iterdir() if (p / "__init__.py").exists()}
+    folders = {p.name for p in PACKAGE.iterdir() if (p / "__init__.py").exists()}
     assert folders == set(FLOORS)
