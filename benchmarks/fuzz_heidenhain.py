@@ -18,10 +18,9 @@ from pathlib import Path
 
 import numpy as np
 
-from postproc import dialects
 from postproc.errors import InputError, ParseError
 from postproc.fivex.machine import load_machine
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import dialects, emit_texts, parse_program
 
 CORPUS = Path(__file__).resolve().parents[1] / "tests" / "corpus" / "heidenhain"
 ALPHABET = list("LXYZACR+-.0123456789 QF=()PDM;~\n") + ["FMAX", "LBL 1", "CALL LBL 1 REP 2", "CC X+1 Y+1", "C X+2 Y+0 DR+", "IX", "PA+",

@@ -16,7 +16,7 @@ import numpy as np
 from scipy.optimize import least_squares
 
 import postproc
-from postproc import pin_model
+from postproc.robot import pin_model
 
 
 def best_of(repeats, func):

@@ -21,7 +21,7 @@ from pathlib import Path
 
 import numpy as np
 
-from postproc import placement as pl
+from postproc.process import placement as pl
 from postproc.process.place_program import problem_from_program
 from postproc.programs import parse_program
 from postproc.robot.robots import load_robot
@@ -37,7 +37,7 @@ def make_program(path: Path, points: int, spacing: float = 10.0) -> None:
 
 def make_rapid_program(path: Path, points: int, spacing: float) -> None:
     """The same pass in RAPID, every robtarget with the confdata of its joints at x 1000, y 0, theta 0."""
-    from postproc import kinematics as kin
+    from postproc.robot import kinematics as kin
 
     robot = load_robot("irb6660_205_190")
     local = np.array([[spacing * i, 50.0, 100.0] for i in range(points)])

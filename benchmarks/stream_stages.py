@@ -42,7 +42,7 @@ def main() -> None:
     args = parser.parse_args()
     import postproc.jobs.stream as stream
     import postproc.programs as programs
-    from postproc import dialects
+    from postproc.programs import dialects
 
     totals: dict[str, float] = {}
     lang = type(dialects.get(args.dialect))

@@ -12,8 +12,6 @@ About 4-6 minutes on the shared 2-core machine (two local-expert GP fits on 9,52
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -23,6 +21,7 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from ur10_series import data_folder, imported  # noqa: E402
 
 from postproc.model.effects import parse_effects  # noqa: E402
 from postproc.model.identify import residuals  # noqa: E402
@@ -98,10 +97,9 @@ def draw(errors: dict[str, np.ndarray], rank: np.ndarray, tilt: np.ndarray) -> N
 
 
 def main() -> None:
-    data = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(os.environ.get("POSTPROC_SHARED", ROOT.parent / "shared")) / "data" / "ur10_ipa"
+    data = data_folder(sys.argv[1] if len(sys.argv) > 1 else None)
     with tempfile.TemporaryDirectory() as tmp, ProgressLine("ur10 gp features") as say:
-        a_csv = Path(tmp) / "A.csv"
-        subprocess.run([sys.executable, "-m", "postproc", "import-ur10", str(data / "Series_A"), "-o", str(a_csv)], check=True, capture_output=True, cwd=ROOT)
+        a_csv = imported(data, "A", Path(tmp) / "A.csv")
         errors, rank, tilt = held_out_errors(a_csv, say)
     print("\n".join(summary_lines(errors, rank, tilt)))
     draw(errors, rank, tilt)

@@ -10,12 +10,13 @@ time (about 2-5 min each on a shared 2-core machine); --skip-hybrid leaves them 
 from __future__ import annotations
 
 import json
-import os
 import subprocess
 import sys
 import tempfile
 import time
 from pathlib import Path
+
+from ur10_series import data_folder, imported
 
 ROOT = Path(__file__).resolve().parents[1]
 RESULT = ROOT / "benchmarks" / "results" / "ur10_protocols.txt"
@@ -58,11 +59,9 @@ def run(args: list[str]) -> tuple[dict, float]:
 
 def main() -> None:
     argv = [x for x in sys.argv[1:] if x != "--skip-hybrid"]
-    data = Path(argv[0]) if argv else Path(os.environ.get("POSTPROC_SHARED", ROOT.parent / "shared")) / "data" / "ur10_ipa"
+    data = data_folder(argv[0] if argv else None)
     with tempfile.TemporaryDirectory() as tmp:
-        a, b = str(Path(tmp) / "A.csv"), str(Path(tmp) / "B.csv")
-        for series, path in (("Series_A", a), ("Series_B", b)):
-            subprocess.run([sys.executable, "-m", "postproc", "import-ur10", str(data / series), "-o", path], check=True, capture_output=True, cwd=ROOT)
+        a, b = (str(imported(data, series, Path(tmp) / f"{series}.csv")) for series in ("A", "B"))
         lines = ["| protocol | goal | n | mean | median | p95 | max | nearest training pose, median / max rad | ceiling mean |",
                  "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
         commands = []

@@ -11,8 +11,6 @@ and joint 2 (binned means), before and after. About a minute on the shared 2-cor
 
 from __future__ import annotations
 
-import os
-import subprocess
 import sys
 import tempfile
 from pathlib import Path
@@ -22,6 +20,7 @@ import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
+from ur10_series import data_folder, imported  # noqa: E402
 
 from postproc.model.effects import parse_effects  # noqa: E402
 from postproc.model.identify import residuals  # noqa: E402
@@ -74,10 +73,9 @@ def draw(errors: dict[str, np.ndarray], q_deg: np.ndarray) -> None:
 
 
 def main() -> None:
-    data = Path(sys.argv[1]) if len(sys.argv) > 1 else Path(os.environ.get("POSTPROC_SHARED", ROOT.parent / "shared")) / "data" / "ur10_ipa"
+    data = data_folder(sys.argv[1] if len(sys.argv) > 1 else None)
     with tempfile.TemporaryDirectory() as tmp, ProgressLine("ur10 shoulder harmonics") as say:
-        b_csv = Path(tmp) / "B.csv"
-        subprocess.run([sys.executable, "-m", "postproc", "import-ur10", str(data / "Series_B"), "-o", str(b_csv)], check=True, capture_output=True, cwd=ROOT)
+        b_csv = imported(data, "B", Path(tmp) / "B.csv")
         errors, q_deg = held_out_errors(b_csv, say)
     for name, e in errors.items():
         print(f"{name}: mean {e.mean():.3f} median {np.median(e):.3f} p95 {np.percentile(e, 95):.3f} max {e.max():.3f} mm ({len(e)} held-out poses)")
