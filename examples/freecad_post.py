@@ -19,13 +19,13 @@ from pathlib import Path
 import numpy as np
 
 import postproc
-from postproc import kinematics as kin
 from postproc.cam.freecad import planned_targets, run
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit
 from postproc.model.model_io import save_model
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import parse_program
+from postproc.robot import kinematics as kin
 
 out = Path(sys.argv[1]) if len(sys.argv) > 1 else Path("out")
 out.mkdir(parents=True, exist_ok=True)

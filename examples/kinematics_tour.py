@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 import postproc
-from postproc import kinematics as kin
+from postproc.robot import kinematics as kin
 from postproc.robot.frames import abc_to_matrix, make_transform
 
 robot = postproc.load_robot("kr160_r1570")

@@ -9,10 +9,10 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 import postproc
-from postproc import kinematics as kin
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.robot import kinematics as kin
 
 TOOL = np.array([0.0, 0.0, 200.0])
 FRAME = "geometric,base_frame,tool_offset"

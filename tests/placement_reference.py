@@ -22,7 +22,7 @@ import itertools
 
 import numpy as np
 
-from postproc import kinematics as kin
+from postproc.robot import kinematics as kin
 from postproc.robot.posture import singularity_margins
 
 REACH, CONF, LIMIT, COUPLING, WRIST, ELBOW, SHOULDER, FLIP = 1, 2, 3, 9, 10, 11, 12, 13

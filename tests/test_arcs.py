@@ -13,14 +13,13 @@ import numpy as np
 import pytest
 from test_real_corpus import RECORDINGS, corpus_file
 
-from postproc import arcs
-from postproc import kinematics as kin
 from postproc.errors import InputError, ParseError
 from postproc.jobs.compensate import compensate
 from postproc.model.effects import parse_effects
 from postproc.model.sim import random_truth
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import arcs, emit_texts, parse_program
 from postproc.programs.ir import F_ARC, Kind
+from postproc.robot import kinematics as kin
 from postproc.robot.robots import load_robot
 
 TOOL = np.array([0.0, 0.0, 200.0])

@@ -24,13 +24,12 @@ import numpy as np
 import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, truth_and_fit
 
-from postproc import arcs
-from postproc import kinematics as kin
 from postproc.compensation.segments import circle_through, distance_to_circles, distance_to_segments
 from postproc.jobs.compensate import compensate
 from postproc.model.sim import JointBox, sample_poses
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import arcs, emit_texts, parse_program
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc, matrix_to_quat_wxyz
 from postproc.robot.posture import branch_of, interpolate_poses
 from postproc.robot.robots import load_robot

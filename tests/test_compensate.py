@@ -15,7 +15,6 @@ from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, kr160, true_tcp, truth_
 from typer.testing import CliRunner
 
 import postproc
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.errors import InputError
 from postproc.jobs.compensate import compensate
@@ -24,6 +23,7 @@ from postproc.model.identify import fit
 from postproc.model.model_io import save_model
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import emit_texts, parse_program
+from postproc.robot import kinematics as kin
 
 runner = CliRunner()
 EFFECTS = FRAME_AND_COMPLIANCE

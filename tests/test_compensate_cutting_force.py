@@ -30,7 +30,7 @@ def model():
 
 
 def _program(tmp_path):
-    from postproc import kinematics as kin
+    from postproc.robot import kinematics as kin
     from postproc.robot.frames import abc_to_matrix
 
     # An axis PTP to the first target's own joints: the straight moves start where the robot stands.
@@ -55,7 +55,7 @@ def test_cutting_force_is_pre_compensated(model, tmp_path):
     # Run the compensated numbers on the robot (the model itself as truth) under that force.
     (tmp_path / "out.src").write_text(emit_texts(tp, new)[0], encoding="latin-1")
     written = parse_program(tmp_path / "out.src")
-    from postproc import kinematics as kin
+    from postproc.robot import kinematics as kin
     from postproc.robot.posture import branch_of
 
     # The controller keeps the posture of the axis PTP along the LINs (KSS: LIN ignores S and T).

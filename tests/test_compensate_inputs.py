@@ -9,12 +9,12 @@ import pytest
 from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.model_io import save_model
 from postproc.programs import parse_program
+from postproc.robot import kinematics as kin
 
 runner = CliRunner()
 FORCE_TOOL = np.array([100.0, -50.0, 400.0])  # N, tool frame

@@ -9,9 +9,8 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from postproc import dialects
 from postproc.errors import InputError
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 from postproc.programs.ir import SourceDoc
 
 T = "[[900,0,900],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"

@@ -21,12 +21,11 @@ import pytest
 from helpers import kr160
 from typer.testing import CliRunner
 
-from postproc import dialects
 from postproc.cli import app
 from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.model_io import save_model
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 runner = CliRunner()
 TARGET = "[[{x},0,0],[0,0,1,0],[0,0,0,1],[9E9,9E9,9E9,9E9,9E9,9E9]]"

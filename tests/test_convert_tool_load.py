@@ -16,12 +16,11 @@ import pytest
 from helpers import kr160
 from typer.testing import CliRunner
 
-from postproc import dialects
 from postproc.cli import app
 from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.model_io import save_model
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 runner = CliRunner()
 GCODE = "G21 G90 F600\nG43 H1\nG0 X0 Y-50 Z0\nG1 X0 Y0 Z0\nG1 X0 Y50 Z0\nM2\n"

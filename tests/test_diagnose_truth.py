@@ -18,8 +18,8 @@ from threadpoolctl import threadpool_info
 from typer.testing import CliRunner
 
 import postproc.model.diagnose as diagnose_module
-from postproc import noise_floor
 from postproc.cli import app
+from postproc.model import noise_floor
 from postproc.model.diagnose import OTHER_WAY, diagnose
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit, residuals
@@ -207,7 +207,7 @@ def test_the_missing_effect_written_as_a_plugin_brings_the_validation_rms_to_the
     """The loop's last step on each hidden set: the effect the catalog lacks, written as a
     file outside the package (tests/plugins/hidden_<kind>.py, public API only) and loaded as
     --plugins loads it, fitted with the catalog's, validated on poses it never saw."""
-    from postproc import effects as effect_catalog
+    from postproc.model import effects as effect_catalog
     from postproc.plugins import ENV, load_plugins
 
     truth, _, data = hidden_case(kind, seed=0)

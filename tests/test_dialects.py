@@ -7,9 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import dialects
-from postproc import kinematics as kin
 from postproc.errors import InputError
+from postproc.programs import dialects
+from postproc.robot import kinematics as kin
 from postproc.robot.robots import load_robot
 
 CORPUS = Path(__file__).parent / "corpus"

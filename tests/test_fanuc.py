@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc import kinematics as kin
 from postproc.errors import ParseError
 from postproc.programs import emit_texts, parse_program
 from postproc.programs.dialects import sniff
 from postproc.programs.dialects.fanuc.controller import R30IB, config_text, fanuc_config
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 
 SAMPLE = Path(__file__).parent / "data" / "fanuc_sample.ls"
 

@@ -11,10 +11,10 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, true_tcp, truth_and_fit
 
 import postproc
-from postproc import kinematics as kin
 from postproc.jobs.compensate import compensate
 from postproc.model.sim import Cylinder
 from postproc.programs import emit_texts, parse_program
+from postproc.robot import kinematics as kin
 
 UFRAME1 = np.eye(4)
 UFRAME1[:3, 3] = [0.0, 0.0, -100.0]  # the table 100 mm below the J2 height

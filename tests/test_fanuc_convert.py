@@ -7,10 +7,9 @@ import numpy as np
 from typer.testing import CliRunner
 
 import postproc
-from postproc import dialects
 from postproc.cli import app
 from postproc.jobs.convert_conf import converted_conf
-from postproc.programs import parse_program, write_program
+from postproc.programs import dialects, parse_program, write_program
 from postproc.programs.ir import Kind
 
 runner = CliRunner()

@@ -5,10 +5,10 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc import fast_model
-from postproc import kinematics as kin
+from postproc.model import fast_model
 from postproc.model.effects import parse_effects
 from postproc.model.sim import random_truth
+from postproc.robot import kinematics as kin
 
 ROBOTS = ("kr160_r1570", "irb2400_10", "kr6_r700_sixx")
 

@@ -24,7 +24,6 @@ from helpers import true_tcp
 from typer.testing import CliRunner
 
 import postproc
-from postproc import kinematics as kin
 from postproc.cam.arcs import linearise_arc
 from postproc.cam.freecad import annotate, commands_to_gcode, planned_targets, run
 from postproc.cli import app
@@ -32,6 +31,7 @@ from postproc.errors import InputError, JobError
 from postproc.jobs.program_check import ModelMismatchError
 from postproc.model.model_io import load_model
 from postproc.programs import emit_texts, parse_program
+from postproc.robot import kinematics as kin
 
 runner = CliRunner()
 ROOT = Path(__file__).resolve().parents[1]

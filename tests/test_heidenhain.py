@@ -16,14 +16,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from postproc import dialects
 from postproc.cli import app
 from postproc.errors import ParseError
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
 from postproc.jobs.five_axis.compensate import actual_tip, controller_axes
 from postproc.jobs.five_axis.program import from_toolpath
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import dialects, emit_texts, parse_program
 from postproc.programs.dialects.heidenhain import parse as klartext_parse
 from postproc.programs.ir import Kind
 

@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import dialects
 from postproc.errors import InputError
 from postproc.fivex.machine import load_machine
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 LN = "LN X+31.737 Y+21.954 Z+33.165 NX+0.2637581 NY+0.0078922 NZ-0.8764339 TX+0.0078922 TY-0.8764339 TZ+0.2590319 F1000"
 

@@ -20,11 +20,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import dialects
 from postproc.errors import InputError
 from postproc.fivex.machine import load_machine
 from postproc.jobs.five_axis.program import from_toolpath
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 S3 = np.sqrt(3.0)
 

@@ -19,11 +19,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import dialects
 from postproc.errors import ParseError
 from postproc.fivex.errors import MachineFileError
 from postproc.fivex.machine import load_machine
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import dialects, emit_texts, parse_program
 
 S3 = np.sqrt(3.0)
 RY30 = np.array([[S3 / 2, 0, 0.5], [0, 1, 0], [-0.5, 0, S3 / 2]])  # Ry(30): columns tilted X, Y, Z

@@ -9,13 +9,13 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.model.effects import parse_effects
 from postproc.model.identify import Stats, fit, fit_predictor, residuals
 from postproc.model.measurements import write_measurements
 from postproc.model.model_io import load_model, save_model
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
+from postproc.robot import kinematics as kin
 from postproc.robot.frames import abc_to_matrix, make_transform
 
 runner = CliRunner()

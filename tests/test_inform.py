@@ -13,12 +13,12 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc import kinematics as kin
 from postproc.errors import EmitError, ParseError, RobotFileError
 from postproc.programs import emit_texts, parse_program, write_program
 from postproc.programs.dialects import sniff
 from postproc.programs.dialects.inform.form import form_of_joints, select_by_form
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 from postproc.robot.frames import abc_to_matrix
 from postproc.robot.robots import parse_robot_toml
 

@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from helpers import FRAME_AND_COMPLIANCE, kr160, truth_and_fit
 
-from postproc import kinematics as kin
 from postproc.jobs.compensate import compensate
 from postproc.programs import emit_texts, parse_program
 from postproc.programs.dialects.inform.form import form_of_joints
+from postproc.robot import kinematics as kin
 
 TOOL_0 = np.eye(4)
 TOOL_0[:3, 3] = [0.0, 0.0, 200.0]  # tool file 0 of the controller: given, as the job cannot hold it

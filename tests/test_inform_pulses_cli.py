@@ -15,13 +15,13 @@ from scipy.spatial.transform import Rotation
 from typer.testing import CliRunner
 
 import postproc
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.jobs.compensate import compensate, predicted_positions
 from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.model_io import save_model
 from postproc.programs import language_of, parse_program
+from postproc.robot import kinematics as kin
 
 Q0 = np.array([0.0, 10.0, -10.0, 0.0, -60.0, 0.0])  # the MOVJ's joints, deg
 PULSES = [0, 13440, -13440, 0, -54600, 0]  # Q0 times the GP25 file's pulses per degree (1344 x3, 910 x2, 546)

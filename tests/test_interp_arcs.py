@@ -24,9 +24,8 @@ from rs274_recordings import Recordings
 from test_arcs import _rs274_arcs
 from test_real_corpus import _moves, canonical_endpoints, corpus_file, machine_positions
 
-from postproc import arcs
 from postproc.errors import ParseError
-from postproc.programs import parse_program
+from postproc.programs import arcs, parse_program
 from postproc.programs.dialects.gcode import interp
 from postproc.programs.ir import Kind
 

@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc import kinematics as kin
-from postproc import pin_model
+from postproc.robot import kinematics as kin
+from postproc.robot import pin_model
 
 ALL = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "ur10", "tx2_90"]
 OPW = ["kr160_r1570", "irb6660_205_190", "irb2400_10", "kr6_r700_sixx", "tx2_90"]

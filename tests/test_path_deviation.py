@@ -8,7 +8,6 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.jobs.compensate import compensate
 from postproc.model.effects import parse_effects
@@ -17,6 +16,7 @@ from postproc.model.model_io import save_model
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.programs import parse_program
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 
 runner = CliRunner()
 HEAD = ["DEF part( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", f"$TOOL = {{X 0, Y 0, Z {TOOL[2]:g}, A 0, B 0, C 0}}",

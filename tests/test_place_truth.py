@@ -14,12 +14,11 @@ import pytest
 from placement_reference import reference_cell
 from typer.testing import CliRunner
 
-from postproc import dialects
-from postproc import placement as pl
-from postproc import placement_branch as pb
 from postproc.cli import app
+from postproc.process import placement as pl
+from postproc.process import placement_branch as pb
 from postproc.process.place_program import problem_from_program
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 from postproc.robot.robots import load_robot
 
 REPO = Path(__file__).resolve().parents[1]
@@ -182,7 +181,7 @@ def test_compensate_reads_the_placed_program(tmp_path):
 
 def test_progress_lines_off_a_terminal(capsys):
     """Off a terminal the search says how far it is on stderr (a plain line every few seconds)."""
-    from postproc import place_report
+    from postproc.process import place_report
     from postproc.progress import ProgressLine
 
     problem = problem_from_program(parse_program(FACE_SRC), load_robot(ROBOT), force_tool=FORCE)

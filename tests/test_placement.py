@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from postproc import compliance as comp
-from postproc import kinematics as kin
-from postproc import placement as pl
-from postproc import placement_branch as pb
 from postproc.cli import app
+from postproc.process import compliance as comp
+from postproc.process import placement as pl
+from postproc.process import placement_branch as pb
 from postproc.process.place_program import current_frame, problem_from_program
 from postproc.programs import parse_program
+from postproc.robot import kinematics as kin
 from postproc.robot.posture import singularity_margins
 from postproc.robot.robots import load_robot
 

@@ -22,11 +22,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from postproc import dialects
-from postproc import effects as effect_catalog
-from postproc import predictor_plugins as predictors
 from postproc.cli import app
 from postproc.errors import ModelFileError
+from postproc.model import effects as effect_catalog
+from postproc.model import predictor_plugins as predictors
 from postproc.model.effect_check import check_effect
 from postproc.model.effect_template import write_template
 from postproc.model.effects import CATALOG, parse_effects
@@ -35,6 +34,7 @@ from postproc.model.measurements import write_measurements
 from postproc.model.model_io import load_model, model_document, model_from_document, save_model
 from postproc.model.sim import parse_region, random_truth, sample_poses, simulate
 from postproc.plugins import ENV, PluginError, load_plugins, loaded_plugin_files, plugin_arguments
+from postproc.programs import dialects
 from postproc.robot.robots import load_robot
 
 PLUGINS = Path(__file__).parent / "plugins"

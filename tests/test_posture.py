@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postproc import kinematics as kin
 from postproc import load_robot
+from postproc.robot import kinematics as kin
 from postproc.robot.posture import branch_of, carry
 
 

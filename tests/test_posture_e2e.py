@@ -17,10 +17,10 @@ import numpy as np
 import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, nearest_walk, true_tcp, truth_and_fit
 
-from postproc import kinematics as kin
 from postproc.jobs.compensate import compensate
 from postproc.model.sim import JointBox
 from postproc.programs import emit_texts, parse_program
+from postproc.robot import kinematics as kin
 
 # A pose whose IK solutions include every configuration the KR160's limits allow away from
 # singularities: four (wrist flipped or not, elbow up or down); the other four need joint
@@ -117,7 +117,7 @@ def test_every_start_configuration_reaches_model_accuracy(robot, truth_and_model
 
 
 def test_krl_lin_ignores_status_and_turn_ptp_follows_them(tmp_path):
-    from postproc import dialects
+    from postproc.programs import dialects
 
     src = tmp_path / "p.src"
     src.write_text("DEF p( )\nPTP {X 1000, Y 0, Z 1200, A 0, B 90, C 0, S 2, T 10}\nLIN {X 1000, Y 50, Z 1200, A 0, B 90, C 0, S 6, T 2}\n"
@@ -157,7 +157,7 @@ def test_compensation_asks_the_controller_it_is_given(robot, tmp_path):
 
 
 def test_rapid_confl_off_lets_the_robot_choose(tmp_path):
-    from postproc import dialects
+    from postproc.programs import dialects
 
     target = "[[900,0,900],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
     mod = tmp_path / "p.mod"

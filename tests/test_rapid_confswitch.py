@@ -6,9 +6,8 @@ from __future__ import annotations
 
 import pytest
 
-from postproc import dialects
 from postproc.errors import InputError
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 T = "[[900,0,900],[0,0,1,0],[0,0,0,0],[9E9,9E9,9E9,9E9,9E9,9E9]]"
 

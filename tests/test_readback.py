@@ -8,12 +8,11 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL
 
 import postproc
-from postproc import dialects
 from postproc.errors import OutputCheckError, ParseError
 from postproc.jobs.compensate import compensate
 from postproc.model.effects import parse_effects
 from postproc.model.sim import random_truth
-from postproc.programs import check_texts, emit_texts, parse_program
+from postproc.programs import check_texts, dialects, emit_texts, parse_program
 from postproc.programs.emit import readback
 from postproc.programs.emit.splice import TOLERANCE
 from postproc.programs.ir import F_POS, Kind, SourceDoc

@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from postproc import rotation_forms
 from postproc.errors import InputError
+from postproc.programs import rotation_forms
 from postproc.programs.parse.common import Builder
 from postproc.robot.frames import abc_to_matrix, matrix_to_quat_wxyz
 

@@ -19,11 +19,10 @@ import numpy as np
 import pytest
 from test_fivex_rs274 import canonical_axes
 
-from postproc import dialects
 from postproc.errors import ParseError
 from postproc.fivex.machine import load_machine
 from postproc.jobs.five_axis.program import from_toolpath
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import dialects, emit_texts, parse_program
 
 HERE = Path(__file__).parent
 

@@ -19,10 +19,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import arcs
 from postproc.errors import InputError, ParseError
 from postproc.fivex.machine import load_machine
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import arcs, emit_texts, parse_program
 from postproc.programs.dialects.sinumerik import swivel
 
 S30, C30 = 0.5, np.sqrt(3) / 2

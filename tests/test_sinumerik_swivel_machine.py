@@ -18,14 +18,13 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from postproc import dialects
 from postproc.cli import app
 from postproc.errors import InputError
 from postproc.fivex.kinematics import fk
 from postproc.fivex.machine import load_machine
 from postproc.jobs.five_axis.emit import solve
 from postproc.jobs.five_axis.program import from_toolpath
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 
 S30, C30 = 0.5, np.sqrt(3) / 2
 TRUE = Path(__file__).parent / "data" / "fivex" / "xyzac-trt-true.toml"

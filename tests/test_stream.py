@@ -90,7 +90,7 @@ def test_streamed_output_is_byte_identical_to_the_whole_program(tmp_path, model,
 
 def test_posture_is_carried_across_cuts(tmp_path, model):
     """A start posture with the wrist flipped: every chunk keeps it (as the whole program does)."""
-    from postproc import kinematics as kin
+    from postproc.robot import kinematics as kin
 
     program = _krl(tmp_path / "p.src", n=400)
     tp = parse_program(program)
@@ -184,7 +184,7 @@ def test_a_chunk_sent_to_a_worker_is_restored_bit_for_bit(tmp_path, model):
 
 _TORCH_AFTER_FORK = """
 import torch
-from postproc import stream
+from postproc.jobs import stream
 a = torch.randn(600, 600); (a @ a).sum()  # the parent's thread pool runs (as a learned predictor's would)
 def work(_):
     b = torch.randn(600, 600)

@@ -63,7 +63,7 @@ def test_anchors_in_later_chunks_are_carried_by_the_workers(tmp_path, model):
     """PTP targets with Status and Turn (they set the branch) in later chunks, LIN moves
     between them carrying it: the pipeline's workers hand the posture on as the whole
     program carries it."""
-    from postproc import kinematics as kin
+    from postproc.robot import kinematics as kin
 
     head = ["DEF raster( )", "$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}", "$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}", "$APO.CDIS = 0.2"]
     xy = [(900.0 + 200.0 * (i // 30) / 12, -200.0 + 400.0 * (i % 30) / 30) for i in range(360)]
@@ -119,7 +119,7 @@ def test_line_reader_hands_out_whole_lines_in_order(tmp_path, monkeypatch, read_
 def test_a_chunk_that_fails_in_a_worker_hands_the_failure_on(monkeypatch):
     """A chunk whose postures cannot be computed (here: no toolpath at all) posts that it
     failed, so the next chunk stops at once instead of waiting for a posture."""
-    from postproc import stream
+    from postproc.jobs import stream
     from postproc.jobs.stream import _postures, _Task
 
     monkeypatch.setattr(stream, "BATON_WAIT_S", 2.0)
@@ -149,7 +149,7 @@ def test_shared_slots_give_back_what_was_put_or_refuse_what_does_not_fit():
 def test_chunks_through_shared_slots_and_through_the_pipe_write_the_same_bytes(tmp_path, model, monkeypatch):
     """The workers take their chunks through shared slots where they fit and through the pipe
     where they do not: the same output either way, and the same as one process."""
-    from postproc import stream
+    from postproc.jobs import stream
 
     program = tmp_path / "p.src"
     xy = [(900.0 + 200.0 * (i // 40) / 10, -200.0 + 400.0 * (i % 40) / 40) for i in range(400)]
@@ -180,7 +180,7 @@ def test_worker_warm_up_runs_the_first_move_and_leaves_errors_to_the_chunk(tmp_p
     """A worker compensates the program's first move once at its start (kernels loaded while
     the main process parses); a move that cannot be compensated is not reported there but by
     the chunk itself."""
-    from postproc import stream
+    from postproc.jobs import stream
 
     head = "DEF p( )\n$BASE = {X 0, Y 0, Z 0, A 0, B 0, C 0}\n$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}\n"
     good, bad = tmp_path / "good.src", tmp_path / "bad.src"

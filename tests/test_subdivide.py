@@ -10,8 +10,6 @@ import pytest
 from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
 from typer.testing import CliRunner
 
-from postproc import dialects
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.errors import EmitError
 from postproc.jobs.compensate import compensate
@@ -20,9 +18,10 @@ from postproc.model.effects import parse_effects
 from postproc.model.identify import fit
 from postproc.model.model_io import save_model
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
 from postproc.programs.emit.insert import NewPoint
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 
 runner = CliRunner()
 DOWN = "A 0, B 180, C 0"

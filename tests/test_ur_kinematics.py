@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 
 import postproc
-from postproc import kinematics as kin
-from postproc import posture
-from postproc import ur_kinematics as ur
+from postproc.robot import kinematics as kin
+from postproc.robot import posture
+from postproc.robot import ur_kinematics as ur
 
 
 @pytest.mark.parametrize("name", ["ur10e", "ur5e", "ur10"])

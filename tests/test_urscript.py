@@ -16,9 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from postproc import dialects
 from postproc.errors import ParseError
-from postproc.programs import emit_texts, parse_program
+from postproc.programs import dialects, emit_texts, parse_program
 from postproc.programs.ir import Kind
 
 CELL = Path(__file__).parent / "corpus" / "urscript" / "cell.script"

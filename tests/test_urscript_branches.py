@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from postproc import dialects
+from postproc.programs import dialects
 from postproc.programs.ir import Kind
 
 START = "def p():\n  movej([0, -1.57, 1.57, 0, 0, 0])\n"

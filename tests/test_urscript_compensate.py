@@ -17,11 +17,11 @@ from helpers import FRAME_AND_COMPLIANCE, TOOL, nearest_walk, true_tcp, truth_an
 from scipy.spatial.transform import Rotation
 
 import postproc
-from postproc import kinematics as kin
 from postproc.jobs.compensate import compensate
 from postproc.model.sim import Cylinder
 from postproc.programs import emit_texts, parse_program
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 
 Q_START = np.array([180.0, -100.0, 100.0, -90.0, -90.0, 0.0])  # arm towards +x, tool down, elbow up
 STEP = np.array([0.5, 0.3, -0.3, 0.4, 0.2, 0.5])

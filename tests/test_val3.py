@@ -21,7 +21,6 @@ from helpers import FRAME_AND_COMPLIANCE, truth_and_fit
 from typer.testing import CliRunner
 
 import postproc
-from postproc import kinematics as kin
 from postproc.cli import app
 from postproc.errors import InputError, ParseError, SharedNumberError
 from postproc.jobs.compensate import compensate
@@ -36,6 +35,7 @@ from postproc.programs.dialects.val3 import parse as val3_parse
 from postproc.programs.dialects.val3.controller import config_of_joints
 from postproc.programs.dialects.val3.rotation import matrix_to_rxyz, rxyz_to_matrix, rxyz_to_quat_wxyz
 from postproc.programs.ir import Kind
+from postproc.robot import kinematics as kin
 from postproc.robot.frames import quat_wxyz_to_matrix
 
 DEMO = Path(__file__).parent / "data" / "val3_demo"
