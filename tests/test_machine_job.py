@@ -122,7 +122,7 @@ def test_a_five_axis_like_head_takes_the_shared_job_through_the_public_entry(tmp
     assert after.max() < 0.002  # as written back (G-code keeps 3 decimals)
     lines = out.getvalue().splitlines()
     assert lines[0] == "compensated for the five-axis test head (a head defined in the test)"
-    assert lines[1].startswith(f"{len(tp)} of {len(tp)} targets compensated (broyden); predicted error RMS")
+    assert lines[1].startswith(f"{len(tp)} of {len(tp)} targets compensated (fixed point); predicted error RMS")
     assert err.getvalue() == ""
 
 

@@ -45,6 +45,8 @@ from .program_check import check_model_fits
 from .stream import StreamFallback, stream_request, wants_stream
 from .subdivide import subdivide_request
 
+# As the command line's consoles: messages carry user text ([brackets] too), lines are not wrapped.
+_PLAIN = {"markup": False, "highlight": False, "soft_wrap": True}
 # The page's figures need matplotlib (postproc.report, a floor above): the caller brings the writer.
 PageWriter = Callable[[Path, object, dict, object, str, Path], None]
 
@@ -66,7 +68,7 @@ def compensate_files(request: CompensationRequest, log: JobLog | None = None) ->
     """Compensate and write the request's program(s) as its machine says; returns the exit
     status (0, or 1 where a batch had programs that failed). Raises the library's typed errors
     (nothing written) for the caller to map."""
-    log = log or JobLog(Console(), Console(stderr=True))
+    log = log or JobLog(Console(**_PLAIN), Console(stderr=True, **_PLAIN))
     own = request.machine.own_job(request)
     if own is not None:
         for line in own:
@@ -124,7 +126,8 @@ def _compensate_whole(request: CompensationRequest, log: JobLog) -> None:
     _write_compensated(request, log, written, new, np.nonzero(rep.compensated)[0], original=tp)
     if added:
         say.print(f"{len(added)} new target(s) subdivide straight segments and arcs (lines {', '.join(str(line) for line, _ in added[:20])}{' ...' if len(added) > 20 else ''})")
-    _print_compensation(summary, _describe(request, summary), request.scheme, new.notes, say)
+    scheme = request.scheme if error_model is not None else "fixed point"  # through_machine's iteration: no scheme to choose
+    _print_compensation(summary, _describe(request, summary), scheme, new.notes, say)
 
 
 def _machine_summary(request: CompensationRequest) -> dict:
