@@ -103,6 +103,18 @@ def _tree(module: str) -> ast.Module:
     return ast.parse(MODULES[module].read_text(encoding="utf-8"), str(MODULES[module]))
 
 
+def _loaded_by(node: ast.Import | ast.ImportFrom, module: str) -> list[str]:
+    """The modules an import statement of ``module`` runs: postproc's (with their packages)
+    and other libraries' names."""
+    return [n for reached in _reached(node, module) for n in _with_parents(reached) if n in MODULES or n.split(".")[0] != "postproc"]
+
+
+@cache
+def _direct(module: str) -> tuple[str, ...]:
+    """What ``module``'s own module-level imports run."""
+    return tuple(n for node in _runs_at_import(_tree(module).body) for n in _loaded_by(node, module))
+
+
 @cache
 def loads(module: str) -> frozenset[str]:
     """Every module importing ``module`` (a postproc module, with its packages) loads, by
@@ -110,12 +122,9 @@ def loads(module: str) -> frozenset[str]:
     seen, todo = set(), [module]
     while todo:
         name = todo.pop()
-        if name in seen:
-            continue
-        seen.add(name)
-        if name in MODULES:
-            for node in _runs_at_import(_tree(name).body):
-                todo += [n for reached in _reached(node, name) for n in _with_parents(reached) if n in MODULES or n.split(".")[0] != "postproc"]
+        if name not in seen:
+            seen.add(name)
+            todo += _direct(name) if name in MODULES else ()
     return frozenset(seen)
 
 
@@ -123,8 +132,7 @@ def heavy_saved(module: str, node: ast.Import | ast.ImportFrom) -> set[str]:
     """The heavy dependencies the deferred import ``node`` of ``module`` keeps from loading
     when ``module`` is imported."""
     already = {name for name in loads(module) if _is_heavy(name)}
-    reached = [n for r in _reached(node, module) for n in _with_parents(r) if n in MODULES or n.split(".")[0] != "postproc"]
-    return {name for r in reached for name in loads(r) if _is_heavy(name)} - already
+    return {name for r in _loaded_by(node, module) for name in loads(r) if _is_heavy(name)} - already
 
 
 def _statement_lists(fn: ast.AST):
@@ -143,10 +151,11 @@ def _statement_lists(fn: ast.AST):
             stack.extend(handler.body for handler in getattr(stmt, "handlers", []) or [])
 
 
-def imports_in_functions(source: str):
-    """(import node, the comment that explains it or None) of every import inside a function."""
+def imports_in_functions(source: str, tree: ast.Module | None = None):
+    """(import node, the comment that explains it or None) of every import inside a function
+    (``tree``: ``source`` parsed already)."""
     lines = source.splitlines()
-    for fn in ast.walk(ast.parse(source)):
+    for fn in ast.walk(ast.parse(source) if tree is None else tree):
         if not isinstance(fn, (ast.FunctionDef, ast.AsyncFunctionDef)):
             continue
         for body in _statement_lists(fn):
@@ -187,7 +196,7 @@ def test_no_import_inside_a_function_without_a_heavy_dependency_and_a_reason():
     bad = []
     for module, path in MODULES.items():
         rel = path.relative_to(PACKAGE.parent).as_posix()
-        for stmt, reason in imports_in_functions(path.read_text(encoding="utf-8")):
+        for stmt, reason in imports_in_functions(path.read_text(encoding="utf-8"), _tree(module)):
             text = ast.unparse(stmt)
             if reason is None:
                 bad.append(f"{rel}:{stmt.lineno}: {text}: no comment saying why it is deferred")
