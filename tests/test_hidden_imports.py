@@ -10,8 +10,9 @@ both hold, in every module of ``postproc/`` (the languages included):
     their packages' ``__init__``; a deferred import that saves nothing is named, to be
     moved to the module top;
 (b) a comment on its line, or right above it, says why (``# Deferred ...``, ``# lazily ...``,
-    ``lazy import``); a comment above the first of consecutive imports covers them all,
-    but each of them must pass (a) on its own.
+    ``lazy import``) and names what it keeps from loading (``scipy``, ``torch``, ``dask``...);
+    a comment above the first of consecutive imports covers them all, but each of them
+    must pass (a) on its own.
 
 ``test_the_command_line_starts_without_heavy_imports`` runs ``python -m postproc --version``
 and ``--help`` in a fresh interpreter and fails if either loads one of them.
@@ -40,6 +41,8 @@ HEAVY = ("torch", "sklearn", "trimesh", "matplotlib", "dask", "distributed", "sc
 # What `postproc --version` / `--help` must not load (issue 27).
 NOT_AT_START = ("torch", "scipy.optimize", "matplotlib", "dask", "distributed", "trimesh", "sklearn")
 REASON = re.compile(r"deferred|lazil|lazy", re.IGNORECASE)
+# How a comment may name a dependency it defers (by the top-level package).
+SAID_AS = {"sklearn": ("sklearn", "scikit-learn"), "distributed": ("distributed", "dask")}
 
 
 def _is_heavy(name: str) -> bool:
@@ -135,6 +138,13 @@ def heavy_saved(module: str, node: ast.Import | ast.ImportFrom) -> set[str]:
     return {name for r in _loaded_by(node, module) for name in loads(r) if _is_heavy(name)} - already
 
 
+def names_one(reason: str, saved: set[str]) -> bool:
+    """Whether the comment ``reason`` names a dependency the import keeps from loading (its
+    top-level package: "scipy" for scipy.optimize, "dask" for distributed)."""
+    said = reason.lower()
+    return any(alias in said for name in saved for alias in SAID_AS.get(name.split(".")[0], (name.split(".")[0],)))
+
+
 def _statement_lists(fn: ast.AST):
     """Statement lists directly inside ``fn`` (nested functions are walked on their own)."""
     stack = [fn.body]
@@ -190,6 +200,8 @@ def test_the_check_sees_a_deferred_import_that_saves_nothing():
     deferred, light = ast.parse("from postproc.jobs.target_file import load_target").body[0], ast.parse("from pathlib import Path").body[0]
     assert "scipy.optimize" in heavy_saved(module, deferred)
     assert heavy_saved(module, light) == set()
+    assert names_one("Deferred import: it loads scipy (slow)", {"scipy.optimize"}) and names_one("lazily: dask", {"distributed"})
+    assert not names_one("Deferred: slow to import", {"scipy.optimize"})
 
 
 def test_no_import_inside_a_function_without_a_heavy_dependency_and_a_reason():
@@ -200,8 +212,10 @@ def test_no_import_inside_a_function_without_a_heavy_dependency_and_a_reason():
             text = ast.unparse(stmt)
             if reason is None:
                 bad.append(f"{rel}:{stmt.lineno}: {text}: no comment saying why it is deferred")
-            elif not heavy_saved(module, stmt):
+            elif not (saved := heavy_saved(module, stmt)):
                 bad.append(f"{rel}:{stmt.lineno}: {text}: loads nothing slow ({', '.join(HEAVY)}) that {module} does not load already")
+            elif not names_one(reason, saved):
+                bad.append(f"{rel}:{stmt.lineno}: {text}: the comment names none of what it keeps from loading ({', '.join(sorted(saved))})")
     assert not bad, "imports inside functions (move them to the module top):\n" + "\n".join(bad)
 
 
