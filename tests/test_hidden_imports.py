@@ -233,7 +233,7 @@ print("LOADED", *sorted(m for m in sys.modules if m in {NOT_AT_START!r} or m.spl
 @pytest.mark.parametrize("option", ["--version", "--help"])
 def test_the_command_line_starts_without_heavy_imports(option):
     run = subprocess.run([sys.executable, "-c", RUNNER.replace("{NOT_AT_START!r}", repr(set(NOT_AT_START))), option],
-                         capture_output=True, text=True, timeout=120)
+                         capture_output=True, text=True, timeout=120, check=False)
     assert run.returncode == 0, run.stderr[-2000:]
     loaded = run.stdout.strip().splitlines()[-1].split()[1:]
     assert loaded == [], f"postproc {option} imports {', '.join(loaded)}: keep it off the start-up path (defer the import, say why)"
