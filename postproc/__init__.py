@@ -43,11 +43,11 @@ def __getattr__(name: str):
     # pull in compensation, the dialects and the program writers (about 1.5 s), which a
     # plain `import postproc` should not pay for.
     if name == "post":
-        from postproc.cam.post import post  # lazily: compensation, languages and writers load on first use
+        from postproc.cam.post import post  # lazily: compensation, languages, writers and scipy.optimize load on first use
 
         return post
     if name == "suggest_poses":
-        from postproc.suggest import suggest_poses  # lazily: as post
+        from postproc.suggest import suggest_poses  # lazily: as post (scipy.optimize, scipy.spatial)
 
         return suggest_poses
     raise AttributeError(f"module 'postproc' has no attribute {name!r}")

@@ -16,7 +16,7 @@ from typer.testing import CliRunner
 import postproc
 from postproc.cam.post import post_request
 from postproc.cli import app
-from postproc.cli.compensate import _can_stream
+from postproc.jobs.compensate_files import can_stream as _can_stream
 from postproc.compensation.machine import Machine
 from postproc.compensation.request import CompensationRequest
 from postproc.errors import InputError, ModelFileError

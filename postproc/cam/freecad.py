@@ -249,7 +249,7 @@ def planned_targets(request: dict):
 
 def run(request: dict) -> dict:
     """One post request (see the module docstring) -> its answer; raises PostprocError."""
-    # Deferred, as postproc.post: the fitting and compensation stack loads only when a job is posted.
+    # Deferred, as postproc.post: the fitting and compensation stack (scipy.optimize) loads only when a job is posted.
     from postproc.model.model_io import load_model
 
     from .post import post, write_programs

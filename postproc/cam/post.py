@@ -85,7 +85,7 @@ def post_request(request: CompensationRequest, program: str | bytes | Toolpath, 
     if to not in robot_languages():
         raise InputError(f"--to: '{to}' is not one of {', '.join(robot_languages())}"
                          + (" (five-axis machines: use 'postproc convert --to gcode --machine M --rtcp MODE')" if target.machine_program else ""))
-    error_model = request.machine.model
+    error_model = request.robot_model("postproc.post (a robot program)")
     if request.robot is not None and request.robot != error_model.robot.name:
         raise InputError(f"--robot {request.robot} does not match the model's robot {error_model.robot.name}")
     output = Path(request.output) if request.output is not None else Path("postproc" + target.extensions[0])

@@ -4,15 +4,18 @@ its fitted error model, or a calibrated five-axis machine.
 ``Machine`` is a protocol: the robot target and the five-axis target
 (``postproc.jobs.targets``) implement it, and ``postproc.jobs.targets.load_target`` returns the one
 a file holds, judged by its content (never by its suffix). A script may bring its own
-class: ``postproc.jobs.compensate.compensate_with`` compensates any machine that is not a robot
-under a fitted error model through ``inverse`` and ``predict`` alone (``through_machine.py``).
+class: ``postproc.jobs.compensate_files.compensate_files(request)`` (what ``postproc compensate``
+calls) asks the machine how its programs are compensated (``own_job``): its own job, or the
+shared one, where ``postproc.jobs.compensate.compensate_with`` compensates any machine that is
+not a robot under a fitted error model through ``inverse`` and ``predict`` alone
+(``through_machine.py``). Nothing chooses by the machine's class.
 This module imports nothing of the languages or of either target, so the request
 (``request.py``) can carry one.
 """
 
 from __future__ import annotations
 
-from typing import Mapping, Protocol, runtime_checkable
+from typing import Mapping, Protocol, Sequence, runtime_checkable
 
 import numpy as np
 
@@ -46,9 +49,22 @@ class Machine(Protocol):
         ...
 
     def read_program(self, path, dialect: str | None = None, data: bytes | None = None) -> Toolpath:
-        """The program at ``path`` (``data``: its text already read) as a Toolpath."""
+        """The program at ``path`` (``data``: its text already read) as a Toolpath. A machine
+        whose ``takes`` holds ``data`` (``--data``) is also given ``modules=``: the other modules'
+        files the program uses."""
         ...
 
     def write_texts(self, tp: Toolpath, new: Toolpath) -> list[str]:
         """The texts of ``tp``'s sources with the numbers of ``new`` spliced in."""
+        ...
+
+    def own_job(self, request) -> Sequence[str] | None:
+        """How a program is compensated on this machine. None: by the shared job
+        (``postproc.jobs.compensate_files``: each program read with ``read_program``,
+        compensated target by target by ``compensate_with``, its texts from ``write_texts`` read
+        back and written, all files or none) — the robot's way, and a script's gantry's.
+        Otherwise the machine runs a job of its own for ``request`` (a ``CompensationRequest``:
+        its ``programs``, ``output`` and the fields in ``takes``), writes the files itself (all or
+        none) and returns the lines of its account (a calibrated five-axis machine: its error
+        grid, rotary solutions and read-back check)."""
         ...

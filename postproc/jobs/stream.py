@@ -802,7 +802,7 @@ def _pool(workers: int, warm: tuple | None = None):
     if workers < 1:
         yield None, None
         return
-    import scipy.spatial.transform  # noqa: F401  (posture's lazy import, done once before the fork, not in every worker)
+    import scipy.spatial.transform  # noqa: F401  (posture's lazy import of scipy.spatial, done once before the fork, not in every worker)
 
     methods = multiprocessing.get_all_start_methods()
     context = multiprocessing.get_context("fork" if "fork" in methods else "spawn")

@@ -6,6 +6,7 @@ stack (scipy.optimize): the command line imports this module when a job runs.
 
 from __future__ import annotations
 
+import re
 import tomllib
 from pathlib import Path
 
@@ -14,6 +15,9 @@ from postproc.fivex.machine import load_machine
 from postproc.model.model_io import FORMAT, load_model
 
 from .targets import FiveAxisTarget, RobotTarget
+
+# A TOML text that opens a [machine] table, even one that does not parse: meant as a machine file.
+_MACHINE_TABLE = re.compile(r"(?m)^[ \t]*\[[ \t]*machine[ \t]*\]")
 
 
 def load_target(path: str | Path) -> RobotTarget | FiveAxisTarget:
@@ -27,7 +31,7 @@ def load_target(path: str | Path) -> RobotTarget | FiveAxisTarget:
         raise ModelFileError(f"{path}: not a model file: byte {exc.start} is not UTF-8 text (binary or damaged file)") from None
     if text.lstrip().startswith("{"):  # a JSON document: load_model names what is wrong with it
         return RobotTarget(load_model(path)[0], str(path))
-    if _is_machine_toml(text) or path.suffix.lower() == ".toml":  # a broken .toml: load_machine names the key
+    if _is_machine_toml(text) or _MACHINE_TABLE.search(text):  # a broken machine file: load_machine names the line or key
         machine = load_machine(path)
         return FiveAxisTarget(machine, load_machine(machine.name), str(path))
     raise ModelFileError(f"{path}: neither a model file from 'postproc fit' (JSON, format '{FORMAT}') "

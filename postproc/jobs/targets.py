@@ -19,6 +19,8 @@ from postproc.programs.ir import Toolpath
 from postproc.programs.program_io import emit_texts, parse_program
 from postproc.robot import kinematics
 
+from .five_axis.commands import compensate_five_request
+
 # What a five-axis machine's compensation uses; the rest of the request is the robot's.
 FIVE_AXIS_TAKES = frozenset({"programs", "output", "dialect", "frames", "tools", "grid", "input_axes", "tool_radii"})
 ROBOT_TAKES = frozenset(OPTION) - {"grid", "input_axes", "tool_radii"}
@@ -27,8 +29,8 @@ ROBOT_TAKES = frozenset(OPTION) - {"grid", "input_axes", "tool_radii"}
 class _ProgramsByDialect:
     """Programs read and written through the language registry (both targets)."""
 
-    def read_program(self, path, dialect: str | None = None, data: bytes | None = None) -> Toolpath:
-        return parse_program(path, dialect, data=data)
+    def read_program(self, path, dialect: str | None = None, data: bytes | None = None, modules=()) -> Toolpath:
+        return parse_program(path, dialect, data=data, modules=modules)
 
     def write_texts(self, tp: Toolpath, new: Toolpath) -> list[str]:
         return emit_texts(tp, new)
@@ -54,6 +56,10 @@ class RobotTarget(_ProgramsByDialect):
     def predict(self, commands: np.ndarray) -> np.ndarray:
         return self.model.predict_prepared(self.model.prepare(q_deg=np.asarray(commands, dtype=float)))
 
+    def own_job(self, request) -> None:
+        """None: a robot takes the shared job (``postproc.jobs.compensate_files``: its postures,
+        forces, path checks, chunks, batches and subdivision)."""
+
 
 @dataclass(frozen=True, eq=False)
 class FiveAxisTarget(_ProgramsByDialect):
@@ -78,6 +84,12 @@ class FiveAxisTarget(_ProgramsByDialect):
 
     def predict(self, commands: np.ndarray) -> np.ndarray:
         return five_kinematics.fk(self.machine, np.asarray(commands, dtype=float))[0]  # the calibrated axes (no grid)
+
+    def own_job(self, request) -> list[str]:
+        """The five-axis job (``jobs.five_axis.commands``): the program's tips and tool axes on the
+        calibrated machine and its error grid, the rotary solution its controller takes, the
+        written numbers read back and checked; the lines of its account."""
+        return compensate_five_request(request)
 
 
 def _poses(tip: np.ndarray, axis: np.ndarray) -> np.ndarray:

@@ -10,7 +10,8 @@ turn a rotary axis use inverse time (G93, F = 1 / minutes) so the tip keeps its 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from pathlib import Path
 
 import numpy as np
 
@@ -60,8 +61,6 @@ def _header(mode: str, machine: Machine, path: FivePath) -> list[str]:
             "fanuc": "Fanuc tool centre point control G43.4 (tool tip + rotary angles)",
             "siemens": "Siemens TRAORI (tool tip + rotary angles)",
             "none": "machine axes (no RTCP), from the machine file's kinematics"}[mode]
-    from pathlib import Path
-
     # file names only: the program must not depend on where it was made
     texts = [f"postproc: {what}", f"machine {machine.name} ({Path(machine.source_path).name}); from {Path(path.source).name}"]
     if machine.calibration:
@@ -143,8 +142,6 @@ def emit(machine: Machine, path: FivePath, mode: str, tool: int = 1, tool_length
 
 
 def _with_note(path: FivePath, note: str) -> FivePath:
-    from dataclasses import replace
-
     return replace(path, notes=path.notes + (note,))
 
 

@@ -18,6 +18,7 @@ from ..gcode import GcodeDialect
 from . import swivel_place
 from .controller import SINUMERIK_840D
 from .facts import with_controller_facts
+from .parse import SinumerikParser
 
 # Words no other G-code dialect writes at the start of a block (the head is upper case).
 _SNIFF = re.compile(r"(?m)^[ \t]*(?:N\d+[ \t]+)?(?:A?TRANS|A?ROT|A?SCALE|A?MIRROR|TRAORI|TRAFOOF|CYCLE800|CYCLE832|G500|G710|G700|SUPA|"
@@ -43,8 +44,6 @@ class SinumerikDialect(GcodeDialect):
         swivel_place.refuse_compensation(tp)
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        from .parse import SinumerikParser  # the reader pulls in lark and the grammar: loaded when a program is read
-
         return with_controller_facts(SinumerikParser(sources[0]).parse())
 
 
