@@ -2,9 +2,11 @@
 
 A program that states its load (RAPID tooldata's tload and ``GripLoad``, KRL ``$LOAD`` /
 ``LOAD_DATA[n]`` / ``BAS(#TOOL, n)``) gets the same load in the new program, at the same
-targets: each dialect reads its statements (``Controller.stated_loads``) into a ``LoadPlan``,
-one ``LoadState`` per target. ``--tool-load`` may be given as well only where it is the
-load the program states (otherwise one of the two is wrong, and which is not ours to guess).
+targets: each language's parser writes its statements into the IR (``Toolpath.facts``, and the
+one in force at each target as an ``extras`` column, found with ``in_force``), and its
+controller turns them into a ``LoadPlan`` (``Controller.stated_loads``), one ``LoadState``
+per target. ``--tool-load`` may be given as well only where it is the load the program
+states (otherwise one of the two is wrong, and which is not ours to guess).
 """
 
 from __future__ import annotations
@@ -77,8 +79,9 @@ def in_force(tp, statements: list[Statement]) -> np.ndarray:
         if s.file not in with_rows:
             raise InputError(f"{s.at}: the load is set in a file without motions (a routine called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
+    lines_of = {f: tp.sources[f].text.splitlines() for f in {s.file for s in statements}}  # once a file: a parser asks this of every program
     for s in statements:
-        lo, hi = _routine(tp.sources[s.file].text, s.line)
+        lo, hi = _routine(lines_of[s.file], s.line)
         if not ((tp.file == s.file) & (tp.line > lo) & (tp.line < hi)).any():
             raise InputError(f"{s.at}: the load is set in a routine without motions (called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
@@ -99,9 +102,8 @@ _START = re.compile(r"^[ \t]*(?:(?:LOCAL|GLOBAL)[ \t]+)?(?:PROC|TRAP|FUNC|DEF|DE
 _END = re.compile(r"^[ \t]*(?:ENDPROC|ENDTRAP|ENDFUNC|END|ENDFCT)\b", re.IGNORECASE)
 
 
-def _routine(text: str, line: int) -> tuple[int, int]:
+def _routine(lines: list[str], line: int) -> tuple[int, int]:
     """(first, last) line of the routine (RAPID PROC/TRAP/FUNC, KRL DEF/DEFFCT) around ``line``."""
-    lines = text.splitlines()
     first = next((k + 1 for k in range(line - 1, -1, -1) if _START.match(lines[k])), 0)
     last = next((k + 1 for k in range(line - 1, len(lines)) if _END.match(lines[k])), len(lines) + 1)
     return first, last
