@@ -79,10 +79,10 @@ def in_force(tp, statements: list[Statement]) -> np.ndarray:
         if s.file not in with_rows:
             raise InputError(f"{s.at}: the load is set in a file without motions (a routine called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
-    lines_of = {f: tp.sources[f].text.splitlines() for f in {s.file for s in statements}}  # once a file: a parser asks this of every program
+    files = {s.file for s in statements}  # each read once: a parser asks this of every program
+    lines_of, rows_of = {f: tp.sources[f].text.splitlines() for f in files}, {f: np.sort(tp.line[tp.file == f]) for f in files}
     for s in statements:
-        lo, hi = _routine(lines_of[s.file], s.line)
-        if not ((tp.file == s.file) & (tp.line > lo) & (tp.line < hi)).any():
+        if not _motions_in_routine(lines_of[s.file], s.line, rows_of[s.file]):
             raise InputError(f"{s.at}: the load is set in a routine without motions (called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
     order = np.lexsort((tp.line, tp.file))
@@ -102,11 +102,20 @@ _START = re.compile(r"^[ \t]*(?:(?:LOCAL|GLOBAL)[ \t]+)?(?:PROC|TRAP|FUNC|DEF|DE
 _END = re.compile(r"^[ \t]*(?:ENDPROC|ENDTRAP|ENDFUNC|END|ENDFCT)\b", re.IGNORECASE)
 
 
-def _routine(lines: list[str], line: int) -> tuple[int, int]:
-    """(first, last) line of the routine (RAPID PROC/TRAP/FUNC, KRL DEF/DEFFCT) around ``line``."""
-    first = next((k + 1 for k in range(line - 1, -1, -1) if _START.match(lines[k])), 0)
-    last = next((k + 1 for k in range(line - 1, len(lines)) if _END.match(lines[k])), len(lines) + 1)
-    return first, last
+def _motions_in_routine(lines: list[str], line: int, rows: np.ndarray) -> bool:
+    """True where a target's line (``rows``: sorted) lies inside the routine (RAPID PROC/TRAP/FUNC,
+    KRL DEF/DEFFCT) around ``line``: after its first line and before its last. Its bounds are
+    looked for only between the statement and its nearest targets (a load statement in a long
+    program is read with every parse: not over the whole file)."""
+    above = int(np.searchsorted(rows, line, side="left"))  # rows[:above] are the targets above the statement
+    if above and not any(_is(_START, lines, i) for i in range(int(rows[above - 1]), line + 1)):
+        return True  # the nearest target above, with no routine start between it and the statement
+    first_below = int(np.searchsorted(rows, line, side="right" if _is(_START, lines, line) else "left"))  # a target on the routine's first line is outside it
+    return first_below < len(rows) and not any(_is(_END, lines, i) for i in range(line, int(rows[first_below]) + 1))
+
+
+def _is(pattern: re.Pattern, lines: list[str], line: int) -> bool:
+    return 0 < line <= len(lines) and pattern.match(lines[line - 1]) is not None
 
 
 def plan_from_index(candidates: list[LoadState | None], index: np.ndarray) -> LoadPlan | None:

@@ -25,6 +25,7 @@ from postproc.robot.frames import abc_to_quat_wxyz
 from ...emit.load_plan import LoadState, Statement, in_force
 from ...emit.tool_load import ToolLoad
 from ...ir import Toolpath
+from ...parse.keyword_scan import keyword_matches
 from ..base import NUMBER
 
 LOADS = "krl.loads"
@@ -55,35 +56,36 @@ NAN3 = (float("nan"),) * 3
 
 def with_load_facts(tp: Toolpath) -> Toolpath:
     """``tp`` with ``facts["krl.loads"]`` and ``extras["krl.load"]``."""
-    # A plain substring test first: most programs set no load, and the patterns below scan a
-    # long program several times slower than str.lower and `in`.
-    stating = any(word in doc.text.lower() for doc in tp.sources if doc.role != "config" for word in ("$load", "#tool"))
-    if not stating:
+    lowered = [doc.text.lower() for doc in tp.sources]  # the patterns are tried only where their keyword stands (keyword_scan)
+    if not any("$load" in low or "#tool" in low for doc, low in zip(tp.sources, lowered) if doc.role != "config"):
         return replace(tp, facts={**tp.facts, LOADS: KrlLoads()}, extras={**tp.extras, LOAD: np.full(len(tp), -1, dtype=int)})
     try:
-        states, at = _in_force(tp)
+        states, at = _in_force(tp, lowered)
         refused = ""
     except InputError as why:  # refused only where the load is asked for (convert)
         states, at, refused = [], np.full(len(tp), -1, dtype=int), str(why)
-    loads = KrlLoads(tuple(_masses(tp)), tuple(states), refused)
+    loads = KrlLoads(tuple(_masses(tp, lowered)), tuple(states), refused)
     return replace(tp, facts={**tp.facts, LOADS: loads}, extras={**tp.extras, LOAD: at})
 
 
-def _masses(tp: Toolpath) -> list[tuple[float, str]]:
+def _masses(tp: Toolpath, lowered: list[str]) -> list[tuple[float, str]]:
     """(mass kg, 'FILE, line N') of every payload the program's files state."""
-    table = {int(m.group(1)): float(m.group(2)) for doc in tp.sources for m in _LOAD_DATA.finditer(doc.text)}
+    table = {int(m.group(1)): float(m.group(2)) for doc, low in zip(tp.sources, lowered) for m in keyword_matches(_LOAD_DATA, doc.text, low, ("load_data",))}
     out = []
-    for doc in tp.sources:
+    for doc, low in zip(tp.sources, lowered):
         if doc.role == "config":
             continue  # LOAD_DATA declarations: only those the program selects count
 
         def where(m):
             return f"{doc.path}, line {doc.text.count(chr(10), 0, m.start()) + 1}"
 
+        def matches(pattern, keyword):
+            return keyword_matches(pattern, doc.text, low, (keyword,), line_start=True)
+
         for pattern in (_LOAD_M, _LOAD_AGG):
-            out += [(float(m.group(1)), where(m)) for m in pattern.finditer(doc.text)]
-        for pattern in (_LOAD_REF, _BAS_TOOL):
-            out += [(table[int(m.group(1))], where(m) + f" (LOAD_DATA[{m.group(1)}])") for m in pattern.finditer(doc.text) if int(m.group(1)) in table]
+            out += [(float(m.group(1)), where(m)) for m in matches(pattern, "$load")]
+        for pattern, keyword in ((_LOAD_REF, "$load"), (_BAS_TOOL, "#tool")):
+            out += [(table[int(m.group(1))], where(m) + f" (LOAD_DATA[{m.group(1)}])") for m in matches(pattern, keyword) if int(m.group(1)) in table]
     return out
 
 
@@ -112,15 +114,16 @@ def _load_of(agg: str) -> ToolLoad:
     return ToolLoad(m if m >= 0 else float("nan"), tuple(cm[:3]), tuple(j[:3]), tuple(float(v) for v in aom))
 
 
-def _in_force(tp: Toolpath) -> tuple[list[LoadState | None], np.ndarray]:
+def _in_force(tp: Toolpath, lowered: list[str]) -> tuple[list[LoadState | None], np.ndarray]:
     """The load each $LOAD statement sets (None: the controller's own LOAD_DATA[n]) and (N,) the
     statement in force at each target (-1: none); an InputError where that cannot be told."""
-    table = {int(m.group(1)): _load_of(_aggregate(doc.text, m.end() - 1)) for doc in tp.sources for m in _DECLARED.finditer(doc.text)}
+    table = {int(m.group(1)): _load_of(_aggregate(doc.text, m.end() - 1))
+             for doc, low in zip(tp.sources, lowered) for m in keyword_matches(_DECLARED, doc.text, low, ("load_data",))}
     statements = []
-    for f, doc in enumerate(tp.sources):
+    for f, (doc, low) in enumerate(zip(tp.sources, lowered)):
         if doc.role == "config":
             continue
-        for m in _STATEMENT.finditer(doc.text):
+        for m in keyword_matches(_STATEMENT, doc.text, low, ("$load", "#tool"), line_start=True):
             start = m.start() + len(m.group(0)) - len(m.group(0).lstrip())
             line = doc.text.count("\n", 0, start) + 1
             at = f"{doc.path}:{line}:{start - (doc.text.rfind(chr(10), 0, start) + 1) + 1}"

@@ -19,6 +19,7 @@ from postproc.errors import InputError
 
 from ...emit.load_plan import Statement, in_force
 from ...ir import Toolpath
+from ...parse.keyword_scan import keyword_matches
 from ..base import NUMBER
 
 LOADS = "rapid.loads"
@@ -70,25 +71,24 @@ class RapidLoads:
     grip_refused: str = ""  # where the GripLoad in force at a target cannot be told (load_plan.in_force), else ''
 
 
+_DECLARATIONS = {kind: re.compile(rf"\b{kind}\s+(\w+)\s*:=\s*\[", re.IGNORECASE) for kind in ("tooldata", "loaddata")}
+_ROBHOLD = re.compile(r"\s*TRUE", re.IGNORECASE)  # tooldata's first component: held by the robot (on the flange)
 _GRIP = re.compile(r"\bGripLoad\s+(\w+)\s*;", re.IGNORECASE)
 _TLOAD = re.compile(r"\\TLoad\s*:=\s*(\w+)", re.IGNORECASE)
-_WORDS = ("tooldata", "loaddata", "gripload", "tload")
 
 
 def with_load_facts(tp: Toolpath) -> Toolpath:
     """``tp`` with ``facts["rapid.loads"]`` and ``extras["rapid.grip"]``."""
     declared, grips, tloads = [], [], []
     for f, doc in enumerate(tp.sources):
-        lowered = doc.text.lower()
-        if not any(word in lowered for word in _WORDS):
-            continue  # a plain substring test first: most modules of a long program state no load
-        for kind in ("tooldata", "loaddata"):
-            for m in re.finditer(rf"\b{kind}\s+(\w+)\s*:=\s*\[", doc.text, re.IGNORECASE):
-                numbers = tuple(float(v) for v in re.findall(NUMBER, doc.text[m.end() : doc.text.find(";", m.end())]))
-                on_flange = kind == "loaddata" or doc.text[m.end() :].lstrip().upper().startswith("TRUE")
+        text, lowered = doc.text, doc.text.lower()  # the patterns are tried only where their keyword stands (keyword_scan)
+        for kind, pattern in _DECLARATIONS.items():
+            for m in keyword_matches(pattern, text, lowered, (kind,)):
+                numbers = tuple(float(v) for v in re.findall(NUMBER, text[m.end() : text.find(";", m.end())]))
+                on_flange = kind == "loaddata" or _ROBHOLD.match(text, m.end()) is not None
                 declared.append(Declared(kind, m.group(1), numbers, on_flange, _place(tp, f, m.start())))
-        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), _place(tp, f, m.start())) for m in _GRIP.finditer(doc.text)]
-        tloads += [Used(m.group(1), m.group(0).strip(), _place(tp, f, m.start())) for m in _TLOAD.finditer(doc.text)]
+        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), _place(tp, f, m.start())) for m in keyword_matches(_GRIP, text, lowered, ("gripload",))]
+        tloads += [Used(m.group(1), m.group(0).strip(), _place(tp, f, m.start())) for m in keyword_matches(_TLOAD, text, lowered, ("\\tload",))]
     grip_at, refused = _grips_in_force(tp, grips)
     loads = RapidLoads(tuple(declared), tuple(grips), tuple(tloads), refused)
     return replace(tp, facts={**tp.facts, LOADS: loads}, extras={**tp.extras, GRIP: grip_at})
