@@ -75,18 +75,16 @@ def _masses(tp: Toolpath, lowered: list[str]) -> list[tuple[float, str]]:
     for doc, low in zip(tp.sources, lowered):
         if doc.role == "config":
             continue  # LOAD_DATA declarations: only those the program selects count
-
-        def where(m):
-            return f"{doc.path}, line {doc.text.count(chr(10), 0, m.start()) + 1}"
-
-        def matches(pattern, keyword):
-            return keyword_matches(pattern, doc.text, low, (keyword,), line_start=True)
-
         for pattern in (_LOAD_M, _LOAD_AGG):
-            out += [(float(m.group(1)), where(m)) for m in matches(pattern, "$load")]
+            out += [(float(m.group(1)), _where(doc, m)) for m in keyword_matches(pattern, doc.text, low, ("$load",), line_start=True)]
         for pattern, keyword in ((_LOAD_REF, "$load"), (_BAS_TOOL, "#tool")):
-            out += [(table[int(m.group(1))], where(m) + f" (LOAD_DATA[{m.group(1)}])") for m in matches(pattern, keyword) if int(m.group(1)) in table]
+            out += [(table[int(m.group(1))], _where(doc, m) + f" (LOAD_DATA[{m.group(1)}])")
+                    for m in keyword_matches(pattern, doc.text, low, (keyword,), line_start=True) if int(m.group(1)) in table]
     return out
+
+
+def _where(doc, m: re.Match) -> str:
+    return f"{doc.path}, line {doc.text.count(chr(10), 0, m.start()) + 1}"
 
 
 def _aggregate(text: str, open_at: int) -> str:
