@@ -8,7 +8,7 @@ import re
 
 import numpy as np
 
-from postproc.programs.emit.load_plan import _END, _START, _motions_in_routine
+from postproc.programs.emit.load_plan import _END, _START, _Lines, _motions_in_routine
 from postproc.programs.parse.keyword_scan import keyword_matches
 
 PIECES = ["$LOAD = {M 5, CM {X 1}}", "$load.m = 3", "  BAS(#TOOL, 2)", "LOAD_DATA[3] = {M 7}", "GripLoad p;", "x $LOAD = 1",
@@ -27,7 +27,7 @@ def test_keyword_matches_are_finditers():
     for _ in range(1000):
         text = "".join(PIECES[i] + ("\n" if rng.random() < 0.5 else "") for i in rng.integers(0, len(PIECES), int(rng.integers(1, 12))))
         for pattern, keywords, anchored in PATTERNS:
-            got = [(m.start(), m.end()) for m in keyword_matches(pattern, text, text.lower(), keywords, line_start=anchored)]
+            got = [(m.start(), m.end()) for m in keyword_matches(pattern, text, keywords, line_start=anchored)]
             assert got == [(m.start(), m.end()) for m in pattern.finditer(text)], (pattern.pattern, text)
 
 
@@ -46,4 +46,9 @@ def test_a_routines_bounds_between_the_statement_and_its_nearest_targets():
         lines = [kinds[i] for i in rng.integers(0, len(kinds), n)]
         rows = np.sort(rng.integers(1, n + 1, int(rng.integers(0, 5))))
         line = int(rng.integers(1, n + 1))
-        assert _motions_in_routine(lines, line, rows) == _whole_file_scan(lines, line, rows), (lines, rows, line)
+        want = _whole_file_scan(lines, line, rows)
+        newline = "\r\n" if rng.random() < 0.3 else "\n"
+        text = newline.join(lines) + newline
+        offset = sum(len(x) + len(newline) for x in lines[: line - 1]) + int(rng.integers(0, len(lines[line - 1]) + 1))  # anywhere on its line
+        assert _motions_in_routine(_Lines(text, line, offset), line, rows) == want, (lines, rows, line)
+        assert _motions_in_routine(_Lines(text, 1, 0), line, rows) == want, (lines, rows, line)

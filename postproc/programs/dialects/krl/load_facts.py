@@ -25,7 +25,7 @@ from postproc.robot.frames import abc_to_quat_wxyz
 from ...emit.load_plan import LoadState, Statement, in_force
 from ...emit.tool_load import ToolLoad
 from ...ir import Toolpath
-from ...parse.keyword_scan import keyword_matches
+from ...parse.keyword_scan import KeywordIndex
 from ..base import NUMBER
 
 LOADS = "krl.loads"
@@ -56,30 +56,30 @@ NAN3 = (float("nan"),) * 3
 
 def with_load_facts(tp: Toolpath) -> Toolpath:
     """``tp`` with ``facts["krl.loads"]`` and ``extras["krl.load"]``."""
-    lowered = [doc.text.lower() for doc in tp.sources]  # the patterns are tried only where their keyword stands (keyword_scan)
-    if not any("$load" in low or "#tool" in low for doc, low in zip(tp.sources, lowered) if doc.role != "config"):
+    index = [KeywordIndex(doc.text) for doc in tp.sources]  # the patterns are tried only where their keyword stands
+    if not any(ix.has("$load", "#tool") for doc, ix in zip(tp.sources, index) if doc.role != "config"):
         return replace(tp, facts={**tp.facts, LOADS: KrlLoads()}, extras={**tp.extras, LOAD: np.full(len(tp), -1, dtype=int)})
     try:
-        states, at = _in_force(tp, lowered)
+        states, at = _in_force(tp, index)
         refused = ""
     except InputError as why:  # refused only where the load is asked for (convert)
         states, at, refused = [], np.full(len(tp), -1, dtype=int), str(why)
-    loads = KrlLoads(tuple(_masses(tp, lowered)), tuple(states), refused)
+    loads = KrlLoads(tuple(_masses(tp, index)), tuple(states), refused)
     return replace(tp, facts={**tp.facts, LOADS: loads}, extras={**tp.extras, LOAD: at})
 
 
-def _masses(tp: Toolpath, lowered: list[str]) -> list[tuple[float, str]]:
+def _masses(tp: Toolpath, index: list[KeywordIndex]) -> list[tuple[float, str]]:
     """(mass kg, 'FILE, line N') of every payload the program's files state."""
-    table = {int(m.group(1)): float(m.group(2)) for doc, low in zip(tp.sources, lowered) for m in keyword_matches(_LOAD_DATA, doc.text, low, ("load_data",))}
+    table = {int(m.group(1)): float(m.group(2)) for ix in index for m in ix.matches(_LOAD_DATA, ("load_data",))}
     out = []
-    for doc, low in zip(tp.sources, lowered):
+    for doc, ix in zip(tp.sources, index):
         if doc.role == "config":
             continue  # LOAD_DATA declarations: only those the program selects count
         for pattern in (_LOAD_M, _LOAD_AGG):
-            out += [(float(m.group(1)), _where(doc, m)) for m in keyword_matches(pattern, doc.text, low, ("$load",), line_start=True)]
+            out += [(float(m.group(1)), _where(doc, m)) for m in ix.matches(pattern, ("$load",), line_start=True)]
         for pattern, keyword in ((_LOAD_REF, "$load"), (_BAS_TOOL, "#tool")):
             out += [(table[int(m.group(1))], _where(doc, m) + f" (LOAD_DATA[{m.group(1)}])")
-                    for m in keyword_matches(pattern, doc.text, low, (keyword,), line_start=True) if int(m.group(1)) in table]
+                    for m in ix.matches(pattern, (keyword,), line_start=True) if int(m.group(1)) in table]
     return out
 
 
@@ -112,16 +112,16 @@ def _load_of(agg: str) -> ToolLoad:
     return ToolLoad(m if m >= 0 else float("nan"), tuple(cm[:3]), tuple(j[:3]), tuple(float(v) for v in aom))
 
 
-def _in_force(tp: Toolpath, lowered: list[str]) -> tuple[list[LoadState | None], np.ndarray]:
+def _in_force(tp: Toolpath, index: list[KeywordIndex]) -> tuple[list[LoadState | None], np.ndarray]:
     """The load each $LOAD statement sets (None: the controller's own LOAD_DATA[n]) and (N,) the
     statement in force at each target (-1: none); an InputError where that cannot be told."""
     table = {int(m.group(1)): _load_of(_aggregate(doc.text, m.end() - 1))
-             for doc, low in zip(tp.sources, lowered) for m in keyword_matches(_DECLARED, doc.text, low, ("load_data",))}
+             for doc, ix in zip(tp.sources, index) for m in ix.matches(_DECLARED, ("load_data",))}
     statements = []
-    for f, (doc, low) in enumerate(zip(tp.sources, lowered)):
+    for f, (doc, ix) in enumerate(zip(tp.sources, index)):
         if doc.role == "config":
             continue
-        for m in keyword_matches(_STATEMENT, doc.text, low, ("$load", "#tool"), line_start=True):
+        for m in ix.matches(_STATEMENT, ("$load", "#tool"), line_start=True):
             start = m.start() + len(m.group(0)) - len(m.group(0).lstrip())
             line = doc.text.count("\n", 0, start) + 1
             at = f"{doc.path}:{line}:{start - (doc.text.rfind(chr(10), 0, start) + 1) + 1}"
@@ -133,9 +133,9 @@ def _in_force(tp: Toolpath, lowered: list[str]) -> tuple[list[LoadState | None],
                 n = int(m.group(2) or m.group(4))
                 if n not in table:
                     if m.group(4):  # BAS(#TOOL, n) without LOAD_DATA[n] here: the controller's $config.dat, unknown here
-                        statements.append(Statement(f, line, at, None))
+                        statements.append(Statement(f, line, at, None, start))
                         continue
                     raise InputError(f"{at}: LOAD_DATA[{n}] is not in the program's files (give $config.dat with --data, or --tool-load)")
                 load = table[n]
-            statements.append(Statement(f, line, at, load))
+            statements.append(Statement(f, line, at, load, start))
     return [None if s.load is None else LoadState(s.load, None, s.at) for s in statements], in_force(tp, statements)

@@ -19,7 +19,7 @@ from postproc.errors import InputError
 
 from ...emit.load_plan import Statement, in_force
 from ...ir import Toolpath
-from ...parse.keyword_scan import keyword_matches
+from ...parse.keyword_scan import KeywordIndex
 from ..base import NUMBER
 
 LOADS = "rapid.loads"
@@ -33,6 +33,7 @@ class Place:
     line: int
     column: int
     commented: bool  # a '!' before it on its line
+    offset: int  # where it starts in the file's text
 
     @property
     def at(self) -> str:
@@ -81,14 +82,14 @@ def with_load_facts(tp: Toolpath) -> Toolpath:
     """``tp`` with ``facts["rapid.loads"]`` and ``extras["rapid.grip"]``."""
     declared, grips, tloads = [], [], []
     for f, doc in enumerate(tp.sources):
-        text, lowered = doc.text, doc.text.lower()  # the patterns are tried only where their keyword stands (keyword_scan)
+        text, index = doc.text, KeywordIndex(doc.text)  # the patterns are tried only where their keyword stands
         for kind, pattern in _DECLARATIONS.items():
-            for m in keyword_matches(pattern, text, lowered, (kind,)):
+            for m in index.matches(pattern, (kind,)):
                 numbers = tuple(float(v) for v in re.findall(NUMBER, text[m.end() : text.find(";", m.end())]))
                 on_flange = kind == "loaddata" or _ROBHOLD.match(text, m.end()) is not None
                 declared.append(Declared(kind, m.group(1), numbers, on_flange, _place(tp, f, m.start())))
-        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), _place(tp, f, m.start())) for m in keyword_matches(_GRIP, text, lowered, ("gripload",))]
-        tloads += [Used(m.group(1), m.group(0).strip(), _place(tp, f, m.start())) for m in keyword_matches(_TLOAD, text, lowered, ("\\tload",))]
+        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), _place(tp, f, m.start())) for m in index.matches(_GRIP, ("gripload",))]
+        tloads += [Used(m.group(1), m.group(0).strip(), _place(tp, f, m.start())) for m in index.matches(_TLOAD, ("\\tload",))]
     grip_at, refused = _grips_in_force(tp, grips)
     loads = RapidLoads(tuple(declared), tuple(grips), tuple(tloads), refused)
     return replace(tp, facts={**tp.facts, LOADS: loads}, extras={**tp.extras, GRIP: grip_at})
@@ -98,7 +99,7 @@ def _grips_in_force(tp: Toolpath, grips: list[Used]) -> tuple[np.ndarray, str]:
     """(N,) the index in ``grips`` of the GripLoad in force at each target (-1: none), and the
     reason where that cannot be told ('' where it can). Commented statements do not count."""
     live = [k for k, g in enumerate(grips) if not g.place.commented]
-    statements = [Statement(grips[k].place.file, grips[k].place.line, grips[k].place.at, None) for k in live]
+    statements = [Statement(grips[k].place.file, grips[k].place.line, grips[k].place.at, None, grips[k].place.offset) for k in live]
     try:
         at = in_force(tp, statements)
     except InputError as why:  # refused only where the load is asked for (convert), as before it was read from the IR
@@ -109,4 +110,4 @@ def _grips_in_force(tp: Toolpath, grips: list[Used]) -> tuple[np.ndarray, str]:
 def _place(tp: Toolpath, f: int, start: int) -> Place:
     text = tp.sources[f].text
     line_start = text.rfind("\n", 0, start) + 1
-    return Place(f, tp.sources[f].path, text.count("\n", 0, start) + 1, start - line_start + 1, "!" in text[line_start:start])
+    return Place(f, tp.sources[f].path, text.count("\n", 0, start) + 1, start - line_start + 1, "!" in text[line_start:start], start)
