@@ -49,6 +49,15 @@ def check_model_fits(tp: Toolpath, model, model_path: str, robot_name: str | Non
     return problems
 
 
+def mismatch_keys(tp: Toolpath, model, model_path: str, robot_name: str | None = None) -> set[str]:
+    """What of ``tp`` does not fit the model, as keys that compare across parts of one program
+    (a streamed chunk and the first): a tool's message without the place of its first target
+    (each part has its own first), every other message as it is (a payload statement's and a
+    joint target's name their own line, the same in every part that holds them)."""
+    tools = {m.split(": ", 1)[-1] for m in _tools(tp, model, model_path)}
+    return tools | set(_robot(tp, model, model_path, robot_name) + _payload(tp, model, model_path) + _maker(tp, model.robot, model_path))
+
+
 def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list[str]:
     robot = model.robot
     out = []

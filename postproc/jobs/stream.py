@@ -37,8 +37,10 @@ What is not streamed (``StreamFallback``; the caller reads the program whole, as
 language without stream rules, a model with an effect that depends on the path's history
 (backlash's approach direction couples every target to the one before, across any cut),
 a header of more than HEADER_MAX_LINES lines, more than TRAILER_MAX_LINES lines after the
-last cut that are not plain moves, a restated target that does not read back exactly, and
-any input error (the whole-program path reports it with the program's own line numbers).
+last cut that are not plain moves, a restated target that does not read back exactly, a
+later chunk that does not fit the model as the first does (a payload set after the plain
+moves: ``program_check.mismatch_keys``), and any input error (the whole-program path reports
+it with the program's own line numbers).
 Both paths give byte-identical output on a program both can take
 (tests/test_stream.py).
 """
@@ -77,7 +79,7 @@ from .compensate import (
     reference_postures,
     request_for,
 )
-from .program_check import check_model_fits
+from .program_check import check_model_fits, mismatch_keys
 
 STREAM_MIN_BYTES = 16 * 2**20  # auto: programs of more than ~300,000 lines are streamed
 CHUNK_LINES = 50_000  # of 1.25 x 10^4 .. 10^5, the fastest on 2 cores (benchmarks/stream.py's rasters, sizes run alternately), half the memory of 10^5
@@ -509,8 +511,9 @@ class _Job:
 
     def __init__(self, program: _Program, model, options: dict, progress, model_check: tuple | None = None):
         self.program, self.model, self.options, self.progress = program, model, options, progress
-        self.model_check = model_check  # (model path, --robot, --allow-model-mismatch): checked on the first chunk
+        self.model_check = model_check  # (model path, --robot, --allow-model-mismatch): checked on the first chunk, later ones against it
         self.mismatches: list[str] = []
+        self.first_mismatch_keys: set[str] = set()  # the first chunk's (``mismatch_keys``): a later one must state nothing else
         self.totals = Totals()
         self.notes: list[str] = []
         self.first_tp: Toolpath | None = None
@@ -545,10 +548,20 @@ class _Job:
             self._first(tp)
             keep, shift, header_chars = np.ones(len(tp), dtype=bool), 0, -1
         else:
+            self._check_later(tp)
             keep, shift, header_chars = tp.line > self.prefix_lines, first_line - 1 - self.prefix_lines, sum(map(len, self.blanked))
         meta = _Meta(keep, shift, 1 if carry is None else self.prefix_lines + 1, carry is None)
         task = _Task(tp, start, reference, header_chars, tail, chunk=chunk)
         return task, meta, _carry_of(tp, None if reference is None else reference.end_joints)
+
+    def _check_later(self, tp: Toolpath) -> None:
+        """A later chunk that states what the first did not (a load set after the plain moves, a
+        joint target out of the model's range) is not streamed: its message would name the
+        chunk's lines, and only the whole program's check names the program's."""
+        if self.model_check is None:
+            return
+        if mismatch_keys(tp, self.model, *self.model_check[:2]) - self.first_mismatch_keys:
+            raise StreamFallback("a later chunk does not fit the model as the first does (e.g. it sets another payload)")
 
     def collect(self, meta: _Meta, result) -> bytes:
         """One chunk's result (in program order): its report counted, its new text."""
@@ -581,6 +594,7 @@ class _Job:
         self.first_tp = tp
         if self.model_check is not None:
             self.mismatches = check_model_fits(tp, self.model, *self.model_check)
+            self.first_mismatch_keys = mismatch_keys(tp, self.model, *self.model_check[:2])
         in_header = tp.line[(tp.line <= len(self.blanked)) & (tp.file == 0)]
         for line in np.unique(in_header):
             self.blanked[int(line) - 1] = "\n"

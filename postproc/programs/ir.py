@@ -105,12 +105,20 @@ class Toolpath:
     # speed, rotary offsets and cutter compensation ("nc.*": postproc.programs.parse.nc_columns). A new language keeps
     # its own here instead of adding a field to the core; ``take`` slices them with the rest.
     extras: dict[str, np.ndarray] = field(repr=False, default_factory=dict)
+    # What the program states once, not per target: {"<dialect>.<what>": immutable value}, e.g. the
+    # loads its declarations and statements give (RAPID tooldata / loaddata / GripLoad, KRL $LOAD),
+    # each naming its file, line and column. A value holds no row number: which statement is in
+    # force at a target is an ``extras`` column (an index into the fact), so ``take``, a
+    # streamed chunk or any other row operation keeps it right without knowing the fact.
+    # The parser writes these; a controller reads them (and never the program text).
+    facts: dict[str, object] = field(repr=False, default_factory=dict)
 
     PER_TARGET = ("kind", "line", "file", "position", "orientation", "joints", "ext", "conf", "speed", "zone", "tool", "frame",
                   "resolved", "spans", "scale", "relative", "values", "offset", "offset_span", "insert_at")
 
     def take(self, rows) -> "Toolpath":
-        """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources and frames."""
+        """The targets ``rows`` (indices or a mask) of this toolpath, with the same sources, frames
+        and program-level ``facts`` (row-free: what is in force per target is in ``extras``)."""
         rows = np.asarray(rows)
         if rows.dtype == bool:
             rows = np.nonzero(rows)[0]

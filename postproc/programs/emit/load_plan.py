@@ -2,9 +2,11 @@
 
 A program that states its load (RAPID tooldata's tload and ``GripLoad``, KRL ``$LOAD`` /
 ``LOAD_DATA[n]`` / ``BAS(#TOOL, n)``) gets the same load in the new program, at the same
-targets: each dialect reads its statements (``Controller.stated_loads``) into a ``LoadPlan``,
-one ``LoadState`` per target. ``--tool-load`` may be given as well only where it is the
-load the program states (otherwise one of the two is wrong, and which is not ours to guess).
+targets: each language's parser writes its statements into the IR (``Toolpath.facts``, and the
+one in force at each target as an ``extras`` column, found with ``in_force``), and its
+controller turns them into a ``LoadPlan`` (``Controller.stated_loads``), one ``LoadState``
+per target. ``--tool-load`` may be given as well only where it is the load the program
+states (otherwise one of the two is wrong, and which is not ours to guess).
 """
 
 from __future__ import annotations
@@ -61,6 +63,7 @@ class Statement:
     line: int
     at: str  # file:line:column
     load: ToolLoad | None  # None: back to none (GripLoad load0)
+    offset: int = -1  # where it starts in its file's text (-1: not given; its lines are then read from the file's start)
 
 
 def in_force(tp, statements: list[Statement]) -> np.ndarray:
@@ -77,9 +80,10 @@ def in_force(tp, statements: list[Statement]) -> np.ndarray:
         if s.file not in with_rows:
             raise InputError(f"{s.at}: the load is set in a file without motions (a routine called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
+    rows_of = {f: np.sort(tp.line[tp.file == f]) for f in {s.file for s in statements}}
     for s in statements:
-        lo, hi = _routine(tp.sources[s.file].text, s.line)
-        if not ((tp.file == s.file) & (tp.line > lo) & (tp.line < hi)).any():
+        near = _Lines(tp.sources[s.file].text, s.line, s.offset) if s.offset >= 0 else _Lines(tp.sources[s.file].text, 1, 0)
+        if not _motions_in_routine(near, s.line, rows_of[s.file]):
             raise InputError(f"{s.at}: the load is set in a routine without motions (called from elsewhere): where it applies is not "
                              "carried into the new program; give the load with --tool-load and move the statement next to the motions")
     order = np.lexsort((tp.line, tp.file))
@@ -99,12 +103,46 @@ _START = re.compile(r"^[ \t]*(?:(?:LOCAL|GLOBAL)[ \t]+)?(?:PROC|TRAP|FUNC|DEF|DE
 _END = re.compile(r"^[ \t]*(?:ENDPROC|ENDTRAP|ENDFUNC|END|ENDFCT)\b", re.IGNORECASE)
 
 
-def _routine(text: str, line: int) -> tuple[int, int]:
-    """(first, last) line of the routine (RAPID PROC/TRAP/FUNC, KRL DEF/DEFFCT) around ``line``."""
-    lines = text.splitlines()
-    first = next((k + 1 for k in range(line - 1, -1, -1) if _START.match(lines[k])), 0)
-    last = next((k + 1 for k in range(line - 1, len(lines)) if _END.match(lines[k])), len(lines) + 1)
-    return first, last
+class _Lines:
+    """The lines of one text by number (1-based, counted by newline as ``Toolpath.line`` is),
+    read outward from one known line: a parser asks this of every program, and a long one's
+    text is not split for the few lines around a statement."""
+
+    def __init__(self, text: str, line: int, offset: int):
+        self.text = text
+        self.starts = {line: text.rfind("\n", 0, offset) + 1}  # line -> offset of its first character
+        self.low = self.high = line
+
+    def __call__(self, line: int) -> str | None:
+        """The text of ``line`` (without its newline), None where the text has no such line."""
+        text = self.text
+        while line < self.low and self.starts[self.low] > 0:
+            self.low -= 1
+            self.starts[self.low] = text.rfind("\n", 0, self.starts[self.low + 1] - 1) + 1
+        while line > self.high and (end := text.find("\n", self.starts[self.high])) >= 0:
+            self.high += 1
+            self.starts[self.high] = end + 1
+        if line not in self.starts or line < 1:
+            return None
+        end = text.find("\n", self.starts[line])
+        return text[self.starts[line] : end if end >= 0 else len(text)]
+
+
+def _motions_in_routine(line_of, line: int, rows: np.ndarray) -> bool:
+    """True where a target's line (``rows``: sorted) lies inside the routine (RAPID PROC/TRAP/FUNC,
+    KRL DEF/DEFFCT) around ``line``: after its first line and before its last. Its bounds are
+    looked for only between the statement and its nearest targets (``line_of``: a line's text
+    by number, None past the text), not over the whole file."""
+    above = int(np.searchsorted(rows, line, side="left"))  # rows[:above] are the targets above the statement
+    if above and not any(_is(_START, line_of, i) for i in range(line, int(rows[above - 1]) - 1, -1)):
+        return True  # the nearest target above, with no routine start between it and the statement
+    first_below = int(np.searchsorted(rows, line, side="right" if _is(_START, line_of, line) else "left"))  # a target on the routine's first line is outside it
+    return first_below < len(rows) and not any(_is(_END, line_of, i) for i in range(line, int(rows[first_below]) + 1))
+
+
+def _is(pattern: re.Pattern, line_of, line: int) -> bool:
+    text = line_of(line)
+    return text is not None and pattern.match(text) is not None
 
 
 def plan_from_index(candidates: list[LoadState | None], index: np.ndarray) -> LoadPlan | None:

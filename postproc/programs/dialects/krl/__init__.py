@@ -13,6 +13,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
 from .controller import KRC
 from .facts import with_controller_facts
+from .load_facts import with_load_facts
 from .modules import module_docs
 from .parse import KrlParser
 from .placing import set_base
@@ -72,7 +73,7 @@ class KrlDialect(Dialect):
         return module_docs(program, paths) if paths else []
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        return with_controller_facts(KrlParser(sources).parse())
+        return with_load_facts(with_controller_facts(KrlParser(sources).parse()))
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "{", 1)  # {X .., S .., T ..}

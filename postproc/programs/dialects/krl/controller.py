@@ -31,11 +31,13 @@ class KukaController(Controller):
         return (tp.kind == Kind.JOINT) & ~np.isnan(tp.conf[:, :2]).any(axis=1)
 
     def stated_loads(self, tp: Toolpath):
+        """The $LOAD in force at each target, from the parser's facts (``krl.loads``, ``krl.load``)."""
         return stated_loads(tp)
 
     def payloads(self, tp: Toolpath):
         """Masses the program gives $LOAD ($LOAD.M = m, $LOAD = {M m, ...}, $LOAD = LOAD_DATA[n]
-        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n])."""
+        with LOAD_DATA[n] in $config.dat, or BAS(#TOOL, n), which loads LOAD_DATA[n]), from
+        the parser's facts (``krl.loads``)."""
         return load_masses(tp)
 
     def arc_ends_at_target(self, tp: Toolpath) -> np.ndarray:

@@ -13,6 +13,7 @@ from ...ir import SourceDoc, Toolpath
 from ..base import Dialect, aggregate_around, first_statement, read_bytes
 from .controller import IRC5
 from .facts import with_controller_facts
+from .load_facts import with_load_facts
 from .parse import parse_modules
 from .placing import set_work_object
 from .targets import set_robtarget_conf
@@ -53,7 +54,7 @@ class RapidDialect(Dialect):
         return docs
 
     def read_ir(self, sources: list[SourceDoc]) -> Toolpath:
-        return with_controller_facts(parse_modules(sources))
+        return with_load_facts(with_controller_facts(parse_modules(sources)))
 
     def target_literal(self, text, first_number):
         return aggregate_around(text, first_number, "[", 2)  # [[x,y,z],[q],[conf],[ext]]

@@ -10,8 +10,7 @@ from postproc.robot.kinematics import select_by_abb_conf
 from ...controller import Controller
 from ...ir import Kind, Toolpath
 from .facts import CONF_REFUSED, CONFJ_OFF, CONFL_OFF, SINGAREA
-from .loads import stated_loads
-from .targets import tool_masses
+from .loads import payloads, stated_loads
 
 
 class AbbController(Controller):
@@ -40,11 +39,13 @@ class AbbController(Controller):
         return has & np.where(joint, ~tp.extras[CONFJ_OFF], ~tp.extras[CONFL_OFF])
 
     def stated_loads(self, tp: Toolpath):
+        """tooldata's tload and GripLoad at each target, from the parser's facts (``rapid.loads``)."""
         return stated_loads(tp)
 
     def payloads(self, tp: Toolpath):
-        """The load (tload mass) of every tooldata the program's Cartesian targets use."""
-        return tool_masses(tp)
+        """The load (tload mass) of every tooldata the program's Cartesian targets use, and its
+        GripLoad / \\TLoad payloads, from the parser's facts (``rapid.loads``)."""
+        return payloads(tp)
 
     def inexact_interpolation(self, tp):
         """The first ``SingArea \\Wrist`` / ``\\LockAxis4`` (``extras["rapid.singarea"]``): from there
