@@ -104,11 +104,8 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
            "theory_suggested": np.full((seeds, len(GRID)), np.nan), "theory_random": np.full((seeds, len(THEORY_GRID)), np.nan),
            "bound": np.full(seeds, np.nan), "uniform": np.full(seeds, np.nan)}
     for s in range(seeds):
-        rng = np.random.default_rng(100 + s)
-        truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
-        q_cand = np.round(sample_poses(robot, tool, 1500, Cylinder(), rng), JOINT_DECIMALS)
-        cands = Candidates(q_deg=q_cand, ids=tuple(f"s{i + 1}" for i in range(len(q_cand))), source="<benchmark>")
-        measured = simulate(truth, q_cand, rng, noise_mm=NOISE)
+        rng, truth, cands, measured = _world(s)
+        q_cand = cands.q_deg
         noise_rng = np.random.default_rng(500 + s)  # its own stream: the other draws stay those of a run with one
         measurements = [measured] + [simulate(truth, q_cand, noise_rng, noise_mm=NOISE) for _ in range(noise_draws - 1)]
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
@@ -132,6 +129,26 @@ def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHAR
                 f"{out['suggested'][s, k]:.4f} random {np.mean(out['random'][s, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
+
+
+def _world(s: int):
+    """Seed s's simulated KR160: (its generator, truth, 1,500 candidates in the cylinder, their
+    measurement); the generator goes on to draw the targets and the random designs."""
+    robot = postproc.load_robot("kr160_r1570")
+    tool = np.array([0.0, 0.0, 200.0])
+    rng = np.random.default_rng(100 + s)
+    truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
+    q_cand = np.round(sample_poses(robot, tool, 1500, Cylinder(), rng), JOINT_DECIMALS)
+    cands = Candidates(q_deg=q_cand, ids=tuple(f"s{i + 1}" for i in range(len(q_cand))), source="<benchmark>")
+    return rng, truth, cands, simulate(truth, q_cand, rng, noise_mm=NOISE)
+
+
+def pass_problem(s: int):
+    """(nominal model, candidates, targets, design problem) of seed s's machining pass, as ``simulated`` draws them."""
+    rng, truth, cands, _ = _world(s)
+    q_eval = sample_poses(truth.robot, truth.tool_mm, 200, PASS, rng)
+    nominal = ErrorModel.create(truth.robot, truth.tool_mm, parse_effects(EFFECTS))
+    return nominal, cands, q_eval, _information(nominal, cands, None, q_eval, NOISE).problem
 
 
 THEORY_GRID = (32, 50, 64, 100)  # the N whose random error the design is compared at
