@@ -670,7 +670,10 @@ def figure(path: Path, runs, real) -> None:
     axes[1].set_yscale("log")
     if "pass0" in runs:
         axes[1].plot(GRID, np.nanmean(runs["pass0"]["suggested"], axis=0), "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
-    if "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
+    if "bound_distinct" in runs["pass"] and np.isfinite(runs["pass"]["bound_distinct"]).all():
+        axes[1].plot(BOUND_GRID[BOUND_GRID.index(GRID[0]):], np.mean(runs["pass"]["bound_distinct"], axis=0)[BOUND_GRID.index(GRID[0]):], "k:",
+                     label="I-optimal bound: the least any N distinct poses\nof these candidates can expect (noise only)")
+    elif "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
         axes[1].plot(GRID, np.sqrt(np.mean(runs["pass"]["bound"]) / np.array(GRID)), "k:",
                      label="I-optimal bound: the least any N poses\nof these candidates can expect (noise only)")
     sm, _, rm, _ = summary(real["grid"], real["whole"]["suggested"], real["whole"]["random"])
