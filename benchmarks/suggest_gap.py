@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
-from suggest import PASS, pass_problem  # noqa: E402  (benchmarks/suggest.py: the same candidates and targets)
+from suggest import pass_problem  # noqa: E402  (benchmarks/suggest.py: the same candidates and targets)
 
 from postproc.suggest import DEFAULT_RANDOM_SHARE, NEAR_TARGETS_FRACTION, fewest_poses, near_targets, random_count, suggest_poses  # noqa: E402
 from postproc.suggest import design  # noqa: E402
