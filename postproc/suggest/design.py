@@ -18,7 +18,8 @@ candidates scored at once by rank-3 updates), then exchange passes swap a chosen
 for a better candidate while that improves the criterion, then, at small N, restarts of
 the exchange from the best design with some of its poses replaced at random keep the
 best design found (``refine``). Poses fixed in advance (a random share) stay.
-Everything is vectorised over candidates.
+Everything is vectorised over candidates. ``i_optimal_bound`` (a pose may repeat) and
+``relaxed_i_design`` (distinct poses, tighter) bound from below what any design can reach.
 """
 
 from __future__ import annotations
