@@ -4,6 +4,8 @@ number of measured poses.
 Run: .venv/bin/python benchmarks/suggest.py [--seeds 5] [--ur10 /work/shared/data/ur10_ipa] [--figure docs/suggest-poses.png]
 Parts alone: --pass-only (2a, e.g. --seeds 12 --noise-draws 6 --random-draws 20 --skip-share0) and
 --ur10-only (3), each with --merge-into benchmarks/results/suggest.npz to redraw the figure with it.
+Shards of seeds in parallel (part 2a): --pass-only --seed-start S --seeds K --shard-out DIR/S.npz per shard, then
+--merge-shards DIR/*.npz --output REPORT.txt (see docs/suggest-poses.md for a 16-core command line).
 
 1. Simulated KR160s with known truth (geometric, base_frame, tool_offset, joint_compliance;
    random magnitudes x2, noise 0.02 mm per axis), candidates 1,500 poses in seed 001's
@@ -45,14 +47,14 @@ from postproc.model.measurements import MeasurementSet  # noqa: E402
 from postproc.model.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
 from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
-from postproc.suggest.design import i_optimal_bound  # noqa: E402
+from postproc.suggest.design import i_optimal_bound, relaxed_i_design  # noqa: E402
 
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
 NOISE = 0.02
 FLOOR = np.sqrt(3) * NOISE  # 3-D RMS of the noise alone
 GRID = (14, 18, 24, 32, 40, 50, 64, 80, 100)
 RANDOM_DRAWS = 3
-THEORY_DRAWS = 30  # random designs per N for the noise-only prediction (no fit: cheap)
+THEORY_DRAWS = 100  # random designs per N for the noise-only prediction and the control variate's mean (no fit: cheap)
 # The program's targets: a machining pass over a 250 x 300 x 200 mm box, the tool within 2 deg
 # of straight down and turned by at most 5 deg about its axis; and the same box with the
 # orientations free (within 15 deg of down, any turn), a harder case for the design.
@@ -86,67 +88,132 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds: int, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False,
+def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False,
               noise_draws: int = 1) -> dict:
-    """Per N: validation and true errors (whole workspace) or true errors at the targets (region).
+    """Per N: validation and true errors (whole workspace) or true errors at the targets (region),
+    for the seeds listed (each seed's world and draws depend on the seed alone: shards of seeds run
+    apart give what one run of them all gives).
     ``noise_draws``: the candidates measured that many times (independent noise); the suggested
     design's error is the mean of its fits on each (the expected error, as random's curve is a
     mean over draws: one noise realisation scatters a curve by about +-10 % of N), random draw d
-    uses measurement d modulo that count.
-    ``theory`` (region): also the noise-only prediction of random designs (THEORY_DRAWS per N, on
-    a grid to 4 x the largest N) and the lower bound on N x variance no design from the candidates beats."""
+    uses measurement d modulo that count: common random numbers, the design and random fitted to the
+    same measurements of the same truth (with draws a multiple of noise_draws, each equally often).
+    ``theory`` (region): also the noise-only prediction (the linearised expected RMS) of every random
+    draw and of THEORY_DRAWS other random designs per N (its population mean: the control variate of
+    ``controlled``), and the lower bounds no design from the candidates beats."""
+    seeds = list(seeds)
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
     nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
-    width = max(draws, 1)
-    out = {"suggested": np.full((seeds, len(GRID)), np.nan), "random": np.full((seeds, len(GRID), width), np.nan),
-           "suggested_val": np.full((seeds, len(GRID)), np.nan), "random_val": np.full((seeds, len(GRID), width), np.nan),
-           "theory_suggested": np.full((seeds, len(GRID)), np.nan), "theory_random": np.full((seeds, len(THEORY_GRID)), np.nan),
-           "bound": np.full(seeds, np.nan), "uniform": np.full(seeds, np.nan)}
-    for s in range(seeds):
-        rng = np.random.default_rng(100 + s)
-        truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
-        q_cand = np.round(sample_poses(robot, tool, 1500, Cylinder(), rng), JOINT_DECIMALS)
-        cands = Candidates(q_deg=q_cand, ids=tuple(f"s{i + 1}" for i in range(len(q_cand))), source="<benchmark>")
-        measured = simulate(truth, q_cand, rng, noise_mm=NOISE)
+    width, count = max(draws, 1), len(seeds)
+    out = {"suggested": np.full((count, len(GRID)), np.nan), "random": np.full((count, len(GRID), width), np.nan),
+           "suggested_val": np.full((count, len(GRID)), np.nan), "random_val": np.full((count, len(GRID), width), np.nan),
+           "theory_suggested": np.full((count, len(GRID)), np.nan), "theory_random": np.full((count, len(THEORY_GRID)), np.nan),
+           "random_pred_pop": np.full((count, len(GRID)), np.nan),
+           "suggested_fits": np.full((count, len(GRID), noise_draws), np.nan), "suggested_lin": np.full((count, len(GRID), noise_draws), np.nan),
+           "suggested_lin_mean": np.full((count, len(GRID)), np.nan), "random_lin": np.full((count, len(GRID), width), np.nan),
+           "random_lin_mean": np.full((count, len(GRID), width), np.nan),
+           "bound": np.full(count, np.nan), "uniform": np.full(count, np.nan), "bound_distinct": np.full((count, len(BOUND_GRID)), np.nan),
+           "seeds": np.array(seeds, dtype=int)}
+    for i, s in enumerate(seeds):
+        rng, truth, cands, measured = _world(s)
+        q_cand = cands.q_deg
         noise_rng = np.random.default_rng(500 + s)  # its own stream: the other draws stay those of a run with one
         measurements = [measured] + [simulate(truth, q_cand, noise_rng, noise_mm=NOISE) for _ in range(noise_draws - 1)]
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
         val = simulate(truth, q_eval, rng, noise_mm=NOISE)
         true_eval = truth.predict_prepared(truth.prepare(q_deg=q_eval))
+        info = _information(nominal, cands, None, q_eval, NOISE) if theory else None
         if theory:
-            _theory(out, s, nominal, cands, q_eval)
+            _theory(out, i, s, info)
+            at_cands = truth.predict_prepared(truth.prepare(q_deg=q_cand))
+            noises = [m.measured_mm - at_cands for m in measurements]  # the realised noise of each measurement (simulation: known)
+            mc = np.random.default_rng([700, s])
         for k, n in enumerate(GRID):
             t0 = time.perf_counter()
             suggestion = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
             pick = suggestion.chosen
-            out["theory_suggested"][s, k] = suggestion.expected_rms_mm
+            out["theory_suggested"][i, k] = suggestion.expected_rms_mm
             preds = [fitted_at(robot, tool, m.subset(pick), q_eval) for m in measurements]
-            out["suggested"][s, k] = np.mean([rms(p - true_eval) for p in preds])
-            out["suggested_val"][s, k] = np.mean([rms(p - val.measured_mm) for p in preds])
+            out["suggested"][i, k] = np.mean([rms(p - true_eval) for p in preds])
+            if info is not None:
+                out["suggested_fits"][i, k] = [rms(p - true_eval) for p in preds]
+                lin, out["suggested_lin_mean"][i, k] = linear_noise_error(info, pick, noises, mc)
+                out["suggested_lin"][i, k] = lin
+            out["suggested_val"][i, k] = np.mean([rms(p - val.measured_mm) for p in preds])
             for d in range(draws):
                 rand = rng.choice(len(q_cand), n, replace=False)
                 pred = fitted_at(robot, tool, measurements[d % noise_draws].subset(rand), q_eval)
-                out["random"][s, k, d], out["random_val"][s, k, d] = rms(pred - true_eval), rms(pred - val.measured_mm)
-            say(f"{'region' if region else 'workspace'} (random share {share:g}) seed {s + 1}/{seeds} N {n}: true error suggested "
-                f"{out['suggested'][s, k]:.4f} random {np.mean(out['random'][s, k][:draws]) if draws else float('nan'):.4f} mm "
+                out["random"][i, k, d], out["random_val"][i, k, d] = rms(pred - true_eval), rms(pred - val.measured_mm)
+                if info is not None:
+                    lin, out["random_lin_mean"][i, k, d] = linear_noise_error(info, rand, noises[d % noise_draws: d % noise_draws + 1], mc)
+                    out["random_lin"][i, k, d] = lin[0]
+            say(f"{'region' if region else 'workspace'} (random share {share:g}) seed {s} ({i + 1} of {count}) N {n}: true error suggested "
+                f"{out['suggested'][i, k]:.4f} random {np.mean(out['random'][i, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
 
 
+LINEAR_MC = 400  # fresh noise draws for the mean of the linearised error (a matrix product: no fit)
+
+
+def linear_noise_error(info, rows: np.ndarray, noises: list[np.ndarray], mc: np.random.Generator) -> tuple[np.ndarray, float]:
+    """The control variate of a fit: the RMS error at the targets that the design's realised noise
+    gives through the linearised least squares (nominal Jacobian, as the design sees it), for each
+    measurement in ``noises`` ((C, 3) noise at every candidate), and its mean over LINEAR_MC fresh
+    Gaussian noise draws (its expectation, known in a simulation). Returns ((M,) values, mean)."""
+    problem = info.problem
+    k = problem.blocks.shape[-1]
+    b = problem.blocks[rows].reshape(-1, k)
+    solve = np.linalg.inv(b.T @ b + problem.ridge * np.eye(k)) @ b.T  # (K, 3n): whitened rows -> parameters (typical sizes)
+    g = info.evaluation.reshape(-1, k)  # (3T, K) mm per typical size
+    targets = len(info.evaluation)
+
+    def error(e: np.ndarray) -> np.ndarray:  # e: (3n, M) noise, mm
+        return np.sqrt(((g @ (solve @ (e / NOISE))) ** 2).sum(axis=0) / targets)
+
+    realised = error(np.stack([n[rows].reshape(-1) for n in noises], axis=1))
+    return realised, float(error(mc.normal(0.0, NOISE, (b.shape[0], LINEAR_MC))).mean())
+
+
+def _world(s: int):
+    """Seed s's simulated KR160: (its generator, truth, 1,500 candidates in the cylinder, their
+    measurement); the generator goes on to draw the targets and the random designs."""
+    robot = postproc.load_robot("kr160_r1570")
+    tool = np.array([0.0, 0.0, 200.0])
+    rng = np.random.default_rng(100 + s)
+    truth = random_truth(robot, tool, parse_effects(EFFECTS), rng)
+    q_cand = np.round(sample_poses(robot, tool, 1500, Cylinder(), rng), JOINT_DECIMALS)
+    cands = Candidates(q_deg=q_cand, ids=tuple(f"s{i + 1}" for i in range(len(q_cand))), source="<benchmark>")
+    return rng, truth, cands, simulate(truth, q_cand, rng, noise_mm=NOISE)
+
+
+def pass_problem(s: int):
+    """(nominal model, candidates, targets, design problem) of seed s's machining pass, as ``simulated`` draws them."""
+    rng, truth, cands, _ = _world(s)
+    q_eval = sample_poses(truth.robot, truth.tool_mm, 200, PASS, rng)
+    nominal = ErrorModel.create(truth.robot, truth.tool_mm, parse_effects(EFFECTS))
+    return nominal, cands, q_eval, _information(nominal, cands, None, q_eval, NOISE).problem
+
+
 THEORY_GRID = (32, 50, 64, 100)  # the N whose random error the design is compared at
+# where the bound for distinct poses is computed (the relaxation needs no identifiable model: from 8 poses), fine enough to interpolate
+BOUND_GRID = (8, 9, 10, 11, 12, 13, 14, 16, 18, 20, 22, 24, 27, 30, 32, 36, 40, 45, 50, 57, 64, 72, 80, 90, 100)
 
 
-def _theory(out: dict, s: int, nominal, cands, q_eval) -> None:
-    """Noise-only prediction at the targets: random designs' expected RMS against N, and
-    the I-optimal bound (N x variance of the best design of any N poses from these candidates)."""
-    info = _information(nominal, cands, None, q_eval, NOISE)
+def _theory(out: dict, i: int, s: int, info) -> None:
+    """Noise-only prediction at the targets: random designs' expected RMS against N (THEORY_DRAWS
+    per N), and the lower bounds: N x variance of the best approximate design (a pose may be
+    repeated; ``bound``) and the least variance of N distinct poses (``bound_distinct``, mm RMS)."""
     problem = info.problem
     draws = np.random.default_rng(900 + s)
-    perms = [draws.permutation(len(cands)) for _ in range(THEORY_DRAWS)]
-    out["theory_random"][s] = [np.mean([_expected_rms(info, _covariance(problem, problem.information(p[:n]))) for p in perms]) for n in THEORY_GRID]
-    out["bound"][s] = i_optimal_bound(problem)[0]
-    out["uniform"][s] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(cands))) / len(cands)))
+    perms = [draws.permutation(len(problem.blocks)) for _ in range(THEORY_DRAWS)]
+    pop = [np.mean([_expected_rms(info, _covariance(problem, problem.information(p[:n]))) for p in perms]) for n in GRID]
+    out["random_pred_pop"][i] = pop
+    out["theory_random"][i] = [pop[GRID.index(n)] for n in THEORY_GRID]
+    out["bound"][i] = i_optimal_bound(problem)[0]
+    out["bound_distinct"][i] = [np.sqrt(max(relaxed_i_design(problem, n, iterations=200).lower_bound, 0.0)) for n in BOUND_GRID]
+    out["uniform"][i] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(problem.blocks))) / len(problem.blocks)))
 
 
 LOAD_EFFECTS = EFFECTS + ",external_load"
@@ -321,7 +388,21 @@ def main():
     parser.add_argument("--merge-into", type=Path, help="After --pass-only or --ur10-only: put this run's arrays into that .npz (the figure's "
                         "raw arrays, e.g. benchmarks/results/suggest.npz) in place of the older run's, and redraw --figure from it.")
     parser.add_argument("--figure-only", action="store_true", help="Only redraw the figure from the raw arrays of the last full run (--output's .npz).")
+    parser.add_argument("--seed-start", type=int, default=0, help="The first seed: the run covers seeds SEED_START .. SEED_START + SEEDS - 1 "
+                        "(each seed's results depend on it alone, so shards of seeds can run in parallel).")
+    parser.add_argument("--shard-out", type=Path, help="With --pass-only: write this shard's raw arrays to that .npz instead of the report "
+                        "(merge the shards with --merge-shards).")
+    parser.add_argument("--merge-shards", type=Path, nargs="+", help="Merge these --shard-out files (same options, other seeds) into one "
+                        "report (--output) as if one run had covered all their seeds; with --merge-into also the figure's arrays.")
     args = parser.parse_args()
+    if args.merge_shards:
+        runs, meta = merge_shards(args.merge_shards)
+        report(args, runs, None, meta)
+        return
+    if args.noise_draws > 1 and args.random_draws % args.noise_draws:
+        parser.error("--random-draws must be a multiple of --noise-draws: each measurement then serves as many random designs (common random numbers)")
+    if args.shard_out is not None and not args.pass_only:
+        parser.error("--shard-out needs --pass-only")
     if args.figure_only:
         redraw(args.output.with_suffix(".npz"), args.figure)
         return
@@ -335,26 +416,45 @@ def main():
         print("\n".join(lines))
         return
     t0 = time.perf_counter()
+    seeds = range(args.seed_start, args.seed_start + args.seeds)
     runs = {}
     if not (args.pass_only or args.ur10_only):
-        runs["whole"] = simulated(args.seeds, None, draws=args.random_draws)
+        runs["whole"] = simulated(seeds, None, draws=args.random_draws)
     boxes = () if args.ur10_only else (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE))
     for name, box in boxes:
-        runs[name] = simulated(args.seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
+        runs[name] = simulated(seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
         if not args.skip_share0:  # the same truths and candidates; random designs as above
-            runs[name + "0"] = simulated(args.seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
+            runs[name + "0"] = simulated(seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws)
-    lines = ["benchmarks/suggest.py" + ("" if args.ur10_only else f" --seeds {args.seeds}") + (f" --noise-draws {args.noise_draws}" if args.noise_draws > 1 else "")
-             + (" --pass-only" if args.pass_only else " --ur10-only" if args.ur10_only else "")
-             + ("" if args.pass_only else f" --ur10-seeds {args.ur10_seeds}") + f" --random-draws {args.random_draws}"
-             + (" --skip-share0" if args.skip_share0 else "")
-             + f"  ({(time.perf_counter() - t0) / 60:.1f} min)",
+    meta = {"seeds": np.array(list(seeds)), "noise_draws": args.noise_draws, "random_draws": args.random_draws,
+            "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60}
+    if args.shard_out is not None:
+        args.shard_out.parent.mkdir(parents=True, exist_ok=True)
+        np.savez_compressed(args.shard_out, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
+                            **{f"meta__{key}": np.asarray(v) for key, v in meta.items()})
+        return
+    report(args, runs, real, meta)
+
+
+def report(args, runs: dict, real: dict | None, meta: dict) -> None:
+    """Write the report (--output), and the raw arrays and figure where the run has what they need."""
+    seeds = meta["seeds"]
+    seed_text = f" --seeds {len(seeds)}" + (f" --seed-start {seeds[0]}" if seeds[0] else "")
+    if args.merge_shards:
+        seed_text = f" --merge-shards ({len(args.merge_shards)} shards, seeds {seeds.min()}-{seeds.max()})"
+    lines = ["benchmarks/suggest.py" + ("" if args.ur10_only else seed_text)
+             + (f" --noise-draws {meta['noise_draws']}" if meta["noise_draws"] > 1 else "")
+             + (" --pass-only" if args.pass_only or args.merge_shards else " --ur10-only" if args.ur10_only else "")
+             + ("" if args.pass_only or args.merge_shards else f" --ur10-seeds {args.ur10_seeds}") + f" --random-draws {meta['random_draws']}"
+             + (" --skip-share0" if meta["skip_share0"] else "")
+             + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
              f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
-             f"(+ perturbed restarts at small N); random: {args.random_draws} draws per seed from all candidates (the same set the design chooses from)"]
+             f"(+ perturbed restarts at small N); random: {meta['random_draws']} draws per seed from all candidates (the same set the design chooses from), "
+             f"draw d fitted to the design's measurement d mod {meta['noise_draws']} (common random numbers)"]
     if "whole" in runs:
-        lines += whole_lines(runs, args.seeds)
-    lines += region_lines(runs, args.seeds)
+        lines += whole_lines(runs, len(seeds))
+    lines += region_lines(runs, len(seeds))
     if real is not None:
         lines += ur10_lines(real, args.ur10_seeds)
     args.output.write_text("\n".join(lines) + "\n")
@@ -367,6 +467,28 @@ def main():
         np.savez_compressed(raw, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
                             **{f"ur10_{label}__{key}": v for label in ("whole", "region") for key, v in real[label].items()}, ur10_grid=np.array(real["grid"]))
         figure(args.figure, runs, real)
+
+
+def merge_shards(paths: list[Path]) -> tuple[dict, dict]:
+    """The runs of several --shard-out files as one: arrays joined along the seeds, in seed order.
+    Refuses shards run with other options or sharing a seed."""
+    shards = [dict(np.load(p)) for p in paths]
+    options = ("noise_draws", "random_draws", "skip_share0")
+    for p, shard in zip(paths[1:], shards[1:]):
+        if any(shard[f"meta__{o}"] != shards[0][f"meta__{o}"] for o in options) or set(shard) != set(shards[0]):
+            raise SystemExit(f"{p}: run with other options than {paths[0]} ({', '.join(options)}, parts)")
+    seeds = np.concatenate([sh["meta__seeds"] for sh in shards])
+    if len(np.unique(seeds)) < len(seeds):
+        raise SystemExit(f"the shards share seeds: {sorted(seeds.tolist())}")
+    order = np.argsort(seeds, kind="stable")
+    runs = {}
+    for key in shards[0]:
+        head, _, field = key.partition("__")
+        if head != "meta":
+            runs.setdefault(head, {})[field] = np.concatenate([sh[key] for sh in shards])[order]
+    meta = {o: shards[0][f"meta__{o}"].item() for o in options}
+    meta.update(seeds=seeds[order], minutes=float(sum(sh["meta__minutes"] for sh in shards)))
+    return runs, meta
 
 
 def redraw(raw_path: Path, figure_path: Path) -> None:
@@ -430,8 +552,50 @@ def region_lines(runs, seeds: int) -> list[str]:
                   + ", ".join(f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r, (lo, hi) in zip((32, 50, 64, 100), intervals))]
         if share0:
             lines += ["  with --random-share 0 (every pose chosen by the design):", *saving_lines(GRID, r0[0], rg[2], (32, 50, 64, 100))]
+        if np.isfinite(runs[name].get("random_lin", np.full(1, np.nan))).any():
+            lines += control_lines(runs[name])
         lines += theory_lines(runs[name], runs.get(name + "0"))
     return lines
+
+
+def controlled(run: dict) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The design's and random's mean fitted error per seed and N with a control variate. Most of a
+    fit's scatter is its noise realisation, and in a simulation that noise is known: the error it
+    gives through the linearised least squares (``linear_noise_error``) follows the fitted error
+    (correlation 0.55-0.98 on the machining pass) and its mean over fresh noise is known. So each
+    fit counts as f - beta (lin - E lin), beta per N and per design kind the regression slope of f on
+    lin - E lin over seeds x fits: unbiased (E[lin - E lin] = 0 for every design) up to beta's own
+    estimate. Returns ((S, G) design, (S, G) random, (2, G) beta)."""
+    sug_x = run["suggested_lin"] - run["suggested_lin_mean"][:, :, None]
+    ran_x = run["random_lin"] - run["random_lin_mean"]
+    betas = np.array([_slope(run["suggested_fits"], sug_x), _slope(run["random"], ran_x)])
+    sug = np.nanmean(run["suggested_fits"] - betas[0][None, :, None] * sug_x, axis=2)
+    ran = np.nanmean(run["random"] - betas[1][None, :, None] * ran_x, axis=2)
+    return sug, ran, betas
+
+
+def _slope(f: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """(G,) least-squares slope of f on x over seeds and fits (axes 0 and 2), nan-safe."""
+    ok = np.isfinite(f) & np.isfinite(x)
+    fc = np.where(ok, f - np.nanmean(np.where(ok, f, np.nan), axis=(0, 2), keepdims=True), 0.0)
+    xc = np.where(ok, x - np.nanmean(np.where(ok, x, np.nan), axis=(0, 2), keepdims=True), 0.0)
+    return (fc * xc).sum(axis=(0, 2)) / np.maximum((xc**2).sum(axis=(0, 2)), 1e-300)
+
+
+def control_lines(run: dict) -> list[str]:
+    sug, ran, betas = controlled(run)
+    plain_s, plain_r = run["suggested"], np.nanmean(run["random"], axis=2)
+    spread = [f"N = {n}: {np.std(plain_s[:, GRID.index(n)]):.4f} -> {np.std(sug[:, GRID.index(n)]):.4f} / "
+              f"{np.std(plain_r[:, GRID.index(n)]):.4f} -> {np.std(ran[:, GRID.index(n)]):.4f}" for n in (32, 50, 64, 100)]
+    intervals = [saving_interval(GRID, sug, ran[:, :, None], n_r) for n_r in (32, 50, 64, 100)]
+    return ["  with a control variate (each fit's error less beta x (its linearised noise error - that error's mean), slope per N "
+            f"design {', '.join(f'{b:.2f}' for b in betas[0])}, random {', '.join(f'{b:.2f}' for b in betas[1])}):",
+            "  std over seeds of the per-seed mean, design / random, plain -> controlled, mm: " + ", ".join(spread),
+            *table(GRID, [("suggested, controlled", np.nanmean(sug, axis=0), np.nanstd(sug, axis=0)),
+                          ("random, controlled", np.nanmean(ran, axis=0), np.nanstd(ran, axis=0))]),
+            *saving_lines(GRID, np.nanmean(sug, axis=0), np.nanmean(ran, axis=0), (32, 50, 64, 100)),
+            "  95 % bootstrap interval over seeds, control variate: "
+            + ", ".join(f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r, (lo, hi) in zip((32, 50, 64, 100), intervals))]
 
 
 def theory_lines(run: dict, run0: dict) -> list[str]:
@@ -439,7 +603,7 @@ def theory_lines(run: dict, run0: dict) -> list[str]:
     least share any design of these candidates can need (the I-optimal bound), per seed."""
     grid = np.array(THEORY_GRID)
     asym = run["bound"] / run["uniform"]
-    lines = ["  noise-only prediction (linearised, no fit; random: 30 draws per N), mean [min, max] over seeds:",
+    lines = [f"  noise-only prediction (linearised, no fit; random: {THEORY_DRAWS} draws per N), mean [min, max] over seeds:",
              f"  best possible design, large N: {100 * asym.mean():.0f} % [{100 * asym.min():.0f}, {100 * asym.max():.0f}] of random's poses "
              "(I-optimal bound phi* / phi(all candidates equally))"]
     for n_r in (32, 50, 64, 100):
@@ -453,9 +617,16 @@ def theory_lines(run: dict, run0: dict) -> list[str]:
                 shares.append(np.nan if n_s is None else abs(n_s) / n_r)
             shares = np.array(shares)
             parts.append(f"{label} {100 * np.nanmean(shares):.0f} % [{100 * np.nanmin(shares):.0f}, {100 * np.nanmax(shares):.0f}]")
+        distinct = np.array([_share(first_n_below(BOUND_GRID, b, r), n_r) for b, r in zip(run["bound_distinct"], rand)]) if "bound_distinct" in run else np.full(1, np.nan)
         lines.append(f"  random's predicted error at N = {n_r}: designed " + ", ".join(parts)
-                     + f"; bound {100 * best.mean():.0f} % [{100 * best.min():.0f}, {100 * best.max():.0f}]")
+                     + f"; bound {100 * best.mean():.0f} % [{100 * best.min():.0f}, {100 * best.max():.0f}]"
+                     + f", bound for distinct poses {100 * np.nanmean(distinct):.0f} % [{100 * np.nanmin(distinct):.0f}, {100 * np.nanmax(distinct):.0f}]")
     return lines
+
+
+def _share(n_s, n_r: int) -> float:
+    """The share of n_r poses that first_n_below's answer is (nan beyond the grid; an 'at most' as its N)."""
+    return np.nan if n_s is None else abs(n_s) / n_r
 
 
 def ur10_lines(real, seeds: int) -> list[str]:
@@ -499,7 +670,10 @@ def figure(path: Path, runs, real) -> None:
     axes[1].set_yscale("log")
     if "pass0" in runs:
         axes[1].plot(GRID, np.nanmean(runs["pass0"]["suggested"], axis=0), "s--", color="#17becf", label="suggested, --random-share 0 (mean)")
-    if "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
+    if "bound_distinct" in runs["pass"] and np.isfinite(runs["pass"]["bound_distinct"]).all():
+        axes[1].plot(BOUND_GRID[BOUND_GRID.index(GRID[0]):], np.mean(runs["pass"]["bound_distinct"], axis=0)[BOUND_GRID.index(GRID[0]):], "k:",
+                     label="I-optimal bound: the least any N distinct poses\nof these candidates can expect (noise only)")
+    elif "bound" in runs["pass"] and np.isfinite(runs["pass"]["bound"]).all():
         axes[1].plot(GRID, np.sqrt(np.mean(runs["pass"]["bound"]) / np.array(GRID)), "k:",
                      label="I-optimal bound: the least any N poses\nof these candidates can expect (noise only)")
     sm, _, rm, _ = summary(real["grid"], real["whole"]["suggested"], real["whole"]["random"])

@@ -18,7 +18,8 @@ candidates scored at once by rank-3 updates), then exchange passes swap a chosen
 for a better candidate while that improves the criterion, then, at small N, restarts of
 the exchange from the best design with some of its poses replaced at random keep the
 best design found (``refine``). Poses fixed in advance (a random share) stay.
-Everything is vectorised over candidates.
+Everything is vectorised over candidates. ``i_optimal_bound`` (a pose may repeat) and
+``relaxed_i_design`` (distinct poses, tighter) bound from below what any design can reach.
 """
 
 from __future__ import annotations
@@ -214,6 +215,70 @@ def _i_directional(problem: Problem, w: np.ndarray, rows: np.ndarray) -> tuple[n
     a = cov @ problem.weight @ cov
     d = ((rows @ a) * rows).sum(axis=1).reshape(-1, 3).sum(axis=1)  # trace(J_i A J_i^T), as matrix products
     return d, float(np.einsum("kl,lk->", problem.weight, cov))
+
+
+# The capped relaxation (designs of distinct poses): 300 multiplicative steps bring its lower bound
+# within 0.2 % of the converged one on the benchmark's 1,500 candidates (seed 0, N = 50 and 100:
+# 0.2 % / 0.04 % after 200 steps), about 0.4 s.
+RELAX_ITERATIONS = 300
+
+
+@dataclass(frozen=True)
+class Relaxation:
+    """The best *fractional* design of distinct poses: x_i in [0, 1] of each candidate, sum x = the
+    free poses, on top of the prior and the fixed poses (I-criterion, trace(W M(x)^-1))."""
+
+    x: np.ndarray  # (C,) fraction of each candidate (0 for fixed and excluded ones)
+    value: float  # trace(W M(x)^-1), mm^2
+    lower_bound: float  # no design of these distinct poses (with the fixed ones) has less mean variance
+
+    def rounded(self, fixed: np.ndarray, n_free: int) -> np.ndarray:
+        """The exact design nearest it: the fixed poses, then the n_free candidates of largest x."""
+        return np.concatenate([np.asarray(fixed, dtype=int), np.argsort(-self.x, kind="stable")[:n_free]])
+
+
+def relaxed_i_design(problem: Problem, n_free: int, fixed: np.ndarray | None = None, excluded: np.ndarray | None = None,
+                     iterations: int = RELAX_ITERATIONS) -> Relaxation:
+    """Minimise trace(W M(x)^-1), M(x) = prior + fixed poses + sum_i x_i J_i^T J_i, over 0 <= x_i <= 1,
+    sum x_i = n_free (the convex relaxation of choosing n_free distinct candidates; Kiefer's
+    approximate design with each candidate's weight capped at one pose, so unlike
+    ``i_optimal_bound`` it knows that a pose is measured at most once). Multiplicative steps
+    x_i <- x_i sqrt(d_i), d_i = trace(J_i M^-1 W M^-1 J_i^T) (minus the gradient), each projected back
+    onto the capped simplex. Lower bound from the Frank-Wolfe duality gap: phi is convex in x, and the
+    linear minimum over the capped simplex puts 1 on the n_free largest d_i, so
+    phi* >= phi(x) - (sum of the n_free largest d_i - sum_i x_i d_i); every exact design is feasible."""
+    if problem.weight is None:
+        raise ValueError("relaxed_i_design needs the targets' weight (a region-targeted problem)")
+    c, _, k = problem.blocks.shape
+    fixed = np.zeros(0, dtype=int) if fixed is None else np.asarray(fixed, dtype=int)
+    allowed = np.ones(c, dtype=bool) if excluded is None else ~excluded
+    allowed[fixed] = False
+    idx = np.nonzero(allowed)[0]
+    n_free = min(n_free, len(idx))
+    base = problem.information(fixed) + problem.ridge * np.eye(k)
+    rows = problem.blocks[idx].reshape(-1, k)
+    x = np.full(len(idx), n_free / max(len(idx), 1))
+    for step in range(iterations + 1):
+        cov = np.linalg.inv(base + (rows * np.repeat(x, 3)[:, None]).T @ rows)
+        d = ((rows @ (cov @ problem.weight @ cov)) * rows).sum(axis=1).reshape(-1, 3).sum(axis=1)
+        if step < iterations and n_free:
+            x = _capped_simplex(x * np.sqrt(d), n_free)
+    value = float(np.sum(problem.weight * cov))  # W and cov symmetric
+    gap = float(np.sort(d)[len(d) - n_free:].sum() - x @ d) if n_free else 0.0
+    full = np.zeros(c)
+    full[idx] = x
+    return Relaxation(full, value, value - max(gap, 0.0))
+
+
+def _capped_simplex(y: np.ndarray, total: float) -> np.ndarray:
+    """lambda y with the entries above 1 set to 1, lambda such that the sum is ``total`` (y >= 0)."""
+    capped = np.zeros(len(y), dtype=bool)
+    while True:
+        scale = (total - capped.sum()) / max(float(y[~capped].sum()), 1e-300)
+        now = capped | (scale * y >= 1.0)
+        if (now == capped).all():
+            return np.where(capped, 1.0, scale * y)
+        capped = now
 
 
 def restarts_for(n: int) -> int:

@@ -38,8 +38,8 @@ def report_lines(s: Suggestion, names_shown: int = 60) -> list[str]:
              f"expected model error RMS at {s.where}: {s.expected_rms_mm:.4f} mm (random {n} poses: {s.random_rms_mm:.4f} mm; "
              + (f"random selection needs about {s.random_equivalent_n} poses for the same)" if s.random_equivalent_n is not None
                 else "random selection needs more poses than the curve spans for the same)"),
-             *([f"no design of {n} poses from these candidates can predict better at {s.where} than {s.bound_rms_mm:.4f} mm "
-                f"(the I-optimal bound; this design is {100 * (s.expected_rms_mm / s.bound_rms_mm - 1):.0f} % above it)"] if s.bound_rms_mm else []),
+             *([f"no design of {n} distinct poses from these candidates can predict better at {s.where} than {s.bound_rms_mm:.4f} mm "
+                f"(the I-optimal bound for distinct poses; this design is {100 * (s.expected_rms_mm / s.bound_rms_mm - 1):.0f} % above it)"] if s.bound_rms_mm else []),
              f"condition number of the identification Jacobian (columns in typical sizes): {s.condition_number:.4g}",
              "expected standard error of each identified parameter (measurement noise only):"]
     for name, std in list(s.std.items())[:names_shown]:
