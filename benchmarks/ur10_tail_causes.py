@@ -50,7 +50,11 @@ def out_of_fold(robot, q, resid, folds: int = 5) -> np.ndarray:
 
 def dahl_state(x: np.ndarray, rise: float) -> np.ndarray:
     """Dahl's lost-motion state (-1..1) per row and column of x along the rows: each step of
-    size |dx| moves it towards sign(dx) by the share 1 - exp(-|dx| / rise)."""
+    size |dx| moves it towards sign(dx) by the share 1 - exp(-|dx| / rise) — the solution of
+    Dahl's friction model, dz/dx = (1 - z sign(dx)) / rise, over one step (P. R. Dahl, "A solid
+    friction model", The Aerospace Corporation, TOR-0158(3107-18)-1, 1968; as lost motion of
+    strain-wave geared robot joints: M. Ruderman, T. Bertram, "Modeling and observation of
+    hysteresis lost motion in elastic robot joints", 10th IFAC Symposium on Robot Control, 2012)."""
     dx = np.diff(x, axis=0, prepend=x[:1])
     direction, decay = np.sign(dx), np.exp(-np.abs(dx) / rise)
     state, out = np.zeros(x.shape[1]), np.empty_like(x)
