@@ -20,17 +20,17 @@ from pathlib import Path
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-from ur10_series import data_folder, imported  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
+from ur10_series import data_folder, imported
 
-from postproc.model.effects import parse_effects  # noqa: E402
-from postproc.model.identify import residuals  # noqa: E402
-from postproc.model.learn.features import travel_mm  # noqa: E402
-from postproc.model.measurements import read_measurements  # noqa: E402
-from postproc.model.validate import FitSpec, fit_model, random_mask, with_order_columns  # noqa: E402
-from postproc.robot import kinematics as kin  # noqa: E402
-from postproc.robot.robots import load_robot  # noqa: E402
+from postproc.model.effects import parse_effects
+from postproc.model.identify import residuals
+from postproc.model.learn.features import travel_mm
+from postproc.model.measurements import read_measurements
+from postproc.model.validate import FitSpec, fit_model, random_mask, with_order_columns
+from postproc.robot import kinematics as kin
+from postproc.robot.robots import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE = ROOT / "benchmarks" / "results" / "ur10_tail.png"
