@@ -15,6 +15,7 @@ import pytest
 from helpers import TOOL, kr160
 
 from postproc.compensation.core import _Plant
+from postproc.jobs.compensate import compensate
 from postproc.jobs.stream import StreamFallback, stream_rules_for
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit, fit_predictor, residuals
@@ -23,7 +24,9 @@ from postproc.model.model_io import load_model, save_model
 from postproc.model.path_history import previous_targets
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.model.validate import random_mask, with_order_columns
+from postproc.programs import parse_program
 from postproc.robot import kinematics as kin
+from postproc.robot.frames import matrix_to_abc
 
 STEP_MM = 0.3  # the extra error of a pose measured right after a long move
 NUDGE_DEG = 0.3  # the second measurement of a place: this much further on joint 6
@@ -130,3 +133,39 @@ def test_the_features_survive_the_model_file_and_refuse_streaming(robot, twice, 
     program.write_text("DEF p( )\r\nLIN {X 900, Y 0, Z 500, A 0, B 180, C 0}\r\nEND\r\n")
     with pytest.raises(StreamFallback, match="gpr predictor \\(--gp-features tcp\\+joints\\+travel\\) depends on the path"):
         stream_rules_for(program, None, back)
+
+
+
+def measured_twice(robot, places: np.ndarray, seed: int):
+    """Each place measured after a long move (+STEP_MM in x), then after a nudge of joint 6."""
+    rng = np.random.default_rng(seed)
+    truth = random_truth(robot, TOOL, parse_effects("none"), rng)
+    q = np.stack([places, places + np.array([0, 0, 0, 0, 0, NUDGE_DEG])], axis=1).reshape(-1, 6)
+    meas = simulate(truth, q, rng, noise_mm=0.01)
+    step = np.zeros_like(meas.measured_mm)
+    step[0::2, 0] = STEP_MM
+    return replace(meas, measured_mm=meas.measured_mm + step)
+
+
+def test_a_compensated_program_moves_the_first_target_after_a_long_move_by_the_step(robot, tmp_path):
+    # Places around one posture, so that the controller keeps it from target to target.
+    home = np.array([0.0, -5.0, -5.0, 10.0, -90.0, 40.0])
+    places = home + np.random.default_rng(8).uniform(-8.0, 8.0, (70, 6))
+    data = measured_twice(robot, places, 9)
+    nominal = fit(robot, TOOL, parse_effects("none"), data, cv_folds=0).model
+    hybrid = fit_predictor(nominal, data, "gpr", gp_options={"features": "tcp+joints+travel"})
+    q = data.q_deg[:12]
+    poses = kin.fk(robot, q, tool=TOOL)
+    abc = matrix_to_abc(poses[:, :3, :3])
+    lines = ["DEF part( )", "$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}",
+             "PTP {" + ", ".join(f"A{j + 1} {v:.4f}" for j, v in enumerate(q[0])) + "}"]
+    lines += [f"PTP {{X {p[0, 3]:.4f}, Y {p[1, 3]:.4f}, Z {p[2, 3]:.4f}, A {a:.5f}, B {b:.5f}, C {c:.5f}}}" for p, (a, b, c) in zip(poses, abc)]
+    program = tmp_path / "part.src"
+    program.write_text("\r\n".join([*lines, "END", ""]))
+    tp = parse_program(program)
+    new, report = compensate(tp, hybrid)
+    assert not report.failed.any(), report.failures()
+    moved = (new.base_positions() - tp.base_positions())[-12:]
+    # The model predicts the first pose after each long move STEP_MM further in x than its
+    # nudge: its compensated target moves back by that much more.
+    assert np.mean(moved[2::2, 0] - moved[3::2, 0]) < -0.7 * STEP_MM
