@@ -8,18 +8,22 @@ nearly the same pose and joints, so only the travel into them tells them apart.
 
 from __future__ import annotations
 
+import json
 from dataclasses import replace
 
 import numpy as np
 import pytest
 from helpers import TOOL, kr160
+from typer.testing import CliRunner
 
+from postproc.cli import app
 from postproc.compensation.core import _Plant
 from postproc.jobs.compensate import compensate
 from postproc.jobs.stream import StreamFallback, stream_rules_for
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit, fit_predictor, residuals
 from postproc.model.learn.features import GP_KINDS, HISTORY_KINDS, features, travel_mm
+from postproc.model.measurements import write_measurements
 from postproc.model.model_io import load_model, save_model
 from postproc.model.path_history import previous_targets
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
@@ -28,6 +32,7 @@ from postproc.programs import parse_program
 from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc
 
+runner = CliRunner()
 STEP_MM = 0.3  # the extra error of a pose measured right after a long move
 NUDGE_DEG = 0.3  # the second measurement of a place: this much further on joint 6
 
@@ -169,3 +174,16 @@ def test_a_compensated_program_moves_the_first_target_after_a_long_move_by_the_s
     # The model predicts the first pose after each long move STEP_MM further in x than its
     # nudge: its compensated target moves back by that much more.
     assert np.mean(moved[2::2, 0] - moved[3::2, 0]) < -0.7 * STEP_MM
+
+
+def test_the_cli_fits_and_validates_with_the_travel(twice, tmp_path):
+    write_measurements(tmp_path / "m.csv", twice)
+    common = ["--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "--predictor", "gpr", "--gp-features", "tcp+joints+travel"]
+    fitted = runner.invoke(app, ["fit", str(tmp_path / "m.csv"), "-o", str(tmp_path / "o.json"), "--cv", "0", *common])
+    assert fitted.exit_code == 0, fitted.output
+    _, doc = load_model(tmp_path / "o.json")
+    assert doc["predictor"]["features"] == "tcp+joints+travel"
+    validated = runner.invoke(app, ["validate", str(tmp_path / "m.csv"), "--protocol", "random", "--json", *common])
+    assert validated.exit_code == 0, validated.output
+    # Each held-out pose keeps its history in the file: the step is learned, not averaged.
+    assert json.loads(validated.stdout)["error"]["mean_mm"] < 0.5 * STEP_MM
