@@ -17,8 +17,8 @@ from helpers import TOOL, kr160
 from typer.testing import CliRunner
 
 from postproc.cli import app
-from postproc.compensation.core import _Plant
-from postproc.jobs.compensate import compensate
+from postproc.compensation.core import _Plant, _Problem
+from postproc.jobs.compensate import compensate, with_robot
 from postproc.jobs.stream import StreamFallback, stream_rules_for
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit, fit_predictor, residuals
@@ -28,7 +28,8 @@ from postproc.model.model_io import load_model, save_model
 from postproc.model.path_history import previous_targets
 from postproc.model.sim import Cylinder, random_truth, sample_poses, simulate
 from postproc.model.validate import random_mask, with_order_columns
-from postproc.programs import parse_program
+from postproc.programs import dialects, parse_program
+from postproc.programs.ir import Kind
 from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc
 
@@ -187,3 +188,19 @@ def test_the_cli_fits_and_validates_with_the_travel(twice, tmp_path):
     assert validated.exit_code == 0, validated.output
     # Each held-out pose keeps its history in the file: the step is learned, not averaged.
     assert json.loads(validated.stdout)["error"]["mean_mm"] < 0.5 * STEP_MM
+
+
+def test_the_program_path_holds_the_joints_of_its_joint_targets(robot, twice, tmp_path):
+    # What the targets after a joint target read as their history (and backlash as its approach).
+    nominal = fit(robot, TOOL, parse_effects("none"), twice, cv_folds=0).model
+    start = np.array([0.0, -5.0, -5.0, 10.0, -90.0, 40.0])
+    pose = kin.fk(robot, start[None] + 3.0, tool=TOOL)[0]
+    a, b, c = matrix_to_abc(pose[None, :3, :3])[0]
+    program = tmp_path / "part.src"
+    program.write_text("\r\n".join(["DEF part( )", "$TOOL = {X 0, Y 0, Z 200, A 0, B 0, C 0}",
+                                     "PTP {" + ", ".join(f"A{j + 1} {v:.4f}" for j, v in enumerate(start)) + "}",
+                                     f"LIN {{X {pose[0, 3]:.4f}, Y {pose[1, 3]:.4f}, Z {pose[2, 3]:.4f}, A {a:.5f}, B {b:.5f}, C {c:.5f}}}", "END", ""]))
+    tp = with_robot(parse_program(program), nominal)
+    problem = _Problem.of(tp, nominal, dialects.of(tp).controller, None, None)
+    joint_row = int(np.nonzero(tp.kind == Kind.ABSJ)[0][0])
+    np.testing.assert_allclose(problem.order_q[joint_row], start, atol=1e-9)
