@@ -31,19 +31,23 @@ def rows(a: str, b: str, hybrid: bool) -> list[tuple[str, str, list[str]]]:
     """(label, goal, validate arguments) per table row; the hybrid rows only with ``hybrid``."""
     gpr = ["--predictor", "gpr"]
     posture = [*gpr, "--gp-features", "tcp+joints"]  # the learner sees the joint angles too
+    history = [*gpr, "--gp-features", "tcp+joints+travel"]  # and the TCP travel of the last three moves
     table = [
         ("A: random 20 % of poses held out, physics", "", [a, "--protocol", "random", *UR10, PHYSICS]),
         ("A: random 20 % of poses held out, hybrid", "<= 0.06", [a, "--protocol", "random", *UR10, PHYSICS, *gpr]),
         ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.06", [a, "--protocol", "random", *UR10, PHYSICS, *posture]),
+        ("A: the same, hybrid with --gp-features tcp+joints+travel", "<= 0.06", [a, "--protocol", "random", *UR10, PHYSICS, *history]),
         ("A: every 5th grid point held out, physics", "", [a, "--protocol", "points", *UR10, PHYSICS]),
         ("A: every 5th grid point held out, hybrid", "<= 0.20", [a, "--protocol", "points", *UR10, PHYSICS, *gpr]),
         ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.20", [a, "--protocol", "points", *UR10, PHYSICS, *posture]),
+        ("A: the same, hybrid with --gp-features tcp+joints+travel", "<= 0.20", [a, "--protocol", "points", *UR10, PHYSICS, *history]),
         ("A: each session held out, physics", "", [a, "--protocol", "sessions", *UR10, PHYSICS]),
         ("B: half of the commanded positions held out, physics", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS]),
         ("B: the same, + joint_harmonics (terms chosen by the fit)", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS + ",joint_harmonics"]),
         ("B: the same, + joint_harmonics[joints=1,2;orders=1-12]", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS + "," + SHOULDER]),
         ("B: the same, hybrid", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *gpr]),
         ("B: the same, hybrid with --gp-features tcp+joints", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *posture]),
+        ("B: the same, hybrid with --gp-features tcp+joints+travel", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *history]),
         ("A -> B: re-registered on half of B, physics", "vs ceiling", [a, "--protocol", "series", "--other", b, *UR10, PHYSICS]),
     ]
     return [row for row in table if hybrid or "--predictor" not in row[2]]

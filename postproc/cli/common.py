@@ -43,8 +43,8 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
     return values
 
 
-GP_FEATURES = ("pose", "tcp+joints", "joints")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
-GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart) or joints."
+GP_FEATURES = ("pose", "tcp+joints", "joints", "tcp+joints+travel")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
+GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart), joints, or tcp+joints+travel (tcp+joints and the TCP travel of the last three moves: the pose's history in the path; rows in measured order)."
 
 
 def gp_features_checked(value: str) -> str:

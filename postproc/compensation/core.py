@@ -36,6 +36,7 @@ from postproc.errors import InputError, JobError
 from postproc.model import fast_model
 from postproc.model.effects import consumers_of
 from postproc.model.errormodel import ErrorModel
+from postproc.model.path_history import previous_targets
 from postproc.programs import arcs
 from postproc.programs.ir import Kind, Toolpath
 from postproc.robot import kinematics as kin
@@ -210,7 +211,11 @@ class _Plant:
                 # Columns the effects derive from the program's path (e.g. approach directions).
                 for effect in m.effects:
                     columns.update({group: col[rows][sel] for group, col in effect.path_columns(order_q).items()})
-            prep = m.prepare(q_deg=q[sel], force_n=columns["force"], approach=columns["approach"], temp_c=columns["temp"], time_s=None)
+            # The targets before each one in program order (a residual predictor that reads them).
+            reads_history = order_q is not None and getattr(m.residual, "reads_history", False)
+            history = previous_targets(order_q)[rows][sel] if reads_history else None
+            prep = m.prepare(q_deg=q[sel], force_n=columns["force"], approach=columns["approach"], temp_c=columns["temp"], time_s=None,
+                             previous_q_deg=history)
             out[sel] = m.predict_prepared(prep)
         return out
 
@@ -433,6 +438,8 @@ class _Problem:
         self.posture_problem = posture_problem
         # Joints of every target in program order (backlash depends on the approach direction).
         self.order_q = np.zeros((len(tp), 6))
+        joint_targets = (tp.kind == Kind.ABSJ) & ~np.isnan(tp.joints).any(axis=1)
+        self.order_q[joint_targets] = tp.joints[joint_targets]  # the joints the arm passes through there
         self.order_q[rows] = np.nan_to_num(q_ref)
 
     @classmethod

@@ -98,9 +98,11 @@ def stream_rules_for(path: str | Path, dialect: str | None, model) -> tuple[obje
     if rules is None:
         raise StreamFallback(f"{lang.name} programs are not read in chunks")
     probe = np.zeros((3, 6))
-    history = [e.name for e in model.effects if e.path_columns(probe)]
+    history = [f"{e.name} effect" for e in model.effects if e.path_columns(probe)]
+    if getattr(model.residual, "reads_history", False):
+        history.append(f"{model.residual.kind} predictor (--gp-features {model.residual.feature_kind})")
     if history:
-        raise StreamFallback(f"the model's {', '.join(history)} effect depends on the path before each target")
+        raise StreamFallback(f"the model's {' and '.join(history)} depend{'s' if len(history) == 1 else ''} on the path before each target")
     return lang, rules
 
 

@@ -24,6 +24,7 @@ from postproc.robot.robots import RobotModel
 from .effects import DH, Context, Effect, EffectSpecError, EffectSum, Param
 from .effects.base import DH_CHANNELS
 from .measurements import MeasurementSet
+from .path_history import previous_targets
 
 _GROUP_COLUMNS = {"force": "fx, fy, fz", "approach": "s1..s6", "temp": "temp", "t": "t"}
 _DEG = np.pi / 180.0
@@ -114,14 +115,20 @@ class ErrorModel:
 
     # ----------------------------------------------------------------- data side
 
-    def prepare(self, meas: MeasurementSet | None = None, *, q_deg=None, force_n=None, approach=None, temp_c=None, time_s=None) -> Prepared:
-        """Compute what the effects need from the data; a missing column is a clear error."""
+    def prepare(self, meas: MeasurementSet | None = None, *, q_deg=None, force_n=None, approach=None, temp_c=None, time_s=None,
+                previous_q_deg=None) -> Prepared:
+        """Compute what the effects need from the data; a missing column is a clear error.
+        ``previous_q_deg`` (N, k, 6): the targets before each pose in path order, for a
+        residual predictor that reads them; absent, the rows' own order is the path."""
         if meas is not None:
             q_deg, force_n, approach, temp_c, time_s = meas.q_deg, meas.force_n, meas.approach, meas.temp_c, meas.time_s
+            previous_q_deg = meas.previous_q_deg
             source = meas.source
         else:
             source = "<arrays>"
         q = np.asarray(q_deg, dtype=float)
+        if previous_q_deg is None and getattr(self.residual, "reads_history", False):
+            previous_q_deg = previous_targets(q)  # a measurement file's rows are in the order they were measured
         present = {"force": force_n is not None, "approach": approach is not None, "temp": temp_c is not None, "t": time_s is not None}
         for effect in self.effects:
             for group in effect.needs:
@@ -132,7 +139,8 @@ class ErrorModel:
             jac = kin.jacobian(self.robot, q, tool=self.tool_mm)
             force_torque = np.einsum("nij,ni->nj", jac[:, :3], np.asarray(force_n, dtype=float)) / 1000.0
         ctx = Context(q_deg=q, gravity_torque=None, force_torque=force_torque, approach=approach, temp_c=temp_c, time_s=time_s,
-                      tool_mm=self.tool_mm, force_n=None if force_n is None else np.asarray(force_n, dtype=float))
+                      tool_mm=self.tool_mm, force_n=None if force_n is None else np.asarray(force_n, dtype=float),
+                      previous_q_deg=previous_q_deg)
         notes = []
         for effect in self.effects:
             ctx, note = effect.complete(ctx)
@@ -189,7 +197,7 @@ class ErrorModel:
         pos = kin.forward_dh(dh.theta, dh.d, dh.a, dh.alpha, tool=tool)[:, :3, 3] + self._displacement(prep, values)
         pos = pos @ rot.T + trans
         if self.residual is not None:
-            pos = pos + self.residual.predict(self.robot, self.tool_mm, prep.ctx.q_deg)
+            pos = pos + self.residual.predict(self.robot, self.tool_mm, prep.ctx.q_deg, prep.ctx.previous_q_deg)
         return pos
 
     def predict(self, meas: MeasurementSet) -> np.ndarray:

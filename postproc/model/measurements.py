@@ -41,6 +41,9 @@ class MeasurementSet:
     source: str = "<memory>"
     extra: dict[str, np.ndarray] = field(default_factory=dict)
     lines: tuple[int, ...] | None = None  # file line of each row, for messages (None: not from a file)
+    # (N, k, 6) the targets before each pose in measurement order (postproc.model.path_history):
+    # derived from the whole set, kept by subset() (a subset's rows are no longer consecutive)
+    previous_q_deg: np.ndarray | None = None
 
     def __len__(self) -> int:
         return self.q_deg.shape[0]
@@ -66,6 +69,7 @@ class MeasurementSet:
             source=self.source,
             extra={k: v[idx] for k, v in self.extra.items()},
             lines=None if self.lines is None else tuple(np.asarray(self.lines)[idx].tolist()),
+            previous_q_deg=pick(self.previous_q_deg),
         )
 
     def line_of(self, row: int) -> int | None:

@@ -69,6 +69,7 @@ class Context:
     time_s: np.ndarray | None  # (N,)
     tool_mm: np.ndarray | None = None  # (3,) nominal measured point in the flange frame
     force_n: np.ndarray | None = None  # (N, 3) N, base frame
+    previous_q_deg: np.ndarray | None = None  # (N, k, 6) the targets before each pose in path order (postproc.model.path_history)
 
 
 @dataclass(frozen=True)

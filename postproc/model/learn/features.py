@@ -7,7 +7,12 @@
 - ``tcp+joints``: the nominal TCP position (mm) and the 6 joint angles (deg) — the arm's
   posture as well as where the probe is: Cartesian features cannot tell two postures that
   reach the same pose apart (another IK branch, another wrist angle), joint angles can;
-- ``joints``: the 6 joint angles (deg) only.
+- ``joints``: the 6 joint angles (deg) only;
+- ``tcp+joints+travel``: ``tcp+joints`` and how far the TCP travelled (nominal, mm) in the
+  move into the pose and in the two moves before it, as log(1 + mm): the pose's history in
+  the path (postproc.model.path_history). On the UR10's Series A the first poses after a
+  move to a new grid point miss by three to four times what the later poses at the point
+  do; a learner that sees only the pose cannot tell them apart.
 
 GP_KINDS are the kinds the ``gpr`` predictor may be given (``--gp-features``); its first
 three features are what its local experts are split on (the TCP position, or for
@@ -21,11 +26,16 @@ import numpy as np
 from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc
 
-KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints")
-GP_KINDS = ("pose", "tcp+joints", "joints")
+KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints", "tcp+joints+travel")
+GP_KINDS = ("pose", "tcp+joints", "joints", "tcp+joints+travel")
+#: the kinds that read the targets before each pose (``previous_q_deg``)
+HISTORY_KINDS = ("tcp+joints+travel",)
 
 
-def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray | None = None) -> np.ndarray:
+def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray | None = None,
+             previous_q_deg: np.ndarray | None = None) -> np.ndarray:
+    """(N, F) inputs of the kind; ``previous_q_deg`` (N, k, 6): the joints of the targets
+    before each pose in path order (postproc.model.path_history), for HISTORY_KINDS."""
     poses = kin.fk(robot, q_deg, tool=np.asarray(tool_mm, dtype=float))
     if kind == "position":
         return poses[:, :3, 3]
@@ -33,9 +43,22 @@ def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray
         return np.hstack([poses[:, :3, 3], matrix_to_abc(poses[:, :3, :3])])
     if kind == "tcp+joints":
         return np.hstack([poses[:, :3, 3], np.asarray(q_deg, dtype=float)])
+    if kind == "tcp+joints+travel":
+        if previous_q_deg is None:
+            raise ValueError("the tcp+joints+travel features need the joints of the targets before each pose")
+        return np.hstack([poses[:, :3, 3], np.asarray(q_deg, dtype=float), np.log1p(travel_mm(robot, tool_mm, poses, previous_q_deg))])
     if kind == "joints":
         return np.asarray(q_deg, dtype=float).copy()
     if kind == "joints+disp":
         ref = np.zeros(3) if reference is None else np.asarray(reference, dtype=float)
         return np.hstack([np.asarray(q_deg, dtype=float), poses[:, :3, 3] - ref])
     raise ValueError(f"unknown feature kind '{kind}' ({', '.join(KINDS)})")
+
+
+def travel_mm(robot, tool_mm, poses: np.ndarray, previous_q_deg: np.ndarray) -> np.ndarray:
+    """(N, k): nominal TCP distance (mm) of the move into each pose (``poses``, (N, 4, 4))
+    and of the k - 1 moves before it (``previous_q_deg``, (N, k, 6), nearest target first)."""
+    n, depth, _ = previous_q_deg.shape
+    before = kin.fk(robot, previous_q_deg.reshape(-1, 6), tool=np.asarray(tool_mm, dtype=float))[:, :3, 3].reshape(n, depth, 3)
+    chain = np.concatenate([poses[:, None, :3, 3], before], axis=1)  # this pose, then back along the path
+    return np.linalg.norm(chain[:, :-1] - chain[:, 1:], axis=2)

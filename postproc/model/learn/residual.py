@@ -15,7 +15,7 @@ import numpy as np
 
 from postproc.errors import ModelFileError
 
-from .features import features
+from .features import HISTORY_KINDS, features
 from .state import base_estimator_from_state, estimator_state
 from .transfer import TrGPRPredictor
 
@@ -29,11 +29,18 @@ class Residual:
     estimator: object
     reference: np.ndarray | None = None  # pso-bp: the displacement reference point
 
-    def inputs(self, robot, tool_mm, q_deg):
-        return features(robot, tool_mm, q_deg, self.feature_kind, self.reference)
+    @property
+    def reads_history(self) -> bool:
+        """Whether its inputs include the targets before each pose (``previous_q_deg``)."""
+        return self.feature_kind in HISTORY_KINDS
 
-    def predict(self, robot, tool_mm, q_deg) -> np.ndarray:
-        return np.asarray(self.estimator.predict(self.inputs(robot, tool_mm, q_deg)), dtype=float).reshape(-1, 3)
+    def inputs(self, robot, tool_mm, q_deg, previous_q_deg=None):
+        return features(robot, tool_mm, q_deg, self.feature_kind, self.reference, previous_q_deg)
+
+    def predict(self, robot, tool_mm, q_deg, previous_q_deg=None) -> np.ndarray:
+        """(N, 3) predicted residual; ``previous_q_deg`` (N, k, 6): the targets before each pose
+        in path order (postproc.model.path_history), needed where ``reads_history``."""
+        return np.asarray(self.estimator.predict(self.inputs(robot, tool_mm, q_deg, previous_q_deg)), dtype=float).reshape(-1, 3)
 
     # ------------------------------------------------------------- state
     def to_state(self) -> dict:
