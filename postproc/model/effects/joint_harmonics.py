@@ -22,6 +22,11 @@ import numpy as np
 from .base import Context, Effect, EffectSpecError, Param, parse_int_list
 
 CANDIDATE_ORDERS = (1, 2, 3, 4)
+# Highest order a term may name: a strain-wave gear's transmission error has its main
+# component at twice the wave generator's speed, i.e. at order 2 x ratio of the joint angle
+# (about 200 on a 1:100 or 1:101 reducer) and harmonics of it above; 1000 leaves room for
+# twice that on ratios up to 1:250 and stays far below what a float angle can resolve.
+MAX_ORDER = 1000
 
 
 class JointHarmonics(Effect):
@@ -55,14 +60,14 @@ class JointHarmonics(Effect):
                     j, k = (int(v) for v in item.split(":"))
                 except ValueError:
                     raise EffectSpecError(f"{cls.name}: terms are joint:order pairs, got '{item}'") from None
-                if not (1 <= j <= 6 and 1 <= k <= 12):
-                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..12)")
+                if not (1 <= j <= 6 and 1 <= k <= MAX_ORDER):
+                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..{MAX_ORDER})")
                 pairs.append((j, k))
             return cls(tuple(pairs))
         if not opts:
             return cls(None)
         joints = parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6)
-        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, 12)
+        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, MAX_ORDER)
         return cls.grid(joints, orders)
 
     @property
