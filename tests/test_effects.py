@@ -29,9 +29,19 @@ def test_parse_effects_with_options_and_round_trip():
     assert (Geometric() + JointHarmonics.grid([2], [3])).spec() == "geometric,joint_harmonics[joints=2;orders=3]"
 
 
+def test_harmonics_take_the_orders_of_a_strain_wave_gear():
+    """Orders near twice a gear ratio (about 200 on a 1:101 strain-wave gear) are terms like any other."""
+    effects = parse_effects("joint_harmonics[terms=2:17,3:202]")
+    assert effects.get("joint_harmonics").terms == ((2, 17), (3, 202))
+    assert parse_effects(effects.spec()).spec() == effects.spec()
+    assert parse_effects("joint_harmonics[joints=2;orders=101,202]").get("joint_harmonics").terms == ((2, 101), (2, 202))
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
+        ("joint_harmonics[terms=2:1001]", "order 1..1000"),
+        ("joint_harmonics[joints=2;orders=1001]", "1..1000"),
         ("geometric,heat", "unknown effect 'heat'"),
         ("geometric,geometric", "appears twice"),
         ("joint_harmonics[joints=7]", "1..6"),

@@ -89,6 +89,19 @@ def test_outliers_are_flagged_and_a_robust_loss_resists_them():
     assert rms(robust) < 1.2 * FLOOR
 
 
+def test_a_high_order_harmonic_is_recovered():
+    """A 5 mdeg cyclic error at order 202 (twice per wave-generator turn of a 1:101 gear),
+    period 1.8 deg, is fitted back from poses that sample it densely."""
+    robot = kr160()
+    rng = np.random.default_rng(5)
+    spec = FRAME + ",joint_harmonics[terms=2:202]"
+    truth = random_truth(robot, TOOL, parse_effects(spec), rng).with_values({"joint_harmonics.j2_sin202": 0.005, "joint_harmonics.j2_cos202": -0.004})
+    data = simulate(truth, sample_poses(robot, TOOL, 400, Cylinder(), rng), rng, noise_mm=NOISE)
+    values = fit(robot, TOOL, parse_effects(spec), data, cv_folds=0).model.as_dict()
+    assert values["joint_harmonics.j2_sin202"] == pytest.approx(0.005, abs=0.001)
+    assert values["joint_harmonics.j2_cos202"] == pytest.approx(-0.004, abs=0.001)
+
+
 def test_harmonics_without_options_choose_the_true_terms():
     robot = kr160()
     rng = np.random.default_rng(8)
