@@ -182,7 +182,7 @@ def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, 
         left.plot(SCAN_ORDERS, 100 * gains[j], lw=0.8, label=f"joint {j + 1}")
     for k in GEAR_ORDERS:
         left.axvline(k, color="grey", ls="--", lw=0.8)
-    left.text(GEAR_ORDERS[1], left.get_ylim()[1] * 0.9, " strain-wave orders\n (1 and 2 x ratio 101)", fontsize=8)
+    left.text(GEAR_ORDERS[0] * 0.95, left.get_ylim()[1] * 0.9, "strain-wave orders\n(1 and 2 x ratio 101)", fontsize=8, ha="right")
     left.set(xlabel="order k of sin/cos(k q_j) (cycles per joint revolution)", ylabel="held-out sum of squares removed (%)",
              title="Series A, every 5th position held out: one term each", xscale="log")
     left.grid(alpha=0.3)
@@ -192,7 +192,7 @@ def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, 
     edges = np.linspace(0, 360, 19)
     centres = 0.5 * (edges[1:] + edges[:-1])
     g = (res.dp_dq[test, :, j - 1] ** 2).sum(axis=1)
-    for name, r in (("physics", res.r[test]), ("physics + chosen harmonics", after)):
+    for name, r in (("physics", res.r[test]), ("physics + chosen harmonics (linearised)", after)):
         q_err = 1e3 * (res.dp_dq[test, :, j - 1] * r).sum(axis=1) / g  # least-squares joint-j error, mdeg
         means = [np.mean(q_err[(phase >= a) & (phase < b)]) for a, b in zip(edges[:-1], edges[1:])]
         right.plot(centres, means, marker="o", label=f"{name}: mean 3-D {np.linalg.norm(r, axis=1).mean():.3f} mm")
