@@ -2,7 +2,7 @@
 residual over sin/cos(k q_j), the terms its training poses support, and whether Series B
 shows the same terms with the same amplitude and phase.
 
-Run: .venv/bin/python benchmarks/ur10_periodic.py [path/to/ur10_ipa]
+Run: .venv/bin/python benchmarks/ur10_periodic.py [path/to/ur10_ipa] [--split points|random]
 
 1. The split of ``postproc validate A.csv --protocol points`` (every 5th commanded position
    held out with all its orientations); physics (geometric, base_frame, tool_offset,
@@ -31,24 +31,32 @@ the chosen terms. About 4 minutes on the shared 2-core machine.
 
 from __future__ import annotations
 
-import sys
+import argparse
 import tempfile
 from dataclasses import dataclass
+from itertools import pairwise
 from pathlib import Path
 
 import matplotlib
 import numpy as np
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-from ur10_series import data_folder, imported  # noqa: E402
+import matplotlib.pyplot as plt
+from ur10_series import data_folder, imported
 
-from postproc.model.effects import parse_effects  # noqa: E402
-from postproc.model.identify import kin_joint_columns, residuals  # noqa: E402
-from postproc.model.measurements import MeasurementSet, read_measurements  # noqa: E402
-from postproc.model.validate import FitSpec, every_kth_group, fit_model, group_column, with_order_columns  # noqa: E402
-from postproc.progress import ProgressLine  # noqa: E402
-from postproc.robot.robots import load_robot  # noqa: E402
+from postproc.model.effects import parse_effects
+from postproc.model.identify import kin_joint_columns, residuals
+from postproc.model.measurements import MeasurementSet, read_measurements
+from postproc.model.validate import (
+    FitSpec,
+    every_kth_group,
+    fit_model,
+    group_column,
+    random_mask,
+    with_order_columns,
+)
+from postproc.progress import ProgressLine
+from postproc.robot.robots import load_robot
 
 ROOT = Path(__file__).resolve().parents[1]
 FIGURE = ROOT / "benchmarks" / "results" / "ur10_periodogram.png"
@@ -202,7 +210,7 @@ def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, 
     g = (res.dp_dq[test, :, j - 1] ** 2).sum(axis=1)
     for name, r in (("physics", res.r[test]), ("physics + chosen harmonics (linearised)", after)):
         q_err = 1e3 * (res.dp_dq[test, :, j - 1] * r).sum(axis=1) / g  # least-squares joint-j error, mdeg
-        means = [np.mean(q_err[(phase >= a) & (phase < b)]) for a, b in zip(edges[:-1], edges[1:])]
+        means = [np.mean(q_err[(phase >= a) & (phase < b)]) for a, b in pairwise(edges)]
         right.plot(centres, means, marker="o", label=f"{name}: mean 3-D {np.linalg.norm(r, axis=1).mean():.3f} mm")
     right.axhline(0, color="grey", lw=0.8)
     right.set(xlabel=f"phase of order {k} of joint {j}, {k} q{j} mod 360 (deg)", ylabel=f"held-out residual seen as a joint-{j} error (mdeg)",
@@ -214,13 +222,18 @@ def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, 
 
 
 def main() -> None:
-    data = data_folder(sys.argv[1] if len(sys.argv) > 1 else None)
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", help="the ur10_ipa folder (default: the shared data's)")
+    parser.add_argument("--split", choices=("points", "random"), default="points",
+                        help="whose training poses choose the terms: validate --protocol points (default; draws the figure) or random (20 %%, seed 0)")
+    args = parser.parse_args()
+    data = data_folder(args.data)
     robot = load_robot("ur10")
     with tempfile.TemporaryDirectory() as tmp, ProgressLine("ur10 periodic error") as say:
         a = read_measurements(imported(data, "A", Path(tmp) / "A.csv"))
         b = read_measurements(imported(data, "B", Path(tmp) / "B.csv"))
         points = group_column(a, "point", "")
-        test = every_kth_group(points, 5)
+        test = every_kth_group(points, 5) if args.split == "points" else random_mask(len(a), 0.2, 0)
         res = physics_residual(robot, a, ~test, say)
         gains = periodogram(res, ~test, test)
         terms, cv_rms = choose_terms(res, points, ~test, say)
@@ -233,8 +246,9 @@ def main() -> None:
     # the fit explains target = -r by the columns; what is left is r + that explanation
     after = res.r[test] + fitted_prediction(design, res.base, -res.r.reshape(-1), np.repeat(~test, 3), np.arange(design.shape[1]), np.repeat(test, 3)).reshape(-1, 3)
     print(f"held-out mean 3-D error (linearised around the physics fit): {np.linalg.norm(res.r[test], axis=1).mean():.3f} -> {np.linalg.norm(after, axis=1).mean():.3f} mm")
-    draw(gains, res, test, after, (2, 17))
-    print(f"figure: {FIGURE.relative_to(ROOT)}")
+    if args.split == "points":
+        draw(gains, res, test, after, (2, 17))
+        print(f"figure: {FIGURE.relative_to(ROOT)}")
 
 
 def report(gains, cv_rms, terms, ab) -> None:
