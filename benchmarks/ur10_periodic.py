@@ -15,7 +15,7 @@ Run: .venv/bin/python benchmarks/ur10_periodic.py [path/to/ur10_ipa] [--split po
    covers every order up to 420 instead of a few): a transmission error would show near
    k = 101 (once per wave-generator turn) and k = 202 (twice: the dominant strain-wave
    component, Ghorbel, Gandhi & Alpeter 2001), and 420 covers twice that.
-3. Selection on the training poses only: forward selection over joints 1-6 and orders
+3. Selection on the training poses only (``postproc.model.harmonic_scan``): forward selection over joints 1-6 and orders
    1..60 (the periodogram shows nothing above), the base (physics) columns profiled out;
    the number of terms (up to 120) by 5-fold cross-validation grouped by commanded
    position inside the training poses (one-standard-error rule). Prints the ``joint_harmonics[terms=...]``
@@ -33,7 +33,6 @@ from __future__ import annotations
 
 import argparse
 import tempfile
-from dataclasses import dataclass
 from itertools import pairwise
 from pathlib import Path
 
@@ -45,7 +44,14 @@ import matplotlib.pyplot as plt
 from ur10_series import data_folder, imported
 
 from postproc.model.effects import parse_effects
-from postproc.model.identify import kin_joint_columns, residuals
+from postproc.model.harmonic_scan import (
+    Residual,
+    amplitude_phase,
+    choose_terms,
+    fitted_prediction,
+    periodogram,
+    term_columns,
+)
 from postproc.model.measurements import MeasurementSet, read_measurements
 from postproc.model.validate import (
     FitSpec,
@@ -69,127 +75,10 @@ MAX_TERMS = 120
 FOLDS = 5
 
 
-@dataclass(frozen=True)
-class Residual:
-    """A physics fit's residual on a set, with what the harmonic columns need."""
-
-    r: np.ndarray  # (N, 3) predicted - measured, mm
-    dp_dq: np.ndarray  # (N, 3, 6) mm per degree
-    base: np.ndarray  # (3N, n_params) the physics fit's identification Jacobian
-    q_rad: np.ndarray  # (N, 6)
-
-
 def physics_residual(robot, meas: MeasurementSet, train: np.ndarray, say) -> Residual:
     effects = parse_effects(PHYSICS)
     meas = with_order_columns(effects, meas)
-    model = fit_model(FitSpec(robot, TOOL_MM, effects), meas.subset(train), say)
-    prep = model.prepare(meas)
-    _, jac = model.evaluate(prep)
-    return Residual(residuals(model, meas, prep), kin_joint_columns(model, prep), jac.reshape(3 * len(meas), -1), np.radians(meas.q_deg))
-
-
-def periodogram(res: Residual, train: np.ndarray, test: np.ndarray) -> np.ndarray:
-    """(6, orders): share of the held-out sum of squares each single term removes, fitted
-    on the training rows (the weighted projection of the residual on dp/dq_j)."""
-    out = np.zeros((6, len(SCAN_ORDERS)))
-    for j in range(6):
-        g = (res.dp_dq[:, :, j] ** 2).sum(axis=1)
-        u = -(res.dp_dq[:, :, j] * res.r).sum(axis=1)
-        s, c = np.sin(np.outer(res.q_rad[:, j], SCAN_ORDERS)), np.cos(np.outer(res.q_rad[:, j], SCAN_ORDERS))
-        a11, a22, a12 = ((g[train, None] * m[train]).sum(axis=0) for m in (s * s, c * c, s * c))
-        b1, b2 = (u[train, None] * s[train]).sum(axis=0), (u[train, None] * c[train]).sum(axis=0)
-        det = a11 * a22 - a12 ** 2
-        fitted = ((a22 * b1 - a12 * b2) / det) * s[test] + ((a11 * b2 - a12 * b1) / det) * c[test]
-        out[j] = (2 * fitted * u[test, None] - fitted ** 2 * g[test, None]).sum(axis=0) / (res.r[test] ** 2).sum()
-    return out
-
-
-def term_columns(res: Residual, terms) -> np.ndarray:
-    """(3N, 2 * len(terms)): joint_harmonics' columns, sin then cos per term."""
-    cols = []
-    for j, k in terms:
-        for wave in (np.sin, np.cos):
-            cols.append((res.dp_dq[:, :, j - 1] * wave(k * res.q_rad[:, j - 1])[:, None]).reshape(-1))
-    return np.column_stack(cols)
-
-
-def reduced_normal(design: np.ndarray, base: np.ndarray, target: np.ndarray, rows: np.ndarray):
-    """Gram and right-hand side of the design on ``rows`` with the base columns profiled out,
-    and the maps that give the base coefficients back."""
-    d, b, t = design[rows], base[rows], target[rows]
-    g_bb = b.T @ b + 1e-9 * np.trace(b.T @ b) / b.shape[1] * np.eye(b.shape[1])
-    maps = np.linalg.solve(g_bb, b.T @ np.column_stack([d, t]))
-    gram = d.T @ d - (d.T @ b) @ maps[:, :-1]
-    rhs = d.T @ t - (d.T @ b) @ maps[:, -1]
-    return gram, rhs, maps
-
-
-def forward_path(gram: np.ndarray, rhs: np.ndarray, n_terms: int, max_terms: int) -> list[int]:
-    """Terms (pairs of columns 2t, 2t+1) added one at a time, each the one that lowers the
-    training sum of squares most given those before it (the chosen columns profiled out of
-    every candidate's 2 x 2 normal equations)."""
-    chosen: list[int] = []
-    pairs = np.arange(2 * n_terms).reshape(n_terms, 2)
-    for _ in range(min(max_terms, n_terms)):
-        cols = pairs[chosen].ravel()
-        if len(cols):
-            ridge = 1e-10 * np.trace(gram[np.ix_(cols, cols)]) / len(cols) * np.eye(len(cols))
-            proj = np.linalg.solve(gram[np.ix_(cols, cols)] + ridge, gram[cols])  # (|S|, all)
-            g_red, r_red = gram - gram[:, cols] @ proj, rhs - proj.T @ rhs[cols]
-        else:
-            g_red, r_red = gram, rhs
-        blocks = g_red[pairs[:, :, None], pairs[:, None, :]] + 1e-12 * np.eye(2)
-        r = r_red[pairs]
-        gains = np.einsum("mi,mi->m", r, np.linalg.solve(blocks, r[..., None])[..., 0])
-        gains[chosen] = -np.inf
-        chosen.append(int(np.argmax(gains)))
-    return chosen
-
-
-def fitted_prediction(design, base, target, rows, cols, pred_rows) -> np.ndarray:
-    gram, rhs, maps = reduced_normal(design[:, cols], base, target, rows)
-    coef = np.linalg.solve(gram + 1e-10 * np.eye(len(cols)), rhs)
-    return design[pred_rows][:, cols] @ coef + base[pred_rows] @ (maps[:, -1] - maps[:, :-1] @ coef)
-
-
-def columns_of(path: list[int]) -> np.ndarray:
-    return np.ravel([[2 * t, 2 * t + 1] for t in path]).astype(int)
-
-
-def choose_terms(res: Residual, points: np.ndarray, train: np.ndarray, say) -> tuple[list[tuple[int, int]], np.ndarray]:
-    """Forward selection on the training poses, the number of terms by cross-validation
-    grouped by commanded position; returns the terms and the CV RMS per number of terms."""
-    candidates = [(j, int(k)) for j in range(1, 7) for k in SELECT_ORDERS]
-    design, target = term_columns(res, candidates), -res.r.reshape(-1)
-    train_points = np.unique(points[train])
-    fold_of_point = dict(zip(train_points, np.random.default_rng(0).permutation(len(train_points)) % FOLDS))
-    fold = np.array([fold_of_point.get(p, -1) for p in points])
-    sq = np.zeros((MAX_TERMS + 1, len(points)))
-    for f in range(FOLDS):
-        say(f"forward selection, cross-validation fold {f + 1}/{FOLDS}")
-        fit_rows, held = np.repeat(train & (fold != f), 3), np.repeat(fold == f, 3)
-        path = forward_path(*reduced_normal(design, res.base, target, fit_rows)[:2], len(candidates), MAX_TERMS)
-        for size in range(MAX_TERMS + 1):
-            pred = fitted_prediction(design, res.base, target, fit_rows, columns_of(path[:size]), held)
-            sq[size, fold == f] = ((target[held] - pred) ** 2).reshape(-1, 3).sum(axis=1)
-    per_point = np.array([[row[points == p].sum() for p in train_points] for row in sq])
-    mse = per_point.sum(axis=1) / train.sum()
-    best = int(np.argmin(mse))
-    # one-standard-error rule, paired over the positions: the smallest model whose held-out
-    # MSE is within one standard error of the best one's
-    std_err = np.sqrt(len(train_points) * np.var(per_point - per_point[best], axis=1)) / train.sum()
-    size = int(np.nonzero(mse <= mse[best] + std_err)[0][0])
-    cv_rms = np.sqrt(mse)
-    say("forward selection on all training poses")
-    path = forward_path(*reduced_normal(design, res.base, target, np.repeat(train, 3))[:2], len(candidates), size)
-    return [candidates[t] for t in path], cv_rms
-
-
-def amplitude_phase(res: Residual, term) -> tuple[float, float]:
-    """One term fitted alone (with the physics columns) on a whole set: amplitude (mdeg), phase (deg)."""
-    design = term_columns(res, [term])
-    x = np.linalg.lstsq(np.column_stack([design, res.base]), -res.r.reshape(-1), rcond=1e-10)[0]
-    return 1e3 * float(np.hypot(x[0], x[1])), float(np.degrees(np.arctan2(x[1], x[0])))
+    return Residual.of(fit_model(FitSpec(robot, TOOL_MM, effects), meas.subset(train), say), meas)
 
 
 def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, term) -> None:
@@ -235,8 +124,9 @@ def main() -> None:
         points = group_column(a, "point", "")
         test = every_kth_group(points, 5) if args.split == "points" else random_mask(len(a), 0.2, 0)
         res = physics_residual(robot, a, ~test, say)
-        gains = periodogram(res, ~test, test)
-        terms, cv_rms = choose_terms(res, points, ~test, say)
+        gains = periodogram(res, SCAN_ORDERS, ~test, test)
+        choice = choose_terms(res, points, ~test, SELECT_ORDERS, MAX_TERMS, FOLDS, say=say)
+        terms, cv_rms = list(choice.terms), choice.cv_rms_mm
         say("whole-series fits of each chosen term")
         whole_a = physics_residual(robot, a, np.ones(len(a), bool), say)
         whole_b = physics_residual(robot, b, np.ones(len(b), bool), say)
