@@ -52,6 +52,7 @@ from postproc.model.harmonic_scan import (
     periodogram,
     term_columns,
 )
+from postproc.model.identify import cyclic_residual
 from postproc.model.measurements import MeasurementSet, read_measurements
 from postproc.model.validate import (
     FitSpec,
@@ -78,7 +79,7 @@ FOLDS = 5
 def physics_residual(robot, meas: MeasurementSet, train: np.ndarray, say) -> Residual:
     effects = parse_effects(PHYSICS)
     meas = with_order_columns(effects, meas)
-    return Residual.of(fit_model(FitSpec(robot, TOOL_MM, effects), meas.subset(train), say), meas)
+    return cyclic_residual(fit_model(FitSpec(robot, TOOL_MM, effects), meas.subset(train), say), meas)
 
 
 def draw(gains: np.ndarray, res: Residual, test: np.ndarray, after: np.ndarray, term) -> None:

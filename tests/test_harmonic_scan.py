@@ -5,7 +5,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from postproc.model.harmonic_scan import Residual, amplitude_phase, choose_terms, periodogram, term_columns
+from postproc.model.harmonic_scan import (
+    Residual,
+    amplitude_phase,
+    choose_terms,
+    periodogram,
+    term_columns,
+)
 
 PLANTED = {(2, 17): (0.02, -0.01), (3, 5): (0.0, 0.015)}  # (joint, order): (sin, cos) deg
 

@@ -28,25 +28,16 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errormodel import ErrorModel
-from .identify import kin_joint_columns, residuals
-from .measurements import MeasurementSet
-
 
 @dataclass(frozen=True)
 class Residual:
-    """A fitted model's residual on a set, with what the harmonic columns need."""
+    """A fitted model's residual on a set, with what the harmonic columns need
+    (``postproc.model.identify.cyclic_residual(model, meas)`` makes one)."""
 
     r: np.ndarray  # (N, 3) predicted - measured, mm
     dp_dq: np.ndarray  # (N, 3, 6) mm per degree of each joint
     base: np.ndarray  # (3N, n_params) the model's identification Jacobian (profiled out)
     q_rad: np.ndarray  # (N, 6)
-
-    @classmethod
-    def of(cls, model: ErrorModel, meas: MeasurementSet) -> Residual:
-        prep = model.prepare(meas)
-        _, jac = model.evaluate(prep)
-        return cls(residuals(model, meas, prep), kin_joint_columns(model, prep), jac.reshape(3 * len(meas), -1), np.radians(meas.q_deg))
 
 
 @dataclass(frozen=True)
@@ -133,12 +124,13 @@ def _one_standard_error(per_group: np.ndarray, n_rows: int) -> int:
     return int(np.nonzero(mse <= mse[best] + std_err)[0][0])
 
 
-def choose_terms(res: Residual, groups: np.ndarray, train: np.ndarray, orders: np.ndarray, max_terms: int = 120,
-                 folds: int = 5, seed: int = 0, say: Callable[[str], None] = lambda m: None) -> TermChoice:
-    """Forward selection over joints 1-6 and ``orders`` on the ``train`` rows; the number of
-    terms by ``folds``-fold cross-validation with whole groups (``groups``: an id per row)
-    held out together."""
-    candidates = [(j, int(k)) for j in range(1, 7) for k in orders]
+def choose_terms(res: Residual, groups: np.ndarray, train: np.ndarray, orders, max_terms: int = 120, folds: int = 5,
+                 seed: int = 0, joints=(1, 2, 3, 4, 5, 6), say: Callable[[str], None] = lambda m: None) -> TermChoice:
+    """Forward selection over ``joints`` and ``orders`` on the ``train`` rows; the number of
+    terms (at most ``max_terms``) by ``folds``-fold cross-validation with whole groups
+    (``groups``: an id per row) held out together."""
+    candidates = [(int(j), int(k)) for j in joints for k in orders]
+    max_terms = min(max_terms, len(candidates))
     design, target = term_columns(res, candidates), -res.r.reshape(-1)
     train_groups = np.unique(groups[train])
     fold_of_group = dict(zip(train_groups, np.random.default_rng(seed).permutation(len(train_groups)) % folds))

@@ -2,6 +2,10 @@
 
 Without options the fit chooses the joints and orders the data support (see
 ``postproc.model.identify.select_terms``, best subset with a stability check) and records them in the model file.
+With ``max_order=K`` (and optionally ``joints=``) it chooses among every order 1..K instead,
+by forward selection with cross-validation that holds out whole commanded positions
+(``postproc.model.identify.select_cyclic_terms``): a joint's cyclic error as a long Fourier
+series, which dense data (e.g. the UR10's Series A) support with tens of terms.
 
 Source: a strain-wave (harmonic drive) gear's transmission error is periodic; besides the
 fast components tied to the wave generator, eccentric and tilted mounting of the circular
@@ -40,9 +44,14 @@ class JointHarmonics(Effect):
         "than one period. Without options the fit keeps only the terms cross-validation supports."
     )
 
-    def __init__(self, terms: tuple[tuple[int, int], ...] | None = None):
-        """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them."""
+    def __init__(self, terms: tuple[tuple[int, int], ...] | None = None, max_order: int | None = None,
+                 search_joints: tuple[int, ...] = (1, 2, 3, 4, 5, 6)):
+        """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them: among
+        orders 1..4 by best subset, or, with ``max_order``, among ``search_joints`` x orders
+        1..max_order by forward selection."""
         self.terms = None if terms is None else tuple(sorted(set(terms)))
+        self.max_order = None if terms is not None else max_order
+        self.search_joints = tuple(search_joints)
 
     @classmethod
     def grid(cls, joints, orders) -> "JointHarmonics":
@@ -50,9 +59,16 @@ class JointHarmonics(Effect):
 
     @classmethod
     def from_options(cls, opts: dict[str, str]) -> "JointHarmonics":
-        unknown = set(opts) - {"joints", "orders", "terms"}
+        unknown = set(opts) - {"joints", "orders", "terms", "max_order"}
         if unknown:
-            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms)")
+            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms, max_order)")
+        if "max_order" in opts:
+            if set(opts) - {"max_order", "joints"}:
+                raise EffectSpecError(f"{cls.name}: max_order asks the fit to choose the terms; it goes with joints only")
+            max_order = parse_int_list(cls.name, "max_order", opts["max_order"], 1, MAX_ORDER)
+            if len(max_order) != 1:
+                raise EffectSpecError(f"{cls.name}: max_order is one order, got '{opts['max_order']}'")
+            return cls(None, max_order[0], parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6))
         if "terms" in opts:
             pairs = []
             for item in opts["terms"].split(","):
@@ -76,7 +92,7 @@ class JointHarmonics(Effect):
 
     def options(self) -> dict:
         if self.terms is None:
-            return {}
+            return {} if self.max_order is None else {"joints": list(self.search_joints), "max_order": self.max_order}
         joints = sorted({j for j, _ in self.terms})
         orders = sorted({k for _, k in self.terms})
         if set(self.terms) == {(j, k) for j in joints for k in orders}:
@@ -96,7 +112,8 @@ class JointHarmonics(Effect):
         return out
 
     def candidate_terms(self) -> list[tuple[int, int]]:
-        return [(j, k) for j in range(1, 7) for k in CANDIDATE_ORDERS]
+        orders = CANDIDATE_ORDERS if self.max_order is None else range(1, self.max_order + 1)
+        return [(j, k) for j in self.search_joints for k in orders]
 
     def with_terms(self, terms) -> "JointHarmonics":
         return JointHarmonics(tuple(terms))
