@@ -126,7 +126,8 @@ def main() -> None:
         test = every_kth_group(points, 5) if args.split == "points" else random_mask(len(a), 0.2, 0)
         res = physics_residual(robot, a, ~test, say)
         gains = periodogram(res, SCAN_ORDERS, ~test, test)
-        choice = choose_terms(res, points, ~test, SELECT_ORDERS, MAX_TERMS, FOLDS, say=say)
+        candidates = [(j, int(k)) for j in range(1, 7) for k in SELECT_ORDERS]
+        choice = choose_terms(res, points, ~test, candidates, MAX_TERMS, FOLDS, say=say)
         terms, cv_rms = list(choice.terms), choice.cv_rms_mm
         say("whole-series fits of each chosen term")
         whole_a = physics_residual(robot, a, np.ones(len(a), bool), say)

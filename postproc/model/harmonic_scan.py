@@ -124,12 +124,12 @@ def _one_standard_error(per_group: np.ndarray, n_rows: int) -> int:
     return int(np.nonzero(mse <= mse[best] + std_err)[0][0])
 
 
-def choose_terms(res: Residual, groups: np.ndarray, train: np.ndarray, orders, max_terms: int = 120, folds: int = 5,
-                 seed: int = 0, joints=(1, 2, 3, 4, 5, 6), say: Callable[[str], None] = lambda m: None) -> TermChoice:
-    """Forward selection over ``joints`` and ``orders`` on the ``train`` rows; the number of
-    terms (at most ``max_terms``) by ``folds``-fold cross-validation with whole groups
-    (``groups``: an id per row) held out together."""
-    candidates = [(int(j), int(k)) for j in joints for k in orders]
+def choose_terms(res: Residual, groups: np.ndarray, train: np.ndarray, candidates, max_terms: int = 120, folds: int = 5,
+                 seed: int = 0, say: Callable[[str], None] = lambda m: None) -> TermChoice:
+    """Forward selection over the ``candidates`` (joint 1..6, order) on the ``train`` rows;
+    the number of terms (at most ``max_terms``) by ``folds``-fold cross-validation with whole
+    groups (``groups``: an id per row) held out together."""
+    candidates = [(int(j), int(k)) for j, k in candidates]
     max_terms = min(max_terms, len(candidates))
     design, target = term_columns(res, candidates), -res.r.reshape(-1)
     train_groups = np.unique(groups[train])

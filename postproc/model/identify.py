@@ -183,8 +183,7 @@ def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prio
     for effect in [e for e in effects if not e.resolved]:
         say(f"choosing {effect.name} terms")
         without = EffectSum(tuple(e for e in effects if e is not effect))
-        # a long Fourier series (joint_harmonics[max_order=...]) is beyond the best-subset search
-        choose = select_cyclic_terms if getattr(effect, "max_order", None) else select_terms
+        choose = select_cyclic_terms if effect.term_search == "forward" else select_terms
         chosen, how = choose(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
         if chosen.terms:
             effects = effects.replaced(effect, chosen)
@@ -390,17 +389,19 @@ def cyclic_residual(model: ErrorModel, meas: MeasurementSet) -> Residual:
 
 
 def select_cyclic_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0) -> tuple[Effect, str]:
-    """joint_harmonics[max_order=K]'s terms: forward selection over its joints and orders
-    1..K on the residual of the model without it, the number of terms by 5-fold
-    cross-validation that holds out whole commanded positions (column ``point``) where the
-    set has them, else single poses (``postproc.model.harmonic_scan.choose_terms``)."""
+    """The terms of a family searched forward (cyclic joint errors with a high largest
+    order): forward selection over its candidate (joint, order) terms on the residual of the
+    model without it, the number of terms by 5-fold cross-validation that holds out whole
+    commanded positions (column ``point``) where the set has them, else single poses
+    (``postproc.model.harmonic_scan.choose_terms``)."""
     result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
     grouped = "point" in meas.extra
     groups = meas.extra["point"].astype(np.int64) if grouped else np.arange(len(meas))
-    choice = choose_terms(cyclic_residual(result.model, meas), groups, np.ones(len(meas), dtype=bool), range(1, family.max_order + 1),
-                          seed=seed, joints=family.search_joints)
+    candidates = family.candidate_terms()
+    choice = choose_terms(cyclic_residual(result.model, meas), groups, np.ones(len(meas), dtype=bool), candidates, seed=seed)
     n = len(choice.terms)
-    how = (f"forward selection over joints {','.join(map(str, family.search_joints))} and orders 1-{family.max_order}, "
+    joints, orders = sorted({j for j, _ in candidates}), sorted({k for _, k in candidates})
+    how = (f"forward selection over joints {','.join(map(str, joints))} and orders {orders[0]}-{orders[-1]}, "
            f"5-fold CV by {'commanded position' if grouped else 'pose'}: {n} terms, CV RMS {choice.cv_rms_mm[0]:.4f} -> {choice.cv_rms_mm[n]:.4f} mm")
     return family.with_terms(choice.terms), how
 

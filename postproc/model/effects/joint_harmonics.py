@@ -52,6 +52,7 @@ class JointHarmonics(Effect):
         self.terms = None if terms is None else tuple(sorted(set(terms)))
         self.max_order = None if terms is not None else max_order
         self.search_joints = tuple(search_joints)
+        self.term_search = "best_subset" if self.max_order is None else "forward"
 
     @classmethod
     def grid(cls, joints, orders) -> "JointHarmonics":
