@@ -29,9 +29,29 @@ def test_parse_effects_with_options_and_round_trip():
     assert (Geometric() + JointHarmonics.grid([2], [3])).spec() == "geometric,joint_harmonics[joints=2;orders=3]"
 
 
+def test_harmonics_take_the_orders_of_a_strain_wave_gear():
+    """Orders near twice a gear ratio (about 200 on a 1:101 strain-wave gear) are terms like any other."""
+    effects = parse_effects("joint_harmonics[terms=2:17,3:202]")
+    assert effects.get("joint_harmonics").terms == ((2, 17), (3, 202))
+    assert parse_effects(effects.spec()).spec() == effects.spec()
+    assert parse_effects("joint_harmonics[joints=2;orders=101,202]").get("joint_harmonics").terms == ((2, 101), (2, 202))
+
+
+def test_harmonics_with_max_order_leave_the_terms_to_the_fit():
+    effect = parse_effects("joint_harmonics[max_order=30;joints=2,3]").get("joint_harmonics")
+    assert not effect.resolved
+    assert len(effect.candidate_terms()) == 60 and (3, 30) in effect.candidate_terms()
+    assert parse_effects(effect.spec()).get("joint_harmonics").candidate_terms() == effect.candidate_terms()
+    assert effect.with_terms(((2, 17),)).spec() == "joint_harmonics[joints=2;orders=17]"
+
+
 @pytest.mark.parametrize(
     ("text", "message"),
     [
+        ("joint_harmonics[max_order=30;orders=2]", "goes with joints only"),
+        ("joint_harmonics[max_order=20,30]", "one order"),
+        ("joint_harmonics[terms=2:1001]", "order 1..1000"),
+        ("joint_harmonics[joints=2;orders=1001]", "1..1000"),
         ("geometric,heat", "unknown effect 'heat'"),
         ("geometric,geometric", "appears twice"),
         ("joint_harmonics[joints=7]", "1..6"),

@@ -27,6 +27,7 @@ from postproc.threads import small_matrices
 from .coverage import Coverage
 from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
+from .harmonic_scan import Residual, choose_terms
 from .measurements import MeasurementSet
 from .path_history import previous_targets
 from .predictor_plugins import PREDICTORS
@@ -183,7 +184,8 @@ def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prio
     for effect in [e for e in effects if not e.resolved]:
         say(f"choosing {effect.name} terms")
         without = EffectSum(tuple(e for e in effects if e is not effect))
-        chosen, how = select_terms(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
+        choose = select_cyclic_terms if effect.term_search == "forward" else select_terms
+        chosen, how = choose(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
         if chosen.terms:
             effects = effects.replaced(effect, chosen)
             notes.append(f"{effect.name}: data support {chosen.spec()} (terms and how often they were chosen: {how})")
@@ -377,6 +379,32 @@ def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: Measur
     how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
     labels = [":".join(map(str, t)) if isinstance(t, tuple) else str(t) for t in candidates]
     return family.with_terms(tuple(candidates[t] for t in pick.chosen)), (term_labels(labels, pick) + "; " if pick.chosen else "") + how
+
+
+def cyclic_residual(model: ErrorModel, meas: MeasurementSet) -> Residual:
+    """The model's residual on ``meas`` with the columns a cyclic-error scan needs
+    (``postproc.model.harmonic_scan``)."""
+    prep = model.prepare(meas)
+    _, jac = model.evaluate(prep)
+    return Residual(residuals(model, meas, prep), kin_joint_columns(model, prep), jac.reshape(3 * len(meas), -1), np.radians(meas.q_deg))
+
+
+def select_cyclic_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0) -> tuple[Effect, str]:
+    """The terms of a family searched forward (cyclic joint errors with a high largest
+    order): forward selection over its candidate (joint, order) terms on the residual of the
+    model without it, the number of terms by 5-fold cross-validation that holds out whole
+    commanded positions (column ``point``) where the set has them, else single poses
+    (``postproc.model.harmonic_scan.choose_terms``)."""
+    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
+    grouped = "point" in meas.extra
+    groups = meas.extra["point"].astype(np.int64) if grouped else np.arange(len(meas))
+    candidates = family.candidate_terms()
+    choice = choose_terms(cyclic_residual(result.model, meas), groups, np.ones(len(meas), dtype=bool), candidates, seed=seed)
+    n = len(choice.terms)
+    joints, orders = sorted({j for j, _ in candidates}), sorted({k for _, k in candidates})
+    how = (f"forward selection over joints {','.join(map(str, joints))} and orders {orders[0]}-{orders[-1]}, "
+           f"5-fold CV by {'commanded position' if grouped else 'pose'}: {n} terms, CV RMS {choice.cv_rms_mm[0]:.4f} -> {choice.cv_rms_mm[n]:.4f} mm")
+    return family.with_terms(choice.terms), how
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:

@@ -149,6 +149,11 @@ class Effect:
         """The terms the fit may choose from (effects that are not ``resolved``)."""
         return []
 
+    #: how the fit chooses among ``candidate_terms``: "best_subset" (tens of candidates, a few
+    #: terms; ``postproc.model.term_selection``) or "forward" (hundreds of (joint, order)
+    #: candidates, tens of terms; ``postproc.model.harmonic_scan``)
+    term_search: str = "best_subset"
+
     def with_terms(self, terms) -> "Effect":
         raise NotImplementedError
 

@@ -2,6 +2,10 @@
 
 Without options the fit chooses the joints and orders the data support (see
 ``postproc.model.identify.select_terms``, best subset with a stability check) and records them in the model file.
+With ``max_order=K`` (and optionally ``joints=``) it chooses among every order 1..K instead,
+by forward selection with cross-validation that holds out whole commanded positions
+(``postproc.model.identify.select_cyclic_terms``): a joint's cyclic error as a long Fourier
+series, which dense data (e.g. the UR10's Series A) support with tens of terms.
 
 Source: a strain-wave (harmonic drive) gear's transmission error is periodic; besides the
 fast components tied to the wave generator, eccentric and tilted mounting of the circular
@@ -22,6 +26,11 @@ import numpy as np
 from .base import Context, Effect, EffectSpecError, Param, parse_int_list
 
 CANDIDATE_ORDERS = (1, 2, 3, 4)
+# Highest order a term may name: a strain-wave gear's transmission error has its main
+# component at twice the wave generator's speed, i.e. at order 2 x ratio of the joint angle
+# (about 200 on a 1:100 or 1:101 reducer) and harmonics of it above; 1000 leaves room for
+# twice that on ratios up to 1:250 and stays far below what a float angle can resolve.
+MAX_ORDER = 1000
 
 
 class JointHarmonics(Effect):
@@ -35,9 +44,15 @@ class JointHarmonics(Effect):
         "than one period. Without options the fit keeps only the terms cross-validation supports."
     )
 
-    def __init__(self, terms: tuple[tuple[int, int], ...] | None = None):
-        """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them."""
+    def __init__(self, terms: tuple[tuple[int, int], ...] | None = None, max_order: int | None = None,
+                 search_joints: tuple[int, ...] = (1, 2, 3, 4, 5, 6)):
+        """terms: (joint 1..6, order >= 1) pairs; None asks the fit to choose them: among
+        orders 1..4 by best subset, or, with ``max_order``, among ``search_joints`` x orders
+        1..max_order by forward selection."""
         self.terms = None if terms is None else tuple(sorted(set(terms)))
+        self.max_order = None if terms is not None else max_order
+        self.search_joints = tuple(search_joints)
+        self.term_search = "best_subset" if self.max_order is None else "forward"
 
     @classmethod
     def grid(cls, joints, orders) -> "JointHarmonics":
@@ -45,9 +60,16 @@ class JointHarmonics(Effect):
 
     @classmethod
     def from_options(cls, opts: dict[str, str]) -> "JointHarmonics":
-        unknown = set(opts) - {"joints", "orders", "terms"}
+        unknown = set(opts) - {"joints", "orders", "terms", "max_order"}
         if unknown:
-            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms)")
+            raise EffectSpecError(f"{cls.name}: unknown option(s) {', '.join(sorted(unknown))} (known: joints, orders, terms, max_order)")
+        if "max_order" in opts:
+            if set(opts) - {"max_order", "joints"}:
+                raise EffectSpecError(f"{cls.name}: max_order asks the fit to choose the terms; it goes with joints only")
+            max_order = parse_int_list(cls.name, "max_order", opts["max_order"], 1, MAX_ORDER)
+            if len(max_order) != 1:
+                raise EffectSpecError(f"{cls.name}: max_order is one order, got '{opts['max_order']}'")
+            return cls(None, max_order[0], parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6))
         if "terms" in opts:
             pairs = []
             for item in opts["terms"].split(","):
@@ -55,14 +77,14 @@ class JointHarmonics(Effect):
                     j, k = (int(v) for v in item.split(":"))
                 except ValueError:
                     raise EffectSpecError(f"{cls.name}: terms are joint:order pairs, got '{item}'") from None
-                if not (1 <= j <= 6 and 1 <= k <= 12):
-                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..12)")
+                if not (1 <= j <= 6 and 1 <= k <= MAX_ORDER):
+                    raise EffectSpecError(f"{cls.name}: term '{item}' out of range (joint 1..6, order 1..{MAX_ORDER})")
                 pairs.append((j, k))
             return cls(tuple(pairs))
         if not opts:
             return cls(None)
         joints = parse_int_list(cls.name, "joints", opts.get("joints", "1,2,3,4,5,6"), 1, 6)
-        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, 12)
+        orders = parse_int_list(cls.name, "orders", opts.get("orders", "1,2,3,4"), 1, MAX_ORDER)
         return cls.grid(joints, orders)
 
     @property
@@ -71,7 +93,7 @@ class JointHarmonics(Effect):
 
     def options(self) -> dict:
         if self.terms is None:
-            return {}
+            return {} if self.max_order is None else {"joints": list(self.search_joints), "max_order": self.max_order}
         joints = sorted({j for j, _ in self.terms})
         orders = sorted({k for _, k in self.terms})
         if set(self.terms) == {(j, k) for j in joints for k in orders}:
@@ -91,7 +113,8 @@ class JointHarmonics(Effect):
         return out
 
     def candidate_terms(self) -> list[tuple[int, int]]:
-        return [(j, k) for j in range(1, 7) for k in CANDIDATE_ORDERS]
+        orders = CANDIDATE_ORDERS if self.max_order is None else range(1, self.max_order + 1)
+        return [(j, k) for j in self.search_joints for k in orders]
 
     def with_terms(self, terms) -> "JointHarmonics":
         return JointHarmonics(tuple(terms))
