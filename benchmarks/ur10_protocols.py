@@ -1,19 +1,25 @@
 """Every evaluation protocol on the real UR10 data, each row one `postproc validate` command.
 
 Run: .venv/bin/python benchmarks/ur10_protocols.py [path/to/ur10_ipa] [--skip-hybrid]
-Writes benchmarks/results/ur10_protocols.txt (the table, the command behind each row and
-its wall time). Imports Series A and B with `postproc import-ur10` into a temporary folder
-first. The hybrid rows (physics + GPR; local experts on ~9,500 poses of A) take most of the
-time (about 2-5 min each on a shared 2-core machine); --skip-hybrid leaves them out.
+     [--jobs N] [--output FILE]
+Writes benchmarks/results/ur10_protocols.txt (or FILE: the table, the command behind each row
+and its wall time). Imports Series A and B with `postproc import-ur10` into a temporary folder
+first. The hybrid rows (physics + GPR; local experts on ~9,500 poses of A) and the rows whose
+fit chooses cyclic terms (`joint_harmonics[max_order=60]`) take most of the time (about 1-5 min
+each on a shared 2-core machine); --skip-hybrid leaves the hybrid rows out. --jobs runs that
+many rows at once (each one single-threaded), for a machine with the cores.
 """
 
 from __future__ import annotations
 
+import argparse
 import json
+import os
 import subprocess
 import sys
 import tempfile
 import time
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 
 from ur10_series import data_folder, imported
@@ -24,6 +30,9 @@ PHYSICS = "geometric,base_frame,tool_offset,joint_compliance"
 # Joints 1 and 2 are where a GPR on the joint angles, fitted on B's training half, puts its
 # short length scales (about 4 deg: docs/guide/explain.md); orders 1-12 are the effect's whole range.
 SHOULDER = "joint_harmonics[joints=1,2;orders=1,2,3,4,5,6,7,8,9,10,11,12]"
+# Per-joint cyclic errors, the terms chosen by the fit among orders 1-60 of every joint
+# (forward selection, CV holding out whole commanded positions: docs/guide/validate.md).
+CYCLIC = PHYSICS + ",joint_harmonics[max_order=60]"
 UR10 = ["--robot", "ur10", "--tool", "0,0,109", "--effects"]
 
 
@@ -49,41 +58,80 @@ def rows(a: str, b: str, hybrid: bool) -> list[tuple[str, str, list[str]]]:
         ("B: the same, hybrid with --gp-features tcp+joints", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *posture]),
         ("B: the same, hybrid with --gp-features tcp+joints+travel", "", [b, "--protocol", "points", "--every", "2", *UR10, PHYSICS, *history]),
         ("A -> B: re-registered on half of B, physics", "vs ceiling", [a, "--protocol", "series", "--other", b, *UR10, PHYSICS]),
+        ("A: random 20 % held out, physics + cyclic terms", "", [a, "--protocol", "random", *UR10, CYCLIC]),
+        ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.06", [a, "--protocol", "random", *UR10, CYCLIC, *posture]),
+        ("A: the same, hybrid with --gp-features tcp+joints+travel", "<= 0.06", [a, "--protocol", "random", *UR10, CYCLIC, *history]),
+        ("A: every 5th grid point held out, physics + cyclic terms", "<= 0.20", [a, "--protocol", "points", *UR10, CYCLIC]),
+        ("A: the same, hybrid", "<= 0.20", [a, "--protocol", "points", *UR10, CYCLIC, *gpr]),
+        ("B: half of the commanded positions held out, physics + cyclic terms", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, CYCLIC]),
+        ("A -> B: re-registered on half of B, physics + cyclic terms", "vs ceiling", [a, "--protocol", "series", "--other", b, *UR10, CYCLIC]),
     ]
     return [row for row in table if hybrid or "--predictor" not in row[2]]
 
 
 def run(args: list[str]) -> tuple[dict, float]:
     start = time.monotonic()
-    proc = subprocess.run([sys.executable, "-m", "postproc", "validate", *args, "--json"], capture_output=True, text=True, cwd=ROOT)
+    # One thread per row: rows run side by side with --jobs, and BLAS threads would fight.
+    env = {**os.environ, "OPENBLAS_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+    proc = subprocess.run([sys.executable, "-m", "postproc", "validate", *args, "--json"], capture_output=True, text=True, cwd=ROOT, env=env)
     if proc.returncode != 0:
         raise SystemExit(f"postproc validate {' '.join(args)} failed:\n{proc.stderr}")
     return json.loads(proc.stdout), time.monotonic() - start
 
 
+def slowness(args: list[str]) -> int:
+    """A rough rank of a row's run time: a GPR and a cyclic term search each add to it, Series A more than B."""
+    text = " ".join(args)
+    return ("--predictor" in args) + ("max_order" in text) + ("A.csv" in args[0]) + ("series" in args)
+
+
+def options() -> argparse.Namespace:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("data", nargs="?", help="the ur10_ipa folder (default: the shared data's)")
+    parser.add_argument("--skip-hybrid", action="store_true", help="leave out the rows with a GPR")
+    parser.add_argument("--jobs", type=int, default=1, help="rows run at once (default 1)")
+    parser.add_argument("--output", type=Path, default=RESULT, help=f"result file (default {RESULT.relative_to(ROOT)})")
+    return parser.parse_args()
+
+
+def row_lines(label: str, goal: str, args: list[str], doc: dict, wall: float, tmp: str) -> tuple[str, list[str]]:
+    """The table line and the command lines of one protocol's result."""
+    e, d = doc["error"], doc["distance"]
+    ceiling = f"{doc['ceiling']['mean_mm']:.3f}" if doc["ceiling"] else ""
+    line = (f"| {label} | {goal} | {e['n']} | **{e['mean_mm']:.3f}** | {e['median_mm']:.3f} | {e['p95_mm']:.3f} | {e['max_mm']:.3f} "
+            f"| {d['median_rad']:.3f} / {d['max_rad']:.3f} | {ceiling} |")
+    shown = " ".join(x.replace(tmp + "/", "") for x in args)
+    commands = [f"- {label}: `postproc validate {shown}` ({wall:.0f} s)"]
+    moved = [s for s in doc["sessions"] if s["moves_as_whole"]]
+    commands += [f"  - session {s['session']} ({s['n']} poses) moves as a whole: rigid offset {s['offset_mm']:.3f} mm, "
+                 f"mean {s['mean_mm']:.3f} -> {s['mean_after_mm']:.3f} mm without it" for s in moved]
+    return line, commands
+
+
 def main() -> None:
-    argv = [x for x in sys.argv[1:] if x != "--skip-hybrid"]
-    data = data_folder(argv[0] if argv else None)
+    opts = options()
+    data = data_folder(opts.data)
     with tempfile.TemporaryDirectory() as tmp:
         a, b = (str(imported(data, series, Path(tmp) / f"{series}.csv")) for series in ("A", "B"))
-        lines = ["| protocol | goal | n | mean | median | p95 | max | nearest training pose, median / max rad | ceiling mean |",
-                 "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |"]
-        commands = []
-        table = rows(a, b, "--skip-hybrid" not in sys.argv)
-        for k, (label, goal, args) in enumerate(table):
-            print(f"[{k + 1}/{len(table)}] {label}", file=sys.stderr, flush=True)
-            doc, wall = run(args)
-            e, d = doc["error"], doc["distance"]
-            ceiling = f"{doc['ceiling']['mean_mm']:.3f}" if doc["ceiling"] else ""
-            lines.append(f"| {label} | {goal} | {e['n']} | **{e['mean_mm']:.3f}** | {e['median_mm']:.3f} | {e['p95_mm']:.3f} | {e['max_mm']:.3f} "
-                         f"| {d['median_rad']:.3f} / {d['max_rad']:.3f} | {ceiling} |")
-            shown = " ".join(x.replace(tmp + "/", "") for x in args)
-            commands.append(f"- {label}: `postproc validate {shown}` ({wall:.0f} s)")
-            moved = [s for s in doc["sessions"] if s["moves_as_whole"]]
-            commands += [f"  - session {s['session']} ({s['n']} poses) moves as a whole: rigid offset {s['offset_mm']:.3f} mm, "
-                         f"mean {s['mean_mm']:.3f} -> {s['mean_after_mm']:.3f} mm without it" for s in moved]
+        table = rows(a, b, not opts.skip_hybrid)
+        done = [0]
+
+        def one(row):
+            doc, wall = run(row[2])
+            done[0] += 1
+            print(f"[{done[0]}/{len(table)}] {row[0]} ({wall:.0f} s)", file=sys.stderr, flush=True)
+            return row_lines(*row, doc, wall, tmp)
+
+        # The slow rows (a GPR, or cyclic terms to choose) start first, so --jobs keeps every core busy to the end.
+        order = sorted(range(len(table)), key=lambda k: -slowness(table[k][2]))
+        with ThreadPoolExecutor(max_workers=max(1, opts.jobs)) as pool:
+            ran = dict(zip(order, pool.map(one, [table[k] for k in order])))
+        results = [ran[k] for k in range(len(table))]
+    lines = ["| protocol | goal | n | mean | median | p95 | max | nearest training pose, median / max rad | ceiling mean |",
+             "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |", *(line for line, _ in results)]
+    commands = [c for _, cs in results for c in cs]
     text = "\n".join(["UR10 protocols (mm; A.csv, B.csv from postproc import-ur10)", "", *lines, "", *commands, ""])
-    RESULT.write_text(text)
+    opts.output.write_text(text)
     print(text)
 
 
