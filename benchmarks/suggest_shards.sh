@@ -3,7 +3,8 @@
 # merged into one report (issue 32). Run from the repository root with OUT set to a folder;
 # PYBIN names a Python with numpy, scipy, numba, matplotlib (lark is installed from .whl/),
 # LAST the last seed (47: 48 seeds), JOBS the shards at a time, DRAWS random designs per seed.
-# It installs postproc and the wheels in .whl/ into /tmp/site first (a bare machine).
+# It installs postproc and the wheels in .whl/ into /tmp/site first (a bare machine); fetch
+# lark there beforehand: python3 -m pip download --no-deps --only-binary=:all: -d .whl lark==1.3.1
 ${PYBIN:-python3} -m pip install -q --no-index --no-deps --no-compile --no-cache-dir --target /tmp/site .whl/*.whl || exit 3
 ${PYBIN:-python3} -m pip install -q --no-index --no-deps --no-build-isolation --no-cache-dir --target /tmp/site . || exit 4
 export PYTHONPATH=/tmp/site OPENBLAS_NUM_THREADS=1 OMP_NUM_THREADS=1 MKL_NUM_THREADS=1 PYTHONUNBUFFERED=1
