@@ -14,7 +14,7 @@ from postproc.errors import InputError
 
 #: postproc.model.learn.features.KINDS, not imported from there: that package loads scikit-learn,
 #: and every model file read consults this table (test_plugins checks the two agree).
-FEATURE_KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints")
+FEATURE_KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints", "tcp+joints+travel")
 
 
 class PluginPredictor:
@@ -23,7 +23,9 @@ class PluginPredictor:
     Set ``name`` (the ``--predictor`` value) and ``features`` (what it is fed: ``pose``
     = the nominal position and orientation of the measured point, ``joints+disp`` = the
     joints and the displacement from the first pose, ``position`` = x, y, z mm,
-    ``tcp+joints`` = x, y, z mm and the 6 joints in degrees, ``joints`` = the 6 joints), then:
+    ``tcp+joints`` = x, y, z mm and the 6 joints in degrees, ``joints`` = the 6 joints,
+    ``tcp+joints+travel`` = ``tcp+joints`` and log(1 + mm) of the TCP travel of the move into
+    the pose and of the two moves before it: the pose's history in the path), then:
 
     - ``__init__(self, random_state=0)``;
     - ``fit(self, X, y)`` with X (N, features) and y (N, 3) mm, returning self;
