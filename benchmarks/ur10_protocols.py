@@ -15,6 +15,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import platform
 import subprocess
 import sys
 import tempfile
@@ -85,6 +86,17 @@ def slowness(args: list[str]) -> int:
     return ("--predictor" in args) + ("max_order" in text) + ("A.csv" in args[0]) + ("series" in args)
 
 
+def environment(jobs: int) -> str:
+    """What the figures were computed with: the GPR rows move by a few thousandths of a mm between library versions."""
+    versions = []
+    for name in ("numpy", "scipy", "torch", "sklearn"):
+        try:
+            versions.append(f"{name} {__import__(name).__version__}")
+        except ImportError:
+            versions.append(f"{name} missing")
+    return f"Python {platform.python_version()}, {', '.join(versions)}; {os.cpu_count()} CPUs, {jobs} rows at a time"
+
+
 def options() -> argparse.Namespace:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("data", nargs="?", help="the ur10_ipa folder (default: the shared data's)")
@@ -130,7 +142,7 @@ def main() -> None:
     lines = ["| protocol | goal | n | mean | median | p95 | max | nearest training pose, median / max rad | ceiling mean |",
              "| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |", *(line for line, _ in results)]
     commands = [c for _, cs in results for c in cs]
-    text = "\n".join(["UR10 protocols (mm; A.csv, B.csv from postproc import-ur10)", "", *lines, "", *commands, ""])
+    text = "\n".join(["UR10 protocols (mm; A.csv, B.csv from postproc import-ur10)", environment(opts.jobs), "", *lines, "", *commands, ""])
     opts.output.write_text(text)
     print(text)
 
