@@ -6,6 +6,7 @@ import os
 from pathlib import Path
 
 import pytest
+from helpers import kr160
 
 REPO = Path(__file__).resolve().parents[1]
 
@@ -21,3 +22,9 @@ def shared_dir() -> Path:
 @pytest.fixture(scope="session")
 def shared() -> Path:
     return shared_dir()
+
+
+@pytest.fixture(scope="module")
+def robot():
+    """The KR160 R1570 most tests simulate (a module may define its own ``robot`` instead)."""
+    return kr160()

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, kr160, true_tcp, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, G54, H1, TOOL, true_tcp, truth_and_fit
 from typer.testing import CliRunner
 
 import postproc
@@ -35,11 +35,6 @@ def _fitted_on_simulated(robot, effects_spec: str, n: int, region, seed: int):
     truth = random_truth(robot, TOOL, effects, np.random.default_rng(seed))
     data = simulate(truth, sample_poses(robot, TOOL, n, region, np.random.default_rng(seed)), np.random.default_rng(seed))
     return fit(robot, TOOL, effects, data, cv_folds=0).model
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return kr160()
 
 
 @pytest.fixture(scope="module")

@@ -11,7 +11,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import TOOL, kr160
+from helpers import TOOL
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -34,11 +34,6 @@ def flipped(q: np.ndarray) -> np.ndarray:
     out[:, 4] = -q[:, 4]
     out[:, 5] = np.where(q[:, 5] > 0, q[:, 5] - 180.0, q[:, 5] + 180.0)
     return out
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return kr160()
 
 
 @pytest.fixture(scope="module")

@@ -6,7 +6,7 @@ import json
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160
+from helpers import FRAME_AND_COMPLIANCE, TOOL
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -20,11 +20,6 @@ from postproc.robot.frames import abc_to_matrix, make_transform
 
 runner = CliRunner()
 EFFECTS = FRAME_AND_COMPLIANCE
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return kr160()
 
 
 @pytest.fixture(scope="module")

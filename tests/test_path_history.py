@@ -13,7 +13,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import TOOL, kr160
+from helpers import TOOL
 from typer.testing import CliRunner
 
 from postproc.cli import app
@@ -36,11 +36,6 @@ from postproc.robot.frames import matrix_to_abc
 runner = CliRunner()
 STEP_MM = 0.3  # the extra error of a pose measured right after a long move
 NUDGE_DEG = 0.3  # the second measurement of a place: this much further on joint 6
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return kr160()
 
 
 @pytest.fixture(scope="module")

@@ -15,7 +15,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
-from helpers import FRAME_AND_COMPLIANCE, TOOL, kr160, nearest_walk, true_tcp, truth_and_fit
+from helpers import FRAME_AND_COMPLIANCE, TOOL, nearest_walk, true_tcp, truth_and_fit
 
 from postproc.jobs.compensate import compensate
 from postproc.model.sim import JointBox
@@ -28,11 +28,6 @@ from postproc.robot import kinematics as kin
 Q_CENTRE = np.array([-104.0, -6.0, 53.0, 161.0, -59.0, 169.0])
 STEP = np.array([0.2, 0.04, -0.04, 0.2, 0.2, 0.2])
 N_LIN = 20
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return kr160()
 
 
 @pytest.fixture(scope="module")
