@@ -49,9 +49,6 @@ class Gantry:
     def write_texts(self, tp, new):
         return emit_texts(tp, new)
 
-    def own_job(self, request):
-        return None  # the shared job: read, compensate target by target, read back, write
-
 
 def _request(tmp_path, **more):
     (tmp_path / "part.nc").write_text(PROGRAM)

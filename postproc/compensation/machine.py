@@ -15,7 +15,7 @@ This module imports nothing of the languages or of either target, so the request
 
 from __future__ import annotations
 
-from typing import Mapping, Protocol, Sequence, runtime_checkable
+from typing import Mapping, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -29,7 +29,16 @@ class Machine(Protocol):
     ``kind`` names it in messages ("robot", "five-axis machine"); ``source`` is the file it
     was read from; ``takes`` holds the ``CompensationRequest`` fields its compensation
     uses (any other field given is refused by the request, naming the option);
-    ``why_unused``: for some of the others, why (said with the refusal)."""
+    ``why_unused``: for some of the others, why (said with the refusal).
+    A machine may also have ``own_job(request)`` (optional, so not part of the protocol's
+    check): how a program is compensated on it. Absent or returning None: by the shared job
+    (``postproc.jobs.compensate_files``: each program read with ``read_program``, compensated
+    target by target by ``compensate_with``, its texts from ``write_texts`` read back and
+    written, all files or none) — the robot's way, and a script's gantry's. Otherwise the
+    machine runs a job of its own for ``request`` (a ``CompensationRequest``), writes the files
+    itself (all or none) and returns the lines of its account (a calibrated five-axis machine:
+    its error grid, rotary solutions and read-back check).
+    """
 
     kind: str
     source: str
@@ -56,15 +65,4 @@ class Machine(Protocol):
 
     def write_texts(self, tp: Toolpath, new: Toolpath) -> list[str]:
         """The texts of ``tp``'s sources with the numbers of ``new`` spliced in."""
-        ...
-
-    def own_job(self, request) -> Sequence[str] | None:
-        """How a program is compensated on this machine. None: by the shared job
-        (``postproc.jobs.compensate_files``: each program read with ``read_program``,
-        compensated target by target by ``compensate_with``, its texts from ``write_texts`` read
-        back and written, all files or none) — the robot's way, and a script's gantry's.
-        Otherwise the machine runs a job of its own for ``request`` (a ``CompensationRequest``:
-        its ``programs``, ``output`` and the fields in ``takes``), writes the files itself (all or
-        none) and returns the lines of its account (a calibrated five-axis machine: its error
-        grid, rotary solutions and read-back check)."""
         ...

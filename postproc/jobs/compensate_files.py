@@ -69,7 +69,9 @@ def compensate_files(request: CompensationRequest, log: JobLog | None = None) ->
     status (0, or 1 where a batch had programs that failed). Raises the library's typed errors
     (nothing written) for the caller to map."""
     log = log or JobLog(Console(**_PLAIN), Console(stderr=True, **_PLAIN))
-    own = request.machine.own_job(request)
+    # own_job is optional: a machine class written before it existed takes the shared job.
+    own_job = getattr(request.machine, "own_job", None)
+    own = own_job(request) if own_job is not None else None
     if own is not None:
         for line in own:
             log.out.print(line)
