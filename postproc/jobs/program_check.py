@@ -41,8 +41,9 @@ class ModelMismatchError(InputError):
 
 def check_model_fits(tp: Toolpath, model, model_path: str, robot_name: str | None = None, allow: bool = False) -> list[str]:
     """Every mismatch between the program and the model, as errors (or notes with ``allow``)."""
+    robot, tools, payload, maker = _findings(tp, model, model_path, robot_name)
     # The maker's last: where the tool or payload differ too, the message names them first.
-    problems = _robot(tp, model, model_path, robot_name) + _tools(tp, model, model_path) + _payload(tp, model, model_path) + _maker(tp, model.robot, model_path)
+    problems = robot + tools + payload + maker
     if problems and not allow:
         more = f" (and {len(problems) - 1} more)" if len(problems) > 1 else ""
         raise ModelMismatchError(f"{problems[0]}{more}; give the model fitted for this set-up, or --allow-model-mismatch if the difference is known to be harmless")
@@ -54,8 +55,13 @@ def mismatch_keys(tp: Toolpath, model, model_path: str, robot_name: str | None =
     (a streamed chunk and the first): a tool's message without the place of its first target
     (each part has its own first), every other message as it is (a payload statement's and a
     joint target's name their own line, the same in every part that holds them)."""
-    tools = {m.split(": ", 1)[-1] for m in _tools(tp, model, model_path)}
-    return tools | set(_robot(tp, model, model_path, robot_name) + _payload(tp, model, model_path) + _maker(tp, model.robot, model_path))
+    robot, tools, payload, maker = _findings(tp, model, model_path, robot_name)
+    return {m.split(": ", 1)[-1] for m in tools} | set(robot + payload + maker)
+
+
+def _findings(tp: Toolpath, model, model_path: str, robot_name: str | None) -> tuple[list[str], list[str], list[str], list[str]]:
+    """The mismatches of each kind: robot, tools, payload, the robot maker's conventions."""
+    return _robot(tp, model, model_path, robot_name), _tools(tp, model, model_path), _payload(tp, model, model_path), _maker(tp, model.robot, model_path)
 
 
 def _robot(tp: Toolpath, model, model_path: str, robot_name: str | None) -> list[str]:
