@@ -29,7 +29,6 @@ from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
 from .harmonic_scan import Residual, choose_terms
 from .measurements import MeasurementSet
-from .path_history import previous_targets
 from .predictor_plugins import PREDICTORS
 from .term_selection import select_terms as best_subset
 from .term_selection import term_labels
@@ -447,8 +446,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         if feature_kind not in GP_KINDS:
             raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
-    history = meas.previous_q_deg if meas.previous_q_deg is not None else previous_targets(meas.q_deg)  # rows in measured order
-    X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference, history)
+    X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference, meas.path_history())
     if kind == "gpr":
         est = GPRPredictor(anisotropic=True, random_state=seed, **gp_options).fit(X, target, progress=progress)
     elif kind == "pso-bp":

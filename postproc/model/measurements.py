@@ -18,6 +18,8 @@ import numpy as np
 from postproc.errors import MeasurementError
 from postproc.files import write_all
 
+from .path_history import previous_targets
+
 JOINTS = tuple(f"q{i}" for i in range(1, 7))
 MEASURED = ("mx", "my", "mz")
 NOMINAL = ("x", "y", "z")
@@ -47,6 +49,11 @@ class MeasurementSet:
 
     def __len__(self) -> int:
         return self.q_deg.shape[0]
+
+    def path_history(self) -> np.ndarray:
+        """(N, k, 6) the targets before each pose: ``previous_q_deg`` where the set carries it (a
+        subset of a larger set), else from its own rows, which are in the order they were measured."""
+        return self.previous_q_deg if self.previous_q_deg is not None else previous_targets(self.q_deg)
 
     def has(self, group: str) -> bool:
         """Whether the optional column group ('force', 'approach', 'temp', 't', 'nominal') is present."""

@@ -35,7 +35,6 @@ from .effects import EffectSum
 from .errormodel import ErrorModel
 from .identify import fit, fit_predictor, refit_base, residuals
 from .measurements import MeasurementSet
-from .path_history import previous_targets
 
 PROTOCOLS = ("random", "points", "sessions", "series")
 SESSION_GAP_S = 1800.0  # a pause of more than 30 min between two poses starts a new session
@@ -130,8 +129,7 @@ def with_order_columns(effects: EffectSum, meas: MeasurementSet) -> MeasurementS
     """Columns an effect infers from the row order (the approach directions of backlash),
     and the targets before each pose (a predictor's --gp-features tcp+joints+travel),
     taken from the whole set before it is split: a subset's rows are no longer consecutive."""
-    if meas.previous_q_deg is None:
-        meas = replace(meas, previous_q_deg=previous_targets(meas.q_deg))
+    meas = replace(meas, previous_q_deg=meas.path_history())
     for effect in effects:
         columns = effect.path_columns(meas.q_deg)
         if "approach" in columns and meas.approach is None:
