@@ -80,12 +80,17 @@ class LineIndex:
     def line(self, offset) -> np.ndarray | int:
         return np.searchsorted(self.starts, offset, side="right")
 
-    def error(self, path: str, offset: int, message: str) -> ParseError:
+    def position(self, offset: int) -> tuple[int, int]:
+        """(line, column), both 1-based, of one offset."""
         line = int(self.line(offset))
+        return line, offset - int(self.starts[line - 1]) + 1
+
+    def error(self, path: str, offset: int, message: str) -> ParseError:
+        line, column = self.position(offset)
         start = int(self.starts[line - 1])
         end = self.text.find("\n", start)
         excerpt = self.text[start : end if end >= 0 else len(self.text)].rstrip("\r")
-        return ParseError(path, line, offset - start + 1, message, excerpt[:200])
+        return ParseError(path, line, column, message, excerpt[:200])
 
 
 @dataclass

@@ -25,6 +25,7 @@ from postproc.robot.frames import abc_to_quat_wxyz
 from ...emit.load_plan import LoadState, Statement, in_force
 from ...emit.tool_load import ToolLoad
 from ...ir import Toolpath
+from ...parse.common import LineIndex
 from ...parse.keyword_scan import KeywordIndex
 from ..base import NUMBER
 
@@ -75,16 +76,30 @@ def _masses(tp: Toolpath, index: list[KeywordIndex]) -> list[tuple[float, str]]:
     for doc, ix in zip(tp.sources, index):
         if doc.role == "config":
             continue  # LOAD_DATA declarations: only those the program selects count
+        where = _Where(doc)
         for pattern in (_LOAD_M, _LOAD_AGG):
-            out += [(float(m.group(1)), _where(doc, m)) for m in ix.matches(pattern, ("$load",), line_start=True)]
+            out += [(float(m.group(1)), where(m.start())) for m in ix.matches(pattern, ("$load",), line_start=True)]
         for pattern, keyword in ((_LOAD_REF, "$load"), (_BAS_TOOL, "#tool")):
-            out += [(table[int(m.group(1))], _where(doc, m) + f" (LOAD_DATA[{m.group(1)}])")
+            out += [(table[int(m.group(1))], where(m.start()) + f" (LOAD_DATA[{m.group(1)}])")
                     for m in ix.matches(pattern, (keyword,), line_start=True) if int(m.group(1)) in table]
     return out
 
 
-def _where(doc, m: re.Match) -> str:
-    return f"{doc.path}, line {doc.text.count(chr(10), 0, m.start()) + 1}"
+class _Where:
+    """Line and column of offsets in one file; its lines are indexed at the first statement
+    found in it (most files state no load)."""
+
+    def __init__(self, doc):
+        self.doc, self.lines = doc, None
+
+    def position(self, offset: int) -> tuple[int, int]:
+        if self.lines is None:
+            self.lines = LineIndex(self.doc.text)
+        return self.lines.position(offset)
+
+    def __call__(self, offset: int) -> str:
+        """'FILE, line N' (the payload check's messages)."""
+        return f"{self.doc.path}, line {self.position(offset)[0]}"
 
 
 def _aggregate(text: str, open_at: int) -> str:
@@ -121,10 +136,11 @@ def _in_force(tp: Toolpath, index: list[KeywordIndex]) -> tuple[list[LoadState |
     for f, (doc, ix) in enumerate(zip(tp.sources, index)):
         if doc.role == "config":
             continue
+        where = _Where(doc)
         for m in ix.matches(_STATEMENT, ("$load", "#tool"), line_start=True):
             start = m.start() + len(m.group(0)) - len(m.group(0).lstrip())
-            line = doc.text.count("\n", 0, start) + 1
-            at = f"{doc.path}:{line}:{start - (doc.text.rfind(chr(10), 0, start) + 1) + 1}"
+            line, column = where.position(start)
+            at = f"{doc.path}:{line}:{column}"
             if m.group(1) == "{":
                 load = _load_of(_aggregate(doc.text, m.end(1) - 1))
             elif m.group(3) is not None:

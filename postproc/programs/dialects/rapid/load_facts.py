@@ -19,6 +19,7 @@ from postproc.errors import InputError
 
 from ...emit.load_plan import Statement, in_force
 from ...ir import Toolpath
+from ...parse.common import LineIndex
 from ...parse.keyword_scan import KeywordIndex
 from ..base import NUMBER
 
@@ -83,13 +84,14 @@ def with_load_facts(tp: Toolpath) -> Toolpath:
     declared, grips, tloads = [], [], []
     for f, doc in enumerate(tp.sources):
         text, index = doc.text, KeywordIndex(doc.text)  # the patterns are tried only where their keyword stands
+        place = _Places(tp, f)
         for kind, pattern in _DECLARATIONS.items():
             for m in index.matches(pattern, (kind,)):
                 numbers = tuple(float(v) for v in re.findall(NUMBER, text[m.end() : text.find(";", m.end())]))
                 on_flange = kind == "loaddata" or _ROBHOLD.match(text, m.end()) is not None
-                declared.append(Declared(kind, m.group(1), numbers, on_flange, _place(tp, f, m.start())))
-        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), _place(tp, f, m.start())) for m in index.matches(_GRIP, ("gripload",))]
-        tloads += [Used(m.group(1), m.group(0).strip(), _place(tp, f, m.start())) for m in index.matches(_TLOAD, ("\\tload",))]
+                declared.append(Declared(kind, m.group(1), numbers, on_flange, place(m.start())))
+        grips += [Used(m.group(1), m.group(0).strip().rstrip(";"), place(m.start())) for m in index.matches(_GRIP, ("gripload",))]
+        tloads += [Used(m.group(1), m.group(0).strip(), place(m.start())) for m in index.matches(_TLOAD, ("\\tload",))]
     grip_at, refused = _grips_in_force(tp, grips)
     loads = RapidLoads(tuple(declared), tuple(grips), tuple(tloads), refused)
     return replace(tp, facts={**tp.facts, LOADS: loads}, extras={**tp.extras, GRIP: grip_at})
@@ -107,7 +109,16 @@ def _grips_in_force(tp: Toolpath, grips: list[Used]) -> tuple[np.ndarray, str]:
     return np.array(live + [-1], dtype=int)[at], ""
 
 
-def _place(tp: Toolpath, f: int, start: int) -> Place:
-    text = tp.sources[f].text
-    line_start = text.rfind("\n", 0, start) + 1
-    return Place(f, tp.sources[f].path, text.count("\n", 0, start) + 1, start - line_start + 1, "!" in text[line_start:start], start)
+class _Places:
+    """The ``Place`` of an offset in file ``f`` of ``tp``; the file's lines are indexed at the
+    first statement found in it (most files state no load)."""
+
+    def __init__(self, tp: Toolpath, f: int):
+        self.f, self.doc, self.lines = f, tp.sources[f], None
+
+    def __call__(self, start: int) -> Place:
+        if self.lines is None:
+            self.lines = LineIndex(self.doc.text)
+        line, column = self.lines.position(start)
+        commented = "!" in self.doc.text[start - column + 1 : start]
+        return Place(self.f, self.doc.path, line, column, commented, start)
