@@ -9,7 +9,7 @@ import re
 import numpy as np
 
 from postproc.programs.emit.load_plan import _END, _START, _Lines, _motions_in_routine
-from postproc.programs.parse.keyword_scan import keyword_matches
+from postproc.programs.parse.keyword_scan import KeywordIndex
 
 PIECES = ["$LOAD = {M 5, CM {X 1}}", "$load.m = 3", "  BAS(#TOOL, 2)", "LOAD_DATA[3] = {M 7}", "GripLoad p;", "x $LOAD = 1",
           "MoveL t\\TLoad:=q;", "tooldata t := [TRUE", "mytooldata t := [", "\r", "{", "}", "; $LOAD.M = 9", " ", "$LOAD = {", "LOAD_DATA[4] = {"]
@@ -27,7 +27,7 @@ def test_keyword_matches_are_finditers():
     for _ in range(1000):
         text = "".join(PIECES[i] + ("\n" if rng.random() < 0.5 else "") for i in rng.integers(0, len(PIECES), int(rng.integers(1, 12))))
         for pattern, keywords, anchored in PATTERNS:
-            got = [(m.start(), m.end()) for m in keyword_matches(pattern, text, keywords, line_start=anchored)]
+            got = [(m.start(), m.end()) for m in KeywordIndex(text).matches(pattern, keywords, line_start=anchored)]
             assert got == [(m.start(), m.end()) for m in pattern.finditer(text)], (pattern.pattern, text)
 
 

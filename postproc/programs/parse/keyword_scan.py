@@ -49,7 +49,3 @@ class KeywordIndex:
                 end = max(m.end(), start + 1)
         return out
 
-
-def keyword_matches(pattern: re.Pattern, text: str, keywords: tuple[str, ...], line_start: bool = False) -> list[re.Match]:
-    """``KeywordIndex(text).matches(...)`` for one pattern over one text."""
-    return KeywordIndex(text).matches(pattern, keywords, line_start)
