@@ -9,6 +9,7 @@ from postproc.model.harmonic_scan import (
     Residual,
     amplitude_phase,
     choose_terms,
+    per_group_sums,
     periodogram,
     term_columns,
 )
@@ -50,3 +51,13 @@ def test_amplitude_and_phase_of_one_term():
     amp, phase = amplitude_phase(res, (2, 17))
     assert amp == pytest.approx(1e3 * np.hypot(0.02, -0.01), rel=0.05)
     assert phase == pytest.approx(np.degrees(np.arctan2(-0.01, 0.02)), abs=3.0)
+
+
+def test_per_group_sums_are_the_sums_over_each_groups_training_rows():
+    rng = np.random.default_rng(2)
+    groups = rng.integers(0, 40, 500)
+    train = rng.random(500) < 0.8
+    values = rng.random((4, 500))
+    train_groups = np.unique(groups[train])
+    expected = np.array([[row[train & (groups == g)].sum() for g in train_groups] for row in values])
+    np.testing.assert_allclose(per_group_sums(values, groups, train, train_groups), expected, rtol=1e-12)

@@ -115,6 +115,13 @@ def _columns_of(path: list[int]) -> np.ndarray:
     return np.ravel([[2 * t, 2 * t + 1] for t in path]).astype(int)
 
 
+def per_group_sums(values: np.ndarray, groups: np.ndarray, train: np.ndarray, train_groups: np.ndarray) -> np.ndarray:
+    """(sizes, len(train_groups)): each row of ``values`` (sizes, N) summed over the training
+    rows of each group (``train_groups``: the sorted ids of the training rows' groups)."""
+    group_index = np.searchsorted(train_groups, groups[train])
+    return np.stack([np.bincount(group_index, weights=row[train], minlength=len(train_groups)) for row in values])
+
+
 def _one_standard_error(per_group: np.ndarray, n_rows: int) -> int:
     """The smallest size whose held-out MSE is within one standard error (paired over the
     groups) of the best size's."""
@@ -143,7 +150,7 @@ def choose_terms(res: Residual, groups: np.ndarray, train: np.ndarray, candidate
         for size in range(max_terms + 1):
             pred = fitted_prediction(design, res.base, target, fit_rows, _columns_of(path[:size]), held)
             sq[size, fold == f] = ((target[held] - pred) ** 2).reshape(-1, 3).sum(axis=1)
-    per_group = np.array([[row[groups == g].sum() for g in train_groups] for row in sq])
+    per_group = per_group_sums(sq, groups, train, train_groups)
     size = _one_standard_error(per_group, int(train.sum()))
     say("forward selection on all training rows")
     path = forward_path(*reduced_normal(design, res.base, target, np.repeat(train, 3))[:2], len(candidates), size)
