@@ -25,7 +25,7 @@ from matplotlib.patches import FancyArrowPatch, FancyBboxPatch  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 # The graph and the floors are the import test's own, so the picture shows what the test checks.
 sys.path.insert(0, str(ROOT / "tests"))
-from test_import_graph import FLOORS, circles, import_graph  # noqa: E402
+from test_import_graph import FLOORS, GROUND, circles, import_graph  # noqa: E402
 
 GROUND_ROOM = "ground"
 TOP_ROOM = "top"  # postproc/__init__.py and __main__.py: the entry points
@@ -37,7 +37,7 @@ def room(module: str) -> str:
     parts = module.split(".")
     if len(parts) > 1 and parts[1] in FLOORS:
         return parts[1]
-    if len(parts) > 1 and parts[1] in {"errors", "files", "progress", "threads", "moved"}:
+    if len(parts) > 1 and parts[1] in GROUND:
         return GROUND_ROOM
     return PLUGINS_ROOM if module == "postproc.plugins" else TOP_ROOM
 
@@ -85,7 +85,7 @@ def draw(arrows: Counter, modules_per_room: Counter, output: Path) -> None:
                                      lw=0.6 + 3.0 * count / widest, color="tab:red" if up else "0.45", alpha=0.55,
                                      connectionstyle="arc3,rad=0.08", zorder=1))
     for name, (x, y) in where.items():
-        label = f"{name}/" if name in FLOORS else {GROUND_ROOM: "errors, files, progress, threads, moved", PLUGINS_ROOM: "plugins.py",
+        label = f"{name}/" if name in FLOORS else {GROUND_ROOM: ", ".join(sorted(GROUND)), PLUGINS_ROOM: "plugins.py",
                                                     TOP_ROOM: "__init__, __main__"}[name]
         half = max(0.075, 0.0045 * max(len(line) for line in label.splitlines()))  # wide enough for its label
         ax.add_patch(FancyBboxPatch((x - half, y - 0.2), 2 * half, 0.4, boxstyle="round,pad=0.01", fc="white", ec="tab:blue", lw=1.2, zorder=2))
