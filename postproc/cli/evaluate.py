@@ -52,7 +52,7 @@ def evaluate_cmd(
         _check_registrable(meas, data)
         error_model = refit_base(error_model, data)
     stats = Stats.of(residuals(error_model, data))
-    outside = outside_poses(error_model, data.q_deg)
+    outside = outside_poses(error_model, data.q_deg, data.path_history())
     if json_out:
         doc = {"n": stats.n, "rms_mm": stats.rms_mm, "mean_mm": stats.mean_mm, "max_mm": stats.max_mm}
         if region_json:

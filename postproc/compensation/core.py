@@ -36,7 +36,7 @@ from postproc.errors import InputError, JobError
 from postproc.model import fast_model
 from postproc.model.effects import consumers_of
 from postproc.model.errormodel import ErrorModel
-from postproc.model.path_history import previous_targets
+from postproc.model.path_history import path_travel_mm, previous_targets
 from postproc.programs import arcs
 from postproc.programs.ir import Kind, Toolpath
 from postproc.robot import kinematics as kin
@@ -658,7 +658,10 @@ def _outside_region(problem: _Problem, sol: _Solution, model: ErrorModel) -> dic
     if model.coverage is None:
         return None
     q = np.where(np.isnan(sol.q), problem.q_ref, sol.q)
-    outside = model.coverage.outside(q, problem.goal)
+    travel = None
+    if model.coverage.travel_log1p is not None:  # the predictor reads the path: the program's moves must be like the measured ones
+        travel = path_travel_mm(model.robot, model.tool_mm, q, previous_targets(problem.order_q)[problem.rows])
+    outside = model.coverage.outside(q, problem.goal, travel)
     return {int(problem.rows[i]): outside.reason(int(i), model.coverage) for i in np.nonzero(outside.mask)[0]}
 
 

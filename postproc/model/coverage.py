@@ -11,17 +11,25 @@ kinematics of the measured joints with the model's tool, so in the robot's base 
 whatever frame the tracker measured in), stored as its vertices, with the radius and z
 ranges for summaries. Distances outside the hull are the largest facet violation: exact
 where the nearest part of the hull is a facet, a lower bound near its edges and corners.
+
+A model whose predictor reads the path before each pose (``--gp-features tcp+joints+travel``)
+also records the TCP travels it was measured with (``travel_log1p``): the move into each pose
+and the two before, as the predictor sees them, log(1 + mm). UR10 Series A has moves of
+0-1.7 mm (the probe turned at a grid point) and of 84-1301 mm (to another point), none in
+between: a program of 1-50 mm moves asks the predictor about moves it never saw.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.spatial import ConvexHull, QhullError
 
 from postproc.errors import ModelFileError
 from postproc.robot import kinematics as kin
+
+from .path_history import path_travel_mm, previous_targets
 
 # A target this close to the measured region is inside it. The measured poses are samples:
 # the hull of N poses scattered through a volume V falls short of the volume sampled by
@@ -35,6 +43,12 @@ JOINT_TOLERANCE_DEG = 1.0
 JOINT_TOLERANCE_FRACTION = 0.05
 HULL_TOLERANCE_MIN_MM = 10.0
 HULL_TOLERANCE_MAX_MM = 100.0
+# A travel is inside the measured ones where its log(1 + mm) lies this close to one of them:
+# a factor of about 1.65 in travel (10 mm is inside where 6-16 mm moves were measured). The
+# predictor's travel features are in these units; Series A's two groups of moves lie 3.8
+# apart, so the tolerance is well short of bridging its gap.
+TRAVEL_TOLERANCE_LOG1P = 0.5
+TRAVEL_ROUND_LOG1P = 0.05  # the model file keeps the measured travels to this step: a few hundred numbers whatever the poses
 
 COVERAGE_KEY = "coverage"  # the model file's key (postproc.model.model_io)
 _HULL_BLOCK = 4096  # rows per product in Coverage.hull_excess
@@ -50,6 +64,9 @@ class Coverage:
     radius_mm: tuple[float, float]  # distance from the base z axis
     z_mm: tuple[float, float]
     hull_vertices_mm: np.ndarray | None  # (V, 3), None where the poses span no volume
+    # Per step back along the path (the move into the pose, the one before, ...): the sorted
+    # distinct log(1 + mm) TCP travels measured; None where the model does not read the path.
+    travel_log1p: tuple[np.ndarray, ...] | None = None
 
     @classmethod
     def of(cls, robot, tool_mm, q_deg: np.ndarray) -> "Coverage":
@@ -98,6 +115,32 @@ class Coverage:
             out[start : start + _HULL_BLOCK] = block.max(axis=1)
         return np.maximum(out, 0.0)
 
+    def with_travels(self, travel_mm: np.ndarray) -> "Coverage":
+        """This region with the measured TCP travels ``travel_mm`` (N, k) recorded (see travel_log1p)."""
+        logs = np.round(np.log1p(np.asarray(travel_mm, dtype=float)) / TRAVEL_ROUND_LOG1P) * TRAVEL_ROUND_LOG1P
+        return replace(self, travel_log1p=tuple(np.unique(column) for column in logs.T))
+
+    def travel_excess(self, travel_mm: np.ndarray) -> np.ndarray:
+        """(N,) log(1 + mm) from each pose's travels (N, k) to the nearest measured travel, the
+        largest over the k steps (0 where the model records no travels)."""
+        travel = np.asarray(travel_mm, dtype=float)
+        if self.travel_log1p is None:
+            return np.zeros(len(travel))
+        out = np.zeros(len(travel))
+        for column, measured in zip(np.log1p(travel).T, self.travel_log1p):
+            at = np.searchsorted(measured, column)  # the measured travel above each, then the one below
+            above, below = measured[np.minimum(at, len(measured) - 1)], measured[np.maximum(at - 1, 0)]
+            out = np.maximum(out, np.minimum(np.abs(column - above), np.abs(column - below)))
+        return out
+
+    def travel_ranges_mm(self) -> str:
+        """The measured travels of the move into a pose, as ranges in mm, for messages."""
+        measured = self.travel_log1p[0]
+        breaks = np.nonzero(np.diff(measured) > TRAVEL_TOLERANCE_LOG1P)[0]
+        starts, ends = np.r_[0, breaks + 1], np.r_[breaks, len(measured) - 1]
+        spans = [f"{np.expm1(measured[a]):.1f}" + ("" if a == b else f"-{np.expm1(measured[b]):.1f}") for a, b in zip(starts, ends)]
+        return ", ".join(spans) + " mm"
+
     @property
     def hull_tolerance_mm(self) -> float:
         """How far outside the hull a pose may lie and still be inside the sampled region:
@@ -107,8 +150,10 @@ class Coverage:
         spacing = (ConvexHull(self.hull_vertices_mm).volume / self.poses) ** (1.0 / 3.0)
         return float(np.clip(spacing, HULL_TOLERANCE_MIN_MM, HULL_TOLERANCE_MAX_MM))
 
-    def outside(self, q_deg: np.ndarray, xyz_mm: np.ndarray) -> "Outside":
-        """Which poses lie outside the region beyond the tolerances, and by how much."""
+    def outside(self, q_deg: np.ndarray, xyz_mm: np.ndarray, travel_mm: np.ndarray | None = None) -> "Outside":
+        """Which poses lie outside the region beyond the tolerances, and by how much;
+        ``travel_mm`` (N, k): their TCP travels along the path, checked where the model
+        records travels (see travel_log1p)."""
         joints = self.joint_excess(q_deg)
         joints_known = ~np.isnan(joints).any(axis=1)
         joints = np.nan_to_num(joints)
@@ -119,7 +164,11 @@ class Coverage:
         worst_deg = joints[np.arange(len(joints)), worst_joint]
         tolerance = self.hull_tolerance_mm
         out = (beyond.any(axis=1) & joints_known) | (cart > tolerance)
-        return Outside(out, worst_joint, worst_deg, cart, tolerance, self.joint_tolerance_deg)
+        travel = None
+        if travel_mm is not None and self.travel_log1p is not None:
+            travel = np.asarray(travel_mm, dtype=float)
+            out |= self.travel_excess(travel) > TRAVEL_TOLERANCE_LOG1P
+        return Outside(out, worst_joint, worst_deg, cart, tolerance, self.joint_tolerance_deg, travel)
 
     # ---------------------------------------------------------------- model file
 
@@ -131,6 +180,7 @@ class Coverage:
             "radius_mm": [round(v, 3) for v in self.radius_mm],
             "z_mm": [round(v, 3) for v in self.z_mm],
             "hull_vertices_mm": None if self.hull_vertices_mm is None else np.round(self.hull_vertices_mm, 2).tolist(),
+            **({} if self.travel_log1p is None else {"travel_log1p": [np.round(column, 4).tolist() for column in self.travel_log1p]}),
         }
 
     @classmethod
@@ -156,7 +206,7 @@ class Coverage:
         if (lower > upper).any():
             raise ModelFileError(f"{source}: key '{COVERAGE_KEY}.joint_lower_deg': above joint_upper_deg")
         radius, z = numbers("radius_mm", (2,)), numbers("z_mm", (2,))
-        return cls(poses, lower, upper, (float(radius[0]), float(radius[1])), (float(z[0]), float(z[1])), hull)
+        return cls(poses, lower, upper, (float(radius[0]), float(radius[1])), (float(z[0]), float(z[1])), hull, _travels(doc, source))
 
 
 @dataclass(frozen=True)
@@ -170,6 +220,7 @@ class Outside:
     cartesian_mm: np.ndarray
     tolerance_mm: float  # Cartesian: a pose this close to the hull is inside
     tolerance_deg: np.ndarray  # (6,) per joint: this far beyond the fitted range is inside
+    travel_mm: np.ndarray | None = None  # (N, k) the poses' TCP travels, where they were checked
 
     def reason(self, i: int, coverage: Coverage) -> str:
         """Why pose ``i`` is outside, in words."""
@@ -180,12 +231,29 @@ class Outside:
                          f"[{coverage.joint_lower_deg[j]:.1f}, {coverage.joint_upper_deg[j]:.1f}] (tolerance {self.tolerance_deg[j]:.1f} deg)")
         if self.cartesian_mm[i] > self.tolerance_mm:
             parts.append(f"the TCP is {self.cartesian_mm[i]:.0f} mm outside the measured region (tolerance {self.tolerance_mm:.0f} mm)")
+        if self.travel_mm is not None and coverage.travel_excess(self.travel_mm[i : i + 1])[0] > TRAVEL_TOLERANCE_LOG1P:
+            moves = ", ".join(f"{v:.1f}" for v in self.travel_mm[i])
+            parts.append(f"its TCP travels along the path ({moves} mm: the move into it, then the ones before) are unlike the moves "
+                         f"the model's predictor was measured with (into a pose: {coverage.travel_ranges_mm()})")
         return "outside the region the model was measured in: " + " and ".join(parts)
 
     def summary(self) -> dict:
         """Count and worst distances, for --json."""
         return {"count": int(self.mask.sum()), "worst_joint_deg": float(self.joint_deg.max(initial=0.0)),
                 "worst_mm": float(self.cartesian_mm.max(initial=0.0)), "tolerance_deg": self.tolerance_deg.round(3).tolist(), "tolerance_mm": self.tolerance_mm}
+
+
+def _travels(doc: dict, source: str) -> tuple[np.ndarray, ...] | None:
+    """The model file's ``coverage.travel_log1p`` (absent in files of models that do not read the path)."""
+    if doc.get("travel_log1p") is None:
+        return None
+    try:
+        columns = tuple(np.array(column, dtype=float) for column in doc["travel_log1p"])
+    except (TypeError, ValueError):
+        columns = ()
+    if not columns or any(c.ndim != 1 or not len(c) or not np.isfinite(c).all() or (np.diff(c) < 0).any() for c in columns):
+        raise ModelFileError(f"{source}: key '{COVERAGE_KEY}.travel_log1p': must be lists of increasing finite numbers, one per step along the path")
+    return columns
 
 
 def _hull_vertices(points: np.ndarray) -> np.ndarray | None:
@@ -204,14 +272,19 @@ def _facets(vertices: np.ndarray) -> np.ndarray:
     return ConvexHull(vertices).equations
 
 
-def outside_poses(model, q_deg: np.ndarray) -> Outside | None:
+def outside_poses(model, q_deg: np.ndarray, previous_q_deg: np.ndarray | None = None) -> Outside | None:
     """Which measured poses (joints ``q_deg``, the model's tool) lie outside the region the
-    model was fitted on; None where the model records none."""
+    model was fitted on; None where the model records none. Where it records travels, the
+    poses' path is ``previous_q_deg`` (N, k, 6), else their rows' order (the measured order)."""
     if model.coverage is None:
         return None
     q = np.asarray(q_deg, dtype=float)
     tcp = kin.fk(model.robot, q, tool=model.tool_mm)[:, :3, 3]
-    return model.coverage.outside(q, tcp)
+    travel = None
+    if model.coverage.travel_log1p is not None:
+        history = previous_targets(q) if previous_q_deg is None else previous_q_deg
+        travel = path_travel_mm(model.robot, model.tool_mm, q, history)
+    return model.coverage.outside(q, tcp, travel)
 
 
 def describe_outside(outside: Outside | None, poses: int) -> str:
@@ -222,5 +295,6 @@ def describe_outside(outside: Outside | None, poses: int) -> str:
     if not s["count"]:
         return f"all {poses} poses lie within the joint ranges and region the model was fitted on"
     worst_joint = int(outside.joint[int(np.argmax(outside.joint_deg))])
-    return (f"{s['count']} of {poses} poses lie outside the joint ranges or region the model was fitted on (the model extrapolates there): "
+    what = "joint ranges or region" if outside.travel_mm is None else "joint ranges, region or moves"
+    return (f"{s['count']} of {poses} poses lie outside the {what} the model was fitted on (the model extrapolates there): "
             f"worst q{worst_joint + 1} {s['worst_joint_deg']:.1f} deg beyond its fitted range, TCP up to {s['worst_mm']:.0f} mm outside the measured region")

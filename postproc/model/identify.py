@@ -29,6 +29,7 @@ from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
 from .harmonic_scan import Residual, choose_terms
 from .measurements import MeasurementSet
+from .path_history import path_travel_mm
 from .predictor_plugins import PREDICTORS
 from .term_selection import select_terms as best_subset
 from .term_selection import term_labels
@@ -433,7 +434,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         Residual,
         TrGPRPredictor,
     )
-    from .learn.features import GP_KINDS, features
+    from .learn.features import GP_KINDS, HISTORY_KINDS, features
 
     if kind not in FEATURES and kind not in PREDICTORS:
         raise IdentificationError(f"unknown predictor '{kind}' (known: {', '.join([*FEATURES, *PREDICTORS])})")
@@ -461,4 +462,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         Xs = features(model.robot, model.tool_mm, source.q_deg, feature_kind)
         ys = source.measured_mm - physics.predict(source)
         est = TrGPRPredictor(random_state=seed).fit(X, target, Xs, ys)
-    return _replace(model, residual=Residual(kind, feature_kind, est, reference))
+    coverage = model.coverage
+    if coverage is not None and feature_kind in HISTORY_KINDS:  # the predictor reads the path: record the moves it was measured with
+        coverage = coverage.with_travels(path_travel_mm(model.robot, model.tool_mm, meas.q_deg, meas.path_history()))
+    return _replace(model, residual=Residual(kind, feature_kind, est, reference), coverage=coverage)

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from postproc.robot import kinematics as kin
+
 #: how many targets back the history reaches
 HISTORY_TARGETS = 3
 
@@ -27,3 +29,17 @@ def previous_targets(q_path_deg: np.ndarray, depth: int = HISTORY_TARGETS) -> np
         index = np.maximum(np.arange(len(q)) - back, 0)
         out[:, back - 1] = q[index]
     return out
+
+
+def path_travel_mm(robot, tool_mm, q_deg: np.ndarray, previous_q_deg: np.ndarray) -> np.ndarray:
+    """(N, k): ``travel_mm`` of the poses at joints ``q_deg`` (N, 6)."""
+    return travel_mm(robot, tool_mm, kin.fk(robot, np.asarray(q_deg, dtype=float), tool=np.asarray(tool_mm, dtype=float)), previous_q_deg)
+
+
+def travel_mm(robot, tool_mm, poses: np.ndarray, previous_q_deg: np.ndarray) -> np.ndarray:
+    """(N, k): nominal TCP distance (mm) of the move into each pose (``poses``, (N, 4, 4))
+    and of the k - 1 moves before it (``previous_q_deg``, (N, k, 6), nearest target first)."""
+    n, depth, _ = previous_q_deg.shape
+    before = kin.fk(robot, previous_q_deg.reshape(-1, 6), tool=np.asarray(tool_mm, dtype=float))[:, :3, 3].reshape(n, depth, 3)
+    chain = np.concatenate([poses[:, None, :3, 3], before], axis=1)  # this pose, then back along the path
+    return np.linalg.norm(chain[:, :-1] - chain[:, 1:], axis=2)

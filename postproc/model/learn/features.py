@@ -26,6 +26,8 @@ import numpy as np
 from postproc.robot import kinematics as kin
 from postproc.robot.frames import matrix_to_abc
 
+from ..path_history import travel_mm
+
 KINDS = ("pose", "joints+disp", "position", "tcp+joints", "joints", "tcp+joints+travel")
 GP_KINDS = ("pose", "tcp+joints", "joints", "tcp+joints+travel")
 #: the kinds that read the targets before each pose (``previous_q_deg``)
@@ -53,12 +55,3 @@ def features(robot, tool_mm, q_deg: np.ndarray, kind: str, reference: np.ndarray
         ref = np.zeros(3) if reference is None else np.asarray(reference, dtype=float)
         return np.hstack([np.asarray(q_deg, dtype=float), poses[:, :3, 3] - ref])
     raise ValueError(f"unknown feature kind '{kind}' ({', '.join(KINDS)})")
-
-
-def travel_mm(robot, tool_mm, poses: np.ndarray, previous_q_deg: np.ndarray) -> np.ndarray:
-    """(N, k): nominal TCP distance (mm) of the move into each pose (``poses``, (N, 4, 4))
-    and of the k - 1 moves before it (``previous_q_deg``, (N, k, 6), nearest target first)."""
-    n, depth, _ = previous_q_deg.shape
-    before = kin.fk(robot, previous_q_deg.reshape(-1, 6), tool=np.asarray(tool_mm, dtype=float))[:, :3, 3].reshape(n, depth, 3)
-    chain = np.concatenate([poses[:, None, :3, 3], before], axis=1)  # this pose, then back along the path
-    return np.linalg.norm(chain[:, :-1] - chain[:, 1:], axis=2)
