@@ -16,7 +16,12 @@ Robotics and Automation 12(3), 1996, 368-374). Orders 1 and 2 are separable from
 geometry and the compliance only on a joint that turns over much of a revolution: over a
 range of less than about 90 degrees sin/cos of order 1 and 2 are nearly a constant, a slope
 and a curvature, which the joint offset, the DH errors and the gravity compliance already
-carry; the candidate search then finds no support for them, and says so.
+carry; the candidate search then finds no support for them, and says so. An output-side
+angle sensor (an integrated joint module's magnetic encoder) errs by a Fourier series in
+the shaft angle as well, at orders its construction sets (Hu, Zhan, Han, Hu, Ye & Yu, "An
+angle error compensation method based on harmonic analysis for integrated joint modules",
+Sensors 20(6), 1715, 2020): the UR10's order 17 on joints 1-3 (docs/guide/explain.md)
+fits that reading better than the gear's.
 """
 
 from __future__ import annotations
