@@ -288,7 +288,7 @@ def load_lines(res: dict, seeds: int) -> list[str]:
 
 
 UR10_GRID = (13, 14, 16, 18, 24, 32, 40, 50, 64, 80, 100)  # from the fewest poses fit accepts for the model's 39 parameters (13)
-UR10_CYCLIC_GRID = (24, 32, 40, 50, 64, 80, 100, 150)  # with cyclic terms: from the fewest fit accepts, then these
+UR10_CYCLIC_GRID = (21, 24, 28, 32, 40, 50, 64, 80, 100, 150)  # with cyclic terms: from the fewest fit accepts, then these
 # The cyclic terms' search on the training part: joints 1-6, orders 1-60 (as joint_harmonics[max_order=60]), forward
 # selection with 5-fold cross-validation by commanded position (harmonic_scan.choose_terms, what fit runs for max_order).
 CYCLIC_JOINTS, CYCLIC_MAX_ORDER = (1, 2, 3, 4, 5, 6), 60
