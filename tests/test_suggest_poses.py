@@ -424,3 +424,16 @@ def test_the_spec_call_without_a_tool_designs_for_the_flange(tmp_path):
     assert result.exit_code == 0, result.output
     assert len(json.loads(result.stdout)["chosen"]) == 40
     assert "no --tool" in result.stderr
+
+
+def test_cyclic_joint_terms_are_designed_for_when_named_and_refused_when_left_to_fit(tmp_path):
+    """A design needs named parameters: joint_harmonics with its terms (the UR10's orders 17 and 8)
+    is designed for, its sin/cos columns in the Jacobian; with max_order (the fit chooses the terms)
+    the job stops with exit 2 and says what to give."""
+    base = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--n-candidates", "300", "-n", "24", "-o", str(tmp_path / "c.csv"), "--json"]
+    named = runner.invoke(app, base + ["--effects", EFFECTS + ",joint_harmonics[terms=1:17,2:17,1:8]"])
+    assert named.exit_code == 0, named.output
+    std = json.loads(named.stdout)["expected_std"]
+    assert {f"joint_harmonics.j{j}_{w}{k}" for j, k in ((1, 17), (2, 17), (1, 8)) for w in ("sin", "cos")} <= set(std)
+    left = runner.invoke(app, base + ["--effects", EFFECTS + ",joint_harmonics[max_order=60]"])
+    assert left.exit_code == 2 and "leaves its terms to fit" in left.output and "terms=" in left.output
