@@ -309,9 +309,10 @@ def cyclic_terms(robot, tool, train: MeasurementSet, count: int) -> tuple[str, s
     return f"{EFFECTS},joint_harmonics[terms={terms}]", how
 
 
-def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS, cyclic: int = 0) -> dict:
+def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS, cyclic: int = 0, whole_criterion: str = "D", whole_only: bool = False) -> dict:
     """Series A retrospectively: held-out RMS of fits on suggested and random subsets; with
-    ``cyclic`` > 0 the model has that many cyclic joint terms (``cyclic_terms``)."""
+    ``cyclic`` > 0 the model has that many cyclic joint terms (``cyclic_terms``); ``whole_criterion``: the
+    design's criterion for the whole held-out set (I: the mean predicted variance over the candidates)."""
     data, tool = read_series(folder / "Series_A")
     robot = postproc.load_robot("ur10")
     rng = np.random.default_rng(7)
@@ -331,14 +332,14 @@ def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS, cyclic: int = 0) -
     else:
         grid = UR10_GRID
     floor = {label: _held_out(robot, tool, pool, held, rows, spec) for label, rows in (("whole", np.arange(len(held))), ("region", region_rows))}
-    out = {"grid": grid, "effects": spec, "how": how, "floor": floor}
-    for label, targets in (("whole", None), ("region", held.q_deg[region_rows])):
+    out = {"grid": grid, "effects": spec, "how": how, "floor": floor, "whole_criterion": whole_criterion}
+    for label, targets in (("whole", None), ("region", held.q_deg[region_rows]))[: 1 if whole_only else 2]:
         sug = np.full((seeds, len(grid)), np.nan)
         ran = np.full((seeds, len(grid), draws), np.nan)
         rows = np.arange(len(held)) if targets is None else region_rows
         for s in range(seeds):
             for k, n in enumerate(grid):
-                pick = suggest_poses(nominal, cands, n, targets_q=targets, seed=s).chosen
+                pick = suggest_poses(nominal, cands, n, criterion=whole_criterion, targets_q=targets, seed=s).chosen
                 sug[s, k] = _held_out(robot, tool, pool.subset(pick), held, rows, spec)
                 for d in range(draws):
                     ran[s, k, d] = _held_out(robot, tool, pool.subset(rng.choice(len(cand_rows), n, replace=False)), held, rows, spec)
@@ -415,6 +416,9 @@ def main():
     parser.add_argument("--ur10-only", action="store_true", help="Only part 3 (UR10 Series A retrospectively).")
     parser.add_argument("--ur10-cyclic", type=int, default=0, help="Part 3 with this many cyclic joint terms in the model (joint_harmonics: "
                         "the first the forward selection adds on the candidate poses' physics residual; the held-out poses never choose one).")
+    parser.add_argument("--ur10-whole-criterion", choices=("D", "E", "A", "I"), default="D", help="Part 3, whole held-out set: the design's "
+                        "criterion (I: the least mean predicted error variance over the candidates).")
+    parser.add_argument("--ur10-whole-only", action="store_true", help="Part 3: the whole held-out set only (no region).")
     parser.add_argument("--random-draws", type=int, default=RANDOM_DRAWS, help="Random designs per seed and N (their mean is what the design is compared with).")
     parser.add_argument("--skip-share0", action="store_true", help="Region: leave out the --random-share 0 variant.")
     parser.add_argument("--merge-into", type=Path, help="After --pass-only or --ur10-only: put this run's arrays into that .npz (the figure's "
@@ -457,7 +461,7 @@ def main():
         runs[name] = simulated(seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
         if not args.skip_share0:  # the same truths and candidates; random designs as above
             runs[name + "0"] = simulated(seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
-    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws, args.ur10_cyclic)
+    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws, args.ur10_cyclic, args.ur10_whole_criterion, args.ur10_whole_only)
     meta = {"seeds": np.array(list(seeds)), "noise_draws": args.noise_draws, "random_draws": args.random_draws,
             "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60}
     if args.shard_out is not None:
@@ -478,7 +482,9 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
              + (f" --noise-draws {meta['noise_draws']}" if meta["noise_draws"] > 1 else "")
              + (" --pass-only" if args.pass_only or args.merge_shards else " --ur10-only" if args.ur10_only else "")
              + ("" if args.pass_only or args.merge_shards else f" --ur10-seeds {args.ur10_seeds}")
-             + (f" --ur10-cyclic {args.ur10_cyclic}" if real is not None and args.ur10_cyclic else "") + f" --random-draws {meta['random_draws']}"
+             + (f" --ur10-cyclic {args.ur10_cyclic}" if real is not None and args.ur10_cyclic else "")
+             + (f" --ur10-whole-criterion {args.ur10_whole_criterion}" if real is not None and args.ur10_whole_criterion != "D" else "")
+             + (" --ur10-whole-only" if real is not None and args.ur10_whole_only else "") + f" --random-draws {meta['random_draws']}"
              + (" --skip-share0" if meta["skip_share0"] else "")
              + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
              f"effects {EFFECTS if real is None or args.ur10_cyclic == 0 else real['effects']}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
@@ -666,9 +672,9 @@ def ur10_lines(real, seeds: int) -> list[str]:
     lines = [""] + ([real["how"]] if real.get("how") else [])
     grid = real["grid"]
     levels = tuple(n for n in (32, 50, 64, 100, 150) if n in grid)
-    for label in ("whole", "region"):
+    for label in (label for label in ("whole", "region") if label in real):
         m = summary(grid, real[label]["suggested"], real[label]["random"])
-        what = "all 2,000 held-out poses (D-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
+        what = f"all 2,000 held-out poses ({real.get('whole_criterion', 'D')}-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
         lines += ["", f"3. UR10 Series A retrospectively ({label}): held-out RMS on {what}, {seeds} seeds",
                   *([f"  floor: the same model fitted on all 2,000 candidate poses: {real['floor'][label]:.4f} mm"] if "floor" in real else []),
                   *table(grid, [("suggested", m[0], m[1]), ("random", m[2], m[3])]),
