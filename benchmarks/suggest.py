@@ -488,7 +488,7 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
              + (" --skip-share0" if meta["skip_share0"] else "")
              + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
              f"effects {EFFECTS if real is None or args.ur10_cyclic == 0 else real['effects']}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
+             f"suggested: {'D' if real is None else real['whole_criterion']}-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
              f"(+ perturbed restarts at small N); random: {meta['random_draws']} draws per seed from all candidates (the same set the design chooses from), "
              f"draw d fitted to the design's measurement d mod {meta['noise_draws']} (common random numbers)"]
     if "whole" in runs:
