@@ -21,7 +21,10 @@ Shards of seeds in parallel (part 2a): --pass-only --seed-start S --seeds K --sh
    (subsampled from 11,911 to keep the run short), 2,000 others held out; the model fitted
    on the suggested N against random N, held-out RMS (whole held-out set, and a region:
    the 300 held-out poses nearest one point, given to the design as its targets), N from 13,
-   the fewest fit accepts for the model's 39 parameters.
+   the fewest fit accepts for the model's 39 parameters. With --ur10-cyclic T the model also has
+   T cyclic joint terms (joint_harmonics), chosen by forward selection on the candidate poses'
+   measurements alone, the grid runs from the fewest poses fit accepts for it to 150, and the
+   floor (the same model fitted on all 2,000 candidates) is reported.
 """
 
 from __future__ import annotations
@@ -42,10 +45,11 @@ import postproc  # noqa: E402
 from postproc.model.effects import parse_effects  # noqa: E402
 from postproc.model.errormodel import ErrorModel  # noqa: E402
 from postproc.model.formats.ur10_ipa import read_series  # noqa: E402
-from postproc.model.identify import fit  # noqa: E402
+from postproc.model.harmonic_scan import choose_terms  # noqa: E402
+from postproc.model.identify import cyclic_residual, fit  # noqa: E402
 from postproc.model.measurements import MeasurementSet  # noqa: E402
 from postproc.model.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
-from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
+from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, fewest_poses, suggest_poses  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
 from postproc.suggest.design import i_optimal_bound, relaxed_i_design  # noqa: E402
 
@@ -284,10 +288,31 @@ def load_lines(res: dict, seeds: int) -> list[str]:
 
 
 UR10_GRID = (13, 14, 16, 18, 24, 32, 40, 50, 64, 80, 100)  # from the fewest poses fit accepts for the model's 39 parameters (13)
+UR10_CYCLIC_GRID = (21, 24, 28, 32, 40, 50, 64, 80, 100, 150)  # with cyclic terms: from the fewest fit accepts, then these
+# The cyclic terms' search on the training part: joints 1-6, orders 1-60 (as joint_harmonics[max_order=60]), forward
+# selection with 5-fold cross-validation by commanded position (harmonic_scan.choose_terms, what fit runs for max_order).
+CYCLIC_JOINTS, CYCLIC_MAX_ORDER = (1, 2, 3, 4, 5, 6), 60
 
 
-def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS) -> dict:
-    """Series A retrospectively: held-out RMS of fits on suggested and random subsets."""
+def cyclic_terms(robot, tool, train: MeasurementSet, count: int) -> tuple[str, str]:
+    """The effect spec with the first ``count`` cyclic terms the forward selection adds on the physics
+    model's residual on ``train`` (the candidates' measurements only: the held-out poses never
+    choose a term), and a line saying how they were chosen and what the selection's CV RMS was."""
+    physics = fit(robot, tool, parse_effects(EFFECTS), train, cv_folds=0).model
+    groups = train.extra["point"].astype(np.int64) if "point" in train.extra else np.arange(len(train))
+    candidates = [(j, k) for j in CYCLIC_JOINTS for k in range(1, CYCLIC_MAX_ORDER + 1)]
+    choice = choose_terms(cyclic_residual(physics, train), groups, np.ones(len(train), dtype=bool), candidates, max_terms=count)
+    terms = ",".join(f"{j}:{k}" for j, k in choice.terms[:count])
+    how = (f"cyclic terms: the first {count} the forward selection adds (joints 1-6, orders 1-{CYCLIC_MAX_ORDER}) on the physics "
+           f"residual of the {len(train)} candidate poses' measurements (5-fold CV by commanded position: "
+           f"{choice.cv_rms_mm[0]:.4f} -> {choice.cv_rms_mm[count]:.4f} mm); the held-out poses never choose a term")
+    return f"{EFFECTS},joint_harmonics[terms={terms}]", how
+
+
+def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS, cyclic: int = 0, whole_criterion: str = "D", whole_only: bool = False) -> dict:
+    """Series A retrospectively: held-out RMS of fits on suggested and random subsets; with
+    ``cyclic`` > 0 the model has that many cyclic joint terms (``cyclic_terms``); ``whole_criterion``: the
+    design's criterion for the whole held-out set (I: the mean predicted variance over the candidates)."""
     data, tool = read_series(folder / "Series_A")
     robot = postproc.load_robot("ur10")
     rng = np.random.default_rng(7)
@@ -299,26 +324,32 @@ def ur10(folder: Path, seeds: int, draws: int = RANDOM_DRAWS) -> dict:
     q_cand = np.round(data.q_deg[cand_rows], JOINT_DECIMALS)
     cands = Candidates(q_deg=q_cand, ids=tuple(data.ids[i] for i in cand_rows), source="Series_A")
     pool = data.subset(cand_rows)
-    nominal = ErrorModel.create(robot, tool, parse_effects(EFFECTS))
-    grid = UR10_GRID
-    out = {"grid": grid}
-    for label, targets in (("whole", None), ("region", held.q_deg[region_rows])):
+    spec, how = cyclic_terms(robot, tool, pool, cyclic) if cyclic else (EFFECTS, "")
+    nominal = ErrorModel.create(robot, tool, parse_effects(spec))
+    if cyclic:
+        least = fewest_poses(len(nominal.params), len(_information(nominal, cands, None, None, NOISE).names))
+        grid = (least, *(n for n in UR10_CYCLIC_GRID if n > least))
+    else:
+        grid = UR10_GRID
+    floor = {label: _held_out(robot, tool, pool, held, rows, spec) for label, rows in (("whole", np.arange(len(held))), ("region", region_rows))}
+    out = {"grid": grid, "effects": spec, "how": how, "floor": floor, "whole_criterion": whole_criterion}
+    for label, targets in (("whole", None), ("region", held.q_deg[region_rows]))[: 1 if whole_only else 2]:
         sug = np.full((seeds, len(grid)), np.nan)
         ran = np.full((seeds, len(grid), draws), np.nan)
         rows = np.arange(len(held)) if targets is None else region_rows
         for s in range(seeds):
             for k, n in enumerate(grid):
-                pick = suggest_poses(nominal, cands, n, targets_q=targets, seed=s).chosen
-                sug[s, k] = _held_out(robot, tool, pool.subset(pick), held, rows)
+                pick = suggest_poses(nominal, cands, n, criterion=whole_criterion, targets_q=targets, seed=s).chosen
+                sug[s, k] = _held_out(robot, tool, pool.subset(pick), held, rows, spec)
                 for d in range(draws):
-                    ran[s, k, d] = _held_out(robot, tool, pool.subset(rng.choice(len(cand_rows), n, replace=False)), held, rows)
+                    ran[s, k, d] = _held_out(robot, tool, pool.subset(rng.choice(len(cand_rows), n, replace=False)), held, rows, spec)
                 say(f"UR10 {label} seed {s + 1}/{seeds} N {n}: held-out RMS suggested {sug[s, k]:.4f} random {np.mean(ran[s, k]):.4f} mm")
         out[label] = {"suggested": sug, "random": ran}
     return out
 
 
-def _held_out(robot, tool, train, held, rows) -> float:
-    result = fit(robot, tool, parse_effects(EFFECTS), train, cv_folds=0)
+def _held_out(robot, tool, train, held, rows, spec: str = EFFECTS) -> float:
+    result = fit(robot, tool, parse_effects(spec), train, cv_folds=0)
     test = held.subset(rows)
     return rms(result.model.predict(test) - test.measured_mm)
 
@@ -383,6 +414,11 @@ def main():
     parser.add_argument("--pass-only", action="store_true", help="Only part 2a (the machining pass), e.g. with more seeds; no figure.")
     parser.add_argument("--loads-only", action="store_true", help="Only part 4 (load states, whole workspace); no figure.")
     parser.add_argument("--ur10-only", action="store_true", help="Only part 3 (UR10 Series A retrospectively).")
+    parser.add_argument("--ur10-cyclic", type=int, default=0, help="Part 3 with this many cyclic joint terms in the model (joint_harmonics: "
+                        "the first the forward selection adds on the candidate poses' physics residual; the held-out poses never choose one).")
+    parser.add_argument("--ur10-whole-criterion", choices=("D", "E", "A", "I"), default="D", help="Part 3, whole held-out set: the design's "
+                        "criterion (I: the least mean predicted error variance over the candidates).")
+    parser.add_argument("--ur10-whole-only", action="store_true", help="Part 3: the whole held-out set only (no region).")
     parser.add_argument("--random-draws", type=int, default=RANDOM_DRAWS, help="Random designs per seed and N (their mean is what the design is compared with).")
     parser.add_argument("--skip-share0", action="store_true", help="Region: leave out the --random-share 0 variant.")
     parser.add_argument("--merge-into", type=Path, help="After --pass-only or --ur10-only: put this run's arrays into that .npz (the figure's "
@@ -425,7 +461,7 @@ def main():
         runs[name] = simulated(seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
         if not args.skip_share0:  # the same truths and candidates; random designs as above
             runs[name + "0"] = simulated(seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
-    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws)
+    real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws, args.ur10_cyclic, args.ur10_whole_criterion, args.ur10_whole_only)
     meta = {"seeds": np.array(list(seeds)), "noise_draws": args.noise_draws, "random_draws": args.random_draws,
             "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60}
     if args.shard_out is not None:
@@ -445,11 +481,14 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
     lines = ["benchmarks/suggest.py" + ("" if args.ur10_only else seed_text)
              + (f" --noise-draws {meta['noise_draws']}" if meta["noise_draws"] > 1 else "")
              + (" --pass-only" if args.pass_only or args.merge_shards else " --ur10-only" if args.ur10_only else "")
-             + ("" if args.pass_only or args.merge_shards else f" --ur10-seeds {args.ur10_seeds}") + f" --random-draws {meta['random_draws']}"
+             + ("" if args.pass_only or args.merge_shards else f" --ur10-seeds {args.ur10_seeds}")
+             + (f" --ur10-cyclic {args.ur10_cyclic}" if real is not None and args.ur10_cyclic else "")
+             + (f" --ur10-whole-criterion {args.ur10_whole_criterion}" if real is not None and args.ur10_whole_criterion != "D" else "")
+             + (" --ur10-whole-only" if real is not None and args.ur10_whole_only else "") + f" --random-draws {meta['random_draws']}"
              + (" --skip-share0" if meta["skip_share0"] else "")
              + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
-             f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
+             f"effects {EFFECTS if real is None or args.ur10_cyclic == 0 else real['effects']}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
+             f"suggested: {'D' if real is None else real['whole_criterion']}-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
              f"(+ perturbed restarts at small N); random: {meta['random_draws']} draws per seed from all candidates (the same set the design chooses from), "
              f"draw d fitted to the design's measurement d mod {meta['noise_draws']} (common random numbers)"]
     if "whole" in runs:
@@ -630,16 +669,18 @@ def _share(n_s, n_r: int) -> float:
 
 
 def ur10_lines(real, seeds: int) -> list[str]:
-    lines = []
+    lines = [""] + ([real["how"]] if real.get("how") else [])
     grid = real["grid"]
-    for label in ("whole", "region"):
+    levels = tuple(n for n in (32, 50, 64, 100, 150) if n in grid)
+    for label in (label for label in ("whole", "region") if label in real):
         m = summary(grid, real[label]["suggested"], real[label]["random"])
-        what = "all 2,000 held-out poses (D-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
+        what = f"all 2,000 held-out poses ({real.get('whole_criterion', 'D')}-optimal)" if label == "whole" else "the 300 held-out poses of the region (I-optimal, they are its targets)"
         lines += ["", f"3. UR10 Series A retrospectively ({label}): held-out RMS on {what}, {seeds} seeds",
+                  *([f"  floor: the same model fitted on all 2,000 candidate poses: {real['floor'][label]:.4f} mm"] if "floor" in real else []),
                   *table(grid, [("suggested", m[0], m[1]), ("random", m[2], m[3])]),
-                  *saving_lines(grid, m[0], m[2], tuple(n for n in (32, 50, 64, 100) if n in grid)),
+                  *saving_lines(grid, m[0], m[2], levels),
                   "  95 % bootstrap interval over seeds: " + ", ".join(
-                      f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r in (32, 50, 64, 100)
+                      f"N = {n_r}: {100 * lo:.0f}-{100 * hi:.0f} %" for n_r in levels
                       for lo, hi in [saving_interval(grid, real[label]["suggested"], real[label]["random"], n_r)])]
     return lines
 

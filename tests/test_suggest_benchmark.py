@@ -65,3 +65,17 @@ def test_linearised_noise_error_scales_with_the_noise_and_vanishes_without_it():
     rows = np.arange(20)
     values, mean = bench.linear_noise_error(info, rows, [noise, 2 * noise, 0 * noise], np.random.default_rng(2))
     assert values[2] == 0 and values[1] == pytest.approx(2 * values[0]) and mean > 0
+
+
+def test_ur10_report_gives_the_floor_and_the_shares_up_to_150():
+    """Part 3's report with cyclic terms: how the terms were chosen, the floor, and the design's share
+    at random's N = 150 (the design reaching random's 150-pose error at 75 poses: 50 %)."""
+    grid = (19, 32, 50, 64, 75, 100, 150)
+    curve = np.array([0.40, 0.30, 0.26, 0.24, 0.20, 0.19, 0.18])
+    random = np.array([0.60, 0.40, 0.32, 0.28, 0.25, 0.22, 0.20])
+    real = {"grid": grid, "how": "cyclic terms: chosen on the candidates", "floor": {"whole": 0.22, "region": 0.19}}
+    for label in ("whole", "region"):
+        real[label] = {"suggested": np.tile(curve, (3, 1)), "random": np.tile(random[None, :, None], (3, 1, 2))}
+    text = "\n".join(bench.ur10_lines(real, 3))
+    assert "cyclic terms: chosen on the candidates" in text and "all 2,000 candidate poses: 0.2200 mm" in text and "0.1900 mm" in text
+    assert "random reaches 0.2000 mm at N = 150; suggested at N = 75.0 (50 % of the poses)" in text and "N = 150: 50-50 %" in text

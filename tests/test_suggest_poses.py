@@ -153,6 +153,33 @@ def test_design_of_distinct_poses_comes_within_a_few_percent_of_the_capped_bound
     assert reported.bound_rms_mm == pytest.approx(np.sqrt(design.relaxed_i_design(problem, 40).lower_bound), rel=1e-9)
 
 
+def test_bound_with_measured_poses_holds_their_information_fixed(cands, model):
+    """With poses measured already the bound is the relaxation for the N new poses on top of
+    their information (measured candidates get no fraction): below the chosen design's predicted
+    RMS and random designs', below the bound without them, and the old bound without them."""
+    targets = cands.q_deg[:40]
+    truth = random_truth(ROBOT, TOOL, parse_effects(EFFECTS), np.random.default_rng(0))
+    measured = replace(simulate(truth, cands.q_deg[100:112], np.random.default_rng(1)), ids=cands.ids[100:112], source="m.csv")
+    with_measured = suggest_poses(model, cands, 15, targets_q=targets, measured=measured)
+    assert with_measured.bound_rms_mm is not None and with_measured.bound_rms_mm <= with_measured.expected_rms_mm
+    assert with_measured.expected_rms_mm < 1.15 * with_measured.bound_rms_mm  # and the design comes near it
+    info = _information(model, cands, measured, targets, 0.02)
+    excluded = np.zeros(len(cands), dtype=bool)
+    excluded[100:112] = True
+    relaxed = design.relaxed_i_design(info.problem, 15, excluded=excluded)
+    assert relaxed.x[100:112].max() == 0 and with_measured.bound_rms_mm == pytest.approx(np.sqrt(relaxed.lower_bound), rel=1e-9)
+    rng = np.random.default_rng(2)
+    free = np.nonzero(~excluded)[0]
+    randoms = [-design.criterion_value(info.problem, info.problem.information(rng.choice(free, 15, replace=False)), "I") for _ in range(10)]
+    assert min(randoms) > relaxed.lower_bound
+    alone = suggest_poses(model, cands, 15, targets_q=targets)
+    assert with_measured.bound_rms_mm < alone.bound_rms_mm  # 12 poses' information more
+    problem = design.Problem.of(_problem(model, cands).blocks, None, _jac_at(model, targets))
+    zero_prior = design.Problem.of(problem.blocks, np.zeros_like(problem.weight), _jac_at(model, targets))
+    assert design.relaxed_i_design(zero_prior, 15).lower_bound == design.relaxed_i_design(problem, 15).lower_bound
+    assert alone.bound_rms_mm == pytest.approx(np.sqrt(design.relaxed_i_design(problem, 15).lower_bound), rel=1e-9)
+
+
 def test_random_share_is_of_the_poses_beyond_the_fewest_fit_accepts(cands, model):
     assert [random_count(0.2, n, 13) for n in (13, 14, 18, 32, 100)] == [0, 0, 1, 4, 17]
     assert random_count(0.2, 10, -5) == 2  # measured poses already cover what fit needs: the share of all n
@@ -397,3 +424,16 @@ def test_the_spec_call_without_a_tool_designs_for_the_flange(tmp_path):
     assert result.exit_code == 0, result.output
     assert len(json.loads(result.stdout)["chosen"]) == 40
     assert "no --tool" in result.stderr
+
+
+def test_cyclic_joint_terms_are_designed_for_when_named_and_refused_when_left_to_fit(tmp_path):
+    """A design needs named parameters: joint_harmonics with its terms (the UR10's orders 17 and 8)
+    is designed for, its sin/cos columns in the Jacobian; with max_order (the fit chooses the terms)
+    the job stops with exit 2 and says what to give."""
+    base = ["suggest-poses", "--robot", "kr160_r1570", "--tool", "0,0,200", "--n-candidates", "300", "-n", "24", "-o", str(tmp_path / "c.csv"), "--json"]
+    named = runner.invoke(app, base + ["--effects", EFFECTS + ",joint_harmonics[terms=1:17,2:17,1:8]"])
+    assert named.exit_code == 0, named.output
+    std = json.loads(named.stdout)["expected_std"]
+    assert {f"joint_harmonics.j{j}_{w}{k}" for j, k in ((1, 17), (2, 17), (1, 8)) for w in ("sin", "cos")} <= set(std)
+    left = runner.invoke(app, base + ["--effects", EFFECTS + ",joint_harmonics[max_order=60]"])
+    assert left.exit_code == 2 and "leaves its terms to fit" in left.output and "terms=" in left.output

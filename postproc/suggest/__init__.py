@@ -56,7 +56,7 @@ class Suggestion:
     swaps: int  # poses of the greedy design the refinement (exchange and restarts) replaced
     where: str  # what expected_rms_mm is measured over
     notes: tuple[str, ...] = field(default_factory=tuple)
-    bound_rms_mm: float | None = None  # with a program and nothing measured: no design of N distinct poses from the candidates predicts better
+    bound_rms_mm: float | None = None  # with a program: no design of N distinct new poses from the candidates (with the measured ones) predicts better
 
     def as_json(self) -> dict:
         return {"chosen": list(self.ids), "criterion": self.criterion, "expected_rms_mm": self.expected_rms_mm,
@@ -254,8 +254,8 @@ def _summarise(info_: _Information, cands: Candidates, order, greedy_order, crit
     if cands.rounded_deg > 0:
         notes.append(f"candidate joints rounded to 4 decimals (the precision of the robot program), by at most {cands.rounded_deg:.2g} deg")
     bound = None
-    if info_.region and m == 0:  # the I-optimal bound for len(order) distinct poses (each measured once, as the design's are)
-        bound = float(np.sqrt(max(design.relaxed_i_design(problem, len(order)).lower_bound, 0.0)))
+    if info_.region:  # the I-optimal bound for len(order) new distinct poses (each measured once, as the design's are), on top of the measured ones
+        bound = float(np.sqrt(max(design.relaxed_i_design(problem, len(order), excluded=excluded).lower_bound, 0.0)))
     return Suggestion(chosen=order, ids=tuple(cands.ids[i] for i in order), criterion=criterion, n_random=n_random, bound_rms_mm=bound,
                       expected_rms_mm=expected, random_rms_mm=float(random_same), random_equivalent_n=equivalent, std=std, units=info_.units,
                       fixed=info_.fixed, condition_number=cond, curve=curve, swaps=swaps, where=info_.where, notes=tuple(notes))

@@ -240,7 +240,9 @@ class Relaxation:
 def relaxed_i_design(problem: Problem, n_free: int, fixed: np.ndarray | None = None, excluded: np.ndarray | None = None,
                      iterations: int = RELAX_ITERATIONS) -> Relaxation:
     """Minimise trace(W M(x)^-1), M(x) = prior + fixed poses + sum_i x_i J_i^T J_i, over 0 <= x_i <= 1,
-    sum x_i = n_free (the convex relaxation of choosing n_free distinct candidates; Kiefer's
+    sum x_i = n_free (the convex relaxation of choosing n_free distinct candidates; the prior, e.g.
+    the information of poses measured already, and the fixed poses are held fixed, and candidates
+    ``excluded`` (e.g. those measured already) get no fraction; Kiefer's
     approximate design with each candidate's weight capped at one pose, so unlike
     ``i_optimal_bound`` it knows that a pose is measured at most once). Multiplicative steps
     x_i <- x_i sqrt(d_i), d_i = trace(J_i M^-1 W M^-1 J_i^T) (minus the gradient), each projected back

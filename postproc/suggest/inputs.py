@@ -9,7 +9,7 @@ import numpy as np
 
 from postproc.errors import InputError
 from postproc.model.effects import EffectSum
-from postproc.model.errormodel import ErrorModel, require_resolved
+from postproc.model.errormodel import ErrorModel
 
 from .candidates import Tracker
 
@@ -20,14 +20,23 @@ def design_model(robot, tool_mm, effects: EffectSum | None, fitted: ErrorModel |
     if fitted is None:
         if effects is None:
             raise InputError("suggest-poses needs --effects (or --model MODEL.json)")
-        require_resolved(effects)
+        _require_terms(effects)
         return ErrorModel.create(robot, tool_mm, effects)
     if robot.name != fitted.robot.name:
         raise InputError(f"--robot {robot.name} does not match the model's robot {fitted.robot.name}")
     chosen = fitted.effects if effects is None else effects
-    require_resolved(chosen)
+    _require_terms(chosen)
     model = ErrorModel.create(robot, tool_mm, chosen, fitted.as_dict())
     return replace(model, base_rotation=fitted.base_rotation, base_translation=fitted.base_translation)
+
+
+def _require_terms(effects: EffectSum) -> None:
+    """A design serves named parameters: an effect whose terms fit chooses from the data
+    (e.g. joint_harmonics[max_order=60]) has none yet, so the user names them."""
+    for effect in effects:
+        if not effect.resolved:
+            raise InputError(f"--effects: {effect.spec()} leaves its terms to fit, which chooses them from measurements; suggest-poses designs "
+                             f"for named terms: give them (e.g. {effect.name}[terms=2:17,1:17,3:17]) or --model MODEL.json of a fit that chose them")
 
 
 def tracker_from(position_mm: np.ndarray | None, range_mm: tuple[float, float] | None, cone_deg: float | None) -> Tracker | None:
