@@ -81,3 +81,11 @@ def test_bad_robot_file_exits_2_naming_file_and_key(tmp_path):
     result = runner.invoke(app, ["fk", str(bad), "--q", "0,0,0,0,0,0"])
     assert result.exit_code == 2
     assert "broken.toml" in result.stderr and "'description'" in result.stderr
+
+
+@pytest.mark.parametrize("spec", ["joint_harmonics", "joint_harmonics[max_order=60]"])
+def test_simulate_refuses_terms_left_to_a_fit_and_says_how_to_name_them(spec, tmp_path):
+    out = runner.invoke(app, ["simulate", "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", spec, "--n", "5", "-o", str(tmp_path / "m.csv")])
+    assert out.exit_code == 2
+    assert "leaves its terms to a fit" in out.output and "name the terms" in out.output, out.output
+    assert not (tmp_path / "m.csv").exists()

@@ -275,4 +275,5 @@ def _columns(idx: np.ndarray):
 def require_resolved(effects: EffectSum) -> None:
     for effect in effects:
         if not effect.resolved:
-            raise EffectSpecError(f"{effect.name} without options must be resolved by a fit before the model is evaluated")
+            raise EffectSpecError(f"{effect.spec()} leaves its terms to a fit, which chooses them from measurements: "
+                                  "name the terms (e.g. joints=2;orders=17) to evaluate or simulate it")
