@@ -25,6 +25,20 @@ from postproc.robot.robots import RobotModel
 # design and the program hold the very numbers the controller executes.
 JOINT_DECIMALS = 4
 _NUMERIC_OPTIONAL = FORCES + APPROACH + ("temp", "t")
+# How many poses to generate when the user gives no --n-candidates: CANDIDATES_PER_POSE per chosen
+# pose, within [MIN_CANDIDATES, MAX_CANDIDATES]. The design gains over random selection by choosing,
+# and with a fixed count the choice per pose shrinks as N grows: on the simulated machining pass
+# (benchmarks/suggest_sim.py candidates) 4x the candidates cut the poses the design needs by 3-4 points
+# of random's at N = 50-100 (random, drawn from the same distribution, does not change). The search's
+# time grows with candidates x N, hence the cap.
+MIN_CANDIDATES = 2000
+CANDIDATES_PER_POSE = 60
+MAX_CANDIDATES = 12000
+
+
+def default_count(n: int) -> int:
+    """Candidates to generate for a design of n poses: 60 per pose, at least 2,000, at most 12,000."""
+    return int(min(MAX_CANDIDATES, max(MIN_CANDIDATES, CANDIDATES_PER_POSE * n)))
 
 
 @dataclass(frozen=True)
