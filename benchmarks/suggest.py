@@ -45,7 +45,7 @@ from postproc.model.formats.ur10_ipa import read_series  # noqa: E402
 from postproc.model.identify import fit  # noqa: E402
 from postproc.model.measurements import MeasurementSet  # noqa: E402
 from postproc.model.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
-from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
+from postproc.suggest import DEFAULT_RANDOM_MOST, DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
 from postproc.suggest.candidates import JOINT_DECIMALS, Candidates, default_count  # noqa: E402
 from postproc.suggest.design import Problem, i_optimal_bound, relaxed_i_design  # noqa: E402
 
@@ -88,7 +88,7 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False,
+def simulated(seeds, region: Box | None, share: float | None = None, draws: int = RANDOM_DRAWS, theory: bool = False,
               noise_draws: int = 1, scaled: bool = False) -> dict:
     """Per N: validation and true errors (whole workspace) or true errors at the targets (region),
     for the seeds listed (each seed's world and draws depend on the seed alone: shards of seeds run
@@ -152,7 +152,7 @@ def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, dr
                 if info is not None:
                     lin, out["random_lin_mean"][i, k, d] = linear_noise_error(info, rand, noises[d % noise_draws: d % noise_draws + 1], mc)
                     out["random_lin"][i, k, d] = lin[0]
-            say(f"{'region' if region else 'workspace'} (random share {share:g}) seed {s} ({i + 1} of {count}) N {n}: true error suggested "
+            say(f"{'region' if region else 'workspace'} (random share {'default' if share is None else f'{share:g}'}) seed {s} ({i + 1} of {count}) N {n}: true error suggested "
                 f"{out['suggested'][i, k]:.4f} random {np.mean(out['random'][i, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
@@ -452,7 +452,7 @@ def main():
     if args.loads_only:
         t0 = time.perf_counter()
         lines = [f"benchmarks/suggest.py --loads-only --seeds {args.seeds}  ({{}} min)", f"noise {NOISE} mm per axis; D-optimal with the default random share "
-                 f"{DEFAULT_RANDOM_SHARE:g}, greedy + exchange; random: 1 draw per seed and N"]
+                 f"{DEFAULT_RANDOM_SHARE:g} (at most {DEFAULT_RANDOM_MOST} poses), greedy + exchange; random: 1 draw per seed and N"]
         lines += load_lines(loads(args.seeds), args.seeds)
         lines[0] = lines[0].format(f"{(time.perf_counter() - t0) / 60:.1f}")
         args.output.write_text("\n".join(lines) + "\n")
@@ -471,7 +471,8 @@ def main():
             runs[name + "0"] = simulated(seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws)
     meta = {"seeds": np.array(list(seeds)), "noise_draws": args.noise_draws, "random_draws": args.random_draws,
-            "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60, "design_candidates": args.design_candidates}
+            "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60, "design_candidates": args.design_candidates,
+            "share_rule": "capped"}
     if args.shard_out is not None:
         args.shard_out.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.shard_out, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
@@ -495,7 +496,7 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
              + (f" --random-from {args.random_from}" if getattr(args, "random_from", None) else "")
              + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
              f"effects {EFFECTS}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
+             f"suggested: D-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share {_share_text(meta)}, greedy + exchange "
              f"(+ perturbed restarts at small N); {_random_text(meta)}, "
              f"draw d fitted to the design's measurement d mod {meta['noise_draws']} (common random numbers)"]
     if "whole" in runs:
@@ -515,6 +516,12 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
         figure(args.figure, runs, real)
 
 
+def _share_text(meta: dict) -> str:
+    if meta.get("share_rule") == "capped":
+        return f"{DEFAULT_RANDOM_SHARE:g} of the poses beyond the fewest fit accepts, at most {DEFAULT_RANDOM_MOST} (the default)"
+    return f"{DEFAULT_RANDOM_SHARE:g} of the poses beyond the fewest fit accepts"
+
+
 def _random_text(meta: dict) -> str:
     if meta.get("design_candidates") == "scaled":
         return (f"the design chooses from suggest-poses' default count of candidates for N (60 per pose, at least 2,000: the 1,500 and more "
@@ -529,7 +536,8 @@ def merge_shards(paths: list[Path]) -> tuple[dict, dict]:
     options = ("noise_draws", "random_draws", "skip_share0")
     for shard in shards:
         shard.setdefault("meta__design_candidates", np.asarray("fixed"))  # shards written before the option
-    options += ("design_candidates",)
+        shard.setdefault("meta__share_rule", np.asarray("uncapped"))  # ... or before the default random share's cap
+    options += ("design_candidates", "share_rule")
     for p, shard in zip(paths[1:], shards[1:]):
         if any(shard[f"meta__{o}"] != shards[0][f"meta__{o}"] for o in options) or set(shard) != set(shards[0]):
             raise SystemExit(f"{p}: run with other options than {paths[0]} ({', '.join(options)}, parts)")

@@ -1,7 +1,11 @@
 """suggest-poses' defaults that the simulated machining pass set (issue 32): the candidates
-generated grow with N, as more candidates from the same workspace let the design do better."""
+generated grow with N, as more candidates from the same workspace let the design do better, and
+the default random share stops at a few poses, as more bought nothing measurable against an
+effect the model lacks."""
 
 from __future__ import annotations
+
+import json
 
 import numpy as np
 import pytest
@@ -13,7 +17,7 @@ from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.sim import Cylinder
 from postproc.robot.robots import load_robot
-from postproc.suggest import suggest_poses
+from postproc.suggest import DEFAULT_RANDOM_MOST, default_random_count, random_count, suggest_poses
 from postproc.suggest.candidates import CANDIDATES_PER_POSE, MAX_CANDIDATES, MIN_CANDIDATES, Candidates, default_count, generate
 
 runner = CliRunner()
@@ -55,10 +59,21 @@ def test_the_cli_generates_the_default_count_for_n_and_refuses_a_count_with_give
     assert runner.invoke(app, args).exit_code == 0
     assert runner.invoke(app, args + ["--n-candidates", "300"]).exit_code == 0
     assert counts == [default_count(40), 300]
+    runs = [runner.invoke(app, args + ["-n", "60"] + share) for share in ([], ["--random-share", "0.2"])]
+    assert [json.loads(r.stdout)["n_random"] for r in runs] == [4, 10]  # geometric: 27 parameters, fit needs 9
     (tmp_path / "cand.csv").write_text("id,q1,q2,q3,q4,q5,q6\n1,0,-90,90,0,0,0\n")
     result = runner.invoke(app, ["suggest-poses", "--robot", "kr160_r1570", "--effects", "geometric", "--candidates", str(tmp_path / "cand.csv"),
                                  "--n-candidates", "2000", "-n", "5", "-o", str(tmp_path / "d.csv")])
     assert result.exit_code == 2 and "--n-candidates" in result.stderr
+
+
+def test_default_random_share_stops_at_a_few_poses_a_given_share_does_not():
+    assert [default_random_count(n, 13) for n in (13, 14, 18, 20, 32, 40, 100, 500)] == [0, 0, 1, 1, 4, 4, 4, 4]
+    assert DEFAULT_RANDOM_MOST == 4 and random_count(0.2, 100, 13) == 17
+    model = ErrorModel.create(ROBOT, TOOL, parse_effects(EFFECTS))  # 33 parameters: fit needs 11 poses
+    cands = generate(ROBOT, TOOL, 300, Cylinder(), np.random.default_rng(5))
+    assert suggest_poses(model, cands, 60, seed=0).n_random == 4
+    assert suggest_poses(model, cands, 60, seed=0, random_share=0.2).n_random == 10  # round(0.2 x 49): as given
 
 
 @pytest.mark.parametrize("n", [14, 100])
