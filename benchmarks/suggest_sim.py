@@ -18,10 +18,16 @@ Three studies, each printing its table (``--output`` appends them to a file):
   amplitudes N(0, A) deg), fitted without it: each design's expected true error at the targets,
   sqrt(bias^2 + noise variance) (bias: the noise-free fit; noise: the linearised prediction; exact
   for least squares), for random share 0 / 0.1 / 0.2 and random designs (24 per seed and N).
+- ``before``: benchmarks/suggest.py's report of the machining pass from an earlier run's arrays
+  (``--from``, default benchmarks/results/suggest.npz: the 48-seed run, 1,500 candidates, share 0.2
+  uncapped) for the seeds given: the design before this change on the seeds of a new run.
+- ``timing``: suggest_poses' wall time (the faster of two calls, alternating) on seed 0's pass with the
+  1,500 candidates (before) and with the default count for N (after), N = 32, 50, 100.
 
 Run: .venv/bin/python benchmarks/suggest_sim.py candidates --seeds 0,1,2 --output benchmarks/results/suggest_sim.txt
      .venv/bin/python benchmarks/suggest_sim.py gap --seeds 0,1,2,3
      .venv/bin/python benchmarks/suggest_sim.py mismatch --seeds 0-7 --amplitudes 0,0.001
+     .venv/bin/python benchmarks/suggest_sim.py timing
 """
 
 from __future__ import annotations
@@ -41,7 +47,7 @@ from postproc.model.errormodel import ErrorModel  # noqa: E402
 from postproc.model.identify import fit  # noqa: E402
 from postproc.model.sim import Cylinder, sample_poses, simulate  # noqa: E402
 from postproc.suggest import _covariance, _expected_rms, _information, suggest_poses  # noqa: E402
-from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
+from postproc.suggest.candidates import JOINT_DECIMALS, Candidates, default_count  # noqa: E402
 
 RANDOM_NS = (32, 50, 64, 100)
 HARMONICS = "joint_harmonics[joints=2,3;orders=3,4]"
@@ -167,6 +173,29 @@ def mismatch_study(seeds, amplitudes, ns=(32, 50, 100), shares=(0.0, 0.1, 0.2), 
     return lines
 
 
+def before(source: Path, seeds: list[int]) -> list[str]:
+    saved = np.load(source)
+    where = {int(s): k for k, s in enumerate(saved["pass__seeds"])}
+    rows = [where[s] for s in seeds]
+    run = {key[len("pass__"):]: saved[key][rows] for key in saved.files if key.startswith("pass__")}
+    return [f"before: {source}'s machining pass for seeds {seeds[0]}-{seeds[-1]}", *bench.region_lines({"pass": run}, len(seeds))]
+
+
+def timing_study(s: int = 0) -> list[str]:
+    truth, cands, q_eval, nominal, _ = world(s)
+    pool, _ = bench._more_candidates(s, truth, cands, [])
+    lines = ["timing: suggest_poses on the machining pass, seed 0, the faster of two calls"]
+    for n in (32, 50, 100):
+        best = {"before": np.inf, "after": np.inf}
+        for _ in range(2):
+            for label, chosen_from in (("before", cands), ("after", bench._first(pool, default_count(n)))):
+                t0 = time.perf_counter()
+                suggest_poses(nominal, chosen_from, n, targets_q=q_eval, seed=s)
+                best[label] = min(best[label], time.perf_counter() - t0)
+        lines.append(f"  N {n}: 1,500 candidates {best['before']:.1f} s, the default {default_count(n):,} {best['after']:.1f} s")
+    return lines
+
+
 def _fitted(truth, eff, meas, q_eval) -> np.ndarray:
     model = fit(truth.robot, truth.tool_mm, eff, meas, cv_folds=0).model
     return model.predict_prepared(model.prepare(q_deg=q_eval))
@@ -182,7 +211,8 @@ def _seeds(text: str) -> list[int]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("study", choices=("candidates", "gap", "mismatch"))
+    parser.add_argument("study", choices=("candidates", "gap", "mismatch", "timing", "before"))
+    parser.add_argument("--from", dest="source", type=Path, default=Path("benchmarks/results/suggest.npz"), help="before: the earlier run's arrays")
     parser.add_argument("--seeds", type=_seeds, default=[0, 1])
     parser.add_argument("--counts", default="1500,3000,6000", help="candidates: the candidate counts the design chooses from")
     parser.add_argument("--amplitudes", default="0,0.001", help="mismatch: harmonic amplitudes, deg")
@@ -193,6 +223,10 @@ def main() -> None:
         lines = candidates_study(args.seeds, [int(c) for c in args.counts.split(",")])
     elif args.study == "gap":
         lines = gap_study(args.seeds)
+    elif args.study == "before":
+        lines = before(args.source, args.seeds)
+    elif args.study == "timing":
+        lines = timing_study()
     else:
         lines = mismatch_study(args.seeds, [float(a) for a in args.amplitudes.split(",")])
     command = " ".join(["benchmarks/suggest_sim.py", *sys.argv[1:]])
