@@ -21,6 +21,10 @@ Three studies, each printing its table (``--output`` appends them to a file):
 - ``before``: benchmarks/suggest.py's report of the machining pass from an earlier run's arrays
   (``--from``, default benchmarks/results/suggest.npz: the 48-seed run, 1,500 candidates, share 0.2
   uncapped) for the seeds given: the design before this change on the seeds of a new run.
+- ``decompose``: from a run's arrays (``--from``), the share of random's poses at the seeds' mean
+  curves by the reported prediction (root mean square error, nominal Jacobian), by the linearised
+  mean RMS (what a mean of fitted RMS values estimates) and by the fits (control variate), and the
+  ratios behind the differences at N = 50 and 100.
 - ``timing``: suggest_poses' wall time (the faster of two calls, alternating) on seed 0's pass with the
   1,500 candidates (before) and with the default count for N (after), N = 32, 50, 100.
 
@@ -181,6 +185,27 @@ def before(source: Path, seeds: list[int]) -> list[str]:
     return [f"before: {source}'s machining pass for seeds {seeds[0]}-{seeds[-1]}", *bench.region_lines({"pass": run}, len(seeds))]
 
 
+def decompose(source: Path) -> list[str]:
+    saved = np.load(source)
+    run = {key[len("pass__"):]: saved[key] for key in saved.files if key.startswith("pass__")}
+    sug, ran, _ = bench.controlled(run)
+    random_lin = np.nanmean(run["random_lin_mean"], axis=2)
+    curves = {"prediction, root mean square (reported)": (run["theory_suggested"], run["random_pred_pop"]),
+              "linearised, mean RMS": (run["suggested_lin_mean"], random_lin),
+              "fitted, control variate": (sug, ran)}
+    lines = [f"decompose: {source}, {len(run['seeds'])} seeds; share of random's poses (%) at random's N = 32 / 50 / 64 / 100, seeds' mean curves"]
+    for label, (design_curve, random_curve) in curves.items():
+        a, b = design_curve.mean(axis=0), random_curve.mean(axis=0)
+        lines.append(f"  {label:<42} " + " / ".join(
+            f"{100 * bench._share(bench.first_n_below(bench.GRID, a, b[bench.GRID.index(n)]), n):.1f}" for n in RANDOM_NS))
+    for n in (50, 100):
+        k = bench.GRID.index(n)
+        lines.append(f"  N {n}: mean RMS / root mean square: design {run['suggested_lin_mean'][:, k].mean() / run['theory_suggested'][:, k].mean():.3f}, "
+                     f"random {random_lin[:, k].mean() / run['random_pred_pop'][:, k].mean():.3f}; fitted / linearised mean RMS: design "
+                     f"{sug[:, k].mean() / run['suggested_lin_mean'][:, k].mean():.3f}, random {ran[:, k].mean() / random_lin[:, k].mean():.3f}")
+    return lines
+
+
 def timing_study(s: int = 0) -> list[str]:
     truth, cands, q_eval, nominal, _ = world(s)
     pool, _ = bench._more_candidates(s, truth, cands, [])
@@ -211,7 +236,7 @@ def _seeds(text: str) -> list[int]:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("study", choices=("candidates", "gap", "mismatch", "timing", "before"))
+    parser.add_argument("study", choices=("candidates", "gap", "mismatch", "timing", "before", "decompose"))
     parser.add_argument("--from", dest="source", type=Path, default=Path("benchmarks/results/suggest.npz"), help="before: the earlier run's arrays")
     parser.add_argument("--seeds", type=_seeds, default=[0, 1])
     parser.add_argument("--counts", default="1500,3000,6000", help="candidates: the candidate counts the design chooses from")
@@ -225,6 +250,8 @@ def main() -> None:
         lines = gap_study(args.seeds)
     elif args.study == "before":
         lines = before(args.source, args.seeds)
+    elif args.study == "decompose":
+        lines = decompose(args.source)
     elif args.study == "timing":
         lines = timing_study()
     else:
