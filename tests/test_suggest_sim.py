@@ -17,8 +17,20 @@ from postproc.model.effects import parse_effects
 from postproc.model.errormodel import ErrorModel
 from postproc.model.sim import Cylinder
 from postproc.robot.robots import load_robot
-from postproc.suggest import DEFAULT_RANDOM_MOST, default_random_count, random_count, suggest_poses
-from postproc.suggest.candidates import CANDIDATES_PER_POSE, MAX_CANDIDATES, MIN_CANDIDATES, Candidates, default_count, generate
+from postproc.suggest import (
+    DEFAULT_RANDOM_MOST,
+    default_random_count,
+    random_count,
+    suggest_poses,
+)
+from postproc.suggest.candidates import (
+    CANDIDATES_PER_POSE,
+    MAX_CANDIDATES,
+    MIN_CANDIDATES,
+    Candidates,
+    default_count,
+    generate,
+)
 
 runner = CliRunner()
 ROBOT = load_robot("kr160_r1570")

@@ -25,7 +25,7 @@ from .targets import program_targets
 DEFAULT_RANDOM_SHARE = 0.2  # a fifth of the poses drawn at random: robustness against a model that misses an effect
 # ... but by default at most DEFAULT_RANDOM_MOST of them: on the simulated machining pass with a truth the model
 # lacks an effect of (cyclic joint errors of 0.02 mm RMS at the targets), designs with random share 0, 0.1 and 0.2
-# had the same true error at N = 32, 50 and 100 (within +-0.2 um of 8-11 um, 8 seeds, benchmarks/suggest_sim.py
+# had the same true error at N = 32, 50 and 100 (within +-0.2 um of 8-12 um, 8 seeds, benchmarks/suggest_sim.py
 # mismatch): no design from the model can remove an error the model lacks, so the random poses serve as a
 # check where the program runs, and a few do that; beyond them each costs the design a chosen pose.
 DEFAULT_RANDOM_MOST = 4

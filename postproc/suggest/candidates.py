@@ -28,9 +28,10 @@ _NUMERIC_OPTIONAL = FORCES + APPROACH + ("temp", "t")
 # How many poses to generate when the user gives no --n-candidates: CANDIDATES_PER_POSE per chosen
 # pose, within [MIN_CANDIDATES, MAX_CANDIDATES]. The design gains over random selection by choosing,
 # and with a fixed count the choice per pose shrinks as N grows: on the simulated machining pass
-# (benchmarks/suggest_sim.py candidates) 4x the candidates cut the poses the design needs by 3-4 points
-# of random's at N = 50-100 (random, drawn from the same distribution, does not change). The search's
-# time grows with candidates x N, hence the cap.
+# (benchmarks/suggest_sim.py candidates, 3 seeds) 4x the candidates cut the poses the design needs by
+# 2.1-2.8 points of random's at N = 32-100 (random, drawn from the same distribution, does not change).
+# The search's time grows with candidates x N (suggest_poses at N = 100: 1.3 s on 1,500, 5.0 s on 6,000),
+# hence the cap.
 MIN_CANDIDATES = 2000
 CANDIDATES_PER_POSE = 60
 MAX_CANDIDATES = 12000
