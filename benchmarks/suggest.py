@@ -49,9 +49,9 @@ from postproc.model.harmonic_scan import choose_terms  # noqa: E402
 from postproc.model.identify import cyclic_residual, fit  # noqa: E402
 from postproc.model.measurements import MeasurementSet  # noqa: E402
 from postproc.model.sim import Box, Cylinder, random_truth, sample_poses, simulate  # noqa: E402
-from postproc.suggest import DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, fewest_poses, suggest_poses  # noqa: E402
-from postproc.suggest.candidates import JOINT_DECIMALS, Candidates  # noqa: E402
-from postproc.suggest.design import i_optimal_bound, relaxed_i_design  # noqa: E402
+from postproc.suggest import DEFAULT_RANDOM_MOST, DEFAULT_RANDOM_SHARE, _covariance, _expected_rms, _information, fewest_poses, suggest_poses  # noqa: E402
+from postproc.suggest.candidates import JOINT_DECIMALS, Candidates, default_count  # noqa: E402
+from postproc.suggest.design import Problem, i_optimal_bound, relaxed_i_design  # noqa: E402
 
 EFFECTS = "geometric,base_frame,tool_offset,joint_compliance"
 NOISE = 0.02
@@ -92,8 +92,8 @@ def first_n_below(grid, values, level):
     return None
 
 
-def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, draws: int = RANDOM_DRAWS, theory: bool = False,
-              noise_draws: int = 1) -> dict:
+def simulated(seeds, region: Box | None, share: float | None = None, draws: int = RANDOM_DRAWS, theory: bool = False,
+              noise_draws: int = 1, scaled: bool = False) -> dict:
     """Per N: validation and true errors (whole workspace) or true errors at the targets (region),
     for the seeds listed (each seed's world and draws depend on the seed alone: shards of seeds run
     apart give what one run of them all gives).
@@ -104,7 +104,10 @@ def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, dr
     same measurements of the same truth (with draws a multiple of noise_draws, each equally often).
     ``theory`` (region): also the noise-only prediction (the linearised expected RMS) of every random
     draw and of THEORY_DRAWS other random designs per N (its population mean: the control variate of
-    ``controlled``), and the lower bounds no design from the candidates beats."""
+    ``controlled``), and the lower bounds no design from the candidates beats.
+    ``scaled``: the design chooses from suggest-poses' default count for N (``default_count``: the 1,500
+    candidates plus more from the same cylinder, ``_more_candidates``); random still draws from the 1,500
+    (the same distribution), so its designs and fits are those of a run without it."""
     seeds = list(seeds)
     robot = postproc.load_robot("kr160_r1570")
     tool = np.array([0.0, 0.0, 200.0])
@@ -124,18 +127,19 @@ def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, dr
         q_cand = cands.q_deg
         noise_rng = np.random.default_rng(500 + s)  # its own stream: the other draws stay those of a run with one
         measurements = [measured] + [simulate(truth, q_cand, noise_rng, noise_mm=NOISE) for _ in range(noise_draws - 1)]
+        pool, measurements = _more_candidates(s, truth, cands, measurements) if scaled else (cands, measurements)
         q_eval = sample_poses(robot, tool, 200 if region else 500, region or Cylinder(), rng)
         val = simulate(truth, q_eval, rng, noise_mm=NOISE)
         true_eval = truth.predict_prepared(truth.prepare(q_deg=q_eval))
-        info = _information(nominal, cands, None, q_eval, NOISE) if theory else None
+        info = _information(nominal, pool, None, q_eval, NOISE) if theory else None
         if theory:
-            _theory(out, i, s, info)
-            at_cands = truth.predict_prepared(truth.prepare(q_deg=q_cand))
+            _theory(out, i, s, info, len(q_cand), scaled)
+            at_cands = truth.predict_prepared(truth.prepare(q_deg=pool.q_deg))
             noises = [m.measured_mm - at_cands for m in measurements]  # the realised noise of each measurement (simulation: known)
             mc = np.random.default_rng([700, s])
         for k, n in enumerate(GRID):
             t0 = time.perf_counter()
-            suggestion = suggest_poses(nominal, cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
+            suggestion = suggest_poses(nominal, _first(pool, default_count(n)) if scaled else cands, n, targets_q=q_eval if region is not None else None, random_share=share, seed=s)
             pick = suggestion.chosen
             out["theory_suggested"][i, k] = suggestion.expected_rms_mm
             preds = [fitted_at(robot, tool, m.subset(pick), q_eval) for m in measurements]
@@ -152,7 +156,7 @@ def simulated(seeds, region: Box | None, share: float = DEFAULT_RANDOM_SHARE, dr
                 if info is not None:
                     lin, out["random_lin_mean"][i, k, d] = linear_noise_error(info, rand, noises[d % noise_draws: d % noise_draws + 1], mc)
                     out["random_lin"][i, k, d] = lin[0]
-            say(f"{'region' if region else 'workspace'} (random share {share:g}) seed {s} ({i + 1} of {count}) N {n}: true error suggested "
+            say(f"{'region' if region else 'workspace'} (random share {'default' if share is None else f'{share:g}'}) seed {s} ({i + 1} of {count}) N {n}: true error suggested "
                 f"{out['suggested'][i, k]:.4f} random {np.mean(out['random'][i, k][:draws]) if draws else float('nan'):.4f} mm "
                 f"({time.perf_counter() - t0:.1f} s)")
     return out
@@ -192,6 +196,30 @@ def _world(s: int):
     return rng, truth, cands, simulate(truth, q_cand, rng, noise_mm=NOISE)
 
 
+def _more_candidates(s: int, truth, cands: Candidates, measurements: list) -> tuple[Candidates, list]:
+    """Seed s's candidates grown to suggest-poses' default count at the grid's largest N: the 1,500
+    first (unchanged, so random's draws stay those of a run without), then more from the same cylinder
+    and their measurements (one per noise draw), from streams of their own."""
+    rng = np.random.default_rng([100 + s, 1])
+    extra = np.round(sample_poses(truth.robot, truth.tool_mm, default_count(max(GRID)) - len(cands), Cylinder(), rng), JOINT_DECIMALS)
+    q = np.vstack([cands.q_deg, extra])
+    pool = Candidates(q_deg=q, ids=tuple(f"s{i + 1}" for i in range(len(q))), source="<benchmark>")
+    noise = np.random.default_rng([100 + s, 2])
+    return pool, [_joined(m, simulate(truth, extra, noise, noise_mm=NOISE)) for m in measurements]
+
+
+def _first(cands: Candidates, count: int) -> Candidates:
+    return Candidates(q_deg=cands.q_deg[:count], ids=cands.ids[:count], source=cands.source)
+
+
+def _joined(a: MeasurementSet, b: MeasurementSet) -> MeasurementSet:
+    """b's rows after a's (b's ids prefixed: ids stay unique); column groups only where both have them."""
+    both = lambda x, y: None if x is None or y is None else np.concatenate([x, y])  # noqa: E731
+    return MeasurementSet(q_deg=both(a.q_deg, b.q_deg), measured_mm=both(a.measured_mm, b.measured_mm), ids=a.ids + tuple(f"x{i}" for i in b.ids),
+                          nominal_mm=both(a.nominal_mm, b.nominal_mm), force_n=both(a.force_n, b.force_n), approach=both(a.approach, b.approach),
+                          temp_c=both(a.temp_c, b.temp_c), time_s=both(a.time_s, b.time_s), source=a.source)
+
+
 def pass_problem(s: int):
     """(nominal model, candidates, targets, design problem) of seed s's machining pass, as ``simulated`` draws them."""
     rng, truth, cands, _ = _world(s)
@@ -205,19 +233,26 @@ THEORY_GRID = (32, 50, 64, 100)  # the N whose random error the design is compar
 BOUND_GRID = (8, 9, 10, 11, 12, 13, 14, 16, 18, 20, 22, 24, 27, 30, 32, 36, 40, 45, 50, 57, 64, 72, 80, 90, 100)
 
 
-def _theory(out: dict, i: int, s: int, info) -> None:
+def _theory(out: dict, i: int, s: int, info, random_pool: int, scaled: bool = False) -> None:
     """Noise-only prediction at the targets: random designs' expected RMS against N (THEORY_DRAWS
-    per N), and the lower bounds: N x variance of the best approximate design (a pose may be
-    repeated; ``bound``) and the least variance of N distinct poses (``bound_distinct``, mm RMS)."""
+    per N, from the first ``random_pool`` candidates), and the lower bounds: N x variance of the best
+    approximate design (a pose may be repeated; ``bound``) and the least variance of N distinct poses
+    (``bound_distinct``, mm RMS; ``scaled``: of the candidates the design at N chooses from)."""
     problem = info.problem
     draws = np.random.default_rng(900 + s)
-    perms = [draws.permutation(len(problem.blocks)) for _ in range(THEORY_DRAWS)]
+    perms = [draws.permutation(random_pool) for _ in range(THEORY_DRAWS)]
     pop = [np.mean([_expected_rms(info, _covariance(problem, problem.information(p[:n]))) for p in perms]) for n in GRID]
     out["random_pred_pop"][i] = pop
     out["theory_random"][i] = [pop[GRID.index(n)] for n in THEORY_GRID]
     out["bound"][i] = i_optimal_bound(problem)[0]
-    out["bound_distinct"][i] = [np.sqrt(max(relaxed_i_design(problem, n, iterations=200).lower_bound, 0.0)) for n in BOUND_GRID]
-    out["uniform"][i] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(len(problem.blocks))) / len(problem.blocks)))
+    out["bound_distinct"][i] = [np.sqrt(max(relaxed_i_design(_head(problem, default_count(n)) if scaled else problem, n, iterations=200).lower_bound, 0.0))
+                                for n in BOUND_GRID]
+    out["uniform"][i] = np.trace(problem.weight @ np.linalg.inv(problem.information(np.arange(random_pool)) / random_pool))
+
+
+def _head(problem: Problem, count: int) -> Problem:
+    """The problem of the first ``count`` candidates only."""
+    return Problem(problem.blocks[:count], problem.prior, problem.weight, problem.ridge)
 
 
 LOAD_EFFECTS = EFFECTS + ",external_load"
@@ -430,9 +465,17 @@ def main():
                         "(merge the shards with --merge-shards).")
     parser.add_argument("--merge-shards", type=Path, nargs="+", help="Merge these --shard-out files (same options, other seeds) into one "
                         "report (--output) as if one run had covered all their seeds; with --merge-into also the figure's arrays.")
+    parser.add_argument("--design-candidates", choices=("fixed", "scaled"), default="fixed", help="Region: the design chooses from the 1,500 "
+                        "candidates (fixed) or from suggest-poses' default count for N (scaled: more from the same cylinder); random always "
+                        "draws from the 1,500.")
+    parser.add_argument("--random-from", type=Path, help="With --merge-shards of a run with --random-draws 0: take random's arrays (pass) "
+                        "for the same seeds from this .npz (e.g. benchmarks/results/suggest.npz): random's designs and fits depend on the "
+                        "seed alone, not on the design's options.")
     args = parser.parse_args()
     if args.merge_shards:
         runs, meta = merge_shards(args.merge_shards)
+        if args.random_from is not None:
+            meta["random_draws"] = random_from(runs["pass"], args.random_from)
         report(args, runs, None, meta)
         return
     if args.noise_draws > 1 and args.random_draws % args.noise_draws:
@@ -445,7 +488,7 @@ def main():
     if args.loads_only:
         t0 = time.perf_counter()
         lines = [f"benchmarks/suggest.py --loads-only --seeds {args.seeds}  ({{}} min)", f"noise {NOISE} mm per axis; D-optimal with the default random share "
-                 f"{DEFAULT_RANDOM_SHARE:g}, greedy + exchange; random: 1 draw per seed and N"]
+                 f"{DEFAULT_RANDOM_SHARE:g} (at most {DEFAULT_RANDOM_MOST} poses), greedy + exchange; random: 1 draw per seed and N"]
         lines += load_lines(loads(args.seeds), args.seeds)
         lines[0] = lines[0].format(f"{(time.perf_counter() - t0) / 60:.1f}")
         args.output.write_text("\n".join(lines) + "\n")
@@ -458,12 +501,14 @@ def main():
         runs["whole"] = simulated(seeds, None, draws=args.random_draws)
     boxes = () if args.ur10_only else (("pass", PASS),) if args.pass_only else (("pass", PASS), ("free", FREE))
     for name, box in boxes:
-        runs[name] = simulated(seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws)
+        runs[name] = simulated(seeds, box, theory=True, noise_draws=args.noise_draws, draws=args.random_draws,
+                               scaled=args.design_candidates == "scaled")
         if not args.skip_share0:  # the same truths and candidates; random designs as above
             runs[name + "0"] = simulated(seeds, box, share=0.0, draws=0, noise_draws=args.noise_draws)
     real = None if args.pass_only else ur10(args.ur10, args.ur10_seeds, args.random_draws, args.ur10_cyclic, args.ur10_whole_criterion, args.ur10_whole_only)
     meta = {"seeds": np.array(list(seeds)), "noise_draws": args.noise_draws, "random_draws": args.random_draws,
-            "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60}
+            "skip_share0": args.skip_share0, "minutes": (time.perf_counter() - t0) / 60, "design_candidates": args.design_candidates,
+            "share_rule": "capped"}
     if args.shard_out is not None:
         args.shard_out.parent.mkdir(parents=True, exist_ok=True)
         np.savez_compressed(args.shard_out, **{f"{run}__{key}": v for run, d in runs.items() for key, v in d.items()},
@@ -486,10 +531,12 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
              + (f" --ur10-whole-criterion {args.ur10_whole_criterion}" if real is not None and args.ur10_whole_criterion != "D" else "")
              + (" --ur10-whole-only" if real is not None and args.ur10_whole_only else "") + f" --random-draws {meta['random_draws']}"
              + (" --skip-share0" if meta["skip_share0"] else "")
+             + (" --design-candidates scaled" if meta.get("design_candidates") == "scaled" else "")
+             + (f" --random-from {args.random_from}" if getattr(args, "random_from", None) else "")
              + f"  ({meta['minutes']:.1f} min{', summed over the shards' if args.merge_shards else ''})",
              f"effects {EFFECTS if real is None or args.ur10_cyclic == 0 else real['effects']}; noise {NOISE} mm per axis; noise floor (3-D RMS) {FLOOR:.4f} mm; 1.2 x floor {1.2 * FLOOR:.4f} mm",
-             f"suggested: {'D' if real is None else real['whole_criterion']}-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share 0.2 of the poses beyond the fewest fit accepts, greedy + exchange "
-             f"(+ perturbed restarts at small N); random: {meta['random_draws']} draws per seed from all candidates (the same set the design chooses from), "
+             f"suggested: {'D' if real is None else real['whole_criterion']}-optimal (region: I-optimal, the random share drawn from the candidates nearest the targets), random share {_share_text(meta)}, greedy + exchange "
+             f"(+ perturbed restarts at small N); {_random_text(meta)}, "
              f"draw d fitted to the design's measurement d mod {meta['noise_draws']} (common random numbers)"]
     if "whole" in runs:
         lines += whole_lines(runs, len(seeds))
@@ -508,11 +555,28 @@ def report(args, runs: dict, real: dict | None, meta: dict) -> None:
         figure(args.figure, runs, real)
 
 
+def _share_text(meta: dict) -> str:
+    if meta.get("share_rule") == "capped":
+        return f"{DEFAULT_RANDOM_SHARE:g} of the poses beyond the fewest fit accepts, at most {DEFAULT_RANDOM_MOST} (the default)"
+    return f"{DEFAULT_RANDOM_SHARE:g} of the poses beyond the fewest fit accepts"
+
+
+def _random_text(meta: dict) -> str:
+    if meta.get("design_candidates") == "scaled":
+        return (f"the design chooses from suggest-poses' default count of candidates for N (60 per pose, at least 2,000: the 1,500 and more "
+                f"from the same cylinder); random: {meta['random_draws']} draws per seed from the 1,500 (the same distribution)")
+    return f"random: {meta['random_draws']} draws per seed from all candidates (the same set the design chooses from)"
+
+
 def merge_shards(paths: list[Path]) -> tuple[dict, dict]:
     """The runs of several --shard-out files as one: arrays joined along the seeds, in seed order.
     Refuses shards run with other options or sharing a seed."""
     shards = [dict(np.load(p)) for p in paths]
     options = ("noise_draws", "random_draws", "skip_share0")
+    for shard in shards:
+        shard.setdefault("meta__design_candidates", np.asarray("fixed"))  # shards written before the option
+        shard.setdefault("meta__share_rule", np.asarray("uncapped"))  # ... or before the default random share's cap
+    options += ("design_candidates", "share_rule")
     for p, shard in zip(paths[1:], shards[1:]):
         if any(shard[f"meta__{o}"] != shards[0][f"meta__{o}"] for o in options) or set(shard) != set(shards[0]):
             raise SystemExit(f"{p}: run with other options than {paths[0]} ({', '.join(options)}, parts)")
@@ -528,6 +592,22 @@ def merge_shards(paths: list[Path]) -> tuple[dict, dict]:
     meta = {o: shards[0][f"meta__{o}"].item() for o in options}
     meta.update(seeds=seeds[order], minutes=float(sum(sh["meta__minutes"] for sh in shards)))
     return runs, meta
+
+
+RANDOM_SIDE = ("random", "random_val", "random_lin", "random_lin_mean")
+
+
+def random_from(run: dict, path: Path) -> int:
+    """Put random's arrays of the run's seeds from ``path`` (a merged .npz) into ``run``; returns the draws per seed."""
+    saved = np.load(path)
+    where = {int(s): k for k, s in enumerate(saved["pass__seeds"])}
+    missing = [int(s) for s in run["seeds"] if int(s) not in where]
+    if missing:
+        raise SystemExit(f"{path}: no random designs for seeds {missing}")
+    rows = [where[int(s)] for s in run["seeds"]]
+    for key in RANDOM_SIDE:
+        run[key] = saved[f"pass__{key}"][rows]
+    return int(run["random"].shape[2])
 
 
 def redraw(raw_path: Path, figure_path: Path) -> None:

@@ -35,7 +35,7 @@ def suggest_poses_cmd(
     region: Optional[str] = typer.Option(None, "--region", help="Workspace extents, as simulate's --region."),
     box: Optional[str] = typer.Option(None, "--box", help="Generate candidates in a box: the same as --workspace box --region TEXT ('' for the default box)."),
     cylinder: Optional[str] = typer.Option(None, "--cylinder", help="Generate candidates in a cylinder sector: --workspace cylinder --region TEXT."),
-    n_candidates: int = typer.Option(2000, "--n-candidates", help="Without --candidates: how many to generate."),
+    n_candidates: Optional[int] = typer.Option(None, "--n-candidates", help="Without --candidates: how many to generate (default: 60 per chosen pose, at least 2,000, at most 12,000: the more candidates, the better the design can do, while random poses from the same workspace do not change)."),
     tracker: Optional[str] = typer.Option(None, "--tracker", help="X,Y,Z of the laser tracker in the robot base frame, mm: generated candidates must be in its range and line of sight."),
     tracker_range: Optional[str] = typer.Option(None, "--tracker-range", help="MIN:MAX distance the tracker measures, mm (default 1000:15000)."),
     tracker_cone: Optional[float] = typer.Option(None, "--tracker-cone", help="Reflector acceptance half-angle about the tool z axis, deg (default: not checked)."),
@@ -43,7 +43,7 @@ def suggest_poses_cmd(
     program: Optional[Path] = typer.Option(None, "--program", help="Region-targeted: minimise the predicted error at this program's targets."),
     dialect: Optional[str] = typer.Option(None, "--dialect", help="Dialect of --program (default: from the extension or content)."),
     measured: Optional[Path] = typer.Option(None, "--measured", help="Poses measured already (measurement CSV): suggest the next batch."),
-    random_share: float = typer.Option(0.2, "--random-share", help="Fraction drawn at random (robustness against effects the model lacks; with --program drawn near its targets) of the poses beyond the fewest fit accepts: those first poses are all chosen by the design (e.g. 39 parameters need 13: -n 32 draws round(0.2 x 19) = 4). The price: on a simulated machining pass at -n 50 to 100 the least expected variance any design can reach with them is 1-2.5 % higher than without."),
+    random_share: Optional[float] = typer.Option(None, "--random-share", help="Fraction drawn at random (with --program near its targets) of the poses beyond the fewest fit accepts; those first poses are all chosen by the design. Default: 0.2 of them, at most 4 poses (e.g. 39 parameters need 13: -n 20 draws 1, -n 32 draws 4, -n 100 draws 4): on a simulated machining pass with an effect the model lacks, random shares 0, 0.1 and 0.2 gave the same true error at -n 32 to 100, so a few random poses serve as a check where the program runs and the rest are chosen. A value given is used as it is, without the cap."),
     load_states: Optional[str] = typer.Option(None, "--load-states", help="FX,FY,FZ[;FX,FY,FZ...]: every candidate under each of these TCP forces (N, base frame; 0,0,0 for none), written as fx,fy,fz: separates compliance from geometry (effects joint_compliance + external_load)."),
     noise: float = typer.Option(0.02, "--noise", help="Measurement noise per axis, mm."),
     seed: int = typer.Option(0, "--seed"),
@@ -57,7 +57,7 @@ def suggest_poses_cmd(
     # Deferred import: it loads scipy / matplotlib (slow to import); `postproc --version` must stay fast.
     from postproc.model.model_io import load_model
     from postproc.suggest import program_targets, suggest_poses
-    from postproc.suggest.candidates import generate, read_candidates, with_load_states
+    from postproc.suggest.candidates import default_count, generate, read_candidates, with_load_states
     from postproc.suggest.inputs import design_model, tracker_from
     from postproc.suggest.job import report_lines, write_outputs
     from postproc.suggest.program import language_of
@@ -68,7 +68,7 @@ def suggest_poses_cmd(
         workspace, region = ("box", box) if box is not None else ("cylinder", cylinder)
     refuse_unused("with --candidates (they are not generated)", {"--box/--cylinder/--region": candidates is not None and region is not None,
                                                                   "--tracker": candidates is not None and tracker is not None,
-                                                                  "--n-candidates": candidates is not None and n_candidates != 2000})
+                                                                  "--n-candidates": candidates is not None and n_candidates is not None})
     refuse_unused("with --program (the design is region-targeted)", {"--criterion": program is not None and criterion not in ("D", "I")})
     fitted = load_model(model)[0] if model is not None else None
     if fitted is None and robot is None:
@@ -94,7 +94,8 @@ def suggest_poses_cmd(
         track = tracker_from(None if tracker is None else floats(tracker, 3, "--tracker"),
                              None if tracker_range is None else tuple(floats(tracker_range.replace(":", ","), 2, "--tracker-range")), tracker_cone)
         # ids name the seed: a batch generated with another seed has other poses under other ids
-        cands = generate(robot_model, tool_mm, n_candidates, parse_region(workspace, region), rng, track, id_prefix=f"s{seed}-")
+        count = default_count(n) if n_candidates is None else n_candidates
+        cands = generate(robot_model, tool_mm, count, parse_region(workspace, region), rng, track, id_prefix=f"s{seed}-")
     if load_states is not None:
         items = [t for t in load_states.split(";") if t.strip()]
         if not items:

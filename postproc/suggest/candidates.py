@@ -25,6 +25,21 @@ from postproc.robot.robots import RobotModel
 # design and the program hold the very numbers the controller executes.
 JOINT_DECIMALS = 4
 _NUMERIC_OPTIONAL = FORCES + APPROACH + ("temp", "t")
+# How many poses to generate when the user gives no --n-candidates: CANDIDATES_PER_POSE per chosen
+# pose, within [MIN_CANDIDATES, MAX_CANDIDATES]. The design gains over random selection by choosing,
+# and with a fixed count the choice per pose shrinks as N grows: on the simulated machining pass
+# (benchmarks/suggest_sim.py candidates, 3 seeds) 4x the candidates cut the poses the design needs by
+# 2.1-2.8 points of random's at N = 32-100 (random, drawn from the same distribution, does not change).
+# The search's time grows with candidates x N (suggest_poses at N = 100: 1.3 s on 1,500, 5.0 s on 6,000),
+# hence the cap.
+MIN_CANDIDATES = 2000
+CANDIDATES_PER_POSE = 60
+MAX_CANDIDATES = 12000
+
+
+def default_count(n: int) -> int:
+    """Candidates to generate for a design of n poses: 60 per pose, at least 2,000, at most 12,000."""
+    return int(min(MAX_CANDIDATES, max(MIN_CANDIDATES, CANDIDATES_PER_POSE * n)))
 
 
 @dataclass(frozen=True)
