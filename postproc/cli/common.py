@@ -46,6 +46,9 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
 GP_FEATURES = ("pose", "tcp+joints", "joints", "tcp+joints+travel")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
 GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart), joints, or tcp+joints+travel (tcp+joints and the TCP travel of the last three moves: the pose's history in the path; rows in measured order)."
 
+NOISE_MODEL_HELP = ("How far each training pose is trusted: none (all alike) or settle (the first poses after a TCP move > 10 mm, in row order, "
+                    "get their own noise level, estimated from the training poses: weights in the physics fit, noise levels in gpr).")
+
 
 def gp_features_checked(value: str) -> str:
     if value not in GP_FEATURES:

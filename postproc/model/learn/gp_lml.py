@@ -9,6 +9,11 @@ with r the row sums of S. A few (N, N) matrices, O(N^3 + N^2 d) per evaluation. 
 hyperparameters found are then handed to scikit-learn's regressor (optimizer=None) for
 prediction, so the model is the same object as the exact GP's.
 theta is scikit-learn's: log [C, l_1..l_d (or one l), noise], with the kernel's bounds.
+
+Noise groups (``groups``, (N,) ints 0..G-1; ``postproc.model.noise_model``): each group of
+poses gets its own noise level, the last group the kernel's, the others G - 1 more log
+levels appended to theta (``with_group_noise``). The gradient of group g's log level is
+1/2 noise_g sum over its poses of (|alpha_i|^2 - m (K^-1)_ii).
 """
 
 from __future__ import annotations
@@ -21,14 +26,35 @@ from scipy.spatial.distance import cdist
 JITTER = 1e-10  # scikit-learn's default alpha
 
 
-def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray) -> tuple[float, np.ndarray]:
-    """-log p(Y | X, theta) summed over Y's columns (already normalised), and its gradient."""
-    c, noise = np.exp(theta[0]), np.exp(theta[-1])
-    scales = np.exp(theta[1:-1])
+def with_group_noise(theta: np.ndarray, bounds: np.ndarray, n_groups: int) -> tuple[np.ndarray, np.ndarray]:
+    """theta and bounds extended by the log noise of groups 0..n_groups-2, each starting at
+    the kernel's (the last entry) and bounded as it is."""
+    extra = n_groups - 1
+    return np.r_[theta, np.repeat(theta[-1], extra)], np.vstack([bounds, np.repeat(bounds[-1:], extra, axis=0)])
+
+
+def point_noise(theta: np.ndarray, n_kernel: int, groups: np.ndarray | None) -> np.ndarray | float:
+    """Each pose's noise variance (normalised units) under an extended theta; the kernel's
+    noise where there are no groups."""
+    if groups is None:
+        return float(np.exp(theta[n_kernel - 1]))
+    levels = np.exp(np.r_[theta[n_kernel:], theta[n_kernel - 1]])  # groups 0..G-2, then the kernel's (G-1)
+    return levels[groups]
+
+
+def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray, groups: np.ndarray | None = None,
+                                n_kernel: int | None = None) -> tuple[float, np.ndarray]:
+    """-log p(Y | X, theta) summed over Y's columns (already normalised), and its gradient.
+    ``groups``: each pose's noise group, theta then extended (``with_group_noise``) past
+    its first ``n_kernel`` entries."""
+    n_kernel = len(theta) if n_kernel is None else n_kernel
+    c = np.exp(theta[0])
+    noise = point_noise(theta, n_kernel, groups)
+    scales = np.exp(theta[1 : n_kernel - 1])
     Xl = X / scales  # one length scale broadcasts too
     Kf = c * np.exp(-0.5 * cdist(Xl, Xl, "sqeuclidean"))
     K = Kf.copy()
-    K[np.diag_indices_from(K)] += noise + JITTER
+    K[np.diag_indices_from(K)] += noise + JITTER  # a scalar, or one per pose
     try:
         factor = cho_factor(K, lower=True, check_finite=False)
     except np.linalg.LinAlgError:
@@ -37,7 +63,7 @@ def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray)
     m = Y.shape[1]
     nll = 0.5 * float(np.sum(Y * alpha)) + m * float(np.sum(np.log(np.diag(factor[0])))) + 0.5 * m * len(X) * np.log(2 * np.pi)
     W = cho_solve(factor, np.eye(len(X)), check_finite=False)  # K^-1, then W in place
-    trace_w = float(np.sum(alpha * alpha)) - m * float(np.trace(W))
+    diag_w = np.sum(alpha * alpha, axis=1) - m * np.diag(W)  # per pose: what its noise's gradient sums
     W *= -m
     W += alpha @ alpha.T
     S = W * Kf
@@ -46,13 +72,20 @@ def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray)
     grad = np.empty_like(theta)
     grad[0] = 0.5 * S.sum()
     per_dim = (r @ (Xl * Xl)) - np.einsum("id,id->d", Xl, S @ Xl)
-    grad[1:-1] = per_dim if len(theta) - 2 == X.shape[1] else per_dim.sum()
-    grad[-1] = 0.5 * noise * trace_w
+    grad[1 : n_kernel - 1] = per_dim if n_kernel - 2 == X.shape[1] else per_dim.sum()
+    if groups is None:
+        grad[n_kernel - 1] = 0.5 * noise * float(diag_w.sum())
+    else:
+        by_group = 0.5 * np.bincount(groups, weights=noise * diag_w, minlength=len(theta) - n_kernel + 1)
+        grad[n_kernel:] = by_group[:-1]
+        grad[n_kernel - 1] = by_group[-1]
     return nll, -grad
 
 
-def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.ndarray, max_iter: int | None, n_restarts: int = 0, rng=None) -> np.ndarray:
-    """Best theta by L-BFGS-B from theta0 and n_restarts further starts.
+def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.ndarray, max_iter: int | None, n_restarts: int = 0, rng=None,
+                   groups: np.ndarray | None = None, n_kernel: int | None = None) -> np.ndarray:
+    """Best theta by L-BFGS-B from theta0 and n_restarts further starts (``groups``,
+    ``n_kernel``: per-group noise, theta0 and bounds extended by ``with_group_noise``).
 
     Restarts draw each log-hyperparameter uniformly within a quarter of its bounds' log range either side
     around theta0 clipped to the bounds: starts at the bounds' extremes (length scales of
@@ -65,7 +98,7 @@ def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.
         starts.append(np.clip(rng.uniform(starts[0] - half, starts[0] + half), bounds[:, 0], bounds[:, 1]))
     best = None
     for start in starts:
-        res = minimize(neg_log_marginal_likelihood, start, args=(X, Yn), method="L-BFGS-B", jac=True, bounds=bounds, options=options)
+        res = minimize(neg_log_marginal_likelihood, start, args=(X, Yn, groups, n_kernel), method="L-BFGS-B", jac=True, bounds=bounds, options=options)
         if best is None or res.fun < best.fun:
             best = res
     return best.x
