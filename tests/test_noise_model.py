@@ -94,11 +94,11 @@ def test_group_noise_gradient_is_the_likelihoods():
     rng = np.random.default_rng(0)
     X, Y, groups = rng.normal(size=(30, 2)), rng.normal(size=(30, 3)), rng.integers(0, 3, 30)
     theta, _ = with_group_noise(np.log([1.0, 0.7, 1.3, 0.1]), np.zeros((4, 2)), 3)
-    theta[-2:] = np.log([0.5, 0.3])
+    theta[-2:] = np.log([5.0, 3.0])  # groups 0 and 1: 5 and 3 times the noise of group 2
     numeric = approx_fprime(theta, lambda t: neg_log_marginal_likelihood(t, X, Y, groups, 4)[0], 1e-6)
     np.testing.assert_allclose(neg_log_marginal_likelihood(theta, X, Y, groups, 4)[1], numeric, atol=1e-4)
-    # All groups at the kernel's level: the plain likelihood.
-    same = np.r_[theta[:4], theta[3], theta[3]]
+    # All groups at the kernel's level (ratio 1): the plain likelihood.
+    same = np.r_[theta[:4], 0.0, 0.0]
     assert neg_log_marginal_likelihood(same, X, Y, groups, 4)[0] == pytest.approx(neg_log_marginal_likelihood(theta[:4], X, Y)[0])
 
 
@@ -171,3 +171,16 @@ def test_validate_takes_the_noise_model_and_the_leaf_size(world, tmp_path):
     assert unused.exit_code == 2 and "--gp-leaf-size" in unused.output
     ok = runner.invoke(app, [*base, "--noise-model", "settle", "--json"])
     assert ok.exit_code == 0, ok.output
+
+
+def test_gp_noise_ratios_leave_the_kernels_length_scales_as_without_groups():
+    # Fitted together, ratios and length scales fall into a degenerate optimum on Series A
+    # (gp_lml): the ratios are fitted with the kernel held, so its length scales stay.
+    rng = np.random.default_rng(4)
+    X, y, groups = _noisy_curve(rng, 200)
+    options = {"method": "exact", "n_restarts": 0, "random_state": 0}
+    grouped = GPRPredictor(**options).fit(X, y, noise_groups=groups)
+    plain = GPRPredictor(**options).fit(X, y)
+    ratio = np.exp(grouped.gpr_.theta_full_[-1])
+    assert ratio > 10  # group 0 is 50 times noisier in standard deviation
+    np.testing.assert_allclose(grouped.gpr_.theta_full_[:2], plain.gpr_.kernel_.theta[:2], atol=0.2)

@@ -16,8 +16,10 @@ memory (or ``memory_limit_gb``) raises MemoryBudgetError naming the method that 
 Predictions are made in blocks, so predicting a 10^6-point program stays bounded too.
 
 ``noise_groups`` (fit): each pose's noise group (``postproc.model.noise_model``: its place
-after the last large move); every group gets its own white-noise level by the marginal
-likelihood (gp_lml), in both methods. The prediction is the mean, as without.
+after the last large move). The kernel is fitted as without groups; then each group's
+noise ratio to the last group's (the settled poses) by the marginal likelihood with the
+kernel held, on up to GROUP_SAMPLE poses (gp_lml says why not together); the local experts
+refine their kernels with the ratios held. The prediction is the mean, as without.
 """
 
 from __future__ import annotations
@@ -37,6 +39,7 @@ from .memory import GB, check_budget, gp_fit_bytes, lean_fit_bytes
 
 METHODS = ("auto", "exact", "local")
 EXACT_MAX = 2000  # auto: the exact GP up to this many poses (about 0.8 GB and 1-2 minutes to fit)
+GROUP_SAMPLE = 1500  # poses the noise groups' ratios are fitted on (a few seconds per likelihood on 2 cores)
 
 
 class GPRPredictor(RegressorMixin, BaseEstimator):
@@ -124,11 +127,21 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         if progress is not None:
             progress(0, 1, f"exact GP on {len(X)} poses, {int(groups.max()) + 1} noise groups")
         kernel = self._kernel(X.shape[1])
-        theta0, bounds = with_group_noise(kernel.theta, kernel.bounds, int(groups.max()) + 1)
-        theta = optimize_theta(Xs, y, theta0, bounds, None, self.n_restarts, np.random.default_rng(self.random_state), groups, len(kernel.theta))
+        rng = np.random.default_rng(self.random_state)
+        theta = optimize_theta(Xs, y, kernel.theta, kernel.bounds, None, self.n_restarts, rng)
+        theta = self._group_ratios(Xs, y, kernel, theta, groups, rng)
         self.gpr_ = local_gp.fit_expert(Xs, y, kernel, None, groups, theta)
         self._keep(X, y, None, groups)
         return self
+
+    @staticmethod
+    def _group_ratios(Xs, y, kernel, theta, groups, rng):
+        """theta extended by the groups' noise ratios, fitted with the kernel held (its white
+        noise free too) on up to GROUP_SAMPLE poses."""
+        full, bounds = with_group_noise(theta, kernel.bounds, int(groups.max()) + 1)
+        sub = np.sort(rng.choice(len(Xs), min(len(Xs), GROUP_SAMPLE), replace=False))
+        free = np.arange(len(full)) >= len(kernel.theta) - 1
+        return optimize_theta(Xs[sub], y[sub], full, bounds, None, 0, rng, groups[sub], len(kernel.theta), free)
 
     def _keep(self, X, y, sample_weight, groups=None):
         self.X_train_, self.y_train_ = X, y
@@ -158,9 +171,9 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         if progress is not None:
             progress(0, total, f"global hyperparameters on {len(sub)} of {len(X)} poses")
         kernel = self._kernel(X.shape[1])
-        n_groups = 1 if groups is None else int(groups.max()) + 1
-        theta0, bounds = with_group_noise(kernel.theta, kernel.bounds, n_groups)
-        start = optimize_theta(Xs[sub], y[sub], theta0, bounds, None, self.n_restarts, rng, None if groups is None else groups[sub], len(kernel.theta))
+        start = optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng)
+        if groups is not None:
+            start = self._group_ratios(Xs, y, kernel, start, groups, rng)
         experts = []
         for k, expert in enumerate(local_gp.fit_experts(Xs, y, members, kernel, self.expert_iter, groups=groups, theta=start)):
             experts.append(expert)

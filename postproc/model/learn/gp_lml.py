@@ -10,10 +10,14 @@ hyperparameters found are then handed to scikit-learn's regressor (optimizer=Non
 prediction, so the model is the same object as the exact GP's.
 theta is scikit-learn's: log [C, l_1..l_d (or one l), noise], with the kernel's bounds.
 
-Noise groups (``groups``, (N,) ints 0..G-1; ``postproc.model.noise_model``): each group of
-poses gets its own noise level, the last group the kernel's, the others G - 1 more log
-levels appended to theta (``with_group_noise``). The gradient of group g's log level is
-1/2 noise_g sum over its poses of (|alpha_i|^2 - m (K^-1)_ii).
+Noise groups (``groups``, (N,) ints 0..G-1; ``postproc.model.noise_model``): group g's
+noise is the kernel's white noise times a ratio r_g, r_{G-1} = 1 (the settled poses); the
+log ratios of groups 0..G-2 are appended to theta (``with_group_noise``). With c_i =
+1/2 noise_i (|alpha_i|^2 - m (K^-1)_ii), the gradient of the log noise is sum_i c_i and of
+log r_g the sum of c_i over group g. Fitting the ratios together with the length scales
+falls into a degenerate optimum on Series A (length scales of the travel inputs at their
+lower bound: the signal turned into per-pose noise, the kernel's noise near zero), so the
+ratios are fitted with the kernel held (``free``), and the kernel with the ratios held.
 """
 
 from __future__ import annotations
@@ -24,22 +28,23 @@ from scipy.optimize import minimize
 from scipy.spatial.distance import cdist
 
 JITTER = 1e-10  # scikit-learn's default alpha
+#: a noise group's variance ratio to the settled poses' stays within these bounds
+RATIO_BOUNDS = (0.25, 100.0)
 
 
 def with_group_noise(theta: np.ndarray, bounds: np.ndarray, n_groups: int) -> tuple[np.ndarray, np.ndarray]:
-    """theta and bounds extended by the log noise of groups 0..n_groups-2, each starting at
-    the kernel's (the last entry) and bounded as it is."""
+    """theta and bounds extended by the log noise ratios of groups 0..n_groups-2 (start 1)."""
     extra = n_groups - 1
-    return np.r_[theta, np.repeat(theta[-1], extra)], np.vstack([bounds, np.repeat(bounds[-1:], extra, axis=0)])
+    return np.r_[theta, np.zeros(extra)], np.vstack([bounds, np.tile(np.log(RATIO_BOUNDS), (extra, 1))])
 
 
 def point_noise(theta: np.ndarray, n_kernel: int, groups: np.ndarray | None) -> np.ndarray | float:
     """Each pose's noise variance (normalised units) under an extended theta; the kernel's
     noise where there are no groups."""
+    base = float(np.exp(theta[n_kernel - 1]))
     if groups is None:
-        return float(np.exp(theta[n_kernel - 1]))
-    levels = np.exp(np.r_[theta[n_kernel:], theta[n_kernel - 1]])  # groups 0..G-2, then the kernel's (G-1)
-    return levels[groups]
+        return base
+    return base * np.exp(np.r_[theta[n_kernel:], 0.0])[groups]  # groups 0..G-2, then the settled (ratio 1)
 
 
 def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray, groups: np.ndarray | None = None,
@@ -73,32 +78,42 @@ def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray,
     grad[0] = 0.5 * S.sum()
     per_dim = (r @ (Xl * Xl)) - np.einsum("id,id->d", Xl, S @ Xl)
     grad[1 : n_kernel - 1] = per_dim if n_kernel - 2 == X.shape[1] else per_dim.sum()
-    if groups is None:
-        grad[n_kernel - 1] = 0.5 * noise * float(diag_w.sum())
-    else:
-        by_group = 0.5 * np.bincount(groups, weights=noise * diag_w, minlength=len(theta) - n_kernel + 1)
-        grad[n_kernel:] = by_group[:-1]
-        grad[n_kernel - 1] = by_group[-1]
+    grad[n_kernel - 1] = 0.5 * float(np.sum(noise * diag_w))
+    if groups is not None:
+        grad[n_kernel:] = 0.5 * np.bincount(groups, weights=noise * diag_w, minlength=len(theta) - n_kernel + 1)[:-1]
     return nll, -grad
 
 
 def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.ndarray, max_iter: int | None, n_restarts: int = 0, rng=None,
-                   groups: np.ndarray | None = None, n_kernel: int | None = None) -> np.ndarray:
+                   groups: np.ndarray | None = None, n_kernel: int | None = None, free: np.ndarray | None = None) -> np.ndarray:
     """Best theta by L-BFGS-B from theta0 and n_restarts further starts (``groups``,
-    ``n_kernel``: per-group noise, theta0 and bounds extended by ``with_group_noise``).
+    ``n_kernel``: per-group noise, theta0 and bounds extended by ``with_group_noise``;
+    ``free``: the entries fitted, the others held at theta0's values).
 
     Restarts draw each log-hyperparameter uniformly within a quarter of its bounds' log range either side
     around theta0 clipped to the bounds: starts at the bounds' extremes (length scales of
     0.01 standard deviations) fall into the degenerate all-noise optimum."""
     Yn = (Y - Y.mean(axis=0)) / np.where(Y.std(axis=0) > 0, Y.std(axis=0), 1.0)  # as normalize_y
     options = {} if max_iter is None else {"maxiter": max_iter}
-    starts = [np.asarray(theta0, dtype=float)]
+    full = np.asarray(theta0, dtype=float)
+    free = np.ones(len(full), dtype=bool) if free is None else np.asarray(free, dtype=bool)
+
+    def objective(x):
+        theta = full.copy()
+        theta[free] = x
+        value, grad = neg_log_marginal_likelihood(theta, X, Yn, groups, n_kernel)
+        return value, grad[free]
+
+    bounds = np.asarray(bounds, dtype=float)[free]
+    starts = [full[free]]
     for _ in range(n_restarts):
         half = 0.25 * (bounds[:, 1] - bounds[:, 0])
         starts.append(np.clip(rng.uniform(starts[0] - half, starts[0] + half), bounds[:, 0], bounds[:, 1]))
     best = None
     for start in starts:
-        res = minimize(neg_log_marginal_likelihood, start, args=(X, Yn, groups, n_kernel), method="L-BFGS-B", jac=True, bounds=bounds, options=options)
+        res = minimize(objective, start, method="L-BFGS-B", jac=True, bounds=bounds, options=options)
         if best is None or res.fun < best.fun:
             best = res
-    return best.x
+    out = full.copy()
+    out[free] = best.x
+    return out

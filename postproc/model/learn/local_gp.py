@@ -102,13 +102,14 @@ def fit_expert(Xs: np.ndarray, y: np.ndarray, kernel, max_iter: int | None, grou
     """One exact GP on standardised inputs: its kernel refined from ``theta`` (default
     kernel.theta) by at most max_iter L-BFGS steps of the lean marginal likelihood (gp_lml),
     or kept (max_iter None). ``groups``: each pose's noise group, ``theta`` then extended by
-    their noise levels (gp_lml.with_group_noise); a pose's noise beyond the kernel's white
-    noise is its ``alpha``. The full theta is kept as ``theta_full_`` (saved with the model)."""
+    their noise ratios (gp_lml.with_group_noise), held here; a pose's noise beyond the
+    kernel's white noise is its ``alpha``. The full theta is kept as ``theta_full_`` (saved
+    with the model)."""
     n_kernel = len(kernel.theta)
     theta = kernel.theta if theta is None else np.asarray(theta, dtype=float)
     if max_iter is not None:
         _, bounds = with_group_noise(kernel.theta, kernel.bounds, len(theta) - n_kernel + 1)
-        theta = optimize_theta(Xs, y, theta, bounds, max_iter, groups=groups, n_kernel=n_kernel)
+        theta = optimize_theta(Xs, y, theta, bounds, max_iter, groups=groups, n_kernel=n_kernel, free=np.arange(len(theta)) < n_kernel)
     alpha = JITTER if groups is None else JITTER + point_noise(theta, n_kernel, groups) - np.exp(theta[n_kernel - 1])
     gpr = GaussianProcessRegressor(kernel=kernel.clone_with_theta(theta[:n_kernel]), alpha=alpha, normalize_y=True, optimizer=None)
     gpr.fit(Xs, y)
