@@ -14,6 +14,7 @@ from typer.testing import CliRunner
 import postproc
 from postproc.cli import app
 from postproc.errors import IdentificationError, InputError
+from postproc.model import validate as protocols
 from postproc.model.effects import parse_effects
 from postproc.model.identify import fit, fit_predictor, residuals
 from postproc.model.learn import GPRPredictor
@@ -160,15 +161,18 @@ def test_plugin_predictor_gets_weights_or_is_refused(world, monkeypatch):
         fit_predictor(model, meas, _Unweighted.name, noise="settle")
 
 
-def test_validate_takes_the_noise_model_and_the_leaf_size(world, tmp_path):
+def test_validate_takes_the_noise_model_and_the_gp_sizes(world, tmp_path):
     _, _, meas, _ = world
     path = tmp_path / "m.csv"
     write_measurements(path, meas)
     base = ["validate", str(path), "--protocol", "random", "--robot", "ur10", "--tool", "0,0,109", "--effects", EFFECTS]
     bad = runner.invoke(app, [*base, "--noise-model", "robust"])
     assert bad.exit_code == 2 and "--noise-model" in bad.output
-    unused = runner.invoke(app, [*base, "--gp-leaf-size", "200"])
-    assert unused.exit_code == 2 and "--gp-leaf-size" in unused.output
+    for option, value in (("--gp-leaf-size", "200"), ("--gp-global-size", "1500")):
+        unused = runner.invoke(app, [*base, option, value])
+        assert unused.exit_code == 2 and option in unused.output
+    small = runner.invoke(app, [*base, "--predictor", "gpr", "--gp-global-size", "5"])
+    assert small.exit_code == 2 and "--gp-global-size" in small.output
     ok = runner.invoke(app, [*base, "--noise-model", "settle", "--json"])
     assert ok.exit_code == 0, ok.output
 
@@ -184,3 +188,20 @@ def test_gp_noise_ratios_leave_the_kernels_length_scales_as_without_groups():
     ratio = np.exp(grouped.gpr_.theta_full_[-1])
     assert ratio > 10  # group 0 is 50 times noisier in standard deviation
     np.testing.assert_allclose(grouped.gpr_.theta_full_[:2], plain.gpr_.kernel_.theta[:2], atol=0.2)
+
+
+def test_validate_hands_the_options_to_every_fold(world, tmp_path, monkeypatch):
+    _, _, meas, _ = world
+    path = tmp_path / "m.csv"
+    write_measurements(path, meas)
+    seen = {}
+
+    def capture(spec, data, fraction, seed, say):
+        seen["spec"] = spec
+        raise InputError("captured")
+
+    monkeypatch.setattr(protocols, "run_random", capture)
+    runner.invoke(app, ["validate", str(path), "--protocol", "random", "--robot", "ur10", "--tool", "0,0,109", "--effects", EFFECTS,
+                        "--predictor", "gpr", "--gp-leaf-size", "300", "--gp-global-size", "1500", "--noise-model", "settle"])
+    spec = seen["spec"]
+    assert spec.noise == "settle" and spec.gp_options["leaf_size"] == 300 and spec.gp_options["global_size"] == 1500
