@@ -5,6 +5,7 @@ in the gpr predictor (saved and restored) and as sample weights for a plugin pre
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import ClassVar
 
 import numpy as np
 import pytest
@@ -81,7 +82,7 @@ def test_unknown_noise_model_is_refused():
 
 
 def test_weighted_physics_fit_is_not_pulled_off_by_the_unsettled_poses(world):
-    robot, truth, meas, first = world
+    robot, truth, meas, _ = world
     plain = fit(robot, TOOL, parse_effects(EFFECTS), meas, cv_folds=0)
     settle = fit(robot, TOOL, parse_effects(EFFECTS), meas, cv_folds=0, noise="settle")
     clean = simulate(truth, meas.q_deg, np.random.default_rng(1), noise_mm=0.0)  # where the arm really is
@@ -130,7 +131,7 @@ class _WeightedMean(PluginPredictor):
     """A plugin predictor that takes sample weights: the weighted mean of the residual."""
 
     name, features = "test-weighted-mean", "position"
-    seen = {}
+    seen: ClassVar[dict] = {}
 
     def fit(self, X, y, sample_weight=None):
         _WeightedMean.seen["w"] = sample_weight

@@ -70,7 +70,7 @@ class NoiseRatios:
     ratios: tuple[float, ...]
 
     @classmethod
-    def estimate(cls, place: np.ndarray, residual_mm: np.ndarray, depth: int) -> "NoiseRatios":
+    def estimate(cls, place: np.ndarray, residual_mm: np.ndarray, depth: int) -> NoiseRatios:
         """From a residual (N, 3) of the training poses and their places."""
         square = np.sum(np.asarray(residual_mm, dtype=float) ** 2, axis=1)
         counts = np.bincount(place, minlength=depth + 1)
