@@ -46,6 +46,19 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
 GP_FEATURES = ("pose", "tcp+joints", "joints", "tcp+joints+travel")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
 GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart), joints, or tcp+joints+travel (tcp+joints and the TCP travel of the last three moves: the pose's history in the path; rows in measured order)."
 
+GP_GLOBAL_SIZE_HELP = ("gpr local: poses the global kernel fit (the experts' start) is made on; on 600 (the default) "
+                       "some splits of the UR10's Series A land in a degenerate kernel (length scales at their lower bound).")
+
+
+def gp_global_size_checked(value: int) -> int:
+    if value < 10:
+        raise InputError(f"--gp-global-size: a kernel needs at least 10 poses to fit, got {value}")
+    return value
+
+
+NOISE_MODEL_HELP = ("How far each training pose is trusted: none (all alike) or settle (the first poses after a TCP move > 10 mm, in row order, "
+                    "get their own noise level, estimated from the training poses: weights in the physics fit, noise levels in gpr).")
+
 
 def gp_features_checked(value: str) -> str:
     if value not in GP_FEATURES:

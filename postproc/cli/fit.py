@@ -10,12 +10,13 @@ from rich.table import Table
 
 from postproc.errors import InputError
 from postproc.model.effects import parse_effects
+from postproc.model.noise_model import checked as noise_model_checked
 from postproc.model.predictor_plugins import predictor_names
 from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
+from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, GP_GLOBAL_SIZE_HELP, NOISE_MODEL_HELP, gp_global_size_checked, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
 from .plugin_option import with_plugins
 
 
@@ -60,24 +61,28 @@ def fit_cmd(
     gp_method: str = typer.Option("auto", "--gp-method", help="gpr: exact, local (experts over workspace regions, 10^4-10^5 poses) or auto (exact up to 2,000 poses)."),
     gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
     gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
+    gp_global_size: int = typer.Option(600, "--gp-global-size", help=GP_GLOBAL_SIZE_HELP),
     memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
+    noise_model: str = typer.Option("none", "--noise-model", help=NOISE_MODEL_HELP),
 ):
     """Identify an error model from measurements and write MODEL.json."""
     if gp_method not in ("auto", "exact", "local"):
         raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
     refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
     refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
-                                               "--gp-features": gp_features != "pose",
+                                               "--gp-features": gp_features != "pose", "--gp-global-size": gp_global_size != 600,
                                                "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
         _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit,
-                                                                                "features": gp_features_checked(gp_features)}, drop_invalid)
+                                                                                "features": gp_features_checked(gp_features),
+                                                                                "global_size": gp_global_size_checked(gp_global_size)}, drop_invalid,
+             noise_model_checked(noise_model))
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")
         raise typer.Exit(130) from None
 
 
-def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False):
+def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False, noise="none"):
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from postproc.model.identify import fit as run_fit
     from postproc.model.model_io import load_model, save_model
@@ -109,7 +114,7 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
     check_output_folder(output, "-o")
     data = load_measurements(meas, robot_model, drop_invalid)
     with ProgressLine("fit", console=err) as progress:
-        result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress)
+        result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress, noise=noise)
     final = result.model
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
@@ -117,7 +122,7 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
 
         with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
             final = fit_predictor(result.model, data, predictor, load_measurements(source) if source is not None else None, seed=seed,
-                                  gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total))
+                                  gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total), noise=noise)
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
     if predictor is not None:

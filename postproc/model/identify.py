@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import inspect
 from dataclasses import dataclass, field, replace
 from dataclasses import replace as _replace
 from types import SimpleNamespace
@@ -29,6 +30,7 @@ from .effects import Effect, EffectSum, catalog_of_kind
 from .errormodel import ErrorModel, Prepared
 from .harmonic_scan import Residual, choose_terms
 from .measurements import MeasurementSet
+from .noise_model import NoiseRatios, checked, settle_place
 from .path_history import path_travel_mm
 from .predictor_plugins import PREDICTORS
 from .term_selection import select_terms as best_subset
@@ -143,10 +145,12 @@ def _absorbers(model: ErrorModel, sub: np.ndarray, keep_local: np.ndarray, keep:
 
 
 def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.ndarray, loss: str, f_scale: float, max_nfev: int | None = None,
-           say=lambda message: None):
+           say=lambda message: None, weights: np.ndarray | None = None):
     """Least squares over the free parameters; ``say`` hears of every Jacobian (a fit of many
-    terms on 10^4 poses runs for minutes: the command's progress line must go on)."""
+    terms on 10^4 poses runs for minutes: the command's progress line must go on).
+    ``weights`` (N,): each pose's weight, 1 / its relative noise variance (None: all 1)."""
     free = np.asarray(free, dtype=bool)
+    root = np.ones((len(measured), 1)) if weights is None else np.sqrt(np.asarray(weights, dtype=float))[:, None]
     if not free.any():
         return model.values.copy(), SimpleNamespace(success=True, message="nothing to fit")
     scales = np.array([p.scale for p in model.params])[free]
@@ -158,7 +162,7 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
         return v
 
     def fun(x):
-        return (model.predict_prepared(prep, unpack(x)) - measured).ravel()
+        return ((model.predict_prepared(prep, unpack(x)) - measured) * root).ravel()
 
     jacobians = [0]
 
@@ -166,7 +170,7 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
         jacobians[0] += 1
         say(f"fitting {int(free.sum())} parameters (step {jacobians[0]})")
         _, jj = model.evaluate(prep, unpack(x))
-        return jj.reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
+        return (jj * root[:, :, None]).reshape(jj.shape[0] * 3, jj.shape[-1])[:, free]
 
     lower = np.array([p.lower for p in model.params])[free]
     upper = np.array([p.upper for p in model.params])[free]
@@ -177,15 +181,17 @@ def _solve(model: ErrorModel, prep: Prepared, measured: np.ndarray, free: np.nda
     return unpack(res.x), res
 
 
-def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, say=lambda m: None) -> tuple[EffectSum, list[str]]:
+def resolve_terms(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, prior=None, seed: int = 0, say=lambda m: None,
+                  weights: np.ndarray | None = None) -> tuple[EffectSum, list[str]]:
     """Effects whose terms the fit chooses (e.g. harmonics without options) get the terms the
-    data support, or are left out when they support none; returns the effects and notes."""
+    data support, or are left out when they support none; returns the effects and notes.
+    ``weights``: each pose's least-squares weight (``fit``'s noise model), None: all 1."""
     notes = []
     for effect in [e for e in effects if not e.resolved]:
         say(f"choosing {effect.name} terms")
         without = EffectSum(tuple(e for e in effects if e is not effect))
         choose = select_cyclic_terms if effect.term_search == "forward" else select_terms
-        chosen, how = choose(robot, tool_mm, without, effect, meas, prior=prior, seed=seed)
+        chosen, how = choose(robot, tool_mm, without, effect, meas, prior=prior, seed=seed, weights=weights)
         if chosen.terms:
             effects = effects.replaced(effect, chosen)
             notes.append(f"{effect.name}: data support {chosen.spec()} (terms and how often they were chosen: {how})")
@@ -206,21 +212,47 @@ def fit(
     prior: ErrorModel | None = None,
     seed: int = 0,
     progress: Callable[[str], None] | None = None,
+    noise: str = "none",
+    weights: np.ndarray | None = None,
 ) -> FitResult:
     """Identify the parameters of ``effects`` from a measurement set.
 
     ``prior``: a previously fitted model whose parameter values (and base registration)
     start this fit, e.g. to extend a model by one effect. BLAS runs one thread unless the
-    set is large (``postproc.threads``).
+    set is large (``postproc.threads``). ``noise``: ``none`` (every pose equally trusted)
+    or ``settle`` (each pose weighted by 1 / its place's noise variance after the last
+    large move, estimated from an unweighted fit: ``postproc.model.noise_model``);
+    ``weights`` (N,): per-pose weights given directly (they take the place of ``noise``).
     """
     with small_matrices(3 * len(meas)):
-        return _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress)
+        weights, note = pose_weights(robot, tool_mm, effects, meas, checked(noise), weights, prior, seed, progress or (lambda msg: None))
+        result = _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress, weights)
+        return result if note is None else replace(result, notes=(note, *result.notes))
 
 
-def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -> FitResult:
+def pose_weights(robot, tool_mm, effects: EffectSum, meas: MeasurementSet, noise: str, weights, prior, seed, say) -> tuple[np.ndarray | None, str | None]:
+    """The per-pose weights of a fit and a note on where they came from: those given, else
+    for ``settle`` 1 / the variance ratio of each pose's place after the last large move,
+    the ratios from the residual of an unweighted fit of the effects whose terms are fixed."""
+    if weights is not None:
+        return np.asarray(weights, dtype=float), None
+    if noise == "none":
+        return None, None
+    history = meas.path_history()
+    place = settle_place(robot, tool_mm, meas.q_deg, history)
+    say("noise model: an unweighted fit for the variance of each place after a move")
+    fixed_terms = EffectSum(tuple(e for e in effects if e.resolved))
+    first = _fit(robot, tool_mm, fixed_terms, meas, "linear", 0, prior, seed, None, None)
+    ratios = NoiseRatios.estimate(place, residuals(first.model, meas), history.shape[1])
+    counts = np.bincount(place, minlength=history.shape[1] + 1)
+    return ratios.weights(place), (f"noise model settle: variance of the poses 1, 2, 3, 4+ after a move > 10 mm "
+                                   f"{ratios.describe()} times the settled poses' ({' / '.join(map(str, counts))} poses); weights 1 / that")
+
+
+def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress, weights=None) -> FitResult:
     say = progress or (lambda msg: None)
     coverage = Coverage.of(robot, tool_mm, meas.q_deg)  # the model records the region it was fitted on
-    effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say)
+    effects, notes = resolve_terms(robot, tool_mm, effects, meas, prior=prior, seed=seed, say=say, weights=weights)
     model = replace(_initial_model(robot, tool_mm, effects, meas, prior), coverage=coverage)
     prep = model.prepare(meas)
     notes.extend(prep.notes)
@@ -242,7 +274,7 @@ def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -
 
     say("fitting")
     f_scale = 0.05
-    values, res = _solve(model, prep, meas.measured_mm, free, loss, f_scale, say=say)
+    values, res = _solve(model, prep, meas.measured_mm, free, loss, f_scale, say=say, weights=weights)
     if not res.success:
         raise IdentificationError(f"{meas.source}: the fit did not converge ({res.message})")
     model = model.with_vector(values)
@@ -253,7 +285,7 @@ def _fit(robot, tool_mm, effects, meas, loss, cv_folds, prior, seed, progress) -
     resid = residuals(model, meas, prep)
     cv = None
     if cv_folds and cv_folds >= 2 and len(meas) >= 2 * cv_folds:
-        cv = cross_validate(model, meas, free, cv_folds, loss, f_scale, seed, say)
+        cv = cross_validate(model, meas, free, cv_folds, loss, f_scale, seed, say, weights)
     return FitResult(model=model, std=_standard_errors(model, prep, resid, free), fixed=fixed, outliers=_outliers(meas, resid),
                      before=before, after=Stats.of(resid), cv_rms_mm=cv, approach_inferred=prep.approach_inferred, notes=tuple(notes))
 
@@ -327,9 +359,11 @@ def _recentre_base(model: ErrorModel) -> ErrorModel:
     return replace(model, values=values, base_rotation=rot, base_translation=trans)
 
 
-def cross_validate(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str, f_scale: float, seed: int, say=lambda m: None) -> float:
-    """k-fold cross-validated RMS (mm): refit the free parameters without each fold, predict it."""
-    errors = cross_validation_errors(model, meas, free, folds, loss, f_scale, seed, say)
+def cross_validate(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str, f_scale: float, seed: int, say=lambda m: None,
+                   weights: np.ndarray | None = None) -> float:
+    """k-fold cross-validated RMS (mm): refit the free parameters without each fold, predict it
+    (the refits weighted by ``weights``; the RMS over all poses, as measured)."""
+    errors = cross_validation_errors(model, meas, free, folds, loss, f_scale, seed, say, weights)
     return float(np.sqrt(np.mean(np.sum(errors**2, axis=1))))
 
 
@@ -341,7 +375,8 @@ def fold_assignment(n: int, folds: int, seed: int) -> np.ndarray:
     return fold_of
 
 
-def cross_validation_errors(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str = "linear", f_scale: float = 0.05, seed: int = 0, say=lambda m: None) -> np.ndarray:
+def cross_validation_errors(model: ErrorModel, meas: MeasurementSet, free: np.ndarray, folds: int, loss: str = "linear", f_scale: float = 0.05, seed: int = 0, say=lambda m: None,
+                            weights: np.ndarray | None = None) -> np.ndarray:
     """Held-out errors (N, 3), in the set's row order: each fold predicted by a refit without it."""
     fold_of = fold_assignment(len(meas), folds, seed)
     errors = np.zeros((len(meas), 3))
@@ -350,7 +385,7 @@ def cross_validation_errors(model: ErrorModel, meas: MeasurementSet, free: np.nd
         test = fold_of == k
         train_set, test_set = meas.subset(~test), meas.subset(test)
         prep_train = model.prepare(train_set)
-        values, _ = _solve(model, prep_train, train_set.measured_mm, free, loss, f_scale, max_nfev=200)
+        values, _ = _solve(model, prep_train, train_set.measured_mm, free, loss, f_scale, max_nfev=200, weights=None if weights is None else weights[~test])
         errors[test] = model.with_vector(values).predict(test_set) - test_set.measured_mm
     return errors
 
@@ -360,51 +395,69 @@ def free_mask(result: "FitResult") -> np.ndarray:
     return np.array([p.name not in result.fixed for p in result.model.params])
 
 
-def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4) -> tuple[Effect, str]:
+def select_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0, max_terms: int = 4,
+                 weights: np.ndarray | None = None) -> tuple[Effect, str]:
     """A term family's terms (e.g. harmonics' (joint, order)) by best-subset regression over
     the whole family, with cross-validation and a stability check (``postproc.model.term_selection``),
     on the residual of the model without the family linearised around its fit. Returns the
     family with the chosen terms and a note of how stable the choice was."""
 
-    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
+    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed, weights=weights)
     prep = result.model.prepare(meas)
     pos, jac = result.model.evaluate(prep)
+    root = np.repeat(np.ones(len(meas)) if weights is None else np.sqrt(weights), 3)  # weighted rows: each scaled by sqrt(w)
     free = np.array([result.std.get(p.name, 0.0) > 0 for p in result.model.params], dtype=bool)
     dp_dq = kin_joint_columns(result.model, prep)  # d p / d q_j in the measurement frame, per degree
     candidates = family.candidate_terms()
-    cols = [family.term_columns(dp_dq, meas.q_deg, term).reshape(3 * len(meas), -1) for term in candidates]
+    cols = [family.term_columns(dp_dq, meas.q_deg, term).reshape(3 * len(meas), -1) * root[:, None] for term in candidates]
     groups = np.split(np.arange(sum(c.shape[1] for c in cols)), np.cumsum([c.shape[1] for c in cols])[:-1])
-    pick = best_subset(np.hstack(cols), (meas.measured_mm - pos).reshape(-1), groups, np.repeat(fold_assignment(len(meas), 5, seed), 3),
-                       base=jac.reshape(3 * len(meas), -1)[:, free], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
+    pick = best_subset(np.hstack(cols), (meas.measured_mm - pos).reshape(-1) * root, groups, np.repeat(fold_assignment(len(meas), 5, seed), 3),
+                       base=jac.reshape(3 * len(meas), -1)[:, free] * root[:, None], unit_of=np.repeat(np.arange(len(meas)), 3), max_terms=max_terms, seed=seed)
     how = f"best subset, 5-fold CV RMS {pick.cv_rms:.4f} mm, the whole set chosen in {100 * pick.support_stability:.0f} % of resamples"
     labels = [":".join(map(str, t)) if isinstance(t, tuple) else str(t) for t in candidates]
     return family.with_terms(tuple(candidates[t] for t in pick.chosen)), (term_labels(labels, pick) + "; " if pick.chosen else "") + how
 
 
-def cyclic_residual(model: ErrorModel, meas: MeasurementSet) -> Residual:
+def cyclic_residual(model: ErrorModel, meas: MeasurementSet, weights: np.ndarray | None = None) -> Residual:
     """The model's residual on ``meas`` with the columns a cyclic-error scan needs
-    (``postproc.model.harmonic_scan``)."""
+    (``postproc.model.harmonic_scan``); with ``weights``, each pose's rows scaled by sqrt(w),
+    so the scan's least squares are the weighted ones."""
     prep = model.prepare(meas)
     _, jac = model.evaluate(prep)
-    return Residual(residuals(model, meas, prep), kin_joint_columns(model, prep), jac.reshape(3 * len(meas), -1), np.radians(meas.q_deg))
+    root = np.ones(len(meas)) if weights is None else np.sqrt(np.asarray(weights, dtype=float))
+    return Residual(residuals(model, meas, prep) * root[:, None], kin_joint_columns(model, prep) * root[:, None, None],
+                    (jac * root[:, None, None]).reshape(3 * len(meas), -1), np.radians(meas.q_deg))
 
 
-def select_cyclic_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0) -> tuple[Effect, str]:
+def select_cyclic_terms(robot, tool_mm, others: EffectSum, family: Effect, meas: MeasurementSet, prior=None, seed: int = 0,
+                        weights: np.ndarray | None = None) -> tuple[Effect, str]:
     """The terms of a family searched forward (cyclic joint errors with a high largest
     order): forward selection over its candidate (joint, order) terms on the residual of the
     model without it, the number of terms by 5-fold cross-validation that holds out whole
     commanded positions (column ``point``) where the set has them, else single poses
     (``postproc.model.harmonic_scan.choose_terms``)."""
-    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed)
+    result = fit(robot, tool_mm, others, meas, cv_folds=0, prior=prior, seed=seed, weights=weights)
     grouped = "point" in meas.extra
     groups = meas.extra["point"].astype(np.int64) if grouped else np.arange(len(meas))
     candidates = family.candidate_terms()
-    choice = choose_terms(cyclic_residual(result.model, meas), groups, np.ones(len(meas), dtype=bool), candidates, seed=seed)
+    choice = choose_terms(cyclic_residual(result.model, meas, weights), groups, np.ones(len(meas), dtype=bool), candidates, seed=seed)
     n = len(choice.terms)
     joints, orders = sorted({j for j, _ in candidates}), sorted({k for _, k in candidates})
     how = (f"forward selection over joints {','.join(map(str, joints))} and orders {orders[0]}-{orders[-1]}, "
            f"5-fold CV by {'commanded position' if grouped else 'pose'}: {n} terms, CV RMS {choice.cv_rms_mm[0]:.4f} -> {choice.cv_rms_mm[n]:.4f} mm")
     return family.with_terms(choice.terms), how
+
+
+def _noise_places(model: ErrorModel, meas: MeasurementSet, noise: str, kind: str) -> np.ndarray | None:
+    """Each pose's place after the last large move where the predictor is given a noise model;
+    refuses a predictor that cannot take one (rather than fitting it as if trusted alike)."""
+    if noise == "none":
+        return None
+    takes = kind == "gpr" or (kind in PREDICTORS and "sample_weight" in inspect.signature(PREDICTORS[kind].fit).parameters)
+    if not takes:
+        raise IdentificationError(f"--noise-model {noise}: the {kind} predictor takes no per-pose noise "
+                                  "(gpr does, and a plugin predictor whose fit takes sample_weight)")
+    return settle_place(model.robot, model.tool_mm, meas.q_deg, meas.path_history())
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
@@ -421,9 +474,13 @@ def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
 
 
 def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: MeasurementSet | None = None, seed: int = 0,
-                  gp_options: dict | None = None, progress=None) -> ErrorModel:
+                  gp_options: dict | None = None, progress=None, noise: str = "none") -> ErrorModel:
     """Attach a data-driven predictor of the model's residual (a hybrid model; with no
-    effects, a purely data-driven one). tr-gpr takes a source-region set as well."""
+    effects, a purely data-driven one). tr-gpr takes a source-region set as well.
+    ``noise``: ``settle`` gives gpr one noise level per place after the last large move
+    (by its marginal likelihood) and a plugin predictor whose ``fit`` takes
+    ``sample_weight`` the weights 1 / each place's variance ratio in the residual
+    (``postproc.model.noise_model``); the other predictors take no per-pose noise."""
 
     # Deferred: postproc.model.learn loads torch (seconds), needed only when a predictor is fitted.
     from .learn import (
@@ -448,12 +505,15 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
             raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
     X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference, meas.path_history())
+    place = _noise_places(model, meas, checked(noise), kind)
     if kind == "gpr":
-        est = GPRPredictor(anisotropic=True, random_state=seed, **gp_options).fit(X, target, progress=progress)
+        est = GPRPredictor(anisotropic=True, random_state=seed, **gp_options).fit(X, target, progress=progress, noise_groups=place)
     elif kind == "pso-bp":
         est = PSOBPPredictor(random_state=seed).fit(X, target, progress=progress)
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
+    elif kind in PREDICTORS and place is not None:
+        est = PREDICTORS[kind](random_state=seed).fit(X, target, sample_weight=NoiseRatios.estimate(place, target, meas.path_history().shape[1]).weights(place))
     elif kind in PREDICTORS:
         est = PREDICTORS[kind](random_state=seed).fit(X, target)
     else:

@@ -28,7 +28,10 @@ class PluginPredictor:
     the pose and of the two moves before it: the pose's history in the path), then:
 
     - ``__init__(self, random_state=0)``;
-    - ``fit(self, X, y)`` with X (N, features) and y (N, 3) mm, returning self;
+    - ``fit(self, X, y)`` with X (N, features) and y (N, 3) mm, returning self; a predictor
+      that can trust poses unequally may take ``fit(self, X, y, sample_weight=None)``:
+      under ``--noise-model settle`` it is given (N,) weights, 1 / each pose's relative noise
+      variance (``postproc.model.noise_model``); one without the argument is refused there;
     - ``predict(self, X)`` -> (N, 3) mm;
     - ``to_state(self)`` -> a JSON-ready dict, and the classmethod ``from_state(cls, state)``
       that rebuilds the fitted predictor from it (the model file stores the state).

@@ -114,15 +114,16 @@ class FitSpec:
     predictor: str | None = None
     gp_options: dict | None = None
     seed: int = 0
+    noise: str = "none"  # the training poses' noise model (postproc.model.noise_model): none or settle
 
 
 def fit_model(spec: FitSpec, meas: MeasurementSet, say: Callable[[str], None]) -> ErrorModel:
-    model = fit(spec.robot, spec.tool_mm, spec.effects, meas, cv_folds=0, seed=spec.seed, progress=say).model
+    model = fit(spec.robot, spec.tool_mm, spec.effects, meas, cv_folds=0, seed=spec.seed, progress=say, noise=spec.noise).model
     if spec.predictor is None:
         return model
     say(f"fitting the {spec.predictor} predictor on {len(meas)} poses")
     return fit_predictor(model, meas, spec.predictor, seed=spec.seed, gp_options=spec.gp_options,
-                         progress=lambda done, total, msg: say(f"{msg} ({done}/{total})"))
+                         progress=lambda done, total, msg: say(f"{msg} ({done}/{total})"), noise=spec.noise)
 
 
 def with_order_columns(effects: EffectSum, meas: MeasurementSet) -> MeasurementSet:

@@ -14,6 +14,12 @@ Two methods, chosen by ``method``:
 The memory a fit needs is estimated before it starts; a fit that would not fit in the free
 memory (or ``memory_limit_gb``) raises MemoryBudgetError naming the method that would.
 Predictions are made in blocks, so predicting a 10^6-point program stays bounded too.
+
+``noise_groups`` (fit): each pose's noise group (``postproc.model.noise_model``: its place
+after the last large move). The kernel is fitted as without groups; then each group's
+noise ratio to the last group's (the settled poses) by the marginal likelihood with the
+kernel held, on up to GROUP_SAMPLE poses (gp_lml says why not together); the local experts
+refine their kernels with the ratios held. The prediction is the mean, as without.
 """
 
 from __future__ import annotations
@@ -28,11 +34,12 @@ from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.preprocessing import StandardScaler
 
 from . import local_gp
-from .gp_lml import optimize_theta
+from .gp_lml import optimize_theta, with_group_noise
 from .memory import GB, check_budget, gp_fit_bytes, lean_fit_bytes
 
 METHODS = ("auto", "exact", "local")
 EXACT_MAX = 2000  # auto: the exact GP up to this many poses (about 0.8 GB and 1-2 minutes to fit)
+GROUP_SAMPLE = 1500  # poses the noise groups' ratios are fitted on (a few seconds per likelihood on 2 cores)
 
 
 class GPRPredictor(RegressorMixin, BaseEstimator):
@@ -86,15 +93,21 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         check_budget(need, f"gpr ({method}) on {n_points} poses x {n_features} features", self.memory_limit_gb, alternative)
         return method
 
-    def fit(self, X, y, sample_weight=None, progress=None):
-        """progress(done, total, message): called between stages (local: once per expert)."""
+    def fit(self, X, y, sample_weight=None, progress=None, noise_groups=None):
+        """progress(done, total, message): called between stages (local: once per expert);
+        noise_groups (N,) ints 0..G-1: one noise level per group, G - 1 the kernel's."""
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
+        groups = None if noise_groups is None else np.asarray(noise_groups, dtype=np.int64)
+        if groups is not None and sample_weight is not None:
+            raise ValueError("give sample weights or noise groups, not both")
         self.method_ = self._check_memory(len(X), X.shape[1])
         if self.method_ == "local":
             if sample_weight is not None:
                 raise ValueError("the local-experts GP takes no sample weights (use method='exact')")
-            return self._fit_local(X, y, progress)
+            return self._fit_local(X, y, progress, groups)
+        if groups is not None:
+            return self._fit_exact_groups(X, y, progress, groups)
         self.scaler_ = StandardScaler().fit(X)
         self.gpr_ = GaussianProcessRegressor(kernel=self._kernel(X.shape[1]), alpha=self._alpha(sample_weight), normalize_y=True,
                                              n_restarts_optimizer=self.n_restarts, random_state=self.random_state)
@@ -107,9 +120,33 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         self._keep(X, y, sample_weight)
         return self
 
-    def _keep(self, X, y, sample_weight):
+    def _fit_exact_groups(self, X, y, progress, groups):
+        """The exact GP with a noise level per group, by the lean marginal likelihood."""
+        self.scaler_ = StandardScaler().fit(X)
+        Xs = self.scaler_.transform(X)
+        if progress is not None:
+            progress(0, 1, f"exact GP on {len(X)} poses, {int(groups.max()) + 1} noise groups")
+        kernel = self._kernel(X.shape[1])
+        rng = np.random.default_rng(self.random_state)
+        theta = optimize_theta(Xs, y, kernel.theta, kernel.bounds, None, self.n_restarts, rng)
+        theta = self._group_ratios(Xs, y, kernel, theta, groups, rng)
+        self.gpr_ = local_gp.fit_expert(Xs, y, kernel, None, groups, theta)
+        self._keep(X, y, None, groups)
+        return self
+
+    @staticmethod
+    def _group_ratios(Xs, y, kernel, theta, groups, rng):
+        """theta extended by the groups' noise ratios, fitted with the kernel held (its white
+        noise free too) on up to GROUP_SAMPLE poses."""
+        full, bounds = with_group_noise(theta, kernel.bounds, int(groups.max()) + 1)
+        sub = np.sort(rng.choice(len(Xs), min(len(Xs), GROUP_SAMPLE), replace=False))
+        free = np.arange(len(full)) >= len(kernel.theta) - 1
+        return optimize_theta(Xs[sub], y[sub], full, bounds, None, 0, rng, groups[sub], len(kernel.theta), free)
+
+    def _keep(self, X, y, sample_weight, groups=None):
         self.X_train_, self.y_train_ = X, y
         self.weights_ = None if sample_weight is None else np.asarray(sample_weight, dtype=float)
+        self.noise_groups_ = groups
         self.n_features_in_ = X.shape[1]
 
     # ------------------------------------------------------------------ local experts
@@ -125,7 +162,7 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         rng = np.random.default_rng(self.random_state)
         return regions, local_gp.expert_members(regions, leaves, P, 2 * self.leaf_size, rng)
 
-    def _fit_local(self, X, y, progress):
+    def _fit_local(self, X, y, progress, groups=None):
         regions, members = self._partition(X)
         Xs = self.scaler_.transform(X)
         rng = np.random.default_rng(self.random_state)
@@ -134,38 +171,47 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         if progress is not None:
             progress(0, total, f"global hyperparameters on {len(sub)} of {len(X)} poses")
         kernel = self._kernel(X.shape[1])
-        start = kernel.clone_with_theta(optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng))
+        start = optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng)
+        if groups is not None:
+            start = self._group_ratios(Xs, y, kernel, start, groups, rng)
         experts = []
-        for k, expert in enumerate(local_gp.fit_experts(Xs, y, members, start, self.expert_iter)):
+        for k, expert in enumerate(local_gp.fit_experts(Xs, y, members, kernel, self.expert_iter, groups=groups, theta=start)):
             experts.append(expert)
             if progress is not None:
                 progress(k + 1, total, f"expert {k + 1} of {len(members)} ({len(members[k])} poses)")
         self._set_local(regions, members, experts)
-        self._keep(X, y, None)
+        self._keep(X, y, None, groups)
         return self
 
     def _set_local(self, regions, members, experts):
         self.regions_, self.members_, self.experts_ = regions, members, experts
 
-    def restore_local(self, X, y, regions, members, thetas, center, scale):
-        """The local-experts GP with every expert's kernel fixed (restoring a saved model)."""
+    def restore_local(self, X, y, regions, members, thetas, center, scale, groups=None):
+        """The local-experts GP with every expert's kernel fixed (restoring a saved model);
+        ``groups``: the poses' noise groups, each theta then extended by their levels."""
         self.method_ = "local"
         self.scaler_ = StandardScaler().fit(X)
         self.region_center_, self.region_scale_ = np.asarray(center, dtype=float), float(scale)
         Xs = self.scaler_.transform(X)
         kernel = self._kernel(X.shape[1])
-        experts = [local_gp.fit_expert(Xs[idx], y[idx], kernel.clone_with_theta(np.asarray(th, dtype=float)), None) for idx, th in zip(members, thetas)]
+        experts = [local_gp.fit_expert(Xs[idx], y[idx], kernel, None, None if groups is None else groups[idx], np.asarray(th, dtype=float))
+                   for idx, th in zip(members, thetas)]
         self._set_local(regions, members, experts)
-        self._keep(X, y, None)
+        self._keep(X, y, None, groups)
         return self
 
     # ------------------------------------------------------------------ exact, restored
-    def fit_fixed(self, X, y, theta, sample_weight=None):
-        """The exact GP with its kernel hyperparameters fixed (restoring a saved model)."""
+    def fit_fixed(self, X, y, theta, sample_weight=None, groups=None):
+        """The exact GP with its kernel hyperparameters fixed (restoring a saved model);
+        ``groups``: the poses' noise groups, theta then extended by their levels."""
         X = np.asarray(X, dtype=float)
         y = np.asarray(y, dtype=float)
         self.method_ = "exact"
         self.scaler_ = StandardScaler().fit(X)
+        if groups is not None:
+            self.gpr_ = local_gp.fit_expert(self.scaler_.transform(X), y, self._kernel(X.shape[1]), None, groups, np.asarray(theta, dtype=float))
+            self._keep(X, y, None, groups)
+            return self
         kernel = self._kernel(X.shape[1]).clone_with_theta(np.asarray(theta, dtype=float))
         self.gpr_ = GaussianProcessRegressor(kernel=kernel, alpha=self._alpha(sample_weight), normalize_y=True, optimizer=None)
         self.gpr_.fit(self.scaler_.transform(X), y)

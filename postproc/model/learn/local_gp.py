@@ -38,7 +38,7 @@ import numpy as np
 from sklearn.gaussian_process import GaussianProcessRegressor
 from threadpoolctl import threadpool_limits
 
-from .gp_lml import JITTER, optimize_theta
+from .gp_lml import JITTER, optimize_theta, point_noise, with_group_noise
 
 PREDICT_CHUNK = 8192  # query rows per block: bounds the (rows x expert size) kernel blocks
 
@@ -97,12 +97,24 @@ def expert_members(regions: Regions, leaves: list[np.ndarray], P: np.ndarray, ca
     return members
 
 
-def fit_expert(Xs: np.ndarray, y: np.ndarray, kernel, max_iter: int | None) -> GaussianProcessRegressor:
-    """One exact GP on standardised inputs: its kernel refined from kernel.theta by at most
-    max_iter L-BFGS steps of the lean marginal likelihood (gp_lml), or kept (max_iter None)."""
-    theta = kernel.theta if max_iter is None else optimize_theta(Xs, y, kernel.theta, kernel.bounds, max_iter)
-    gpr = GaussianProcessRegressor(kernel=kernel.clone_with_theta(theta), alpha=JITTER, normalize_y=True, optimizer=None)
-    return gpr.fit(Xs, y)
+def fit_expert(Xs: np.ndarray, y: np.ndarray, kernel, max_iter: int | None, groups: np.ndarray | None = None,
+               theta: np.ndarray | None = None) -> GaussianProcessRegressor:
+    """One exact GP on standardised inputs: its kernel refined from ``theta`` (default
+    kernel.theta) by at most max_iter L-BFGS steps of the lean marginal likelihood (gp_lml),
+    or kept (max_iter None). ``groups``: each pose's noise group, ``theta`` then extended by
+    their noise ratios (gp_lml.with_group_noise), held here; a pose's noise beyond the
+    kernel's white noise is its ``alpha``. The full theta is kept as ``theta_full_`` (saved
+    with the model)."""
+    n_kernel = len(kernel.theta)
+    theta = kernel.theta if theta is None else np.asarray(theta, dtype=float)
+    if max_iter is not None:
+        _, bounds = with_group_noise(kernel.theta, kernel.bounds, len(theta) - n_kernel + 1)
+        theta = optimize_theta(Xs, y, theta, bounds, max_iter, groups=groups, n_kernel=n_kernel, free=np.arange(len(theta)) < n_kernel)
+    alpha = JITTER if groups is None else JITTER + point_noise(theta, n_kernel, groups) - np.exp(theta[n_kernel - 1])
+    gpr = GaussianProcessRegressor(kernel=kernel.clone_with_theta(theta[:n_kernel]), alpha=alpha, normalize_y=True, optimizer=None)
+    gpr.fit(Xs, y)
+    gpr.theta_full_ = theta
+    return gpr
 
 
 def fit_workers() -> int:
@@ -112,20 +124,25 @@ def fit_workers() -> int:
     return max(1, len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else (os.cpu_count() or 1))
 
 
-def fit_experts(Xs: np.ndarray, y: np.ndarray, members: list[np.ndarray], kernel, max_iter: int | None, workers: int | None = None):
+def fit_experts(Xs: np.ndarray, y: np.ndarray, members: list[np.ndarray], kernel, max_iter: int | None, workers: int | None = None,
+                groups: np.ndarray | None = None, theta: np.ndarray | None = None):
     """Yield the fitted expert of each member set, in order, fitting ``workers`` at a time
     (threads: LAPACK and NumPy release the GIL). Stopping the iteration (Ctrl-C) cancels the
-    experts not started; at most ``workers`` are in memory being fitted at once."""
+    experts not started; at most ``workers`` are in memory being fitted at once. ``groups``,
+    ``theta``: per-pose noise groups and the start theta (``fit_expert``)."""
 
     workers = workers or fit_workers()
+
+    def submit(pool, idx):
+        return pool.submit(fit_expert, Xs[idx], y[idx], kernel, max_iter, None if groups is None else groups[idx], theta)
+
     with threadpool_limits(limits=1), ThreadPoolExecutor(max_workers=workers) as pool:
-        pending = [pool.submit(fit_expert, Xs[idx], y[idx], kernel, max_iter) for idx in members[:workers]]
+        pending = [submit(pool, idx) for idx in members[:workers]]
         try:
             for k in range(len(members)):
                 expert = pending[k].result()
                 if k + workers < len(members):
-                    idx = members[k + workers]
-                    pending.append(pool.submit(fit_expert, Xs[idx], y[idx], kernel, max_iter))
+                    pending.append(submit(pool, members[k + workers]))
                 yield expert
         finally:
             for fut in pending:

@@ -25,12 +25,12 @@ def estimator_state(est) -> dict:
     if isinstance(est, GPRPredictor) and getattr(est, "method_", "exact") == "local":
         r = est.regions_
         return {"type": "gpr-local", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
-                "members": [m.tolist() for m in est.members_], "thetas": [e.kernel_.theta.tolist() for e in est.experts_],
+                "members": [m.tolist() for m in est.members_], "thetas": [_theta(e).tolist() for e in est.experts_], "noise_groups": _groups(est),
                 "lo": _finite_or_none(r.lo), "hi": _finite_or_none(r.hi), "margin": r.margin.tolist(),
                 "center": est.region_center_.tolist(), "scale": est.region_scale_}
     if isinstance(est, GPRPredictor):
         return {"type": "gpr", "params": est.get_params(), "X": est.X_train_.tolist(), "y": est.y_train_.tolist(),
-                "theta": est.gpr_.kernel_.theta.tolist(), "weights": None if est.weights_ is None else est.weights_.tolist()}
+                "theta": _theta(est.gpr_).tolist(), "weights": None if est.weights_ is None else est.weights_.tolist(), "noise_groups": _groups(est)}
     if isinstance(est, PSOBPPredictor):
         return {"type": "pso-bp", "params": est.get_params(), "weights": est.weights_.tolist(), "shapes": [list(s) for s in est.shapes_],
                 "x_mean": est.x_mean_.tolist(), "x_std": est.x_std_.tolist(), "y_mean": est.y_mean_.tolist(), "y_std": est.y_std_.tolist()}
@@ -49,12 +49,13 @@ def base_estimator_from_state(state: dict):
     if kind == "gpr":
         est = GPRPredictor(**state["params"])
         w = state.get("weights")
-        return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w))
+        return est.fit_fixed(np.asarray(state["X"]), np.asarray(state["y"]), np.asarray(state["theta"]), None if w is None else np.asarray(w), _groups_of(state))
     if kind == "gpr-local":
 
         regions = Regions(_inf_from_none(state["lo"], -np.inf), _inf_from_none(state["hi"], np.inf), np.asarray(state["margin"], dtype=float))
         return GPRPredictor(**state["params"]).restore_local(np.asarray(state["X"], dtype=float), np.asarray(state["y"], dtype=float), regions,
-                                                             [np.asarray(m, dtype=int) for m in state["members"]], state["thetas"], state["center"], state["scale"])
+                                                             [np.asarray(m, dtype=int) for m in state["members"]], state["thetas"], state["center"], state["scale"],
+                                                             _groups_of(state))
     if kind == "pso-bp":
         est = PSOBPPredictor(**state["params"])
         est.weights_ = np.asarray(state["weights"], dtype=float)
@@ -74,6 +75,22 @@ def base_estimator_from_state(state: dict):
     if plugin is not None:
         return plugin
     raise ValueError(f"unknown predictor type '{kind}' (a predictor of your own: load its file with --plugins PATH or POSTPROC_PLUGINS)")
+
+
+def _theta(gpr) -> np.ndarray:
+    """A fitted GP's hyperparameters: the kernel's, with the noise groups' levels where it has them."""
+    return getattr(gpr, "theta_full_", gpr.kernel_.theta)
+
+
+def _groups(est) -> list | None:
+    groups = getattr(est, "noise_groups_", None)
+    return None if groups is None else groups.tolist()
+
+
+def _groups_of(state: dict) -> np.ndarray | None:
+    """The poses' noise groups of a saved GP (None: one noise level; files before the noise model)."""
+    groups = state.get("noise_groups")
+    return None if groups is None else np.asarray(groups, dtype=np.int64)
 
 
 def _finite_or_none(a: np.ndarray) -> list:
