@@ -105,3 +105,32 @@ def test_interrupted_fit_says_so_and_writes_no_model(tmp_path, monkeypatch):
     result = runner.invoke(app, ["fit", str(meas), "--robot", "kr160_r1570", "--tool", "0,0,200", "--effects", "none", "--cv", "0", "--predictor", "gpr", "-o", str(out)])
     assert result.exit_code == 130 and "interrupted: no model written" in result.stderr
     assert not out.exists() and list(tmp_path.iterdir()) == [meas]
+
+
+def test_a_global_kernel_with_a_length_scale_at_its_floor_is_refitted_on_more_poses(monkeypatch):
+    from postproc.model.learn import gp
+
+    X, y, _ = _field(900)
+    real, sizes = gp.optimize_theta, []
+
+    def floor_until(n_at_floor):
+        def optimize(Xs, Y, theta0, bounds, *args):
+            sizes.append(len(Xs))
+            theta = real(Xs, Y, theta0, bounds, *args)
+            if len(sizes) <= n_at_floor:
+                theta = theta.copy()
+                theta[2] = bounds[2, 0]  # a length scale at its lower bound: a degenerate optimum
+            return theta
+        return optimize
+
+    monkeypatch.setattr(gp, "optimize_theta", floor_until(0))
+    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 100
+    assert sizes == [100]
+    sizes.clear()
+    monkeypatch.setattr(gp, "optimize_theta", floor_until(1))
+    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 200
+    assert sizes == [100, 200]
+    sizes.clear()
+    monkeypatch.setattr(gp, "optimize_theta", floor_until(10))  # never leaves the floor: stops at GLOBAL_GROWTH x global_size
+    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 100 * gp.GLOBAL_GROWTH
+    assert sizes == [100, 200, 400]
