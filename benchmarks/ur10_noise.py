@@ -23,7 +23,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from ur10_series import data_folder, imported
+from ur10_series import bars_by_place, data_folder, imported
 
 from postproc.model.effects import parse_effects
 from postproc.model.identify import residuals
@@ -77,17 +77,9 @@ def main() -> None:
 
 def plot(errors: dict, place: np.ndarray, seed: int) -> None:
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
-    width = 0.38
-    for shift, (noise, err) in zip((-width / 2, width / 2), errors.items()):
-        means = [err[place == k].mean() for k in range(BINS)]
-        left.bar(np.arange(BINS) + shift, means, width, label=f"--noise-model {noise} (mean {err.mean():.4f} mm)")
-    counts = [int((place == k).sum()) for k in range(BINS)]
-    left.set_xticks(range(BINS), [f"{k}{'+' if k == BINS - 1 else ''}\n(n={n})" for k, n in enumerate(counts)], fontsize=8)
-    left.axhline(0.06, color="k", linestyle=":", label="goal: mean 0.06 mm")
-    left.set_xlabel(f"targets since the TCP last moved more than {SETTLE_MM:.0f} mm\n(0: the first pose after the move; n: held-out poses)")
-    left.set_ylabel("mean held-out 3-D error (mm)")
-    left.set_title(f"Series A, random 20 % held out (seed {seed}): error by place")
-    left.legend(fontsize=8)
+    bars_by_place(left, errors, place, BINS, lambda noise, err: f"--noise-model {noise} (mean {err.mean():.4f} mm)",
+                  f"targets since the TCP last moved more than {SETTLE_MM:.0f} mm\n(0: the first pose after the move; n: held-out poses)",
+                  f"Series A, random 20 % held out (seed {seed}): error by place")
     for noise, err in errors.items():
         ordered = np.sort(err)
         right.plot(ordered, np.arange(1, len(ordered) + 1) / len(ordered), label=f"--noise-model {noise}")

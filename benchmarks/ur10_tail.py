@@ -22,12 +22,12 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from ur10_series import data_folder, imported
+from ur10_series import bars_by_place, data_folder, imported
 
 from postproc.model.effects import parse_effects
 from postproc.model.identify import residuals
-from postproc.model.learn.features import travel_mm
 from postproc.model.measurements import read_measurements
+from postproc.model.path_history import travel_mm
 from postproc.model.validate import FitSpec, fit_model, random_mask, with_order_columns
 from postproc.robot import kinematics as kin
 from postproc.robot.robots import load_robot
@@ -75,17 +75,9 @@ def main() -> None:
 
 def plot(errors: dict, since: np.ndarray, travel_into: np.ndarray) -> None:
     fig, (left, right) = plt.subplots(1, 2, figsize=(12, 4.8))
-    width = 0.38
-    for shift, (features, err) in zip((-width / 2, width / 2), errors.items()):
-        means = [err[since == k].mean() for k in range(SINCE_BINS)]
-        left.bar(np.arange(SINCE_BINS) + shift, means, width, label=f"--gp-features {features} (mean {err.mean():.3f} mm)")
-    counts = [int((since == k).sum()) for k in range(SINCE_BINS)]
-    left.set_xticks(range(SINCE_BINS), [f"{k}{'+' if k == SINCE_BINS - 1 else ''}\n(n={n})" for k, n in enumerate(counts)], fontsize=8)
-    left.axhline(0.06, color="k", linestyle=":", label="goal: mean 0.06 mm")
-    left.set_xlabel(f"targets since the TCP last moved more than {LONG_MOVE_MM:.0f} mm\n(0: the first pose after the move; n: held-out poses)")
-    left.set_ylabel("mean held-out 3-D error (mm)")
-    left.set_title("Series A, random 20 % held out: error by history")
-    left.legend(fontsize=8)
+    bars_by_place(left, errors, since, SINCE_BINS, lambda features, err: f"--gp-features {features} (mean {err.mean():.3f} mm)",
+                  f"targets since the TCP last moved more than {LONG_MOVE_MM:.0f} mm\n(0: the first pose after the move; n: held-out poses)",
+                  "Series A, random 20 % held out: error by history")
     edges = np.array([0.0, 0.1, 0.2, 0.5, 1.0, 10.0, 60.0, 200.0, 2000.0])
     bins = np.clip(np.digitize(travel_into, edges) - 1, 0, len(edges) - 2)
     present = [b for b in range(len(edges) - 1) if (bins == b).sum() >= 5]
