@@ -448,7 +448,7 @@ def select_cyclic_terms(robot, tool_mm, others: EffectSum, family: Effect, meas:
     return family.with_terms(choice.terms), how
 
 
-def _noise_places(model: ErrorModel, meas: MeasurementSet, noise: str, kind: str) -> np.ndarray | None:
+def _noise_places(model: ErrorModel, q_deg: np.ndarray, history: np.ndarray, noise: str, kind: str) -> np.ndarray | None:
     """Each pose's place after the last large move where the predictor is given a noise model;
     refuses a predictor that cannot take one (rather than fitting it as if trusted alike)."""
     if noise == "none":
@@ -457,7 +457,7 @@ def _noise_places(model: ErrorModel, meas: MeasurementSet, noise: str, kind: str
     if not takes:
         raise IdentificationError(f"--noise-model {noise}: the {kind} predictor takes no per-pose noise "
                                   "(gpr does, and a plugin predictor whose fit takes sample_weight)")
-    return settle_place(model.robot, model.tool_mm, meas.q_deg, meas.path_history())
+    return settle_place(model.robot, model.tool_mm, q_deg, history)
 
 
 def kin_joint_columns(model: ErrorModel, prep: Prepared) -> np.ndarray:
@@ -504,8 +504,9 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         if feature_kind not in GP_KINDS:
             raise IdentificationError(f"gpr features '{feature_kind}' are not one of {', '.join(GP_KINDS)}")
     reference = features(model.robot, model.tool_mm, meas.q_deg[:1], "position")[0] if feature_kind == "joints+disp" else None
-    X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference, meas.path_history())
-    place = _noise_places(model, meas, checked(noise), kind)
+    history = meas.path_history()  # (N, k, 6) the targets before each pose in measured order
+    X = features(model.robot, model.tool_mm, meas.q_deg, feature_kind, reference, history)
+    place = _noise_places(model, meas.q_deg, history, checked(noise), kind)
     if kind == "gpr":
         est = GPRPredictor(anisotropic=True, random_state=seed, **gp_options).fit(X, target, progress=progress, noise_groups=place)
     elif kind == "pso-bp":
@@ -513,7 +514,7 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
     elif kind == "grid":
         est = GridPredictor().fit(X, target)
     elif kind in PREDICTORS and place is not None:
-        est = PREDICTORS[kind](random_state=seed).fit(X, target, sample_weight=NoiseRatios.estimate(place, target, meas.path_history().shape[1]).weights(place))
+        est = PREDICTORS[kind](random_state=seed).fit(X, target, sample_weight=NoiseRatios.estimate(place, target, history.shape[1]).weights(place))
     elif kind in PREDICTORS:
         est = PREDICTORS[kind](random_state=seed).fit(X, target)
     else:
@@ -524,5 +525,5 @@ def fit_predictor(model: ErrorModel, meas: MeasurementSet, kind: str, source: Me
         est = TrGPRPredictor(random_state=seed).fit(X, target, Xs, ys)
     coverage = model.coverage
     if coverage is not None and feature_kind in HISTORY_KINDS:  # the predictor reads the path: record the moves it was measured with
-        coverage = coverage.with_travels(path_travel_mm(model.robot, model.tool_mm, meas.q_deg, meas.path_history()))
+        coverage = coverage.with_travels(path_travel_mm(model.robot, model.tool_mm, meas.q_deg, history))
     return _replace(model, residual=Residual(kind, feature_kind, est, reference), coverage=coverage)

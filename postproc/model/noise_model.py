@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from postproc.errors import InputError
-from postproc.robot import kinematics as kin
+
+from .path_history import path_travel_mm
 
 NOISE_MODELS = ("none", "settle")
 #: a move of the TCP longer than this starts a new visit. On Series A the moves within a
@@ -53,13 +54,8 @@ def settle_place(robot, tool_mm, q_deg: np.ndarray, previous_q_deg: np.ndarray, 
     the pose it moved into; ``depth`` (= previous_q_deg.shape[1]) where none of the last
     ``depth`` moves was large (the settled poses). ``previous_q_deg`` (N, depth, 6): the
     targets before each pose, nearest first."""
-    q = np.asarray(q_deg, dtype=float)
-    n, depth, _ = previous_q_deg.shape
-    tool = np.asarray(tool_mm, dtype=float)
-    here = kin.fk(robot, q, tool=tool)[:, :3, 3]
-    before = kin.fk(robot, previous_q_deg.reshape(-1, 6), tool=tool)[:, :3, 3].reshape(n, depth, 3)
-    chain = np.concatenate([here[:, None], before], axis=1)
-    large = np.linalg.norm(chain[:, :-1] - chain[:, 1:], axis=2) > threshold_mm  # (N, depth): move into this pose, then back
+    depth = previous_q_deg.shape[1]
+    large = path_travel_mm(robot, tool_mm, q_deg, previous_q_deg) > threshold_mm  # (N, depth): move into this pose, then back
     return np.where(large.any(axis=1), np.argmax(large, axis=1), depth).astype(np.int64)
 
 
