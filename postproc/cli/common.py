@@ -46,8 +46,15 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
 GP_FEATURES = ("pose", "tcp+joints", "joints", "tcp+joints+travel")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
 GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart), joints, or tcp+joints+travel (tcp+joints and the TCP travel of the last three moves: the pose's history in the path; rows in measured order)."
 
-GP_GLOBAL_SIZE_HELP = ("gpr local: poses the global kernel fit (the experts' start) is made on; on 600 (the default) "
-                       "some splits of the UR10's Series A land in a degenerate kernel (length scales at their lower bound).")
+GP_GLOBAL_SIZE_HELP = "gpr local: poses drawn over the whole workspace whose kernel fit starts the shared fit (--gp-shared-experts)."
+GP_SHARED_EXPERTS_HELP = ("gpr local: experts whose data together fit the kernel every expert starts from (their summed likelihood; "
+                          "0: the --gp-global-size sample's fit alone, which is sparse where the experts' data are dense).")
+
+
+def gp_shared_experts_checked(value: int) -> int:
+    if value < 0:
+        raise InputError(f"--gp-shared-experts: a number of experts, 0 or more, got {value}")
+    return value
 
 
 def gp_global_size_checked(value: int) -> int:

@@ -16,7 +16,20 @@ from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, GP_GLOBAL_SIZE_HELP, NOISE_MODEL_HELP, gp_global_size_checked, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
+from .common import (
+    DROP_INVALID_HELP,
+    GP_FEATURES_HELP,
+    GP_GLOBAL_SIZE_HELP,
+    GP_SHARED_EXPERTS_HELP,
+    NOISE_MODEL_HELP,
+    check_output_folder,
+    floats,
+    gp_features_checked,
+    gp_global_size_checked,
+    gp_shared_experts_checked,
+    load_measurements,
+    refuse_unused,
+)
 from .plugin_option import with_plugins
 
 
@@ -62,6 +75,7 @@ def fit_cmd(
     gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
     gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
     gp_global_size: int = typer.Option(600, "--gp-global-size", help=GP_GLOBAL_SIZE_HELP),
+    gp_shared_experts: int = typer.Option(4, "--gp-shared-experts", help=GP_SHARED_EXPERTS_HELP),
     memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
     noise_model: str = typer.Option("none", "--noise-model", help=NOISE_MODEL_HELP),
 ):
@@ -71,11 +85,12 @@ def fit_cmd(
     refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
     refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
                                                "--gp-features": gp_features != "pose", "--gp-global-size": gp_global_size != 600,
-                                               "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
+                                               "--gp-shared-experts": gp_shared_experts != 4, "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
         _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit,
                                                                                 "features": gp_features_checked(gp_features),
-                                                                                "global_size": gp_global_size_checked(gp_global_size)}, drop_invalid,
+                                                                                "global_size": gp_global_size_checked(gp_global_size),
+                                                                                "shared_experts": gp_shared_experts_checked(gp_shared_experts)}, drop_invalid,
              noise_model_checked(noise_model))
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")
