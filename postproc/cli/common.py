@@ -51,6 +51,18 @@ GP_SHARED_EXPERTS_HELP = ("gpr local: experts whose data together fit the kernel
                           "0: the --gp-global-size sample's fit alone, which is sparse where the experts' data are dense).")
 
 
+SESSION_OFFSETS_HELP = ("Estimate each measuring session's frame shift (one translation per id in the 'session' column) from the physics residual "
+                        "and take it out before a predictor is fitted; applied to measurements of those sessions, never to programs.")
+
+
+def session_offsets_line(offsets) -> str:
+    """One line for the terminal: how many sessions, the largest shift and where."""
+    sizes = np.linalg.norm(offsets.offsets_mm, axis=1)
+    k = int(np.argmax(sizes))
+    return (f"session offsets: {len(offsets.ids)} sessions, largest {sizes[k]:.3f} mm (session {offsets.ids[k]}, {offsets.counts[k]} poses), "
+            f"median {float(np.median(sizes)):.3f} mm")
+
+
 def gp_shared_experts_checked(value: int) -> int:
     if value < 0:
         raise InputError(f"--gp-shared-experts: a number of experts, 0 or more, got {value}")

@@ -22,6 +22,7 @@ from .common import (
     GP_GLOBAL_SIZE_HELP,
     GP_SHARED_EXPERTS_HELP,
     NOISE_MODEL_HELP,
+    SESSION_OFFSETS_HELP,
     check_output_folder,
     floats,
     gp_features_checked,
@@ -29,6 +30,7 @@ from .common import (
     gp_shared_experts_checked,
     load_measurements,
     refuse_unused,
+    session_offsets_line,
 )
 from .plugin_option import with_plugins
 
@@ -78,6 +80,7 @@ def fit_cmd(
     gp_shared_experts: int = typer.Option(4, "--gp-shared-experts", help=GP_SHARED_EXPERTS_HELP),
     memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
     noise_model: str = typer.Option("none", "--noise-model", help=NOISE_MODEL_HELP),
+    session_offsets: bool = typer.Option(False, "--session-offsets", help=SESSION_OFFSETS_HELP),
 ):
     """Identify an error model from measurements and write MODEL.json."""
     if gp_method not in ("auto", "exact", "local"):
@@ -91,13 +94,13 @@ def fit_cmd(
                                                                                 "features": gp_features_checked(gp_features),
                                                                                 "global_size": gp_global_size_checked(gp_global_size),
                                                                                 "shared_experts": gp_shared_experts_checked(gp_shared_experts)}, drop_invalid,
-             noise_model_checked(noise_model))
+             noise_model_checked(noise_model), session_offsets)
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")
         raise typer.Exit(130) from None
 
 
-def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False, noise="none"):
+def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False, noise="none", session_offsets=False):
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from postproc.model.identify import fit as run_fit
     from postproc.model.model_io import load_model, save_model
@@ -131,12 +134,17 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
     with ProgressLine("fit", console=err) as progress:
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress, noise=noise)
     final = result.model
+    if session_offsets:
+        from postproc.model.session_offsets import with_session_offsets
+
+        final = with_session_offsets(final, data)
+        out.print(session_offsets_line(final.session_offsets), highlight=False)
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from postproc.model.identify import Stats, fit_predictor, residuals
 
         with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
-            final = fit_predictor(result.model, data, predictor, load_measurements(source) if source is not None else None, seed=seed,
+            final = fit_predictor(final, data, predictor, load_measurements(source) if source is not None else None, seed=seed,
                                   gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total), noise=noise)
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
