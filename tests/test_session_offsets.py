@@ -134,3 +134,23 @@ def test_cli_validate_takes_the_offsets(world, tmp_path):
     result = runner.invoke(app, [*args, "--session-offsets"])
     assert result.exit_code == 0, result.output
     assert json.loads(result.stdout)["error"]["mean_mm"] < 0.6 * plain
+
+
+def test_evaluate_applies_the_offsets_only_when_asked(world, tmp_path):
+    _, _, meas = world
+    path = tmp_path / "m.csv"
+    write_measurements(path, meas)
+    plain, offsets = tmp_path / "plain.json", tmp_path / "offsets.json"
+    base = ["fit", str(path), "--robot", "ur10", "--tool", "0,0,109", "--effects", EFFECTS, "--cv", "0"]
+    assert runner.invoke(app, [*base, "-o", str(plain)]).exit_code == 0
+    assert runner.invoke(app, [*base, "--session-offsets", "-o", str(offsets)]).exit_code == 0
+    mean = lambda result: json.loads(result.stdout)["mean_mm"]  # noqa: E731
+    asked = runner.invoke(app, ["evaluate", str(offsets), str(path), "--json", "--session-offsets"])
+    unasked = runner.invoke(app, ["evaluate", str(offsets), str(path), "--json"])
+    assert asked.exit_code == 0 and unasked.exit_code == 0
+    # Another file's session ids need not be the fit's set-ups: without the option they are set aside, and said so.
+    assert "not applied" in unasked.stderr and "not applied" not in asked.stderr
+    assert mean(unasked) == pytest.approx(mean(runner.invoke(app, ["evaluate", str(plain), str(path), "--json"])), abs=0.01)
+    assert mean(asked) < 0.6 * mean(unasked)
+    refused = runner.invoke(app, ["evaluate", str(plain), str(path), "--session-offsets"])
+    assert refused.exit_code == 2 and "has no session offsets" in refused.stderr

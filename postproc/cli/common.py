@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Optional
 
@@ -61,6 +62,19 @@ def session_offsets_line(offsets) -> str:
     k = int(np.argmax(sizes))
     return (f"session offsets: {len(offsets.ids)} sessions, largest {sizes[k]:.3f} mm (session {offsets.ids[k]}, {offsets.counts[k]} poses), "
             f"median {float(np.median(sizes)):.3f} mm")
+
+
+def sessions_as_asked(data, model, apply: bool, path):
+    """``data`` as the model's session offsets should see it. A session id means the fit's
+    session only where the user says so (``--session-offsets``): another file's session 0 is
+    another set-up. Otherwise its ``session`` column is set aside, with a note."""
+    if apply and getattr(model, "session_offsets", None) is None:
+        raise InputError("--session-offsets: the model has no session offsets (fit it with --session-offsets)")
+    if apply or getattr(model, "session_offsets", None) is None or "session" not in data.extra:
+        return data
+    err.print(f"note: {path}: the model's session offsets are not applied to this file (--session-offsets applies them "
+              "where its session ids are the fit's sessions)", highlight=False)
+    return replace(data, extra={k: v for k, v in data.extra.items() if k != "session"})
 
 
 def gp_shared_experts_checked(value: int) -> int:

@@ -138,7 +138,6 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         from postproc.model.session_offsets import with_session_offsets
 
         final = with_session_offsets(final, data)
-        out.print(session_offsets_line(final.session_offsets), highlight=False)
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from postproc.model.identify import Stats, fit_predictor, residuals
@@ -148,6 +147,8 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
                                   gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total), noise=noise)
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
+    if final.session_offsets is not None:  # taken out of the residual before any predictor; never applied to a program
+        out.print(session_offsets_line(final.session_offsets), highlight=False)
     if predictor is not None:
         hybrid = Stats.of(residuals(final, data))
         out.print(f"with the {predictor} predictor on the residual: training RMS {hybrid.rms_mm:.4f} mm (validate with 'postproc evaluate')")

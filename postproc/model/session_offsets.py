@@ -10,11 +10,13 @@ moved as a whole by 0.42 mm (docs/guide/validate.md).
 With ``session_offsets`` (``fit`` / ``validate --session-offsets``) the fit estimates one
 translation per session from the physics residual of the training poses, the mean shrunk
 towards zero as n / (n + SHRINK_POSES) so that a session of a few poses does not take its
-own noise for a shift. The offsets are taken out before a predictor is fitted, and added
-to predictions of *measurements* that carry the same session ids (``validate``,
-``evaluate``): they are part of how that session measured. A program has no session, so
-compensation never applies them, and a measurement of a session the fit did not see gets
-none (a new set-up is a new frame).
+own noise for a shift. The offsets are taken out before a predictor is fitted, and
+``ErrorModel.predict`` adds them to predictions of *measurements* that carry session ids:
+they are part of how that session measured. The CLI lets a file's ids count as the fit's
+sessions only where that is sure (``validate``'s split of one file) or said
+(``evaluate --session-offsets``). A program has no session, so compensation never applies
+them, and a measurement of a session the fit did not see gets none (a new set-up is a
+new frame).
 
 Session ids come from the measurement file's ``session`` column (``postproc import-ur10``
 writes it): whole numbers, the same id the same session in every file.
