@@ -62,8 +62,10 @@ def rows(a: str, b: str, hybrid: bool) -> list[tuple[str, str, list[str]]]:
         ("A: random 20 % held out, physics + cyclic terms", "", [a, "--protocol", "random", *UR10, CYCLIC]),
         ("A: the same, hybrid with --gp-features tcp+joints", "<= 0.06", [a, "--protocol", "random", *UR10, CYCLIC, *posture]),
         ("A: the same, hybrid with --gp-features tcp+joints+travel", "<= 0.06", [a, "--protocol", "random", *UR10, CYCLIC, *history]),
+        ("A: the same, with --session-offsets", "<= 0.06", [a, "--protocol", "random", *UR10, CYCLIC, *history, "--session-offsets"]),
         ("A: every 5th grid point held out, physics + cyclic terms", "<= 0.20", [a, "--protocol", "points", *UR10, CYCLIC]),
         ("A: the same, hybrid", "<= 0.20", [a, "--protocol", "points", *UR10, CYCLIC, *gpr]),
+        ("A: the same, with --session-offsets", "<= 0.20", [a, "--protocol", "points", *UR10, CYCLIC, *gpr, "--session-offsets"]),
         ("B: half of the commanded positions held out, physics + cyclic terms", "< 0.30", [b, "--protocol", "points", "--every", "2", *UR10, CYCLIC]),
         ("A -> B: re-registered on half of B, physics + cyclic terms", "vs ceiling", [a, "--protocol", "series", "--other", b, *UR10, CYCLIC]),
     ]

@@ -107,30 +107,37 @@ def test_interrupted_fit_says_so_and_writes_no_model(tmp_path, monkeypatch):
     assert not out.exists() and list(tmp_path.iterdir()) == [meas]
 
 
-def test_a_global_kernel_with_a_length_scale_at_its_floor_is_refitted_on_more_poses(monkeypatch):
-    from postproc.model.learn import gp
+def test_the_shared_fit_sums_its_blocks_likelihoods_and_keeps_the_better_start():
+    from postproc.model.learn.gp_lml import optimize_shared_theta
 
-    X, y, _ = _field(900)
-    real, sizes = gp.optimize_theta, []
+    X, y, _ = _field(300)
+    Xs = (X - X.mean(0)) / X.std(0)
+    kernel = GPRPredictor(anisotropic=True)._kernel(6)
+    blocks = [(Xs[:150], y[:150]), (Xs[150:], y[150:])]
+    bad_start = kernel.theta.copy()
+    bad_start[1:-1] = kernel.bounds[1:-1, 0]  # every length scale at its floor: the all-noise optimum's basin
+    theta, value = optimize_shared_theta(blocks, [bad_start, kernel.theta], kernel.bounds, workers=2)
+    normalised = [(Xb, (Yb - Yb.mean(0)) / Yb.std(0)) for Xb, Yb in blocks]
+    assert value == pytest.approx(sum(neg_log_marginal_likelihood(theta, Xb, Yn)[0] for Xb, Yn in normalised), rel=1e-9)
+    alone, alone_value = optimize_shared_theta(blocks, [bad_start], kernel.bounds)
+    assert value <= alone_value + 1e-6
+    assert not np.allclose(alone, theta)  # the floor start alone stays in its basin; the default start is kept
+    assert np.all(theta[1:-1] > kernel.bounds[1:-1, 0] + 1.0)
 
-    def floor_until(n_at_floor):
-        def optimize(Xs, Y, theta0, bounds, *args):
-            sizes.append(len(Xs))
-            theta = real(Xs, Y, theta0, bounds, *args)
-            if len(sizes) <= n_at_floor:
-                theta = theta.copy()
-                theta[2] = bounds[2, 0]  # a length scale at its lower bound: a degenerate optimum
-            return theta
-        return optimize
 
-    monkeypatch.setattr(gp, "optimize_theta", floor_until(0))
-    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 100
-    assert sizes == [100]
-    sizes.clear()
-    monkeypatch.setattr(gp, "optimize_theta", floor_until(1))
-    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 200
-    assert sizes == [100, 200]
-    sizes.clear()
-    monkeypatch.setattr(gp, "optimize_theta", floor_until(10))  # never leaves the floor: stops at GLOBAL_GROWTH x global_size
-    assert GPRPredictor(n_restarts=0, anisotropic=True, method="local", leaf_size=250, global_size=100).fit(X, y).global_poses_ == 100 * gp.GLOBAL_GROWTH
-    assert sizes == [100, 200, 400]
+def test_local_experts_start_from_the_kernel_their_data_share_not_from_a_sparse_sample():
+    # A field that varies on a scale a sparse global sample cannot resolve but each expert's
+    # dense data can: with the experts' kernels held at the start (expert_iter None), the
+    # shared start predicts far better than the 40-pose sample's fit.
+    rng = np.random.default_rng(3)
+    X = rng.uniform(0, 1000, (2400, 3))
+    f = np.column_stack([np.sin(X[:, 0] / 25) * np.cos(X[:, 1] / 30), np.sin(X[:, 2] / 20), np.cos((X[:, 0] - X[:, 2]) / 35)]) * 0.1
+    y = f + rng.normal(0, 0.005, f.shape)
+    train, test = np.arange(2000), np.arange(2000, 2400)
+    options = dict(anisotropic=True, n_restarts=0, method="local", leaf_size=300, global_size=40, expert_iter=None)
+    shared = GPRPredictor(**options).fit(X[train], y[train])
+    sample = GPRPredictor(**options, shared_experts=0).fit(X[train], y[train])
+    assert len(shared.shared_experts_) == 4 and len(sample.shared_experts_) == 0 and shared.global_poses_ == 40
+    err_shared = np.abs(shared.predict(X[test]) - f[test]).mean()
+    err_sample = np.abs(sample.predict(X[test]) - f[test]).mean()
+    assert err_shared < 0.6 * err_sample, (err_shared, err_sample)

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Optional
 
@@ -46,8 +47,40 @@ def floats(text: str, count: int, what: str) -> np.ndarray:
 GP_FEATURES = ("pose", "tcp+joints", "joints", "tcp+joints+travel")  # = postproc.model.learn.features.GP_KINDS; not imported: importing postproc.model.learn loads torch (seconds)
 GP_FEATURES_HELP = "gpr: what the learner sees: pose (TCP position + KUKA ABC), tcp+joints (TCP position + the 6 joint angles: tells postures apart), joints, or tcp+joints+travel (tcp+joints and the TCP travel of the last three moves: the pose's history in the path; rows in measured order)."
 
-GP_GLOBAL_SIZE_HELP = ("gpr local: poses the global kernel fit (the experts' start) is made on; on 600 (the default) "
-                       "some splits of the UR10's Series A land in a degenerate kernel (length scales at their lower bound).")
+GP_GLOBAL_SIZE_HELP = "gpr local: poses drawn over the whole workspace whose kernel fit starts the shared fit (--gp-shared-experts)."
+GP_SHARED_EXPERTS_HELP = ("gpr local: experts whose data together fit the kernel every expert starts from (their summed likelihood; "
+                          "0: the --gp-global-size sample's fit alone, which is sparse where the experts' data are dense).")
+
+
+SESSION_OFFSETS_HELP = ("Estimate each measuring session's frame shift (one translation per id in the 'session' column) from the physics residual "
+                        "and take it out before a predictor is fitted; applied to measurements of those sessions, never to programs.")
+
+
+def session_offsets_line(offsets) -> str:
+    """One line for the terminal: how many sessions, the largest shift and where."""
+    sizes = np.linalg.norm(offsets.offsets_mm, axis=1)
+    k = int(np.argmax(sizes))
+    return (f"session offsets: {len(offsets.ids)} sessions, largest {sizes[k]:.3f} mm (session {offsets.ids[k]}, {offsets.counts[k]} poses), "
+            f"median {float(np.median(sizes)):.3f} mm")
+
+
+def sessions_as_asked(data, model, apply: bool, path):
+    """``data`` as the model's session offsets should see it. A session id means the fit's
+    session only where the user says so (``--session-offsets``): another file's session 0 is
+    another set-up. Otherwise its ``session`` column is set aside, with a note."""
+    if apply and getattr(model, "session_offsets", None) is None:
+        raise InputError("--session-offsets: the model has no session offsets (fit it with --session-offsets)")
+    if apply or getattr(model, "session_offsets", None) is None or "session" not in data.extra:
+        return data
+    err.print(f"note: {path}: the model's session offsets are not applied to this file (--session-offsets applies them "
+              "where its session ids are the fit's sessions)", highlight=False)
+    return replace(data, extra={k: v for k, v in data.extra.items() if k != "session"})
+
+
+def gp_shared_experts_checked(value: int) -> int:
+    if value < 0:
+        raise InputError(f"--gp-shared-experts: a number of experts, 0 or more, got {value}")
+    return value
 
 
 def gp_global_size_checked(value: int) -> int:

@@ -18,7 +18,7 @@ from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, check_output_folder, floats, load_measurements, refuse_unused
+from .common import DROP_INVALID_HELP, check_output_folder, floats, load_measurements, refuse_unused, sessions_as_asked
 from .plugin_option import with_plugins
 
 
@@ -44,7 +44,7 @@ def diagnose_cmd(
         raise InputError("--folds must be at least 2")
     check_output_folder(report, "--report")
     error_model, _ = load_model(model)
-    data = load_measurements(meas, error_model.robot, drop_invalid)
+    data = sessions_as_asked(load_measurements(meas, error_model.robot, drop_invalid), error_model, False, meas)
     with ProgressLine("diagnose", console=err, disable=json_out) as progress:
         result = diagnose(error_model, data, folds=folds, seed=seed, noise_mm=noise, progress=progress, files=Files(str(model), str(meas), plugin_arguments()))
     if report is not None:
@@ -181,7 +181,7 @@ def similarity_cmd(
         error_model = ErrorModel.create(load_robot(robot), floats(tool, 3, "--tool"), EffectSum())
     else:
         raise InputError("similarity needs --model MODEL.json, or --robot and --tool")
-    a, b = load_measurements(region_a), load_measurements(region_b)
+    a, b = (sessions_as_asked(load_measurements(path), error_model, False, path) for path in (region_a, region_b))
     ea = a.measured_mm - error_model.predict(a)
     eb = b.measured_mm - error_model.predict(b)
     sim = region_similarity(ea, eb)

@@ -11,7 +11,7 @@ import typer
 from postproc.errors import InputError
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, load_measurements, refuse_unused
+from .common import DROP_INVALID_HELP, load_measurements, refuse_unused, sessions_as_asked
 from .plugin_option import with_plugins
 
 # it an estimate rather than an interpolation of noise.
@@ -38,6 +38,7 @@ def evaluate_cmd(
     region_json: bool = typer.Option(False, "--region", help="With --json: add outside_region {count, worst_joint_deg, worst_mm, tolerance_deg, tolerance_mm} (null for a model without a recorded region)."),
     reregister: bool = typer.Option(False, "--reregister", help="Re-fit only the base/tracker frame on this set (another tracker placement), all else fixed."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
+    session_offsets: bool = typer.Option(False, "--session-offsets", help="Apply the model's session offsets to this file's 'session' ids: only where they are the fit's sessions (the same set-ups)."),
 ):
     """Position error of a model on a measurement set, and the poses outside the region it was fitted on."""
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
@@ -47,7 +48,7 @@ def evaluate_cmd(
 
     refuse_unused("without --json", {"--region": region_json and not json_out})  # usage first, before any work
     error_model, _ = load_model(model)
-    data = load_measurements(meas, error_model.robot, drop_invalid)
+    data = sessions_as_asked(load_measurements(meas, error_model.robot, drop_invalid), error_model, session_offsets, meas)
     if reregister:
         _check_registrable(meas, data)
         error_model = refit_base(error_model, data)

@@ -16,7 +16,22 @@ from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, GP_GLOBAL_SIZE_HELP, NOISE_MODEL_HELP, gp_global_size_checked, check_output_folder, floats, gp_features_checked, load_measurements, refuse_unused
+from .common import (
+    DROP_INVALID_HELP,
+    GP_FEATURES_HELP,
+    GP_GLOBAL_SIZE_HELP,
+    GP_SHARED_EXPERTS_HELP,
+    NOISE_MODEL_HELP,
+    SESSION_OFFSETS_HELP,
+    check_output_folder,
+    floats,
+    gp_features_checked,
+    gp_global_size_checked,
+    gp_shared_experts_checked,
+    load_measurements,
+    refuse_unused,
+    session_offsets_line,
+)
 from .plugin_option import with_plugins
 
 
@@ -62,8 +77,10 @@ def fit_cmd(
     gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
     gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
     gp_global_size: int = typer.Option(600, "--gp-global-size", help=GP_GLOBAL_SIZE_HELP),
+    gp_shared_experts: int = typer.Option(4, "--gp-shared-experts", help=GP_SHARED_EXPERTS_HELP),
     memory_limit: Optional[float] = typer.Option(None, "--memory-limit", help="GB a predictor fit may use (default: the free memory); a fit needing more is refused."),
     noise_model: str = typer.Option("none", "--noise-model", help=NOISE_MODEL_HELP),
+    session_offsets: bool = typer.Option(False, "--session-offsets", help=SESSION_OFFSETS_HELP),
 ):
     """Identify an error model from measurements and write MODEL.json."""
     if gp_method not in ("auto", "exact", "local"):
@@ -71,18 +88,19 @@ def fit_cmd(
     refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
     refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
                                                "--gp-features": gp_features != "pose", "--gp-global-size": gp_global_size != 600,
-                                               "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
+                                               "--gp-shared-experts": gp_shared_experts != 4, "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
         _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit,
                                                                                 "features": gp_features_checked(gp_features),
-                                                                                "global_size": gp_global_size_checked(gp_global_size)}, drop_invalid,
-             noise_model_checked(noise_model))
+                                                                                "global_size": gp_global_size_checked(gp_global_size),
+                                                                                "shared_experts": gp_shared_experts_checked(gp_shared_experts)}, drop_invalid,
+             noise_model_checked(noise_model), session_offsets)
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")
         raise typer.Exit(130) from None
 
 
-def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False, noise="none"):
+def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, gp_options, drop_invalid=False, noise="none", session_offsets=False):
     # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
     from postproc.model.identify import fit as run_fit
     from postproc.model.model_io import load_model, save_model
@@ -116,15 +134,21 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
     with ProgressLine("fit", console=err) as progress:
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress, noise=noise)
     final = result.model
+    if session_offsets:
+        from postproc.model.session_offsets import with_session_offsets
+
+        final = with_session_offsets(final, data)
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.
         from postproc.model.identify import Stats, fit_predictor, residuals
 
         with ProgressLine(f"fitting the {predictor} predictor", console=err) as line:
-            final = fit_predictor(result.model, data, predictor, load_measurements(source) if source is not None else None, seed=seed,
+            final = fit_predictor(final, data, predictor, load_measurements(source) if source is not None else None, seed=seed,
                                   gp_options=gp_options, progress=lambda done, total, msg: line(msg, done, total), noise=noise)
     save_model(output, final, result, measurements=str(meas))
     _fit_summary(result, robot_model.name, result.model.effects.spec())
+    if final.session_offsets is not None:  # taken out of the residual before any predictor; never applied to a program
+        out.print(session_offsets_line(final.session_offsets), highlight=False)
     if predictor is not None:
         hybrid = Stats.of(residuals(final, data))
         out.print(f"with the {predictor} predictor on the residual: training RMS {hybrid.rms_mm:.4f} mm (validate with 'postproc evaluate')")

@@ -9,13 +9,26 @@ from typing import Optional
 import typer
 
 from postproc.errors import InputError
-from postproc.model.noise_model import checked as noise_model_checked
 from postproc.model.effects import parse_effects
+from postproc.model.noise_model import checked as noise_model_checked
 from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
 from .app import app, err, handles_errors, out
-from .common import DROP_INVALID_HELP, GP_FEATURES_HELP, GP_GLOBAL_SIZE_HELP, NOISE_MODEL_HELP, floats, gp_global_size_checked, gp_features_checked, load_measurements, refuse_unused
+from .common import (
+    DROP_INVALID_HELP,
+    GP_FEATURES_HELP,
+    GP_GLOBAL_SIZE_HELP,
+    GP_SHARED_EXPERTS_HELP,
+    NOISE_MODEL_HELP,
+    SESSION_OFFSETS_HELP,
+    floats,
+    gp_features_checked,
+    gp_global_size_checked,
+    gp_shared_experts_checked,
+    load_measurements,
+    refuse_unused,
+)
 from .plugin_option import with_plugins
 
 
@@ -35,7 +48,9 @@ def validate_cmd(
     gp_features: str = typer.Option("pose", "--gp-features", help=GP_FEATURES_HELP),
     gp_leaf_size: int = typer.Option(500, "--gp-leaf-size", help="gpr local: most poses per workspace region."),
     gp_global_size: int = typer.Option(600, "--gp-global-size", help=GP_GLOBAL_SIZE_HELP),
+    gp_shared_experts: int = typer.Option(4, "--gp-shared-experts", help=GP_SHARED_EXPERTS_HELP),
     noise_model: str = typer.Option("none", "--noise-model", help=NOISE_MODEL_HELP),
+    session_offsets: bool = typer.Option(False, "--session-offsets", help=SESSION_OFFSETS_HELP),
     seed: int = typer.Option(0, "--seed"),
     json_out: bool = typer.Option(False, "--json", help="Print the figures as JSON."),
     drop_invalid: bool = typer.Option(False, "--drop-invalid", help=DROP_INVALID_HELP),
@@ -53,14 +68,17 @@ def validate_cmd(
                                                    "--every": every != 5 and protocol != "points",
                                                    "--gp-features": gp_features != "pose" and predictor != "gpr",
                                                    "--gp-leaf-size": gp_leaf_size != 500 and predictor != "gpr",
-                                                   "--gp-global-size": gp_global_size != 600 and predictor != "gpr"})
+                                                   "--gp-global-size": gp_global_size != 600 and predictor != "gpr",
+                                                   "--gp-shared-experts": gp_shared_experts != 4 and predictor != "gpr"})
     if protocol == "series" and other is None:
         raise InputError("--protocol series needs --other OTHER.csv (the series to re-register and score)")
     robot_model = load_robot(robot)
     chosen = parse_effects(effects)
     gp_options = {"features": gp_features_checked(gp_features), "leaf_size": gp_leaf_size,
-                  "global_size": gp_global_size_checked(gp_global_size)} if predictor == "gpr" else None
-    spec = protocols.FitSpec(robot_model, floats(tool, 3, "--tool"), chosen, predictor, gp_options, seed=seed, noise=noise_model_checked(noise_model))
+                  "global_size": gp_global_size_checked(gp_global_size),
+                  "shared_experts": gp_shared_experts_checked(gp_shared_experts)} if predictor == "gpr" else None
+    spec = protocols.FitSpec(robot_model, floats(tool, 3, "--tool"), chosen, predictor, gp_options, seed=seed, noise=noise_model_checked(noise_model),
+                                session_offsets=session_offsets)
     data = load_measurements(meas, robot_model, drop_invalid)
     other_data = load_measurements(other, robot_model, drop_invalid) if other is not None else None
     with ProgressLine("validate", console=err, disable=json_out) as say:

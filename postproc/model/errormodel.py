@@ -25,6 +25,7 @@ from .effects import DH, Context, Effect, EffectSpecError, EffectSum, Param
 from .effects.base import DH_CHANNELS
 from .measurements import MeasurementSet
 from .path_history import previous_targets
+from .session_offsets import session_column
 
 _GROUP_COLUMNS = {"force": "fx, fy, fz", "approach": "s1..s6", "temp": "temp", "t": "t"}
 _DEG = np.pi / 180.0
@@ -40,6 +41,7 @@ class Prepared:
     indices: tuple[np.ndarray, ...]  # per effect: the indices of its parameters in the model
     kinds: tuple[str, ...]  # per effect: its kind
     notes: tuple[str, ...] = ()  # columns the effects inferred (e.g. approach directions from the row order)
+    sessions: np.ndarray | None = None  # (N,) measuring session ids, where the model has session offsets and the data the column
 
     @property
     def approach_inferred(self) -> bool:
@@ -62,6 +64,9 @@ class ErrorModel:
     base_translation: np.ndarray = field(default_factory=lambda: np.zeros(3))  # t0
     residual: object | None = None  # a data-driven predictor of what the effects leave (postproc.model.learn.Residual)
     coverage: object | None = None  # the region it was fitted on (postproc.model.coverage.Coverage); None: unknown
+    # each measuring session's frame shift (postproc.model.session_offsets.SessionOffsets): added to
+    # predictions of measurements of those sessions, never to a program's (it has no session)
+    session_offsets: object | None = None
 
     # ------------------------------------------------------------------ building
 
@@ -120,10 +125,13 @@ class ErrorModel:
         """Compute what the effects need from the data; a missing column is a clear error.
         ``previous_q_deg`` (N, k, 6): the targets before each pose in path order, for a
         residual predictor that reads them; absent, the rows' own order is the path."""
+        sessions = None
         if meas is not None:
             q_deg, force_n, approach, temp_c, time_s = meas.q_deg, meas.force_n, meas.approach, meas.temp_c, meas.time_s
             previous_q_deg = meas.previous_q_deg
             source = meas.source
+            if self.session_offsets is not None:
+                sessions = session_column(meas, required=False)
         else:
             source = "<arrays>"
         q = np.asarray(q_deg, dtype=float)
@@ -148,7 +156,7 @@ class ErrorModel:
                 notes.append(note)
         data = tuple(effect.prepare(ctx, self.robot) for effect in self.effects)
         return Prepared(ctx, data, tuple(self.indices_of(e) for e in self.effects),
-                        tuple(e.kind for e in self.effects), tuple(notes))
+                        tuple(e.kind for e in self.effects), tuple(notes), sessions)
 
     def _parts(self, prep: Prepared, kind: str):
         """(effect, prepared data, parameter indices) of the model's effects of one kind."""
@@ -198,6 +206,8 @@ class ErrorModel:
         pos = pos @ rot.T + trans
         if self.residual is not None:
             pos = pos + self.residual.predict(self.robot, self.tool_mm, prep.ctx.q_deg, prep.ctx.previous_q_deg)
+        if self.session_offsets is not None and prep.sessions is not None:
+            pos = pos + self.session_offsets.at(prep.sessions)
         return pos
 
     def predict(self, meas: MeasurementSet) -> np.ndarray:

@@ -24,6 +24,8 @@ from .errormodel import ErrorModel
 from .identify import FitResult
 from .measurements import write_text_atomic
 from .plugin_records import check_model_plugins, plugin_document
+from .session_offsets import KEY as SESSION_KEY
+from .session_offsets import SessionOffsets
 
 FORMAT = "postproc-model"
 VERSION = 1
@@ -52,6 +54,8 @@ def model_document(model: ErrorModel, result: FitResult | None = None, measureme
         **plugin_document(model),  # "plugins": where each plugin effect / predictor came from (postproc.plugins)
     }
     doc.update(_coverage_document(model))
+    if model.session_offsets is not None:
+        doc[SESSION_KEY] = model.session_offsets.to_document()
     if result is not None:
         doc["fit"] = {
             "measurements": measurements,
@@ -140,8 +144,9 @@ def model_from_document(doc: Any, source: str) -> ErrorModel:
         from .learn import Residual
 
         residual = Residual.from_state(doc["predictor"], source)
+    sessions = None if doc.get(SESSION_KEY) is None else SessionOffsets.from_document(doc[SESSION_KEY], fail)
     return replace(model.with_values(values), base_rotation=rot, base_translation=trans, residual=residual,
-                   coverage=_coverage_of(doc, source))
+                   coverage=_coverage_of(doc, source), session_offsets=sessions)
 
 
 def _coverage_document(model: ErrorModel) -> dict[str, Any]:

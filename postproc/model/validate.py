@@ -35,6 +35,7 @@ from .effects import EffectSum
 from .errormodel import ErrorModel
 from .identify import fit, fit_predictor, refit_base, residuals
 from .measurements import MeasurementSet
+from .session_offsets import with_session_offsets
 
 PROTOCOLS = ("random", "points", "sessions", "series")
 SESSION_GAP_S = 1800.0  # a pause of more than 30 min between two poses starts a new session
@@ -115,10 +116,13 @@ class FitSpec:
     gp_options: dict | None = None
     seed: int = 0
     noise: str = "none"  # the training poses' noise model (postproc.model.noise_model): none or settle
+    session_offsets: bool = False  # each session's frame shift estimated and taken out (postproc.model.session_offsets)
 
 
 def fit_model(spec: FitSpec, meas: MeasurementSet, say: Callable[[str], None]) -> ErrorModel:
     model = fit(spec.robot, spec.tool_mm, spec.effects, meas, cv_folds=0, seed=spec.seed, progress=say, noise=spec.noise).model
+    if spec.session_offsets:
+        model = with_session_offsets(model, meas)
     if spec.predictor is None:
         return model
     say(f"fitting the {spec.predictor} predictor on {len(meas)} poses")

@@ -32,27 +32,30 @@ from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel, WhiteKernel
 from sklearn.preprocessing import StandardScaler
+from threadpoolctl import threadpool_limits
 
 from . import local_gp
-from .gp_lml import optimize_theta, with_group_noise
+from .gp_lml import optimize_shared_theta, optimize_theta, with_group_noise
 from .memory import GB, check_budget, gp_fit_bytes, lean_fit_bytes
 
 METHODS = ("auto", "exact", "local")
 EXACT_MAX = 2000  # auto: the exact GP up to this many poses (about 0.8 GB and 1-2 minutes to fit)
 GROUP_SAMPLE = 1500  # poses the noise groups' ratios are fitted on (a few seconds per likelihood on 2 cores)
-# The local GP's global kernel is fitted on a subsample of ``global_size`` poses. A length
-# scale that ends at its lower bound (0.01 standard deviations of its input: closer than any
-# two poses) is a degenerate optimum, a kernel that treats neighbours as unrelated and fits
-# the sample's noise; the subsample did not pin the kernel down, so the fit is repeated on
-# twice the poses, up to GLOBAL_GROWTH times ``global_size``. On UR10 Series A's random splits
-# 600 poses ended there on seeds 0 and 2 (seed 2: 0.0699 mm held out against 0.0574 on 1,500).
-GLOBAL_GROWTH = 4
+# The local GP's kernel, the start every expert refines: one set of hyperparameters for
+# SHARED_EXPERTS experts' data together (the sum of their log marginal likelihoods, as
+# distributed GPs share them: Deisenroth & Ng, ICML 2015), from a fit on ``global_size``
+# poses drawn over the whole workspace and from the kernel's defaults. A global subsample
+# is sparse where an expert's data are dense: on UR10 Series A's random splits the
+# 600-pose fit alone ended in a degenerate kernel (length scales at their lower bound, all
+# noise) on two of four splits and depended on its sample by about the spread between
+# splits (seed 2: 0.0683 mm held out; 0.0573 with the shared fit).
+SHARED_EXPERTS = 4
 
 
 class GPRPredictor(RegressorMixin, BaseEstimator):
     def __init__(self, length_scale: float = 1.0, noise_level: float = 1e-2, n_restarts: int = 2, anisotropic: bool = False, random_state: int = 0,
                  method: str = "auto", exact_max: int = EXACT_MAX, leaf_size: int = 500, overlap: float = 0.15, global_size: int = 600,
-                 expert_iter: int | None = 15, memory_limit_gb: float | None = None):
+                 expert_iter: int | None = 15, memory_limit_gb: float | None = None, shared_experts: int = SHARED_EXPERTS):
         self.length_scale = length_scale
         self.noise_level = noise_level
         self.n_restarts = n_restarts
@@ -65,6 +68,7 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         self.global_size = global_size
         self.expert_iter = expert_iter
         self.memory_limit_gb = memory_limit_gb
+        self.shared_experts = shared_experts
 
     def _kernel(self, n_features: int):
         scale = np.full(n_features, self.length_scale) if self.anisotropic else self.length_scale
@@ -86,7 +90,7 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         """Peak memory of fitting on n_points, by the method that would be used."""
         if self.resolved_method(n_points) == "exact":
             return gp_fit_bytes(n_points, n_features, self.anisotropic)
-        largest = max(min(n_points, 2 * self.leaf_size), min(n_points, GLOBAL_GROWTH * self.global_size))
+        largest = max(min(n_points, 2 * self.leaf_size), min(n_points, self.global_size))
         return lean_fit_bytes(largest) * local_gp.fit_workers() + 64 * n_points * (n_features + 3)
 
     def _check_memory(self, n_points: int, n_features: int) -> str:
@@ -175,7 +179,7 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         rng = np.random.default_rng(self.random_state)
         total = len(members) + 1
         kernel = self._kernel(X.shape[1])
-        start = self._global_theta(Xs, y, kernel, rng, lambda message: progress is not None and progress(0, total, message))
+        start = self._shared_theta(Xs, y, members, kernel, rng, lambda message: progress is not None and progress(0, total, message))
         if groups is not None:
             start = self._group_ratios(Xs, y, kernel, start, groups, rng)
         experts = []
@@ -187,19 +191,25 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         self._keep(X, y, None, groups)
         return self
 
-    def _global_theta(self, Xs, y, kernel, rng, say) -> np.ndarray:
-        """The global kernel's hyperparameters, on ``global_size`` poses or, where a length
-        scale ends at its lower bound, on twice as many (see GLOBAL_GROWTH); records the
-        poses used as ``global_poses_``."""
-        size, most = min(len(Xs), self.global_size), min(len(Xs), GLOBAL_GROWTH * self.global_size)
-        while True:
-            sub = np.sort(rng.choice(len(Xs), size, replace=False))
-            say(f"global hyperparameters on {size} of {len(Xs)} poses")
-            theta = optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng)
-            if size >= most or not _length_scale_at_floor(theta, kernel):
-                self.global_poses_ = size
-                return theta
-            size = min(2 * size, most)
+    def _shared_theta(self, Xs, y, members, kernel, rng, say) -> np.ndarray:
+        """The experts' start: the hyperparameters of ``shared_experts`` experts' data together
+        (see SHARED_EXPERTS), from the global subsample's fit and from the kernel's defaults,
+        the better likelihood kept; with ``shared_experts`` 0, the global subsample's fit.
+        Records the experts used as ``shared_experts_`` and the subsample's size as
+        ``global_poses_``."""
+        size = min(len(Xs), self.global_size)
+        sub = np.sort(rng.choice(len(Xs), size, replace=False))
+        say(f"global hyperparameters on {size} of {len(Xs)} poses")
+        theta = optimize_theta(Xs[sub], y[sub], kernel.theta, kernel.bounds, None, self.n_restarts, rng)
+        self.global_poses_ = size
+        self.shared_experts_ = np.sort(rng.choice(len(members), min(self.shared_experts, len(members)), replace=False))
+        if len(self.shared_experts_) == 0:
+            return theta
+        blocks = [(Xs[members[k]], y[members[k]]) for k in self.shared_experts_]
+        say(f"shared hyperparameters on {len(blocks)} experts' {sum(len(b[0]) for b in blocks)} poses")
+        with threadpool_limits(limits=1):  # blocks of about 1,000 poses: threaded BLAS does not pay (local_gp.fit_workers)
+            shared, _ = optimize_shared_theta(blocks, [theta, kernel.theta], kernel.bounds, local_gp.fit_workers())
+        return shared
 
     def _set_local(self, regions, members, experts):
         self.regions_, self.members_, self.experts_ = regions, members, experts
@@ -245,9 +255,3 @@ class GPRPredictor(RegressorMixin, BaseEstimator):
         if not return_std:
             return np.concatenate(parts)
         return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
-
-
-def _length_scale_at_floor(theta: np.ndarray, kernel) -> bool:
-    """Whether a length scale of ``kernel`` (ConstantKernel * RBF + WhiteKernel) ends at its lower bound in ``theta``."""
-    scales = slice(1, len(theta) - 1)  # log constant, log length scales, log noise
-    return bool(np.any(theta[scales] <= kernel.bounds[scales, 0] + 1e-3))

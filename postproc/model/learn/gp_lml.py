@@ -22,6 +22,8 @@ ratios are fitted with the kernel held (``free``), and the kernel with the ratio
 
 from __future__ import annotations
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 from scipy.optimize import minimize
@@ -117,3 +119,23 @@ def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.
     out = full.copy()
     out[free] = best.x
     return out
+
+
+def optimize_shared_theta(blocks: list[tuple[np.ndarray, np.ndarray]], starts: list[np.ndarray], bounds: np.ndarray,
+                          workers: int = 1) -> tuple[np.ndarray, float]:
+    """One theta for several independent data sets (``blocks``: (X, Y) each, Y normalised per
+    block as the experts' normalize_y does): the sum of their negative log marginal
+    likelihoods minimised by L-BFGS-B from each start; the best theta and its value.
+    This is how distributed GP experts share hyperparameters (Deisenroth & Ng, "Distributed
+    Gaussian Processes", ICML 2015): each block is dense local data, as an expert sees it.
+    ``workers``: blocks evaluated at once (threads; LAPACK releases the GIL)."""
+    normalised = [(X, (Y - Y.mean(axis=0)) / np.where(Y.std(axis=0) > 0, Y.std(axis=0), 1.0)) for X, Y in blocks]
+
+    def objective(theta, pool):
+        parts = list(pool.map(lambda block: neg_log_marginal_likelihood(theta, *block), normalised))
+        return sum(value for value, _ in parts), np.sum([grad for _, grad in parts], axis=0)
+
+    with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
+        results = [minimize(objective, np.asarray(start, dtype=float), args=(pool,), method="L-BFGS-B", jac=True, bounds=bounds) for start in starts]
+    best = min(results, key=lambda res: res.fun)
+    return best.x, float(best.fun)

@@ -17,10 +17,13 @@ into regions and each gets its own exact GP:
   normalised. The prediction is therefore continuous (C1) everywhere — a compensated path
   never jumps at a region border — and uses at most the few experts whose margins overlap;
 - predictive variance is that of the mixture: sum w_k (s_k^2 + m_k^2) - m^2;
-- hyperparameters: one exact GP (with restarts) on a random subsample of ``global_size``
-  poses gives a starting point; each expert then refines it by marginal likelihood on its
-  own data (a bounded number of L-BFGS steps), so each region gets its own length scales
-  and noise (local, non-stationary), which is what the dense local data support.
+- hyperparameters: one set shared by a few experts' data together (the sum of their log
+  marginal likelihoods; Deisenroth & Ng, "Distributed Gaussian Processes", ICML 2015),
+  started from an exact GP (with restarts) on a random subsample of ``global_size`` poses,
+  gives the starting point (gp.py, SHARED_EXPERTS, says why not the subsample alone);
+  each expert then refines it by marginal likelihood on its own data (a bounded number
+  of L-BFGS steps), so each region gets its own length scales and noise (local,
+  non-stationary), which is what the dense local data support.
 Inducing-point (sparse variational) GPs were the alternative: they keep one global kernel
 and smooth away detail finer than the inducing-point spacing, which is exactly the local
 structure dense tracker data are measured for; the local experts keep exact-GP accuracy
