@@ -12,6 +12,7 @@ from postproc.errors import InputError
 from postproc.model.effects import parse_effects
 from postproc.model.noise_model import checked as noise_model_checked
 from postproc.model.predictor_plugins import predictor_names
+from postproc.model.session_offsets import with_session_offsets
 from postproc.progress import ProgressLine
 from postproc.robot.robots import load_robot
 
@@ -135,8 +136,6 @@ def _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv,
         result = run_fit(robot_model, tool_mm, chosen, data, loss=loss, cv_folds=cv, prior=base_model, seed=seed, progress=progress, noise=noise)
     final = result.model
     if session_offsets:
-        from postproc.model.session_offsets import with_session_offsets
-
         final = with_session_offsets(final, data)
     if predictor is not None:
         # Deferred import: it loads scipy (slow to import); `postproc --version` must stay fast.

@@ -48,7 +48,7 @@ GROUP_SAMPLE = 1500  # poses the noise groups' ratios are fitted on (a few secon
 # is sparse where an expert's data are dense: on UR10 Series A's random splits the
 # 600-pose fit alone ended in a degenerate kernel (length scales at their lower bound, all
 # noise) on two of four splits and depended on its sample by about the spread between
-# splits (seed 2: 0.0683 mm held out; 0.0573 with the shared fit).
+# splits (seed 2: 0.0683 mm held out; 0.0558 with the shared fit).
 SHARED_EXPERTS = 4
 
 
