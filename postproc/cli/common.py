@@ -68,9 +68,9 @@ def sessions_as_asked(data, model, apply: bool, path):
     """``data`` as the model's session offsets should see it. A session id means the fit's
     session only where the user says so (``--session-offsets``): another file's session 0 is
     another set-up. Otherwise its ``session`` column is set aside, with a note."""
-    if apply and getattr(model, "session_offsets", None) is None:
+    if apply and model.session_offsets is None:
         raise InputError("--session-offsets: the model has no session offsets (fit it with --session-offsets)")
-    if apply or getattr(model, "session_offsets", None) is None or "session" not in data.extra:
+    if apply or model.session_offsets is None or "session" not in data.extra:
         return data
     err.print(f"note: {path}: the model's session offsets are not applied to this file (--session-offsets applies them "
               "where its session ids are the fit's sessions)", highlight=False)

@@ -87,6 +87,18 @@ class MeasurementSet:
 _GROUP_FIELD = {"nominal": "nominal_mm", "force": "force_n", "approach": "approach", "temp": "temp_c", "t": "time_s"}
 
 
+def group_column(meas: MeasurementSet, column: str, why: str) -> np.ndarray:
+    """An integer group id per row from an extra column (e.g. 'point', 'session'); refuse its
+    absence (``why``: what needs it) and any value that is not a whole number."""
+    if column not in meas.extra:
+        raise MeasurementError(meas.source, 1, column, f"column missing: {why} (postproc import-ur10 writes it)")
+    values = meas.extra[column]
+    bad = np.nonzero(~np.isfinite(values) | (values != np.round(values)))[0]
+    if bad.size:
+        raise MeasurementError(meas.source, meas.line_of(int(bad[0])), column, f"a group id must be a whole number, got {values[bad[0]]:g}")
+    return values.astype(np.int64)
+
+
 def read_measurements(path: str | Path) -> MeasurementSet:
     """Read and validate a measurement CSV; raise MeasurementError naming line and column."""
     path = Path(path)

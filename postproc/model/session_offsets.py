@@ -28,9 +28,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from postproc.errors import MeasurementError
-
-from .measurements import MeasurementSet
+from .measurements import MeasurementSet, group_column
 
 COLUMN = "session"
 #: poses whose weight a session's own mean gets in its offset: n / (n + SHRINK_POSES)
@@ -40,16 +38,9 @@ KEY = "session_offsets"  # in the model file
 
 def session_column(meas: MeasurementSet, required: bool = True) -> np.ndarray | None:
     """The ``session`` column as whole numbers; None where it is absent and not required."""
-    if COLUMN not in meas.extra:
-        if not required:
-            return None
-        raise MeasurementError(meas.source, 1, COLUMN, "column missing: session offsets need each pose's measuring session "
-                                                        "(a whole number per row; postproc import-ur10 writes it)")
-    values = meas.extra[COLUMN]
-    bad = np.nonzero(~np.isfinite(values) | (values != np.round(values)))[0]
-    if bad.size:
-        raise MeasurementError(meas.source, meas.line_of(int(bad[0])), COLUMN, f"a session id must be a whole number, got {values[bad[0]]:g}")
-    return values.astype(np.int64)
+    if COLUMN not in meas.extra and not required:
+        return None
+    return group_column(meas, COLUMN, "session offsets need each pose's measuring session, a whole number per row")
 
 
 @dataclass(frozen=True)
@@ -100,7 +91,7 @@ class SessionOffsets:
 def with_session_offsets(model, meas: MeasurementSet):
     """``model`` (an ErrorModel without a predictor) with each session's offset estimated from
     its residual on ``meas``: fit it before a predictor, which then learns what is left."""
-    if getattr(model, "residual", None) is not None:
+    if model.residual is not None:
         raise ValueError("session offsets are estimated on the physics residual, before a predictor is fitted")
     sessions = session_column(meas)
     residual = meas.measured_mm - replace(model, session_offsets=None).predict(meas)

@@ -34,7 +34,7 @@ from postproc.robot.robots import RobotModel
 from .effects import EffectSum
 from .errormodel import ErrorModel
 from .identify import fit, fit_predictor, refit_base, residuals
-from .measurements import MeasurementSet
+from .measurements import MeasurementSet, group_column
 from .session_offsets import with_session_offsets
 
 PROTOCOLS = ("random", "points", "sessions", "series")
@@ -146,17 +146,6 @@ def joint_distance(train_q_deg: np.ndarray, test_q_deg: np.ndarray) -> np.ndarra
     """Distance (rad) of each test pose to its nearest training pose in joint space."""
     dist, _ = cKDTree(np.radians(train_q_deg)).query(np.radians(test_q_deg))
     return dist
-
-
-def group_column(meas: MeasurementSet, column: str, why: str) -> np.ndarray:
-    """An integer group id per row from an extra column (e.g. 'point'); refuse its absence."""
-    if column not in meas.extra:
-        raise MeasurementError(meas.source, 1, column, f"column missing: {why} (postproc import-ur10 writes it)")
-    values = meas.extra[column]
-    bad = np.nonzero(values != np.round(values))[0]
-    if bad.size:
-        raise MeasurementError(meas.source, meas.line_of(int(bad[0])), column, f"a group id must be a whole number, got {values[bad[0]]:g}")
-    return values.astype(np.int64)
 
 
 def session_ids(meas: MeasurementSet) -> np.ndarray:

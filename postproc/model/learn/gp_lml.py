@@ -86,6 +86,12 @@ def neg_log_marginal_likelihood(theta: np.ndarray, X: np.ndarray, Y: np.ndarray,
     return nll, -grad
 
 
+def normalised(Y: np.ndarray) -> np.ndarray:
+    """Y with each column at mean 0 and standard deviation 1 (a constant column left at 0), as
+    scikit-learn's normalize_y does before the likelihood."""
+    return (Y - Y.mean(axis=0)) / np.where(Y.std(axis=0) > 0, Y.std(axis=0), 1.0)
+
+
 def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.ndarray, max_iter: int | None, n_restarts: int = 0, rng=None,
                    groups: np.ndarray | None = None, n_kernel: int | None = None, free: np.ndarray | None = None) -> np.ndarray:
     """Best theta by L-BFGS-B from theta0 and n_restarts further starts (``groups``,
@@ -95,7 +101,7 @@ def optimize_theta(X: np.ndarray, Y: np.ndarray, theta0: np.ndarray, bounds: np.
     Restarts draw each log-hyperparameter uniformly within a quarter of its bounds' log range either side
     around theta0 clipped to the bounds: starts at the bounds' extremes (length scales of
     0.01 standard deviations) fall into the degenerate all-noise optimum."""
-    Yn = (Y - Y.mean(axis=0)) / np.where(Y.std(axis=0) > 0, Y.std(axis=0), 1.0)  # as normalize_y
+    Yn = normalised(Y)
     options = {} if max_iter is None else {"maxiter": max_iter}
     full = np.asarray(theta0, dtype=float)
     free = np.ones(len(full), dtype=bool) if free is None else np.asarray(free, dtype=bool)
@@ -129,10 +135,10 @@ def optimize_shared_theta(blocks: list[tuple[np.ndarray, np.ndarray]], starts: l
     This is how distributed GP experts share hyperparameters (Deisenroth & Ng, "Distributed
     Gaussian Processes", ICML 2015): each block is dense local data, as an expert sees it.
     ``workers``: blocks evaluated at once (threads; LAPACK releases the GIL)."""
-    normalised = [(X, (Y - Y.mean(axis=0)) / np.where(Y.std(axis=0) > 0, Y.std(axis=0), 1.0)) for X, Y in blocks]
+    standard = [(X, normalised(Y)) for X, Y in blocks]
 
     def objective(theta, pool):
-        parts = list(pool.map(lambda block: neg_log_marginal_likelihood(theta, *block), normalised))
+        parts = list(pool.map(lambda block: neg_log_marginal_likelihood(theta, *block), standard))
         return sum(value for value, _ in parts), np.sum([grad for _, grad in parts], axis=0)
 
     with ThreadPoolExecutor(max_workers=max(1, workers)) as pool:
