@@ -77,6 +77,19 @@ def sessions_as_asked(data, model, apply: bool, path):
     return replace(data, extra={k: v for k, v in data.extra.items() if k != "session"})
 
 
+def gp_options_given(features: str, leaf_size: int, global_size: int, shared_experts: int) -> dict[str, bool]:
+    """Which of the GPR options that ``fit`` and ``validate`` share were given (not at their
+    defaults), by flag: for refuse_unused where no gpr is fitted."""
+    return {"--gp-features": features != "pose", "--gp-leaf-size": leaf_size != 500, "--gp-global-size": global_size != 600,
+            "--gp-shared-experts": shared_experts != 4}
+
+
+def gp_options_checked(features: str, leaf_size: int, global_size: int, shared_experts: int) -> dict:
+    """The shared GPR options as GPRPredictor / fit_predictor take them, each checked."""
+    return {"features": gp_features_checked(features), "leaf_size": leaf_size, "global_size": gp_global_size_checked(global_size),
+            "shared_experts": gp_shared_experts_checked(shared_experts)}
+
+
 def gp_shared_experts_checked(value: int) -> int:
     if value < 0:
         raise InputError(f"--gp-shared-experts: a number of experts, 0 or more, got {value}")

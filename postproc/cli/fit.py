@@ -26,9 +26,8 @@ from .common import (
     SESSION_OFFSETS_HELP,
     check_output_folder,
     floats,
-    gp_features_checked,
-    gp_global_size_checked,
-    gp_shared_experts_checked,
+    gp_options_checked,
+    gp_options_given,
     load_measurements,
     refuse_unused,
     session_offsets_line,
@@ -87,14 +86,12 @@ def fit_cmd(
     if gp_method not in ("auto", "exact", "local"):
         raise InputError(f"--gp-method: '{gp_method}' is not one of auto, exact, local")
     refuse_unused("without --predictor tr-gpr", {"--source": source is not None and predictor != "tr-gpr"})
-    refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", "--gp-leaf-size": gp_leaf_size != 500,
-                                               "--gp-features": gp_features != "pose", "--gp-global-size": gp_global_size != 600,
-                                               "--gp-shared-experts": gp_shared_experts != 4, "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
+    shared = (gp_features, gp_leaf_size, gp_global_size, gp_shared_experts)
+    refuse_unused("without --predictor gpr", {"--gp-method": gp_method != "auto", **gp_options_given(*shared),
+                                               "--memory-limit": memory_limit is not None} if predictor != "gpr" else {})
     try:
-        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed, {"method": gp_method, "leaf_size": gp_leaf_size, "memory_limit_gb": memory_limit,
-                                                                                "features": gp_features_checked(gp_features),
-                                                                                "global_size": gp_global_size_checked(gp_global_size),
-                                                                                "shared_experts": gp_shared_experts_checked(gp_shared_experts)}, drop_invalid,
+        _fit(meas, robot, tool, effects, output, predictor, source, prior, loss, cv, seed,
+             {"method": gp_method, "memory_limit_gb": memory_limit, **gp_options_checked(*shared)}, drop_invalid,
              noise_model_checked(noise_model), session_offsets)
     except KeyboardInterrupt:
         err.print("interrupted: no model written", style="bold red")

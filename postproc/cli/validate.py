@@ -23,9 +23,8 @@ from .common import (
     NOISE_MODEL_HELP,
     SESSION_OFFSETS_HELP,
     floats,
-    gp_features_checked,
-    gp_global_size_checked,
-    gp_shared_experts_checked,
+    gp_options_checked,
+    gp_options_given,
     load_measurements,
     refuse_unused,
 )
@@ -63,20 +62,16 @@ def validate_cmd(
         raise InputError(f"--protocol: '{protocol}' is not one of {', '.join(protocols.PROTOCOLS)}")
     if predictor is not None and predictor not in ("gpr", "pso-bp", "grid"):
         raise InputError(f"--predictor: '{predictor}' is not one of gpr, pso-bp, grid")
+    shared = (gp_features, gp_leaf_size, gp_global_size, gp_shared_experts)
     refuse_unused(f"with --protocol {protocol}", {"--other": other is not None and protocol != "series",
                                                    "--fraction": fraction != 0.2 and protocol != "random",
                                                    "--every": every != 5 and protocol != "points",
-                                                   "--gp-features": gp_features != "pose" and predictor != "gpr",
-                                                   "--gp-leaf-size": gp_leaf_size != 500 and predictor != "gpr",
-                                                   "--gp-global-size": gp_global_size != 600 and predictor != "gpr",
-                                                   "--gp-shared-experts": gp_shared_experts != 4 and predictor != "gpr"})
+                                                   **(gp_options_given(*shared) if predictor != "gpr" else {})})
     if protocol == "series" and other is None:
         raise InputError("--protocol series needs --other OTHER.csv (the series to re-register and score)")
     robot_model = load_robot(robot)
     chosen = parse_effects(effects)
-    gp_options = {"features": gp_features_checked(gp_features), "leaf_size": gp_leaf_size,
-                  "global_size": gp_global_size_checked(gp_global_size),
-                  "shared_experts": gp_shared_experts_checked(gp_shared_experts)} if predictor == "gpr" else None
+    gp_options = gp_options_checked(*shared) if predictor == "gpr" else None
     spec = protocols.FitSpec(robot_model, floats(tool, 3, "--tool"), chosen, predictor, gp_options, seed=seed, noise=noise_model_checked(noise_model),
                                 session_offsets=session_offsets)
     data = load_measurements(meas, robot_model, drop_invalid)
