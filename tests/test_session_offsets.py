@@ -154,3 +154,19 @@ def test_evaluate_applies_the_offsets_only_when_asked(world, tmp_path):
     assert mean(asked) < 0.6 * mean(unasked)
     refused = runner.invoke(app, ["evaluate", str(plain), str(path), "--session-offsets"])
     assert refused.exit_code == 2 and "has no session offsets" in refused.stderr
+
+
+def test_evaluate_asked_for_offsets_refuses_a_file_without_sessions_and_counts_unseen_ones(world, tmp_path):
+    _, _, meas = world
+    path, model = tmp_path / "m.csv", tmp_path / "offsets.json"
+    write_measurements(path, meas)
+    assert runner.invoke(app, ["fit", str(path), "--robot", "ur10", "--tool", "0,0,109", "--effects", EFFECTS, "--cv", "0",
+                               "--session-offsets", "-o", str(model)]).exit_code == 0
+    bare = tmp_path / "bare.csv"
+    write_measurements(bare, replace(meas, extra={}))
+    refused = runner.invoke(app, ["evaluate", str(model), str(bare), "--session-offsets"])
+    assert refused.exit_code == 2 and "column missing" in refused.stderr and "session" in refused.stderr
+    other = tmp_path / "other.csv"
+    write_measurements(other, replace(meas, extra={"session": meas.extra["session"] + 2}))  # sessions 2-5: 4 and 5 unseen
+    noted = runner.invoke(app, ["evaluate", str(model), str(other), "--json", "--session-offsets"])
+    assert noted.exit_code == 0 and "120 of 240 poses are of sessions the model has no offset for" in noted.stderr

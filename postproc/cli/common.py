@@ -11,6 +11,7 @@ import typer
 
 from postproc.errors import InputError, OutputError
 from postproc.model.measurements import ESTIMATED_LIMIT_MARGIN_DEG, check_joint_limits, outside_limits, read_measurements
+from postproc.model.session_offsets import session_column
 from postproc.programs import dialects
 from postproc.robot.frames import abc_to_matrix, make_transform
 
@@ -70,7 +71,12 @@ def sessions_as_asked(data, model, apply: bool, path):
     another set-up. Otherwise its ``session`` column is set aside, with a note."""
     if apply and model.session_offsets is None:
         raise InputError("--session-offsets: the model has no session offsets (fit it with --session-offsets)")
-    if apply or model.session_offsets is None or "session" not in data.extra:
+    if apply:  # asked for: a file without session ids, or ids the fit never saw, would silently get none
+        unseen = model.session_offsets.unknown(session_column(data))
+        if unseen:
+            err.print(f"note: {path}: {unseen} of {len(data)} poses are of sessions the model has no offset for: none applied to them", highlight=False)
+        return data
+    if model.session_offsets is None or "session" not in data.extra:
         return data
     err.print(f"note: {path}: the model's session offsets are not applied to this file (--session-offsets applies them "
               "where its session ids are the fit's sessions)", highlight=False)
